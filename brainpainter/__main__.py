@@ -1,0 +1,5 @@
+"""``python -m brainpainter`` runs the CLI."""
+
+from brainpainter.cli import main
+
+main()

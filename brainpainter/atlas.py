@@ -1,0 +1,228 @@
+"""Atlas model: a lookup table of regions plus the template labels it uses.
+
+An atlas is data. On disk it is a directory with ``atlas.json`` (metadata)
+and ``regions.tsv`` with the columns ``index, name, hemi, kind, color,
+aliases``, in the style of BIDS ``dseg.tsv`` look-up tables. Cortical rows
+come from FreeSurfer annotation colour tables and subcortical rows from
+FreeSurfer's aseg look-up table; nothing is typed by hand in Python.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from brainpainter.errors import BrainPainterError
+
+HEMIS = ("lh", "rh", "bilateral")
+HEMI_PREFIX = {"lh": "Left-", "rh": "Right-", "bilateral": ""}
+KINDS = ("cortical", "subcortical")
+REGION_COLUMNS = ("index", "name", "hemi", "kind", "color", "aliases")
+
+
+@dataclass(frozen=True)
+class Region:
+    """One region of an atlas.
+
+    Attributes
+    ----------
+    index : int
+        FreeSurfer look-up-table index (e.g. 1035 for ctx-lh-insula).
+    name : str
+        Structure name without hemisphere (``"insula"``, ``"Hippocampus"``).
+    hemi : {"lh", "rh", "bilateral"}
+    kind : {"cortical", "subcortical"}
+    color : tuple of int, shape (3,)
+        FreeSurfer colour, 0-255.
+    aliases : tuple of str
+        Other names this region is known by (hemisphere-free or full).
+    """
+
+    index: int
+    name: str
+    hemi: str
+    kind: str
+    color: tuple[int, int, int]
+    aliases: tuple[str, ...] = ()
+
+    @property
+    def key(self) -> str:
+        """The BrainPainter column name: ``Left-insula``, ``Brain-Stem``."""
+        return HEMI_PREFIX[self.hemi] + self.name
+
+
+@dataclass(frozen=True)
+class Atlas:
+    """A parcellation: metadata plus its regions.
+
+    Attributes
+    ----------
+    name : str
+        Registry name (``"dk"``).
+    title : str
+        Human title (``"Desikan-Killiany"``).
+    template_labels : str
+        Name of the label set inside a template that carries this atlas's
+        cortical regions (``"dk"``); subcortical regions come from the aseg.
+    regions : tuple of Region
+    description, citation : str
+    aliases : tuple of str
+        Other names of the atlas itself.
+    """
+
+    name: str
+    title: str
+    template_labels: str
+    regions: tuple[Region, ...]
+    description: str = ""
+    citation: str = ""
+    aliases: tuple[str, ...] = ()
+    _by_key: dict[str, Region] = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        keys: dict[str, Region] = {}
+        for r in self.regions:
+            if r.key in keys:
+                raise BrainPainterError(f"atlas {self.name!r} lists region {r.key!r} twice")
+            keys[r.key] = r
+        object.__setattr__(self, "_by_key", keys)
+
+    def __iter__(self) -> Iterator[Region]:
+        return iter(self.regions)
+
+    def __len__(self) -> int:
+        return len(self.regions)
+
+    @property
+    def keys(self) -> list[str]:
+        """Region keys in table order."""
+        return [r.key for r in self.regions]
+
+    def region(self, key: str) -> Region:
+        """Region by its key (exact)."""
+        return self._by_key[key]
+
+    def cortical(self, hemi: str | None = None) -> list[Region]:
+        """Cortical regions, optionally of one hemisphere."""
+        return [r for r in self.regions if r.kind == "cortical" and hemi in (None, r.hemi)]
+
+    def subcortical(self) -> list[Region]:
+        return [r for r in self.regions if r.kind == "subcortical"]
+
+    def to_dict(self) -> dict:
+        """JSON-ready description (regions with key, hemi, colour, aliases)."""
+        return {
+            "name": self.name,
+            "title": self.title,
+            "template_labels": self.template_labels,
+            "description": self.description,
+            "citation": self.citation,
+            "aliases": list(self.aliases),
+            "n_cortical_per_hemisphere": {h: len(self.cortical(h)) for h in ("lh", "rh")},
+            "n_subcortical": len(self.subcortical()),
+            "regions": [
+                {
+                    "key": r.key,
+                    "index": r.index,
+                    "name": r.name,
+                    "hemi": r.hemi,
+                    "kind": r.kind,
+                    "color": "#{:02x}{:02x}{:02x}".format(*r.color),
+                    "aliases": list(r.aliases),
+                }
+                for r in self.regions
+            ],
+        }
+
+
+def read_regions_tsv(path: str | Path) -> tuple[Region, ...]:
+    """Read a ``regions.tsv`` look-up table.
+
+    Parameters
+    ----------
+    path : path-like
+        Tab-separated file with header ``index name hemi kind color aliases``;
+        ``color`` is ``#rrggbb``; ``aliases`` is ``|``-separated (may be empty).
+    """
+    path = Path(path)
+    regions = []
+    with path.open(newline="", encoding="utf-8") as fh:
+        reader = csv.DictReader(fh, delimiter="\t")
+        missing = set(REGION_COLUMNS) - set(reader.fieldnames or ())
+        if missing:
+            raise BrainPainterError(
+                f"{path} lacks the columns {sorted(missing)}; a regions table needs {list(REGION_COLUMNS)}"
+            )
+        for i, row in enumerate(reader, start=2):
+            hemi, kind, color = row["hemi"], row["kind"], row["color"].lstrip("#")
+            if hemi not in HEMIS or kind not in KINDS or len(color) != 6:
+                raise BrainPainterError(
+                    f"{path} line {i}: hemi must be one of {list(HEMIS)}, kind one of "
+                    f"{list(KINDS)} and color #rrggbb; got {hemi!r}, {kind!r}, {row['color']!r}"
+                )
+            regions.append(
+                Region(
+                    index=int(row["index"]),
+                    name=row["name"],
+                    hemi=hemi,
+                    kind=kind,
+                    color=(int(color[0:2], 16), int(color[2:4], 16), int(color[4:6], 16)),
+                    aliases=tuple(a for a in (row["aliases"] or "").split("|") if a),
+                )
+            )
+    return tuple(regions)
+
+
+def write_regions_tsv(regions: list[Region] | tuple[Region, ...], path: str | Path) -> None:
+    """Write regions in the ``regions.tsv`` format read by :func:`read_regions_tsv`."""
+    with Path(path).open("w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh, delimiter="\t", lineterminator="\n")
+        w.writerow(REGION_COLUMNS)
+        for r in regions:
+            w.writerow([r.index, r.name, r.hemi, r.kind, "#{:02x}{:02x}{:02x}".format(*r.color),
+                        "|".join(r.aliases)])
+
+
+def load_atlas_dir(path: str | Path) -> Atlas:
+    """Load an atlas directory (``atlas.json`` + ``regions.tsv`` [+ ``subcortical``]).
+
+    ``atlas.json`` keys: ``name``, ``title``, ``template_labels``, optional
+    ``description``, ``citation``, ``aliases``, and ``include`` — a list of
+    other region tables in the same directory's parent (e.g. the shared
+    ``aseg.tsv`` of subcortical structures).
+    """
+    path = Path(path)
+    meta_file = path / "atlas.json"
+    try:
+        meta = json.loads(meta_file.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise BrainPainterError(f"cannot read atlas metadata {meta_file}: {exc}") from None
+    regions = list(read_regions_tsv(path / "regions.tsv"))
+    for extra in meta.get("include", []):
+        regions.extend(read_regions_tsv((path / extra).resolve()))
+    return Atlas(
+        name=meta["name"],
+        title=meta.get("title", meta["name"]),
+        template_labels=meta.get("template_labels", meta["name"]),
+        regions=tuple(regions),
+        description=meta.get("description", ""),
+        citation=meta.get("citation", ""),
+        aliases=tuple(meta.get("aliases", ())),
+    )
+
+
+def get_atlas(name: str) -> Atlas:
+    """The registered atlas called `name` (or one of its aliases)."""
+    from brainpainter import registry
+
+    return registry.atlases.get(name)
+
+
+def list_atlases() -> list[str]:
+    """Names of installed atlases (no plugin is imported)."""
+    from brainpainter import registry
+
+    return registry.atlases.names()

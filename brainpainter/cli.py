@@ -1,0 +1,280 @@
+"""The ``brainpainter`` command line: a click group of small commands.
+
+Every command maps user errors (:class:`BrainPainterError`) to one line on
+stderr and exit code 2. Heavy modules (bpy, nibabel, pandas) are imported
+inside the commands, so ``brainpainter --help`` stays fast.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from pathlib import Path
+
+import click
+
+from brainpainter.errors import BrainPainterError
+
+CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
+
+
+def _echo_json(obj: object) -> None:
+    click.echo(json.dumps(obj, indent=2))
+
+
+@click.group(context_settings=CONTEXT)
+@click.version_option(package_name="brainpainter", prog_name="brainpainter")
+def cli() -> None:
+    """Paint numbers per brain region onto 3D brains.
+
+    \b
+    Quick start:
+      brainpainter render examples/brainpainter_dk.csv --atlas dk --out out/
+      brainpainter atlas list
+      brainpainter atlas show dk
+    """
+
+
+# -- atlas --------------------------------------------------------------------
+@cli.group(context_settings=CONTEXT)
+def atlas() -> None:
+    """List and inspect atlases."""
+
+
+@atlas.command("list", context_settings=CONTEXT)
+@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
+def atlas_list(as_json: bool) -> None:
+    """Installed atlases (built-in and plugins)."""
+    from brainpainter import registry
+
+    rows = []
+    for name in registry.atlases.names():
+        entry = next((e for e in registry.atlases.entries() if e.name == name), None)
+        row = {"name": name, "aliases": list(entry.aliases) if entry else [],
+               "distribution": entry.distribution if entry else "(session)"}
+        try:
+            a = registry.atlases.get(name)
+            row.update(title=a.title, n_cortical_per_hemisphere=len(a.cortical("lh")),
+                       n_subcortical=len(a.subcortical()), error=None)
+        except BrainPainterError as exc:
+            row.update(error=str(exc))
+        rows.append(row)
+    if as_json:
+        _echo_json(rows)
+        return
+    for r in rows:
+        alias = f" (alias: {', '.join(r['aliases'])})" if r["aliases"] else ""
+        if r["error"]:
+            click.echo(f"{r['name']}{alias}  BROKEN: {r['error']}")
+        else:
+            click.echo(f"{r['name']}{alias}  {r['title']}: {r['n_cortical_per_hemisphere']} cortical "
+                       f"regions per hemisphere, {r['n_subcortical']} subcortical  [{r['distribution']}]")
+
+
+@atlas.command("show", context_settings=CONTEXT)
+@click.argument("name")
+@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
+def atlas_show(name: str, as_json: bool) -> None:
+    """Regions of atlas NAME, with hemisphere, colour and aliases."""
+    from brainpainter.atlas import get_atlas
+
+    a = get_atlas(name)
+    if as_json:
+        _echo_json(a.to_dict())
+        return
+    click.echo(f"{a.name}: {a.title}")
+    if a.description:
+        click.echo(f"  {a.description}")
+    for hemi in ("lh", "rh"):
+        regs = a.cortical(hemi)
+        click.echo(f"\ncortical, {'left' if hemi == 'lh' else 'right'} hemisphere ({len(regs)}):")
+        for r in regs:
+            click.echo(f"  {r.key}")
+    sub = a.subcortical()
+    click.echo(f"\nsubcortical ({len(sub)}):")
+    for r in sub:
+        alias = f"  (also: {', '.join(r.aliases)})" if r.aliases else ""
+        click.echo(f"  {r.key}{alias}")
+    if a.citation:
+        click.echo(f"\nCite: {a.citation}")
+
+
+# -- plugins ------------------------------------------------------------------
+@cli.command(context_settings=CONTEXT)
+@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
+def plugins(as_json: bool) -> None:
+    """Installed plugins, and which failed to load and why."""
+    from brainpainter import registry
+
+    report = []
+    for reg in (registry.atlases, registry.renderers, registry.templates):
+        for entry in reg.entries():
+            status, error = "ok", None
+            try:
+                reg.get(entry.name)
+            except BrainPainterError as exc:
+                status, error = "failed", str(exc)
+            report.append({"group": reg.group, "name": entry.name, "aliases": list(entry.aliases),
+                           "target": entry.target, "distribution": entry.distribution,
+                           "status": status, "error": error})
+        for name, error in reg.errors().items():
+            if not any(r["group"] == reg.group and r["name"] == name for r in report):
+                report.append({"group": reg.group, "name": name, "aliases": [], "target": None,
+                               "distribution": None, "status": "failed", "error": error})
+    if as_json:
+        _echo_json(report)
+        return
+    for r in report:
+        line = f"{r['group']:<24} {r['name']:<12} {r['status']:<7} {r['distribution'] or ''}"
+        click.echo(line + (f"\n    {r['error']}" if r["error"] else ""))
+
+
+# -- render -------------------------------------------------------------------
+def _split(ctx: click.Context, param: click.Parameter, value: tuple[str, ...]) -> list[str]:
+    return [v for item in value for v in item.split(",") if v.strip()]
+
+
+@cli.command(context_settings=CONTEXT)
+@click.argument("input", type=click.Path(path_type=Path, dir_okay=False))
+@click.option("--atlas", "-a", default="dk", show_default=True,
+              help="Atlas: dk, destrieux, dkt (alias tourville) or a plugin atlas.")
+@click.option("--out", "-o", required=True, type=click.Path(path_type=Path, file_okay=False),
+              help="Output folder for {image}_{view}.png and manifest.json.")
+@click.option("--views", default="lateral-left,medial-left,subcortical", show_default=True,
+              help="Comma-separated views, 'all', or camera:AZ:EL[:ZOOM].")
+@click.option("--template", default="fsaverage", show_default=True, help="Template name or folder.")
+@click.option("--surface", default="pial", show_default=True,
+              type=click.Choice(["pial", "white", "inflated"]))
+@click.option("--gradient", default=None,
+              help="Control colours, e.g. white,yellow,orange,red (the default). Values 0..N-1.")
+@click.option("--cmap", default=None, help="A matplotlib colour map instead of a gradient, e.g. viridis.")
+@click.option("--vmin", type=float, default=None, help="Value at the first colour.")
+@click.option("--vmax", type=float, default=None, help="Value at the last colour.")
+@click.option("--center", type=float, default=None, help="Diverging: value at the middle colour.")
+@click.option("--nan-color", default="#8c8c8c", show_default=True, help="Colour of empty cells.")
+@click.option("--missing-color", default="#d0d0d0", show_default=True,
+              help="Colour of regions with no column.")
+@click.option("--hide", multiple=True, callback=_split,
+              help="Regions or groups not drawn (cerebellum, ventricles, brainstem, ventraldc). Repeatable.")
+@click.option("--background", default="white", show_default=True, help="Background colour.")
+@click.option("--transparent", is_flag=True, help="Transparent background.")
+@click.option("--size", default="1200x900", show_default=True, help="Image size WIDTHxHEIGHT.")
+@click.option("--quality", default="default", show_default=True,
+              type=click.Choice(["fast", "default", "high"]))
+@click.option("--shading", default="default", show_default=True, type=click.Choice(["default", "flat"]))
+@click.option("--lighting", default="studio", show_default=True,
+              type=click.Choice(["studio", "soft", "flat-studio"]))
+@click.option("--glass-opacity", type=float, default=0.12, show_default=True)
+@click.option("--image-column", default=None, help="Column with image names (default Image-name-unique).")
+@click.option("--strict", is_flag=True, help="Unmatched columns are an error.")
+@click.option("--renderer", default="blender", show_default=True)
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
+def render(input: Path, atlas: str, out: Path, views: str, template: str, surface: str,
+           gradient: str | None, cmap: str | None, vmin: float | None, vmax: float | None,
+           center: float | None, nan_color: str, missing_color: str, hide: list[str],
+           background: str, transparent: bool, size: str, quality: str, shading: str,
+           lighting: str, glass_opacity: float, image_column: str | None, strict: bool,
+           renderer: str, quiet: bool) -> None:
+    """Render every row of INPUT (a BrainPainter CSV) from every view."""
+    from brainpainter.render import render as run
+
+    try:
+        w, h = (int(x) for x in size.lower().split("x"))
+    except ValueError:
+        raise BrainPainterError(f"--size must be WIDTHxHEIGHT, e.g. 1200x900; {size!r} was given.") from None
+    result = run(
+        input, atlas, out=out, views=views, template=template, surface=surface, gradient=gradient,
+        cmap=cmap, vmin=vmin, vmax=vmax, center=center, nan_color=nan_color,
+        missing_color=missing_color, hide=hide, background=None if transparent else background,
+        width=w, height=h, quality=quality, shading=shading, lighting=lighting,
+        glass_opacity=glass_opacity, renderer=renderer, image_column=image_column, strict=strict,
+        progress=not quiet,
+    )
+    from brainpainter.inputs import RegionTable  # noqa: F401  (summary printed below)
+
+    s = result.manifest["input"]
+    click.echo(
+        f"{len(result.files)} image(s) written to {out} "
+        f"({s['n_images']} row(s); {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
+        f"{len(s['unmatched_columns'])} unmatched column(s))"
+    )
+
+
+# -- template -----------------------------------------------------------------
+@cli.group(context_settings=CONTEXT)
+def template() -> None:
+    """Build and inspect templates (the meshes a renderer draws)."""
+
+
+@template.command("build", context_settings=CONTEXT)
+@click.argument("subject_dir", type=click.Path(path_type=Path, file_okay=False))
+@click.option("--out", "-o", required=True, type=click.Path(path_type=Path, file_okay=False))
+@click.option("--atlas", "atlases", multiple=True, callback=_split,
+              help="Label sets to build: dk, destrieux, dkt (default: all three).")
+@click.option("--surface", "surfaces", multiple=True, callback=_split,
+              help="Surfaces: pial, white, inflated (default: all three).")
+@click.option("--target-faces", type=int, default=None,
+              help="Faces per hemisphere and label set after decimation (default: builder's choice).")
+@click.option("--name", default=None, help="Template name (default: the subject folder's name).")
+@click.option("--gcs-dir", type=click.Path(path_type=Path, file_okay=False), default=None,
+              help="Folder with FreeSurfer's ?h.DKTaparc...gcs(.gz) classifier atlases, to derive DKT.")
+def template_build(subject_dir: Path, out: Path, atlases: list[str], surfaces: list[str],
+                   target_faces: int | None, name: str | None, gcs_dir: Path | None) -> None:
+    """Build a template from a FreeSurfer SUBJECT_DIR (surf/, label/, mri/aseg.mgz)."""
+    from brainpainter_builder.build import build_template
+
+    kwargs: dict = {"name": name, "gcs_dir": gcs_dir, "target_faces": target_faces}
+    if atlases:
+        kwargs["atlases"] = tuple(atlases)
+    if surfaces:
+        kwargs["surfaces"] = tuple(surfaces)
+    path = build_template(subject_dir, out, **{k: v for k, v in kwargs.items() if v is not None})
+    click.echo(f"template written to {path}")
+
+
+@template.command("info", context_settings=CONTEXT)
+@click.argument("name_or_path", default="fsaverage")
+@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
+def template_info(name_or_path: str, as_json: bool) -> None:
+    """Manifest and checks of a template (default: the bundled fsaverage)."""
+    from brainpainter_builder.report import format_report, template_report
+
+    from brainpainter.template import load_template
+
+    report = template_report(load_template(name_or_path).path)
+    if as_json:
+        _echo_json(report)
+    else:
+        click.echo(format_report(report))
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Console entry point: user errors become one line and exit code 2."""
+    try:
+        cli.main(args=argv, prog_name="brainpainter", standalone_mode=False)
+    except click.exceptions.Abort:
+        click.echo("aborted", err=True)
+        sys.exit(130)
+    except click.ClickException as exc:
+        # click's own usage errors: one line, exit 2
+        msg = exc.format_message().replace("\n", " ")
+        click.echo(f"error: {msg}", err=True)
+        sys.exit(exc.exit_code)
+    except BrainPainterError as exc:
+        click.echo(f"error: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}", err=True)
+        sys.exit(exc.exit_code)
+    except KeyboardInterrupt:
+        click.echo("interrupted", err=True)
+        sys.exit(130)
+    except Exception as exc:  # no traceback for users; BRAINPAINTER_DEBUG=1 shows it
+        if os.environ.get("BRAINPAINTER_DEBUG"):
+            raise
+        click.echo(f"internal error: {type(exc).__name__}: {exc} (set BRAINPAINTER_DEBUG=1 for a "
+                   "traceback and please report it)", err=True)
+        sys.exit(1)
+    sys.exit(0)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

@@ -1,0 +1,76 @@
+"""Parse user colours: names, ``#rrggbb``, 0-1 or 0-255 triples."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+
+import numpy as np
+
+from brainpainter.errors import BrainPainterError, nearest
+
+ColorLike = str | Sequence[float] | np.ndarray
+
+_HEX = re.compile(r"^#?([0-9a-fA-F]{6})([0-9a-fA-F]{2})?$")
+_HELP = (
+    "a colour is a name ('red', 'tab:blue'), '#rrggbb', or three numbers "
+    "either all in 0-1 (0.5,0.2,0.1) or 0-255 (128,51,25)"
+)
+
+
+def _named_colors() -> dict[str, str]:
+    from matplotlib import colors as mcolors
+
+    return mcolors.get_named_colors_mapping()
+
+
+def to_rgb(color: ColorLike) -> tuple[float, float, float]:
+    """Convert a colour to an sRGB triple in 0-1.
+
+    Parameters
+    ----------
+    color : str or sequence of 3 numbers
+        A matplotlib colour name, ``#rrggbb``, ``"r,g,b"``, or a triple.
+        Triples with any component above 1 are read as 0-255.
+
+    Returns
+    -------
+    tuple of float, shape (3,)
+    """
+    if isinstance(color, str):
+        text = color.strip()
+        m = _HEX.match(text)
+        if m and (text.startswith("#") or not text.isalpha()):
+            h = m.group(1)
+            return tuple(int(h[i : i + 2], 16) / 255.0 for i in (0, 2, 4))  # type: ignore[return-value]
+        if "," in text or " " in text:
+            parts = [p for p in re.split(r"[,\s]+", text.strip("()[] ")) if p]
+            try:
+                return to_rgb([float(p) for p in parts])
+            except ValueError:
+                raise BrainPainterError(f"colour {color!r} is not valid: {_HELP}.") from None
+        names = _named_colors()
+        key = text.lower()
+        if key in names:
+            return to_rgb(names[key])
+        close = nearest(key, [n for n in names if ":" not in n or n.startswith("tab:")])
+        hint = f" Did you mean {close[0]!r}?" if close else ""
+        raise BrainPainterError(f"colour {color!r} is not known: {_HELP}.{hint}")
+    try:
+        arr = np.asarray(color, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise BrainPainterError(f"colour {color!r} is not valid: {_HELP}.") from None
+    if arr.size == 4:
+        arr = arr[:3]
+    if arr.size != 3 or not np.all(np.isfinite(arr)) or np.any(arr < 0):
+        raise BrainPainterError(f"colour {color!r} is not valid: {_HELP}.")
+    if np.any(arr > 1):
+        if np.any(arr > 255):
+            raise BrainPainterError(f"colour {color!r} is out of range: {_HELP}.")
+        arr = arr / 255.0
+    return (float(arr[0]), float(arr[1]), float(arr[2]))
+
+
+def to_hex(rgb: Sequence[float]) -> str:
+    """``(r, g, b)`` in 0-1 to ``#rrggbb``."""
+    return "#" + "".join(f"{round(float(c) * 255):02x}" for c in rgb[:3])

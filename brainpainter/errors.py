@@ -1,0 +1,41 @@
+"""User-facing errors: one line, what was given, what is allowed, what to do."""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+
+
+class BrainPainterError(Exception):
+    """An error caused by the user's input or environment.
+
+    The CLI prints its message as one line and exits with code 2, without a
+    traceback. Library callers can catch it like any exception.
+    """
+
+    exit_code = 2
+
+
+class PluginError(BrainPainterError):
+    """A plugin could not be loaded or does not honour its contract."""
+
+
+def nearest(value: str, allowed: Iterable[str], n: int = 1) -> list[str]:
+    """Closest matches to `value` among `allowed` (case-insensitive)."""
+    allowed = list(allowed)
+    lower = {a.lower(): a for a in allowed}
+    hits = difflib.get_close_matches(str(value).lower(), list(lower), n=n, cutoff=0.5)
+    return [lower[h] for h in hits]
+
+
+def choice_error(what: str, value: object, allowed: Iterable[str], hint: str = "") -> BrainPainterError:
+    """Build the standard "'what' must be one of [...]; 'x' was given" error."""
+    allowed = sorted(set(allowed))
+    shown = allowed if len(allowed) <= 12 else [*allowed[:12], "..."]
+    msg = f"{what} must be one of {shown}; {value!r} was given."
+    close = nearest(str(value), allowed)
+    if close:
+        msg += f" Did you mean {close[0]!r}?"
+    if hint:
+        msg += f" {hint}"
+    return BrainPainterError(msg)

@@ -1,0 +1,75 @@
+"""Write images and manifests safely: sanitised names, atomic writes, metadata."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from brainpainter.errors import BrainPainterError
+
+_UNSAFE = re.compile(r"[^A-Za-z0-9._+-]+")
+MAX_NAME = 100
+
+
+def safe_name(name: str) -> str:
+    """A file-name-safe version of an image name (no path parts, <= 100 chars)."""
+    text = _UNSAFE.sub("_", str(name)).strip("._") or "image"
+    return text[:MAX_NAME]
+
+
+def prepare_out_dir(out: str | Path) -> Path:
+    """Create `out` if needed and check that files can be written there."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise BrainPainterError(
+            f"output {str(out)!r} exists and is not a folder; give a folder path with --out."
+        )
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=out, prefix=".bp-write-test-"):
+            pass
+    except OSError as exc:
+        raise BrainPainterError(
+            f"output folder {str(out)!r} is not writable ({exc.strerror or exc}); choose another --out."
+        ) from None
+    return out
+
+
+def atomic_write_bytes(path: Path, data: bytes) -> None:
+    """Write via a temporary file in the same folder, then rename."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def png_bytes(image: np.ndarray, metadata: dict[str, str] | None = None) -> bytes:
+    """Encode an RGBA uint8 image, shape (h, w, 4), as PNG with text chunks."""
+    import io
+
+    from PIL import Image
+    from PIL.PngImagePlugin import PngInfo
+
+    info = PngInfo()
+    for k, v in (metadata or {}).items():
+        info.add_itxt(k, v)
+    buf = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(image), mode="RGBA").save(buf, format="PNG", pnginfo=info)
+    return buf.getvalue()
+
+
+def write_png(path: Path, image: np.ndarray, metadata: dict[str, str] | None = None) -> None:
+    atomic_write_bytes(path, png_bytes(image, metadata))
+
+
+def write_json(path: Path, obj: object) -> None:
+    atomic_write_bytes(path, (json.dumps(obj, indent=2, sort_keys=False) + "\n").encode())

@@ -1,0 +1,315 @@
+"""Render a region-value table to images: the main job, as a Python API.
+
+:class:`Painter` is the long-lived object: it loads the scene once and then
+paints any number of value sets from any view. ``render()`` drives it for a
+whole table and writes PNGs plus a manifest. A server, a movie writer and a
+cluster worker reuse :class:`Painter` the same way.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from brainpainter.atlas import Atlas, get_atlas
+from brainpainter.colormap import (
+    DEFAULT_MISSING_COLOR,
+    DEFAULT_NAN_COLOR,
+    ColourScale,
+    make_scale,
+)
+from brainpainter.colors import ColorLike, to_rgb
+from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.inputs import RegionTable, read_table
+from brainpainter.scene import RGB, RenderSettings, Scene
+from brainpainter.template import Template, load_template
+from brainpainter.views import View, parse_views
+
+# Named groups for --hide: structure names (hemisphere-free) they cover.
+HIDE_GROUPS: dict[str, tuple[str, ...]] = {
+    "cerebellum": ("Cerebellum-Cortex", "Cerebellum-White-Matter"),
+    "ventricles": ("Lateral-Ventricle", "Inf-Lat-Vent", "3rd-Ventricle", "4th-Ventricle"),
+    "brainstem": ("Brain-Stem",),
+    "ventraldc": ("VentralDC",),
+}
+
+
+def resolve_hidden(tokens: Iterable[str], atlas: Atlas) -> frozenset[str]:
+    """Region keys hidden by ``--hide`` tokens (keys, bare names or groups).
+
+    ``Left-Hippocampus`` hides one structure, ``Hippocampus`` both, and a
+    group name (``cerebellum``, ``ventricles``, ``brainstem``, ``ventraldc``)
+    all of its structures.
+    """
+    by_name: dict[str, list[str]] = {}
+    for r in atlas.regions:
+        by_name.setdefault(r.name.lower(), []).append(r.key)
+        by_name.setdefault(r.key.lower(), []).append(r.key)
+    hidden: set[str] = set()
+    for token in tokens:
+        t = str(token).strip()
+        if not t:
+            continue
+        if t.lower() in HIDE_GROUPS:
+            for name in HIDE_GROUPS[t.lower()]:
+                hidden.update(by_name.get(name.lower(), []))
+        elif t.lower() in by_name:
+            hidden.update(by_name[t.lower()])
+        else:
+            raise choice_error("--hide", t, [*HIDE_GROUPS, *atlas.keys],
+                               "Give region names, or a group.")
+    return frozenset(hidden)
+
+
+def region_colors(values: Mapping[str, float], atlas: Atlas, scale: ColourScale) -> dict[str, RGB]:
+    """Colour of every atlas region for one image.
+
+    Parameters
+    ----------
+    values : mapping of region key to float
+        NaN = empty cell (``scale.nan_color``); keys absent = no data
+        (``scale.missing_color``).
+    """
+    keys = [k for k in atlas.keys if k in values]
+    colors: dict[str, RGB] = {k: scale.missing_color for k in atlas.keys}
+    if keys:
+        rgb = scale(np.array([values[k] for k in keys], dtype=float))
+        colors.update({k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(keys, rgb, strict=True)})
+    return colors
+
+
+@dataclass
+class Painter:
+    """A loaded scene plus a renderer, reused for every image.
+
+    Parameters
+    ----------
+    atlas : Atlas or str
+    template : Template or str
+    surface : {"pial", "white", "inflated"}
+    hidden : iterable of str
+        ``--hide`` tokens.
+    settings : RenderSettings
+    renderer : str
+        Name in the ``brainpainter.renderers`` registry.
+    """
+
+    atlas: Atlas | str = "dk"
+    template: Template | str = "fsaverage"
+    surface: str = "pial"
+    hidden: Iterable[str] = ()
+    settings: RenderSettings = field(default_factory=RenderSettings)
+    renderer: str = "blender"
+    medial_wall_color: ColorLike = (0.72, 0.72, 0.72)
+    _renderer: Any = field(default=None, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if isinstance(self.atlas, str):
+            self.atlas = get_atlas(self.atlas)
+        if not isinstance(self.template, Template):
+            self.template = load_template(self.template)
+        self.scene = Scene(
+            template=self.template,
+            labels=self.atlas.template_labels,
+            surface=self.surface,
+            hidden=resolve_hidden(self.hidden, self.atlas),
+            settings=self.settings,
+            medial_wall_color=to_rgb(self.medial_wall_color),
+        )
+        if self.atlas.template_labels not in self.template.label_sets:
+            raise BrainPainterError(
+                f"atlas {self.atlas.name!r} needs the label set {self.atlas.template_labels!r}, which "
+                f"template {self.template.name!r} lacks (it has {self.template.label_sets})."
+            )
+
+    def _load(self) -> Any:
+        if self._renderer is None:
+            from brainpainter import registry
+
+            cls = registry.renderers.get(self.renderer)
+            self._renderer = cls(self.scene)
+        return self._renderer
+
+    def paint_colors(self, colors: Mapping[str, RGB], view: View) -> np.ndarray:
+        """Render explicit region colours; returns RGBA uint8, shape (h, w, 4)."""
+        return self._load().render(colors, view)
+
+    def paint(self, values: Mapping[str, float], view: View, scale: ColourScale) -> np.ndarray:
+        """Render region values through `scale`; returns RGBA uint8, shape (h, w, 4)."""
+        assert isinstance(self.atlas, Atlas)
+        return self.paint_colors(region_colors(values, self.atlas, scale), view)
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    def __enter__(self) -> Painter:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+@dataclass
+class RenderResult:
+    """What :func:`render` made.
+
+    Attributes
+    ----------
+    files : list of Path
+        PNGs written (empty when no output folder was given).
+    images : dict of (str, str) to ndarray
+        ``(image name, view name) -> RGBA (h, w, 4)`` when rendering in memory.
+    manifest : dict
+    """
+
+    files: list[Path]
+    images: dict[tuple[str, str], np.ndarray]
+    manifest: dict[str, Any]
+
+    def _repr_html_(self) -> str:  # notebooks: show the images
+        import base64
+
+        from brainpainter.output import png_bytes
+
+        parts = []
+        for (image, view), arr in self.images.items():
+            b64 = base64.b64encode(png_bytes(arr)).decode()
+            parts.append(
+                '<figure style="display:inline-block">'
+                f'<img width="300" src="data:image/png;base64,{b64}">'
+                f"<figcaption>{image} · {view}</figcaption></figure>"
+            )
+        return "".join(parts) or f"<pre>{len(self.files)} file(s) written</pre>"
+
+
+def render(
+    data: Any,
+    atlas: Atlas | str = "dk",
+    *,
+    out: str | Path | None = None,
+    views: str | Sequence[str] | None = None,
+    template: Template | str = "fsaverage",
+    surface: str = "pial",
+    gradient: Sequence[ColorLike] | str | None = None,
+    cmap: str | None = None,
+    vmin: float | None = None,
+    vmax: float | None = None,
+    center: float | None = None,
+    nan_color: ColorLike = DEFAULT_NAN_COLOR,
+    missing_color: ColorLike = DEFAULT_MISSING_COLOR,
+    hide: Iterable[str] = (),
+    background: ColorLike | None = "white",
+    width: int = 1200,
+    height: int = 900,
+    quality: str = "default",
+    shading: str = "default",
+    lighting: str = "studio",
+    glass_opacity: float = 0.12,
+    renderer: str = "blender",
+    image_column: str | None = None,
+    strict: bool = False,
+    progress: bool = True,
+) -> RenderResult:
+    """Render every row of a region-value table from every view.
+
+    Parameters
+    ----------
+    data : path, DataFrame or dict
+        See :func:`brainpainter.inputs.read_table`.
+    atlas : str or Atlas
+        ``"dk"``, ``"destrieux"``, ``"dkt"`` (alias ``"tourville"``) or a plugin atlas.
+    out : path, optional
+        Output folder for ``{image}_{view}.png`` and ``manifest.json``. Without
+        it the images are returned in memory (``result.images``).
+    views : str or list of str, optional
+        Default: BrainPainter's ``lateral-left, medial-left, subcortical``.
+    gradient, cmap, vmin, vmax, center, nan_color, missing_color
+        Colour scale, see :func:`brainpainter.colormap.make_scale`.
+    hide : iterable of str
+        Regions, hemisphere-free names or groups (``cerebellum``) not to draw.
+    background : colour or None
+        None renders a transparent background.
+
+    Returns
+    -------
+    RenderResult
+    """
+    from brainpainter import __version__
+    from brainpainter.output import prepare_out_dir, safe_name, write_json, write_png
+
+    # Validate everything before the first image so bad input leaves nothing behind.
+    if isinstance(atlas, str):
+        atlas = get_atlas(atlas)
+    # Options first (cheap, and their errors should not wait for a big input file).
+    make_scale(gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center,
+               nan_color=nan_color, missing_color=missing_color)
+    view_list: list[View] = parse_views(views)
+    table: RegionTable = read_table(data, atlas, image_column=image_column, strict=strict)
+    scale = make_scale(gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center,
+                       nan_color=nan_color, missing_color=missing_color, data=table.values)
+    for what, n in (("width", width), ("height", height)):
+        if not 16 <= int(n) <= 8192:
+            raise BrainPainterError(f"{what} must be between 16 and 8192 pixels; {n} was given.")
+    if not 0.0 <= glass_opacity <= 1.0:
+        raise BrainPainterError(f"glass opacity must be in [0, 1]; {glass_opacity} was given.")
+    settings = RenderSettings(
+        width=int(width), height=int(height),
+        background=None if background is None else to_rgb(background),
+        quality=quality, shading=shading, lighting=lighting, glass_opacity=float(glass_opacity),
+    )
+    names = [safe_name(n) for n in table.images]
+    clash = sorted({n for n in names if names.count(n) > 1})
+    if clash:
+        raise BrainPainterError(
+            f"image names {clash[:3]} become the same file name after removing unsafe characters; "
+            "make the image names differ in letters or digits."
+        )
+    painter = Painter(atlas, template, surface, hide, settings, renderer)
+    out_dir = prepare_out_dir(out) if out is not None else None
+
+    settings_dict = {
+        "atlas": atlas.name, "template": painter.scene.template.name, "surface": surface,
+        "views": [v.to_dict() for v in view_list], "scale": scale.to_dict(),
+        "hidden": sorted(painter.scene.hidden), "renderer": renderer, **settings.to_dict(),
+    }
+    files: list[Path] = []
+    images: dict[tuple[str, str], np.ndarray] = {}
+    entries = []
+    total = len(table.images) * len(view_list)
+    from tqdm.auto import tqdm
+
+    with painter, tqdm(total=total, unit="img", desc="rendering", disable=not progress) as bar:
+        for i, image in enumerate(table.images):
+            values = table.row(i)
+            for view in view_list:
+                pixels = painter.paint(values, view, scale)
+                if out_dir is None:
+                    images[(image, view.name)] = pixels
+                else:
+                    path = out_dir / f"{names[i]}_{view.name}.png"
+                    meta = {
+                        "Software": f"brainpainter {__version__}",
+                        "brainpainter:image": image,
+                        "brainpainter:view": view.name,
+                        "brainpainter:settings": json.dumps(settings_dict, sort_keys=True),
+                    }
+                    write_png(path, pixels, meta)
+                    files.append(path)
+                    entries.append({"file": path.name, "image": image, "row": i, "view": view.name})
+                bar.update(1)
+    manifest = {
+        "software": {"brainpainter": __version__},
+        "input": table.summary(),
+        "settings": settings_dict,
+        "files": entries,
+    }
+    if out_dir is not None:
+        write_json(out_dir / "manifest.json", manifest)
+    return RenderResult(files, images, manifest)

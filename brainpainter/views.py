@@ -1,0 +1,152 @@
+"""Camera presets: BrainPainter's views and more, in anatomical terms.
+
+Coordinates are RAS (x right, y anterior, z superior). ``azimuth`` is the
+camera's direction from the brain centre in the horizontal plane, in degrees
+counter-clockwise from +x seen from above: 0 = from the right, 90 = from the
+front, 180 = from the left, 270 = from behind. ``elevation`` is the angle
+above the horizontal plane: 90 = from above, -90 = from below. The image's
+up is superior, except straight from above or below where it is anterior.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+from brainpainter.errors import BrainPainterError, choice_error
+
+
+@dataclass(frozen=True)
+class View:
+    """What to draw and from where.
+
+    Attributes
+    ----------
+    name : str
+    content : {"cortex", "subcortical"}
+        ``cortex`` draws the cortical hemispheres in `hemis`; ``subcortical``
+        draws all subcortical structures plus the cortex of `glass` as glass.
+    hemis : tuple of {"lh", "rh"}
+        Cortical hemispheres drawn opaque.
+    glass : tuple of {"lh", "rh"}
+        Hemispheres drawn as a transparent glass brain.
+    azimuth, elevation : float
+        Camera direction in degrees (see module docstring).
+    zoom : float
+        > 1 moves the camera closer.
+    """
+
+    name: str
+    content: str
+    hemis: tuple[str, ...]
+    azimuth: float
+    elevation: float
+    zoom: float = 1.0
+    glass: tuple[str, ...] = ()
+
+    def to_dict(self) -> dict:
+        return {
+            "name": self.name, "content": self.content, "hemis": list(self.hemis),
+            "glass": list(self.glass), "azimuth": self.azimuth,
+            "elevation": self.elevation, "zoom": self.zoom,
+        }
+
+
+_BOTH = ("lh", "rh")
+PRESETS: dict[str, View] = {
+    v.name: v
+    for v in (
+        View("lateral-left", "cortex", ("lh",), 180.0, 0.0),
+        View("medial-left", "cortex", ("lh",), 0.0, 0.0),
+        View("lateral-right", "cortex", ("rh",), 0.0, 0.0),
+        View("medial-right", "cortex", ("rh",), 180.0, 0.0),
+        View("dorsal", "cortex", _BOTH, 0.0, 90.0),
+        View("ventral", "cortex", _BOTH, 0.0, -90.0),
+        View("anterior", "cortex", _BOTH, 90.0, 0.0),
+        View("posterior", "cortex", _BOTH, 270.0, 0.0),
+        View("subcortical", "subcortical", (), 200.0, 20.0, glass=("rh",)),
+        View("subcortical-left", "subcortical", (), 180.0, 0.0, glass=("rh",)),
+        View("subcortical-dorsal", "subcortical", (), 0.0, 90.0, glass=_BOTH),
+    )
+}
+DEFAULT_VIEWS = ("lateral-left", "medial-left", "subcortical")
+
+# The original BrainPainter's names, and common synonyms.
+ALIASES: dict[str, str] = {
+    "cortical-outer-left-hemisphere": "lateral-left",
+    "cortical-inner-left-hemisphere": "medial-left",
+    "cortical-outer-right-hemisphere": "lateral-right",
+    "cortical-inner-right-hemisphere": "medial-right",
+    "cortical-outer": "lateral-left",
+    "cortical-inner": "medial-left",
+    "top": "dorsal",
+    "bottom": "ventral",
+    "front": "anterior",
+    "back": "posterior",
+    "superior": "dorsal",
+    "inferior": "ventral",
+    "subcortical-top": "subcortical-dorsal",
+    "left-lateral": "lateral-left",
+    "left-medial": "medial-left",
+    "right-lateral": "lateral-right",
+    "right-medial": "medial-right",
+}
+
+
+def get_view(name: str) -> View:
+    """A preset view by name or alias (case-insensitive)."""
+    key = str(name).strip().lower()
+    key = ALIASES.get(key, key)
+    if key not in PRESETS:
+        raise choice_error("view", name, [*PRESETS, *ALIASES])
+    return PRESETS[key]
+
+
+def camera_view(azimuth: float, elevation: float, zoom: float = 1.0,
+                hemis: tuple[str, ...] = _BOTH, name: str | None = None) -> View:
+    """A free camera on the cortex of `hemis`."""
+    if not -90.0 <= elevation <= 90.0 or not zoom > 0:
+        raise BrainPainterError(
+            f"elevation must be in [-90, 90] and zoom > 0; elevation={elevation}, zoom={zoom} were given."
+        )
+    name = name or f"az{azimuth:g}-el{elevation:g}" + (f"-zoom{zoom:g}" if zoom != 1 else "")
+    return View(name, "cortex", tuple(hemis), float(azimuth) % 360.0, float(elevation), float(zoom))
+
+
+def parse_views(spec: str | list[str] | tuple[str, ...] | None) -> list[View]:
+    """Parse ``"lateral-left,medial-left"`` or a list; ``"all"`` gives every preset.
+
+    A free camera is written ``camera:AZ:EL[:ZOOM]``.
+    """
+    if spec is None:
+        return [PRESETS[v] for v in DEFAULT_VIEWS]
+    items = spec.split(",") if isinstance(spec, str) else list(spec)
+    out: list[View] = []
+    for item in (i.strip() for i in items):
+        if not item:
+            continue
+        if item.lower() == "all":
+            out.extend(PRESETS.values())
+        elif item.lower().startswith("camera:"):
+            parts = item.split(":")[1:]
+            try:
+                nums = [float(p) for p in parts]
+                if len(nums) not in (2, 3):
+                    raise ValueError
+            except ValueError:
+                raise BrainPainterError(
+                    f"free camera {item!r} must be camera:AZIMUTH:ELEVATION[:ZOOM] in degrees, "
+                    "e.g. camera:135:30:1.2"
+                ) from None
+            out.append(camera_view(*nums))
+        else:
+            out.append(get_view(item))
+    if not out:
+        raise BrainPainterError(f"no view was given in {spec!r}; e.g. --views lateral-left,medial-left")
+    seen: dict[str, View] = {}
+    for v in out:
+        seen.setdefault(v.name, v)
+    return list(seen.values())
+
+
+def with_zoom(view: View, zoom: float) -> View:
+    return replace(view, zoom=zoom)
