@@ -106,7 +106,8 @@ def _read_frame(path: Path):
             f"input file {str(path)!r} is {size / 1e6:.0f} MB; at most {MAX_BYTES // 2**20} MB is read. "
             "Split it into smaller tables."
         )
-    head = path.open("rb").read(4096)
+    with path.open("rb") as fh:
+        head = fh.read(4096)
     if b"\x00" in head:
         raise BrainPainterError(
             f"input file {str(path)!r} is binary, not a text table; give a CSV with one column per region."

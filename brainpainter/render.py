@@ -121,6 +121,10 @@ class Painter:
             settings=self.settings,
             medial_wall_color=to_rgb(self.medial_wall_color),
         )
+        from brainpainter import registry
+
+        # Resolve (import) the renderer now, so a missing bpy fails before any output.
+        self._renderer_class = registry.renderers.get(self.renderer)
         if self.atlas.template_labels not in self.template.label_sets:
             raise BrainPainterError(
                 f"atlas {self.atlas.name!r} needs the label set {self.atlas.template_labels!r}, which "
@@ -129,10 +133,7 @@ class Painter:
 
     def _load(self) -> Any:
         if self._renderer is None:
-            from brainpainter import registry
-
-            cls = registry.renderers.get(self.renderer)
-            self._renderer = cls(self.scene)
+            self._renderer = self._renderer_class(self.scene)
         return self._renderer
 
     def paint_colors(self, colors: Mapping[str, RGB], view: View) -> np.ndarray:

@@ -29,7 +29,8 @@ def test_original_format(tmp_path):
 
 
 def test_names_case_insensitive_and_freesurfer_spellings(tmp_path):
-    path = write(tmp_path, "image-name-unique,left-INSULA,ctx-rh-insula,Left-Thalamus-Proper,lh_precuneus\nx,1,2,3,0\n")
+    path = write(tmp_path, "image-name-unique,left-INSULA,ctx-rh-insula,Left-Thalamus-Proper,lh_precuneus\n"
+                           "x,1,2,3,0\n")
     table = read_table(path, "dk")
     assert table.regions == ("Left-insula", "Right-insula", "Left-Thalamus", "Left-precuneus")
 

@@ -105,7 +105,8 @@ def test_plugin_breaking_the_contract_is_named(tmp_path):
         tmp_path / "site", "wrong-atlas", {"brainpainter.atlases": {"wrong": "wrong_atlas:thing"}},
         {"wrong_atlas/__init__.py": "thing = 42\n"},
     )
-    with installed(root), pytest.raises(BrainPainterError, match="'wrong'.*not a brainpainter.atlas.Atlas"):
+    expected = r"'wrong'.*not a brainpainter\.atlas\.Atlas"
+    with installed(root), pytest.raises(BrainPainterError, match=expected):
         registry.atlases.get("wrong")
 
 

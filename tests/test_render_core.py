@@ -1,0 +1,149 @@
+"""The render pipeline with a stand-in renderer: naming, manifest, metadata, errors.
+
+The real Blender renderer is tested in test_renderer_blender.py; here a tiny
+numpy renderer paints each image with the colour of ``Left-insula`` so that the
+core's work (reading, colour mapping, files, manifest) is checked quickly.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from brainpainter import registry
+from brainpainter.errors import BrainPainterError
+from brainpainter.render import Painter, render, resolve_hidden
+from brainpainter.testing import write_tiny_template
+
+
+class SolidRenderer:
+    instances = 0
+
+    def __init__(self, scene):
+        type(self).instances += 1
+        self.scene = scene
+
+    def render(self, colors, view):
+        s = self.scene.settings
+        rgb = np.round(np.array(colors["Left-insula"]) * 255).astype(np.uint8)
+        img = np.zeros((s.height, s.width, 4), np.uint8)
+        img[..., :3] = rgb
+        img[..., 3] = 255
+        return img
+
+    def close(self):
+        pass
+
+
+@pytest.fixture
+def solid():
+    registry.renderers.register("solid", lambda: SolidRenderer, replace=True)
+    SolidRenderer.instances = 0
+    yield "solid"
+    registry.renderers.unregister("solid")
+
+
+@pytest.fixture
+def tiny(tmp_path):
+    return write_tiny_template(tmp_path / "tiny")
+
+
+def csv(tmp_path, text):
+    p = tmp_path / "in.csv"
+    p.write_text(text)
+    return p
+
+
+def test_one_png_per_row_and_view_with_manifest(tmp_path, solid, tiny):
+    data = csv(tmp_path, "Image-name-unique,Left-insula,Right-insula\nA,1.2,0\nB,3,1\n")
+    out = tmp_path / "out"
+    result = render(data, "dk", out=out, template=str(tiny), renderer=solid, width=40, height=30,
+                    views="lateral-left,medial-left,subcortical", progress=False)
+    names = sorted(p.name for p in out.iterdir())
+    views = ("lateral-left", "medial-left", "subcortical")
+    assert names == sorted([f"{i}_{v}.png" for i in "AB" for v in views] + ["manifest.json"])
+    assert SolidRenderer.instances == 1  # scene loaded once for all 6 images
+    manifest = json.loads((out / "manifest.json").read_text())
+    pairs = [(f["image"], f["view"]) for f in manifest["files"]]
+    assert pairs[:2] == [("A", "lateral-left"), ("A", "medial-left")]
+    assert manifest["settings"]["scale"]["vmax"] == 3.0 and manifest["input"]["n_regions_matched"] == 2
+    img = Image.open(out / "A_lateral-left.png")
+    assert img.size == (40, 30)
+    # 1.2 on white, yellow, orange, red = 80% yellow + 20% orange
+    assert tuple(np.asarray(img)[0, 0, :3]) == (255, round(255 * (0.8 + 0.2 * 165 / 255)), 0)
+    settings = json.loads(img.text["brainpainter:settings"])
+    assert settings["atlas"] == "dk" and img.text["Software"].startswith("brainpainter ")
+    assert len(result.files) == 6
+
+
+def test_in_memory_render_returns_arrays(solid, tiny):
+    result = render({"Left-insula": [0.0]}, "dk", template=str(tiny), renderer=solid, width=16,
+                    height=16, views=["lateral-left"], progress=False)
+    assert list(result.images) == [("1", "lateral-left")]
+    assert result.images[("1", "lateral-left")].shape == (16, 16, 4)
+
+
+def test_image_names_are_sanitised(tmp_path, solid, tiny):
+    data = csv(tmp_path, "Image-name-unique,Left-insula\n../../etc/passwd,1\n")
+    out = tmp_path / "out"
+    render(data, "dk", out=out, template=str(tiny), renderer=solid, width=16, height=16,
+           views="lateral-left", progress=False)
+    assert sorted(p.name for p in out.iterdir()) == ["etc_passwd_lateral-left.png", "manifest.json"]
+    assert not (tmp_path / "etc").exists()
+
+
+def test_absent_and_nan_regions_get_their_colours(solid, tiny):
+    from brainpainter.colormap import make_scale
+    from brainpainter.scene import RenderSettings
+    from brainpainter.views import get_view
+
+    painter = Painter("dk", str(tiny), renderer=solid, settings=RenderSettings(width=4, height=4))
+    scale = make_scale(nan_color="#000080", missing_color="#008000")
+    nan_img = painter.paint({"Left-insula": float("nan")}, get_view("lateral-left"), scale)
+    absent_img = painter.paint({}, get_view("lateral-left"), scale)
+    assert tuple(nan_img[0, 0, :3]) == (0, 0, 128)
+    assert tuple(absent_img[0, 0, :3]) == (0, 128, 0)
+
+
+def test_hide_groups_and_names():
+    from brainpainter.atlas import get_atlas
+
+    dk = get_atlas("dk")
+    assert resolve_hidden(["cerebellum"], dk) == {
+        "Left-Cerebellum-Cortex", "Right-Cerebellum-Cortex",
+        "Left-Cerebellum-White-Matter", "Right-Cerebellum-White-Matter"}
+    assert resolve_hidden(["hippocampus", "Brain-Stem"], dk) == {
+        "Left-Hippocampus", "Right-Hippocampus", "Brain-Stem"}
+    with pytest.raises(BrainPainterError, match="Did you mean 'cerebellum'"):
+        resolve_hidden(["cerebelum"], dk)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"views": "sideways"}, "view must be one of"),
+        ({"width": 0}, "width must be between"),
+        ({"glass_opacity": 2.0}, "glass opacity"),
+        ({"surface": "smooth"}, "surface must be one of"),
+        ({"renderer": "povray"}, "'renderer' must be one of"),
+    ],
+)
+def test_bad_options_fail_before_writing(tmp_path, solid, tiny, kwargs, message):
+    data = csv(tmp_path, "Image-name-unique,Left-insula\nA,1\n")
+    out = tmp_path / "out"
+    with pytest.raises(BrainPainterError, match=message):
+        render(data, "dk", out=out, template=str(tiny), progress=False, **{"renderer": solid, **kwargs})
+    assert not out.exists()
+
+
+def test_unwritable_output_folder(tmp_path, solid, tiny):
+    data = csv(tmp_path, "Image-name-unique,Left-insula\nA,1\n")
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    with pytest.raises(BrainPainterError, match="is not a folder"):
+        render(data, "dk", out=blocker, template=str(tiny), renderer=solid, progress=False)
+    with pytest.raises(BrainPainterError, match="not writable"):
+        render(data, "dk", out=blocker / "sub", template=str(tiny), renderer=solid, progress=False)
