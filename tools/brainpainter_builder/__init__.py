@@ -1,0 +1,1 @@
+"""Offline tools that build brainpainter's bundled data from FreeSurfer files."""
