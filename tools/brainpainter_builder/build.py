@@ -1,0 +1,326 @@
+"""Build a brainpainter template from a FreeSurfer subject directory.
+
+One pipeline (read sources, construct meshes, write, validate)::
+
+    build_template("subjects/fsaverage", "templates/fsaverage")
+
+1. **read**: surfaces, annotations (or a GCSA classifier atlas for DKT),
+   ``mri/aseg.mgz`` — every reader fails with a one-line
+   :class:`~brainpainter.errors.BrainPainterError` naming the bad file;
+2. **cortex**: per hemisphere and label set, one mesh whose faces carry a
+   region label, decimated on the pial surface with region boundaries locked,
+   shared by the pial, white and inflated surfaces (:mod:`.cortex`);
+3. **subcortical**: marching cubes of the aseg structures (:mod:`.subcortical`);
+4. **glass**: smooth hull of each pial surface (:mod:`.glass`);
+5. **write** into a hidden sibling directory (:mod:`.writer`);
+6. **validate** (:func:`.report.template_problems`): every region has faces
+   on every hemisphere, no open edge, subcortical volumes within 5 %, size in
+   budget — then rename into place. A failure leaves nothing behind.
+
+The output is byte-identical for identical inputs.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.template import FORMAT, FORMAT_VERSION, HEMIS, SURFACES
+from brainpainter_builder import cortex, glass, report, sources, subcortical, writer
+
+#: Faces per hemisphere and label set of a default build (full fsaverage: 327680).
+DEFAULT_TARGET_FACES = 120_000
+#: Size budget of a template, MB (the default fsaverage template is about 17 MB).
+DEFAULT_MAX_SIZE_MB = 25.0
+#: Faces of each glass-brain hull.
+GLASS_FACES = 6000
+#: Gap between the inflated hemispheres, mm.
+INFLATED_GAP_MM = 10.0
+DEFAULT_ATLASES = ("dk", "destrieux", "dkt")
+
+
+def _hex(rgb) -> str:
+    return "#{:02x}{:02x}{:02x}".format(*(int(c) for c in rgb[:3]))
+
+
+def _bounds(arrays: list[np.ndarray]) -> list[list[float]]:
+    stacked = np.concatenate([a.reshape(-1, 3) for a in arrays])
+    return [stacked.min(axis=0).astype(float).tolist(), stacked.max(axis=0).astype(float).tolist()]
+
+
+def _region_names(per_hemi: dict[str, cortex.LabelledSurface]) -> list[str]:
+    """Regions of a label set: non-region names excluded, in colour-table order."""
+    out: list[str] = []
+    for hemi in HEMIS:
+        mesh = per_hemi[hemi]
+        used = np.unique(mesh.face_label)
+        for i in used:
+            name = mesh.names[int(i)]
+            if name not in sources.NON_REGIONS and name not in out:
+                out.append(name)
+    order = {n: i for i, n in enumerate(per_hemi[HEMIS[0]].names)}
+    return sorted(out, key=lambda n: (order.get(n, len(order)), n))
+
+
+def _check_args(atlases, surfaces, target_faces) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    atlases = tuple(dict.fromkeys(atlases))
+    surfaces = tuple(dict.fromkeys(surfaces))
+    if not atlases:
+        raise BrainPainterError("no atlas given; choose at least one of "
+                                f"{list(DEFAULT_ATLASES)} (or an annotation name in label/)")
+    for s in surfaces:
+        if s not in SURFACES:
+            raise choice_error("'surface'", s, SURFACES)
+    if "pial" not in surfaces:
+        raise BrainPainterError(f"surfaces must include 'pial' (decimation and bounds use it); "
+                                f"{list(surfaces)} was given")
+    if target_faces is not None and (not isinstance(target_faces, int | np.integer)
+                                     or target_faces < 1000):
+        raise BrainPainterError(f"target_faces must be an integer >= 1000 or None (full "
+                                f"resolution); {target_faces!r} was given")
+    return atlases, surfaces
+
+
+def build_template(subject_dir: str | Path, out_dir: str | Path, *,
+                   atlases: tuple[str, ...] | list[str] = DEFAULT_ATLASES,
+                   surfaces: tuple[str, ...] | list[str] = SURFACES,
+                   target_faces: int | None = DEFAULT_TARGET_FACES,
+                   name: str | None = None,
+                   gcs_dir: str | Path | None = None,
+                   progress: bool = True,
+                   freesurfer_version: str | None = None,
+                   max_size_mb: float | None = DEFAULT_MAX_SIZE_MB,
+                   license_file: str | Path | None = None,
+                   expected_regions: dict[str, int] | None = None) -> Path:
+    """Build a template directory from a FreeSurfer subject.
+
+    Parameters
+    ----------
+    subject_dir : path-like
+        FreeSurfer subject (``surf/``, ``label/``, ``mri/``).
+    out_dir : path-like
+        Template directory to create (an existing template there is replaced).
+    atlases : sequence of str
+        Label sets: ``"dk"`` (aparc), ``"destrieux"`` (aparc.a2009s), ``"dkt"``
+        (aparc.DKTatlas, or derived from the DKT40 classifier atlas when the
+        subject has no DKT annotation), or any annotation name in ``label/``.
+    surfaces : sequence of str
+        Among ``"pial"`` (required), ``"white"``, ``"inflated"``.
+    target_faces : int or None
+        Faces per hemisphere and label set after decimation; None keeps full
+        resolution. Region-boundary faces are never removed.
+    name : str, optional
+        Template name (default: the subject's folder name).
+    gcs_dir : path-like, optional
+        Folder of FreeSurfer classifier atlases (default
+        ``SUBJECT/../../average``, then ``$FREESURFER_HOME/average``).
+    progress : bool
+        Show a progress bar on stderr.
+    freesurfer_version : str, optional
+        Recorded in the manifest (default: read ``build-stamp.txt``, else "unknown").
+    max_size_mb : float or None
+        Fail if the template is larger (None: no limit).
+    license_file : path-like, optional
+        FreeSurfer's licence text (default: found beside the subjects folder
+        or in ``$FREESURFER_HOME``); its Part B goes into the template.
+    expected_regions : dict of str to int, optional
+        Regions per hemisphere each label set must have (e.g. ``{"dk": 34}``);
+        checked in the validation step.
+
+    Returns
+    -------
+    Path
+        The template directory.
+
+    Raises
+    ------
+    BrainPainterError
+        Bad or missing input, or a template that fails validation; nothing
+        is left at `out_dir` (or its previous content is untouched).
+    """
+    from tqdm import tqdm
+
+    atlases, surfaces = _check_args(atlases, surfaces, target_faces)
+    subject = sources.Subject(subject_dir, gcs_dir=gcs_dir)
+    for label_set in atlases:
+        subject.check_label_set(label_set)
+    version = freesurfer_version or sources.freesurfer_version(subject.path)
+    name = name or subject.name
+    n_steps = 2 + 2 * len(atlases) + 1 + 2 + 2
+    bar = tqdm(total=n_steps, desc=f"template {name}", unit="step", disable=not progress,
+               leave=False, dynamic_ncols=True)
+
+    def step(what: str) -> None:
+        bar.set_postfix_str(what, refresh=True)
+
+    try:
+        # 1. read ---------------------------------------------------------------
+        surf: dict[str, dict[str, tuple[np.ndarray, np.ndarray]]] = {}
+        for hemi in HEMIS:
+            step(f"read {hemi} surfaces")
+            surf[hemi] = {s: subject.surface(hemi, s) for s in surfaces}
+            for s in surfaces:
+                if not np.array_equal(surf[hemi][s][1], surf[hemi]["pial"][1]):
+                    raise BrainPainterError(
+                        f"{subject.path / 'surf' / f'{hemi}.{s}'} does not share the triangles "
+                        f"of {hemi}.pial; all surfaces of a hemisphere must come from one recon-all run")
+            bar.update()
+        offsets = {h: {} for h in HEMIS}
+        if "inflated" in surfaces:
+            off = cortex.inflated_offsets(surf["lh"]["inflated"][0], surf["rh"]["inflated"][0],
+                                          gap=INFLATED_GAP_MM)
+            offsets = {h: {"inflated": off[h]} for h in HEMIS}
+
+        # 2. cortex ---------------------------------------------------------------
+        meshes: dict[str, dict[str, cortex.LabelledSurface]] = {}
+        label_sources: dict[str, list[str]] = {}
+        for label_set in atlases:
+            meshes[label_set] = {}
+            label_sources[label_set] = []
+            for hemi in HEMIS:
+                step(f"{label_set} {hemi}: labels")
+                annot = subject.annotation(hemi, label_set)
+                label_sources[label_set].append(annot.source)
+                step(f"{label_set} {hemi}: split and decimate")
+                meshes[label_set][hemi] = cortex.build_labelled_surface(
+                    surf[hemi], annot.labels, annot.names, annot.ctab, target_faces,
+                    offsets=offsets[hemi])
+                bar.update()
+
+        # 3. subcortical ----------------------------------------------------------
+        step("read aseg")
+        aseg, vox2ras, voxel_volume = subject.aseg()
+        structures = subcortical.build_structures(
+            aseg, vox2ras, voxel_volume, progress=lambda s: step(f"subcortical {s}"))
+        del aseg
+        bar.update()
+
+        # 4. glass ----------------------------------------------------------------
+        hulls = {}
+        for hemi in HEMIS:
+            step(f"glass {hemi}")
+            hulls[hemi] = glass.pial_hull(*surf[hemi]["pial"], target_faces=GLASS_FACES)
+            bar.update()
+
+        # 5. write + 6. validate ----------------------------------------------------
+        with writer.staged_dir(out_dir) as stage:
+            step("write")
+            manifest = _write(stage, name=name, subject=subject, version=version,
+                              surfaces=surfaces, target_faces=target_faces, meshes=meshes,
+                              label_sources=label_sources, offsets=offsets,
+                              structures=structures, hulls=hulls, license_file=license_file)
+            bar.update()
+            step("validate")
+            problems = report.template_problems(stage, max_size_mb=max_size_mb)
+            for label_set, n in (expected_regions or {}).items():
+                got = len(manifest["labels"].get(label_set, {}).get("regions", []))
+                if label_set in manifest["labels"] and got != n:
+                    problems.append(f"label set {label_set!r} has {got} regions per hemisphere, "
+                                    f"expected {n}")
+            if problems:
+                raise BrainPainterError(
+                    f"template {name!r} from {subject.path} failed validation: " + "; ".join(problems))
+            del manifest
+            bar.update()
+    finally:
+        bar.close()
+    return Path(out_dir).expanduser().absolute()
+
+
+def _write(stage: Path, *, name, subject, version, surfaces, target_faces, meshes, label_sources,
+           offsets, structures, hulls, license_file) -> dict:
+    labels_entry: dict = {}
+    all_vertices: dict[str, list[np.ndarray]] = {s: [] for s in surfaces}
+    totals = {"cortex": 0, "subcortical": 0, "glass": 0}
+    for label_set, per_hemi in meshes.items():
+        regions = _region_names(per_hemi)
+        entry = {"source": ", ".join(label_sources[label_set]), "regions": regions, "cortex": {}}
+        for hemi in HEMIS:
+            m = per_hemi[hemi]
+            file = f"cortex-{hemi}-{label_set}.npz"
+            arrays = {"faces": m.faces, "face_label": m.face_label}
+            arrays.update({s: m.vertices[s] for s in surfaces})
+            arrays["source_vertex"] = m.source_vertex
+            writer.save_npz(stage / file, arrays)
+            for s in surfaces:
+                all_vertices[s].append(m.vertices[s])
+            counts = np.bincount(m.face_label.astype(np.int64), minlength=len(m.names))
+            entry["cortex"][hemi] = {
+                "file": file,
+                "names": list(m.names),
+                "colors": [_hex(c) for c in m.colors],
+                "n_vertices": len(m.source_vertex),
+                "n_faces": len(m.faces),
+                "n_source_faces": m.n_source_faces,
+                "open_edges": cortex.open_edge_count(m.faces),
+                "region_faces": {n: int(counts[i]) for i, n in enumerate(m.names) if counts[i]},
+            }
+            totals["cortex"] += len(m.faces)
+        labels_entry[label_set] = entry
+
+    merged = subcortical.merge_structures(structures)
+    writer.save_npz(stage / "subcortical.npz", merged)
+    totals["subcortical"] = len(merged["faces"])
+    glass_entry = {}
+    for hemi in HEMIS:
+        v, f = hulls[hemi]
+        file = f"glass-{hemi}.npz"
+        writer.save_npz(stage / file, {"vertices": v.astype(np.float32), "faces": f.astype(np.int32)})
+        glass_entry[hemi] = {"file": file, "n_vertices": len(v), "n_faces": len(f)}
+        totals["glass"] += len(f)
+
+    vname = version.removeprefix("freesurfer-")
+    manifest = {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "name": name,
+        "source": {
+            "subject": subject.name,
+            "freesurfer": version,
+            "builder": "brainpainter_builder (tools/brainpainter_builder)",
+        },
+        "space": f"{subject.name} FreeSurfer surface RAS (tkr-RAS), mm",
+        "surfaces": list(surfaces),
+        "target_faces": target_faces,
+        "labels": labels_entry,
+        "subcortical": {
+            "file": "subcortical.npz",
+            "source": "mri/aseg.mgz",
+            "structures": [
+                {
+                    "name": s.name,
+                    "index": s.index,
+                    "n_vertices": len(s.vertices),
+                    "n_faces": len(s.faces),
+                    "volume_mm3": s.volume_mm3,
+                    "voxel_volume_mm3": s.voxel_volume_mm3,
+                    "volume_error": s.volume_mm3 / s.voxel_volume_mm3 - 1.0,
+                    "smoothed_volume_error": s.smoothed_volume_mm3 / s.voxel_volume_mm3 - 1.0,
+                    "watertight": s.watertight,
+                }
+                for s in structures
+            ],
+        },
+        "glass": glass_entry,
+        "inflated_offset": {h: offsets[h]["inflated"].tolist() for h in HEMIS
+                            if "inflated" in offsets[h]},
+        "bounds": {s: _bounds(all_vertices[s]) for s in surfaces},
+        "n_faces": totals,
+        "license": "FreeSurfer Software License Agreement, Part B (research use); "
+                   "see LICENSE.FreeSurfer.txt",
+        "attribution": f"Data derived (modified) from FreeSurfer {vname} ({subject.name}), "
+                       "The General Hospital Corporation (MGH); not endorsed by MGH.",
+    }
+    writer.write_json(stage / "manifest.json", manifest)
+    lic = Path(license_file) if license_file is not None else writer.find_license(subject.path)
+    if lic is not None:
+        writer.write_license(stage / "LICENSE.FreeSurfer.txt", lic, subject.name, version)
+    else:
+        (stage / "LICENSE.FreeSurfer.txt").write_text(
+            f"The files in this directory are data derived (modified) from FreeSurfer {vname}'s\n"
+            f"output for {subject.name}. FreeSurfer's Software License Agreement applies; see\n"
+            "https://surfer.nmr.mgh.harvard.edu/fswiki/FreeSurferSoftwareLicense\n",
+            encoding="utf-8")
+    return manifest
