@@ -135,10 +135,71 @@ def _split(ctx: click.Context, param: click.Parameter, value: tuple[str, ...]) -
     return [v for item in value for v in item.split(",") if v.strip()]
 
 
+def _input_options(f):
+    """Options that say how INPUT tables are read (shared by render and check)."""
+    for opt in reversed([
+        click.option("--atlas", "-a", default=None,
+                     help="Atlas: dk, destrieux, dkt (alias tourville) or a plugin atlas. "
+                          "Default: inferred from the region names."),
+        click.option("--image-column", default=None,
+                     help="Column with image names (default Image-name-unique, a FreeSurfer first column, "
+                          "subject...; otherwise rows are numbered)."),
+        click.option("--value", default=None,
+                     help="Long tables: the column with the values, e.g. d_icv."),
+        click.option("--region-column", default=None,
+                     help="Long tables: the column with region names (auto-detected when unambiguous)."),
+        click.option("--strict", is_flag=True, help="Names that match no region are an error."),
+    ]):
+        f = opt(f)
+    return f
+
+
+def _one_or_many(inputs: tuple[Path, ...]) -> Path | list[Path]:
+    return inputs[0] if len(inputs) == 1 else list(inputs)
+
+
+# -- check --------------------------------------------------------------------
 @cli.command(context_settings=CONTEXT)
-@click.argument("input", type=click.Path(path_type=Path, dir_okay=False))
-@click.option("--atlas", "-a", default="dk", show_default=True,
-              help="Atlas: dk, destrieux, dkt (alias tourville) or a plugin atlas.")
+@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
+                type=click.Path(path_type=Path, dir_okay=False))
+@_input_options
+@click.option("--gradient", default=None, help="Colour scale to compare the values with (as for render).")
+@click.option("--cmap", default=None, help="Colour map to compare the values with (as for render).")
+@click.option("--vmin", type=float, default=None)
+@click.option("--vmax", type=float, default=None)
+@click.option("--center", type=float, default=None)
+@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
+def check(inputs: tuple[Path, ...], atlas: str | None, image_column: str | None, value: str | None,
+          region_column: str | None, strict: bool, gradient: str | None, cmap: str | None,
+          vmin: float | None, vmax: float | None, center: float | None, as_json: bool) -> None:
+    """Read INPUT tables exactly as render would and report how, without rendering.
+
+    \b
+    Shows the shape detected, the atlas (inferred when --atlas is not given),
+    what each column or name resolved to (or the closest names), regions
+    without a value, bad cells and the value range against the colour scale.
+    Several INPUTs (e.g. lh and rh aparcstats2table files) are merged by image
+    name. Exit code 0: render would accept the table; 2: it would not.
+    """
+    from brainpainter.inputs import inspect_table
+    from brainpainter.report import check_report, format_report
+
+    table = inspect_table(_one_or_many(inputs), atlas, image_column=image_column, value=value,
+                          region_column=region_column, strict=strict)
+    report = check_report(table, gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center)
+    if as_json:
+        _echo_json(report)
+    else:
+        click.echo(format_report(report))
+    if report["errors"]:
+        raise BrainPainterError(report["errors"][0])
+
+
+# -- render -------------------------------------------------------------------
+@cli.command(context_settings=CONTEXT)
+@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
+                type=click.Path(path_type=Path, dir_okay=False))
+@_input_options
 @click.option("--out", "-o", required=True, type=click.Path(path_type=Path, file_okay=False),
               help="Output folder for {image}_{view}.png and manifest.json.")
 @click.option("--views", default="lateral-left,medial-left,subcortical", show_default=True,
@@ -166,17 +227,18 @@ def _split(ctx: click.Context, param: click.Parameter, value: tuple[str, ...]) -
 @click.option("--lighting", default="studio", show_default=True,
               type=click.Choice(["studio", "soft", "flat-studio"]))
 @click.option("--glass-opacity", type=float, default=0.12, show_default=True)
-@click.option("--image-column", default=None, help="Column with image names (default Image-name-unique).")
-@click.option("--strict", is_flag=True, help="Unmatched columns are an error.")
 @click.option("--renderer", default="blender", show_default=True)
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
-def render(input: Path, atlas: str, out: Path, views: str, template: str, surface: str,
+def render(inputs: tuple[Path, ...], atlas: str | None, out: Path, views: str, template: str, surface: str,
            gradient: str | None, cmap: str | None, vmin: float | None, vmax: float | None,
            center: float | None, nan_color: str, missing_color: str, hide: list[str],
            background: str, transparent: bool, size: str, quality: str, shading: str,
            lighting: str, glass_opacity: float, image_column: str | None, strict: bool,
-           renderer: str, quiet: bool) -> None:
-    """Render every row of INPUT (a BrainPainter CSV) from every view."""
+           renderer: str, quiet: bool, value: str | None, region_column: str | None) -> None:
+    """Render every image of INPUT tables (CSV, TSV, .xlsx; see 'check') from every view.
+
+    Several INPUTs (e.g. lh and rh aparcstats2table files) are merged by image name.
+    """
     from brainpainter.render import render as run
 
     try:
@@ -184,16 +246,17 @@ def render(input: Path, atlas: str, out: Path, views: str, template: str, surfac
     except ValueError:
         raise BrainPainterError(f"--size must be WIDTHxHEIGHT, e.g. 1200x900; {size!r} was given.") from None
     result = run(
-        input, atlas, out=out, views=views, template=template, surface=surface, gradient=gradient,
-        cmap=cmap, vmin=vmin, vmax=vmax, center=center, nan_color=nan_color,
+        _one_or_many(inputs), atlas, out=out, views=views, template=template, surface=surface,
+        gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center, nan_color=nan_color,
         missing_color=missing_color, hide=hide, background=None if transparent else background,
         width=w, height=h, quality=quality, shading=shading, lighting=lighting,
         glass_opacity=glass_opacity, renderer=renderer, image_column=image_column, strict=strict,
-        progress=not quiet,
+        progress=not quiet, value=value, region_column=region_column,
     )
-    from brainpainter.inputs import RegionTable  # noqa: F401  (summary printed below)
+    from brainpainter.inputs import summary_line
 
     s = result.manifest["input"]
+    click.echo(f"input: {summary_line(s)}")
     click.echo(
         f"{len(result.files)} image(s) written to {out} "
         f"({s['n_images']} row(s); {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
@@ -238,9 +301,8 @@ def template_build(subject_dir: Path, out: Path, atlases: list[str], surfaces: l
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
 def template_info(name_or_path: str, as_json: bool) -> None:
     """Manifest and checks of a template (default: the bundled fsaverage)."""
-    from brainpainter_builder.report import format_report, template_report
-
     from brainpainter.template import load_template
+    from brainpainter_builder.report import format_report, template_report
 
     report = template_report(load_template(name_or_path).path)
     if as_json:

@@ -192,7 +192,7 @@ class RenderResult:
 
 def render(
     data: Any,
-    atlas: Atlas | str = "dk",
+    atlas: Atlas | str | None = None,
     *,
     out: str | Path | None = None,
     views: str | Sequence[str] | None = None,
@@ -217,15 +217,18 @@ def render(
     image_column: str | None = None,
     strict: bool = False,
     progress: bool = True,
+    value: str | None = None,
+    region_column: str | None = None,
 ) -> RenderResult:
     """Render every row of a region-value table from every view.
 
     Parameters
     ----------
-    data : path, DataFrame or dict
-        See :func:`brainpainter.inputs.read_table`.
-    atlas : str or Atlas
-        ``"dk"``, ``"destrieux"``, ``"dkt"`` (alias ``"tourville"``) or a plugin atlas.
+    data : path, DataFrame, dict, or a list of these
+        See :func:`brainpainter.inputs.read_table` (several inputs are merged by image name).
+    atlas : str or Atlas, optional
+        ``"dk"``, ``"destrieux"``, ``"dkt"`` (alias ``"tourville"``) or a plugin atlas;
+        inferred from the region names when not given.
     out : path, optional
         Output folder for ``{image}_{view}.png`` and ``manifest.json``. Without
         it the images are returned in memory (``result.images``).
@@ -237,6 +240,8 @@ def render(
         Regions, hemisphere-free names or groups (``cerebellum``) not to draw.
     background : colour or None
         None renders a transparent background.
+    image_column, value, region_column, strict
+        How the table is read, see :func:`brainpainter.inputs.read_table`.
 
     Returns
     -------
@@ -252,7 +257,9 @@ def render(
     make_scale(gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center,
                nan_color=nan_color, missing_color=missing_color)
     view_list: list[View] = parse_views(views)
-    table: RegionTable = read_table(data, atlas, image_column=image_column, strict=strict)
+    table: RegionTable = read_table(data, atlas, image_column=image_column, value=value,
+                                    region_column=region_column, strict=strict)
+    atlas = table.atlas  # inferred from the names when not given
     scale = make_scale(gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center,
                        nan_color=nan_color, missing_color=missing_color, data=table.values)
     for what, n in (("width", width), ("height", height)):

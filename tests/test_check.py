@@ -1,0 +1,138 @@
+"""``brainpainter check``: the report of how a table was read, and render's one-line summary."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from click.testing import CliRunner
+
+from brainpainter import registry
+from brainpainter.cli import cli, main
+from brainpainter.testing import write_tiny_template
+
+GOOD = ("Image-name-unique,Left-insula,lh_precuneus_thickness,eTIV,Age,Left-insulaa\n"
+        "A,1,2,1500000,30,1\nB,2,,1,31,2\n")
+
+
+def _check(tmp_path, text, *args, name="in.csv"):
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return CliRunner().invoke(cli, ["check", str(path), *args])
+
+
+def test_text_report_says_how_each_name_was_read(tmp_path):
+    result = _check(tmp_path, GOOD)
+    assert result.exit_code == 0, result.output
+    out = result.output
+    assert "wide (one row per image" in out and "images in 'Image-name-unique'" in out
+    assert "atlas   dk (inferred:" in out
+    assert "Left-insula" in out and "-> Left-precuneus  [FreeSurfer stats table]" in out
+    assert "eTIV" in out and "summary measure, not a region" in out
+    assert "unmatched (2)" in out and "closest: Left-insula" in out
+    assert "regions without a value (93)" in out and "... and 69 more" in out
+    assert "cells   1 empty" in out and "scale   white,yellow,orange,red: 0 .. 3" in out
+    assert out.rstrip().splitlines()[-1].startswith("OK ")
+
+
+def test_json_report(tmp_path):
+    result = _check(tmp_path, GOOD, "--json", "--atlas", "dk")
+    assert result.exit_code == 0
+    report = json.loads(result.output)
+    assert report["ok"]
+    assert report["atlas"] == {"name": "dk", "inferred": False, "reason": "given with --atlas", "scores": {}}
+    by_name = {n["name"]: n for n in report["names"]}
+    assert by_name["lh_precuneus_thickness"]["regions"] == ["Left-precuneus"]
+    assert by_name["Left-insulaa"]["status"] == "unmatched"
+    assert by_name["Left-insulaa"]["closest"][0] == "Left-insula"
+    assert by_name["eTIV"]["status"] == "ignored"
+    assert report["unmatched"] == ["Age", "Left-insulaa"]
+    assert report["cells"]["n_empty"] == 1 and report["values"]["range"] == [1.0, 2.0]
+    assert report["inputs"][0]["shape"]["kind"] == "wide"
+
+
+def test_unmatched_name_of_another_atlas_is_pointed_out(tmp_path):
+    text = "Image-name-unique,Left-insula,Left-bankssts\nA,1,2\n"
+    result = _check(tmp_path, text, "--atlas", "dkt", "--json")
+    by_name = {n["name"]: n for n in json.loads(result.output)["names"]}
+    assert by_name["Left-bankssts"]["region_of_atlas"] == ["dk"]
+
+
+def test_scale_comparison_and_hints(tmp_path):
+    text = "Structure,d\nL_insula,-0.4\nR_insula,0.9\n"
+    report = json.loads(_check(tmp_path, text, "--json").output)
+    assert report["values"]["n_below_vmin"] == 1
+    assert any("diverging" in h for h in report["values"]["hints"])
+    report = json.loads(_check(tmp_path, text, "--json", "--cmap", "RdBu_r", "--center", "0").output)
+    assert report["values"]["scale"]["center"] == 0 and report["values"]["n_below_vmin"] == 0
+
+
+def test_bad_cells_are_all_listed_and_exit_2(tmp_path, capsys):
+    path = tmp_path / "in.csv"
+    path.write_text("Image-name-unique,Left-insula,Right-insula\nA,high,inf\nB,1,low\n")
+    with pytest.raises(SystemExit) as exc:
+        main(["check", str(path)])
+    assert exc.value.code == 2
+    captured = capsys.readouterr()
+    assert "'high' is not a number" in captured.out and "'inf' is infinite" in captured.out
+    assert "'low' is not a number" in captured.out and "render would stop" in captured.out
+    assert captured.err.strip().startswith("error: ") and len(captured.err.strip().splitlines()) == 1
+
+
+def test_strict_turns_unmatched_into_an_error(tmp_path, capsys):
+    path = tmp_path / "in.csv"
+    path.write_text(GOOD)
+    with pytest.raises(SystemExit) as exc:
+        main(["check", str(path), "--strict"])
+    assert exc.value.code == 2
+    assert "2 name(s) match no dk region, e.g. 'Age'" in capsys.readouterr().err
+
+
+def test_several_inputs_are_merged(tmp_path):
+    lh = tmp_path / "lh.tsv"
+    rh = tmp_path / "rh.tsv"
+    lh.write_text("lh.aparc.thickness\tlh_insula_thickness\teTIV\ns1\t2.5\t1\ns2\t2.6\t1\n")
+    rh.write_text("rh.aparc.thickness\trh_insula_thickness\teTIV\ns1\t2.4\t1\ns3\t2.7\t1\n")
+    result = CliRunner().invoke(cli, ["check", str(lh), str(rh), "--json"])
+    report = json.loads(result.output)
+    assert report["n_images"] == 3 and report["unmatched"] == []
+    assert report["n_regions_with_value"] == 2 and len(report["inputs"]) == 2
+    assert any("not in" in n for n in report["notes"])
+
+
+class _Blank:
+    def __init__(self, scene):
+        self.scene = scene
+
+    def render(self, colors, view):
+        import numpy as np
+
+        s = self.scene.settings
+        return np.full((s.height, s.width, 4), 255, np.uint8)
+
+    def close(self):
+        pass
+
+
+def test_render_prints_the_summary_line_and_writes_it_to_the_manifest(tmp_path):
+    registry.renderers.register("blank", lambda: _Blank, replace=True)
+    try:
+        tiny = write_tiny_template(tmp_path / "tiny")
+        path = tmp_path / "in.csv"
+        path.write_text("Structure;d\nL_insula;0,5\nRhippo;1,25\nICV;3\n")
+        out = tmp_path / "out"
+        result = CliRunner().invoke(cli, ["render", str(path), "--out", str(out), "--renderer", "blank",
+                                          "--template", str(tiny), "--views", "lateral-left", "--size",
+                                          "32x32", "--quiet"])
+        assert result.exit_code == 0, result.output
+        first = result.output.splitlines()[0]
+        assert first.startswith("input: long (ENIGMA names), atlas dk (inferred): 1 image(s), 2/")
+        manifest = json.loads((out / "manifest.json").read_text())
+        summary = manifest["input"]
+        assert summary["atlas_inferred"]
+        assert summary["ignored_columns"] == {"ICV": "summary measure, not a region (ENIGMA)"}
+        assert summary["value_range"] == [0.5, 1.25] and summary["inputs"][0]["shape"]["value_column"] == "d"
+        assert any("decimal commas" in n for n in summary["notes"])
+        assert sorted(p.name for p in out.iterdir()) == ["d_lateral-left.png", "manifest.json"]
+    finally:
+        registry.renderers.unregister("blank")
