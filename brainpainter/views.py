@@ -63,7 +63,7 @@ PRESETS: dict[str, View] = {
         View("ventral", "cortex", _BOTH, 0.0, -90.0),
         View("anterior", "cortex", _BOTH, 90.0, 0.0),
         View("posterior", "cortex", _BOTH, 270.0, 0.0),
-        View("subcortical", "subcortical", (), 200.0, 20.0, glass=("rh",)),
+        View("subcortical", "subcortical", (), 160.0, 20.0, glass=("rh",)),
         View("subcortical-left", "subcortical", (), 180.0, 0.0, glass=("rh",)),
         View("subcortical-dorsal", "subcortical", (), 0.0, 90.0, glass=_BOTH),
     )

@@ -1,0 +1,118 @@
+"""Materials: one per region, recoloured in place for every image.
+
+A region material carries its colour twice: ``diffuse_color`` (what the
+Workbench engine draws with ``color_type = "MATERIAL"``) and the Principled
+BSDF's base colour (what Cycles draws). Blender stores both as scene-linear
+values, so sRGB inputs are linearised here; with the ``Standard`` view
+transform the rendered pixel is the sRGB colour again.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+#: Colour of subcortical structures that have no colour in the mapping (sRGB).
+NEUTRAL_GREY = (0.8, 0.8, 0.8)
+#: Colour of the glass brain (sRGB).
+GLASS_COLOR = (0.78, 0.80, 0.84)
+# Cycles' unlit glass is darkened to read like Workbench's lit glass.
+_GLASS_CYCLES_SHADE = 0.6
+# Surface finish in Cycles: matte, like a plastic model.
+_ROUGHNESS = 0.6
+_SPECULAR = 0.25
+
+
+def srgb_to_linear(rgb: Sequence[float]) -> tuple[float, float, float]:
+    """The IEC 61966-2-1 sRGB transfer function inverted.
+
+    Parameters
+    ----------
+    rgb : sequence of float, shape (3,)
+        sRGB 0-1 (clipped to that range).
+
+    Returns
+    -------
+    tuple of float, shape (3,)
+        Linear-light values 0-1.
+    """
+    c = np.clip(np.asarray(rgb, dtype=float)[:3], 0.0, 1.0)
+    lin = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return (float(lin[0]), float(lin[1]), float(lin[2]))
+
+
+def _node_tree(material):
+    if material.node_tree is None:  # pragma: no cover - Blender < 5 creates no nodes by default
+        material.use_nodes = True
+    return material.node_tree
+
+
+def _principled(material):
+    for node in _node_tree(material).nodes:
+        if node.bl_idname == "ShaderNodeBsdfPrincipled":
+            return node
+    raise RuntimeError(f"material {material.name!r} has no Principled BSDF node")  # pragma: no cover
+
+
+def new_region_material(bpy, name: str):
+    """A matte material whose colour :func:`set_color` changes.
+
+    Parameters
+    ----------
+    bpy : module
+    name : str
+        Datablock name (Blender may add a suffix if taken).
+    """
+    mat = bpy.data.materials.new(name)
+    mat.roughness = _ROUGHNESS
+    mat.specular_intensity = _SPECULAR
+    bsdf = _principled(mat)
+    bsdf.inputs["Roughness"].default_value = _ROUGHNESS
+    bsdf.inputs["Specular IOR Level"].default_value = _SPECULAR
+    return mat
+
+
+def new_glass_material(bpy, name: str, opacity: float):
+    """A light, semi-transparent material for the glass brain.
+
+    Workbench blends materials whose ``diffuse_color`` alpha is below 1 (order
+    independent, in linear light) and shades them with the studio light. In
+    Cycles the glass is an unlit grey mixed with full transparency (no lighting
+    to sample, hence no noise), more opaque where the surface turns away from
+    the camera so the outline reads like Workbench's shaded glass.
+    """
+    mat = bpy.data.materials.new(name)
+    mat.surface_render_method = "BLENDED"
+    linear = srgb_to_linear(GLASS_COLOR)
+    opacity = float(np.clip(opacity, 0.0, 1.0))
+    mat.diffuse_color = (*linear, opacity)
+    tree = _node_tree(mat)
+    nodes, links = tree.nodes, tree.links
+    nodes.clear()
+    out = nodes.new("ShaderNodeOutputMaterial")
+    emission = nodes.new("ShaderNodeEmission")
+    emission.inputs["Color"].default_value = (*(c * _GLASS_CYCLES_SHADE for c in linear), 1.0)
+    emission.inputs["Strength"].default_value = 1.0
+    clear = nodes.new("ShaderNodeBsdfTransparent")
+    # opacity at the centre, up to 2.5 x opacity at grazing angles
+    facing = nodes.new("ShaderNodeLayerWeight")
+    facing.inputs["Blend"].default_value = 0.5
+    edge = nodes.new("ShaderNodeMapRange")
+    edge.clamp = True
+    edge.inputs["To Min"].default_value = opacity
+    edge.inputs["To Max"].default_value = min(1.0, 2.5 * opacity)
+    links.new(facing.outputs["Facing"], edge.inputs["Value"])
+    mix = nodes.new("ShaderNodeMixShader")
+    links.new(edge.outputs["Result"], mix.inputs["Fac"])
+    links.new(clear.outputs["BSDF"], mix.inputs[1])
+    links.new(emission.outputs["Emission"], mix.inputs[2])
+    links.new(mix.outputs["Shader"], out.inputs["Surface"])
+    return mat
+
+
+def set_color(material, rgb: Sequence[float]) -> None:
+    """Set an opaque region material to the sRGB colour `rgb` (0-1)."""
+    value = (*srgb_to_linear(rgb), 1.0)
+    material.diffuse_color = value
+    _principled(material).inputs["Base Color"].default_value = value

@@ -1,0 +1,200 @@
+"""The Blender renderer: load a scene once, then recolour, re-aim and render.
+
+Every :class:`BlenderRenderer` owns a Blender scene of its own (objects,
+materials, camera), so several renderers can live in one process; bpy calls
+are serialised by one process-wide lock. ``close`` deletes everything the
+renderer created, so a long-lived process does not grow.
+"""
+
+from __future__ import annotations
+
+import itertools
+import shutil
+import tempfile
+import weakref
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from brainpainter.errors import BrainPainterError
+from brainpainter.scene import RGB, Scene
+from brainpainter.views import View
+from brainpainter_blender import _bpy, camera, lighting, materials, scene_builder
+
+_ids = itertools.count()
+
+
+class BlenderRenderer:
+    """Render a :class:`~brainpainter.scene.Scene` with Blender (``bpy``).
+
+    Parameters
+    ----------
+    scene : brainpainter.scene.Scene
+        Loaded once: both hemispheres' cortex for ``scene.surface`` and
+        ``scene.labels``, the subcortical structures and the glass hulls.
+
+    Examples
+    --------
+    >>> r = BlenderRenderer(scene)                      # doctest: +SKIP
+    >>> rgba = r.render({"Left-insula": (1, 0, 0)}, get_view("lateral-left"))  # doctest: +SKIP
+    >>> r.close()                                       # doctest: +SKIP
+    """
+
+    name = "blender"
+
+    def __init__(self, scene: Scene) -> None:
+        self.scene = scene
+        self._bpy = bpy = _bpy.import_bpy()
+        self._tag = f"bp{next(_ids)}"
+        self._tmp = Path(tempfile.mkdtemp(prefix="brainpainter-blender-"))
+        self._file = self._tmp / "render.tif"
+        # The temporary folder goes even if close() is never called.
+        weakref.finalize(self, shutil.rmtree, self._tmp, True)
+        self._closed = False
+        self._colors: dict[int, tuple[float, ...]] = {}
+        with _bpy.LOCK:
+            try:
+                with _bpy.quiet():  # Cycles prints notices while probing for GPUs
+                    self._build(bpy)
+            except BaseException:
+                self._free()
+                raise
+
+    def _build(self, bpy) -> None:
+        settings = self.scene.settings
+        self._bscene = bscene = bpy.data.scenes.new(self._tag)
+        lighting.configure(bpy, bscene, settings)
+        image = bscene.render.image_settings
+        # Uncompressed 8-bit TIFF: the quickest lossless round trip (straight alpha).
+        image.file_format = "TIFF"
+        image.tiff_codec = "NONE"
+        image.color_mode = "RGBA"
+        image.color_depth = "8"
+        cam_data = bpy.data.cameras.new(f"{self._tag}:camera")
+        cam_data.type = "ORTHO"
+        cam_data.sensor_fit = "HORIZONTAL"
+        self._camera = bpy.data.objects.new(f"{self._tag}:camera", cam_data)
+        bscene.collection.objects.link(self._camera)
+        bscene.camera = self._camera
+        self._lamps = []
+        if lighting.uses_cycles(settings):
+            self._lamps = lighting.add_camera_lights(bpy, bscene, self._camera, bscene.collection)
+        self._parts = scene_builder.build(bpy, self.scene, self._tag, bscene.collection)
+
+    # -- per image -------------------------------------------------------------
+    def render(self, colors: Mapping[str, RGB], view: View) -> np.ndarray:
+        """Render one image.
+
+        Parameters
+        ----------
+        colors : mapping of str to (r, g, b)
+            sRGB 0-1 colour per region key; cortex regions without a colour
+            are drawn in ``scene.medial_wall_color``, subcortical ones in a
+            neutral light grey.
+        view : brainpainter.views.View
+
+        Returns
+        -------
+        ndarray of uint8, shape (height, width, 4)
+            RGBA, row 0 at the top, sRGB.
+        """
+        if self._closed:
+            raise BrainPainterError("this BlenderRenderer was closed; create a new one to render.")
+        with _bpy.LOCK:
+            visible = self._show(view)
+            if not visible:
+                raise BrainPainterError(
+                    f"view {view.name!r} shows nothing: content={view.content!r}, "
+                    f"hemis={list(view.hemis)}, glass={list(view.glass)}; the template or the "
+                    "hidden regions leave no object to draw."
+                )
+            self._recolor(colors)
+            self._aim(view, visible)
+            return self._render_pixels()
+
+    def _show(self, view: View) -> list[scene_builder.Part]:
+        visible = []
+        for part in self._parts:
+            if view.content == "subcortical":
+                on = part.kind == "subcortical" or (part.kind == "glass" and part.hemi in view.glass)
+            else:
+                on = (part.kind == "cortex" and part.hemi in view.hemis) or (
+                    part.kind == "glass" and part.hemi in view.glass)
+            if part.obj.hide_render == on:
+                part.obj.hide_render = not on
+            if on:
+                visible.append(part)
+        return visible
+
+    def _recolor(self, colors: Mapping[str, RGB]) -> None:
+        medial = tuple(self.scene.medial_wall_color)
+        for part in self._parts:
+            default = medial if part.kind == "cortex" else materials.NEUTRAL_GREY
+            for key, mat in part.slots:
+                rgb = colors.get(key)
+                rgb = default if rgb is None else tuple(float(c) for c in rgb[:3])
+                if self._colors.get(id(mat)) != rgb:
+                    materials.set_color(mat, rgb)
+                    self._colors[id(mat)] = rgb
+
+    def _aim(self, view: View, visible: list[scene_builder.Part]) -> None:
+        from mathutils import Matrix
+
+        settings = self.scene.settings
+        points = np.vstack([p.hull for p in visible])
+        pose = camera.frame(points, view.azimuth, view.elevation, view.zoom,
+                            settings.width / settings.height)
+        m = np.eye(4)
+        m[:3, :3], m[:3, 3] = pose.rotation, pose.location
+        self._camera.matrix_world = Matrix(m.tolist())
+        data = self._camera.data
+        data.ortho_scale = pose.ortho_scale
+        data.clip_start, data.clip_end = pose.clip_start, pose.clip_end
+
+    def _render_pixels(self) -> np.ndarray:
+        bpy = self._bpy
+        with _bpy.quiet() as log:
+            try:
+                bpy.ops.render.render(write_still=False, scene=self._bscene.name)
+                bpy.data.images["Render Result"].save_render(str(self._file), scene=self._bscene)
+                failed = None
+            except (RuntimeError, KeyError) as exc:
+                failed = exc
+        if failed is not None:
+            text = " ".join("".join(log).split())[-300:]
+            raise BrainPainterError(f"Blender failed to render: {failed} {text}".strip())
+        with Image.open(self._file) as im:
+            pixels = np.array(im.convert("RGBA"))
+        _bpy.release_memory()
+        return pixels
+
+    # -- lifetime --------------------------------------------------------------
+    def close(self) -> None:
+        """Delete this renderer's Blender data and temporary files (idempotent)."""
+        if self._closed:
+            return
+        with _bpy.LOCK:
+            self._free()
+
+    def _free(self) -> None:
+        self._closed = True
+        bpy = self._bpy
+        prefix = self._tag + ":"
+        for coll in (bpy.data.objects, bpy.data.meshes, bpy.data.materials,
+                     bpy.data.cameras, bpy.data.lights, bpy.data.worlds):
+            for block in [b for b in coll if b.name.startswith(prefix)]:
+                coll.remove(block)
+        scene = bpy.data.scenes.get(self._tag)
+        if scene is not None:
+            bpy.data.scenes.remove(scene)
+        shutil.rmtree(self._tmp, ignore_errors=True)
+        self._colors.clear()
+
+    def __enter__(self) -> BlenderRenderer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+

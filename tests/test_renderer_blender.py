@@ -1,0 +1,503 @@
+"""The Blender renderer, checked as pictures: colours, orientation, cracks, glass.
+
+A tiny synthetic template (ellipsoid hemispheres split by the signs of y and
+z, boxes as subcortical structures, larger ellipsoids as glass) is written
+with the real template format. Tests that render are marked ``render``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from scipy import ndimage
+
+from brainpainter.errors import BrainPainterError
+from brainpainter.scene import RenderSettings, Scene
+from brainpainter.template import load_template
+from brainpainter.views import PRESETS, View, get_view
+from brainpainter_blender import camera
+
+ROOT = Path(__file__).resolve().parents[1]
+REGIONS = ("unknown", "antsup", "antinf", "postsup", "postinf")
+CENTRES = {"lh": (-32.0, 0.0, 0.0), "rh": (32.0, 0.0, 0.0)}
+RADII = np.array([24.0, 40.0, 30.0])  # x, y, z semi-axes: brain-like proportions
+STRUCTURES = {  # name: (centre, size)
+    "Left-Caudate": ((-30.0, 15.0, 10.0), 8.0),
+    "Left-Hippocampus": ((-30.0, -15.0, -10.0), 8.0),
+    "Right-Caudate": ((30.0, 15.0, 10.0), 8.0),
+    "Right-Hippocampus": ((30.0, -15.0, -10.0), 8.0),
+}
+BACKGROUND = (1.0, 1.0, 1.0)
+
+# Palette of well-separated flat colours (sRGB 0-1).
+RED, GREEN, BLUE, YELLOW = (1.0, 0.0, 0.0), (0.0, 0.8, 0.0), (0.0, 0.0, 1.0), (1.0, 0.9, 0.0)
+MAGENTA, CYAN, ORANGE, PURPLE = (1.0, 0.0, 1.0), (0.0, 0.9, 0.9), (1.0, 0.5, 0.0), (0.4, 0.0, 0.6)
+
+
+def _ellipsoid(centre, radii, subdivisions=4) -> trimesh.Trimesh:
+    m = trimesh.creation.icosphere(subdivisions=subdivisions)
+    return trimesh.Trimesh(m.vertices * radii + centre, m.faces, process=False)
+
+
+def _write_template(path: Path) -> Path:
+    """A two-hemisphere template in brainpainter's template format."""
+    path.mkdir(parents=True, exist_ok=True)
+    manifest = {
+        "format": "brainpainter-template", "format_version": 1, "name": "synthetic",
+        "surfaces": ["pial", "white", "inflated"], "labels": {"test": {"cortex": {}}},
+        "glass": {}, "bounds": {},
+    }
+    allv = []
+    for hemi, centre in CENTRES.items():
+        m = _ellipsoid(np.array(centre), RADII)
+        v = m.vertices.astype(np.float32)
+        c = (v[m.faces].mean(axis=1) - centre) / RADII
+        medial = c[:, 0] > 0.8 if hemi == "lh" else c[:, 0] < -0.8
+        label = 1 + (c[:, 1] < 0) * 2 + (c[:, 2] < 0)  # antsup, antinf, postsup, postinf
+        label = np.where(medial, 0, label).astype(np.int16)
+        shift = np.float32(-8 if hemi == "lh" else 8)
+        inflated = v * np.float32(1.1) + np.array([shift, 0, 0], np.float32)
+        file = f"cortex-{hemi}-test.npz"
+        np.savez_compressed(path / file, faces=m.faces.astype(np.int32), face_label=label,
+                            pial=v, white=v * np.float32(0.9), inflated=inflated,
+                            source_vertex=np.arange(len(v), dtype=np.int32))
+        manifest["labels"]["test"]["cortex"][hemi] = {"file": file, "names": list(REGIONS)}
+        g = _ellipsoid(np.array(centre), RADII * 1.06, subdivisions=3)
+        np.savez_compressed(path / f"glass-{hemi}.npz", vertices=g.vertices.astype(np.float32),
+                            faces=g.faces.astype(np.int32))
+        manifest["glass"][hemi] = {"file": f"glass-{hemi}.npz"}
+        allv.append(v)
+    verts, faces, labels, off = [], [], [], 0
+    for i, (centre, size) in enumerate(STRUCTURES.values()):
+        box = trimesh.creation.box(extents=(size, size, size))
+        verts.append(box.vertices + centre)
+        faces.append(box.faces + off)
+        labels.append(np.full(len(box.faces), i))
+        off += len(box.vertices)
+    np.savez_compressed(path / "subcortical.npz", vertices=np.vstack(verts).astype(np.float32),
+                        faces=np.vstack(faces).astype(np.int32),
+                        face_label=np.concatenate(labels).astype(np.int16))
+    manifest["subcortical"] = {"file": "subcortical.npz",
+                               "structures": [{"name": n} for n in STRUCTURES]}
+    allv = np.vstack(allv)
+    manifest["bounds"]["pial"] = [allv.min(0).tolist(), allv.max(0).tolist()]
+    (path / "manifest.json").write_text(json.dumps(manifest), encoding="utf-8")
+    return path
+
+
+@pytest.fixture(scope="module")
+def template(tmp_path_factory):
+    return load_template(_write_template(tmp_path_factory.mktemp("template") / "synthetic"))
+
+
+def _renderer(template, **settings):
+    from brainpainter_blender import BlenderRenderer
+
+    scene_kw = {k: settings.pop(k) for k in ("hidden", "surface") if k in settings}
+    settings = {"width": 320, "height": 240, "background": BACKGROUND, **settings}
+    return BlenderRenderer(Scene(template, "test", settings=RenderSettings(**settings), **scene_kw))
+
+
+@pytest.fixture(scope="module")
+def flat(template):
+    # Invisible glass: exact flat colours in every view (glass has its own test).
+    r = _renderer(template, quality="fast", shading="flat", glass_opacity=0.0)
+    yield r
+    r.close()
+
+
+def _quadrant_colors() -> dict[str, tuple[float, float, float]]:
+    """Distinct flat colours: per hemisphere, anterior/posterior x superior/inferior."""
+    return {
+        "Left-antsup": RED, "Left-antinf": GREEN, "Left-postsup": BLUE, "Left-postinf": YELLOW,
+        "Right-antsup": MAGENTA, "Right-antinf": CYAN, "Right-postsup": ORANGE,
+        "Right-postinf": PURPLE,
+        "Left-Caudate": RED, "Left-Hippocampus": BLUE,
+        "Right-Caudate": MAGENTA, "Right-Hippocampus": ORANGE,
+    }
+
+
+def _mask(img: np.ndarray, rgb, tol: float = 2) -> np.ndarray:
+    target = np.round(np.asarray(rgb) * 255)
+    return np.abs(img[..., :3].astype(float) - target).max(axis=-1) <= tol
+
+
+def _centroid(img: np.ndarray, rgbs, tol: float = 2) -> np.ndarray:
+    """(x, y) image centroid (x right, y DOWN) of pixels with any of the colours."""
+    m = np.zeros(img.shape[:2], bool)
+    for rgb in rgbs:
+        m |= _mask(img, rgb, tol)
+    assert m.sum() > 20, f"colours {rgbs} hardly appear"
+    ys, xs = np.nonzero(m)
+    return np.array([xs.mean(), ys.mean()])
+
+
+# -- no Blender needed ----------------------------------------------------------
+
+
+def test_import_does_not_import_bpy():
+    code = "import sys, brainpainter, brainpainter_blender; print('bpy' in sys.modules)"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(ROOT), str(ROOT / "plugins" / "renderers"), os.environ.get("PYTHONPATH", "")])}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env=env, check=True)
+    assert out.stdout.strip() == "False"
+
+
+def test_missing_bpy_is_a_one_line_error(monkeypatch):
+    from brainpainter_blender import _bpy
+
+    monkeypatch.setattr(_bpy, "_state", {})
+    monkeypatch.setitem(sys.modules, "bpy", None)
+    with pytest.raises(BrainPainterError, match="pip install bpy") as info:
+        _bpy.import_bpy()
+    assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize(("name", "right", "up"), [
+    # image right and image up in RAS
+    ("lateral-left", (0, -1, 0), (0, 0, 1)),
+    ("medial-left", (0, 1, 0), (0, 0, 1)),
+    ("lateral-right", (0, 1, 0), (0, 0, 1)),
+    ("medial-right", (0, -1, 0), (0, 0, 1)),
+    ("dorsal", (1, 0, 0), (0, 1, 0)),
+    ("ventral", (-1, 0, 0), (0, 1, 0)),
+    ("anterior", (-1, 0, 0), (0, 0, 1)),
+    ("posterior", (1, 0, 0), (0, 0, 1)),
+])
+def test_view_axes_are_anatomical(name, right, up):
+    v = PRESETS[name]
+    r, u, b = camera.view_axes(v.azimuth, v.elevation)
+    np.testing.assert_allclose(r, right, atol=1e-9)
+    np.testing.assert_allclose(u, up, atol=1e-9)
+    np.testing.assert_allclose(np.cross(r, u), b, atol=1e-9)
+
+
+def test_frame_fits_points_with_margin_and_zoom():
+    pts = np.array([[0, -50, -10], [0, 50, 10], [5, 0, 0]], float)
+    pose = camera.frame(pts, 180.0, 0.0, 1.0, aspect=4 / 3)
+    assert pose.ortho_scale == pytest.approx(100 * (1 + 2 * camera.MARGIN))
+    tall = camera.frame(pts, 180.0, 0.0, 1.0, aspect=0.25)
+    assert tall.ortho_scale * 4 >= 100  # the height fits too
+    assert camera.frame(pts, 180.0, 0.0, 2.0, aspect=4 / 3).ortho_scale == pytest.approx(
+        pose.ortho_scale / 2)
+
+
+# -- renders --------------------------------------------------------------------
+
+
+@pytest.mark.render
+def test_flat_colours_are_exact(flat, template):
+    rng = np.random.default_rng(7)
+    colors = {f"Left-{n}": tuple(rng.integers(0, 256, 3) / 255) for n in REGIONS[1:]}
+    img = flat.render(colors, get_view("lateral-left"))
+    assert img.shape == (240, 320, 4) and img.dtype == np.uint8
+    palette = [*colors.values(), flat.scene.medial_wall_color, BACKGROUND]
+    px = img[..., :3].reshape(-1, 3).astype(float)
+    dev = np.abs(px[:, None, :] - np.round(np.array(palette) * 255)[None]).max(-1).min(-1)
+    assert dev.max() <= 1, "a pixel is none of the region, medial-wall or background colours"
+    for rgb in colors.values():
+        assert _mask(img, rgb, 1).sum() > 100
+
+
+@pytest.mark.render
+@pytest.mark.parametrize("quality", ["default", "high"])
+def test_antialiased_flat_interiors_are_exact(template, quality):
+    r = _renderer(template, quality=quality, shading="flat")
+    try:
+        colors = {"Left-antsup": (0.2, 0.5, 0.9), "Left-antinf": (0.95, 0.6, 0.1),
+                  "Left-postsup": (0.3, 0.3, 0.3), "Left-postinf": (0.0, 0.7, 0.35)}
+        img = r.render(colors, get_view("lateral-left"))
+    finally:
+        r.close()
+    for rgb in colors.values():
+        m = _mask(img, rgb, 1)
+        core = ndimage.binary_erosion(_mask(img, rgb, 30), iterations=3)
+        assert core.sum() > 100
+        assert (m[core]).all(), "interior pixels differ from the given colour"
+
+
+@pytest.mark.render
+@pytest.mark.parametrize("name", list(PRESETS))
+def test_orientation_of_every_preset(flat, name):
+    view = PRESETS[name]
+    img = flat.render(_quadrant_colors(), view)
+    c = _quadrant_colors()
+    tol = 2
+    if view.content == "cortex":
+        hemis = view.hemis
+        pre = {"lh": "Left-", "rh": "Right-"}
+        ant = [c[pre[h] + s] for h in hemis for s in ("antsup", "antinf")]
+        post = [c[pre[h] + s] for h in hemis for s in ("postsup", "postinf")]
+        sup = [c[pre[h] + s] for h in hemis for s in ("antsup", "postsup")]
+        inf = [c[pre[h] + s] for h in hemis for s in ("antinf", "postinf")]
+        left = [c["Left-" + s] for s in REGIONS[1:]]
+        right = [c["Right-" + s] for s in REGIONS[1:]]
+    else:
+        ant = [c["Left-Caudate"], c["Right-Caudate"]]
+        post = [c["Left-Hippocampus"], c["Right-Hippocampus"]]
+        sup, inf = ant, post
+        left = [c["Left-Caudate"], c["Left-Hippocampus"]]
+        right = [c["Right-Caudate"], c["Right-Hippocampus"]]
+    expected = {  # image direction of anterior; superior; right hemisphere (x right, y down)
+        "lateral-left": ("left", "up", None), "medial-left": ("right", "up", None),
+        "lateral-right": ("right", "up", None), "medial-right": ("left", "up", None),
+        "dorsal": ("up", None, "right"), "ventral": ("up", None, "left"),
+        "anterior": (None, "up", "left"), "posterior": (None, "up", "right"),
+        "subcortical": ("left", "up", None), "subcortical-left": ("left", "up", None),
+        "subcortical-dorsal": ("up", None, "right"),
+    }[name]
+    unit = {"left": (-1, 0), "right": (1, 0), "up": (0, -1), "down": (0, 1)}
+
+    def points(d, direction):
+        return np.dot(d, unit[direction]) > 0.1 * np.linalg.norm(d) and np.linalg.norm(d) > 5
+
+    a, s, r = expected
+    if a:
+        d = _centroid(img, ant, tol) - _centroid(img, post, tol)
+        assert points(d, a), f"{name}: anterior should be {a}, got offset {d}"
+    if s:
+        d = _centroid(img, sup, tol) - _centroid(img, inf, tol)
+        assert points(d, s), f"{name}: superior should be {s}, got offset {d}"
+    if r:
+        d = _centroid(img, right, tol) - _centroid(img, left, tol)
+        assert points(d, r), f"{name}: right hemisphere should be {r}, got offset {d}"
+
+
+@pytest.mark.render
+def test_object_fills_frame_with_margin_and_zoom(template):
+    r = _renderer(template, quality="fast", shading="flat", background=None)
+    try:
+        sil = r.render({}, get_view("lateral-left"))[..., 3] > 0
+        zoomed = r.render({}, View("z", "cortex", ("lh",), 180.0, 0.0, zoom=1.5))[..., 3] > 0
+    finally:
+        r.close()
+    ys, xs = np.nonzero(sil)
+    assert xs.min() > 0 and xs.max() < 319 and ys.min() > 0 and ys.max() < 239
+    # the limiting dimension is framed tightly (4% margin per side)
+    assert max((xs.max() - xs.min() + 1) / 320, (ys.max() - ys.min() + 1) / 240) > 0.85
+    assert zoomed.sum() > 1.3 * sil.sum()
+
+
+@pytest.mark.render
+def test_no_background_holes_inside_the_silhouette(flat):
+    grey = {f"{h}-{n}": (0.5, 0.5, 0.5) for h in ("Left", "Right") for n in REGIONS}
+    for name in ("lateral-left", "dorsal", "medial-right"):
+        img = flat.render(grey, get_view(name))
+        brain = ~_mask(img, BACKGROUND, 0)
+        holes = ndimage.binary_fill_holes(brain) & ~brain
+        assert holes.sum() == 0, f"{name}: {holes.sum()} background pixels inside the brain"
+
+
+@pytest.mark.render
+def test_transparent_background(template):
+    r = _renderer(template, quality="default", background=None)
+    try:
+        img = r.render({}, get_view("lateral-left"))
+    finally:
+        r.close()
+    alpha = img[..., 3]
+    assert (alpha[0, :] == 0).all() and (alpha[:, 0] == 0).all()
+    assert (alpha[120, 160] == 255)
+    assert ((alpha == 255).mean() > 0.3)
+
+
+@pytest.mark.render
+def test_background_colour_is_exact(template):
+    bg = (0.2, 0.4, 0.6)
+    r = _renderer(template, quality="default", background=bg)
+    try:
+        img = r.render({}, get_view("dorsal"))
+    finally:
+        r.close()
+    corners = img[[0, 0, -1, -1], [0, -1, 0, -1]]
+    assert np.abs(corners[:, :3].astype(int) - np.round(np.array(bg) * 255)).max() <= 1
+    assert (corners[:, 3] == 255).all()
+
+
+@pytest.mark.render
+def test_glass_is_visible_and_structures_show_through(template):
+    colors = {"Left-Caudate": RED, "Right-Caudate": RED,
+              "Left-Hippocampus": BLUE, "Right-Hippocampus": BLUE}
+    view = get_view("subcortical-dorsal")  # both hemispheres as glass, seen from above
+    images = []
+    for opacity in (0.2, 0.0):  # invisible glass: same framing, structures only
+        r = _renderer(template, quality="fast", shading="flat", glass_opacity=opacity)
+        try:
+            images.append(r.render(colors, view).astype(float))
+        finally:
+            r.close()
+    img, bare = images
+    white = np.array([255, 255, 255])
+    glass_only = (np.abs(img[..., :3] - white).max(-1) > 3) & (np.abs(bare[..., :3] - white).max(-1) == 0)
+    assert glass_only.mean() > 0.2, "the glass brain is not drawn"
+    assert (img[glass_only][:, :3].min(axis=1) > 150).all(), "the glass is too opaque"
+    # Inside the boxes the structure colour dominates, tinted by the glass in front.
+    red = _mask(bare, RED, 1)
+    seen = img[red][:, :3]
+    assert red.sum() > 50
+    assert (seen[:, 0] > 150).all() and (seen[:, 0] - seen[:, 1:].max(axis=1) > 80).all()
+
+
+@pytest.mark.render
+def test_subcortical_without_colour_is_neutral_and_cortex_uses_medial_wall(flat):
+    from brainpainter_blender.materials import NEUTRAL_GREY
+
+    img = flat.render({}, get_view("subcortical-left"))
+    assert _mask(img, NEUTRAL_GREY, 30).sum() > 50
+    img = flat.render({}, get_view("lateral-left"))
+    assert _mask(img, flat.scene.medial_wall_color, 1).sum() > 1000
+
+
+@pytest.mark.render
+def test_hidden_regions_are_never_drawn(template):
+    r = _renderer(template, quality="fast", shading="flat",
+                  hidden=frozenset({"Left-antsup", "Left-Caudate"}))
+    try:
+        img = r.render(_quadrant_colors(), get_view("lateral-left"))
+        sub = r.render(_quadrant_colors(), get_view("subcortical-left"))
+    finally:
+        r.close()
+    assert _mask(img, RED, 2).sum() == 0
+    assert _mask(img, GREEN, 2).sum() > 100
+    assert _mask(sub, RED, 40).sum() == 0
+
+
+@pytest.mark.render
+def test_deterministic_and_reusable(flat, template):
+    view, other = get_view("lateral-left"), get_view("dorsal")
+    c1 = _quadrant_colors()
+    a = flat.render(c1, view)
+    flat.render(c1, other)
+    assert np.array_equal(a, flat.render(c1, view))
+    c2 = {**c1, "Left-antsup": GREEN}
+    b = flat.render(c2, view)
+    assert not np.array_equal(a, b)
+    assert _mask(b, RED, 2).sum() == 0
+    # a second renderer with other settings coexists in the same process
+    other_r = _renderer(template, quality="default", width=160, height=120)
+    try:
+        assert other_r.render(c1, view).shape == (120, 160, 4)
+        assert np.array_equal(a, flat.render(c1, view))
+    finally:
+        other_r.close()
+    assert np.array_equal(a, flat.render(c1, view))
+
+
+@pytest.mark.render
+def test_many_renders_do_not_grow_memory(template):
+    def rss_mb() -> float:
+        with open("/proc/self/statm") as fh:
+            return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+    if not Path("/proc/self/statm").exists():
+        pytest.skip("needs /proc")
+    r = _renderer(template, quality="fast", width=160, height=120)
+    rng = np.random.default_rng(0)
+    views = [get_view(n) for n in ("lateral-left", "dorsal", "subcortical")]
+    try:
+        for i in range(15):
+            r.render({"Left-antsup": tuple(rng.random(3))}, views[i % 3])
+        before = rss_mb()
+        for i in range(60):
+            r.render({"Left-antsup": tuple(rng.random(3))}, views[i % 3])
+        grown = rss_mb() - before
+    finally:
+        r.close()
+    assert grown < 25, f"memory grew by {grown:.1f} MB over 60 renders"
+
+
+@pytest.mark.render
+def test_close_frees_blender_data_and_refuses_to_render(template):
+    import bpy
+
+    before = (len(bpy.data.objects), len(bpy.data.meshes), len(bpy.data.materials),
+              len(bpy.data.scenes))
+    r = _renderer(template, quality="fast")
+    assert len(bpy.data.objects) > before[0]
+    r.close()
+    r.close()
+    assert (len(bpy.data.objects), len(bpy.data.meshes), len(bpy.data.materials),
+            len(bpy.data.scenes)) == before
+    with pytest.raises(BrainPainterError, match="closed"):
+        r.render({}, get_view("dorsal"))
+
+
+@pytest.mark.render
+def test_surfaces_and_lighting_presets(template):
+    for kw in ({"surface": "inflated", "lighting": "soft"}, {"lighting": "flat-studio"},
+               {"surface": "white"}):
+        r = _renderer(template, **kw)
+        try:
+            img = r.render({"Left-antsup": RED}, get_view("lateral-left"))
+        finally:
+            r.close()
+        red = img[..., 0].astype(int) - img[..., 1:3].max(-1) > 60  # hue kept under lighting
+        assert red.sum() > 200, kw
+
+
+@pytest.mark.render
+def test_default_shading_keeps_hue(template):
+    r = _renderer(template, quality="default")
+    try:
+        img = r.render(_quadrant_colors(), get_view("lateral-left")).astype(int)
+    finally:
+        r.close()
+    red = (img[..., 0] - img[..., 1:3].max(-1) > 60) & (img[..., 3] == 255)
+    blue = (img[..., 2] - img[..., 0:2].max(-1) > 60) & (img[..., 3] == 255)
+    assert red.sum() > 1000 and blue.sum() > 1000
+    assert img[..., :3][img[..., 3] == 255].max(-1).min() > 10, "harsh black in the shading"
+
+
+@pytest.mark.render
+def test_cycles_high_quality(template):
+    r = _renderer(template, quality="high", width=96, height=72)
+    try:
+        a = r.render({"Left-antsup": RED, "Left-postsup": BLUE}, get_view("lateral-left"))
+        b = r.render({"Left-antsup": RED, "Left-postsup": BLUE}, get_view("lateral-left"))
+    finally:
+        r.close()
+    assert np.array_equal(a, b)
+    img = a.astype(int)
+    assert (img[..., 0] - img[..., 1:3].max(-1) > 60).sum() > 50
+    assert (img[..., 2] - img[..., 0:2].max(-1) > 60).sum() > 50
+
+
+def _realistic_template():
+    for candidate in (os.environ.get("BRAINPAINTER_TEST_TEMPLATE"),
+                      ROOT / "plugins/atlases/brainpainter_atlases/templates/fsaverage",
+                      "/tmp/bp_templates/fsaverage5"):
+        if candidate and (Path(candidate) / "manifest.json").is_file():
+            return load_template(Path(candidate))
+    pytest.skip("no realistic template built yet (fsaverage or /tmp/bp_templates/fsaverage5)")
+
+
+@pytest.mark.render
+@pytest.mark.integration
+def test_real_brain_has_no_cracks():
+    from brainpainter_blender import BlenderRenderer
+
+    tpl = _realistic_template()
+    labels = tpl.label_sets[0]
+    settings = RenderSettings(480, 360, quality="fast", shading="flat")
+    grey = {f"{p}{n}": (0.5, 0.5, 0.5) for h, p in (("lh", "Left-"), ("rh", "Right-"))
+            for n in tpl.cortex(labels, h).label_names}
+    # One hemisphere at a time: the gap between hemispheres is real background.
+    views = [get_view("lateral-left"), get_view("medial-left"), get_view("lateral-right"),
+             View("dorsal-lh", "cortex", ("lh",), 0.0, 90.0),
+             View("ventral-rh", "cortex", ("rh",), 0.0, -90.0)]
+    renderer = BlenderRenderer(Scene(tpl, labels, settings=settings))
+    try:
+        for view in views:
+            brain = ~_mask(renderer.render(grey, view), BACKGROUND, 0)
+            holes = ndimage.binary_fill_holes(brain) & ~brain
+            assert holes.sum() == 0, f"{view.name}: {holes.sum()} background pixels in the brain"
+    finally:
+        renderer.close()
