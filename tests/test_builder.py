@@ -483,3 +483,14 @@ def test_default_template_rebuilds_identically(tmp_path):
     committed_tables = DEFAULT_TEMPLATE.parents[1] / "data"
     for rel, digest in digests(tmp_path / "atlas-data").items():
         assert hashlib.sha256((committed_tables / rel).read_bytes()).hexdigest() == digest, rel
+
+
+def test_bpy_still_imports_after_the_builder_used_pymeshlab():
+    """Both ship libembree4.so.4; the builder must load pymeshlab so that bpy keeps working."""
+    import subprocess
+    import sys
+
+    code = ("from brainpainter_builder.meshlab import import_pymeshlab\n"
+            "ms = import_pymeshlab().MeshSet()\nimport bpy\nprint('ok')")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.stdout.strip() == "ok", proc.stderr[-500:]

@@ -136,7 +136,9 @@ def decimate(vertices: np.ndarray, faces: np.ndarray, face_label: np.ndarray,
     source_vertex : ndarray of int64, shape (k,)
         Increasing indices into `vertices` of the kept vertices.
     """
-    import pymeshlab
+    from brainpainter_builder.meshlab import import_pymeshlab
+
+    pymeshlab = import_pymeshlab()
 
     vertices = np.asarray(vertices, dtype=np.float64)
     faces = np.asarray(faces, dtype=np.int64)

@@ -45,7 +45,9 @@ def pial_hull(vertices: np.ndarray, faces: np.ndarray, *, voxel: float = 1.5,
     faces : ndarray of int64, shape (l, 3)
         Outward-facing.
     """
-    import pymeshlab
+    from brainpainter_builder.meshlab import import_pymeshlab
+
+    pymeshlab = import_pymeshlab()
     import trimesh
     from scipy import ndimage
     from skimage.measure import marching_cubes

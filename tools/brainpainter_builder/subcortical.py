@@ -125,7 +125,9 @@ def mesh_mask(mask: np.ndarray, vox2ras: np.ndarray, *, smooth_iterations: int =
     smoothed_volume : float
         Volume after smoothing and decimation, before the final volume match.
     """
-    import pymeshlab
+    from brainpainter_builder.meshlab import import_pymeshlab
+
+    pymeshlab = import_pymeshlab()
     import trimesh
     from skimage.measure import marching_cubes
 
