@@ -26,7 +26,7 @@ REPO = Path(__file__).resolve().parents[1]
 EXAMPLE = REPO / "examples" / "brainpainter_dk.csv"
 
 CHILD = r"""
-import json, resource, sys, time
+import json, sys, time
 t0 = time.perf_counter()
 import pandas as pd
 import brainpainter
@@ -46,7 +46,7 @@ output.write_png = timed_write
 render(big, "dk", out=args["out"], views=args["views"], width=args["width"], height=args["height"],
        quality=args["quality"], progress=False)
 t_end = time.perf_counter()
-peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+peak_mb = next(int(l.split()[1]) for l in open("/proc/self/status") if l.startswith("VmHWM:")) / 1024
 print(json.dumps({"t_first": stamps[0] - t0, "t_total": t_end - t0, "stamps": [s - t0 for s in stamps],
                   "peak_mb": peak_mb}))
 """

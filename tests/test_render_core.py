@@ -147,3 +147,16 @@ def test_unwritable_output_folder(tmp_path, solid, tiny):
         render(data, "dk", out=blocker, template=str(tiny), renderer=solid, progress=False)
     with pytest.raises(BrainPainterError, match="not writable"):
         render(data, "dk", out=blocker / "sub", template=str(tiny), renderer=solid, progress=False)
+
+
+def test_written_files_get_the_usual_permissions(tmp_path, solid, tiny):
+    import os
+
+    data = csv(tmp_path, "Image-name-unique,Left-insula\nA,1\n")
+    out = tmp_path / "out"
+    render(data, "dk", out=out, template=str(tiny), renderer=solid, width=16, height=16,
+           views="lateral-left", progress=False)
+    mask = os.umask(0)
+    os.umask(mask)
+    for path in out.iterdir():
+        assert path.stat().st_mode & 0o777 == 0o666 & ~mask, path.name
