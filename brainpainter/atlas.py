@@ -11,9 +11,10 @@ from __future__ import annotations
 
 import csv
 import json
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TypeVar
 
 from brainpainter.errors import BrainPainterError
 
@@ -21,6 +22,7 @@ HEMIS = ("lh", "rh", "bilateral")
 HEMI_PREFIX = {"lh": "Left-", "rh": "Right-", "bilateral": ""}
 KINDS = ("cortical", "subcortical")
 REGION_COLUMNS = ("index", "name", "hemi", "kind", "color", "aliases")
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -71,6 +73,15 @@ class Atlas:
     description, citation : str
     aliases : tuple of str
         Other names of the atlas itself.
+    label_dir : Path or None
+        Folder with a label-set overlay (``labels.json``) that carries
+        `template_labels` for a template that lacks it (custom and plugin
+        atlases); see :meth:`brainpainter.template.Template.with_label_sets`.
+    members : tuple of (str, tuple of str)
+        Region groups: ``(key, member keys)`` pairs saying which regions of the
+        label set a region of this atlas stands for (``("Left-frontal",
+        ("Left-superiorfrontal", ...))``). Regions not listed stand for
+        themselves. Empty for ordinary atlases.
     """
 
     name: str
@@ -80,6 +91,8 @@ class Atlas:
     description: str = ""
     citation: str = ""
     aliases: tuple[str, ...] = ()
+    label_dir: Path | None = None
+    members: tuple[tuple[str, tuple[str, ...]], ...] = ()
     _by_key: dict[str, Region] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -112,6 +125,18 @@ class Atlas:
     def subcortical(self) -> list[Region]:
         return [r for r in self.regions if r.kind == "subcortical"]
 
+    def member_keys(self, key: str) -> tuple[str, ...]:
+        """Keys of the label-set regions that region `key` is drawn as (itself if no group)."""
+        return dict(self.members).get(key, (key,))
+
+    def expand(self, mapping: Mapping[str, T]) -> dict[str, T]:
+        """Copy of `mapping` (region key -> anything) with each group's value given to its members."""
+        out = dict(mapping)
+        for key, members in self.members:
+            if key in mapping:
+                out.update(dict.fromkeys(members, mapping[key]))
+        return out
+
     def to_dict(self) -> dict:
         """JSON-ready description (regions with key, hemi, colour, aliases)."""
         return {
@@ -123,6 +148,8 @@ class Atlas:
             "aliases": list(self.aliases),
             "n_cortical_per_hemisphere": {h: len(self.cortical(h)) for h in ("lh", "rh")},
             "n_subcortical": len(self.subcortical()),
+            "label_dir": None if self.label_dir is None else str(self.label_dir),
+            "groups": {k: list(m) for k, m in self.members},
             "regions": [
                 {
                     "key": r.key,
@@ -192,7 +219,8 @@ def load_atlas_dir(path: str | Path) -> Atlas:
     ``atlas.json`` keys: ``name``, ``title``, ``template_labels``, optional
     ``description``, ``citation``, ``aliases``, and ``include`` — a list of
     other region tables in the same directory's parent (e.g. the shared
-    ``aseg.tsv`` of subcortical structures).
+    ``aseg.tsv`` of subcortical structures). A ``labels.json`` beside them
+    makes the directory the atlas's label-set overlay (``Atlas.label_dir``).
     """
     path = Path(path)
     meta_file = path / "atlas.json"
@@ -211,6 +239,7 @@ def load_atlas_dir(path: str | Path) -> Atlas:
         description=meta.get("description", ""),
         citation=meta.get("citation", ""),
         aliases=tuple(meta.get("aliases", ())),
+        label_dir=path if (path / "labels.json").is_file() else None,
     )
 
 

@@ -39,13 +39,13 @@ def cli() -> None:
 # -- atlas --------------------------------------------------------------------
 @cli.group(context_settings=CONTEXT)
 def atlas() -> None:
-    """List and inspect atlases."""
+    """List, inspect, add and remove atlases."""
 
 
 @atlas.command("list", context_settings=CONTEXT)
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
 def atlas_list(as_json: bool) -> None:
-    """Installed atlases (built-in and plugins)."""
+    """Atlases: built-in, from plugins, and yours (atlas add)."""
     from brainpainter import registry
 
     rows = []
@@ -75,11 +75,31 @@ def atlas_list(as_json: bool) -> None:
 @atlas.command("show", context_settings=CONTEXT)
 @click.argument("name")
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
-def atlas_show(name: str, as_json: bool) -> None:
-    """Regions of atlas NAME, with hemisphere, colour and aliases."""
+@click.option("--image", type=click.Path(path_type=Path, dir_okay=False), default=None,
+              help="Also draw a reference PNG: every region in its colour-table colour, views side by side.")
+@click.option("--views", default="lateral-left,medial-left,subcortical", show_default=True,
+              help="Views of the reference image.")
+@click.option("--size", default="800x600", show_default=True, help="Size of each view, WIDTHxHEIGHT.")
+@click.option("--template", default="fsaverage", show_default=True, help="Template name or folder.")
+@click.option("--surface", default="pial", show_default=True,
+              type=click.Choice(["pial", "white", "inflated"]))
+@click.option("--quality", default="default", show_default=True,
+              type=click.Choice(["fast", "default", "high"]))
+@click.option("--renderer", default="blender", show_default=True)
+def atlas_show(name: str, as_json: bool, image: Path | None, views: str, size: str, template: str,
+               surface: str, quality: str, renderer: str) -> None:
+    """Regions of atlas NAME, with hemisphere, colour and aliases; --image draws them."""
     from brainpainter.atlas import get_atlas
 
     a = get_atlas(name)
+    if image is not None:
+        from brainpainter.atlas_image import reference_image
+
+        reference_image(a, image, views=views, size=_parse_size(size), template=template, surface=surface,
+                        quality=quality, renderer=renderer)
+        if not as_json:
+            click.echo(f"reference image of {a.name} written to {image}")
+            return
     if as_json:
         _echo_json(a.to_dict())
         return
@@ -98,6 +118,72 @@ def atlas_show(name: str, as_json: bool) -> None:
         click.echo(f"  {r.key}{alias}")
     if a.citation:
         click.echo(f"\nCite: {a.citation}")
+
+
+@atlas.command("add", context_settings=CONTEXT)
+@click.argument("name")
+@click.option("--annot", "annots", multiple=True, metavar="HEMI=FILE",
+              help="Label map per hemisphere: lh=FILE and rh=FILE (FreeSurfer .annot or GIFTI .label.gii "
+                   "on the template's surface).")
+@click.option("--config", "config", type=click.Path(path_type=Path, dir_okay=False), default=None,
+              help="Region-group TOML file (a base atlas and named groups of its regions).")
+@click.option("--template", default="fsaverage", show_default=True,
+              help="Template the label maps were made for.")
+@click.option("--title", default="", help="Human title (default: NAME).")
+@click.option("--description", default="", help="One-line description.")
+@click.option("--citation", default="", help="What to cite.")
+@click.option("--replace", is_flag=True, help="Replace your atlas of the same name.")
+@click.option("--out", "out", type=click.Path(path_type=Path, file_okay=False), default=None,
+              help="Write the atlas folder to OUT (e.g. into an atlas plugin) instead of adding it.")
+def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, template: str, title: str,
+              description: str, citation: str, replace: bool, out: Path | None) -> None:
+    """Add atlas NAME from label maps (--annot) or from region groups (--config).
+
+    \b
+    Examples:
+      brainpainter atlas add yeo7 --annot lh=lh.Yeo2011_7Networks_N1000.annot \\
+                                  --annot rh=rh.Yeo2011_7Networks_N1000.annot
+      brainpainter atlas add lobes --config lobes.toml
+    """
+    import time
+
+    from brainpainter import registry, user_atlases
+
+    if bool(annots) == (config is not None):
+        raise BrainPainterError("give either --annot lh=FILE --annot rh=FILE or --config FILE.toml "
+                                "(one of them)")
+    t0 = time.perf_counter()
+    if config is not None:
+        if out is not None:
+            raise BrainPainterError("--out is for label maps (--annot); a config is a file you can ship "
+                                    "as it is")
+        folder = user_atlases.add_config(name, config, replace=replace)
+    else:
+        folder = user_atlases.add_label_map(
+            name, user_atlases.parse_annot_options(annots), template=template, title=title,
+            description=description, citation=citation, replace=replace, out=out)
+    if out is not None:
+        from brainpainter.atlas import load_atlas_dir
+
+        a = load_atlas_dir(folder)
+    else:
+        a = registry.atlases.get(name)
+    n = {h: len(a.cortical(h)) for h in ("lh", "rh")}
+    where = "written to" if out is not None else "added in"
+    click.echo(f"atlas {name!r} {where} {folder} ({n['lh']} left, {n['rh']} right cortical regions, "
+               f"{len(a.subcortical())} subcortical; {time.perf_counter() - t0:.1f} s)")
+    if out is None:
+        click.echo(f"render with: brainpainter render TABLE --atlas {name} --out DIR")
+
+
+@atlas.command("remove", context_settings=CONTEXT)
+@click.argument("name")
+def atlas_remove(name: str) -> None:
+    """Remove atlas NAME that you added with 'atlas add'."""
+    from brainpainter import user_atlases
+
+    folder = user_atlases.remove(name)
+    click.echo(f"atlas {name!r} removed ({folder} deleted)")
 
 
 # -- plugins ------------------------------------------------------------------
@@ -152,6 +238,14 @@ def _input_options(f):
     ]):
         f = opt(f)
     return f
+
+
+def _parse_size(size: str) -> tuple[int, int]:
+    try:
+        w, h = (int(x) for x in size.lower().split("x"))
+    except ValueError:
+        raise BrainPainterError(f"--size must be WIDTHxHEIGHT, e.g. 1200x900; {size!r} was given.") from None
+    return w, h
 
 
 def _one_or_many(inputs: tuple[Path, ...]) -> Path | list[Path]:
@@ -229,12 +323,15 @@ def check(inputs: tuple[Path, ...], atlas: str | None, image_column: str | None,
 @click.option("--glass-opacity", type=float, default=0.12, show_default=True)
 @click.option("--renderer", default="blender", show_default=True)
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
+@click.option("--atlas-config", type=click.Path(path_type=Path, dir_okay=False), default=None,
+              help="Region-group TOML file defining the atlas (instead of --atlas); see docs/atlases.md.")
 def render(inputs: tuple[Path, ...], atlas: str | None, out: Path, views: str, template: str, surface: str,
            gradient: str | None, cmap: str | None, vmin: float | None, vmax: float | None,
            center: float | None, nan_color: str, missing_color: str, hide: list[str],
            background: str, transparent: bool, size: str, quality: str, shading: str,
            lighting: str, glass_opacity: float, image_column: str | None, strict: bool,
-           renderer: str, quiet: bool, value: str | None, region_column: str | None) -> None:
+           renderer: str, quiet: bool, value: str | None, region_column: str | None,
+           atlas_config: Path | None = None) -> None:
     """Render every image of INPUT tables (CSV, TSV, .xlsx; see 'check') from every view.
 
     Several INPUTs (e.g. lh and rh aparcstats2table files) are merged by image name.
@@ -251,7 +348,7 @@ def render(inputs: tuple[Path, ...], atlas: str | None, out: Path, views: str, t
         missing_color=missing_color, hide=hide, background=None if transparent else background,
         width=w, height=h, quality=quality, shading=shading, lighting=lighting,
         glass_opacity=glass_opacity, renderer=renderer, image_column=image_column, strict=strict,
-        progress=not quiet, value=value, region_column=region_column,
+        progress=not quiet, value=value, region_column=region_column, atlas_config=atlas_config,
     )
     from brainpainter.inputs import summary_line
 
@@ -309,6 +406,12 @@ def template_info(name_or_path: str, as_json: bool) -> None:
         _echo_json(report)
     else:
         click.echo(format_report(report))
+
+
+from brainpainter.cli_media import figure, movie  # noqa: E402
+
+cli.add_command(figure)
+cli.add_command(movie)
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -55,11 +55,18 @@ class Registry:
     validate : callable, optional
         ``validate(name, obj) -> obj`` checks the plugin contract and may
         normalise the object (e.g. call a factory); raises PluginError.
+    local_source : callable, optional
+        ``local_source() -> {name: (location, factory)}``: entries kept in a
+        folder rather than installed (user atlases); listed with distribution
+        ``"user"``. An installed entry of the same name wins and the local one
+        is reported in :meth:`errors`.
     """
 
     group: str
     kind: str
     validate: Callable[[str, Any], Any] | None = None
+    local_source: Callable[[], Mapping[str, tuple[str, Callable[[], Any]]]] | None = None
+    _local: dict[str, Callable[[], Any]] = field(default_factory=dict, repr=False)
     _entries: dict[str, Entry] | None = field(default=None, repr=False)
     _alias: dict[str, str] = field(default_factory=dict, repr=False)
     _loaded: dict[str, Any] = field(default_factory=dict, repr=False)
@@ -99,6 +106,19 @@ class Registry:
                 f"({', '.join(targets)}); uninstall one of them"
             )
             entries.pop(name, None)
+        self._local = {}
+        if self.local_source is not None:
+            taken = {n.lower(): n for n in (*entries, *self._alias)}
+            for name, (where, factory) in sorted(self.local_source().items()):
+                if name.lower() in taken:
+                    self._errors[f"{name} (user)"] = (
+                        f"the user {self.kind} {name!r} in {where} has the name of an installed "
+                        f"{self.kind} and is ignored; remove it (brainpainter {self.kind} remove {name}) "
+                        "and add it again under another name"
+                    )
+                    continue
+                entries[name] = Entry(name, where, "user")
+                self._local[name] = factory
         self._entries = entries
         return entries
 
@@ -154,6 +174,8 @@ class Registry:
         try:
             if canonical in self._extra:
                 obj = self._extra[canonical]()
+            elif canonical in self._local:
+                obj = self._local[canonical]()
             else:
                 entry = self._discover()[canonical]
                 obj = load_target(entry.target)
@@ -212,6 +234,12 @@ def _validate_atlas(name: str, obj: Any) -> Any:
     return obj
 
 
+def _user_atlases() -> Mapping[str, tuple[str, Callable[[], Any]]]:
+    from brainpainter.user_atlases import local_entries
+
+    return local_entries()
+
+
 def _validate_renderer(name: str, obj: Any) -> Any:
     for method in ("render",):
         if not callable(getattr(obj, method, None)):
@@ -230,7 +258,7 @@ def _validate_template(name: str, obj: Any) -> Any:
     return path
 
 
-atlases = Registry("brainpainter.atlases", "atlas", _validate_atlas)
+atlases = Registry("brainpainter.atlases", "atlas", _validate_atlas, local_source=_user_atlases)
 renderers = Registry("brainpainter.renderers", "renderer", _validate_renderer)
 templates = Registry("brainpainter.templates", "template", _validate_template)
 

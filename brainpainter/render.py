@@ -80,7 +80,7 @@ def region_colors(values: Mapping[str, float], atlas: Atlas, scale: ColourScale)
     if keys:
         rgb = scale(np.array([values[k] for k in keys], dtype=float))
         colors.update({k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(keys, rgb, strict=True)})
-    return colors
+    return atlas.expand(colors)  # a region group's colour goes to each of its member regions
 
 
 @dataclass
@@ -97,6 +97,8 @@ class Painter:
     settings : RenderSettings
     renderer : str
         Name in the ``brainpainter.renderers`` registry.
+    atlas_config : path, optional
+        Region-group TOML file (:mod:`brainpainter.atlas_config`); replaces `atlas`.
     """
 
     atlas: Atlas | str = "dk"
@@ -106,18 +108,28 @@ class Painter:
     settings: RenderSettings = field(default_factory=RenderSettings)
     renderer: str = "blender"
     medial_wall_color: ColorLike = (0.72, 0.72, 0.72)
+    atlas_config: str | Path | None = None
     _renderer: Any = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
+        if self.atlas_config is not None:
+            from brainpainter.atlas_config import load_atlas_config
+
+            self.atlas = load_atlas_config(self.atlas_config)
         if isinstance(self.atlas, str):
             self.atlas = get_atlas(self.atlas)
         if not isinstance(self.template, Template):
             self.template = load_template(self.template)
+        if self.atlas.label_dir is not None and self.atlas.template_labels not in self.template.label_sets:
+            # a custom or plugin atlas brings its own label set for this template
+            self.template = self.template.with_label_sets(self.atlas.label_dir)
+            for hemi in ("lh", "rh"):
+                self.template.cortex(self.atlas.template_labels, hemi)  # fail now if it does not fit
         self.scene = Scene(
             template=self.template,
             labels=self.atlas.template_labels,
             surface=self.surface,
-            hidden=resolve_hidden(self.hidden, self.atlas),
+            hidden=frozenset(self.atlas.expand(dict.fromkeys(resolve_hidden(self.hidden, self.atlas)))),
             settings=self.settings,
             medial_wall_color=to_rgb(self.medial_wall_color),
         )
@@ -131,14 +143,16 @@ class Painter:
                 f"template {self.template.name!r} lacks (it has {self.template.label_sets})."
             )
 
-    def _load(self) -> Any:
+    def load(self) -> Any:
+        """Start the renderer and load the scene (once); later calls return it."""
         if self._renderer is None:
             self._renderer = self._renderer_class(self.scene)
         return self._renderer
 
     def paint_colors(self, colors: Mapping[str, RGB], view: View) -> np.ndarray:
-        """Render explicit region colours; returns RGBA uint8, shape (h, w, 4)."""
-        return self._load().render(colors, view)
+        """Render explicit region colours (group keys colour their members); RGBA uint8, (h, w, 4)."""
+        assert isinstance(self.atlas, Atlas)
+        return self.load().render(self.atlas.expand(colors), view)
 
     def paint(self, values: Mapping[str, float], view: View, scale: ColourScale) -> np.ndarray:
         """Render region values through `scale`; returns RGBA uint8, shape (h, w, 4)."""
@@ -219,6 +233,7 @@ def render(
     progress: bool = True,
     value: str | None = None,
     region_column: str | None = None,
+    atlas_config: str | Path | None = None,
 ) -> RenderResult:
     """Render every row of a region-value table from every view.
 
@@ -242,6 +257,9 @@ def render(
         None renders a transparent background.
     image_column, value, region_column, strict
         How the table is read, see :func:`brainpainter.inputs.read_table`.
+    atlas_config : path, optional
+        Region-group TOML file (:mod:`brainpainter.atlas_config`) defining the
+        atlas; give it instead of `atlas`.
 
     Returns
     -------
@@ -251,6 +269,13 @@ def render(
     from brainpainter.output import prepare_out_dir, safe_name, write_json, write_png
 
     # Validate everything before the first image so bad input leaves nothing behind.
+    if atlas_config is not None:
+        if atlas is not None:
+            raise BrainPainterError("give an atlas or an atlas config (--atlas-config), not both; the "
+                                    "config's [atlas] base names the atlas it groups.")
+        from brainpainter.atlas_config import load_atlas_config
+
+        atlas = load_atlas_config(atlas_config)
     if isinstance(atlas, str):
         atlas = get_atlas(atlas)
     # Options first (cheap, and their errors should not wait for a big input file).
@@ -280,6 +305,7 @@ def render(
             "make the image names differ in letters or digits."
         )
     painter = Painter(atlas, template, surface, hide, settings, renderer)
+    painter.load()  # a renderer that cannot start (e.g. no bpy) fails before any output exists
     out_dir = prepare_out_dir(out) if out is not None else None
 
     settings_dict = {

@@ -15,10 +15,24 @@ region label: the per-region meshes are ``faces[face_label == i]``, so
 neighbouring regions share their boundary vertices exactly. The pial, white
 and inflated surfaces share one topology (``faces``) and differ in vertex
 positions; inflated positions are already offset so hemispheres never overlap.
+
+Label-set overlays
+------------------
+A custom or plugin atlas brings its own label set in a folder beside its
+``atlas.json``: ``labels.json`` (format ``brainpainter-labels``, the same
+``labels`` entries as a manifest, for one named template) plus
+``cortex-{hemi}-{labels}.npz`` files. An overlay file holds labels for one of
+the template's own label-set meshes (entry key ``base``; ``base_faces_sha256``
+guards against a rebuilt template): ``vertex_label`` (one per vertex; faces
+whose vertices differ are split through edge midpoints when loaded, see
+:func:`brainpainter.labelset.split_mesh`) or ``face_label`` (one per face).
+:meth:`Template.with_label_sets` adds such a folder's label sets to a template.
 """
 
 from __future__ import annotations
 
+import copy
+import hashlib
 import json
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -32,6 +46,13 @@ FORMAT = "brainpainter-template"
 FORMAT_VERSION = 1
 SURFACES = ("pial", "white", "inflated")
 HEMIS = ("lh", "rh")
+LABELS_FORMAT = "brainpainter-labels"
+LABELS_FILE = "labels.json"
+
+
+def faces_digest(faces: np.ndarray) -> str:
+    """SHA-256 of a face array (as little-endian int32), to recognise a mesh."""
+    return hashlib.sha256(np.ascontiguousarray(faces, dtype="<i4").tobytes()).hexdigest()
 
 
 @dataclass(frozen=True)
@@ -51,7 +72,8 @@ class CortexMesh:
     vertices : dict of str to ndarray of float32, shape (n_vertices, 3)
         One entry per surface (``"pial"``, ``"white"``, ``"inflated"``).
     source_vertex : ndarray of int32, shape (n_vertices,)
-        Index of each vertex in the full-resolution FreeSurfer surface.
+        Index of each vertex in the full-resolution FreeSurfer surface; -1 for
+        a vertex added on an edge or face by a label-set overlay.
     """
 
     hemi: str
@@ -117,6 +139,28 @@ class Template:
             )
         entry = self.manifest["labels"][labels]["cortex"][hemi]
         z = self._npz(entry["file"])
+        if "base" in entry:  # an overlay: labels for the vertices or faces of one of our own meshes
+            base = self.cortex(entry["base"], hemi)
+            per_vertex = "vertex_label" in z
+            n = len(z["vertex_label"]) if per_vertex else len(z["face_label"])
+            digest = entry.get("base_faces_sha256")
+            if n != (len(base.source_vertex) if per_vertex else len(base.faces)) or (
+                    digest and faces_digest(base.faces) != digest):
+                raise BrainPainterError(
+                    f"label set {labels!r} ({entry['file']}) was made for the {entry['base']!r} mesh of "
+                    f"template {self.name!r} as it was then, and that mesh has changed; add the atlas "
+                    "again (brainpainter atlas add ... --replace)."
+                )
+            if not per_vertex:
+                return CortexMesh(hemi=hemi, labels=labels, faces=base.faces, face_label=z["face_label"],
+                                  label_names=tuple(entry["names"]), vertices=base.vertices,
+                                  source_vertex=base.source_vertex)
+            from brainpainter.labelset import split_mesh
+
+            key = f"{entry['file']}#{labels}"  # computed once per template object
+            if key not in self._cache:
+                self._cache[key] = split_mesh(base, z["vertex_label"], labels, tuple(entry["names"]))
+            return self._cache[key]
         return CortexMesh(
             hemi=hemi,
             labels=labels,
@@ -126,6 +170,36 @@ class Template:
             vertices={s: z[s] for s in self.surfaces if s in z},
             source_vertex=z["source_vertex"],
         )
+
+    def with_label_sets(self, folder: str | Path) -> Template:
+        """This template plus the label sets of an overlay folder (``labels.json``).
+
+        The overlay's label sets win over the template's own ones of the same
+        name. An overlay made for another template is an error.
+        """
+        folder = Path(folder)
+        meta_file = folder / LABELS_FILE
+        try:
+            meta = json.loads(meta_file.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise BrainPainterError(f"cannot read label-set overlay {meta_file}: {exc}") from None
+        if meta.get("format") != LABELS_FORMAT or meta.get("format_version") != FORMAT_VERSION:
+            raise BrainPainterError(f"{meta_file} is not a {LABELS_FORMAT} version {FORMAT_VERSION} file; "
+                                    "add the atlas again with 'brainpainter atlas add'.")
+        if meta.get("template") != self.name:
+            raise BrainPainterError(
+                f"the label sets in {folder} were made for template {meta.get('template')!r}, not "
+                f"{self.name!r}; render with --template {meta.get('template')} or add the atlas again "
+                f"with --template {self.name}."
+            )
+        manifest = dict(self.manifest)
+        manifest["labels"] = dict(manifest["labels"])
+        for name, entry in meta.get("labels", {}).items():
+            entry = copy.deepcopy(entry)
+            for hemi_entry in entry.get("cortex", {}).values():
+                hemi_entry["file"] = str((folder / hemi_entry["file"]).absolute())
+            manifest["labels"][name] = entry
+        return Template(path=self.path, manifest=manifest, _cache=self._cache)
 
     def subcortical(self) -> LabelledMesh:
         """All subcortical structures (names as in FreeSurfer's aseg LUT)."""

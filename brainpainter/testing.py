@@ -4,6 +4,22 @@
 its ``.dist-info`` with ``entry_points.txt``) into a folder, exactly what pip
 would leave in site-packages; put that folder on ``sys.path`` and call
 :func:`brainpainter.registry.reset_all` to make the registries see it.
+
+For atlas plugin authors: :func:`check_atlas` runs every check brainpainter
+makes of an atlas (it loads through the registry, its label set fits the
+template, every region has faces or a subcortical mesh, a table naming every
+region renders with 0 unmatched columns) using :class:`StandInRenderer`, a
+renderer without Blender. In a plugin's ``tests/conftest.py``::
+
+    pytest_plugins = ["brainpainter.testing"]   # fixtures: brainpainter_home, stand_in_renderer
+
+and in a test::
+
+    from brainpainter.testing import check_atlas
+
+    def test_my_atlas(brainpainter_home):
+        report = check_atlas("myatlas")
+        assert report["n_cortical"] == {"lh": 7, "rh": 7}
 """
 
 from __future__ import annotations
@@ -12,6 +28,7 @@ import sys
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any, ClassVar
 
 
 def fake_distribution(
@@ -136,3 +153,168 @@ def write_tiny_template(path: Path, labels: Mapping[str, tuple[str, ...]] | None
     manifest["bounds"] = {"pial": [lo, hi]}
     (path / "manifest.json").write_text(json.dumps(manifest, indent=1))
     return path
+
+
+class StandInRenderer:
+    """A renderer without Blender, for tests: paints what a real one would, as stripes.
+
+    Loading checks what a real renderer needs: the scene's label set exists on
+    both hemispheres and the surface is there. Each image shows the faces of
+    the view's structures sampled evenly (grouped by label), each in the
+    colour the real renderer would give it (medial wall / neutral grey when
+    the key has no colour). ``StandInRenderer.calls`` records ``(colors, view)``.
+    """
+
+    calls: ClassVar[list[tuple[dict, Any]]] = []
+
+    def __init__(self, scene: Any) -> None:
+        import numpy as np
+
+        self.scene = scene
+        self.parts: dict[str, tuple[list[str], np.ndarray]] = {}
+        for hemi in ("lh", "rh"):
+            cm = scene.template.cortex(scene.labels, hemi)
+            if scene.surface not in cm.vertices:
+                raise AssertionError(f"template {scene.template.name!r} has no {scene.surface} surface")
+            prefix = {"lh": "Left-", "rh": "Right-"}[hemi]
+            self.parts[hemi] = ([prefix + n for n in cm.label_names], np.sort(cm.face_label))
+        if scene.template.manifest.get("subcortical"):
+            sub = scene.template.subcortical()
+            self.parts["subcortical"] = (list(sub.label_names), np.sort(sub.face_label))
+
+    def painted(self, colors: Mapping[str, Any], part: str) -> dict[str, Any]:
+        """Label key -> colour drawn (None: default colour) for one part (``lh``, ``rh``, ``subcortical``)."""
+        keys, labels = self.parts[part]
+        return {keys[i]: colors.get(keys[i]) for i in sorted(set(labels.tolist()))
+                if keys[i] not in self.scene.hidden}
+
+    def render(self, colors: Mapping[str, Any], view: Any) -> Any:
+        import numpy as np
+
+        type(self).calls.append((dict(colors), view))
+        s = self.scene.settings
+        parts = ["subcortical"] if view.content == "subcortical" else list(view.hemis)
+        default = {"subcortical": (0.8, 0.8, 0.8)}
+        stripes = []
+        for part in parts:
+            keys, labels = self.parts.get(part, ([], np.zeros(0, int)))
+            for i in labels:
+                if keys[i] in self.scene.hidden:
+                    continue
+                rgb = colors.get(keys[i]) or default.get(part, self.scene.medial_wall_color)
+                stripes.append(rgb)
+        img = np.zeros((s.height, s.width, 4), np.uint8)
+        if stripes:
+            cols = np.asarray(stripes, dtype=float)[np.linspace(0, len(stripes) - 1, s.width).astype(int)]
+            img[..., :3] = np.round(cols[None, :, :3] * 255).astype(np.uint8)
+            img[..., 3] = 255
+        return img
+
+    def close(self) -> None:
+        pass
+
+
+@contextmanager
+def stand_in(name: str = "stand-in") -> Iterator[str]:
+    """Register :class:`StandInRenderer` as renderer `name` for the duration."""
+    from brainpainter import registry
+
+    registry.renderers.register(name, lambda: StandInRenderer, replace=True)
+    StandInRenderer.calls = []
+    try:
+        yield name
+    finally:
+        registry.renderers.unregister(name)
+
+
+def check_atlas(atlas: Any, template: str | Path = "fsaverage") -> dict[str, Any]:
+    """Check an atlas the way brainpainter uses it; raise AssertionError listing every problem.
+
+    Parameters
+    ----------
+    atlas : str or Atlas
+        Registry name (loads it through the registry, as ``--atlas NAME`` does) or an Atlas.
+    template : str or path
+        Template to draw it on.
+
+    Returns
+    -------
+    dict
+        ``atlas``, ``template``, ``label_set``, ``n_cortical`` (per hemisphere),
+        ``n_subcortical``, ``n_regions_matched``, ``unmatched_columns``.
+    """
+    import numpy as np
+
+    from brainpainter import registry
+    from brainpainter.atlas import Atlas
+    from brainpainter.render import render
+    from brainpainter.template import load_template
+
+    a: Atlas = registry.atlases.get(atlas) if isinstance(atlas, str) else atlas
+    problems: list[str] = []
+    tpl = load_template(template)
+    if a.template_labels not in tpl.label_sets and a.label_dir is not None:
+        tpl = tpl.with_label_sets(a.label_dir)
+    if a.template_labels not in tpl.label_sets:
+        raise AssertionError(f"atlas {a.name!r}: template {tpl.name!r} has no label set "
+                             f"{a.template_labels!r} (it has {tpl.label_sets}) and the atlas brings none "
+                             "(labels.json)")
+    with_faces: set[str] = set()
+    for hemi, prefix in (("lh", "Left-"), ("rh", "Right-")):
+        cm = tpl.cortex(a.template_labels, hemi)
+        with_faces |= {prefix + cm.label_names[i] for i in np.unique(cm.face_label).tolist()}
+    subcortical = set(tpl.subcortical().label_names) if tpl.manifest.get("subcortical") else set()
+    for r in a.regions:
+        drawn = with_faces if r.kind == "cortical" else subcortical
+        missing = [k for k in a.member_keys(r.key) if k not in drawn]
+        if missing:
+            problems.append(f"region {r.key!r} has nothing to draw on template {tpl.name!r} "
+                            f"({', '.join(missing)} missing)")
+    data = {r.key: float(i) for i, r in enumerate(a.regions)}
+    with stand_in() as renderer:
+        result = render(data, a, template=tpl, renderer=renderer, width=32, height=24,
+                        views="lateral-left,medial-right,subcortical", progress=False)
+    summary = result.manifest["input"]
+    if summary["unmatched_columns"]:
+        problems.append(f"region keys that do not read back as regions: {summary['unmatched_columns']}")
+    if summary["n_regions_matched"] != len(a.regions):
+        problems.append(f"{summary['n_regions_matched']} of {len(a.regions)} region keys matched")
+    if problems:
+        raise AssertionError(f"atlas {a.name!r}: " + "; ".join(problems))
+    return {
+        "atlas": a.name, "template": tpl.name, "label_set": a.template_labels,
+        "n_cortical": {h: len(a.cortical(h)) for h in ("lh", "rh")}, "n_subcortical": len(a.subcortical()),
+        "n_regions_matched": summary["n_regions_matched"], "unmatched_columns": summary["unmatched_columns"],
+    }
+
+
+try:  # fixtures for plugin test suites: pytest_plugins = ["brainpainter.testing"]
+    import pytest as _pytest
+except ImportError:  # pragma: no cover - pytest is only needed by test suites
+    _pytest = None
+
+if _pytest is not None:
+
+    @_pytest.fixture
+    def brainpainter_home(tmp_path: Path, monkeypatch: Any) -> Iterator[Path]:
+        """HOME and XDG folders in `tmp_path`: user atlases go there, never to the real home.
+
+        Returns the (not yet created) user-atlas folder.
+        """
+        from brainpainter import registry
+        from brainpainter.user_atlases import atlases_dir
+
+        home = tmp_path / "home"
+        monkeypatch.setenv("HOME", str(home))
+        for var, sub in (("XDG_DATA_HOME", ".local/share"), ("XDG_CACHE_HOME", ".cache"),
+                         ("XDG_CONFIG_HOME", ".config")):
+            monkeypatch.setenv(var, str(home / sub))
+        registry.reset_all()
+        yield atlases_dir()
+        registry.reset_all()
+
+    @_pytest.fixture
+    def stand_in_renderer() -> Iterator[str]:
+        """Name of a registered :class:`StandInRenderer` (renders without Blender)."""
+        with stand_in() as name:
+            yield name
