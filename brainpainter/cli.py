@@ -11,9 +11,11 @@ import json
 import os
 import sys
 from pathlib import Path
+from typing import Any
 
 import click
 
+from brainpainter.cli_options import input_options, parse_size, render_kwargs, render_options, split_commas
 from brainpainter.errors import BrainPainterError
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
@@ -95,7 +97,7 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str, size: s
     if image is not None:
         from brainpainter.atlas_image import reference_image
 
-        reference_image(a, image, views=views, size=_parse_size(size), template=template, surface=surface,
+        reference_image(a, image, views=views, size=parse_size(size), template=template, surface=surface,
                         quality=quality, renderer=renderer)
         if not as_json:
             click.echo(f"reference image of {a.name} written to {image}")
@@ -216,38 +218,6 @@ def plugins(as_json: bool) -> None:
         click.echo(line + (f"\n    {r['error']}" if r["error"] else ""))
 
 
-# -- render -------------------------------------------------------------------
-def _split(ctx: click.Context, param: click.Parameter, value: tuple[str, ...]) -> list[str]:
-    return [v for item in value for v in item.split(",") if v.strip()]
-
-
-def _input_options(f):
-    """Options that say how INPUT tables are read (shared by render and check)."""
-    for opt in reversed([
-        click.option("--atlas", "-a", default=None,
-                     help="Atlas: dk, destrieux, dkt (alias tourville) or a plugin atlas. "
-                          "Default: inferred from the region names."),
-        click.option("--image-column", default=None,
-                     help="Column with image names (default Image-name-unique, a FreeSurfer first column, "
-                          "subject...; otherwise rows are numbered)."),
-        click.option("--value", default=None,
-                     help="Long tables: the column with the values, e.g. d_icv."),
-        click.option("--region-column", default=None,
-                     help="Long tables: the column with region names (auto-detected when unambiguous)."),
-        click.option("--strict", is_flag=True, help="Names that match no region are an error."),
-    ]):
-        f = opt(f)
-    return f
-
-
-def _parse_size(size: str) -> tuple[int, int]:
-    try:
-        w, h = (int(x) for x in size.lower().split("x"))
-    except ValueError:
-        raise BrainPainterError(f"--size must be WIDTHxHEIGHT, e.g. 1200x900; {size!r} was given.") from None
-    return w, h
-
-
 def _one_or_many(inputs: tuple[Path, ...]) -> Path | list[Path]:
     return inputs[0] if len(inputs) == 1 else list(inputs)
 
@@ -256,7 +226,10 @@ def _one_or_many(inputs: tuple[Path, ...]) -> Path | list[Path]:
 @cli.command(context_settings=CONTEXT)
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
                 type=click.Path(path_type=Path, dir_okay=False))
-@_input_options
+@click.option("--atlas", "-a", default=None,
+              help="Atlas: dk, destrieux, dkt (alias tourville) or a plugin atlas. "
+                   "Default: inferred from the region names.")
+@input_options
 @click.option("--gradient", default=None, help="Colour scale to compare the values with (as for render).")
 @click.option("--cmap", default=None, help="Colour map to compare the values with (as for render).")
 @click.option("--vmin", type=float, default=None)
@@ -293,63 +266,19 @@ def check(inputs: tuple[Path, ...], atlas: str | None, image_column: str | None,
 @cli.command(context_settings=CONTEXT)
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
                 type=click.Path(path_type=Path, dir_okay=False))
-@_input_options
 @click.option("--out", "-o", required=True, type=click.Path(path_type=Path, file_okay=False),
               help="Output folder for {image}_{view}.png and manifest.json.")
-@click.option("--views", default="lateral-left,medial-left,subcortical", show_default=True,
-              help="Comma-separated views, 'all', or camera:AZ:EL[:ZOOM].")
-@click.option("--template", default="fsaverage", show_default=True, help="Template name or folder.")
-@click.option("--surface", default="pial", show_default=True,
-              type=click.Choice(["pial", "white", "inflated"]))
-@click.option("--gradient", default=None,
-              help="Control colours, e.g. white,yellow,orange,red (the default). Values 0..N-1.")
-@click.option("--cmap", default=None, help="A matplotlib colour map instead of a gradient, e.g. viridis.")
-@click.option("--vmin", type=float, default=None, help="Value at the first colour.")
-@click.option("--vmax", type=float, default=None, help="Value at the last colour.")
-@click.option("--center", type=float, default=None, help="Diverging: value at the middle colour.")
-@click.option("--nan-color", default="#8c8c8c", show_default=True, help="Colour of empty cells.")
-@click.option("--missing-color", default="#d0d0d0", show_default=True,
-              help="Colour of regions with no column.")
-@click.option("--hide", multiple=True, callback=_split,
-              help="Regions or groups not drawn (cerebellum, ventricles, brainstem, ventraldc). Repeatable.")
-@click.option("--background", default="white", show_default=True, help="Background colour.")
-@click.option("--transparent", is_flag=True, help="Transparent background.")
-@click.option("--size", default="1200x900", show_default=True, help="Image size WIDTHxHEIGHT.")
-@click.option("--quality", default="default", show_default=True,
-              type=click.Choice(["fast", "default", "high"]))
-@click.option("--shading", default="default", show_default=True, type=click.Choice(["default", "flat"]))
-@click.option("--lighting", default="studio", show_default=True,
-              type=click.Choice(["studio", "soft", "flat-studio"]))
-@click.option("--glass-opacity", type=float, default=0.12, show_default=True)
-@click.option("--renderer", default="blender", show_default=True)
+@render_options
+@input_options
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
-@click.option("--atlas-config", type=click.Path(path_type=Path, dir_okay=False), default=None,
-              help="Region-group TOML file defining the atlas (instead of --atlas); see docs/atlases.md.")
-def render(inputs: tuple[Path, ...], atlas: str | None, out: Path, views: str, template: str, surface: str,
-           gradient: str | None, cmap: str | None, vmin: float | None, vmax: float | None,
-           center: float | None, nan_color: str, missing_color: str, hide: list[str],
-           background: str, transparent: bool, size: str, quality: str, shading: str,
-           lighting: str, glass_opacity: float, image_column: str | None, strict: bool,
-           renderer: str, quiet: bool, value: str | None, region_column: str | None,
-           atlas_config: Path | None = None) -> None:
+def render(inputs: tuple[Path, ...], out: Path, quiet: bool, **options: Any) -> None:
     """Render every image of INPUT tables (CSV, TSV, .xlsx; see 'check') from every view.
 
     Several INPUTs (e.g. lh and rh aparcstats2table files) are merged by image name.
     """
     from brainpainter.render import render as run
 
-    try:
-        w, h = (int(x) for x in size.lower().split("x"))
-    except ValueError:
-        raise BrainPainterError(f"--size must be WIDTHxHEIGHT, e.g. 1200x900; {size!r} was given.") from None
-    result = run(
-        _one_or_many(inputs), atlas, out=out, views=views, template=template, surface=surface,
-        gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center, nan_color=nan_color,
-        missing_color=missing_color, hide=hide, background=None if transparent else background,
-        width=w, height=h, quality=quality, shading=shading, lighting=lighting,
-        glass_opacity=glass_opacity, renderer=renderer, image_column=image_column, strict=strict,
-        progress=not quiet, value=value, region_column=region_column, atlas_config=atlas_config,
-    )
+    result = run(_one_or_many(inputs), out=out, progress=not quiet, **render_kwargs(options))
     from brainpainter.inputs import summary_line
 
     s = result.manifest["input"]
@@ -370,9 +299,9 @@ def template() -> None:
 @template.command("build", context_settings=CONTEXT)
 @click.argument("subject_dir", type=click.Path(path_type=Path, file_okay=False))
 @click.option("--out", "-o", required=True, type=click.Path(path_type=Path, file_okay=False))
-@click.option("--atlas", "atlases", multiple=True, callback=_split,
+@click.option("--atlas", "atlases", multiple=True, callback=split_commas,
               help="Label sets to build: dk, destrieux, dkt (default: all three).")
-@click.option("--surface", "surfaces", multiple=True, callback=_split,
+@click.option("--surface", "surfaces", multiple=True, callback=split_commas,
               help="Surfaces: pial, white, inflated (default: all three).")
 @click.option("--target-faces", type=int, default=None,
               help="Faces per hemisphere and label set after decimation (default: builder's choice).")

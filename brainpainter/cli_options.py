@@ -26,7 +26,7 @@ DEFAULT_SIZE = "1200x900"
 RENDER_OPTION_NAMES = (
     "atlas", "views", "template", "surface", "gradient", "cmap", "vmin", "vmax", "center", "nan_color",
     "missing_color", "hide", "background", "transparent", "size", "quality", "shading", "lighting",
-    "glass_opacity", "renderer",
+    "glass_opacity", "renderer", "atlas_config",
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 
@@ -73,6 +73,9 @@ def make_render_options(views: str = DEFAULT_VIEWS, size: str = DEFAULT_SIZE) ->
                      type=click.Choice(["studio", "soft", "flat-studio"])),
         click.option("--glass-opacity", type=float, default=0.12, show_default=True),
         click.option("--renderer", default="blender", show_default=True),
+        click.option("--atlas-config", type=click.Path(dir_okay=False), default=None,
+                     help="Region-group TOML file defining the atlas (instead of --atlas); "
+                          "see docs/atlases.md."),
     ]
 
     def decorate(f: F) -> F:

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from brainpainter.colormap import DEFAULT_MISSING_COLOR, DEFAULT_NAN_COLOR, ColourScale, make_scale
+from brainpainter.colormap import DEFAULT_MISSING_COLOR, DEFAULT_NAN_COLOR, ColourScale
 from brainpainter.colors import ColorLike, to_rgb
 from brainpainter.errors import BrainPainterError, nearest
 
@@ -41,7 +41,6 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from brainpainter.atlas import Atlas
     from brainpainter.inputs import RegionTable
-    from brainpainter.scene import RenderSettings
     from brainpainter.template import Template
     from brainpainter.views import View
 
@@ -110,13 +109,6 @@ def check_out_file(out: str | Path, suffixes: Iterable[str], what: str = "--out"
     return path
 
 
-def set_default_mode(path: Path) -> None:
-    """Give a file made through a temporary file (mode 0600) the usual mode (0666 less the umask)."""
-    mask = os.umask(0o022)
-    os.umask(mask)
-    os.chmod(path, 0o666 & ~mask)
-
-
 def select_rows(images: Sequence[str], rows: Iterable[str | int] | str | None) -> list[int]:
     """Positions of the chosen rows.
 
@@ -163,14 +155,6 @@ def select_rows(images: Sequence[str], rows: Iterable[str | int] | str | None) -
     return list(dict.fromkeys(out))
 
 
-def check_render_size(width: int, height: int, glass_opacity: float) -> None:
-    for what, n in (("width", width), ("height", height)):
-        if not 16 <= int(n) <= 8192:
-            raise BrainPainterError(f"{what} must be between 16 and 8192 pixels; {n} was given.")
-    if not 0.0 <= glass_opacity <= 1.0:
-        raise BrainPainterError(f"glass opacity must be in [0, 1]; {glass_opacity} was given.")
-
-
 def drawn_keys(atlas: Atlas, views: Sequence[View], hidden: Iterable[str] = ()) -> list[str]:
     """Region keys that some view draws: its hemispheres' cortex, or the subcortical structures."""
     hidden = set(hidden)
@@ -194,50 +178,6 @@ def swatches_needed(table: RegionTable, rows: Sequence[int], views: Sequence[Vie
     nan = bool(np.isnan(values).any())
     missing = bool(keys - set(table.regions))
     return nan, missing
-
-
-@dataclass
-class Run:
-    """What a figure or movie needs before rendering: all checked."""
-
-    table: RegionTable
-    scale: ColourScale
-    views: list[View]
-    settings: RenderSettings
-
-
-def prepare_run(
-    data: Any, atlas: Atlas | str | None, *, views: str | Sequence[str] | None,
-    gradient: Any, cmap: str | None, vmin: float | None, vmax: float | None, center: float | None,
-    nan_color: ColorLike, missing_color: ColorLike, background: ColorLike | None,
-    width: int, height: int, quality: str, shading: str, lighting: str, glass_opacity: float,
-    image_column: str | None, value: str | None, region_column: str | None, strict: bool,
-) -> Run:
-    """Read the table and check every option, as :func:`brainpainter.render.render` does.
-
-    The colour scale is fixed over all rows of the table.
-    """
-    from brainpainter.atlas import get_atlas
-    from brainpainter.inputs import read_table
-    from brainpainter.scene import RenderSettings
-    from brainpainter.views import parse_views
-
-    if isinstance(atlas, str):
-        atlas = get_atlas(atlas)
-    make_scale(gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center,
-               nan_color=nan_color, missing_color=missing_color)
-    view_list = parse_views(views)
-    check_render_size(width, height, glass_opacity)
-    settings = RenderSettings(
-        width=int(width), height=int(height),
-        background=None if background is None else to_rgb(background),
-        quality=quality, shading=shading, lighting=lighting, glass_opacity=float(glass_opacity),
-    )
-    table = read_table(data, atlas, image_column=image_column, value=value, region_column=region_column,
-                       strict=strict)
-    scale = make_scale(gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center,
-                       nan_color=nan_color, missing_color=missing_color, data=table.values)
-    return Run(table, scale, view_list, settings)
 
 
 # -- layout ------------------------------------------------------------------------
@@ -486,7 +426,6 @@ def save_figure(fig: Figure, path: Path, dpi: float, transparent: bool = False) 
                     facecolor="none" if transparent else fig.get_facecolor(), **extra)
     path.parent.mkdir(parents=True, exist_ok=True)
     atomic_write_bytes(path, buf.getvalue())
-    set_default_mode(path)
 
 
 def make_figure(
@@ -527,6 +466,7 @@ def make_figure(
     region_column: str | None = None,
     strict: bool = False,
     progress: bool = True,
+    atlas_config: str | Path | None = None,
 ) -> FigureResult:
     """Render rows of a region-value table and lay them out as a figure with a colour bar.
 
@@ -558,6 +498,8 @@ def make_figure(
         How the table is read, see :func:`brainpainter.inputs.read_table`.
     progress : bool
         Show a progress bar.
+    atlas_config : path, optional
+        Region-group TOML file defining the atlas, as for :func:`brainpainter.render.render`.
 
     Returns
     -------
@@ -566,7 +508,7 @@ def make_figure(
     from tqdm.auto import tqdm
 
     from brainpainter.colorbar import resolve_ticks
-    from brainpainter.render import Painter
+    from brainpainter.render import Painter, prepare_run
 
     if not 50 <= float(dpi) <= 1200:
         raise BrainPainterError(f"dpi must be between 50 and 1200; {dpi} was given.")
@@ -576,6 +518,7 @@ def make_figure(
         nan_color=nan_color, missing_color=missing_color, background=background, width=width,
         height=height, quality=quality, shading=shading, lighting=lighting, glass_opacity=glass_opacity,
         image_column=image_column, value=value, region_column=region_column, strict=strict,
+        atlas_config=atlas_config,
     )
     resolve_ticks(run.scale, ticks)
     table = run.table

@@ -579,6 +579,7 @@ def make_movie(
     region_column: str | None = None,
     strict: bool = False,
     progress: bool = True,
+    atlas_config: str | Path | None = None,
 ) -> MovieResult:
     """Make a movie through the rows of a region-value table.
 
@@ -623,6 +624,8 @@ def make_movie(
         How the table is read, see :func:`brainpainter.inputs.read_table`.
     progress : bool
         Show a progress bar.
+    atlas_config : path, optional
+        Region-group TOML file defining the atlas, as for :func:`brainpainter.render.render`.
 
     Returns
     -------
@@ -631,14 +634,9 @@ def make_movie(
     from tqdm.auto import tqdm
 
     from brainpainter.colorbar import resolve_ticks
-    from brainpainter.figure import (
-        check_out_file,
-        prepare_run,
-        select_rows,
-        set_default_mode,
-        swatches_needed,
-    )
-    from brainpainter.render import Painter
+    from brainpainter.figure import check_out_file, select_rows, swatches_needed
+    from brainpainter.output import set_default_mode
+    from brainpainter.render import Painter, prepare_run
 
     start = time.perf_counter()
     path = check_out_file(out, MOVIE_FORMATS)
@@ -661,6 +659,7 @@ def make_movie(
         height=height, quality=quality, shading=shading, lighting=lighting, glass_opacity=glass_opacity,
         image_column=image_column, value=value, region_column=region_column,
         strict=strict and time_column is None,  # the time column is no region: checked below
+        atlas_config=atlas_config,
     )
     resolve_ticks(run.scale, ticks)
     table = run.table

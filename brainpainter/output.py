@@ -40,10 +40,11 @@ def prepare_out_dir(out: str | Path) -> Path:
     return out
 
 
-def _umask() -> int:
-    mask = os.umask(0)
+def set_default_mode(path: Path | str) -> None:
+    """Give a file made through a temporary file (mode 0600) the usual mode (0666 less the umask)."""
+    mask = os.umask(0o022)
     os.umask(mask)
-    return mask
+    os.chmod(path, 0o666 & ~mask)
 
 
 def atomic_write_bytes(path: Path, data: bytes) -> None:
@@ -52,7 +53,7 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the usual permissions
+        set_default_mode(tmp)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

@@ -204,6 +204,75 @@ class RenderResult:
         return "".join(parts) or f"<pre>{len(self.files)} file(s) written</pre>"
 
 
+@dataclass
+class Run:
+    """A checked run: the table, its colour scale (fixed over all rows), views and settings."""
+
+    table: RegionTable
+    scale: ColourScale
+    views: list[View]
+    settings: RenderSettings
+
+
+def prepare_run(
+    data: Any,
+    atlas: Atlas | str | None = None,
+    *,
+    atlas_config: str | Path | None = None,
+    views: str | Sequence[str] | None = None,
+    gradient: Sequence[ColorLike] | str | None = None,
+    cmap: str | None = None,
+    vmin: float | None = None,
+    vmax: float | None = None,
+    center: float | None = None,
+    nan_color: ColorLike = DEFAULT_NAN_COLOR,
+    missing_color: ColorLike = DEFAULT_MISSING_COLOR,
+    background: ColorLike | None = "white",
+    width: int = 1200,
+    height: int = 900,
+    quality: str = "default",
+    shading: str = "default",
+    lighting: str = "studio",
+    glass_opacity: float = 0.12,
+    image_column: str | None = None,
+    value: str | None = None,
+    region_column: str | None = None,
+    strict: bool = False,
+) -> Run:
+    """Read the table and check every option, before anything is rendered or written.
+
+    Used by :func:`render`, figures and movies alike; parameters as for :func:`render`.
+    Cheap option errors come first, so they do not wait for a big input file.
+    """
+    if atlas_config is not None:
+        if atlas is not None:
+            raise BrainPainterError("give an atlas or an atlas config (--atlas-config), not both; the "
+                                    "config's [atlas] base names the atlas it groups.")
+        from brainpainter.atlas_config import load_atlas_config
+
+        atlas = load_atlas_config(atlas_config)
+    if isinstance(atlas, str):
+        atlas = get_atlas(atlas)
+    make_scale(gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center,
+               nan_color=nan_color, missing_color=missing_color)
+    view_list = parse_views(views)
+    for what, n in (("width", width), ("height", height)):
+        if not 16 <= int(n) <= 8192:
+            raise BrainPainterError(f"{what} must be between 16 and 8192 pixels; {n} was given.")
+    if not 0.0 <= glass_opacity <= 1.0:
+        raise BrainPainterError(f"glass opacity must be in [0, 1]; {glass_opacity} was given.")
+    settings = RenderSettings(
+        width=int(width), height=int(height),
+        background=None if background is None else to_rgb(background),
+        quality=quality, shading=shading, lighting=lighting, glass_opacity=float(glass_opacity),
+    )
+    table = read_table(data, atlas, image_column=image_column, value=value,
+                       region_column=region_column, strict=strict)
+    scale = make_scale(gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center,
+                       nan_color=nan_color, missing_color=missing_color, data=table.values)
+    return Run(table, scale, view_list, settings)
+
+
 def render(
     data: Any,
     atlas: Atlas | str | None = None,
@@ -269,34 +338,15 @@ def render(
     from brainpainter.output import prepare_out_dir, safe_name, write_json, write_png
 
     # Validate everything before the first image so bad input leaves nothing behind.
-    if atlas_config is not None:
-        if atlas is not None:
-            raise BrainPainterError("give an atlas or an atlas config (--atlas-config), not both; the "
-                                    "config's [atlas] base names the atlas it groups.")
-        from brainpainter.atlas_config import load_atlas_config
-
-        atlas = load_atlas_config(atlas_config)
-    if isinstance(atlas, str):
-        atlas = get_atlas(atlas)
-    # Options first (cheap, and their errors should not wait for a big input file).
-    make_scale(gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center,
-               nan_color=nan_color, missing_color=missing_color)
-    view_list: list[View] = parse_views(views)
-    table: RegionTable = read_table(data, atlas, image_column=image_column, value=value,
-                                    region_column=region_column, strict=strict)
-    atlas = table.atlas  # inferred from the names when not given
-    scale = make_scale(gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center,
-                       nan_color=nan_color, missing_color=missing_color, data=table.values)
-    for what, n in (("width", width), ("height", height)):
-        if not 16 <= int(n) <= 8192:
-            raise BrainPainterError(f"{what} must be between 16 and 8192 pixels; {n} was given.")
-    if not 0.0 <= glass_opacity <= 1.0:
-        raise BrainPainterError(f"glass opacity must be in [0, 1]; {glass_opacity} was given.")
-    settings = RenderSettings(
-        width=int(width), height=int(height),
-        background=None if background is None else to_rgb(background),
-        quality=quality, shading=shading, lighting=lighting, glass_opacity=float(glass_opacity),
+    run = prepare_run(
+        data, atlas, atlas_config=atlas_config, views=views, gradient=gradient, cmap=cmap, vmin=vmin,
+        vmax=vmax, center=center, nan_color=nan_color, missing_color=missing_color,
+        background=background, width=width, height=height, quality=quality, shading=shading,
+        lighting=lighting, glass_opacity=glass_opacity, image_column=image_column, value=value,
+        region_column=region_column, strict=strict,
     )
+    table, scale, view_list, settings = run.table, run.scale, run.views, run.settings
+    atlas = table.atlas
     names = [safe_name(n) for n in table.images]
     clash = sorted({n for n in names if names.count(n) > 1})
     if clash:
