@@ -6,6 +6,8 @@ import json
 import os
 import re
 import tempfile
+from collections import deque
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -81,3 +83,38 @@ def write_png(path: Path, image: np.ndarray, metadata: dict[str, str] | None = N
 
 def write_json(path: Path, obj: object) -> None:
     atomic_write_bytes(path, (json.dumps(obj, indent=2, sort_keys=False) + "\n").encode())
+
+
+class PngWriter:
+    """Encode and write PNGs on a worker thread while the caller renders the next image.
+
+    PNG compression releases the GIL, so on a multi-core machine it overlaps
+    with rendering. At most `max_pending` images wait, which bounds memory.
+    Leaving the ``with`` block waits for every write and re-raises the first
+    error; each file is written atomically, so an error leaves no partial PNG.
+    """
+
+    def __init__(self, max_pending: int = 2) -> None:
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="brainpainter-png")
+        self._pending: deque[Future] = deque()
+        self._max = max_pending
+
+    def submit(self, path: Path, image: np.ndarray, metadata: dict[str, str] | None = None) -> None:
+        """Queue `image` (RGBA uint8, shape (h, w, 4)) for writing to `path`."""
+        while len(self._pending) >= self._max:
+            self._pending.popleft().result()
+        self._pending.append(self._pool.submit(write_png, path, image, metadata))
+
+    def __enter__(self) -> PngWriter:
+        return self
+
+    def __exit__(self, exc_type: object, *rest: object) -> None:
+        try:
+            while self._pending:
+                future = self._pending.popleft()
+                if exc_type is not None:
+                    future.cancel()
+                    continue
+                future.result()
+        finally:
+            self._pool.shutdown(wait=True)

@@ -335,7 +335,7 @@ def render(
     RenderResult
     """
     from brainpainter import __version__
-    from brainpainter.output import prepare_out_dir, safe_name, write_json, write_png
+    from brainpainter.output import PngWriter, prepare_out_dir, safe_name, write_json
 
     # Validate everything before the first image so bad input leaves nothing behind.
     run = prepare_run(
@@ -369,7 +369,8 @@ def render(
     total = len(table.images) * len(view_list)
     from tqdm.auto import tqdm
 
-    with painter, tqdm(total=total, unit="img", desc="rendering", disable=not progress) as bar:
+    with painter, PngWriter() as writer, \
+            tqdm(total=total, unit="img", desc="rendering", disable=not progress) as bar:
         for i, image in enumerate(table.images):
             values = table.row(i)
             for view in view_list:
@@ -384,7 +385,7 @@ def render(
                         "brainpainter:view": view.name,
                         "brainpainter:settings": json.dumps(settings_dict, sort_keys=True),
                     }
-                    write_png(path, pixels, meta)
+                    writer.submit(path, pixels, meta)
                     files.append(path)
                     entries.append({"file": path.name, "image": image, "row": i, "view": view.name})
                 bar.update(1)

@@ -160,3 +160,16 @@ def test_written_files_get_the_usual_permissions(tmp_path, solid, tiny):
     os.umask(mask)
     for path in out.iterdir():
         assert path.stat().st_mode & 0o777 == 0o666 & ~mask, path.name
+
+
+def test_png_writer_writes_in_order_and_reraises(tmp_path):
+    from brainpainter.output import PngWriter
+
+    img = np.zeros((4, 4, 4), np.uint8)
+    with PngWriter(max_pending=1) as writer:
+        for k in range(5):
+            writer.submit(tmp_path / f"{k}.png", img)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [f"{k}.png" for k in range(5)]
+    with pytest.raises(FileNotFoundError), PngWriter() as writer:
+        writer.submit(tmp_path / "missing-folder" / "x.png", img)
+    assert not (tmp_path / "missing-folder").exists()
