@@ -145,6 +145,16 @@ class Registry:
         for a, n in self._alias.items():
             if a.lower() == key:
                 return n
+        # Names the objects themselves declare (an atlas.json's "aliases"): only on a miss, as
+        # it imports every entry; a broken one is skipped here and reported by errors().
+        for n in (*entries, *self._extra):
+            try:
+                declared = getattr(self.get(n), "aliases", ())
+            except BrainPainterError:
+                continue
+            if key in {str(a).lower() for a in declared}:
+                self._alias[key] = n
+                return n
         allowed = [*entries, *self._extra, *self._alias]
         hint = KNOWN_ELSEWHERE.get(self.group, {}).get(key, "")
         if not hint:

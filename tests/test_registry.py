@@ -42,6 +42,12 @@ def test_builtin_atlas_region_counts(name, n):
     assert {r.name for r in atlas.subcortical()} >= {"Hippocampus", "Thalamus", "Putamen", "Brain-Stem"}
 
 
+def test_aliases_declared_by_atlas_data_resolve():
+    assert registry.atlases.canonical("Desikan-Killiany") == "dk"
+    assert registry.atlases.canonical("aparc.a2009s") == "destrieux"
+    assert registry.atlases.get("DKT40").name == "dkt"
+
+
 def test_bad_atlas_name_suggests_nearest():
     with pytest.raises(BrainPainterError, match=r"'dkk' was given\. Did you mean 'dk'\?"):
         registry.atlases.get("dkk")
