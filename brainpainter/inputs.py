@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from collections import Counter
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -27,7 +27,15 @@ from brainpainter.atlas import Atlas
 from brainpainter.cells import is_empty, is_text, to_number
 from brainpainter.errors import BrainPainterError
 from brainpainter.readers import MAX_BYTES, RawTable, has_control, read_raw
-from brainpainter.regionnames import IGNORED, REGION, UNMATCHED, AtlasGuess, NameResolver, infer_atlas
+from brainpainter.regionnames import (
+    IGNORED,
+    REGION,
+    UNMATCHED,
+    AtlasGuess,
+    NameResolver,
+    Resolution,
+    infer_atlas,
+)
 from brainpainter.tableshape import IMAGE_COLUMN, SAMPLE_ROWS, TableShape, detect_shape
 
 __all__ = ["IMAGE_COLUMN", "MAX_BYTES", "CellProblem", "NameReport", "RegionTable", "inspect_table",
@@ -38,31 +46,9 @@ MAX_IMAGE_NAME = 200
 MAX_PROBLEMS = 50
 
 
-@dataclass(frozen=True)
-class NameReport:
-    """How one input name was understood.
-
-    Attributes
-    ----------
-    source : str
-        Input it came from.
-    name : str
-        A column header (wide tables) or a value of the region column (long, transposed).
-    status : {"region", "ignored", "unmatched"}
-    keys : tuple of str
-        Region keys it sets (two for a bare lateral name such as ``insula``).
-    naming : str
-        Convention recognised (``"FreeSurfer stats table"``).
-    reason : str
-        Why an ignored name is not a region.
-    """
-
-    source: str
-    name: str
-    status: str
-    keys: tuple[str, ...] = ()
-    naming: str = ""
-    reason: str = ""
+#: How one input name was understood (with the input it came from): see
+#: :class:`brainpainter.regionnames.Resolution`.
+NameReport = Resolution
 
 
 @dataclass(frozen=True)
@@ -344,7 +330,7 @@ def _read_part(raw: RawTable, shape: TableShape, resolver: NameResolver) -> _Par
             if h in seen_names and r.status != REGION:
                 continue
             seen_names.add(h)
-            names.append(NameReport(source, h, r.status, r.keys, r.naming, r.reason))
+            names.append(replace(r, source=source))
             if r.status != REGION:
                 continue
             vals = _convert([row[j] for row in raw.rows], raw, h, range(len(raw.rows)), problems, decimal)
@@ -389,7 +375,7 @@ def _read_long(raw: RawTable, shape: TableShape, resolver: NameResolver, problem
             _check_name(name, raw.source, raw.where(i), "region name")
             r = resolver.lookup(name)
             lookups[name] = r
-            names.append(NameReport(raw.source, name, r.status, r.keys, r.naming, r.reason))
+            names.append(replace(r, source=raw.source))
         r = lookups[name]
         if r.status != REGION:
             continue
@@ -443,7 +429,7 @@ def _read_transposed(raw: RawTable, shape: TableShape, resolver: NameResolver, p
         name = str(cell).strip()
         _check_name(name, raw.source, raw.where(i), "region name")
         r = resolver.lookup(name)
-        names.append(NameReport(raw.source, name, r.status, r.keys, r.naming, r.reason))
+        names.append(replace(r, source=raw.source))
         if r.status != REGION:
             continue
         vals = _convert([c for j, c in enumerate(row) if j != reg], raw, name, [i] * (len(row) - 1),

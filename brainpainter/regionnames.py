@@ -112,6 +112,8 @@ class Resolution:
         Convention recognised (``"FreeSurfer stats table"``, ``"ENIGMA"``, ...).
     reason : str
         For ignored names: why it is not a region (``"summary measure (FreeSurfer)"``).
+    source : str
+        Input the name came from (set by the table reader).
     """
 
     name: str
@@ -119,6 +121,7 @@ class Resolution:
     keys: tuple[str, ...] = ()
     naming: str = ""
     reason: str = ""
+    source: str = ""
 
 
 @dataclass(frozen=True)
