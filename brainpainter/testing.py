@@ -215,16 +215,23 @@ class StandInRenderer:
 
 
 @contextmanager
-def stand_in(name: str = "stand-in") -> Iterator[str]:
-    """Register :class:`StandInRenderer` as renderer `name` for the duration."""
+def registered_renderer(name: str, cls: type) -> Iterator[str]:
+    """Register renderer class `cls` under `name` for the duration; yields `name`."""
     from brainpainter import registry
 
-    registry.renderers.register(name, lambda: StandInRenderer, replace=True)
-    StandInRenderer.calls = []
+    registry.renderers.register(name, lambda: cls, replace=True)
     try:
         yield name
     finally:
         registry.renderers.unregister(name)
+
+
+@contextmanager
+def stand_in(name: str = "stand-in") -> Iterator[str]:
+    """Register :class:`StandInRenderer` as renderer `name` for the duration."""
+    StandInRenderer.calls = []
+    with registered_renderer(name, StandInRenderer) as registered:
+        yield registered
 
 
 def check_atlas(atlas: Any, template: str | Path = "fsaverage") -> dict[str, Any]:

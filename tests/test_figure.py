@@ -16,11 +16,10 @@ import pytest
 from click.testing import CliRunner
 from PIL import Image
 
-from brainpainter import registry
 from brainpainter.colorbar import bar_colors
 from brainpainter.errors import BrainPainterError
 from brainpainter.figure import common_crop, content_box, make_figure, select_rows
-from brainpainter.testing import write_tiny_template
+from brainpainter.testing import registered_renderer, write_tiny_template
 
 REGIONS = ("Left-insula", "Left-precuneus")
 W, H = 160, 120
@@ -54,9 +53,8 @@ class StripeRenderer:
 
 @pytest.fixture
 def stripes():
-    registry.renderers.register("stripes", lambda: StripeRenderer, replace=True)
-    yield "stripes"
-    registry.renderers.unregister("stripes")
+    with registered_renderer("stripes", StripeRenderer) as registered:
+        yield registered
 
 
 @pytest.fixture

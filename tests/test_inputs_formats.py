@@ -18,11 +18,10 @@ import json
 import numpy as np
 import pytest
 
-from brainpainter import registry
 from brainpainter.atlas import get_atlas
 from brainpainter.inputs import read_table
 from brainpainter.render import render
-from brainpainter.testing import write_tiny_template
+from brainpainter.testing import registered_renderer, write_tiny_template
 
 PARC = {"dk": "aparc", "destrieux": "aparc.a2009s", "dkt": "aparc.DKTatlas"}
 ENIGMA_SUBCORTICAL = ["LLatVent", "RLatVent", "Lthal", "Rthal", "Lcaud", "Rcaud", "Lput", "Rput", "Lpal",
@@ -272,9 +271,8 @@ class KeyStripRenderer:
 
 @pytest.fixture
 def strip():
-    registry.renderers.register("keystrip", lambda: KeyStripRenderer, replace=True)
-    yield "keystrip"
-    registry.renderers.unregister("keystrip")
+    with registered_renderer("keystrip", KeyStripRenderer) as registered:
+        yield registered
 
 
 @pytest.fixture

@@ -17,7 +17,6 @@ from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from brainpainter import registry
 from brainpainter.colormap import make_scale
 from brainpainter.errors import BrainPainterError
 from brainpainter.movie import (
@@ -27,7 +26,7 @@ from brainpainter.movie import (
     make_movie,
     plan_frames,
 )
-from brainpainter.testing import write_tiny_template
+from brainpainter.testing import registered_renderer, write_tiny_template
 
 REGIONS = ("Left-insula", "Left-precuneus")
 W, H = 160, 120
@@ -73,11 +72,10 @@ def stripe_centre(k: int) -> tuple[int, int]:
 
 @pytest.fixture
 def stripes():
-    registry.renderers.register("stripes", lambda: StripeRenderer, replace=True)
     StripeRenderer.views = []
     StripeRenderer.fail_after = None
-    yield "stripes"
-    registry.renderers.unregister("stripes")
+    with registered_renderer("stripes", StripeRenderer) as registered:
+        yield registered
 
 
 @pytest.fixture

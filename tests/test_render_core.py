@@ -13,10 +13,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from brainpainter import registry
 from brainpainter.errors import BrainPainterError
 from brainpainter.render import Painter, render, resolve_hidden
-from brainpainter.testing import write_tiny_template
+from brainpainter.testing import registered_renderer, write_tiny_template
 
 
 class SolidRenderer:
@@ -40,10 +39,9 @@ class SolidRenderer:
 
 @pytest.fixture
 def solid():
-    registry.renderers.register("solid", lambda: SolidRenderer, replace=True)
     SolidRenderer.instances = 0
-    yield "solid"
-    registry.renderers.unregister("solid")
+    with registered_renderer("solid", SolidRenderer) as registered:
+        yield registered
 
 
 @pytest.fixture
