@@ -268,17 +268,19 @@ def check(inputs: tuple[Path, ...], atlas: str | None, image_column: str | None,
                 type=click.Path(path_type=Path, dir_okay=False))
 @click.option("--out", "-o", required=True, type=click.Path(path_type=Path, file_okay=False),
               help="Output folder for {image}_{view}.png and manifest.json.")
+@click.option("--rows", default=None,
+              help="Image names to render, comma-separated, in this order (default: all rows).")
 @render_options
 @input_options
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
-def render(inputs: tuple[Path, ...], out: Path, quiet: bool, **options: Any) -> None:
+def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, **options: Any) -> None:
     """Render every image of INPUT tables (CSV, TSV, .xlsx; see 'check') from every view.
 
     Several INPUTs (e.g. lh and rh aparcstats2table files) are merged by image name.
     """
     from brainpainter.render import render as run
 
-    result = run(_one_or_many(inputs), out=out, progress=not quiet, **render_kwargs(options))
+    result = run(_one_or_many(inputs), out=out, progress=not quiet, rows=rows, **render_kwargs(options))
     from brainpainter.inputs import summary_line
 
     s = result.manifest["input"]
@@ -343,10 +345,40 @@ cli.add_command(figure)
 cli.add_command(movie)
 
 
+#: Options whose value is a comma-separated list.
+LIST_OPTIONS = ("--views", "--hide", "--rows", "--ticks", "--atlas")
+
+
+def join_split_lists(args: list[str]) -> list[str]:
+    """Rejoin a comma-separated option value that the shell split at a space.
+
+    ``--views lateral-left, medial-left`` reaches us as ``["--views",
+    "lateral-left,", "medial-left"]``; without this, ``medial-left`` would be
+    taken for an input file.
+    """
+    out: list[str] = []
+    i = 0
+    while i < len(args):
+        arg = args[i]
+        name = arg.split("=", 1)[0]
+        if name in LIST_OPTIONS and ("=" in arg or i + 1 < len(args)):
+            value = arg.split("=", 1)[1] if "=" in arg else args[i + 1]
+            i += 1 if "=" in arg else 2
+            while i < len(args) and (value.rstrip().endswith(",") or args[i].startswith(",")):
+                value += args[i]
+                i += 1
+            out.append(f"{name}={value}")
+            continue
+        out.append(arg)
+        i += 1
+    return out
+
+
 def main(argv: list[str] | None = None) -> None:
     """Console entry point: user errors become one line and exit code 2."""
+    args = join_split_lists(sys.argv[1:] if argv is None else list(argv))
     try:
-        cli.main(args=argv, prog_name="brainpainter", standalone_mode=False)
+        cli.main(args=args, prog_name="brainpainter", standalone_mode=False)
     except click.exceptions.Abort:
         click.echo("aborted", err=True)
         sys.exit(130)

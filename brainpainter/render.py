@@ -8,6 +8,7 @@ cluster worker reuse :class:`Painter` the same way.
 
 from __future__ import annotations
 
+import contextlib
 import json
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -134,7 +135,10 @@ class Painter:
             medial_wall_color=to_rgb(self.medial_wall_color),
         )
         from brainpainter import registry
+        from brainpainter.pythons import require_bpy
 
+        if self.renderer == "blender":
+            require_bpy()  # where no bpy exists (Python 3.12), say which Pythons have one
         # Resolve (import) the renderer now, so a missing bpy fails before any output.
         self._renderer_class = registry.renderers.get(self.renderer)
         if self.atlas.template_labels not in self.template.label_sets:
@@ -182,11 +186,17 @@ class RenderResult:
     images : dict of (str, str) to ndarray
         ``(image name, view name) -> RGBA (h, w, 4)`` when rendering in memory.
     manifest : dict
+    scale : ColourScale
+        The colour scale of the run (for a colour bar).
+    table : RegionTable
+        The table as read.
     """
 
     files: list[Path]
     images: dict[tuple[str, str], np.ndarray]
     manifest: dict[str, Any]
+    scale: ColourScale | None = None
+    table: RegionTable | None = None
 
     def _repr_html_(self) -> str:  # notebooks: show the images
         import base64
@@ -303,6 +313,8 @@ def render(
     value: str | None = None,
     region_column: str | None = None,
     atlas_config: str | Path | None = None,
+    painter: Painter | None = None,
+    rows: Iterable[str | int] | str | None = None,
 ) -> RenderResult:
     """Render every row of a region-value table from every view.
 
@@ -329,6 +341,15 @@ def render(
     atlas_config : path, optional
         Region-group TOML file (:mod:`brainpainter.atlas_config`) defining the
         atlas; give it instead of `atlas`.
+    painter : Painter, optional
+        A loaded painter to draw with (it stays open): no new scene is built, so
+        a notebook renders table after table without reloading Blender. Its
+        atlas is the default `atlas`, and its template, surface, hidden regions,
+        renderer and image settings are used; giving one of those that differs
+        from the painter's is an error.
+    rows : iterable of str or int, or a comma-separated str, optional
+        Image names (or 0-based positions) to render, in that order; default all
+        rows. The colour scale is computed over all rows either way.
 
     Returns
     -------
@@ -337,6 +358,16 @@ def render(
     from brainpainter import __version__
     from brainpainter.output import PngWriter, prepare_out_dir, safe_name, write_json
 
+    if painter is not None:
+        atlas = painter.atlas if atlas is None and atlas_config is None else atlas
+        _check_painter_options(painter, {
+            "template": template, "surface": surface, "hide": hide, "renderer": renderer,
+            "background": background, "width": width, "height": height, "quality": quality,
+            "shading": shading, "lighting": lighting, "glass_opacity": glass_opacity})
+        ps = painter.scene.settings
+        background, width, height, quality = ps.background, ps.width, ps.height, ps.quality
+        shading, lighting, glass_opacity = ps.shading, ps.lighting, ps.glass_opacity
+        surface, renderer = painter.surface, painter.renderer
     # Validate everything before the first image so bad input leaves nothing behind.
     run = prepare_run(
         data, atlas, atlas_config=atlas_config, views=views, gradient=gradient, cmap=cmap, vmin=vmin,
@@ -347,6 +378,9 @@ def render(
     )
     table, scale, view_list, settings = run.table, run.scale, run.views, run.settings
     atlas = table.atlas
+    from brainpainter.figure import select_rows
+
+    chosen = select_rows(table.images, rows)
     names = [safe_name(n) for n in table.images]
     clash = sorted({n for n in names if names.count(n) > 1})
     if clash:
@@ -354,7 +388,13 @@ def render(
             f"image names {clash[:3]} become the same file name after removing unsafe characters; "
             "make the image names differ in letters or digits."
         )
-    painter = Painter(atlas, template, surface, hide, settings, renderer)
+    own = painter is None
+    if painter is None:
+        painter = Painter(atlas, template, surface, hide, settings, renderer)
+    elif painter.atlas.name != atlas.name:  # type: ignore[union-attr]
+        raise BrainPainterError(
+            f"the table was read with atlas {atlas.name!r} but the painter draws {painter.atlas.name!r}; "  # type: ignore[union-attr]
+            "give atlas= the painter's atlas, or make a Painter for this one.")
     painter.load()  # a renderer that cannot start (e.g. no bpy) fails before any output exists
     out_dir = prepare_out_dir(out) if out is not None else None
 
@@ -366,13 +406,13 @@ def render(
     files: list[Path] = []
     images: dict[tuple[str, str], np.ndarray] = {}
     entries = []
-    total = len(table.images) * len(view_list)
+    total = len(chosen) * len(view_list)
     from tqdm.auto import tqdm
 
-    with painter, PngWriter() as writer, \
+    with painter if own else contextlib.nullcontext(painter), PngWriter() as writer, \
             tqdm(total=total, unit="img", desc="rendering", disable=not progress) as bar:
-        for i, image in enumerate(table.images):
-            values = table.row(i)
+        for i in chosen:
+            image, values = table.images[i], table.row(i)
             for view in view_list:
                 pixels = painter.paint(values, view, scale)
                 if out_dir is None:
@@ -397,4 +437,29 @@ def render(
     }
     if out_dir is not None:
         write_json(out_dir / "manifest.json", manifest)
-    return RenderResult(files, images, manifest)
+    return RenderResult(files, images, manifest, scale, table)
+
+
+def _check_painter_options(painter: Painter, given: Mapping[str, Any]) -> None:
+    """Refuse scene options passed to ``render(painter=...)`` that differ from the painter's own."""
+    defaults = render.__kwdefaults__ or {}
+    s = painter.scene.settings
+    own = {"template": painter.scene.template.name, "surface": painter.surface, "renderer": painter.renderer,
+           "background": s.background, "width": s.width, "height": s.height, "quality": s.quality,
+           "shading": s.shading, "lighting": s.lighting, "glass_opacity": s.glass_opacity}
+    clash = []
+    for name, value in given.items():
+        if name == "hide":
+            if list(value) and frozenset(resolve_hidden(value, painter.atlas)) != painter.scene.hidden:  # type: ignore[arg-type]
+                clash.append(name)
+        elif name == "background":
+            if value != defaults[name] and (None if value is None else to_rgb(value)) != own[name]:
+                clash.append(name)
+        elif value != defaults[name] and value != own[name]:
+            clash.append(name)
+    if clash:
+        raise BrainPainterError(
+            f"render(painter=...) draws with the painter's scene and image settings, but {clash} "
+            "were also given with other values; leave them out, or make a Painter with them "
+            "(brainpainter.Painter(atlas, settings=RenderSettings(...)))."
+        )

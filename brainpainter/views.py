@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.errors import BrainPainterError, nearest
 
 
 @dataclass(frozen=True)
@@ -97,7 +97,13 @@ def get_view(name: str) -> View:
     key = str(name).strip().lower()
     key = ALIASES.get(key, key)
     if key not in PRESETS:
-        raise choice_error("view", name, [*PRESETS, *ALIASES])
+        # current names first (in preset order), the original BrainPainter's names after them
+        close = nearest(str(name), [*PRESETS, *ALIASES])
+        hint = f" Did you mean {ALIASES.get(close[0], close[0])!r}?" if close else ""
+        raise BrainPainterError(
+            f"view must be one of {[*PRESETS, 'all', 'camera:AZ:EL[:ZOOM]']}; {name!r} was given.{hint} "
+            f"The original BrainPainter's names work too: {[*list(ALIASES)[:6], '...']}."
+        )
     return PRESETS[key]
 
 
