@@ -42,9 +42,9 @@ if TYPE_CHECKING:
     from brainpainter.atlas import get_atlas, list_atlases
     from brainpainter.colormap import make_scale
     from brainpainter.errors import BrainPainterError
-    from brainpainter.export import export
     from brainpainter.figure import make_figure as figure
     from brainpainter.inputs import read_table
+    from brainpainter.interactive import export
     from brainpainter.movie import make_movie as movie
     from brainpainter.plotting import plot
     from brainpainter.render import Painter, RenderResult, render
@@ -57,7 +57,7 @@ _LAZY = {
     "Painter": ("brainpainter.render", "Painter"),
     "RenderResult": ("brainpainter.render", "RenderResult"),
     "RenderSettings": ("brainpainter.scene", "RenderSettings"),
-    "export": ("brainpainter.export", "export"),
+    "export": ("brainpainter.interactive", "export"),
     "figure": ("brainpainter.figure", "make_figure"),
     "get_atlas": ("brainpainter.atlas", "get_atlas"),
     "list_atlases": ("brainpainter.atlas", "list_atlases"),

@@ -343,6 +343,9 @@ from brainpainter.cli_media import figure, movie  # noqa: E402
 
 cli.add_command(figure)
 cli.add_command(movie)
+from brainpainter.cli_export import export  # noqa: E402
+
+cli.add_command(export)
 
 
 #: Options whose value is a comma-separated list.

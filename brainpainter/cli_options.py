@@ -36,8 +36,12 @@ def split_commas(ctx: click.Context, param: click.Parameter, value: tuple[str, .
     return [v.strip() for item in value for v in item.split(",") if v.strip()]
 
 
-def make_render_options(views: str = DEFAULT_VIEWS, size: str = DEFAULT_SIZE) -> Callable[[F], F]:
-    """A decorator adding the render options, with the given defaults for ``--views`` and ``--size``."""
+def make_render_options(views: str = DEFAULT_VIEWS, size: str = DEFAULT_SIZE,
+                        only: tuple[str, ...] | None = None) -> Callable[[F], F]:
+    """A decorator adding the render options, with the given defaults for ``--views`` and ``--size``.
+
+    `only` keeps just the options of those Python names (see :data:`RENDER_OPTION_NAMES`).
+    """
 
     options = [
         click.option("--atlas", "-a", default=None,
@@ -77,6 +81,9 @@ def make_render_options(views: str = DEFAULT_VIEWS, size: str = DEFAULT_SIZE) ->
                      help="Region-group TOML file defining the atlas (instead of --atlas); "
                           "see docs/atlases.md."),
     ]
+
+    if only is not None:
+        options = [opt for opt, name in zip(options, RENDER_OPTION_NAMES, strict=True) if name in only]
 
     def decorate(f: F) -> F:
         for opt in reversed(options):

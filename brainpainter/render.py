@@ -84,6 +84,54 @@ def region_colors(values: Mapping[str, float], atlas: Atlas, scale: ColourScale)
     return atlas.expand(colors)  # a region group's colour goes to each of its member regions
 
 
+def load_scene(
+    atlas: Atlas | str = "dk",
+    template: Template | str = "fsaverage",
+    surface: str = "pial",
+    hidden: Iterable[str] = (),
+    settings: RenderSettings | None = None,
+    medial_wall_color: ColorLike = (0.72, 0.72, 0.72),
+    atlas_config: str | Path | None = None,
+) -> tuple[Atlas, Scene]:
+    """The atlas and the scene a renderer (or an exporter) draws; nothing is rendered.
+
+    Parameters as for :class:`Painter`. A custom or plugin atlas's own label
+    set is added to the template here.
+
+    Returns
+    -------
+    atlas : Atlas
+    scene : Scene
+    """
+    if atlas_config is not None:
+        from brainpainter.atlas_config import load_atlas_config
+
+        atlas = load_atlas_config(atlas_config)
+    if isinstance(atlas, str):
+        atlas = get_atlas(atlas)
+    if not isinstance(template, Template):
+        template = load_template(template)
+    if atlas.label_dir is not None and atlas.template_labels not in template.label_sets:
+        # a custom or plugin atlas brings its own label set for this template
+        template = template.with_label_sets(atlas.label_dir)
+        for hemi in ("lh", "rh"):
+            template.cortex(atlas.template_labels, hemi)  # fail now if it does not fit
+    scene = Scene(
+        template=template,
+        labels=atlas.template_labels,
+        surface=surface,
+        hidden=frozenset(atlas.expand(dict.fromkeys(resolve_hidden(hidden, atlas)))),
+        settings=settings or RenderSettings(),
+        medial_wall_color=to_rgb(medial_wall_color),
+    )
+    if atlas.template_labels not in template.label_sets:
+        raise BrainPainterError(
+            f"atlas {atlas.name!r} needs the label set {atlas.template_labels!r}, which "
+            f"template {template.name!r} lacks (it has {template.label_sets})."
+        )
+    return atlas, scene
+
+
 @dataclass
 class Painter:
     """A loaded scene plus a renderer, reused for every image.
@@ -113,27 +161,9 @@ class Painter:
     _renderer: Any = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
-        if self.atlas_config is not None:
-            from brainpainter.atlas_config import load_atlas_config
-
-            self.atlas = load_atlas_config(self.atlas_config)
-        if isinstance(self.atlas, str):
-            self.atlas = get_atlas(self.atlas)
-        if not isinstance(self.template, Template):
-            self.template = load_template(self.template)
-        if self.atlas.label_dir is not None and self.atlas.template_labels not in self.template.label_sets:
-            # a custom or plugin atlas brings its own label set for this template
-            self.template = self.template.with_label_sets(self.atlas.label_dir)
-            for hemi in ("lh", "rh"):
-                self.template.cortex(self.atlas.template_labels, hemi)  # fail now if it does not fit
-        self.scene = Scene(
-            template=self.template,
-            labels=self.atlas.template_labels,
-            surface=self.surface,
-            hidden=frozenset(self.atlas.expand(dict.fromkeys(resolve_hidden(self.hidden, self.atlas)))),
-            settings=self.settings,
-            medial_wall_color=to_rgb(self.medial_wall_color),
-        )
+        self.atlas, self.scene = load_scene(self.atlas, self.template, self.surface, self.hidden,
+                                            self.settings, self.medial_wall_color, self.atlas_config)
+        self.template = self.scene.template
         from brainpainter import registry
         from brainpainter.pythons import require_bpy
 
@@ -141,11 +171,6 @@ class Painter:
             require_bpy()  # where no bpy exists (Python 3.12), say which Pythons have one
         # Resolve (import) the renderer now, so a missing bpy fails before any output.
         self._renderer_class = registry.renderers.get(self.renderer)
-        if self.atlas.template_labels not in self.template.label_sets:
-            raise BrainPainterError(
-                f"atlas {self.atlas.name!r} needs the label set {self.atlas.template_labels!r}, which "
-                f"template {self.template.name!r} lacks (it has {self.template.label_sets})."
-            )
 
     def load(self) -> Any:
         """Start the renderer and load the scene (once); later calls return it."""
