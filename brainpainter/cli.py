@@ -313,6 +313,13 @@ def template() -> None:
 def template_build(subject_dir: Path, out: Path, atlases: list[str], surfaces: list[str],
                    target_faces: int | None, name: str | None, gcs_dir: Path | None) -> None:
     """Build a template from a FreeSurfer SUBJECT_DIR (surf/, label/, mri/aseg.mgz)."""
+    import importlib.util
+
+    missing = [pip for mod, pip in (("pymeshlab", "pymeshlab"), ("skimage", "scikit-image"))
+               if importlib.util.find_spec(mod) is None]
+    if missing:
+        raise BrainPainterError(f"template build needs {' and '.join(missing)}, which are not installed; "
+                                "install them with: pip install 'brainpainter[builder]'")
     from brainpainter_builder.build import build_template
 
     kwargs: dict = {"name": name, "gcs_dir": gcs_dir, "target_faces": target_faces}

@@ -32,7 +32,7 @@ def require_bpy() -> None:
     """
     if importlib.util.find_spec("bpy") is not None:
         return
-    here = f"{sys.version_info.major}.{sys.version_info.minor}"
+    here = "{}.{}".format(*sys.version_info[:2])
     if sys.version_info[:2] in BPY_PYTHONS:
         raise BrainPainterError(
             f"the Blender renderer needs Blender's Python module bpy, which is not installed for this "

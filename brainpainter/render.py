@@ -200,6 +200,10 @@ class Painter:
         self.close()
 
 
+#: At most this many written images are shown inline in a notebook.
+MAX_SHOWN = 24
+
+
 @dataclass
 class RenderResult:
     """What :func:`render` made.
@@ -225,18 +229,24 @@ class RenderResult:
 
     def _repr_html_(self) -> str:  # notebooks: show the images
         import base64
+        import html
 
         from brainpainter.output import png_bytes
 
-        parts = []
-        for (image, view), arr in self.images.items():
-            b64 = base64.b64encode(png_bytes(arr)).decode()
-            parts.append(
-                '<figure style="display:inline-block">'
-                f'<img width="300" src="data:image/png;base64,{b64}">'
-                f"<figcaption>{image} · {view}</figcaption></figure>"
-            )
-        return "".join(parts) or f"<pre>{len(self.files)} file(s) written</pre>"
+        shown: list[tuple[str, bytes]] = [(f"{image} · {view}", png_bytes(arr))
+                                          for (image, view), arr in self.images.items()]
+        for path in self.files[:MAX_SHOWN - len(shown)]:  # rendered to files: show those
+            if path.is_file():
+                shown.append((path.name, path.read_bytes()))
+        parts = [
+            '<figure style="display:inline-block">'
+            f'<img width="300" src="data:image/png;base64,{base64.b64encode(data).decode()}">'
+            f"<figcaption>{html.escape(caption)}</figcaption></figure>"
+            for caption, data in shown
+        ]
+        if len(self.files) > len(shown):
+            parts.append(f"<p>{len(self.files)} file(s) written; {len(shown)} shown</p>")
+        return "".join(parts) or "<pre>no image</pre>"
 
 
 @dataclass

@@ -1,0 +1,178 @@
+"""The public Python API: names that stay callable, render(painter=...), plot into Axes, Pythons."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import brainpainter
+from brainpainter.errors import BrainPainterError
+from brainpainter.testing import StandInRenderer, registered_renderer, write_tiny_template
+
+VALUES = {"Left-insula": 3.0, "Left-precuneus": 1.0, "Left-superiorfrontal": 0.0}
+
+
+class CountingRenderer(StandInRenderer):
+    scenes = 0
+
+    def __init__(self, scene):
+        type(self).scenes += 1
+        super().__init__(scene)
+
+
+@pytest.fixture
+def tiny(tmp_path):
+    return write_tiny_template(tmp_path / "tiny")
+
+
+@pytest.fixture
+def counting():
+    CountingRenderer.scenes = 0
+    with registered_renderer("counting", CountingRenderer) as name:
+        yield name
+
+
+def test_public_names_stay_callable_after_their_modules_are_imported():
+    code = ("import brainpainter, brainpainter.render, brainpainter.figure, brainpainter.movie\n"
+            "import brainpainter.plotting, brainpainter.interactive\n"
+            "from brainpainter.render import Painter\n"
+            "names = ['render', 'figure', 'movie', 'plot', 'export', 'Painter']\n"
+            "print([callable(getattr(brainpainter, n)) for n in names])\n"
+            "print(brainpainter.figure.__name__, brainpainter.movie.__name__)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.split("\n")[:2] == ["[True, True, True, True, True, True]", "make_figure make_movie"]
+
+
+def test_render_three_times_in_one_process(tiny, counting):
+    for _ in range(3):
+        result = brainpainter.render(VALUES, "dk", template=tiny, renderer=counting, views="lateral-left",
+                                     width=40, height=30, progress=False)
+        assert callable(brainpainter.render)
+        assert set(result.images) == {("1", "lateral-left")}
+    assert CountingRenderer.scenes == 3
+
+
+def test_render_with_a_painter_builds_no_new_scene(tiny, counting, tmp_path):
+    settings = brainpainter.RenderSettings(width=40, height=30)
+    with brainpainter.Painter("dk", tiny, renderer=counting, settings=settings) as painter:
+        a = brainpainter.render(VALUES, painter=painter, views="lateral-left", progress=False)
+        b = brainpainter.render({"Left-insula": 0.0}, painter=painter, views="lateral-left,medial-left",
+                                out=tmp_path / "o", progress=False)
+        c = brainpainter.render(VALUES, painter=painter, views="lateral-left", progress=False)
+        assert painter._renderer is not None  # still open for the next table
+    assert CountingRenderer.scenes == 1
+    assert a.images[("1", "lateral-left")].shape == (30, 40, 4)  # the painter's size
+    assert len(b.files) == 2 and b.manifest["settings"]["width"] == 40
+    np.testing.assert_array_equal(a.images[("1", "lateral-left")], c.images[("1", "lateral-left")])
+    assert not np.array_equal(a.images[("1", "lateral-left")],
+                              brainpainter.render({"Left-insula": 0.0}, painter=fresh_painter(tiny, counting),
+                                                  views="lateral-left", progress=False)
+                              .images[("1", "lateral-left")])
+
+
+def fresh_painter(tiny, renderer):
+    return brainpainter.Painter("dk", tiny, renderer=renderer,
+                                settings=brainpainter.RenderSettings(width=40, height=30))
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"width": 800}, "['width']"),
+    ({"surface": "inflated", "quality": "fast"}, "['surface', 'quality']"),
+    ({"atlas": "dkt"}, "painter draws 'dk'"),
+])
+def test_render_with_a_painter_refuses_other_scene_options(tiny, counting, kwargs, message):
+    painter = fresh_painter(tiny, counting)
+    with pytest.raises(BrainPainterError, match="painter") as err:
+        brainpainter.render(VALUES, painter=painter, progress=False, **kwargs)
+    assert message in str(err.value)
+    assert CountingRenderer.scenes == 0  # refused before any scene was built
+
+
+def test_render_rows_selects_and_orders(tiny, counting, tmp_path):
+    table = {"a": {"Left-insula": 1.0}, "b": {"Left-insula": 2.0}, "c": {"Left-insula": 3.0}}
+    import pandas as pd
+
+    df = pd.DataFrame(table).T.rename_axis("Image-name-unique").reset_index()
+    result = brainpainter.render(df, "dk", template=tiny, renderer=counting, views="lateral-left",
+                                 width=20, height=16, rows="c,a", progress=False, out=tmp_path / "o")
+    assert [p.name for p in result.files] == ["c_lateral-left.png", "a_lateral-left.png"]
+    assert result.manifest["settings"]["scale"]["vmax"] == 3.0  # scale over all rows
+    with pytest.raises(BrainPainterError, match="'d' is not an image name"):
+        brainpainter.render(df, "dk", template=tiny, renderer=counting, rows=["d"], progress=False)
+
+
+def test_plot_draws_into_the_users_axes_with_a_colour_bar(tiny, counting):
+    from matplotlib.figure import Figure
+
+    from brainpainter.colorbar import agg_canvas
+
+    fig = Figure(figsize=(6, 3))
+    ax_line, ax_brain = fig.subplots(1, 2)
+    ax_line.plot([0, 1], [0, 1])
+    res = brainpainter.plot(VALUES, view="lateral-left", ax=ax_brain, atlas="dk", template=tiny,
+                            renderer=counting, width=60, height=40, label="z", crop=False)
+    assert res.ax is ax_brain and res.image.shape == (40, 60, 4)
+    np.testing.assert_array_equal(res.artist.get_array(), res.image)
+    assert res.colorbar_ax is not None and res.colorbar_ax in ax_brain.child_axes
+    assert res.colorbar_ax.get_ylabel() == "z"
+    assert not ax_brain.axison
+    canvas = agg_canvas(fig)
+    canvas.draw()
+    pixels = np.asarray(canvas.buffer_rgba())[..., :3].reshape(-1, 3)
+    red = np.round(np.array(res.scale(np.array([3.0]))[0][:3]) * 255)
+    assert (np.abs(pixels.astype(int) - red).max(axis=1) <= 2).sum() > 50  # the insula's colour shows
+
+
+def test_plot_reuses_a_painter_and_picks_a_row(tiny, counting):
+    from matplotlib.figure import Figure
+
+    painter = fresh_painter(tiny, counting)
+    fig = Figure()
+    axes = fig.subplots(1, 2)
+    table = [{"Left-insula": 0.0}, {"Left-insula": 3.0}]
+    import pandas as pd
+
+    df = pd.DataFrame(table, index=["pre", "post"]).rename_axis("Image-name-unique").reset_index()
+    a = brainpainter.plot(df, ax=axes[0], row="pre", painter=painter, colorbar=False)
+    b = brainpainter.plot(df, ax=axes[1], row="post", painter=painter, orientation="horizontal")
+    assert CountingRenderer.scenes == 1 and a.colorbar_ax is None and b.colorbar_ax is not None
+    assert not np.array_equal(a.image, b.image)
+    with pytest.raises(BrainPainterError, match="orientation"):
+        brainpainter.plot(df, ax=axes[0], painter=painter, orientation="diagonal")
+
+
+def test_render_result_shows_in_notebooks(tiny, counting, tmp_path):
+    shown = brainpainter.render(VALUES, "dk", template=tiny, renderer=counting, views="lateral-left",
+                                width=20, height=16, progress=False)._repr_html_()
+    assert shown.count("<img") == 1 and "data:image/png;base64," in shown
+    written = brainpainter.render(VALUES, "dk", template=tiny, renderer=counting, views="lateral-left",
+                                  width=20, height=16, progress=False, out=tmp_path / "o")
+    assert written._repr_html_().count("<img") == 1
+
+
+def test_missing_bpy_names_the_pythons_that_work(monkeypatch):
+    import importlib.util
+
+    from brainpainter import pythons
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "bpy" else real(name, *a))
+    monkeypatch.setattr(sys, "version_info", (3, 12, 4, "final", 0))
+    with pytest.raises(BrainPainterError) as err:
+        pythons.require_bpy()
+    msg = str(err.value)
+    assert "\n" not in msg and "Python 3.11" in msg and "Python 3.13" in msg and "3.12" in msg
+    with pytest.raises(BrainPainterError, match=r"Python 3\.13"):
+        brainpainter.Painter("dk")  # the Blender renderer is checked before anything loads
+
+
+def test_views_error_lists_current_names_first():
+    with pytest.raises(BrainPainterError) as err:
+        brainpainter.render(VALUES, "dk", views="sideways")
+    msg = str(err.value)
+    assert msg.index("lateral-left") < msg.index("cortical-outer-left-hemisphere")
+    assert msg.startswith("view must be one of ['lateral-left', 'medial-left'")
