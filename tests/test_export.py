@@ -1,0 +1,201 @@
+"""Interactive 3D export: the .glb (read back with trimesh) and the HTML viewer (in headless Chromium)."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import struct
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import brainpainter
+from brainpainter.atlas import get_atlas
+from brainpainter.cli import main
+from brainpainter.errors import BrainPainterError
+
+pytestmark = pytest.mark.integration  # the bundled fsaverage template
+
+VALUES = {"Left-superiorfrontal": 0.0, "Left-precentral": 1.0, "Left-superiortemporal": 2.0,
+          "Left-Hippocampus": 2.0}
+SCALE = {"gradient": "blue,lime,red", "vmin": 0, "vmax": 2}
+EXPECTED = {"Left-superiorfrontal": (0, 0, 255), "Left-precentral": (0, 255, 0),
+            "Left-superiortemporal": (255, 0, 0), "Left-Hippocampus": (255, 0, 0)}
+MISSING = (0xD0, 0xD0, 0xD0)
+
+
+def glb_json(data: bytes) -> dict:
+    n = struct.unpack("<I", data[12:16])[0]
+    return json.loads(data[20:20 + n])
+
+
+def linear_to_srgb(c: np.ndarray) -> np.ndarray:
+    c = np.asarray(c, dtype=float)
+    return np.where(c <= 0.0031308, c * 12.92, 1.055 * c ** (1 / 2.4) - 0.055)
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    out = tmp_path_factory.mktemp("export")
+    glb = brainpainter.export(VALUES, out / "brain.glb", atlas="dk", hide=["cerebellum"], **SCALE)
+    page = brainpainter.export(VALUES, out / "brain.html", atlas="dk", hide=["cerebellum"], label="z",
+                               title="<test & page>", **SCALE)
+    return glb, page
+
+
+def test_glb_has_one_named_mesh_per_region_in_its_colour(exported):
+    import trimesh
+
+    glb, _ = exported
+    scene = trimesh.load(glb, file_type="glb")
+    atlas = get_atlas("dk")
+    cortical = {r.key for r in atlas.regions if r.kind == "cortical"}
+    hidden = {"Left-Cerebellum-Cortex", "Right-Cerebellum-Cortex", "Left-Cerebellum-White-Matter",
+              "Right-Cerebellum-White-Matter"}
+    names = set(scene.geometry)
+    assert cortical <= names
+    assert {"Left-medial-wall", "Right-medial-wall"} <= names
+    assert "Left-Hippocampus" in names and "Brain-Stem" in names and not hidden & names
+    assert len(scene.geometry) == len(scene.graph.nodes_geometry)  # one node per mesh
+    for name, mesh in scene.geometry.items():
+        rgb = np.round(linear_to_srgb(np.asarray(mesh.visual.material.baseColorFactor[:3]) / 255) * 255)
+        want = EXPECTED.get(name, MISSING if name in {r.key for r in atlas.regions} else None)
+        if want is not None:
+            assert np.abs(rgb - want).max() <= 6, (name, rgb, want)  # 8-bit linear colour: rounding
+        assert len(mesh.faces) > 0
+    nodes = {n["name"]: n for n in glb_json(glb.read_bytes())["nodes"]}
+    assert nodes["Left-precentral"]["extras"] == {"part": "lh", "color": "#00ff00"}
+    assert nodes["Right-insula"]["extras"]["part"] == "rh"
+    # RAS millimetres turned y-up: the left hemisphere has x < 0, the top of the brain is +y
+    lh = scene.geometry["Left-superiorfrontal"].vertices
+    assert lh[:, 0].mean() < 0 and lh[:, 1].mean() > scene.geometry["Left-Hippocampus"].vertices[:, 1].mean()
+
+
+def test_export_errors_are_one_line_and_write_nothing(tmp_path, capsys):
+    table = tmp_path / "t.csv"
+    table.write_text("Image-name-unique,Left-insula\na,1\nb,2\n")
+    for args, message in [
+        ([str(table), "--out", str(tmp_path / "x.glb")], "the table has 2 rows"),
+        ([str(table), "--row", "c", "--out", str(tmp_path / "x.glb")], "'c' is not an image name"),
+        ([str(table), "--row", "a", "--out", str(tmp_path / "x.obj")], "format must be one of"),
+    ]:
+        with pytest.raises(SystemExit) as exit_:
+            main(["export", *args])
+        err = capsys.readouterr().err
+        assert exit_.value.code == 2 and message in err and err.count("\n") == 1
+    assert not list(tmp_path.glob("x.*"))
+    with pytest.raises(BrainPainterError, match="row= in Python"):
+        brainpainter.export(table, tmp_path / "y.glb")
+
+
+def test_export_cli_writes_glb_by_suffix(tmp_path, capsys):
+    table = tmp_path / "t.csv"
+    table.write_text("Image-name-unique,Left-insula\na,1\nb,2\n")
+    with pytest.raises(SystemExit) as exit_:
+        main(["export", str(table), "--row", "b", "--out", str(tmp_path / "b.glb"), "--cmap", "viridis"])
+    assert exit_.value.code == 0 and "glb written to" in capsys.readouterr().out
+    assert (tmp_path / "b.glb").read_bytes()[:4] == b"glTF"
+
+
+CHROMIUM = Path("/usr/bin/chromium")
+CHROMEDRIVER = Path("/usr/bin/chromedriver")
+
+
+@pytest.fixture(scope="module")
+def browser():
+    if not (CHROMIUM.exists() and CHROMEDRIVER.exists()) or not _has_selenium():
+        if os.environ.get("CI"):
+            pytest.fail("CI needs chromium, chromium-driver (apt) and selenium (the test extra)")
+        pytest.skip("headless Chromium (Debian chromium + chromium-driver) or selenium not installed")
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    options = webdriver.ChromeOptions()
+    options.binary_location = str(CHROMIUM)
+    profile = tempfile.mkdtemp(prefix="bp-chromium-")
+    for arg in ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                "--enable-unsafe-swiftshader", "--window-size=900,700", f"--user-data-dir={profile}"):
+        options.add_argument(arg)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(service=Service(str(CHROMEDRIVER)), options=options)
+    try:
+        yield driver
+    finally:
+        driver.quit()
+        shutil.rmtree(profile, ignore_errors=True)
+
+
+def _has_selenium() -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec("selenium") is not None
+
+
+def _load(driver, url: str) -> None:
+    driver.get(url)
+    deadline = time.monotonic() + 60
+    while not driver.execute_script("return window.brainpainterReady === true"):
+        errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+        assert not errors, errors
+        assert time.monotonic() < deadline, "the viewer did not finish loading in 60 s"
+        time.sleep(0.2)
+
+
+def _screenshot(driver, path: Path) -> np.ndarray:
+    from PIL import Image
+
+    driver.save_screenshot(str(path))
+    return np.asarray(Image.open(path).convert("RGB")).astype(int)
+
+
+def _count(pixels: np.ndarray, rgb: tuple[int, int, int], tol: int) -> int:
+    return int((np.abs(pixels - np.array(rgb)).max(axis=-1) <= tol).sum())
+
+
+def test_html_renders_in_headless_chromium(exported, browser, tmp_path):
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+
+    _, page = exported
+    text = page.read_text(encoding="utf-8")
+    assert "http://" not in text.split("<script>")[0] and "<script src" not in text  # nothing fetched
+    assert "&lt;test &amp; page&gt;" in text
+    _load(browser, page.as_uri() + "#flat")
+    flat = _screenshot(browser, tmp_path / "flat.png")
+    for name, rgb in EXPECTED.items():  # unlit: the exact colours of the regions
+        if name.startswith("Left-superior") or name == "Left-precentral":
+            assert _count(flat, rgb, 3) > 300, (name, rgb)
+    assert _count(flat, MISSING, 3) > 1000
+    browser.find_element(By.ID, "flat").click()  # lit: hues of the same colours
+    lit = _screenshot(browser, tmp_path / "lit.png")
+    for hue, c in {"red": 0, "green": 1, "blue": 2}.items():
+        others = [lit[..., o] for o in range(3) if o != c]
+        mask = (lit[..., c] > 120) & (lit[..., c] > 2 * others[0]) & (lit[..., c] > 2 * others[1])
+        assert mask.sum() > 300, hue
+    # the tooltip names the region under the mouse: aim at the superior temporal gyrus
+    x, y = browser.execute_script("""
+        const v = window.brainpainterViewer, T = window.BPTHREE;
+        const m = v.meshes.find((o) => o.name === 'Left-superiortemporal');
+        const box = new T.Box3().setFromObject(m), c = box.getCenter(new T.Vector3());
+        const hit = m.geometry.attributes.position; let best = null, bd = 1e9;
+        for (let i = 0; i < hit.count; i += 7) {  // the vertex nearest the camera near the centre
+          const p = new T.Vector3().fromBufferAttribute(hit, i).applyMatrix4(m.matrixWorld);
+          const d = p.distanceTo(v.camera.position) + 0.2 * p.distanceTo(c);
+          if (d < bd) { bd = d; best = p; }
+        }
+        best.project(v.camera);
+        const r = v.renderer.domElement.getBoundingClientRect();
+        return [r.left + (best.x + 1) / 2 * r.width, r.top + (1 - best.y) / 2 * r.height];""")
+    canvas = browser.find_element(By.TAG_NAME, "canvas")
+    rect = canvas.rect
+    ActionChains(browser).move_to_element_with_offset(
+        canvas, round(x - rect["x"] - rect["width"] / 2), round(y - rect["y"] - rect["height"] / 2)).perform()
+    tip = browser.find_element(By.ID, "tip")
+    assert tip.is_displayed() and tip.text == "Left-superiortemporal"
+    errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+    assert not errors, errors
