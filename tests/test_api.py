@@ -176,3 +176,35 @@ def test_views_error_lists_current_names_first():
     msg = str(err.value)
     assert msg.index("lateral-left") < msg.index("cortical-outer-left-hemisphere")
     assert msg.startswith("view must be one of ['lateral-left', 'medial-left'")
+
+
+def test_views_split_by_a_space_still_work(tiny, counting, tmp_path, capsys):
+    from brainpainter.cli import join_split_lists, main
+
+    assert join_split_lists(["render", "t.csv", "--views", "lateral-left,", "medial-left", "-o", "o"]) == [
+        "render", "t.csv", "--views=lateral-left,medial-left", "-o", "o"]
+    assert join_split_lists(["--views=a", ",b", "x"]) == ["--views=a,b", "x"]
+    table = tmp_path / "t.csv"
+    table.write_text("Image-name-unique,Left-insula\na,1\n")
+    with pytest.raises(SystemExit) as exit_:
+        main(["render", str(table), "--views", "lateral-left,", "medial-left", "--template", str(tiny),
+              "--renderer", counting, "--size", "40x30", "--out", str(tmp_path / "o"), "-q"])
+    assert exit_.value.code == 0, capsys.readouterr().err
+    written = sorted(p.name for p in (tmp_path / "o").glob("*.png"))
+    assert written == ["a_lateral-left.png", "a_medial-left.png"]
+
+
+def test_template_build_names_the_builder_extra_when_missing(monkeypatch, tmp_path, capsys):
+    import importlib.util
+
+    from brainpainter.cli import main
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "pymeshlab" else real(name, *a))
+    with pytest.raises(SystemExit) as exit_:
+        main(["template", "build", str(tmp_path), "--out", str(tmp_path / "t")])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and err.count("\n") == 1
+    assert "pymeshlab" in err and "pip install 'brainpainter[builder]'" in err
+    assert not (tmp_path / "t").exists()
