@@ -109,7 +109,8 @@ def check_out_file(out: str | Path, suffixes: Iterable[str], what: str = "--out"
     return path
 
 
-def select_rows(images: Sequence[str], rows: Iterable[str | int] | str | None) -> list[int]:
+def select_rows(images: Sequence[str], rows: Iterable[str | int] | str | None,
+                what: str = "--rows") -> list[int]:
     """Positions of the chosen rows.
 
     Parameters
@@ -119,6 +120,8 @@ def select_rows(images: Sequence[str], rows: Iterable[str | int] | str | None) -
     rows : iterable of str or int, or a comma-separated str, optional
         Image names (exact, else case-insensitive), or ints as 0-based
         positions. None: every row.
+    what : str
+        The option's name in error messages.
 
     Returns
     -------
@@ -147,7 +150,7 @@ def select_rows(images: Sequence[str], rows: Iterable[str | int] | str | None) -
             close = nearest(name, images)
             shown = list(images[:8]) + (["..."] if len(images) > 8 else [])
             raise BrainPainterError(
-                f"--rows: {name!r} is not an image name of the table; its images are {shown}"
+                f"{what}: {name!r} is not an image name of the table; its images are {shown}"
                 + (f". Did you mean {close[0]!r}?" if close else ".")
             )
     if not out:

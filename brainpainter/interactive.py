@@ -402,7 +402,7 @@ def export(
         shown = list(table.images[:8]) + (["..."] if len(table.images) > 8 else [])
         raise BrainPainterError(f"the table has {len(table.images)} rows {shown}; export draws one: "
                                 f"choose it with --row (row= in Python), e.g. --row {table.images[-1]}")
-    i = select_rows(table.images, [0 if row is None else row])[0]
+    i = select_rows(table.images, [0 if row is None else row], what="--row")[0]
     atlas_obj, scene = load_scene(table.atlas, template, surface, hide)
     meshes = region_meshes(scene, region_colors(table.row(i), atlas_obj, run.scale))
     if not meshes:
