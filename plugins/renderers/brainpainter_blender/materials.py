@@ -1,8 +1,8 @@
 """Materials: one per region, recoloured in place for every image.
 
-A region material carries its colour twice: ``diffuse_color`` (what the
-Workbench engine draws with ``color_type = "MATERIAL"``) and the Principled
-BSDF's base colour (what Cycles draws). Blender stores both as scene-linear
+Used by the Cycles path (``quality="high"``). A region material carries its
+colour in the Principled BSDF's base colour (and ``diffuse_color``, which
+Blender's viewport shows). Blender stores both as scene-linear
 values, so sRGB inputs are linearised here; with the ``Standard`` view
 transform the rendered pixel is the sRGB colour again.
 """
@@ -13,10 +13,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-#: Colour of subcortical structures that have no colour in the mapping (sRGB).
-NEUTRAL_GREY = (0.8, 0.8, 0.8)
-#: Colour of the glass brain (sRGB).
-GLASS_COLOR = (0.78, 0.80, 0.84)
+from brainpainter.geometry import GLASS_COLOR
+
 # Cycles' unlit glass is darkened to read like Workbench's lit glass.
 _GLASS_CYCLES_SHADE = 0.6
 # Surface finish in Cycles: matte, like a plastic model.

@@ -11,7 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import ConvexHull, QhullError
 
 from brainpainter.atlas import HEMI_PREFIX
 from brainpainter.scene import Scene
@@ -30,25 +29,12 @@ class Part:
     hemi : str or None
     slots : list of (str, bpy.types.Material)
         Region key of every material slot, in slot order (empty for glass).
-    hull : ndarray of float, shape (n, 3)
-        Points whose projections bound the object (convex-hull vertices).
     """
 
     obj: object
     kind: str
     hemi: str | None
     slots: list[tuple[str, object]] = field(default_factory=list)
-    hull: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
-
-
-def _hull_points(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    used = vertices[np.unique(faces)] if len(faces) else np.zeros((0, 3))
-    if len(used) < 5:
-        return used.astype(float)
-    try:
-        return used[ConvexHull(used).vertices].astype(float)
-    except QhullError:  # flat or degenerate: every point bounds it
-        return used.astype(float)
 
 
 def mesh_object(bpy, name: str, vertices: np.ndarray, faces: np.ndarray,
@@ -108,7 +94,7 @@ def _labelled_part(bpy, tag: str, kind: str, hemi: str | None, vertices: np.ndar
     name = f"{tag}:{kind}" + (f"-{hemi}" if hemi else "")
     obj = mesh_object(bpy, name, vertices, faces, slot_of[face_label],
                       [m for _, m in slots], collection)
-    return Part(obj, kind, hemi, slots, _hull_points(vertices, faces))
+    return Part(obj, kind, hemi, slots)
 
 
 def build(bpy, scene: Scene, tag: str, collection) -> list[Part]:
@@ -154,7 +140,7 @@ def build(bpy, scene: Scene, tag: str, collection) -> list[Part]:
         obj = mesh_object(bpy, f"{tag}:glass-{hemi}", verts, faces, None, [glass_mat], collection)
         # In Cycles the glass neither shadows nor reflects onto the structures inside.
         obj.visible_shadow = obj.visible_diffuse = obj.visible_glossy = False
-        parts.append(Part(obj, "glass", hemi, [], _hull_points(verts, faces)))
+        parts.append(Part(obj, "glass", hemi, []))
     for part in parts:
         part.obj.hide_render = True
     return parts
