@@ -84,8 +84,9 @@ def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     n = np.zeros_like(v)
     if len(f):
         fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
-        for k in range(3):
-            np.add.at(n, f[:, k], fn)
+        idx = f.ravel()
+        for c in range(3):
+            n[:, c] = np.bincount(idx, weights=np.repeat(fn[:, c], 3), minlength=len(v))
     length = np.linalg.norm(n, axis=1, keepdims=True)
     return (n / np.where(length > 0, length, 1.0)).astype(np.float32)
 

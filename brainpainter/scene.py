@@ -112,7 +112,7 @@ class Scene:
 
     @cached_property
     def geometry(self) -> SceneGeometry:
-        """Ready-to-draw parts and palette slots (:class:`brainpainter.geometry.SceneGeometry`), built once."""
+        """Ready-to-draw parts and palette slots (:class:`~brainpainter.geometry.SceneGeometry`)."""
         from brainpainter.geometry import SceneGeometry
 
         return SceneGeometry(self)

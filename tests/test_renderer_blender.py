@@ -22,7 +22,7 @@ from brainpainter.errors import BrainPainterError
 from brainpainter.scene import RenderSettings, Scene
 from brainpainter.template import load_template
 from brainpainter.views import PRESETS, View, get_view
-from brainpainter_blender import camera
+from brainpainter import framing as camera
 
 ROOT = Path(__file__).resolve().parents[1]
 REGIONS = ("unknown", "antsup", "antinf", "postsup", "postinf")
@@ -348,7 +348,7 @@ def test_glass_is_visible_and_structures_show_through(template):
 
 @pytest.mark.render
 def test_subcortical_without_colour_is_neutral_and_cortex_uses_medial_wall(flat):
-    from brainpainter_blender.materials import NEUTRAL_GREY
+    from brainpainter.geometry import NEUTRAL_GREY
 
     img = flat.render({}, get_view("subcortical-left"))
     assert _mask(img, NEUTRAL_GREY, 30).sum() > 50
@@ -420,7 +420,11 @@ def test_close_frees_blender_data_and_refuses_to_render(template):
 
     before = (len(bpy.data.objects), len(bpy.data.meshes), len(bpy.data.materials),
               len(bpy.data.scenes))
-    r = _renderer(template, quality="fast")
+    gpu_path = _renderer(template, quality="fast")  # draws with the gpu module: no Blender objects
+    gpu_path.close()
+    with pytest.raises(BrainPainterError, match="closed"):
+        gpu_path.render({}, get_view("dorsal"))
+    r = _renderer(template, quality="high")  # Cycles builds objects, materials and a scene
     assert len(bpy.data.objects) > before[0]
     r.close()
     r.close()

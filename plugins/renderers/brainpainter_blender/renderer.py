@@ -25,7 +25,7 @@ from PIL import Image
 
 from brainpainter import framing
 from brainpainter.errors import BrainPainterError
-from brainpainter.geometry import Palette
+from brainpainter.geometry import NEUTRAL_GREY, Palette
 from brainpainter.scene import RGB, Scene
 from brainpainter.views import View
 from brainpainter_blender import _bpy, lighting, materials, scene_builder
@@ -139,7 +139,7 @@ class BlenderRenderer:
     def _recolor(self, colors: Mapping[str, RGB]) -> None:
         medial = tuple(self.scene.medial_wall_color)
         for part in self._parts:
-            default = medial if part.kind == "cortex" else materials.NEUTRAL_GREY
+            default = medial if part.kind == "cortex" else NEUTRAL_GREY
             for key, mat in part.slots:
                 rgb = colors.get(key)
                 rgb = default if rgb is None else tuple(float(c) for c in rgb[:3])
