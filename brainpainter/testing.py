@@ -193,7 +193,10 @@ class StandInRenderer:
 
         type(self).calls.append((dict(colors), view))
         s = self.scene.settings
-        parts = ["subcortical"] if view.content == "subcortical" else list(view.hemis)
+        from brainpainter.framing import shows
+
+        kinds = {"lh": ("cortex", "lh"), "rh": ("cortex", "rh"), "subcortical": ("subcortical", None)}
+        parts = [p for p, (kind, hemi) in kinds.items() if shows(view, kind, hemi)]
         default = {"subcortical": (0.8, 0.8, 0.8)}
         stripes = []
         for part in parts:
