@@ -18,11 +18,11 @@ import pytest
 import trimesh
 from scipy import ndimage
 
+from brainpainter import framing as camera
 from brainpainter.errors import BrainPainterError
 from brainpainter.scene import RenderSettings, Scene
 from brainpainter.template import load_template
 from brainpainter.views import PRESETS, View, get_view
-from brainpainter import framing as camera
 
 ROOT = Path(__file__).resolve().parents[1]
 REGIONS = ("unknown", "antsup", "antinf", "postsup", "postinf")
