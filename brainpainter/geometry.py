@@ -91,7 +91,7 @@ def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return (n / np.where(length > 0, length, 1.0)).astype(np.float32)
 
 
-def convexity(vertices: np.ndarray, faces: np.ndarray, iterations: int = 40) -> np.ndarray:
+def convexity(vertices: np.ndarray, faces: np.ndarray, iterations: int = 60) -> np.ndarray:
     """Sulcal depth from the mesh alone: how far each vertex lies inside a smoothed copy.
 
     The surface is smoothed by `iterations` steps of uniform Laplacian
@@ -109,7 +109,7 @@ def convexity(vertices: np.ndarray, faces: np.ndarray, iterations: int = 40) -> 
     Returns
     -------
     ndarray of float32, shape (n_vertices,)
-        0 on crowns, up to 1 at the deepest few percent of sulci.
+        0 on the outer 30 % (crowns), rising to 1 at the deepest 3 % of sulci.
     """
     from scipy import sparse
 
@@ -128,9 +128,13 @@ def convexity(vertices: np.ndarray, faces: np.ndarray, iterations: int = 40) -> 
     for _ in range(iterations):
         smooth = step @ smooth
     d = np.einsum("ij,ij->i", v - smooth, vertex_normals(v, f).astype(np.float64))
-    depth = np.clip(-d, 0.0, None)
-    scale = np.percentile(depth, 97) if np.any(depth > 0) else 1.0
-    return np.clip(depth / max(scale, 1e-9), 0.0, 1.0).astype(np.float32)
+    return _depth_0_1(-d)
+
+
+def _depth_0_1(depth: np.ndarray) -> np.ndarray:
+    """Map a sulcal-depth measure (larger = deeper) to 0-1 by its 30th and 97th percentiles."""
+    lo, hi = np.percentile(depth, [30, 97])
+    return np.clip((depth - lo) / max(hi - lo, 1e-9), 0.0, 1.0).astype(np.float32)
 
 
 def _hull_points(vertices: np.ndarray) -> np.ndarray:
@@ -185,9 +189,7 @@ def _template_sulc(template, labels: str, hemi: str, cm) -> np.ndarray | None:
         raw = z.get("sulc")
     if raw is None or len(raw) != len(cm.source_vertex):
         return None
-    depth = np.clip(np.asarray(raw, dtype=np.float64), 0.0, None)  # FreeSurfer: sulci positive
-    scale = np.percentile(depth, 97) if np.any(depth > 0) else 1.0
-    return np.clip(depth / max(scale, 1e-9), 0.0, 1.0).astype(np.float32)
+    return _depth_0_1(np.asarray(raw, dtype=np.float64))  # FreeSurfer's sulc: sulci positive
 
 
 class Palette(Mapping):
