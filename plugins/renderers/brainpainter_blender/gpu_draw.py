@@ -24,7 +24,7 @@ ambient term (:data:`LIGHTING`).
 
 from __future__ import annotations
 
-import itertools
+import atexit
 from dataclasses import dataclass
 from typing import Any
 
@@ -248,11 +248,11 @@ def _shaders_get() -> tuple[Any, Any]:
     info.vertex_source(_RESOLVE_VERTEX)
     info.fragment_source(_RESOLVE_FRAGMENT)
     resolve = gpu.shader.create_from_info(info)
+    if not _shaders:
+        # Drop them before Blender's own exit handler, which reports GPU blocks still held.
+        atexit.register(_shaders.clear)
     _shaders.update(part=part, resolve=resolve, iface=iface)
     return part, resolve
-
-
-_ids = itertools.count()
 
 
 class GpuDraw:
