@@ -66,9 +66,11 @@ class Lighting:
 
 #: Lighting per ``--lighting`` preset; ``--shading flat`` is always unlit and exact.
 LIGHTING = {
-    "studio": Lighting(ambient=0.42, key=0.62, fill=0.22),
-    "soft": Lighting(ambient=0.62, key=0.32, fill=0.16),
-    "sulc": Lighting(ambient=0.42, key=0.62, fill=0.22, sulc=0.3),
+    # ambient + key + fill peak near 1 (a facing surface keeps its colour, no clipping to white
+    # or to a pure hue on lit slopes) and the median white surface stays near-white
+    "studio": Lighting(ambient=0.36, key=0.62, fill=0.10),
+    "soft": Lighting(ambient=0.56, key=0.40, fill=0.06),
+    "sulc": Lighting(ambient=0.36, key=0.62, fill=0.10, sulc=0.3),
     "flat-studio": Lighting(ambient=1.0, key=0.0, fill=0.0, sulc=0.35, lit=False),
 }
 FLAT = Lighting(ambient=1.0, key=0.0, fill=0.0, lit=False)
