@@ -52,7 +52,7 @@ render(big, "dk", out=args["out"], views=args["views"], width=args["width"], hei
 t_end = time.perf_counter()
 peak_mb = next(int(l.split()[1]) for l in open("/proc/self/status") if l.startswith("VmHWM:")) / 1024
 print(json.dumps({"t_first": stamps[0] - t0, "t_total": t_end - t0, "stamps": [s - t0 for s in stamps],
-                  "peak_mb": peak_mb}))
+                  "peak_mb": peak_mb, "cpu_s": time.process_time()}))
 """
 
 
@@ -158,6 +158,8 @@ def main() -> None:
         "size": args.size,
         "quality": args.quality,
         "images_per_second": round(n / big["t_total"], 2),
+        # CPU seconds (all threads) per image: what the run costs whatever the machine's load
+        "cpu_s_per_image_incl_startup": round(big["cpu_s"] / n, 3),
         "amortised_s_per_image_incl_startup": round(amortised, 3),
         "median_s_per_image_steady": round(statistics.median(per_image), 3) if per_image else None,
         "time_to_first_image_cold_s": round(big["t_first"], 2),

@@ -76,6 +76,8 @@ LIGHTING = {
 FLAT = Lighting(ambient=1.0, key=0.0, fill=0.0, lit=False)
 #: Supersampling factor per quality (per axis); ``high`` reaches here only for flat shading.
 SUPERSAMPLING = {"fast": 1, "default": 2, "high": 3}
+#: Largest supersampled buffer (pixels; 8 bytes each as RGBA16F): huge images get less supersampling.
+MAX_SUPERSAMPLED_PIXELS = 64_000_000
 #: Glass: opacity at grazing angles, as a multiple of the opacity facing the camera.
 GLASS_EDGE = 2.5
 
@@ -284,7 +286,8 @@ class GpuDraw:
         s = self.settings
         want = SUPERSAMPLING[s.quality]
         limit = max(1, int(gpu.capabilities.max_texture_size_get()) // max(s.width, s.height))
-        return max(1, min(want, limit))
+        budget = int((MAX_SUPERSAMPLED_PIXELS / (s.width * s.height)) ** 0.5)  # GPU memory
+        return max(1, min(want, limit, budget))
 
     def _upload(self) -> None:
         import gpu

@@ -15,7 +15,7 @@ import numpy as np
 
 from brainpainter.geometry import GLASS_COLOR
 
-# Cycles' unlit glass is darkened to read like Workbench's lit glass.
+# Cycles' unlit glass is darkened to read like the lit glass of the default draw path.
 _GLASS_CYCLES_SHADE = 0.6
 # Surface finish in Cycles: matte, like a plastic model.
 _ROUGHNESS = 0.6
@@ -74,11 +74,9 @@ def new_region_material(bpy, name: str):
 def new_glass_material(bpy, name: str, opacity: float):
     """A light, semi-transparent material for the glass brain.
 
-    Workbench blends materials whose ``diffuse_color`` alpha is below 1 (order
-    independent, in linear light) and shades them with the studio light. In
-    Cycles the glass is an unlit grey mixed with full transparency (no lighting
-    to sample, hence no noise), more opaque where the surface turns away from
-    the camera so the outline reads like Workbench's shaded glass.
+    In Cycles the glass is an unlit grey mixed with full transparency (no
+    lighting to sample, hence no noise), more opaque where the surface turns
+    away from the camera, as the default draw path's glass.
     """
     mat = bpy.data.materials.new(name)
     mat.surface_render_method = "BLENDED"
