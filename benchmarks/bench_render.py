@@ -71,14 +71,15 @@ part = next(p for p in painter.scene.geometry.parts if p.name == "cortex-lh")
 rng = np.random.default_rng(0)
 palettes = [rng.random((painter.scene.geometry.n_slots, 3)) for _ in range(args["n"] + 2)]
 keys = painter.scene.geometry.keys
-times = []
+times, cpu = [], []
 if args["engine"] == "brainpainter":
     painter.load()
     for i, pal in enumerate(palettes):
         colors = {k: tuple(pal[3 + j]) for j, k in enumerate(keys)}
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         img = painter.paint_colors(colors, view)
         times.append(time.perf_counter() - t)
+        cpu.append(time.process_time() - c)
 else:
     import pyvista as pv
     pose = painter.scene.geometry.camera(view, args["width"] / args["height"])
@@ -97,23 +98,26 @@ else:
     pl.camera.parallel_scale = pose.ortho_scale / args["width"] * args["height"] / 2
     pl.renderer.ResetCameraClippingRange()
     for pal in palettes:
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         mesh.point_data["rgb"][:] = np.round(pal[part.palette_index] * 255).astype(np.uint8)
         mesh.point_data["rgb"] = mesh.point_data["rgb"]  # marks the array modified
         pl.render()  # force a real render: a screenshot alone may return the last frame
         img = pl.screenshot(return_img=True)
         times.append(time.perf_counter() - t)
+        cpu.append(time.process_time() - c)
     assert img.shape[:2] == (args["height"], args["width"])
     pl.close()
-print(json.dumps({"times": times[2:]}))
+print(json.dumps({"times": times[2:], "cpu": cpu[2:]}))
 """
 
 
-def run_peer(engine: str, args: argparse.Namespace, n: int = 20) -> float:
+def run_peer(engine: str, args: argparse.Namespace, n: int = 20) -> tuple[float, float]:
+    """Median wall and CPU seconds of one render + read-back."""
     cfg = {"engine": engine, "width": args.width, "height": args.height, "n": n}
     proc = subprocess.run([sys.executable, "-c", PEER, json.dumps(cfg)], capture_output=True, text=True,
                           check=True)
-    return statistics.median(_last_json(proc.stdout)["times"])
+    out = _last_json(proc.stdout)
+    return statistics.median(out["times"]), statistics.median(out["cpu"])
 
 
 def _last_json(text: str) -> dict:
@@ -174,9 +178,12 @@ def main() -> None:
         except subprocess.CalledProcessError as exc:
             report["peer_error"] = exc.stderr.strip().splitlines()[-1:]
         else:
-            report["render_readback_median_s"] = {"brainpainter": round(ours, 4),
-                                                  "pyvista_vtk_ssaa": round(theirs, 4)}
-            report["pyvista_over_brainpainter"] = round(theirs / ours, 2)
+            report["render_readback_median_s"] = {"brainpainter": round(ours[0], 4),
+                                                  "pyvista_vtk_ssaa": round(theirs[0], 4)}
+            report["render_readback_median_cpu_s"] = {"brainpainter": round(ours[1], 4),
+                                                      "pyvista_vtk_ssaa": round(theirs[1], 4)}
+            report["pyvista_over_brainpainter"] = round(theirs[0] / ours[0], 2)
+            report["pyvista_over_brainpainter_cpu"] = round(theirs[1] / ours[1], 2)
     print(json.dumps(report, indent=2))
 
 

@@ -76,6 +76,8 @@ LIGHTING = {
 FLAT = Lighting(ambient=1.0, key=0.0, fill=0.0, lit=False)
 #: Supersampling factor per quality (per axis); ``high`` reaches here only for flat shading.
 SUPERSAMPLING = {"fast": 1, "default": 2, "high": 3}
+#: Face culling of opaque parts ("BACK": half the triangles are never rasterised; "NONE": draw all).
+CULL_OPAQUE = "BACK"
 #: Largest supersampled buffer (pixels; 8 bytes each as RGBA16F): huge images get less supersampling.
 MAX_SUPERSAMPLED_PIXELS = 64_000_000
 #: Glass: opacity at grazing angles, as a multiple of the opacity facing the camera.
@@ -359,7 +361,8 @@ class GpuDraw:
             gpu.state.depth_test_set("LESS_EQUAL")
             gpu.state.depth_mask_set(True)
             gpu.state.blend_set("NONE")
-            gpu.state.face_culling_set("NONE")
+            # Parts are closed surfaces: faces turned away are always hidden behind others.
+            gpu.state.face_culling_set(CULL_OPAQUE)
             part_shader.uniform_int("mode", _MODE_LIT)
             for p in visible:
                 if p.kind == "glass":
