@@ -61,7 +61,8 @@ class PartGeometry:
         Palette slot of each vertex (equal on the three vertices of a triangle).
     sulc : ndarray of float32, shape (n_vertices,)
         Sulcal depth 0 (crown of a gyrus) to 1 (deep in a sulcus), for
-        optional darkening; zeros where unknown.
+        optional darkening; zeros where unknown, off the cortex, and when the
+        scene's lighting does not use it (:data:`brainpainter.scene.SULC_LIGHTINGS`).
     hull : ndarray of float64, shape (n_points, 3)
         Points whose projections bound the part (convex-hull vertices).
     """
@@ -260,9 +261,12 @@ class SceneGeometry:
     def __init__(self, scene: Scene) -> None:
         from brainpainter.atlas import HEMI_PREFIX
         from brainpainter.errors import choice_error
+        from brainpainter.scene import SULC_LIGHTINGS
         from brainpainter.template import HEMIS
 
         template, hidden = scene.template, frozenset(scene.hidden)
+        settings = scene.settings
+        with_sulc = settings.shading != "flat" and settings.lighting in SULC_LIGHTINGS
         keys: list[str] = []
         defaults: list[RGB] = [tuple(scene.medial_wall_color), NEUTRAL_GREY, GLASS_COLOR]  # type: ignore[list-item]
         slot_of: dict[str, int] = {}
@@ -298,10 +302,10 @@ class SceneGeometry:
             names = [HEMI_PREFIX[hemi] + n for n in cm.label_names]
             face_slot = slots_for(names, MEDIAL_SLOT, hidden)[np.asarray(cm.face_label, np.int64)]
             verts = cm.vertices[scene.surface]
-            sulc = _template_sulc(template, scene.labels, hemi, cm)
+            sulc = _template_sulc(template, scene.labels, hemi, cm) if with_sulc else None
             if sulc is None:
-                shape = cm.vertices.get("pial", verts)
-                sulc = convexity(shape, cm.faces)
+                sulc = (convexity(cm.vertices.get("pial", verts), cm.faces) if with_sulc
+                        else np.zeros(len(verts), np.float32))
             add(f"cortex-{hemi}", "cortex", hemi, verts, cm.faces, face_slot, sulc)
         if template.manifest.get("subcortical"):
             sub = template.subcortical()

@@ -31,6 +31,8 @@ RGB = tuple[float, float, float]
 QUALITIES = ("fast", "default", "high")
 SHADINGS = ("default", "flat")
 LIGHTINGS = ("studio", "soft", "flat-studio", "sulc")
+#: Lighting presets that darken sulci (they need the cortex's sulcal depth).
+SULC_LIGHTINGS = ("flat-studio", "sulc")
 
 
 @dataclass(frozen=True)

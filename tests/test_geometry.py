@@ -106,3 +106,12 @@ def test_lateral_left_puts_anterior_on_the_left(scene):
     pose = scene.geometry.camera(get_view("lateral-left"), 4 / 3)
     (front, back) = framing.to_pixels(np.array([[-60, 40, 0], [-60, -40, 0.0]]), pose, 400, 300)
     assert front[0] < 200 < back[0]
+
+
+def test_sulcal_depth_only_when_the_lighting_uses_it(scene):
+    from brainpainter.scene import RenderSettings
+
+    assert not scene.geometry.parts[0].sulc.any()  # studio lighting: not computed
+    lit = Scene(scene.template, "dk", settings=RenderSettings(lighting="sulc"))
+    sulc = lit.geometry.parts[0].sulc
+    assert sulc.dtype == np.float32 and sulc.max() == 1.0 and sulc.min() == 0.0
