@@ -418,12 +418,12 @@ def test_many_renders_do_not_grow_memory(template):
 def test_close_frees_blender_data_and_refuses_to_render(template):
     import bpy
 
-    before = (len(bpy.data.objects), len(bpy.data.meshes), len(bpy.data.materials),
-              len(bpy.data.scenes))
     gpu_path = _renderer(template, quality="fast")  # draws with the gpu module: no Blender objects
-    gpu_path.close()
+    gpu_path.close()  # (its process-wide 4x4 dummy scene stays, made once)
     with pytest.raises(BrainPainterError, match="closed"):
         gpu_path.render({}, get_view("dorsal"))
+    before = (len(bpy.data.objects), len(bpy.data.meshes), len(bpy.data.materials),
+              len(bpy.data.scenes))
     r = _renderer(template, quality="high")  # Cycles builds objects, materials and a scene
     assert len(bpy.data.objects) > before[0]
     r.close()

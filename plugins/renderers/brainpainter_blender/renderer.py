@@ -25,7 +25,7 @@ from PIL import Image
 
 from brainpainter import framing
 from brainpainter.errors import BrainPainterError
-from brainpainter.geometry import NEUTRAL_GREY, Palette
+from brainpainter.geometry import Palette
 from brainpainter.scene import RGB, Scene
 from brainpainter.views import View
 from brainpainter_blender import _bpy, lighting, materials, scene_builder
@@ -136,16 +136,14 @@ class BlenderRenderer:
             if part.obj.hide_render == on:
                 part.obj.hide_render = not on
 
-    def _recolor(self, colors: Mapping[str, RGB]) -> None:
-        medial = tuple(self.scene.medial_wall_color)
+    def _recolor(self, palette: Palette) -> None:
+        rgb = palette.rgb
         for part in self._parts:
-            default = medial if part.kind == "cortex" else NEUTRAL_GREY
-            for key, mat in part.slots:
-                rgb = colors.get(key)
-                rgb = default if rgb is None else tuple(float(c) for c in rgb[:3])
-                if self._colors.get(id(mat)) != rgb:
-                    materials.set_color(mat, rgb)
-                    self._colors[id(mat)] = rgb
+            for slot, mat in part.slots:
+                color = tuple(float(c) for c in rgb[slot])
+                if self._colors.get(id(mat)) != color:
+                    materials.set_color(mat, color)
+                    self._colors[id(mat)] = color
 
     def _aim(self, view: View) -> None:
         from mathutils import Matrix
