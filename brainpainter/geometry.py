@@ -63,8 +63,10 @@ class PartGeometry:
         Sulcal depth 0 (crown of a gyrus) to 1 (deep in a sulcus), for
         optional darkening; zeros where unknown, off the cortex, and when the
         scene's lighting does not use it (:data:`brainpainter.scene.SULC_LIGHTINGS`).
-    hull : ndarray of float64, shape (n_points, 3)
-        Points whose projections bound the part (convex-hull vertices).
+    hull : ndarray of float, shape (n_points, 3)
+        Points whose projections bound the part (here its vertices: projecting
+        them costs about a millisecond, less than a convex hull, whose import
+        alone costs a second at start-up).
     """
 
     name: str
@@ -136,18 +138,6 @@ def _depth_0_1(depth: np.ndarray) -> np.ndarray:
     """Map a sulcal-depth measure (larger = deeper) to 0-1 by its 30th and 97th percentiles."""
     lo, hi = np.percentile(depth, [30, 97])
     return np.clip((depth - lo) / max(hi - lo, 1e-9), 0.0, 1.0).astype(np.float32)
-
-
-def _hull_points(vertices: np.ndarray) -> np.ndarray:
-    from scipy.spatial import ConvexHull, QhullError
-
-    pts = np.asarray(vertices, dtype=np.float64)
-    if len(pts) < 5:
-        return pts
-    try:
-        return pts[ConvexHull(pts).vertices]
-    except QhullError:  # flat or degenerate: every point bounds it
-        return pts
 
 
 def split_by_label(vertices: np.ndarray, faces: np.ndarray, face_slot: np.ndarray,
@@ -292,7 +282,7 @@ class SceneGeometry:
             normals = vertex_normals(verts, faces)
             v, tri, pal, (nrm, dep) = split_by_label(verts, faces, face_slot, (normals, sulc))
             parts.append(PartGeometry(name, kind, hemi, v.astype(np.float32), nrm.astype(np.float32),
-                                      tri, pal, dep.astype(np.float32), _hull_points(v)))
+                                      tri, pal, dep.astype(np.float32), v))
 
         for hemi in HEMIS:
             cm = template.cortex(scene.labels, hemi)

@@ -62,6 +62,14 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
         raise
 
 
+# Imported with this module, early and on the caller's thread: fpng's import walks the
+# interpreter stack (lazy_loader), which takes seconds on a PNG worker thread once bpy is loaded.
+try:
+    import fpng as _fpng
+except ImportError:  # pragma: no cover - fpng is a dependency; Pillow is the fallback
+    _fpng = None
+
+
 def _png_chunk(kind: bytes, data: bytes) -> bytes:
     import struct
     import zlib
@@ -77,12 +85,8 @@ def png_bytes(image: np.ndarray, metadata: dict[str, str] | None = None) -> byte
     text chunks go right after the header, as Pillow writes them.
     """
     pixels = np.ascontiguousarray(image, dtype=np.uint8)
-    try:
-        import fpng
-    except ImportError:  # pragma: no cover - fpng is a dependency; Pillow is the fallback
-        fpng = None
-    if fpng is not None and pixels.ndim == 3 and pixels.shape[2] in (3, 4):
-        data = fpng.from_ndarray(pixels)
+    if _fpng is not None and pixels.ndim == 3 and pixels.shape[2] in (3, 4):
+        data = _fpng.from_ndarray(pixels)
         chunks = b"".join(
             _png_chunk(b"iTXt", k.encode("latin-1") + b"\0\0\0\0\0" + str(v).encode("utf-8"))
             for k, v in (metadata or {}).items())

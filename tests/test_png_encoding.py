@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import io
-import sys
 
 import numpy as np
 import pytest
@@ -18,7 +17,7 @@ META = {"Software": "brainpainter 0.1", "brainpainter:image": "Stage é/1",
 @pytest.mark.parametrize("use_fpng", [True, False])
 def test_png_is_lossless_and_keeps_metadata(monkeypatch, use_fpng):
     if not use_fpng:
-        monkeypatch.setitem(sys.modules, "fpng", None)  # import fails: Pillow fallback
+        monkeypatch.setattr("brainpainter.output._fpng", None)  # as if not installed: Pillow fallback
     rng = np.random.default_rng(3)
     img = rng.integers(0, 256, (37, 53, 4), dtype=np.uint8)
     img[:10] = (255, 255, 255, 0)  # transparent rows stay transparent
