@@ -246,6 +246,7 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
     app = FastAPI(title="brainpainter", version=_version(), lifespan=lifespan, docs_url=None, redoc_url=None,
                   description="Upload a table of values per brain region, check it, preview and render it.")
     app.state.config, app.state.store, app.state.pool = config, store, pool
+    app.add_middleware(Guard, config=config)
 
     @app.exception_handler(BrainPainterError)
     async def _bp_error(request: Request, exc: BrainPainterError) -> JSONResponse:
