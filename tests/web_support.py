@@ -24,8 +24,8 @@ def standin_site(root: Path) -> Path:
     Put the returned folder on ``PYTHONPATH`` and the server's worker processes (spawned
     interpreters) find renderer ``web-stand-in`` through the real entry-point registry.
     """
-    return fake_distribution(root, "bp-web-stand-in",
-                             {"brainpainter.renderers": {STANDIN: "brainpainter.testing:StandInRenderer"}}, {})
+    entry = {"brainpainter.renderers": {STANDIN: "brainpainter.testing:StandInRenderer"}}
+    return fake_distribution(root, "bp-web-stand-in", entry, {})
 
 
 def env_with_site(site: Path) -> dict[str, str]:
