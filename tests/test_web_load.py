@@ -15,88 +15,26 @@ from __future__ import annotations
 
 import json
 import os
-import signal
-import socket
 import sqlite3
-import subprocess
-import sys
 import threading
 import time
-from pathlib import Path
 
 import pytest
-from web_support import STANDIN, env_with_site, png_pixels, standin_site, wait_for, zip_pngs
+from web_support import (
+    STANDIN,
+    Server,
+    alive,
+    env_with_site,
+    png_pixels,
+    rss_mb,
+    standin_site,
+    wait_for,
+    zip_pngs,
+)
 
 httpx = pytest.importorskip("httpx")
 
 HEADER = "Image-name-unique,Left-insula,Right-insula,Left-Hippocampus\n"
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def rss_mb(pid: int) -> float:
-    try:
-        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024
-    except OSError:
-        pass
-    return 0.0
-
-
-def alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    try:  # a zombie (exited, not yet reaped by init) counts as gone
-        return Path(f"/proc/{pid}/stat").read_text().split(") ")[1][0] != "Z"
-    except OSError:
-        return False
-
-
-class Server:
-    """``python -m brainpainter serve`` on a free loopback port, killable and restartable."""
-
-    def __init__(self, data_dir: Path, env: dict[str, str], log: Path, workers: int = 2,
-                 max_queued: int = 40) -> None:
-        self.port = free_port()
-        self.url = f"http://127.0.0.1:{self.port}"
-        self.args = [sys.executable, "-m", "brainpainter", "serve", "--host", "127.0.0.1", "--port",
-                     str(self.port), "--data-dir", str(data_dir), "--workers", str(workers), "--no-preview",
-                     "--renderer", STANDIN, "--max-jobs-per-client", "10000", "--max-queued", str(max_queued),
-                     "--rate", "1000000", "--log-level", "warning"]
-        self.env, self.log, self.proc = env, log, None
-
-    def start(self) -> None:
-        with self.log.open("a") as fh:
-            self.proc = subprocess.Popen(self.args, env=self.env, stdout=fh, stderr=subprocess.STDOUT)
-        ok = wait_for(lambda: self._ready(), 90, 0.3)
-        assert ok, self.log.read_text()[-3000:]
-
-    def _ready(self) -> bool:
-        assert self.proc.poll() is None, self.log.read_text()[-3000:]
-        try:
-            return httpx.get(f"{self.url}/readyz", timeout=2).status_code == 200
-        except httpx.HTTPError:
-            return False
-
-    def kill(self) -> None:
-        self.proc.send_signal(signal.SIGKILL)
-        self.proc.wait(timeout=30)
-
-    def stop(self) -> None:
-        if self.proc and self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait(timeout=10)
 
 
 def table(k: int) -> bytes:
@@ -147,15 +85,17 @@ def submit_all(server: Server, n_jobs: int, n_clients: int, halfway: threading.E
     return accepted, refused
 
 
-@pytest.mark.parametrize("n_jobs, n_clients", [
-    (60, 12),
-    pytest.param(200, 50, marks=pytest.mark.skipif(not os.environ.get("BRAINPAINTER_SLOW_TESTS"),
+@pytest.mark.parametrize("n_jobs, n_clients, max_queued", [
+    (60, 12, 40),
+    pytest.param(200, 50, 150, marks=pytest.mark.skipif(not os.environ.get("BRAINPAINTER_SLOW_TESTS"),
                                                    reason="full load: BRAINPAINTER_SLOW_TESTS=1")),
 ])
-def test_concurrent_jobs_survive_a_killed_server(tmp_path, n_jobs, n_clients):
+def test_concurrent_jobs_survive_a_killed_server(tmp_path, n_jobs, n_clients, max_queued):
     site = standin_site(tmp_path / "site")
     data = tmp_path / "data"
-    server = Server(data, env_with_site(site), tmp_path / "server.log")
+    server = Server(data, env_with_site(site), tmp_path / "server.log", [
+        "--workers", "2", "--no-preview", "--renderer", STANDIN, "--max-jobs-per-client", "10000",
+        "--max-queued", str(max_queued), "--rate", "1000000"])
     server.start()
     halfway = threading.Event()
     result: dict = {}

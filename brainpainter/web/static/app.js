@@ -192,6 +192,7 @@ async function preview() {
   $("preview-status").textContent = "Rendering preview…";
   const body = { upload_id: state.uploadId, options: options(), row: Number($("row").value || 0),
                  view: $("pview").value };
+  refreshScale(body.options, ctl.signal);
   try {
     const res = await api("/api/preview", { method: "POST", signal: ctl.signal,
       headers: { "content-type": "application/json" }, body: JSON.stringify(body) });
@@ -212,6 +213,16 @@ async function preview() {
     $("preview-status").textContent = "No preview.";
     showError(e.message);
   }
+}
+
+async function refreshScale(opts, signal) {
+  // the check report again with the colour options: value range against the scale, hints
+  try {
+    const res = await api("/api/check", { method: "POST", signal, headers: { "content-type": "application/json" },
+                                          body: JSON.stringify({ upload_id: state.uploadId, options: opts }) });
+    state.report = await res.json();
+    showReport(state.report);
+  } catch (e) { /* the preview shows the error */ }
 }
 
 // -- jobs -------------------------------------------------------------------------------
