@@ -127,3 +127,27 @@ def test_worker_reports_bad_jobs_as_one_line_and_honours_the_time_limit(tmp_path
         run_job(store, job, painters, ttl_s=60, time_limit_s=50)
         painters.close()
     assert store.get(slow)["status"] == "failed" and "limit of 50 s" in store.get(slow)["error"]
+
+
+def test_serve_command_refuses_a_data_dir_in_use_and_bad_limits(tmp_path):
+    import subprocess
+    import sys
+
+    from brainpainter.web.store import lock_data_dir
+
+    data = tmp_path / "data"
+    lock_data_dir(data)
+    lock_data_dir(data)  # again in the same process: fine
+    for args, message in (
+        (["--data-dir", str(data)], "another brainpainter serve is using --data-dir"),
+        (["--data-dir", str(tmp_path / "other"), "--max-images", "0"], "--max-images must be at least 1"),
+        (["--data-dir", str(tmp_path / "other"), "--renderer", "nope"], "nope"),
+    ):
+        proc = subprocess.run([sys.executable, "-m", "brainpainter", "serve", "--port", "1", *args],
+                              capture_output=True, text=True, timeout=120)
+        lines = proc.stderr.strip().splitlines()
+        assert proc.returncode == 2 and lines[-1].startswith("error: ") and message in lines[-1], proc.stderr
+        assert "Traceback" not in proc.stderr
+    help_text = subprocess.run([sys.executable, "-m", "brainpainter", "--help"], capture_output=True,
+                               text=True, timeout=60).stdout
+    assert "serve" in help_text

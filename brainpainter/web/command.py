@@ -68,6 +68,9 @@ def serve(host: str, port: int, data_dir: Path | None, workers: int, no_preview:
     except OSError as exc:
         raise BrainPainterError(f"--data-dir {str(config.data_dir)!r} cannot be created ({exc.strerror}); "
                                 "choose a writable folder.") from None
+    from brainpainter.web.store import lock_data_dir
+
+    lock_data_dir(config.data_dir)  # one server per data folder (held until this process ends)
     level = getattr(logging, log_level.upper())
     handler = logging.StreamHandler()  # uvicorn configures its own loggers; ours log one line per record
     handler.setFormatter(logging.Formatter("%(message)s"))

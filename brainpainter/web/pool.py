@@ -74,7 +74,10 @@ class Pool:
 
     # -- life ------------------------------------------------------------------------------
     def start(self) -> None:
+        from brainpainter.web.store import lock_data_dir
+
         c = self.config
+        lock_data_dir(self.store.root)
         again = self.store.requeue(max_attempts=c.max_attempts, ttl_s=c.result_ttl_s)
         if again:
             log.info("re-queued %d job(s) left running by a previous server", len(again))
