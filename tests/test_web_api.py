@@ -141,6 +141,7 @@ def test_upload_returns_the_check_report_of_the_cli(server, tmp_path):
     report = got["report"]
     assert re.fullmatch(r"[0-9a-f]{32}", got["upload_id"])
     assert report["ok"] and report["atlas"] == want["atlas"] and report["n_images"] == 4
+    assert got["images"] == ["stage-1", "stage-2", "stage-3", "stage-4"]
     assert report["names"] == [{**n, "source": "brainpainter_dk.csv"} for n in want["names"]]
     assert report["values"] == want["values"]
 

@@ -9,7 +9,7 @@ API (all JSON unless said; errors are ``{"error": "one line"}`` with the CLI's m
     GET  /api/meta                 atlases, views, colour maps, option defaults, limits
     POST /api/uploads?name=&atlas=&image_column=&value=&region_column=&strict=
                                    body: the table file (CSV/TSV/XLSX bytes, or pasted text)
-                                   -> {"upload_id", "name", "report"} (the `check --json` report)
+                                   -> {"upload_id", "name", "report", "images"} (`check --json`'s report)
     POST /api/check                {"upload_id", "options"} -> the check report for those options
     POST /api/preview              {"upload_id", "options", "row", "view"} -> image/png
     POST /api/jobs                 {"upload_id", "kind", "options", "figure"|"movie"} -> 202 {job}
@@ -61,6 +61,7 @@ SECURITY_HEADERS = [
     (b"cross-origin-resource-policy", b"same-origin"),
 ]
 JSON_BODY_LIMIT = 64 * 1024
+MAX_LISTED_IMAGES = 5000  # image names sent to the page for its row chooser
 STATE_CHANGING = ("POST", "PUT", "DELETE", "PATCH")
 
 
@@ -325,10 +326,11 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
         shown = upload_name(name)
         opts = TableOptions(atlas=atlas or None, image_column=image_column or None, value=value or None,
                             region_column=region_column or None, strict=strict)
-        report = await run_in_threadpool(_check, data, shown, opts, {})
+        report, images = await run_in_threadpool(_check, data, shown, opts, {})
         upload_id = await run_in_threadpool(store.add_upload, _client(request), shown, data,
                                             config.result_ttl_s)
-        return {"upload_id": upload_id, "name": shown, "size": size, "report": report}
+        return {"upload_id": upload_id, "name": shown, "size": size, "report": report,
+                "images": images[:MAX_LISTED_IMAGES]}
 
     @app.post("/api/check", tags=["api"])
     async def check(body: CheckRequest) -> dict[str, Any]:
@@ -336,7 +338,7 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
         name, data = _upload(store, body.upload_id)
         o = body.options
         scale = {"gradient": o.gradient, "cmap": o.cmap, "vmin": o.vmin, "vmax": o.vmax, "center": o.center}
-        return await run_in_threadpool(_check, data, name, o, scale)
+        return (await run_in_threadpool(_check, data, name, o, scale))[0]
 
     # -- preview -------------------------------------------------------------------------------
     @app.post("/api/preview", tags=["api"], responses={200: {"content": {"image/png": {}}}})
@@ -438,8 +440,10 @@ def _public(job: dict[str, Any] | None) -> dict[str, Any]:
     }
 
 
-def _check(data: bytes, name: str, opts: TableOptions, scale: dict[str, Any]) -> dict[str, Any]:
-    """``brainpainter check --json`` for uploaded bytes; raises the first error as the CLI does."""
+def _check(data: bytes, name: str, opts: TableOptions,
+           scale: dict[str, Any]) -> tuple[dict[str, Any], list[str]]:
+    """``brainpainter check --json`` for uploaded bytes, and every image name; raises the first error
+    as the CLI does."""
     from brainpainter.inputs import inspect_table
     from brainpainter.report import check_report
 
@@ -448,7 +452,7 @@ def _check(data: bytes, name: str, opts: TableOptions, scale: dict[str, Any]) ->
     report = check_report(table, **scale)
     if report["errors"]:
         raise BrainPainterError(report["errors"][0])
-    return report
+    return report, list(table.images)
 
 
 def _preview_request(data: bytes, name: str, body: PreviewRequest, config: ServerConfig) -> dict[str, Any]:

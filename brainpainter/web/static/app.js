@@ -124,7 +124,7 @@ async function upload(blob, name) {
     const j = await res.json();
     state.uploadId = j.upload_id; state.report = j.report;
     showReport(j.report);
-    fillRows(j.report);
+    fillRows(j.images, j.report.n_images);
     setReady(true);
     schedulePreview(0);
   } catch (e) {
@@ -164,12 +164,12 @@ function showReport(r) {
   list("Notes", [...r.values.hints, ...r.notes]);
 }
 
-function fillRows(r) {
+function fillRows(images, total) {
   const sel = $("row");
   sel.replaceChildren();
-  r.images.forEach((name, i) => sel.append(el("option", { value: String(i), text: name })));
-  if (r.n_images > r.images.length) sel.append(el("option", { disabled: true, text: `… ${r.n_images - r.images.length} more` }));
-  sel.value = String(Math.min(r.images.length - 1, Math.max(0, r.images.length - 1)));
+  images.forEach((name, i) => sel.append(el("option", { value: String(i), text: name })));
+  if (total > images.length) sel.append(el("option", { disabled: true, text: `… ${total - images.length} more` }));
+  sel.value = String(Math.max(0, images.length - 1));
 }
 
 function setReady(on) {
