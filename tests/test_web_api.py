@@ -344,3 +344,14 @@ def test_json_bodies_are_bounded(limited):
     r = limited.post("/api/check", content=b'{"upload_id": "' + b"a" * 100_000 + b'"}',
                      headers={"content-type": "application/json"})
     assert r.status_code == 413 and "request body" in r.json()["error"]
+
+
+def test_cancel_frees_the_clients_slot(limited):
+    uid = upload(limited, b"Image-name-unique,Left-insula\nA,1\n")["upload_id"]
+    ok = {"upload_id": uid, "options": {"size": "50x50"}}
+    first, second = (limited.post("/api/jobs", json=ok).json() for _ in range(2))
+    assert limited.post("/api/jobs", json=ok).status_code == 429
+    r = limited.delete(first["url"])
+    assert r.status_code == 200 and r.json()["status"] == "cancelled"
+    assert limited.post("/api/jobs", json=ok).status_code == 202
+    assert limited.get(second["url"]).json()["status"] == "queued"

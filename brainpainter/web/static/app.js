@@ -243,7 +243,9 @@ async function submit(kind, format) {
   const progId = `prog-${job.id.slice(0, 8)}`;
   const status = el("p", { text: `${label}: queued` });
   const prog = el("progress", { id: progId, max: String(Math.max(1, job.total)), value: "0" });
-  box.append(el("label", { for: progId, text: label }), prog, status);
+  const cancel = el("button", { type: "button", text: "Cancel" });
+  cancel.addEventListener("click", () => api(job.url, { method: "DELETE" }).catch((e) => showError(e.message)));
+  box.append(el("label", { for: progId, text: label }), prog, status, cancel);
   $("jobs").prepend(box);
   for (let i = 0; i < 7200; i++) { // bounded: at most about an hour of polling
     await new Promise((r) => setTimeout(r, 500));
@@ -252,6 +254,7 @@ async function submit(kind, format) {
     status.textContent = `${label}: ${job.status} (${job.progress}/${job.total})`;
     if (["done", "failed", "cancelled", "expired"].includes(job.status)) break;
   }
+  cancel.remove();
   if (job.status !== "done") { status.textContent = `${label}: ${job.status}${job.error ? ": " + job.error : ""}`; return; }
   showResult(box, job, label);
 }
