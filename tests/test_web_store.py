@@ -151,3 +151,19 @@ def test_serve_command_refuses_a_data_dir_in_use_and_bad_limits(tmp_path):
     help_text = subprocess.run([sys.executable, "-m", "brainpainter", "--help"], capture_output=True,
                                text=True, timeout=60).stdout
     assert "serve" in help_text
+
+
+def test_uploads_per_client_and_old_rows_are_bounded(tmp_path):
+    store = Store(tmp_path)
+    ids = [store.add_upload("a", "t.csv", b"x", ttl_s=60, keep=3) for _ in range(5)]
+    other = store.add_upload("b", "t.csv", b"y", ttl_s=60, keep=3)
+    assert [store.get_upload(i) is not None for i in ids] == [False, False, True, True, True]
+    assert store.get_upload(other) == ("t.csv", b"y")
+    assert len(list((tmp_path / "uploads").iterdir())) == 4
+    job_id = submit(store)
+    job = store.claim("w")
+    store.finish(job_id, job["attempt"], [], ttl_s=1)
+    store.expire(time.time() + 2)
+    assert store.get(job_id)["status"] == "expired"
+    store.expire(time.time() + 31 * 24 * 3600)
+    assert store.get(job_id) is None and store.events(job_id) == []

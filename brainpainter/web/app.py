@@ -328,7 +328,7 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
                             region_column=region_column or None, strict=strict)
         report, images = await run_in_threadpool(_check, data, shown, opts, {})
         upload_id = await run_in_threadpool(store.add_upload, _client(request), shown, data,
-                                            config.result_ttl_s)
+                                            config.result_ttl_s, config.max_uploads_per_client)
         return {"upload_id": upload_id, "name": shown, "size": size, "report": report,
                 "images": images[:MAX_LISTED_IMAGES]}
 

@@ -36,6 +36,8 @@ class ServerConfig:
         Largest width x height of one rendered view.
     max_jobs_per_client : int
         Queued or running jobs one client (IP address) may have at once.
+    max_uploads_per_client : int
+        Uploads kept per client; older ones are deleted (jobs keep their own copy).
     max_queued : int
         Queued jobs of all clients; beyond it submissions get 503.
     rate_per_minute : int
@@ -59,6 +61,7 @@ class ServerConfig:
     max_images: int = 600
     max_pixels: int = 2400 * 1800
     max_jobs_per_client: int = 4
+    max_uploads_per_client: int = 100
     max_queued: int = 100
     rate_per_minute: int = 240
     job_time_limit_s: float = 1800.0

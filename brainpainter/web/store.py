@@ -35,6 +35,7 @@ from brainpainter.output import atomic_write_bytes
 
 _ID = re.compile(r"^[0-9a-f]{32}$")
 ACTIVE = ("queued", "running")
+FORGET_AFTER_S = 30 * 24 * 3600.0  # an expired job's row is kept this long (its id then answers 404)
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS uploads (
@@ -174,13 +175,21 @@ class Store:
         return True
 
     # -- uploads -------------------------------------------------------------------------
-    def add_upload(self, client: str, name: str, data: bytes, ttl_s: float) -> str:
+    def add_upload(self, client: str, name: str, data: bytes, ttl_s: float, keep: int = 20) -> str:
+        """Store an upload; the client's uploads beyond its newest `keep` are deleted (disk stays bounded;
+        jobs keep their own copy of their table)."""
         upload_id = new_id()
         atomic_write_bytes(self.upload_path(upload_id), data)
         now = time.time()
         with self.transaction() as db:
             db.execute("INSERT INTO uploads VALUES (?, ?, ?, ?, ?, ?)",
                        (upload_id, client, name, len(data), now, now + ttl_s))
+            old = [r["id"] for r in db.execute(
+                "SELECT id FROM uploads WHERE client = ? ORDER BY created DESC, rowid DESC LIMIT -1 OFFSET ?",
+                (client, keep)).fetchall()]
+            db.executemany("DELETE FROM uploads WHERE id = ?", [(i,) for i in old])
+        for i in old:
+            self.upload_path(i).unlink(missing_ok=True)
         return upload_id
 
     def get_upload(self, upload_id: str) -> tuple[str, bytes] | None:
@@ -361,6 +370,12 @@ class Store:
             uploads = [r["id"] for r in db.execute("SELECT id FROM uploads WHERE expires < ?",
                                                    (now,)).fetchall()]
             db.execute("DELETE FROM uploads WHERE expires < ?", (now,))
+            # rows of long-expired jobs go too (their files went when they expired)
+            gone = now - FORGET_AFTER_S
+            db.execute("DELETE FROM events WHERE job_id IN (SELECT id FROM jobs WHERE status = 'expired' AND "
+                       "coalesce(expires, finished) < ?)", (gone,))
+            db.execute("DELETE FROM jobs WHERE status = 'expired' AND coalesce(expires, finished) < ?",
+                       (gone,))
         for job_id in jobs:
             shutil.rmtree(self.job_dir(job_id), ignore_errors=True)
         for upload_id in uploads:
