@@ -292,14 +292,15 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
             db_ok = await run_in_threadpool(store.ping)
         except Exception:
             db_ok = False
-        ready_workers = [w for w in store.workers() if w["state"] in ("ready", "busy")]
+        workers = await run_in_threadpool(store.workers)
+        ready_workers = [w for w in workers if w["state"] in ("ready", "busy")]
         checks = {"database": db_ok,
                   "workers": len(ready_workers) >= min(1, config.workers) and pool.alive_workers() >= min(
                       1, config.workers),
                   "preview": pool.preview_ready or not config.preview}
         ok = all(checks.values())
         return JSONResponse({"status": "ready" if ok else "starting", "checks": checks,
-                             "jobs": store.counts()}, status_code=200 if ok else 503)
+                             "jobs": await run_in_threadpool(store.counts)}, status_code=200 if ok else 503)
 
     @app.get("/api/meta", tags=["api"])
     async def meta() -> dict[str, Any]:
@@ -335,7 +336,7 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
     @app.post("/api/check", tags=["api"])
     async def check(body: CheckRequest) -> dict[str, Any]:
         """The ``check`` report of an upload with these options (the colour scale included)."""
-        name, data = _upload(store, body.upload_id)
+        name, data = await run_in_threadpool(_upload, store, body.upload_id)
         o = body.options
         scale = {"gradient": o.gradient, "cmap": o.cmap, "vmin": o.vmin, "vmax": o.vmax, "center": o.center}
         return (await run_in_threadpool(_check, data, name, o, scale))[0]
@@ -344,7 +345,7 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
     @app.post("/api/preview", tags=["api"], responses={200: {"content": {"image/png": {}}}})
     async def preview(body: PreviewRequest) -> Response:
         """One row from one view, small, rendered by the warm preview painter."""
-        name, data = _upload(store, body.upload_id)
+        name, data = await run_in_threadpool(_upload, store, body.upload_id)
         req = await run_in_threadpool(_preview_request, data, name, body, config)
         try:
             png, ms = await run_in_threadpool(pool.preview, req)
@@ -359,7 +360,7 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
     async def submit(body: JobRequest, request: Request) -> dict[str, Any]:
         """Queue a job: ``images`` (every row from every view, as PNGs plus a zip), ``figure`` (PDF/PNG)
         or ``movie`` (MP4/GIF)."""
-        name, data = _upload(store, body.upload_id)
+        name, data = await run_in_threadpool(_upload, store, body.upload_id)
         prep = await run_in_threadpool(prepare, data, name, body.options, max_images=config.max_images,
                                        max_pixels=config.max_pixels)
         n_rows, n_views = len(prep.run.table.images), len(prep.run.views)
@@ -374,24 +375,24 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
                 total, max_per_client=config.max_jobs_per_client, max_queued=config.max_queued)
         except LimitError as exc:
             raise ApiError(exc.status, str(exc), {"retry-after": str(exc.retry_after)}) from None
-        return _public(store.get(job_id))
+        return _public(await run_in_threadpool(store.get, job_id))
 
     @app.get("/api/jobs/{job_id}", tags=["api"])
     async def job_status(job_id: str) -> dict[str, Any]:
         """Status, progress and files of a job."""
-        return _public(_job(store, job_id))
+        return _public(await run_in_threadpool(_job, store, job_id))
 
     @app.delete("/api/jobs/{job_id}", tags=["api"])
     async def cancel(job_id: str) -> dict[str, Any]:
         """Cancel a queued or running job."""
-        _job(store, job_id)
+        await run_in_threadpool(_job, store, job_id)
         await run_in_threadpool(store.cancel, job_id)
-        return _public(_job(store, job_id))
+        return _public(await run_in_threadpool(_job, store, job_id))
 
     @app.get("/api/jobs/{job_id}/files/{file_name}", tags=["api"])
     async def job_file(job_id: str, file_name: str, download: bool = False) -> FileResponse:
         """One file the job made (only names listed in its ``files``)."""
-        job = _job(store, job_id)
+        job = await run_in_threadpool(_job, store, job_id)
         if file_name not in job["files"]:
             raise ApiError(404, f"job {job_id} has no file {file_name[:100]!r}; its files are listed in "
                                 f"GET /api/jobs/{job_id}.")
