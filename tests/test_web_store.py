@@ -133,7 +133,7 @@ def test_serve_command_refuses_a_data_dir_in_use_and_bad_limits(tmp_path):
     import subprocess
     import sys
 
-    from brainpainter.web.store import lock_data_dir
+    from brainpainter.web.store import lock_data_dir, unlock_data_dir
 
     data = tmp_path / "data"
     lock_data_dir(data)
@@ -148,6 +148,7 @@ def test_serve_command_refuses_a_data_dir_in_use_and_bad_limits(tmp_path):
         lines = proc.stderr.strip().splitlines()
         assert proc.returncode == 2 and lines[-1].startswith("error: ") and message in lines[-1], proc.stderr
         assert "Traceback" not in proc.stderr
+    unlock_data_dir(data)
     help_text = subprocess.run([sys.executable, "-m", "brainpainter", "--help"], capture_output=True,
                                text=True, timeout=60).stdout
     assert "serve" in help_text

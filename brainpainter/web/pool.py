@@ -104,6 +104,9 @@ class Pool:
                 p.join(timeout=5)
         # jobs the stopped workers held go back to the queue now (a restart would do it too)
         self.store.requeue(max_attempts=self.config.max_attempts + 1, ttl_s=self.config.result_ttl_s)
+        from brainpainter.web.store import unlock_data_dir
+
+        unlock_data_dir(self.store.root)
 
     def _spawn_worker(self, slot: int) -> None:
         from brainpainter.web.worker import job_worker_main

@@ -97,6 +97,13 @@ def lock_data_dir(data_dir: str | Path) -> None:
     _HELD_LOCKS[str(root)] = fh
 
 
+def unlock_data_dir(data_dir: str | Path) -> None:
+    """Let go of the folder locked by :func:`lock_data_dir` in this process (no-op when not held)."""
+    fh = _HELD_LOCKS.pop(str(Path(data_dir).resolve()), None)
+    if fh is not None:
+        fh.close()  # closing the file releases the flock
+
+
 class LimitError(Exception):
     """A submission refused by a limit; `status` is the HTTP status (429 or 503)."""
 
