@@ -383,6 +383,10 @@ def join_split_lists(args: list[str]) -> list[str]:
         i += 1
     return out
 
+from brainpainter.web.command import serve  # noqa: E402
+
+cli.add_command(serve)
+
 
 def main(argv: list[str] | None = None) -> None:
     """Console entry point: user errors become one line and exit code 2."""
