@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import csv
 import difflib
+import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from functools import cache
@@ -57,6 +58,8 @@ _AFFIXES: dict[str, tuple[tuple[str, str, str], ...]] = {
         ("_R", "suffix", "other"), ("-R", "suffix", "other"), ("_right", "suffix", "other"),
     ),
 }
+# A hemisphere inside a name, between underscores: Schaefer 2018's 7Networks_LH_Vis_1.
+_HEMI_TOKEN = re.compile(r"_([LR]H)_", re.IGNORECASE)
 # ENIGMA's subcortical codes carry the hemisphere as a bare letter: Lhippo, RLatVent.
 _ENIGMA_LETTER = {"lh": "L", "rh": "R"}
 
@@ -208,6 +211,12 @@ class NameResolver:
         return out[:n]
 
 
+def _embedded_hemi(name: str) -> str | None:
+    """Hemisphere written inside a name as a ``_LH_`` / ``_RH_`` token (``7Networks_LH_Vis_1``), or None."""
+    hit = _HEMI_TOKEN.search(name)
+    return None if hit is None else hit.group(1).lower()
+
+
 def _hemi_free_names(region: Region, extra: dict[str, list[tuple[str, str]]]) -> tuple[
         list[tuple[str, str, int]], list[tuple[str, str]]]:
     """Hemisphere-free names of `region` as (name, naming, rank) and full aliases as (name, naming)."""
@@ -215,7 +224,7 @@ def _hemi_free_names(region: Region, extra: dict[str, list[tuple[str, str]]]) ->
     full: list[tuple[str, str]] = []
     for alias in region.aliases:
         hemi, _ = _split_affix(normalise(alias))
-        if hemi is not None:
+        if hemi is not None or _embedded_hemi(alias) == region.hemi:
             full.append((alias, "FreeSurfer look-up table"))
         else:
             free.append((alias, "FreeSurfer look-up table", 2))

@@ -26,6 +26,10 @@ the template's own label-set meshes (entry key ``base``; ``base_faces_sha256``
 guards against a rebuilt template): ``vertex_label`` (one per vertex; faces
 whose vertices differ are split through edge midpoints when loaded, see
 :func:`brainpainter.labelset.split_mesh`) or ``face_label`` (one per face).
+An overlay file may instead hold ``source_label``: one label per vertex of the
+full-resolution surface the template was built from (e.g. all 163842 of
+fsaverage); it is mapped through the base mesh's ``source_vertex`` when
+loaded, so it survives a rebuild of the template (no digest needed).
 :meth:`Template.with_label_sets` adds such a folder's label sets to a template.
 """
 
@@ -141,6 +145,8 @@ class Template:
         z = self._npz(entry["file"])
         if "base" in entry:  # an overlay: labels for the vertices or faces of one of our own meshes
             base = self.cortex(entry["base"], hemi)
+            if "source_label" in z:  # one label per full-resolution vertex: fits any rebuild of the base
+                return self._source_labelled(base, z["source_label"], labels, entry)
             per_vertex = "vertex_label" in z
             n = len(z["vertex_label"]) if per_vertex else len(z["face_label"])
             digest = entry.get("base_faces_sha256")
@@ -170,6 +176,24 @@ class Template:
             vertices={s: z[s] for s in self.surfaces if s in z},
             source_vertex=z["source_vertex"],
         )
+
+    def _source_labelled(self, base: CortexMesh, source_label: np.ndarray, labels: str,
+                         entry: dict) -> CortexMesh:
+        """`base` labelled by `source_label` (one label per vertex of the full-resolution surface)."""
+        from brainpainter.labelset import labels_at_vertices, split_mesh
+
+        n_source = int(entry.get("n_source_vertices", len(source_label)))
+        if len(source_label) != n_source or int(base.source_vertex.max(initial=-1)) >= n_source:
+            raise BrainPainterError(
+                f"label set {labels!r} ({entry['file']}) labels {len(source_label)} source vertices, but the "
+                f"{entry['base']!r} mesh of template {self.name!r} was made from a surface with more; "
+                "use the template the atlas was made for."
+            )
+        key = f"{entry['file']}#{labels}"
+        if key not in self._cache:
+            vertex_label = labels_at_vertices(source_label, base)
+            self._cache[key] = split_mesh(base, vertex_label, labels, tuple(entry["names"]))
+        return self._cache[key]
 
     def with_label_sets(self, folder: str | Path) -> Template:
         """This template plus the label sets of an overlay folder (``labels.json``).
