@@ -82,6 +82,14 @@ class Atlas:
         label set a region of this atlas stands for (``("Left-frontal",
         ("Left-superiorfrontal", ...))``). Regions not listed stand for
         themselves. Empty for ordinary atlases.
+    volume_dirs : tuple of Path
+        Folders of volumetric atlases (``subcortical.npz`` meshes, see
+        :mod:`brainpainter.volumes`) drawn as the template's subcortical part
+        instead of its own structures; see
+        :meth:`brainpainter.template.Template.with_volumes`.
+    sources : tuple of (str, str)
+        For an atlas combined from several (``schaefer400_7n+tian_s2``): each
+        region key and the atlas it comes from. Empty otherwise.
     """
 
     name: str
@@ -93,6 +101,8 @@ class Atlas:
     aliases: tuple[str, ...] = ()
     label_dir: Path | None = None
     members: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    volume_dirs: tuple[Path, ...] = ()
+    sources: tuple[tuple[str, str], ...] = ()
     _by_key: dict[str, Region] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -150,6 +160,7 @@ class Atlas:
             "n_subcortical": len(self.subcortical()),
             "label_dir": None if self.label_dir is None else str(self.label_dir),
             "groups": {k: list(m) for k, m in self.members},
+            "volume_dirs": [str(p) for p in self.volume_dirs],
             "regions": [
                 {
                     "key": r.key,
@@ -240,6 +251,7 @@ def load_atlas_dir(path: str | Path) -> Atlas:
         citation=meta.get("citation", ""),
         aliases=tuple(meta.get("aliases", ())),
         label_dir=path if (path / "labels.json").is_file() else None,
+        volume_dirs=(path,) if (path / "subcortical.npz").is_file() else (),
     )
 
 

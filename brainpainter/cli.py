@@ -129,6 +129,14 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str, size: s
                    "on the template's surface).")
 @click.option("--config", "config", type=click.Path(path_type=Path, dir_okay=False), default=None,
               help="Region-group TOML file (a base atlas and named groups of its regions).")
+@click.option("--volume", "volume", type=click.Path(path_type=Path, dir_okay=False), default=None,
+              help="Label volume (NIfTI/MGH of integer labels): one smooth mesh per label, drawn in the "
+                   "subcortical views.")
+@click.option("--lut", "lut", type=click.Path(path_type=Path, dir_okay=False), default=None,
+              help="Look-up table for --volume: FreeSurfer LUT, BIDS dseg.tsv or CSV of index,name.")
+@click.option("--space", default="MNI152NLin2009cAsym", show_default=True,
+              type=click.Choice(["MNI152NLin2009cAsym", "MNI152NLin6Asym", "fsaverage", "template"]),
+              help="Space of --volume (mapped into the template's; see docs/atlases.md).")
 @click.option("--template", default="fsaverage", show_default=True,
               help="Template the label maps were made for.")
 @click.option("--title", default="", help="Human title (default: NAME).")
@@ -137,25 +145,34 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str, size: s
 @click.option("--replace", is_flag=True, help="Replace your atlas of the same name.")
 @click.option("--out", "out", type=click.Path(path_type=Path, file_okay=False), default=None,
               help="Write the atlas folder to OUT (e.g. into an atlas plugin) instead of adding it.")
-def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, template: str, title: str,
-              description: str, citation: str, replace: bool, out: Path | None) -> None:
-    """Add atlas NAME from label maps (--annot) or from region groups (--config).
+def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: Path | None, lut: Path | None,
+              space: str, template: str, title: str, description: str, citation: str, replace: bool,
+              out: Path | None) -> None:
+    """Add atlas NAME from label maps (--annot), a label volume (--volume) or region groups (--config).
 
     \b
     Examples:
       brainpainter atlas add yeo7 --annot lh=lh.Yeo2011_7Networks_N1000.annot \\
                                   --annot rh=rh.Yeo2011_7Networks_N1000.annot
       brainpainter atlas add lobes --config lobes.toml
+      brainpainter atlas add tian_s2 --volume Tian_S2.nii.gz --lut Tian_S2.csv --space MNI152NLin6Asym
     """
     import time
 
     from brainpainter import registry, user_atlases
 
-    if bool(annots) == (config is not None):
-        raise BrainPainterError("give either --annot lh=FILE --annot rh=FILE or --config FILE.toml "
-                                "(one of them)")
+    if sum([bool(annots), config is not None, volume is not None]) != 1:
+        raise BrainPainterError("give one of --annot lh=FILE --annot rh=FILE, --volume FILE --lut FILE, or "
+                                "--config FILE.toml")
+    if (volume is None) != (lut is None):
+        raise BrainPainterError("--volume and --lut go together: the look-up table names the volume's labels")
     t0 = time.perf_counter()
-    if config is not None:
+    if volume is not None:
+        from brainpainter.volumes import add_volume_atlas
+
+        folder = add_volume_atlas(name, volume, lut, space=space, template=template, title=title,
+                                  description=description, citation=citation, replace=replace, out=out)
+    elif config is not None:
         if out is not None:
             raise BrainPainterError("--out is for label maps (--annot); a config is a file you can ship "
                                     "as it is")

@@ -27,7 +27,7 @@ from brainpainter.colors import ColorLike, to_rgb
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.inputs import RegionTable, read_table
 from brainpainter.scene import RGB, RenderSettings, Scene
-from brainpainter.template import Template, load_template
+from brainpainter.template import Template, load_template, template_for
 from brainpainter.views import View, parse_views
 
 # Named groups for --hide: structure names (hemisphere-free) they cover.
@@ -121,10 +121,12 @@ class Painter:
         if not isinstance(self.template, Template):
             self.template = load_template(self.template)
         if self.atlas.label_dir is not None and self.atlas.template_labels not in self.template.label_sets:
-            # a custom or plugin atlas brings its own label set for this template
-            self.template = self.template.with_label_sets(self.atlas.label_dir)
+            # a custom or plugin atlas brings its own label set for this template (and volume meshes)
+            self.template = template_for(self.atlas, self.template)
             for hemi in ("lh", "rh"):
                 self.template.cortex(self.atlas.template_labels, hemi)  # fail now if it does not fit
+        elif self.atlas.volume_dirs:  # a volumetric atlas: its meshes are the subcortical part
+            self.template = template_for(self.atlas, self.template)
         self.scene = Scene(
             template=self.template,
             labels=self.atlas.template_labels,

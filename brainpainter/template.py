@@ -226,11 +226,49 @@ class Template:
         return Template(path=self.path, manifest=manifest, _cache=self._cache)
 
     def subcortical(self) -> LabelledMesh:
-        """All subcortical structures (names as in FreeSurfer's aseg LUT)."""
+        """All subcortical structures (names as in FreeSurfer's aseg LUT, or a volume atlas's keys)."""
         entry = self.manifest["subcortical"]
-        z = self._npz(entry["file"])
-        return LabelledMesh(z["vertices"], z["faces"], z["face_label"],
-                            tuple(s["name"] for s in entry["structures"]))
+        names = tuple(s["name"] for s in entry["structures"])
+        files = entry.get("parts", [entry["file"]])
+        arrays = [self._npz(f) for f in files]
+        if len(arrays) == 1:
+            z = arrays[0]
+            return LabelledMesh(z["vertices"], z["faces"], z["face_label"], names)
+        verts, faces, labels, n_v, n_l = [], [], [], 0, 0
+        for z in arrays:
+            verts.append(z["vertices"])
+            faces.append(z["faces"] + n_v)
+            labels.append(z["face_label"] + n_l)
+            n_v += len(z["vertices"])
+            n_l += int(z["face_label"].max()) + 1 if len(z["face_label"]) else 0
+        return LabelledMesh(np.concatenate(verts), np.concatenate(faces).astype(np.int32),
+                            np.concatenate(labels).astype(np.int16), names)
+
+    def with_volumes(self, folders: list[Path] | tuple[Path, ...]) -> Template:
+        """This template with the meshes of volumetric atlases as its subcortical part.
+
+        Each folder holds ``atlas.json`` and ``subcortical.npz`` written by
+        :func:`brainpainter.volumes.build_volume_atlas` for this template; its
+        structures replace the template's own (aseg) ones, several folders are
+        drawn together.
+        """
+        structures, parts = [], []
+        for folder in folders:
+            folder = Path(folder)
+            try:
+                meta = json.loads((folder / "atlas.json").read_text(encoding="utf-8"))
+            except (OSError, ValueError) as exc:
+                raise BrainPainterError(f"cannot read volume atlas {folder}: {exc}") from None
+            if meta.get("template") != self.name:
+                raise BrainPainterError(
+                    f"the volume atlas in {folder} was made for template {meta.get('template')!r}, not "
+                    f"{self.name!r}; render with --template {meta.get('template')} or add it again with "
+                    f"--template {self.name}.")
+            structures.extend({"name": s["name"]} for s in meta["structures"])
+            parts.append(str((folder / "subcortical.npz").absolute()))
+        manifest = dict(self.manifest)
+        manifest["subcortical"] = {"file": parts[0], "parts": parts, "structures": structures}
+        return Template(path=self.path, manifest=manifest, _cache=self._cache)
 
     def glass(self, hemi: str) -> tuple[np.ndarray, np.ndarray]:
         """Glass-brain hull of one hemisphere: ``(vertices (n, 3), faces (m, 3))``."""
@@ -244,6 +282,21 @@ class Template:
 
     def files(self) -> list[Path]:
         return sorted(p for p in self.path.iterdir() if p.is_file())
+
+
+def template_for(atlas, template: Template) -> Template:
+    """`template` with what `atlas` brings: its cortex label set overlay and its volume meshes.
+
+    Parameters
+    ----------
+    atlas : brainpainter.atlas.Atlas
+    template : Template
+    """
+    if atlas.label_dir is not None and atlas.template_labels not in template.label_sets:
+        template = template.with_label_sets(atlas.label_dir)
+    if atlas.volume_dirs:
+        template = template.with_volumes(atlas.volume_dirs)
+    return template
 
 
 def load_template(name_or_path: str | Path = "fsaverage") -> Template:

@@ -274,13 +274,11 @@ def check_atlas(atlas: Any, template: str | Path = "fsaverage") -> dict[str, Any
     from brainpainter import registry
     from brainpainter.atlas import Atlas
     from brainpainter.render import render
-    from brainpainter.template import load_template
+    from brainpainter.template import load_template, template_for
 
     a: Atlas = registry.atlases.get(atlas) if isinstance(atlas, str) else atlas
     problems: list[str] = []
-    tpl = load_template(template)
-    if a.template_labels not in tpl.label_sets and a.label_dir is not None:
-        tpl = tpl.with_label_sets(a.label_dir)
+    tpl = template_for(a, load_template(template))
     if a.template_labels not in tpl.label_sets:
         raise AssertionError(f"atlas {a.name!r}: template {tpl.name!r} has no label set "
                              f"{a.template_labels!r} (it has {tpl.label_sets}) and the atlas brings none "
