@@ -252,11 +252,16 @@ def read_volume(path: str | Path) -> LabelVolume:
     if data.ndim != 3:
         raise BrainPainterError(f"{path} has shape {data.shape}; a label volume is 3-D (one label per voxel)")
     if not np.issubdtype(data.dtype, np.integer):
-        rounded = np.rint(data)
-        if not np.allclose(data, rounded):
+        # labels saved as floats (sometimes through an 8-bit rescale: 0.988, 1.976, ...) are rounded when
+        # every distinct value is within 0.1 of an integer and no two round to the same one
+        values = np.unique(data[np.isfinite(data)])
+        rounded = np.rint(values)
+        off = np.abs(values - rounded).max(initial=0)
+        if (len(values) > 65535 or not np.isfinite(data).all() or off > 0.1
+                or len(np.unique(rounded)) != len(values)):
             raise BrainPainterError(f"{path} holds non-integer values ({data.dtype}); a label volume holds "
                                     "integer labels (a probability map must be thresholded first)")
-        data = rounded
+        data = np.rint(data)
     return LabelVolume(data.astype(np.int64), np.asarray(img.affine, dtype=np.float64), path)
 
 
