@@ -67,11 +67,14 @@ def check_report(table: RegionTable, **scale_options: Any) -> dict[str, Any]:
         ``gradient``, ``cmap``, ``vmin``, ``vmax``, ``center`` as for render.
     """
     summary = table.summary()
+    origin = dict(table.atlas.sources)
     names = []
     n_suggested = 0
     for n in table.names:
         entry: dict[str, Any] = {"source": n.source, "name": n.name, "status": n.status,
                                  "regions": list(n.keys), "naming": n.naming, "reason": n.reason}
+        if origin and n.keys:  # a combined atlas: which of its atlases the name matched
+            entry["atlas"] = origin.get(n.keys[0], table.atlas.name)
         if n.status == UNMATCHED and n_suggested < MAX_SUGGESTED:
             entry.update(_closest(n.name, table))
             n_suggested += 1
@@ -143,7 +146,8 @@ def format_report(report: dict[str, Any]) -> str:
     out.append(f"\nregions {len(regions)} name(s) set {report['n_regions_with_value']} of "
                f"{report['n_regions_in_atlas']} {a['name']} regions:")
     for n in regions:
-        out.append(f"    {n['name']:<40} -> {', '.join(n['regions'])}  [{n['naming']}]")
+        out.append(f"    {n['name']:<40} -> {', '.join(n['regions'])}  [{n['naming']}]"
+                   + (f"  ({n['atlas']})" if "atlas" in n else ""))
     ignored = [n for n in report["names"] if n["status"] == "ignored"]
     if ignored:
         out.append(f"\nnot regions ({len(ignored)}), set aside:")

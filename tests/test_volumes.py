@@ -270,3 +270,81 @@ def test_float_labels_are_rounded_but_a_probability_map_is_refused(tmp_path):
     nib.save(nib.Nifti1Image(data, np.eye(4)), tmp_path / "prob.nii.gz")
     with pytest.raises(BrainPainterError, match="holds non-integer values"):
         read_volume(tmp_path / "prob.nii.gz")
+
+
+# -- combined atlases ---------------------------------------------------------------------------------
+@pytest.fixture
+def balls(tmp_path) -> str:
+    vol = write_volume(tmp_path / "balls.nii.gz")
+    lut = tmp_path / "lut.csv"
+    lut.write_text("1,ball-lh\n2,ball-rh\n7,box\n")
+    from brainpainter.volumes import add_volume_atlas
+
+    add_volume_atlas("balls", vol, lut, space="fsaverage")
+    return "balls"
+
+
+def test_cortical_and_volumetric_atlases_combine_into_one(balls, tmp_path, capsys):
+    from brainpainter.atlas import get_atlas
+    from brainpainter.cli import main
+
+    combo = get_atlas("dk+balls")
+    assert combo.name == "dk+balls" and combo.template_labels == "dk"
+    assert len(combo.cortical("lh")) == 34 and [r.key for r in combo.subcortical()] == [
+        "Left-ball", "Right-ball", "box"]  # the volume's structures replace dk's aseg ones
+    assert dict(combo.sources)["Left-insula"] == "dk" and dict(combo.sources)["box"] == "balls"
+    table = tmp_path / "t.csv"
+    table.write_text("Image-name-unique,lh_insula_thickness,Left-ball,box\nA,1,2,3\n")
+    with pytest.raises(SystemExit) as exc:
+        main(["check", str(table), "--atlas", "dk+balls"])
+    out = capsys.readouterr().out
+    assert exc.value.code == 0
+    assert "-> Left-insula  [FreeSurfer stats table]  (dk)" in out
+    assert "-> box  [BrainPainter]  (balls)" in out
+    with stand_in() as renderer:
+        result = CliRunner().invoke(cli, ["render", str(table), "--atlas", "dk+balls", "--out",
+                                          str(tmp_path / "out"), "--renderer", renderer, "--views",
+                                          "lateral-left,subcortical", "--size", "40x30", "-q"])
+        assert result.exit_code == 0, result.output
+        (c_cortex, v1), (_, v2) = StandInRenderer.calls[-2:]
+    assert (v1.content, v2.content) == ("cortex", "subcortical")
+    assert c_cortex["Left-insula"] != c_cortex["Left-ball"] != c_cortex["box"]
+    pngs = sorted(p.name for p in (tmp_path / "out").glob("*.png"))
+    assert pngs == ["A_lateral-left.png", "A_subcortical.png"]
+
+
+@pytest.mark.parametrize("name, message", [
+    ("dk+destrieux", "without volume meshes"),
+    ("dk+nothere", "'atlas' must be one of"),
+])
+def test_bad_combinations_are_one_line_errors(balls, name, message):
+    from brainpainter.atlas import get_atlas
+
+    with pytest.raises(BrainPainterError, match=message) as err:
+        get_atlas(name)
+    assert "\n" not in str(err.value)
+
+
+def test_the_same_region_in_two_volumes_is_refused(balls):
+    from brainpainter.atlas import get_atlas
+
+    with pytest.raises(BrainPainterError, match="region 'Left-ball' is in both 'balls' and 'balls'"):
+        get_atlas("balls+balls")
+
+
+@pytest.mark.render
+def test_volume_atlas_renders_in_place_inside_the_glass_brain(balls):
+    colors = {"Left-ball": (1.0, 0.0, 0.0), "Right-ball": (0.0, 0.8, 0.0), "box": (0.0, 0.0, 1.0)}
+    result = render({"Left-ball": 0.0, "Right-ball": 1.0, "box": 2.0}, "balls", views="subcortical-dorsal",
+                    gradient=list(colors.values()), width=200, height=160, shading="flat", quality="fast",
+                    glass_opacity=0.0, progress=False)
+    img = next(iter(result.images.values()))[..., :3].astype(int)
+    centres = {}
+    for key, rgb in colors.items():
+        mask = (np.abs(img - np.round(np.array(rgb) * 255)).max(-1) <= 2)
+        assert mask.sum() > 30, key
+        rows, cols = np.nonzero(mask)
+        centres[key] = (rows.mean(), cols.mean())
+    # seen from above, anterior up: the left ball is on the image's left, the box (anterior) is higher
+    assert centres["Left-ball"][1] < centres["box"][1] < centres["Right-ball"][1]
+    assert centres["box"][0] < min(centres["Left-ball"][0], centres["Right-ball"][0])
