@@ -4,7 +4,9 @@ The original BrainPainter's "Custom" atlas drew several DK regions as one user
 label (a lobe). Here that is a small TOML file::
 
     [atlas]
-    base = "dk"                  # required: any installed or user atlas
+    base = "dk"                  # required: any installed or user atlas, or a combination of a
+                                 # cortical and volumetric atlases ("schaefer400_7n+tian_s2"; then
+                                 # [groups] may be left out)
     name = "lobes"               # optional (default: the file name); 'atlas add NAME' overrides it
     title = "Lobes"              # optional; also description, citation
     ungrouped = "keep"           # "keep" (default): regions in no group stay regions of their own;
@@ -98,7 +100,6 @@ def _palette(n: int, avoid: list[tuple[int, int, int]] = ()) -> list[tuple[int, 
 
 def atlas_from_config(config: dict[str, Any], source: str, name: str) -> Atlas:
     """Build a group atlas from a parsed config (see the module docstring for the schema)."""
-    from brainpainter import registry
     from brainpainter.colors import to_rgb
 
     extra = sorted(set(config) - {"atlas", "groups"})
@@ -114,13 +115,15 @@ def atlas_from_config(config: dict[str, Any], source: str, name: str) -> Atlas:
     if "base" not in meta:
         raise _fail(source, '[atlas] needs base = "ATLAS", the atlas whose regions are grouped (e.g. "dk")')
     try:
-        base: Atlas = registry.atlases.get(str(meta["base"]))
+        from brainpainter.atlas import get_atlas
+
+        base: Atlas = get_atlas(str(meta["base"]))  # "schaefer400_7n+tian_s2" combines atlases
     except BrainPainterError as exc:
         raise _fail(source, f"[atlas] base: {exc}") from None
     ungrouped = meta.get("ungrouped", "keep")
     if ungrouped not in UNGROUPED:
         raise _fail(source, str(choice_error("[atlas] ungrouped", ungrouped, UNGROUPED)))
-    if not groups:
+    if not groups and "+" not in str(meta["base"]):
         raise _fail(source, "[groups] is empty; add e.g. frontal = [\"superiorfrontal\", ...]")
 
     by_key = {r.key.lower(): r for r in base.regions}
@@ -243,4 +246,6 @@ def atlas_from_config(config: dict[str, Any], source: str, name: str) -> Atlas:
         citation=str(meta.get("citation") or base.citation),
         label_dir=base.label_dir,
         members=tuple(members_out),
+        volume_dirs=base.volume_dirs,
+        sources=tuple((k, v) for k, v in base.sources if k in {r.key for r in regions}),
     )

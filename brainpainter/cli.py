@@ -162,8 +162,8 @@ def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: P
     from brainpainter import registry, user_atlases
 
     if sum([bool(annots), config is not None, volume is not None]) != 1:
-        raise BrainPainterError("give one of --annot lh=FILE --annot rh=FILE, --volume FILE --lut FILE, or "
-                                "--config FILE.toml")
+        raise BrainPainterError("give either --annot lh=FILE --annot rh=FILE, --volume FILE --lut FILE or "
+                                "--config FILE.toml (one of them)")
     if (volume is None) != (lut is None):
         raise BrainPainterError("--volume and --lut go together: the look-up table names the volume's labels")
     t0 = time.perf_counter()

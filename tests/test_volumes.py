@@ -348,3 +348,22 @@ def test_volume_atlas_renders_in_place_inside_the_glass_brain(balls):
     # seen from above, anterior up: the left ball is on the image's left, the box (anterior) is higher
     assert centres["Left-ball"][1] < centres["box"][1] < centres["Right-ball"][1]
     assert centres["box"][0] < min(centres["Left-ball"][0], centres["Right-ball"][0])
+
+
+def test_a_toml_config_combines_atlases(balls, tmp_path):
+    from brainpainter.atlas_config import load_atlas_config
+
+    config = tmp_path / "combo.toml"
+    config.write_text('[atlas]\nbase = "dk+balls"\ntitle = "DK with balls"\n')
+    atlas = load_atlas_config(config)
+    assert atlas.name == "combo" and atlas.title == "DK with balls"
+    assert len(atlas.volume_dirs) == 1 and "box" in atlas.keys and "Left-insula" in atlas.keys
+    table = tmp_path / "t.csv"
+    table.write_text("Image-name-unique,Left-insula,box\nA,1,2\n")
+    with stand_in() as renderer:
+        result = CliRunner().invoke(cli, ["render", str(table), "--atlas-config", str(config), "--out",
+                                          str(tmp_path / "out"), "--renderer", renderer, "--views",
+                                          "subcortical", "--size", "40x30", "-q"])
+        assert result.exit_code == 0, result.output
+        colors, _ = StandInRenderer.calls[-1]
+    assert set(colors) >= {"Left-ball", "box"}
