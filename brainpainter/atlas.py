@@ -90,6 +90,9 @@ class Atlas:
     sources : tuple of (str, str)
         For an atlas combined from several (``schaefer400_7n+tian_s2``): each
         region key and the atlas it comes from. Empty otherwise.
+    template_dir : Path or None
+        A template of the atlas's own (a volume atlas of a brain without
+        cortical surfaces, e.g. a mouse), used unless another template is named.
     """
 
     name: str
@@ -103,6 +106,7 @@ class Atlas:
     members: tuple[tuple[str, tuple[str, ...]], ...] = ()
     volume_dirs: tuple[Path, ...] = ()
     sources: tuple[tuple[str, str], ...] = ()
+    template_dir: Path | None = None
     _by_key: dict[str, Region] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -252,6 +256,7 @@ def load_atlas_dir(path: str | Path) -> Atlas:
         aliases=tuple(meta.get("aliases", ())),
         label_dir=path if (path / "labels.json").is_file() else None,
         volume_dirs=(path,) if (path / "subcortical.npz").is_file() else (),
+        template_dir=path / "template" if (path / "template" / "manifest.json").is_file() else None,
     )
 
 

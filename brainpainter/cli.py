@@ -137,6 +137,9 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str, size: s
 @click.option("--space", default="MNI152NLin2009cAsym", show_default=True,
               type=click.Choice(["MNI152NLin2009cAsym", "MNI152NLin6Asym", "fsaverage", "template"]),
               help="Space of --volume (mapped into the template's; see docs/atlases.md).")
+@click.option("--own-template", is_flag=True,
+              help="With --volume: the volume is a brain of its own (e.g. a mouse atlas): make a template of "
+                   "its labels only (no cortex) in the volume's coordinates; --space is not used.")
 @click.option("--template", default="fsaverage", show_default=True,
               help="Template the label maps were made for.")
 @click.option("--title", default="", help="Human title (default: NAME).")
@@ -146,8 +149,8 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str, size: s
 @click.option("--out", "out", type=click.Path(path_type=Path, file_okay=False), default=None,
               help="Write the atlas folder to OUT (e.g. into an atlas plugin) instead of adding it.")
 def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: Path | None, lut: Path | None,
-              space: str, template: str, title: str, description: str, citation: str, replace: bool,
-              out: Path | None) -> None:
+              space: str, own_template: bool, template: str, title: str, description: str, citation: str,
+              replace: bool, out: Path | None) -> None:
     """Add atlas NAME from label maps (--annot), a label volume (--volume) or region groups (--config).
 
     \b
@@ -164,6 +167,9 @@ def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: P
     if sum([bool(annots), config is not None, volume is not None]) != 1:
         raise BrainPainterError("give either --annot lh=FILE --annot rh=FILE, --volume FILE --lut FILE or "
                                 "--config FILE.toml (one of them)")
+    if own_template and volume is None:
+        raise BrainPainterError("--own-template goes with --volume FILE --lut FILE (a brain made of volume "
+                                "labels)")
     if (volume is None) != (lut is None):
         raise BrainPainterError("--volume and --lut go together: the look-up table names the volume's labels")
     t0 = time.perf_counter()
@@ -171,7 +177,8 @@ def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: P
         from brainpainter.volumes import add_volume_atlas
 
         folder = add_volume_atlas(name, volume, lut, space=space, template=template, title=title,
-                                  description=description, citation=citation, replace=replace, out=out)
+                                  description=description, citation=citation, replace=replace, out=out,
+                                  own_template=own_template)
     elif config is not None:
         if out is not None:
             raise BrainPainterError("--out is for label maps (--annot); a config is a file you can ship "

@@ -118,6 +118,8 @@ class Painter:
             self.atlas = load_atlas_config(self.atlas_config)
         if isinstance(self.atlas, str):
             self.atlas = get_atlas(self.atlas)
+        if self.atlas.template_dir is not None and self.template == "fsaverage":
+            self.template = str(self.atlas.template_dir)  # an atlas with a brain of its own (volume only)
         if not isinstance(self.template, Template):
             self.template = load_template(self.template)
         if self.atlas.label_dir is not None and self.atlas.template_labels not in self.template.label_sets:

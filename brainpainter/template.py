@@ -141,6 +141,12 @@ class Template:
                 f"template {self.name!r} has no label set {labels!r}; it has {self.label_sets}. "
                 "Build the template with that atlas (brainpainter template build --atlas ...)."
             )
+        if hemi not in self.manifest["labels"][labels].get("cortex", {}):
+            # a template without this hemisphere's cortex (made of volume labels only): an empty mesh
+            return CortexMesh(hemi=hemi, labels=labels, faces=np.zeros((0, 3), np.int32),
+                              face_label=np.zeros(0, np.int16), label_names=(),
+                              vertices={s: np.zeros((0, 3), np.float32) for s in self.surfaces},
+                              source_vertex=np.zeros(0, np.int32))
         entry = self.manifest["labels"][labels]["cortex"][hemi]
         z = self._npz(entry["file"])
         if "base" in entry:  # an overlay: labels for the vertices or faces of one of our own meshes

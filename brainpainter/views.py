@@ -66,6 +66,7 @@ PRESETS: dict[str, View] = {
         View("subcortical", "subcortical", (), 160.0, 20.0, glass=("rh",)),
         View("subcortical-left", "subcortical", (), 180.0, 0.0, glass=("rh",)),
         View("subcortical-dorsal", "subcortical", (), 0.0, 90.0, glass=_BOTH),
+        View("subcortical-ventral", "subcortical", (), 0.0, -90.0, glass=_BOTH),
     )
 }
 DEFAULT_VIEWS = ("lateral-left", "medial-left", "subcortical")

@@ -265,11 +265,44 @@ def read_volume(path: str | Path) -> LabelVolume:
     return LabelVolume(data.astype(np.int64), np.asarray(img.affine, dtype=np.float64), path)
 
 
+def write_own_template(folder: Path, name: str, volume: str, structures: list) -> dict:
+    """Write ``folder/template/manifest.json``: a template made only of the volume's meshes (no cortex).
+
+    Its subcortical part is the atlas's ``subcortical.npz``; it has no cortex
+    and no glass brain, so only the subcortical views draw it (each framed to
+    the meshes): ``subcortical-dorsal``, ``subcortical-left``,
+    ``subcortical-ventral``, ``subcortical``.
+    """
+    from brainpainter.template import FORMAT, FORMAT_VERSION
+
+    points = np.concatenate([s.vertices for s in structures])
+    manifest = {
+        "format": FORMAT, "format_version": FORMAT_VERSION, "name": name,
+        "source": {"subject": name, "volume": volume, "builder": "brainpainter.volumes"},
+        "space": "world coordinates of the label volume (mm, RAS)", "surfaces": ["pial"],
+        "labels": {"none": {"source": "no cortical surfaces: a template of volume labels only",
+                            "regions": [], "cortex": {}}},
+        "subcortical": {"file": f"../{VOLUME_FILE}", "source": volume,
+                        "structures": [{"name": s.name, "index": s.index} for s in structures]},
+        "glass": {},
+        "bounds": {"pial": [points.min(axis=0).round(4).tolist(), points.max(axis=0).round(4).tolist()]},
+    }
+    (folder / "template").mkdir()
+    text = json.dumps(manifest, indent=1) + "\n"
+    (folder / "template" / "manifest.json").write_text(text, encoding="utf-8")
+    return manifest
+
+
 def build_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, space: str = "MNI152NLin2009cAsym",
                        template: str = "fsaverage", title: str = "", description: str = "",
                        citation: str = "", target_fraction: float = 0.3, out: Path,
-                       progress: Callable[[str], None] | None = None) -> dict:
+                       own_template: bool = False, progress: Callable[[str], None] | None = None) -> dict:
     """Mesh every label of `volume` named in `lut` and write an atlas folder into `out`.
+
+    With `own_template` the volume is a brain of its own (any species, no
+    cortical surfaces): the meshes stay in the volume's world coordinates and
+    the folder gets a template made of them (:func:`write_own_template`);
+    `space` and `template` are then not used.
 
     Parameters
     ----------
@@ -296,8 +329,12 @@ def build_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, space:
     from brainpainter_builder.subcortical import build_structures, merge_structures
     from brainpainter_builder.writer import save_npz
 
-    tpl = load_template(template)
-    to_template = space_transform(space, tpl)
+    if own_template:
+        space, tpl_name, label_set, to_template = "template", name, "none", np.eye(4)
+    else:
+        tpl = load_template(template)
+        to_template = space_transform(space, tpl)
+        tpl_name, label_set = tpl.name, ("dk" if "dk" in tpl.label_sets else tpl.label_sets[0])
     vol = read_volume(volume)
     entries = read_lut(lut)
     present = set(np.unique(vol.data).tolist()) - {0}
@@ -318,16 +355,18 @@ def build_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, space:
                                   source=vol.source.name)
     save_npz(out / VOLUME_FILE, merge_structures(structures))
     write_regions_tsv(regions, out / "regions.tsv")
+    if own_template:
+        write_own_template(out, name, vol.source.name, structures)
     source_voxel = abs(float(np.linalg.det(vol.affine[:3, :3])))
     meta = {
         "name": name,
         "title": title or name,
         "kind": "volume",
-        "template_labels": "dk" if "dk" in tpl.label_sets else tpl.label_sets[0],
-        "template": tpl.name,
+        "template_labels": label_set,
+        "template": tpl_name,
         "description": description or (
             f"Label volume {vol.source.name} ({space}), {len(regions)} structures meshed in template "
-            f"{tpl.name!r}."),
+            f"{tpl_name!r}" + (" (its own: no cortex)." if own_template else ".")),
         "citation": citation,
         "aliases": [],
         "source": {
@@ -336,7 +375,7 @@ def build_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, space:
             "to_template": to_template.round(6).tolist(),
             "transform_note": {
                 "fsaverage": "MNI305 = fsaverage coordinates; used as they are",
-                "template": "volume already in the template's coordinates",
+                "template": "volume already in the template's coordinates (or a template of its own)",
                 "MNI152NLin6Asym": "FreeSurfer's MNI152->MNI305 affine (wiki CoordinateSystems 8b)",
                 "MNI152NLin2009cAsym": "FreeSurfer's MNI152->MNI305 affine (wiki CoordinateSystems 8b), made "
                                        "for MNI152NLin6Asym: approximate for 2009cAsym (nonlinear, few mm)",

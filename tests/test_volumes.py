@@ -367,3 +367,42 @@ def test_a_toml_config_combines_atlases(balls, tmp_path):
         assert result.exit_code == 0, result.output
         colors, _ = StandInRenderer.calls[-1]
     assert set(colors) >= {"Left-ball", "box"}
+
+
+# -- a brain of volume labels only (any species) ---------------------------------------------------------
+@pytest.mark.render
+def test_a_volume_only_template_renders_in_dorsal_lateral_and_ventral_views(tmp_path):
+    vol = write_volume(tmp_path / "mouse.nii.gz")
+    lut = tmp_path / "mouse_dseg.tsv"
+    lut.write_text("index\tname\tcolor\n1\tball-lh\t#ff0000\n2\tball-rh\t#00cc00\n7\tbox\t#0000ff\n")
+    result = CliRunner().invoke(cli, ["atlas", "add", "mouse", "--volume", str(vol), "--lut", str(lut),
+                                      "--own-template"])
+    assert result.exit_code == 0, result.output
+    atlas = registry.atlases.get("mouse")
+    assert atlas.template_dir is not None and atlas.cortical() == []
+    tpl = load_template(str(atlas.template_dir))
+    assert tpl.label_sets == ["none"] and len(tpl.cortex("none", "lh").faces) == 0
+    out = tmp_path / "out"
+    res = render({"Left-ball": 0.0, "Right-ball": 1.0, "box": 2.0}, "mouse", out=out,
+                 views="subcortical-dorsal,subcortical-left,subcortical-ventral",
+                 gradient=["#ff0000", "#00cc00", "#0000ff"], width=160, height=120, shading="flat",
+                 quality="fast", progress=False)
+    assert res.manifest["settings"]["template"] == "mouse"
+    from PIL import Image
+
+    def centre(view: str, rgb) -> np.ndarray:
+        img = np.asarray(Image.open(out / f"1_{view}.png").convert("RGB")).astype(int)
+        rows, cols = np.nonzero(np.abs(img - rgb).max(-1) <= 2)
+        assert len(rows) > 20, (view, rgb)
+        assert img[0, 0].tolist() == [255, 255, 255]
+        return np.array([rows.mean(), cols.mean()])
+
+    red, green, blue = (255, 0, 0), (0, 204, 0), (0, 0, 255)
+    views = ("subcortical-dorsal", "subcortical-ventral")
+    d = {v: {c: centre(v, c) for c in (red, green, blue)} for v in views}
+    assert d["subcortical-dorsal"][red][1] < d["subcortical-dorsal"][green][1]  # from above: left on the left
+    assert d["subcortical-ventral"][red][1] > d["subcortical-ventral"][green][1]  # from below: mirrored
+    for v in ("subcortical-dorsal", "subcortical-ventral"):  # anterior (the box) up
+        assert d[v][blue][0] < d[v][red][0]
+    lateral = centre("subcortical-left", red)  # the left ball faces the camera; framed in the image
+    assert 20 < lateral[0] < 100 and 20 < lateral[1] < 140
