@@ -39,8 +39,9 @@ Look-up tables
 --------------
 :func:`read_lut` reads FreeSurfer colour tables (``index name R G B A``, ``#``
 comments), BIDS ``dseg.tsv`` (``index``, ``name`` and optional ``color``
-columns) and CSV files with ``index,name`` (optional header, optional third
-column ``#rrggbb``). Labels without a colour get one from matplotlib's
+columns), CSV files with ``index,name`` (optional header, optional third
+column ``#rrggbb``) and plain lists of one name per line (label = line
+number, as Tian's ``*_label.txt``). Labels without a colour get one from matplotlib's
 ``tab20`` cycle. The hemisphere is read from the name (``Left-``, ``lh_``,
 ``-lh``, ``_L``, ...): ``hippocampus_anterior-lh`` is the left region
 ``hippocampus_anterior`` (key ``Left-hippocampus_anterior``); the name as
@@ -137,6 +138,9 @@ def read_lut(path: str | Path) -> list[LutEntry]:
         entries = _read_dseg(path, lines)
     elif "," in first or ";" in first:
         entries = _read_csv(path, lines, "," if "," in first else ";")
+    elif all(len(ln.split()) == 1 and not re.fullmatch(r"-?\d+", ln.strip()) for ln in lines):
+        # one name per line, label = line number (e.g. Tian's Tian_Subcortex_S2_3T_label.txt)
+        entries = [LutEntry(i, ln.strip()) for i, ln in enumerate(lines, start=1)]
     else:
         for i, ln in enumerate(lines, start=1):
             parts = ln.split()

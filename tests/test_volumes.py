@@ -63,6 +63,9 @@ def test_freesurfer_lut_dseg_tsv_and_csv_are_read(tmp_path):
         (1, "Ball_L", (255, 0, 0)), (2, "Ball_R", (0, 255, 0)), (7, "Midline-Box", None)]
     assert [(e.index, e.name) for e in read_lut(csv)] == [(1, "ball-lh"), (2, "ball-rh"), (7, "midline_box")]
     assert [(e.index, e.name, e.color) for e in read_lut(header_csv)] == [(1, "lh_ball", (255, 0, 0))]
+    names = tmp_path / "Tian_Subcortex_S1_3T_label.txt"
+    names.write_text("HIP-rh\nAMY-rh\nHIP-lh\n")
+    assert [(e.index, e.name) for e in read_lut(names)] == [(1, "HIP-rh"), (2, "AMY-rh"), (3, "HIP-lh")]
 
 
 @pytest.mark.parametrize("text, message", [
