@@ -79,8 +79,9 @@ def atlas_list(as_json: bool) -> None:
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
 @click.option("--image", type=click.Path(path_type=Path, dir_okay=False), default=None,
               help="Also draw a reference PNG: every region in its colour-table colour, views side by side.")
-@click.option("--views", default="lateral-left,medial-left,subcortical", show_default=True,
-              help="Views of the reference image.")
+@click.option("--views", default=None,
+              help="Views of the reference image [default: lateral-left,medial-left,subcortical; "
+                   "subcortical,subcortical-dorsal for an atlas without cortical regions].")
 @click.option("--size", default="800x600", show_default=True, help="Size of each view, WIDTHxHEIGHT.")
 @click.option("--template", default="fsaverage", show_default=True, help="Template name or folder.")
 @click.option("--surface", default="pial", show_default=True,
@@ -88,7 +89,7 @@ def atlas_list(as_json: bool) -> None:
 @click.option("--quality", default="default", show_default=True,
               type=click.Choice(["fast", "default", "high"]))
 @click.option("--renderer", default="blender", show_default=True)
-def atlas_show(name: str, as_json: bool, image: Path | None, views: str, size: str, template: str,
+def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, size: str, template: str,
                surface: str, quality: str, renderer: str) -> None:
     """Regions of atlas NAME, with hemisphere, colour and aliases; --image draws them."""
     from brainpainter.atlas import get_atlas
@@ -96,7 +97,10 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str, size: s
     a = get_atlas(name)
     if image is not None:
         from brainpainter.atlas_image import reference_image
+        from brainpainter.render import VOLUME_VIEWS
 
+        if views is None:
+            views = "lateral-left,medial-left,subcortical" if a.cortical() else ",".join(VOLUME_VIEWS)
         reference_image(a, image, views=views, size=parse_size(size), template=template, surface=surface,
                         quality=quality, renderer=renderer)
         if not as_json:

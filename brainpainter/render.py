@@ -83,6 +83,10 @@ def region_colors(values: Mapping[str, float], atlas: Atlas, scale: ColourScale)
     return atlas.expand(colors)  # a region group's colour goes to each of its member regions
 
 
+#: Default views of an atlas without cortical regions (volumetric atlases).
+VOLUME_VIEWS = ("subcortical", "subcortical-dorsal")
+
+
 @dataclass
 class Painter:
     """A loaded scene plus a renderer, reused for every image.
@@ -259,6 +263,8 @@ def prepare_run(
         atlas = get_atlas(atlas)
     make_scale(gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center,
                nan_color=nan_color, missing_color=missing_color)
+    if views is None and isinstance(atlas, Atlas) and not atlas.cortical():
+        views = VOLUME_VIEWS  # a volumetric atlas alone: its structures, not a grey cortex
     view_list = parse_views(views)
     for what, n in (("width", width), ("height", height)):
         if not 16 <= int(n) <= 8192:

@@ -30,6 +30,14 @@ NAMES = [f"schaefer{s}_{n}n" for s in range(100, 1001, 100) for n in (7, 17)] + 
 DIST = "brainpainter-atlas-schaefer-yeo"
 
 
+
+@pytest.fixture(autouse=True)
+def _fresh_registry():
+    """Atlases added by a test (into its own temporary home) are forgotten after it."""
+    registry.reset_all()
+    yield
+    registry.reset_all()
+
 @pytest.fixture(scope="module")
 def site(tmp_path_factory) -> Path:
     """The distribution as pip installs it, into a throw-away site-packages folder."""

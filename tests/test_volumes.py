@@ -31,6 +31,14 @@ REPO = Path(__file__).resolve().parents[1]
 ASEG = REPO.parent / "shared" / "data" / "freesurfer" / "subjects" / "fsaverage" / "mri" / "aseg.mgz"
 
 
+
+@pytest.fixture(autouse=True)
+def _fresh_registry():
+    """Atlases added by a test (into its own temporary home) are forgotten after it."""
+    registry.reset_all()
+    yield
+    registry.reset_all()
+
 def write_volume(path: Path, voxel: float = 2.0) -> Path:
     """A 3-label volume in MNI305 millimetres: a left and a right ball and a midline box."""
     n = 40
