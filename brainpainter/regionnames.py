@@ -24,6 +24,7 @@ FreeSurfer stats tables          ``lh_insula_thickness``, ``lh_insula_area``
 ENIGMA                           ``L_insula``, ``L_insula_thickavg``,
                                  ``Lhippo``, ``Rthal``, ``LLatVent``
 ggseg                            ``lh_insula``
+atlas label list (Schaefer)      ``7Networks_LH_Vis_1`` (a ``_LH_`` token)
 ==============================  =========================================
 """
 
@@ -224,8 +225,10 @@ def _hemi_free_names(region: Region, extra: dict[str, list[tuple[str, str]]]) ->
     full: list[tuple[str, str]] = []
     for alias in region.aliases:
         hemi, _ = _split_affix(normalise(alias))
-        if hemi is not None or _embedded_hemi(alias) == region.hemi:
+        if hemi is not None:
             full.append((alias, "FreeSurfer look-up table"))
+        elif _embedded_hemi(alias) == region.hemi:
+            full.append((alias, "atlas label list"))  # Schaefer/CBIG, nilearn: 7Networks_LH_Vis_1
         else:
             free.append((alias, "FreeSurfer look-up table", 2))
     for alias, source in extra.get(normalise(region.name), []):
