@@ -256,12 +256,12 @@ def read_volume(path: str | Path) -> LabelVolume:
     if data.ndim != 3:
         raise BrainPainterError(f"{path} has shape {data.shape}; a label volume is 3-D (one label per voxel)")
     if not np.issubdtype(data.dtype, np.integer):
-        # labels saved as floats (sometimes through an 8-bit rescale: 0.988, 1.976, ...) are rounded when
-        # every distinct value is within 0.1 of an integer and no two round to the same one
+        # labels saved as floats, sometimes through an 8-bit rescale (0.988, 1.976, ...; 211.27, 212.24,
+        # ... with a step under 1), are rounded when no two distinct values round to the same integer;
+        # a probability map (many values between two integers) is refused
         values = np.unique(data[np.isfinite(data)])
         rounded = np.rint(values)
-        off = np.abs(values - rounded).max(initial=0)
-        if (len(values) > 65535 or not np.isfinite(data).all() or off > 0.1
+        if (len(values) > 65535 or not np.isfinite(data).all()
                 or len(np.unique(rounded)) != len(values)):
             raise BrainPainterError(f"{path} holds non-integer values ({data.dtype}); a label volume holds "
                                     "integer labels (a probability map must be thresholded first)")

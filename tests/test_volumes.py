@@ -275,8 +275,9 @@ def test_float_labels_are_rounded_but_a_probability_map_is_refused(tmp_path):
 
     data = np.zeros((4, 4, 4), dtype=np.float32)
     data[1, 1, 1], data[2, 2, 2] = 0.9882353, 1.9764706  # labels 1 and 2 through an 8-bit rescale
+    data[3, 2, 1], data[1, 2, 3] = 218.98824, 219.95294  # labels 219, 220 (Brainnetome's rescale)
     nib.save(nib.Nifti1Image(data, np.eye(4)), tmp_path / "float.nii.gz")
-    assert sorted(np.unique(read_volume(tmp_path / "float.nii.gz").data).tolist()) == [0, 1, 2]
+    assert sorted(np.unique(read_volume(tmp_path / "float.nii.gz").data).tolist()) == [0, 1, 2, 219, 220]
     data[3, 3, 3] = 0.5
     nib.save(nib.Nifti1Image(data, np.eye(4)), tmp_path / "prob.nii.gz")
     with pytest.raises(BrainPainterError, match="holds non-integer values"):
