@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import os
 import re
 import tempfile
@@ -82,7 +81,9 @@ def write_png(path: Path, image: np.ndarray, metadata: dict[str, str] | None = N
 
 
 def write_json(path: Path, obj: object) -> None:
-    atomic_write_bytes(path, (json.dumps(obj, indent=2, sort_keys=False) + "\n").encode())
+    from brainpainter.transaction import json_bytes
+
+    atomic_write_bytes(path, json_bytes(obj))
 
 
 class PngWriter:
@@ -104,6 +105,11 @@ class PngWriter:
         while len(self._pending) >= self._max:
             self._pending.popleft().result()
         self._pending.append(self._pool.submit(write_png, path, image, metadata))
+
+    def wait(self) -> None:
+        """Wait until every queued image is written; re-raise the first error."""
+        while self._pending:
+            self._pending.popleft().result()
 
     def __enter__(self) -> PngWriter:
         return self
