@@ -414,15 +414,14 @@ def _sheet_rows(ws: Any, source: str) -> list[list[Cell]]:
     rows: list[list[Cell]] = []
     cells = 0
     for row in ws.iter_rows(values_only=True):
+        cells += len(row)
         if len(rows) >= MAX_ROWS or cells > MAX_CELLS:
             raise BrainPainterError(
                 f"input {source!r} sheet {ws.title!r} has more than {MAX_ROWS} rows or {MAX_CELLS} cells; "
                 "a region table has one row per image (or per region and image). Split the workbook or "
                 "export the sheet as CSV."
             )
-        trimmed = _trim([_xl_cell(v) for v in row])
-        cells += len(row)
-        rows.append(trimmed)
+        rows.append(_trim([_xl_cell(v) for v in row]))
     return rows
 
 

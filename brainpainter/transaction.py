@@ -104,18 +104,42 @@ def folder_lock(folder: Path, what: str = "output folder") -> Iterator[None]:
         os.close(fd)  # releases the lock
 
 
-def make_folder(folder: Path, what: str = "output folder") -> Path:
-    """Create `folder` (and parents); a one-line error when that is impossible."""
+def make_folder(folder: Path, what: str = "output folder", created: list[Path] | None = None) -> Path:
+    """Create `folder` (and parents); a one-line error when that is impossible.
+
+    Folders made are appended to `created` (outermost first); on failure the
+    ones made so far are removed again.
+    """
     folder = Path(folder)
     if str(folder) in ("", "."):
         folder = Path.cwd()
-    if folder.exists() and not folder.is_dir():
-        raise BrainPainterError(f"{what} {str(folder)!r} exists and is not a folder; give a folder path.")
+    made: list[Path] = []
     try:
-        folder.mkdir(parents=True, exist_ok=True)
+        if folder.is_dir():
+            return folder
+        if folder.exists() or folder.is_symlink():
+            raise BrainPainterError(f"{what} {str(folder)!r} exists and is not a folder; give a folder path.")
+        missing = [folder]
+        while not missing[-1].parent.exists() and missing[-1].parent != missing[-1]:
+            missing.append(missing[-1].parent)
+        for p in reversed(missing):
+            p.mkdir()
+            made.append(p)
     except OSError as exc:
+        remove_empty(made)
         raise os_error(exc, f"cannot create {what}", folder) from None
+    if created is not None:
+        created.extend(made)
     return folder
+
+
+def remove_empty(folders: list[Path]) -> None:
+    """Remove `folders` (innermost last in the list) where they are empty."""
+    for p in reversed(folders):
+        try:
+            p.rmdir()
+        except OSError:
+            break
 
 
 def remove_stale_stages(folder: Path) -> None:
@@ -423,14 +447,20 @@ class FolderTransaction:
         self.committed = False
 
     def __enter__(self) -> FolderTransaction:
-        self.out = make_folder(self.out, self.what)
-        self._lock = folder_lock(self.out, self.what)
-        self._lock.__enter__()
+        self._created: list[Path] = []
+        self.out = make_folder(self.out, self.what, self._created)
+        try:
+            self._lock = folder_lock(self.out, self.what)
+            self._lock.__enter__()
+        except BaseException:
+            remove_empty(self._created)
+            raise
         try:
             remove_stale_stages(self.out)
             self.stage = _new_stage(self.out, f"{self.what} {str(self.out)!r}")
         except BaseException:
             self._lock.__exit__(None, None, None)
+            remove_empty(self._created)
             raise
         return self
 
@@ -485,6 +515,8 @@ class FolderTransaction:
                 shutil.rmtree(self.stage, ignore_errors=True)
         finally:
             self._lock.__exit__(None, None, None)
+            if not self.committed:
+                remove_empty(self._created)  # a failed run leaves no empty output folder behind
 
 
 class FileTransaction:
@@ -505,15 +537,22 @@ class FileTransaction:
         self.tmp: Path = self.target
 
     def __enter__(self) -> FileTransaction:
-        folder = make_folder(self.target.parent if str(self.target.parent) else Path.cwd(), "output folder")
-        self._lock = folder_lock(folder, "output folder")
-        self._lock.__enter__()
+        self._created: list[Path] = []
+        self.committed = False
+        folder = make_folder(self.target.parent, "output folder", self._created)
+        try:
+            self._lock = folder_lock(folder, "output folder")
+            self._lock.__enter__()
+        except BaseException:
+            remove_empty(self._created)
+            raise
         try:
             remove_stale_stages(folder)
             self.stage = _new_stage(folder, f"output folder {str(folder)!r}")
             self.tmp = self.stage / ("output" + self.target.suffix.lower())
         except BaseException:
             self._lock.__exit__(None, None, None)
+            remove_empty(self._created)
             raise
         return self
 
@@ -529,6 +568,7 @@ class FileTransaction:
             _fsync_dir(self.target.parent)
         except OSError as exc:
             raise os_error(exc, "cannot write", self.target) from None
+        self.committed = True
         return self.target
 
     def __exit__(self, *exc: object) -> None:
@@ -537,6 +577,8 @@ class FileTransaction:
                 shutil.rmtree(self.stage, ignore_errors=True)
         finally:
             self._lock.__exit__(None, None, None)
+            if not self.committed:
+                remove_empty(self._created)
 
 
 # -- whole folders (templates, atlases) -------------------------------------------------------------
@@ -553,6 +595,13 @@ def check_replaceable(target: Path, is_ours: Callable[[Path], bool], what: str, 
     hint : str
         What to do instead.
     """
+    try:
+        _check_replaceable(target, is_ours, what, hint)
+    except OSError as exc:
+        raise os_error(exc, f"cannot use {what}", target) from None
+
+
+def _check_replaceable(target: Path, is_ours: Callable[[Path], bool], what: str, hint: str) -> None:
     if str(target) in ("", "."):
         raise BrainPainterError(f"{what} must be a new folder's name; {str(target)!r} (the current folder) "
                                 f"was given. {hint}")

@@ -185,7 +185,11 @@ def add_label_map(name: str, annots: Mapping[str, str | Path], *, template: str 
     if out is None:
         check_name(name, replace=replace)
     else:
+        from brainpainter.transaction import check_replaceable
+
         check_syntax(name)
+        check_replaceable(Path(out).expanduser(), lambda p: False, "output folder",
+                          "Give a new or empty folder.")
     tpl = load_template(template)
     maps = {h: read_label_map(annots[h], h) for h in ("lh", "rh") if h in annots}
     label_set = build_label_set(name, tpl, maps)
