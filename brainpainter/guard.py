@@ -52,12 +52,30 @@ CACHE_VARIABLES = {
 }
 
 
-class Terminated(KeyboardInterrupt):
-    """Raised in the main thread on SIGTERM, so ``with`` blocks clean up as for Ctrl-C."""
+class Stopped(BaseException):
+    """A signal asked the run to stop; ``with`` blocks clean up on the way out.
+
+    Not a KeyboardInterrupt, so that no library (click included) turns it into
+    something else; it is caught only by :func:`run`.
+    """
+
+    exit_code = EXIT_SIGINT
+    word = "interrupted"
 
 
-def _on_sigterm(signum: int, frame: Any) -> None:
-    raise Terminated()
+class Interrupted(Stopped):
+    """SIGINT (Ctrl-C)."""
+
+
+class Terminated(Stopped):
+    """SIGTERM."""
+
+    exit_code = EXIT_SIGTERM
+    word = "terminated"
+
+
+def _on_signal(signum: int, frame: Any) -> None:
+    raise Terminated() if signum == signal.SIGTERM else Interrupted()
 
 
 @contextmanager
@@ -87,12 +105,12 @@ def private_temp() -> Iterator[str]:
 
 @contextmanager
 def signals_as_exceptions() -> Iterator[None]:
-    """SIGTERM raises :class:`Terminated` in the main thread (SIGINT already raises KeyboardInterrupt)."""
+    """SIGTERM raises :class:`Terminated` and SIGINT :class:`Interrupted` in the main thread."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    old_term = signal.signal(signal.SIGTERM, _on_sigterm)
-    old_int = signal.signal(signal.SIGINT, signal.default_int_handler)
+    old_term = signal.signal(signal.SIGTERM, _on_signal)
+    old_int = signal.signal(signal.SIGINT, _on_signal)
     try:
         yield
     finally:
@@ -130,12 +148,18 @@ def run(group: click.Group, argv: Sequence[str] | None = None, prog_name: str = 
                        standalone_mode=False)
             sys.stdout.flush()
             return 0
-        except Terminated:
-            _say("terminated: nothing was published; partial output was removed")
-            return EXIT_SIGTERM
+        except Stopped as exc:
+            _say(f"{exc.word}: nothing was published; partial output was removed")
+            return exc.exit_code
         except (KeyboardInterrupt, click.exceptions.Abort):
             _say("interrupted: nothing was published; partial output was removed")
             return EXIT_SIGINT
+        except SystemExit:
+            if type(sys.stdout).__name__ == "PacifyFlushWrapper":  # click's answer to a closed pipe
+                _silence_stdout()
+                _say("error: standard output was closed; the output shown may be incomplete.")
+                return EXIT_USER
+            raise
         except click.exceptions.Exit as exc:
             return exc.exit_code
         except click.ClickException as exc:  # click's own usage errors

@@ -50,12 +50,20 @@ def set_default_mode(path: Path | str) -> None:
 
 def atomic_write_bytes(path: Path, data: bytes) -> None:
     """Write via a temporary file in the same folder, then rename."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    from brainpainter.transaction import os_error
+
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    except OSError as exc:
+        raise os_error(exc, "cannot write", path) from None
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
         set_default_mode(tmp)
         os.replace(tmp, path)
+    except OSError as exc:
+        Path(tmp).unlink(missing_ok=True)
+        raise os_error(exc, "cannot write", path) from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

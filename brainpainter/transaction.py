@@ -209,6 +209,14 @@ def verify_file(path: Path, size: tuple[int, int] | None = None, frames: int | N
 
 
 def _broken(path: Path, why: str) -> BrainPainterError:
+    try:
+        st = os.statvfs(path.parent)
+        full = st.f_bavail * st.f_frsize < 1024 * 1024
+    except (OSError, AttributeError):
+        full = False
+    if full:
+        return BrainPainterError(f"writing {path.name!r} failed: the disk is full ({why}); nothing was "
+                                 "published. Free some space or choose another place.")
     return BrainPainterError(f"writing {path.name!r} failed: {why}; nothing was published (is the disk "
                              "full?). Run again.")
 
