@@ -505,9 +505,13 @@ class _GifWriter:
         # pillow's palette look-up is approximate: put the background back exactly (index 255)
         bg = Image.fromarray(((frame == self.background).all(axis=-1) * 255).astype(np.uint8))
         im.paste(255, mask=bg)
-        duration = max(20, round(1000 / self.fps / 10) * 10)
-        for part in GifImagePlugin.getdata(im, duration=duration, disposal=1):
-            self._fh.write(part)
+        params = {"duration": max(20, round(1000 / self.fps / 10) * 10), "disposal": 1}
+        write_frame = getattr(GifImagePlugin, "_write_frame_data", None)
+        if write_frame is not None:  # straight into the file
+            write_frame(self._fh, im, (0, 0), params)
+        else:  # pragma: no cover - older/newer pillow: the public (but leakier) frame encoder
+            for part in GifImagePlugin.getdata(im, **params):
+                self._fh.write(part)
         self.n_frames += 1
 
     def abort(self) -> None:
