@@ -143,7 +143,7 @@ def test_unwritable_output_folder(tmp_path, solid, tiny):
     blocker.write_text("x")
     with pytest.raises(BrainPainterError, match="is not a folder"):
         render(data, "dk", out=blocker, template=str(tiny), renderer=solid, progress=False)
-    with pytest.raises(BrainPainterError, match="not writable"):
+    with pytest.raises(BrainPainterError, match="is a file, not a folder"):
         render(data, "dk", out=blocker / "sub", template=str(tiny), renderer=solid, progress=False)
 
 
