@@ -438,6 +438,8 @@ class _Mp4Writer:
     def __init__(self, path: Path, size: tuple[int, int], fps: float) -> None:
         import imageio_ffmpeg
 
+        self.path = path
+
         self._gen = imageio_ffmpeg.write_frames(
             str(path), size, fps=fps, codec="libx264", pix_fmt_in="rgb24", pix_fmt_out="yuv420p",
             quality=None, macro_block_size=2, ffmpeg_log_level="quiet",  # failures: verified after
@@ -449,10 +451,21 @@ class _Mp4Writer:
         self._gen.send(None)
 
     def write(self, frame: np.ndarray) -> None:
-        self._gen.send(np.ascontiguousarray(frame))
+        try:
+            self._gen.send(np.ascontiguousarray(frame))
+        except (OSError, RuntimeError, StopIteration) as exc:
+            raise self._failed(exc) from None
 
     def close(self) -> None:
-        self._gen.close()
+        try:
+            self._gen.close()
+        except (OSError, RuntimeError) as exc:
+            raise self._failed(exc) from None
+
+    def _failed(self, exc: BaseException) -> BrainPainterError:
+        from brainpainter.transaction import _broken
+
+        return _broken(self.path, f"the video encoder (ffmpeg) stopped: {type(exc).__name__}")
 
     def abort(self) -> None:
         self._gen.close()  # ffmpeg finishes the temporary file, which is then deleted

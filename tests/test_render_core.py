@@ -168,6 +168,6 @@ def test_png_writer_writes_in_order_and_reraises(tmp_path):
         for k in range(5):
             writer.submit(tmp_path / f"{k}.png", img)
     assert sorted(p.name for p in tmp_path.iterdir()) == [f"{k}.png" for k in range(5)]
-    with pytest.raises(FileNotFoundError), PngWriter() as writer:
+    with pytest.raises(BrainPainterError, match="cannot write"), PngWriter() as writer:
         writer.submit(tmp_path / "missing-folder" / "x.png", img)
     assert not (tmp_path / "missing-folder").exists()
