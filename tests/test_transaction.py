@@ -291,3 +291,46 @@ def test_check_and_render_agree_on_every_check_case(tmp_path, monkeypatch):
             answers.append((code, err.getvalue().decode().strip()))
         assert answers[0] == answers[1], case.id
         assert not (folder / "o").exists(), case.id
+
+
+def test_a_cycle_of_group_atlases_is_one_short_line(tmp_path, monkeypatch):
+    from brainpainter import registry
+    from brainpainter.cli import cli
+    from brainpainter.guard import run
+    from brainpainter.user_atlases import atlases_dir
+
+    for name, base in (("aa", "bb"), ("bb", "aa")):
+        folder = atlases_dir() / name
+        folder.mkdir(parents=True)
+        (folder / "atlas.toml").write_text(f'[atlas]\nbase = "{base}"\n[groups]\nf = ["insula"]\n')
+    (tmp_path / "in.csv").write_text("Image-name-unique,Left-f\nA,1\n")
+    monkeypatch.chdir(tmp_path)
+    registry.atlases.reset()
+    try:
+        with CliRunner().isolation() as (_out, err, _):
+            code = run(cli, ["check", "in.csv", "--atlas", "aa"])
+    finally:
+        registry.atlases.reset()
+    line = err.getvalue().decode().strip()
+    assert code == 2 and len(line.splitlines()) == 1 and len(line) < 600, line
+    assert "leads back to this atlas" in line
+
+
+@pytest.mark.render
+def test_real_render_writes_nothing_outside_the_output_folder(tmp_path):
+    """Blender and matplotlib caches go to the run's temporary folder, which is removed."""
+    import subprocess
+    import sys
+
+    home, tmp = tmp_path / "home", tmp_path / "tmp"
+    home.mkdir()
+    tmp.mkdir()
+    (tmp_path / "a.csv").write_text("Image-name-unique,Left-insula\nA,1\n")
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("XDG_", "MPLCONFIGDIR", "BLENDER_USER"))}
+    proc = subprocess.run([sys.executable, "-m", "brainpainter", "render", "a.csv", "--out", "out", "--views",
+                           "lateral-left", "--size", "160x120", "--quality", "fast", "-q"], cwd=tmp_path,
+                          env={**env, "HOME": str(home), "TMPDIR": str(tmp)}, capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    assert list(home.rglob("*")) == [] and list(tmp.rglob("*")) == []
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["A_lateral-left.png", "manifest.json"]
