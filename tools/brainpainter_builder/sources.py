@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from brainpainter.errors import BrainPainterError
-from brainpainter.files import check_input, choice_error
+from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.files import check_input
 
 HEMIS = ("lh", "rh")
 
