@@ -257,8 +257,13 @@ def prepare_run(
                nan_color=nan_color, missing_color=missing_color)
     view_list = parse_views(views)
     for what, n in (("width", width), ("height", height)):
-        if not 16 <= int(n) <= 8192:
-            raise BrainPainterError(f"{what} must be between 16 and 8192 pixels; {n} was given.")
+        try:
+            ok = float(n) == int(n) and 16 <= int(n) <= 8192
+        except (TypeError, ValueError, OverflowError):
+            ok = False
+        if not ok:
+            raise BrainPainterError(f"{what} must be a whole number of pixels between 16 and 8192; {n!r} was "
+                                    "given.")
     if not 0.0 <= glass_opacity <= 1.0:
         raise BrainPainterError(f"glass opacity must be in [0, 1]; {glass_opacity} was given.")
     settings = RenderSettings(

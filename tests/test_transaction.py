@@ -334,3 +334,31 @@ def test_real_render_writes_nothing_outside_the_output_folder(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert list(home.rglob("*")) == [] and list(tmp.rglob("*")) == []
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["A_lateral-left.png", "manifest.json"]
+
+
+@pytest.mark.parametrize(("function", "kwargs", "message"), [
+    ("render", {"width": float("nan")}, "whole number of pixels"),
+    ("render", {"height": float("inf")}, "whole number of pixels"),
+    ("render", {"vmin": float("nan")}, "finite"),
+    ("render", {"center": float("inf")}, "finite"),
+    ("render", {"glass_opacity": float("nan")}, "glass opacity"),
+    ("render", {"views": ["camera:nan:0"]}, "azimuth"),
+    ("figure", {"font_size": float("nan")}, "font size"),
+    ("figure", {"fig_width": float("inf")}, "font size"),
+    ("figure", {"dpi": float("nan")}, "dpi"),
+    ("movie", {"fps": float("nan")}, "fps"),
+    ("movie", {"orbit": float("inf")}, "orbit"),
+])
+def test_library_api_refuses_non_finite_numbers(tmp_path, function, kwargs, message):
+    from brainpainter.figure import make_figure
+    from brainpainter.movie import make_movie
+    from brainpainter.render import render
+    from brainpainter.testing import stand_in, write_tiny_template
+
+    tiny = write_tiny_template(tmp_path / "tiny")
+    table = {"A": {"Left-insula": 1.0}, "B": {"Left-insula": 2.0}}
+    out = {"render": tmp_path / "o", "figure": tmp_path / "o" / "f.png", "movie": tmp_path / "o" / "m.gif"}
+    call = {"render": render, "figure": make_figure, "movie": make_movie}[function]
+    with stand_in("solid"), pytest.raises(BrainPainterError, match=message):
+        call(table, "dk", out=out[function], template=str(tiny), renderer="solid", progress=False, **kwargs)
+    assert not (tmp_path / "o").exists()
