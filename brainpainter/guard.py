@@ -75,6 +75,9 @@ class Terminated(Stopped):
 
 
 def _on_signal(signum: int, frame: Any) -> None:
+    # a second Ctrl-C must not cut the clean-up short (kill -9 still stops everything)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     raise Terminated() if signum == signal.SIGTERM else Interrupted()
 
 
