@@ -265,7 +265,7 @@ def prepare_run(
         except (TypeError, ValueError, OverflowError):
             ok = False
         if not ok:
-            raise BrainPainterError(f"{what} must be a whole number of pixels between 16 and 8192; {n!r} was "
+            raise BrainPainterError(f"{what} must be between 16 and 8192 pixels (a whole number); {n!r} was "
                                     "given.")
     if not 0.0 <= glass_opacity <= 1.0:
         raise BrainPainterError(f"glass opacity must be in [0, 1]; {glass_opacity} was given.")

@@ -337,8 +337,8 @@ def test_real_render_writes_nothing_outside_the_output_folder(tmp_path):
 
 
 @pytest.mark.parametrize(("function", "kwargs", "message"), [
-    ("render", {"width": float("nan")}, "whole number of pixels"),
-    ("render", {"height": float("inf")}, "whole number of pixels"),
+    ("render", {"width": float("nan")}, "between 16 and 8192 pixels"),
+    ("render", {"height": float("inf")}, "between 16 and 8192 pixels"),
     ("render", {"vmin": float("nan")}, "finite"),
     ("render", {"center": float("inf")}, "finite"),
     ("render", {"glass_opacity": float("nan")}, "glass opacity"),
