@@ -313,7 +313,9 @@ def smooth_crossings(faces: np.ndarray, vertex_label: np.ndarray,
     mesh; the boundary crosses the edge where their difference, linear along
     the edge, is zero. This is the iso-line of a blurred label map: it keeps
     the label of every vertex but no longer zigzags from edge midpoint to
-    edge midpoint.
+    edge midpoint. Where both ends fall on one side (a vertex whose label
+    its neighbourhood outvotes: a spike of a noisy label map), the crossing
+    goes as close to the outvoted vertex as allowed.
 
     Parameters
     ----------
@@ -359,17 +361,27 @@ def smooth_crossings(faces: np.ndarray, vertex_label: np.ndarray,
     du, dv = diff(row[:, 0]), diff(row[:, 1])  # A - B at u (expected > 0) and at v (< 0)
     ok = (du > 0) & (dv < 0)
     t = np.where(ok, du / np.where(ok, du - dv, 1.0), 0.5)
+    # Both ends look like B after smoothing: u is a lone spike of A, so the border hugs u
+    # (and hugs v in the mirror case); the spike shrinks instead of showing as a tooth.
+    t = np.where(~ok & (du <= 0) & (dv < 0), 0.0, np.where(~ok & (du > 0) & (dv >= 0), 1.0, t))
     return t.clip(CROSSING_CLAMP, 1.0 - CROSSING_CLAMP)
 
 
 def split_mesh(base: CortexMesh, vertex_label: np.ndarray, labels: str,
-               names: tuple[str, ...]) -> CortexMesh:
+               names: tuple[str, ...], crossing: np.ndarray | None = None) -> CortexMesh:
     """`base` with faces labelled (and split where needed) by `vertex_label`, all surfaces.
 
-    Boundary crossings come from :func:`smooth_crossings`; per-vertex arrays
-    (positions of every surface, `sulc`) are interpolated at the new vertices.
+    Boundary crossings are `crossing` (stored ``boundary_t``, one per edge of
+    :func:`crossing_edges`, as :func:`smooth_crossings` computed them when
+    the file was written) or, when not given or not matching, computed now
+    with :func:`smooth_crossings`. Per-vertex arrays (positions of every
+    surface, `sulc`) are interpolated at the new vertices.
     """
-    t = smooth_crossings(base.faces, vertex_label)
+    n_edges = len(crossing_edges(base.faces, vertex_label)) if crossing is not None else -1
+    if crossing is not None and np.shape(crossing) == (n_edges,):
+        t = np.asarray(crossing, dtype=np.float64)
+    else:
+        t = smooth_crossings(base.faces, vertex_label)
     faces, face_label, parents, weights = split_faces(base.faces, vertex_label, t)
 
     def extend(values: np.ndarray) -> np.ndarray:
@@ -517,8 +529,9 @@ def write_label_set(folder: Path, label_set: LabelSet, template: Template) -> di
             if n not in entry["regions"]:
                 entry["regions"].append(n)
         file = f"cortex-{hemi}-{label_set.name}.npz"
-        save_npz(folder / file, {"vertex_label": hl.vertex_label})
         base = template.base_cortex(label_set.base, hemi)
+        crossing = smooth_crossings(base.faces, hl.vertex_label).astype(np.float32)
+        save_npz(folder / file, {"vertex_label": hl.vertex_label, "boundary_t": crossing})
         entry["cortex"][hemi] = {
             "file": file, "base": label_set.base, "base_faces_sha256": faces_digest(base.faces),
             "names": list(hl.names), "colors": [_hex(c) for c in hl.colors],

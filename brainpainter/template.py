@@ -22,7 +22,10 @@ vertex, index into the names) makes :meth:`Template.cortex` split the faces
 that straddle a region boundary when loading, so borders follow the label
 boundary instead of the triangles (:func:`brainpainter.labelset.split_mesh`,
 the same code as for label-set overlays); ``face_label`` stays the
-whole-triangle labelling for older readers. ``sulc`` (float32, one per
+whole-triangle labelling for older readers; ``boundary_t`` (float32, one
+per label-crossing edge) caches where the border crosses each edge
+(:func:`brainpainter.labelset.smooth_crossings`), so loading only splits.
+``sulc`` (float32, one per
 vertex) is FreeSurfer's sulcal depth (``surf/?h.sulc``, mm, positive in
 sulci) for shading.
 
@@ -209,7 +212,8 @@ class Template:
 
         key = f"{entry['file']}#{labels}"  # computed once per template object
         if key not in self._cache:
-            self._cache[key] = split_mesh(base, z["vertex_label"], labels, tuple(entry["names"]))
+            self._cache[key] = split_mesh(base, z["vertex_label"], labels, tuple(entry["names"]),
+                                          z.get("boundary_t"))
         return self._cache[key]
 
     def with_label_sets(self, folder: str | Path) -> Template:

@@ -245,6 +245,7 @@ def _write(stage: Path, *, name, subject, version, surfaces, target_faces, meshe
             arrays.update({s: m.vertices[s] for s in surfaces})
             arrays["source_vertex"] = m.source_vertex
             arrays["vertex_label"] = m.vertex_label
+            arrays["boundary_t"] = m.boundary_t
             if m.sulc is not None:
                 arrays["sulc"] = m.sulc
             writer.save_npz(stage / file, arrays)

@@ -71,6 +71,10 @@ class LabelledSurface:
         Face count before decimation.
     vertex_label : ndarray of int16, shape (n_vertices,)
         Index into `names` per vertex (the full-resolution vertex's label).
+    boundary_t : ndarray of float32, shape (n_crossing_edges,)
+        Where the border crosses each label-crossing edge
+        (:func:`brainpainter.labelset.smooth_crossings`), stored so that
+        loading the template only has to split.
     sulc : ndarray of float32, shape (n_vertices,), or None
         Sulcal depth per vertex, when given.
     self_intersections : dict of str to (int, int)
@@ -85,6 +89,7 @@ class LabelledSurface:
     source_vertex: np.ndarray
     n_source_faces: int
     vertex_label: np.ndarray
+    boundary_t: np.ndarray
     sulc: np.ndarray | None = None
     self_intersections: dict[str, tuple[int, int]] | None = None
 
@@ -253,6 +258,7 @@ def build_labelled_surface(surfaces: dict[str, tuple[np.ndarray, np.ndarray]],
     clean : bool
         Remove self-intersections of every surface (:mod:`.clean`).
     """
+    from brainpainter.labelset import smooth_crossings
     from brainpainter_builder.clean import remove_self_intersections
 
     pial_v, faces = surfaces["pial"]
@@ -281,6 +287,7 @@ def build_labelled_surface(surfaces: dict[str, tuple[np.ndarray, np.ndarray]],
         source_vertex=source.astype(np.int32),
         n_source_faces=len(faces),
         vertex_label=vertex_labels[source].astype(np.int16),
+        boundary_t=smooth_crossings(out_faces, vertex_labels[source]).astype(np.float32),
         sulc=None if sulc is None else np.asarray(sulc, dtype=np.float32)[source],
         self_intersections=crossings if clean else None,
     )

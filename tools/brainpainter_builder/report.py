@@ -62,7 +62,9 @@ def _cortex_checks(tpl: Template) -> tuple[dict, list[str]]:
             crossing = entry["cortex"][hemi].get("self_intersecting_faces", {})
             out[labels][hemi] = {
                 "n_vertices": n_v,
-                "n_faces": len(mesh.faces),
+                "n_faces": len(tpl.base_cortex(labels, hemi).faces) if "base" not in entry["cortex"][hemi]
+                else len(mesh.faces),
+                "n_faces_drawn": len(mesh.faces),
                 "n_regions": len(wanted) - len(empty),
                 "regions_without_faces": empty,
                 "open_edges": {s: opened for s in tpl.surfaces if s in mesh.vertices},
@@ -168,8 +170,9 @@ def template_report(path: str | Path) -> dict:
     Returns
     -------
     dict
-        ``manifest``; ``checks`` (per label set and hemisphere: faces,
-        vertices, regions without faces, open boundary edges per surface;
+        ``manifest``; ``checks`` (per label set and hemisphere: faces
+        stored and drawn (after splitting boundary faces), vertices,
+        regions without faces, open boundary edges per surface;
         subcortical structures without faces; glass hulls); ``files`` (bytes
         per file), ``size_bytes`` / ``size_mb`` (total on disk), ``load_s``
         (seconds to load the template and read all its arrays), ``problems``
@@ -194,7 +197,9 @@ def format_report(report: dict) -> str:
         parts = []
         for hemi, c in per_hemi.items():
             opened = sorted(set(c["open_edges"].values()))
-            parts.append(f"{hemi} {c['n_regions']} regions, {c['n_faces']} faces, "
+            drawn = c.get("n_faces_drawn", c["n_faces"])
+            parts.append(f"{hemi} {c['n_regions']} regions, {c['n_faces']} faces"
+                         f"{f' ({drawn} drawn, boundary faces split)' if drawn != c['n_faces'] else ''}, "
                          f"open edges {'/'.join(map(str, opened))}")
             if c["regions_without_faces"]:
                 parts[-1] += f", without faces: {c['regions_without_faces']}"
