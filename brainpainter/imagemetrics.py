@@ -27,6 +27,32 @@ def _contour_length(field: np.ndarray, valid: np.ndarray) -> float:
     return total
 
 
+def _srgb_to_linear(c: np.ndarray) -> np.ndarray:
+    c = np.asarray(c, dtype=np.float64) / 255.0
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def _linear_to_srgb(c: np.ndarray) -> np.ndarray:
+    c = np.clip(c, 0.0, 1.0)
+    return 255.0 * np.where(c <= 0.0031308, c * 12.92, 1.055 * c ** (1 / 2.4) - 0.055)
+
+
+def _blend(rgb: np.ndarray, a: np.ndarray, b: np.ndarray, linear: bool = False) -> tuple[
+        np.ndarray, np.ndarray]:
+    """Per pixel: the fraction `t` of `a` in a blend of `a` and `b`, and the distance (0-255) to that blend.
+
+    Blends are mixed in sRGB values, or in linear light when `linear`.
+    """
+    if linear:
+        x, a, b = _srgb_to_linear(rgb), _srgb_to_linear(a), _srgb_to_linear(b)
+    else:
+        x = rgb
+    ab = a - b
+    t = np.clip(((x - b) @ ab) / float(ab @ ab), 0.0, 1.0)  # 1 at a, 0 at b
+    blend = b + t[..., None] * ab
+    return t, np.linalg.norm(rgb - (_linear_to_srgb(blend) if linear else blend), axis=-1)
+
+
 def border_ratio(image: np.ndarray, a: tuple[int, int, int], b: tuple[int, int, int], *,
                  sigma: float = 1.5, tol: float = 12.0, margin: int = 3) -> tuple[float, float]:
     """Border length between two colours over the same after Gaussian smoothing.
@@ -40,9 +66,9 @@ def border_ratio(image: np.ndarray, a: tuple[int, int, int], b: tuple[int, int, 
     sigma : float
         Gaussian smoothing, pixels.
     tol : float
-        Pixels within `tol` (RGB distance) of the segment from `a` to `b`
-        count as region pixels (anti-aliased border pixels are blends of `a`
-        and `b`).
+        Pixels within `tol` (RGB distance) of a blend of `a` and `b` (mixed in
+        sRGB values or in linear light) count as region pixels: anti-aliased
+        border pixels are such blends.
     margin : int
         Region pixels this close to a non-region pixel (background, silhouette,
         medial wall, other colours) are left out, so only ``a``-``b`` borders count.
@@ -57,11 +83,12 @@ def border_ratio(image: np.ndarray, a: tuple[int, int, int], b: tuple[int, int, 
     from scipy import ndimage
 
     rgb = np.asarray(image, dtype=np.float64)[..., :3]
-    a_ = np.asarray(a, dtype=np.float64)
-    b_ = np.asarray(b, dtype=np.float64)
-    ab = a_ - b_
-    t = np.clip(((rgb - b_) @ ab) / float(ab @ ab), 0.0, 1.0)  # 1 at a, 0 at b
-    off = np.linalg.norm(rgb - (b_ + t[..., None] * ab), axis=-1)
+    t, off = _blend(rgb, np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64))
+    # a renderer that blends in linear light (and encodes sRGB) puts border pixels on a curve
+    t_lin, off_lin = _blend(rgb, np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64),
+                            linear=True)
+    t = np.where(off_lin < off, t_lin, t)
+    off = np.minimum(off, off_lin)
     region = off <= tol
     valid = ndimage.binary_erosion(region, iterations=margin)
     w = region.astype(np.float64)
