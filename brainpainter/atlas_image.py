@@ -81,6 +81,10 @@ def reference_image(atlas: Atlas, path: str | Path, *, views: str = "lateral-lef
         entries = list(first.items())
         if entries:
             image = np.concatenate([image, _legend(entries, image.shape[1])], axis=0)
-    write_png(path, image, {"Software": f"brainpainter {__version__}", "brainpainter:atlas": atlas.name,
-                            "brainpainter:views": ",".join(v.name for v in view_list)})
+    from brainpainter.transaction import FileTransaction
+
+    with FileTransaction(path) as tx:  # locked, staged, verified, published atomically
+        write_png(tx.tmp, image, {"Software": f"brainpainter {__version__}", "brainpainter:atlas": atlas.name,
+                                  "brainpainter:views": ",".join(v.name for v in view_list)})
+        tx.commit(size=(image.shape[1], image.shape[0]))
     return image

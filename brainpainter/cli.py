@@ -8,14 +8,20 @@ inside the commands, so ``brainpainter --help`` stays fast.
 from __future__ import annotations
 
 import json
-import os
 import sys
 from pathlib import Path
 from typing import Any
 
 import click
 
-from brainpainter.cli_options import input_options, parse_size, render_kwargs, render_options, split_commas
+from brainpainter.cli_options import (
+    FINITE,
+    input_options,
+    parse_size,
+    render_kwargs,
+    render_options,
+    split_commas,
+)
 from brainpainter.errors import BrainPainterError
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
@@ -232,9 +238,9 @@ def _one_or_many(inputs: tuple[Path, ...]) -> Path | list[Path]:
 @input_options
 @click.option("--gradient", default=None, help="Colour scale to compare the values with (as for render).")
 @click.option("--cmap", default=None, help="Colour map to compare the values with (as for render).")
-@click.option("--vmin", type=float, default=None)
-@click.option("--vmax", type=float, default=None)
-@click.option("--center", type=float, default=None)
+@click.option("--vmin", type=FINITE, default=None)
+@click.option("--vmax", type=FINITE, default=None)
+@click.option("--center", type=FINITE, default=None)
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
 def check(inputs: tuple[Path, ...], atlas: str | None, image_column: str | None, value: str | None,
           region_column: str | None, strict: bool, gradient: str | None, cmap: str | None,
@@ -280,9 +286,12 @@ def render(inputs: tuple[Path, ...], out: Path, quiet: bool, **options: Any) -> 
 
     result = run(_one_or_many(inputs), out=out, progress=not quiet, **render_kwargs(options))
     from brainpainter.inputs import summary_line
+    from brainpainter.report import input_warnings
 
     s = result.manifest["input"]
     click.echo(f"input: {summary_line(s)}")
+    for line in input_warnings(s):
+        click.echo(f"warning: {line}")
     click.echo(
         f"{len(result.files)} image(s) written to {out} "
         f"({s['n_images']} row(s); {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
@@ -348,30 +357,10 @@ cli.add_command(serve)
 
 
 def main(argv: list[str] | None = None) -> None:
-    """Console entry point: user errors become one line and exit code 2."""
-    try:
-        cli.main(args=argv, prog_name="brainpainter", standalone_mode=False)
-    except click.exceptions.Abort:
-        click.echo("aborted", err=True)
-        sys.exit(130)
-    except click.ClickException as exc:
-        # click's own usage errors: one line, exit 2
-        msg = exc.format_message().replace("\n", " ")
-        click.echo(f"error: {msg}", err=True)
-        sys.exit(exc.exit_code)
-    except BrainPainterError as exc:
-        click.echo(f"error: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}", err=True)
-        sys.exit(exc.exit_code)
-    except KeyboardInterrupt:
-        click.echo("interrupted", err=True)
-        sys.exit(130)
-    except Exception as exc:  # no traceback for users; BRAINPAINTER_DEBUG=1 shows it
-        if os.environ.get("BRAINPAINTER_DEBUG"):
-            raise
-        click.echo(f"internal error: {type(exc).__name__}: {exc} (set BRAINPAINTER_DEBUG=1 for a "
-                   "traceback and please report it)", err=True)
-        sys.exit(1)
-    sys.exit(0)
+    """Console entry point: user errors become one line and exit code 2 (see :mod:`brainpainter.guard`)."""
+    from brainpainter.guard import run
+
+    sys.exit(run(cli, argv))
 
 
 if __name__ == "__main__":  # pragma: no cover

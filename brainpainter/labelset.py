@@ -116,14 +116,19 @@ def read_label_map(path: str | Path, hemi: str) -> LabelMap:
     BrainPainterError
         Missing or unreadable file, or no colour table.
     """
+    from brainpainter.files import check_input
+    from brainpainter.readers import has_control
+
     path = Path(path).expanduser()
-    if not path.is_file():
-        raise BrainPainterError(f"label map {path} does not exist; give a FreeSurfer .annot or a GIFTI "
-                                ".label.gii file made for the template's surface")
+    check_input(path, "label map", hint="give a FreeSurfer .annot or a GIFTI .label.gii file made for the "
+                                        "template's surface")
     low = path.name.lower()
     if not low.endswith(LABEL_SUFFIXES):
         raise BrainPainterError(f"label map {path} must be a FreeSurfer .annot or a GIFTI .label.gii file "
                                 f"(allowed endings: {list(LABEL_SUFFIXES)})")
+    named = hemi_of(path)
+    if named is not None and named != hemi:
+        raise _swapped(path, hemi, named, "its file name")
     try:
         if low.endswith(".annot"):
             from nibabel.freesurfer import read_annot
@@ -133,7 +138,7 @@ def read_label_map(path: str | Path, hemi: str) -> LabelMap:
             colors = np.asarray(ctab, dtype=np.int64)[:, :3]
             labels = np.asarray(labels, dtype=np.int64)
         else:
-            labels, names, colors = _read_gifti_labels(path)
+            labels, names, colors = _read_gifti_labels(path, hemi)
     except BrainPainterError:
         raise
     except Exception as exc:  # nibabel raises ValueError, struct.error, OSError, ExpatError...
@@ -142,6 +147,10 @@ def read_label_map(path: str | Path, hemi: str) -> LabelMap:
     if not names:
         raise BrainPainterError(f"{path} has no colour table, so it names no regions; give a label map "
                                 "whose colour table names its regions")
+    bad = next((n for n in names if has_control(n)), None)
+    if bad is not None:
+        raise BrainPainterError(f"{path}: the region name {bad[:40]!r} contains control or text-direction "
+                                "characters; names may hold letters, digits, spaces and punctuation only")
     if (labels < 0).any():  # vertices outside the colour table: a non-region entry
         fill = next((i for i, n in enumerate(names) if is_non_region(n)), None)
         if fill is None:
@@ -152,12 +161,25 @@ def read_label_map(path: str | Path, hemi: str) -> LabelMap:
     return LabelMap(hemi, path, labels, tuple(names), np.asarray(colors).clip(0, 255).astype(np.uint8))
 
 
-def _read_gifti_labels(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
+def _swapped(path: Path, hemi: str, named: str, how: str) -> BrainPainterError:
+    side = {"lh": "left", "rh": "right"}
+    return BrainPainterError(
+        f"label map {path} is given for the {side[hemi]} hemisphere ({hemi}=...), but {how} says "
+        f"{side[named]}; swap the files (--annot {named}={path.name}), or rename the file if it is right")
+
+
+def _read_gifti_labels(path: Path, hemi: str | None = None) -> tuple[np.ndarray, list[str], np.ndarray]:
     import nibabel as nib
 
     img = nib.load(str(path))
     if not getattr(img, "darrays", None):
         raise BrainPainterError(f"{path} holds no data array; a GIFTI label file has one label per vertex")
+    meta = {**dict(img.meta or {}), **dict(img.darrays[0].meta or {})}
+    structure = str(meta.get("AnatomicalStructurePrimary", "")).lower()
+    side = "lh" if structure.endswith("left") else "rh" if structure.endswith("right") else None
+    given = hemi_of(path) if hemi is None else hemi
+    if side is not None and given is not None and side != given:
+        raise _swapped(path, given, side, f"its AnatomicalStructurePrimary ({structure!r})")
     keys = np.asarray(img.darrays[0].data).astype(np.int64).ravel()
     table = list(img.labeltable.labels)
     names = [str(lab.label) for lab in table]

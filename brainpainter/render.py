@@ -260,8 +260,13 @@ def prepare_run(
                nan_color=nan_color, missing_color=missing_color)
     view_list = parse_views(views)
     for what, n in (("width", width), ("height", height)):
-        if not 16 <= int(n) <= 8192:
-            raise BrainPainterError(f"{what} must be between 16 and 8192 pixels; {n} was given.")
+        try:
+            ok = float(n) == int(n) and 16 <= int(n) <= 8192
+        except (TypeError, ValueError, OverflowError):
+            ok = False
+        if not ok:
+            raise BrainPainterError(f"{what} must be between 16 and 8192 pixels (a whole number); {n!r} was "
+                                    "given.")
     if not 0.0 <= glass_opacity <= 1.0:
         raise BrainPainterError(f"glass opacity must be in [0, 1]; {glass_opacity} was given.")
     settings = RenderSettings(
@@ -337,8 +342,11 @@ def render(
     -------
     RenderResult
     """
+    from contextlib import nullcontext
+
     from brainpainter import __version__
-    from brainpainter.output import PngWriter, prepare_out_dir, safe_name, write_json
+    from brainpainter.output import PngWriter, safe_name
+    from brainpainter.transaction import FolderTransaction
 
     # Validate everything before the first image so bad input leaves nothing behind.
     run = prepare_run(
@@ -350,16 +358,10 @@ def render(
     )
     table, scale, view_list, settings = run.table, run.scale, run.views, run.settings
     atlas = table.atlas
-    names = [safe_name(n) for n in table.images]
-    clash = sorted({n for n in names if names.count(n) > 1})
-    if clash:
-        raise BrainPainterError(
-            f"image names {clash[:3]} become the same file name after removing unsafe characters; "
-            "make the image names differ in letters or digits."
-        )
+    names = [safe_name(n) for n in table.images]  # distinct, even ignoring case: checked by read_table
     painter = Painter(atlas, template, surface, hide, settings, renderer)
     painter.load()  # a renderer that cannot start (e.g. no bpy) fails before any output exists
-    out_dir = prepare_out_dir(out) if out is not None else None
+    tx = FolderTransaction(out) if out is not None else None  # lock, stage, verify, publish
 
     settings_dict = {
         "atlas": atlas.name, "template": painter.scene.template.name, "surface": surface,
@@ -372,32 +374,34 @@ def render(
     total = len(table.images) * len(view_list)
     from tqdm.auto import tqdm
 
-    with painter, PngWriter() as writer, \
+    with tx or nullcontext(), painter, PngWriter() as writer, \
             tqdm(total=total, unit="img", desc="rendering", disable=not progress) as bar:
         for i, image in enumerate(table.images):
             values = table.row(i)
             for view in view_list:
                 pixels = painter.paint(values, view, scale)
-                if out_dir is None:
+                if tx is None:
                     images[(image, view.name)] = pixels
                 else:
-                    path = out_dir / f"{names[i]}_{view.name}.png"
+                    path = tx.out / f"{names[i]}_{view.name}.png"
                     meta = {
                         "Software": f"brainpainter {__version__}",
                         "brainpainter:image": image,
                         "brainpainter:view": view.name,
                         "brainpainter:settings": json.dumps(settings_dict, sort_keys=True),
                     }
-                    writer.submit(path, pixels, meta)
+                    writer.submit(tx.path(path.name), pixels, meta)
+                    tx.expect(path.name, size=(settings.width, settings.height))
                     files.append(path)
                     entries.append({"file": path.name, "image": image, "row": i, "view": view.name})
                 bar.update(1)
-    manifest = {
-        "software": {"brainpainter": __version__},
-        "input": table.summary(),
-        "settings": settings_dict,
-        "files": entries,
-    }
-    if out_dir is not None:
-        write_json(out_dir / "manifest.json", manifest)
+        writer.wait()
+        manifest = {
+            "software": {"brainpainter": __version__},
+            "input": table.summary(),
+            "settings": settings_dict,
+            "files": entries,
+        }
+        if tx is not None:
+            tx.commit(manifest)  # verify every PNG, then publish them and the manifest last
     return RenderResult(files, images, manifest)

@@ -188,3 +188,37 @@ def format_report(report: dict[str, Any]) -> str:
     if not report["ok"]:
         out.append(f"        render would stop: {report['errors'][0]}")
     return "\n".join(out)
+
+
+def input_warnings(summary: dict[str, Any], max_names: int = 8) -> list[str]:
+    """Warnings ``render``, ``figure`` and ``movie`` print about their input (as ``check`` reports it).
+
+    Parameters
+    ----------
+    summary : dict
+        :meth:`RegionTable.summary` (``manifest["input"]``).
+
+    Returns
+    -------
+    list of str
+        The notes (empty columns, decimal commas, images missing from an
+        input) and the unmatched names, each with its closest region names.
+    """
+    from brainpainter.atlas import get_atlas
+    from brainpainter.errors import BrainPainterError
+
+    lines = list(summary.get("notes", []))
+    unmatched = summary.get("unmatched_columns", [])
+    if unmatched:
+        try:
+            resolver: NameResolver | None = NameResolver.for_atlas(get_atlas(summary["atlas"]))
+        except BrainPainterError:  # an atlas from --atlas-config is not registered
+            resolver = None
+        shown = []
+        for name in unmatched[:max_names]:
+            close = resolver.suggest(name) if resolver is not None else []
+            shown.append(f"{name!r}" + (f" (did you mean {close[0]!r}?)" if close else ""))
+        more = f" and {len(unmatched) - max_names} more" if len(unmatched) > max_names else ""
+        lines.append(f"{len(unmatched)} name(s) match no {summary['atlas']} region and were not drawn: "
+                     f"{', '.join(shown)}{more}; see 'brainpainter check' (--strict makes this an error)")
+    return lines
