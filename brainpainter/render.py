@@ -8,7 +8,6 @@ cluster worker reuse :class:`Painter` the same way.
 
 from __future__ import annotations
 
-import contextlib
 import json
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -29,7 +28,7 @@ from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.geometry import Palette
 from brainpainter.inputs import RegionTable, read_table
 from brainpainter.scene import RGB, RenderSettings, Scene
-from brainpainter.template import Template, load_template
+from brainpainter.template import Template, load_template, template_for
 from brainpainter.views import View, parse_views
 
 # Named groups for --hide: structure names (hemisphere-free) they cover.
@@ -85,6 +84,10 @@ def region_colors(values: Mapping[str, float], atlas: Atlas, scale: ColourScale)
     return atlas.expand(colors)  # a region group's colour goes to each of its member regions
 
 
+#: Default views of an atlas without cortical regions (volumetric atlases).
+VOLUME_VIEWS = ("subcortical", "subcortical-dorsal")
+
+
 def load_scene(
     atlas: Atlas | str = "dk",
     template: Template | str = "fsaverage",
@@ -110,13 +113,17 @@ def load_scene(
         atlas = load_atlas_config(atlas_config)
     if isinstance(atlas, str):
         atlas = get_atlas(atlas)
+    if atlas.template_dir is not None and template == "fsaverage":
+        template = str(atlas.template_dir)  # an atlas with a brain of its own (volume only)
     if not isinstance(template, Template):
         template = load_template(template)
     if atlas.label_dir is not None and atlas.template_labels not in template.label_sets:
-        # a custom or plugin atlas brings its own label set for this template
-        template = template.with_label_sets(atlas.label_dir)
+        # a custom or plugin atlas brings its own label set for this template (and volume meshes)
+        template = template_for(atlas, template)
         for hemi in ("lh", "rh"):
             template.cortex(atlas.template_labels, hemi)  # fail now if it does not fit
+    elif atlas.volume_dirs:  # a volumetric atlas: its meshes are the subcortical part
+        template = template_for(atlas, template)
     scene = Scene(
         template=template,
         labels=atlas.template_labels,
@@ -125,11 +132,6 @@ def load_scene(
         settings=settings or RenderSettings(),
         medial_wall_color=to_rgb(medial_wall_color),
     )
-    if atlas.template_labels not in template.label_sets:
-        raise BrainPainterError(
-            f"atlas {atlas.name!r} needs the label set {atlas.template_labels!r}, which "
-            f"template {template.name!r} lacks (it has {template.label_sets})."
-        )
     return atlas, scene
 
 
@@ -303,10 +305,17 @@ def prepare_run(
         atlas = get_atlas(atlas)
     make_scale(gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center,
                nan_color=nan_color, missing_color=missing_color)
+    if views is None and isinstance(atlas, Atlas) and not atlas.cortical():
+        views = VOLUME_VIEWS  # a volumetric atlas alone: its structures, not a grey cortex
     view_list = parse_views(views)
     for what, n in (("width", width), ("height", height)):
-        if not 16 <= int(n) <= 8192:
-            raise BrainPainterError(f"{what} must be between 16 and 8192 pixels; {n} was given.")
+        try:
+            ok = float(n) == int(n) and 16 <= int(n) <= 8192
+        except (TypeError, ValueError, OverflowError):
+            ok = False
+        if not ok:
+            raise BrainPainterError(f"{what} must be between 16 and 8192 pixels (a whole number); {n!r} was "
+                                    "given.")
     if not 0.0 <= glass_opacity <= 1.0:
         raise BrainPainterError(f"glass opacity must be in [0, 1]; {glass_opacity} was given.")
     settings = RenderSettings(
@@ -393,8 +402,11 @@ def render(
     -------
     RenderResult
     """
+    from contextlib import nullcontext
+
     from brainpainter import __version__
-    from brainpainter.output import PngWriter, prepare_out_dir, safe_name, write_json
+    from brainpainter.output import PngWriter, safe_name
+    from brainpainter.transaction import FolderTransaction
 
     if painter is not None:
         atlas = painter.atlas if atlas is None and atlas_config is None else atlas
@@ -416,16 +428,10 @@ def render(
     )
     table, scale, view_list, settings = run.table, run.scale, run.views, run.settings
     atlas = table.atlas
+    names = [safe_name(n) for n in table.images]  # distinct, even ignoring case: checked by read_table
     from brainpainter.figure import select_rows
 
     chosen = select_rows(table.images, rows)
-    names = [safe_name(n) for n in table.images]
-    clash = sorted({n for n in names if names.count(n) > 1})
-    if clash:
-        raise BrainPainterError(
-            f"image names {clash[:3]} become the same file name after removing unsafe characters; "
-            "make the image names differ in letters or digits."
-        )
     own = painter is None
     if painter is None:
         painter = Painter(atlas, template, surface, hide, settings, renderer)
@@ -434,7 +440,7 @@ def render(
             f"the table was read with atlas {atlas.name!r} but the painter draws {painter.atlas.name!r}; "  # type: ignore[union-attr]
             "give atlas= the painter's atlas, or make a Painter for this one.")
     painter.load()  # a renderer that cannot start (e.g. no bpy) fails before any output exists
-    out_dir = prepare_out_dir(out) if out is not None else None
+    tx = FolderTransaction(out) if out is not None else None  # lock, stage, verify, publish
 
     settings_dict = {
         "atlas": atlas.name, "template": painter.scene.template.name, "surface": surface,
@@ -447,34 +453,36 @@ def render(
     total = len(chosen) * len(view_list)
     from tqdm.auto import tqdm
 
-    with painter if own else contextlib.nullcontext(painter), PngWriter() as writer, \
+    with tx or nullcontext(), painter if own else nullcontext(painter), PngWriter() as writer, \
             tqdm(total=total, unit="img", desc="rendering", disable=not progress) as bar:
         for i in chosen:
             image, values = table.images[i], table.row(i)
             for view in view_list:
                 pixels = painter.paint(values, view, scale)
-                if out_dir is None:
+                if tx is None:
                     images[(image, view.name)] = pixels
                 else:
-                    path = out_dir / f"{names[i]}_{view.name}.png"
+                    path = tx.out / f"{names[i]}_{view.name}.png"
                     meta = {
                         "Software": f"brainpainter {__version__}",
                         "brainpainter:image": image,
                         "brainpainter:view": view.name,
                         "brainpainter:settings": json.dumps(settings_dict, sort_keys=True),
                     }
-                    writer.submit(path, pixels, meta)
+                    writer.submit(tx.path(path.name), pixels, meta)
+                    tx.expect(path.name, size=(settings.width, settings.height))
                     files.append(path)
                     entries.append({"file": path.name, "image": image, "row": i, "view": view.name})
                 bar.update(1)
-    manifest = {
-        "software": {"brainpainter": __version__},
-        "input": table.summary(),
-        "settings": settings_dict,
-        "files": entries,
-    }
-    if out_dir is not None:
-        write_json(out_dir / "manifest.json", manifest)
+        writer.wait()
+        manifest = {
+            "software": {"brainpainter": __version__},
+            "input": table.summary(),
+            "settings": settings_dict,
+            "files": entries,
+        }
+        if tx is not None:
+            tx.commit(manifest)  # verify every PNG, then publish them and the manifest last
     return RenderResult(files, images, manifest, scale, table)
 
 

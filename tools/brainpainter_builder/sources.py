@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.files import check_input
 
 HEMIS = ("lh", "rh")
 
@@ -151,6 +152,7 @@ class Subject:
         path = self.path / "surf" / f"{hemi}.{surf}"
         if not path.is_file():
             raise _missing(path, "FreeSurfer surface")
+        check_input(path, "subject file")  # a regular file within the size limit
         try:
             vertices, faces = read_geometry(str(path))
         except Exception as exc:  # nibabel raises ValueError, struct.error, OSError...
@@ -171,6 +173,22 @@ class Subject:
                 f"{expected}; all surfaces of a hemisphere must come from one recon-all run"
             )
         return vertices, faces
+
+    def sulc(self, hemi: str) -> np.ndarray | None:
+        """Sulcal depth ``surf/{hemi}.sulc`` (mm, positive in sulci), shape (n,); None if absent."""
+        from nibabel.freesurfer import read_morph_data
+
+        path = self.path / "surf" / f"{hemi}.sulc"
+        if not path.is_file():
+            return None
+        try:
+            values = np.asarray(read_morph_data(str(path)), dtype=np.float64)
+        except Exception as exc:  # nibabel raises ValueError, struct.error, OSError...
+            raise _unreadable(path, "a FreeSurfer curvature (morph) file", exc) from None
+        self._check_count(path, len(values), hemi, "values")
+        if not np.isfinite(values).all():
+            raise BrainPainterError(f"{path} has non-finite values; expected sulcal depths in mm")
+        return values
 
     def n_vertices(self, hemi: str) -> int:
         """Vertex count of the hemisphere (read from its pial surface if needed)."""
@@ -211,7 +229,7 @@ class Subject:
         for annot in ANNOTATIONS.get(label_set, (label_set,)):
             path = self.path / "label" / f"{hemi}.{annot}.annot"
             if path.is_file():
-                return path
+                return check_input(path, "subject file")
         return None
 
     def gcs_path(self, hemi: str, label_set: str) -> Path | None:
@@ -326,6 +344,7 @@ class Subject:
         path = self.path / "mri" / "aseg.mgz"
         if not path.is_file():
             raise _missing(path, "subcortical segmentation")
+        check_input(path, "subject file")
         try:
             img = nib.load(str(path))
             data = np.asarray(img.dataobj)
