@@ -182,11 +182,15 @@ class RenderResult:
     images : dict of (str, str) to ndarray
         ``(image name, view name) -> RGBA (h, w, 4)`` when rendering in memory.
     manifest : dict
+    workers : dict
+        Where it ran (``backend``, ``workers``, ``startup_seconds``, ``retried``);
+        not part of the manifest, which is the same however the run was split.
     """
 
     files: list[Path]
     images: dict[tuple[str, str], np.ndarray]
     manifest: dict[str, Any]
+    workers: dict[str, Any] = field(default_factory=dict)
 
     def _repr_html_(self) -> str:  # notebooks: show the images
         import base64
@@ -303,6 +307,9 @@ def render(
     value: str | None = None,
     region_column: str | None = None,
     atlas_config: str | Path | None = None,
+    jobs: int | str = 1,
+    client: Any = None,
+    scheduler: str | None = None,
 ) -> RenderResult:
     """Render every row of a region-value table from every view.
 
@@ -329,13 +336,21 @@ def render(
     atlas_config : path, optional
         Region-group TOML file (:mod:`brainpainter.atlas_config`) defining the
         atlas; give it instead of `atlas`.
+    jobs : int or "auto"
+        Worker processes on this machine (``"auto"``: one per core), each with
+        a warm renderer; the output is byte-identical to ``jobs=1``.
+    client : distributed.Client, optional
+        Render on this Dask cluster instead (see :mod:`brainpainter.parallel`).
+    scheduler : str, optional
+        A Dask scheduler address (``tcp://host:8786``) to connect to instead of `client`.
 
     Returns
     -------
     RenderResult
     """
     from brainpainter import __version__
-    from brainpainter.output import PngWriter, prepare_out_dir, safe_name, write_json
+    from brainpainter.output import PngWriter, atomic_write_bytes, prepare_out_dir, safe_name, write_json
+    from brainpainter.parallel import Item, SerialRunner, chunked, make_runner
 
     # Validate everything before the first image so bad input leaves nothing behind.
     run = prepare_run(
@@ -355,40 +370,62 @@ def render(
             "make the image names differ in letters or digits."
         )
     painter = Painter(atlas, template, surface, hide, settings, renderer)
-    painter.load()  # a renderer that cannot start (e.g. no bpy) fails before any output exists
-    out_dir = prepare_out_dir(out) if out is not None else None
+    runner = make_runner(painter, template, jobs=jobs, client=client, scheduler=scheduler)
+    # The renderer (or every worker's) starts before any output exists: one that cannot start leaves none.
+    runner.start()
+    try:
+        out_dir = prepare_out_dir(out) if out is not None else None
+        settings_dict = {
+            "atlas": atlas.name, "template": painter.scene.template.name, "surface": surface,
+            "views": [v.to_dict() for v in view_list], "scale": scale.to_dict(),
+            "hidden": sorted(painter.scene.hidden), "renderer": renderer, **settings.to_dict(),
+        }
 
-    settings_dict = {
-        "atlas": atlas.name, "template": painter.scene.template.name, "surface": surface,
-        "views": [v.to_dict() for v in view_list], "scale": scale.to_dict(),
-        "hidden": sorted(painter.scene.hidden), "renderer": renderer, **settings.to_dict(),
-    }
-    files: list[Path] = []
-    images: dict[tuple[str, str], np.ndarray] = {}
-    entries = []
-    total = len(table.images) * len(view_list)
-    from tqdm.auto import tqdm
+        def path_meta(i: int, view: View) -> tuple[Path, dict[str, str]]:
+            assert out_dir is not None
+            return out_dir / f"{names[i]}_{view.name}.png", {
+                "Software": f"brainpainter {__version__}",
+                "brainpainter:image": table.images[i],
+                "brainpainter:view": view.name,
+                "brainpainter:settings": json.dumps(settings_dict, sort_keys=True),
+            }
 
-    with painter, PngWriter() as writer, \
-            tqdm(total=total, unit="img", desc="rendering", disable=not progress) as bar:
-        for i, image in enumerate(table.images):
-            values = table.row(i)
-            for view in view_list:
-                pixels = painter.paint(values, view, scale)
-                if out_dir is None:
-                    images[(image, view.name)] = pixels
-                else:
-                    path = out_dir / f"{names[i]}_{view.name}.png"
-                    meta = {
-                        "Software": f"brainpainter {__version__}",
-                        "brainpainter:image": image,
-                        "brainpainter:view": view.name,
-                        "brainpainter:settings": json.dumps(settings_dict, sort_keys=True),
-                    }
-                    writer.submit(path, pixels, meta)
-                    files.append(path)
-                    entries.append({"file": path.name, "image": image, "row": i, "view": view.name})
-                bar.update(1)
+        plan = [(i, view) for i in range(len(table.images)) for view in view_list]
+        files = [path_meta(i, view)[0] for i, view in plan] if out_dir is not None else []
+        entries = [{"file": path.name, "image": table.images[i], "row": i, "view": view.name}
+                   for path, (i, view) in zip(files, plan, strict=False)]  # none without out_dir
+        images: dict[tuple[str, str], np.ndarray] = {}
+        from tqdm.auto import tqdm
+
+        with tqdm(total=len(plan), unit="img", desc="rendering", disable=not progress) as bar:
+            if isinstance(runner, SerialRunner):
+                with PngWriter() as writer:
+                    for i, view in plan:
+                        pixels = painter.paint(table.row(i), view, scale)
+                        if out_dir is None:
+                            images[(table.images[i], view.name)] = pixels
+                        else:
+                            path, meta = path_meta(i, view)
+                            writer.submit(path, pixels, meta)
+                        bar.update(1)
+            else:
+                chunks = chunked(plan, runner.chunk_size(len(plan)))
+                items = ([Item(region_colors(table.row(i), atlas, scale), view,
+                               None if out_dir is None else path_meta(i, view)[1]) for i, view in chunk]
+                         for chunk in chunks)
+                by_index: dict[int, list[np.ndarray]] = {}
+                for index, results in runner.map(items, encode=out_dir is not None):
+                    if out_dir is None:
+                        by_index[index] = results
+                    else:
+                        for (i, view), data in zip(chunks[index], results, strict=True):
+                            atomic_write_bytes(path_meta(i, view)[0], data)
+                    bar.update(len(results))
+                for index in sorted(by_index):
+                    for (i, view), pixels in zip(chunks[index], by_index[index], strict=True):
+                        images[(table.images[i], view.name)] = pixels
+    finally:
+        runner.close()
     manifest = {
         "software": {"brainpainter": __version__},
         "input": table.summary(),
@@ -397,4 +434,4 @@ def render(
     }
     if out_dir is not None:
         write_json(out_dir / "manifest.json", manifest)
-    return RenderResult(files, images, manifest)
+    return RenderResult(files, images, manifest, runner.summary())
