@@ -132,7 +132,7 @@ class DaskRunner(Runner):
         assert self.spec is not None
         if self.client is None:
             try:
-                self.client = distributed.Client(self.address, timeout="30s", set_as_default=False)
+                self.client = distributed.Client(self.address, timeout="15s", set_as_default=False)
             except (OSError, TimeoutError) as exc:
                 raise BrainPainterError(
                     f"cannot reach the Dask scheduler at {self.address!r} ({exc}); check the address "

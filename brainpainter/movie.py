@@ -580,6 +580,9 @@ def make_movie(
     strict: bool = False,
     progress: bool = True,
     atlas_config: str | Path | None = None,
+    jobs: int | str = 1,
+    client: Any = None,
+    scheduler: str | None = None,
 ) -> MovieResult:
     """Make a movie through the rows of a region-value table.
 
@@ -626,6 +629,9 @@ def make_movie(
         Show a progress bar.
     atlas_config : path, optional
         Region-group TOML file defining the atlas, as for :func:`brainpainter.render.render`.
+    jobs, client, scheduler
+        Render frames on worker processes or a Dask cluster, as for
+        :func:`brainpainter.render.render`; frames are encoded in order.
 
     Returns
     -------
@@ -636,10 +642,12 @@ def make_movie(
     from brainpainter.colorbar import resolve_ticks
     from brainpainter.figure import check_out_file, select_rows, swatches_needed
     from brainpainter.output import set_default_mode
-    from brainpainter.render import Painter, prepare_run
+    from brainpainter.parallel import Item, check_options, make_runner
+    from brainpainter.render import Painter, prepare_run, region_colors
 
     start = time.perf_counter()
     path = check_out_file(out, MOVIE_FORMATS)
+    check_options(jobs, client, scheduler)
     fmt = path.suffix.lower()
     if background is None:
         raise BrainPainterError("a movie has no transparency; give a background colour (--background) "
@@ -690,6 +698,7 @@ def make_movie(
         per_view = [orbit_views(painter, v, [v.azimuth + a for a in azimuths], w / h) for v in run.views]
     else:
         per_view = [[v] * n for v in run.views]
+    runner = make_runner(painter, template, jobs=jobs, client=client, scheduler=scheduler)
     key_values = table.values[keys]
     names = [table.images[i] for i in keys]
 
@@ -698,19 +707,28 @@ def make_movie(
             return f"{time_column}: {format_clock(f.clock, key_times)}"
         return names[f.a] if f.a == f.b else f"{names[f.a]} {ARROW} {names[f.b]}"
 
+    # Frames that repeat the previous frame's renders (held key frames) reuse them.
+    states: list[tuple[int, int, float, tuple[View, ...]]] = []
+    frame_state: list[int] = []
+    for i, f in enumerate(plan):
+        state = (f.a, f.b, f.weight, tuple(per_view[k][i] for k in range(len(run.views))))
+        if not states or states[-1] != state:
+            states.append(state)
+        frame_state.append(len(states) - 1)
+
+    def chunks() -> Iterator[list[Item]]:
+        for a, b, weight, state_views in states:
+            values = interpolate(key_values[a], key_values[b], weight)
+            colors = region_colors(dict(zip(table.regions, values.tolist(), strict=True)), table.atlas,
+                                   run.scale)
+            yield [Item(colors, view) for view in state_views]
+
     def frames() -> Iterator[np.ndarray]:
-        previous: tuple[Any, list[np.ndarray]] | None = None
-        for i, f in enumerate(plan):
-            state = (f.a, f.b, f.weight, tuple(per_view[k][i] for k in range(len(run.views))))
-            if previous is not None and previous[0] == state:
-                renders = previous[1]  # a held key frame: nothing changed
-            else:
-                values = interpolate(key_values[f.a], key_values[f.b], f.weight)
-                region_values = dict(zip(table.regions, values.tolist(), strict=True))
-                renders = [painter.paint(region_values, per_view[k][i], run.scale)
-                           for k in range(len(run.views))]
-                previous = (state, renders)
-            yield composer.compose(renders, caption(f), f.clock)
+        i = 0
+        for s, renders in runner.map(chunks(), ordered=True):  # rendered in parallel, encoded in order
+            while i < n and frame_state[i] == s:
+                yield composer.compose(renders, caption(plan[i]), plan[i].clock)
+                i += 1
 
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp_name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=f".part{fmt}")
@@ -721,7 +739,7 @@ def make_movie(
             _Mp4Writer(tmp, composer.size, float(fps)) if fmt == ".mp4"
             else _GifWriter(tmp, composer.size, float(fps), tuple(composer.bg.tolist())))
         try:
-            with painter, tqdm(total=n, unit="frame", desc="movie", disable=not progress) as bar:
+            with runner, tqdm(total=n, unit="frame", desc="movie", disable=not progress) as bar:
                 for frame in frames():
                     writer.write(frame)
                     bar.update(1)

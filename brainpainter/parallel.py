@@ -163,12 +163,20 @@ class PainterSpec:
         from brainpainter import registry
         from brainpainter.render import Painter
 
-        if self.renderer_target is not None and self.renderer not in registry.renderers.names():
+        if self.renderer_target is not None:
             module, _, attr = self.renderer_target.partition(":")
-            obj: Any = importlib.import_module(module)
-            for part in attr.split("."):
-                obj = getattr(obj, part)
-            registry.renderers.register(self.renderer, lambda: obj, replace=True)
+            try:
+                obj: Any = importlib.import_module(module)
+                for part in attr.split("."):
+                    obj = getattr(obj, part)
+            except (ImportError, AttributeError):
+                obj = None  # not importable here: the registry's entry of that name, if any, is used
+            try:
+                current = registry.renderers.get(self.renderer)
+            except BrainPainterError:
+                current = None
+            if obj is not None and current is not obj:
+                registry.renderers.register(self.renderer, lambda: obj, replace=True)
         return Painter(self.atlas, self.template, self.surface, self.hidden, self.settings,
                        self.renderer, self.medial_wall_color)
 
@@ -344,6 +352,20 @@ class SerialRunner(Runner):
         self.painter.close()
 
 
+def paint_all(runner: Runner, items: Sequence[Item], bar: Any = None) -> list[np.ndarray]:
+    """Paint `items` with `runner`: RGBA uint8 arrays of shape (h, w, 4), in the order of `items`.
+
+    `bar` (a tqdm progress bar) advances by each finished chunk's images.
+    """
+    size = runner.chunk_size(len(items))
+    out: list[Any] = [None] * len(items)
+    for index, results in runner.map(chunked(items, size), encode=False):
+        out[index * size:index * size + len(results)] = results
+        if bar is not None:
+            bar.update(len(results))
+    return out
+
+
 # -- local processes ---------------------------------------------------------------------
 _PROCESS_PAINTER: WarmPainter | None = None
 
@@ -471,6 +493,24 @@ def import_distributed() -> Any:
 
 
 # -- choosing ------------------------------------------------------------------------------
+def check_options(jobs: int | str | None = 1, client: Any = None, scheduler: str | None = None) -> int:
+    """Check where a run is to render (cheaply, before its input is read); returns the local job count.
+
+    Raises
+    ------
+    BrainPainterError
+        A bad ``--jobs``, both ``--jobs`` and a cluster, or a cluster without
+        ``dask.distributed`` installed.
+    """
+    n = resolve_jobs(jobs)
+    if client is not None or scheduler:
+        if n > 1:
+            raise BrainPainterError("give --jobs (processes on this machine) or --scheduler / client (a Dask "
+                                    f"cluster), not both; --jobs {jobs} and a scheduler were given.")
+        import_distributed()
+    return n
+
+
 def make_runner(painter: Painter, template: Any = None, *, jobs: int | str | None = 1, client: Any = None,
                 scheduler: str | None = None) -> Runner:
     """The runner for a run's options: serial, local processes, or Dask.
@@ -488,12 +528,8 @@ def make_runner(painter: Painter, template: Any = None, *, jobs: int | str | Non
         Dask scheduler address; default ``$BRAINPAINTER_SCHEDULER`` only where
         the caller (the CLI) passes it.
     """
-    n = resolve_jobs(jobs)
-    if (client is not None or scheduler) and n > 1:
-        raise BrainPainterError("give --jobs (processes on this machine) or --scheduler / client (a Dask "
-                                f"cluster), not both; --jobs {jobs} and a scheduler were given.")
+    n = check_options(jobs, client, scheduler)
     if client is not None or scheduler:
-        import_distributed()
         from brainpainter.cluster import DaskRunner
 
         return DaskRunner(spec=PainterSpec.of(painter, template), client=client, address=scheduler)

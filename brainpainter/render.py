@@ -350,9 +350,10 @@ def render(
     """
     from brainpainter import __version__
     from brainpainter.output import PngWriter, atomic_write_bytes, prepare_out_dir, safe_name, write_json
-    from brainpainter.parallel import Item, SerialRunner, chunked, make_runner
+    from brainpainter.parallel import Item, SerialRunner, check_options, chunked, make_runner
 
     # Validate everything before the first image so bad input leaves nothing behind.
+    check_options(jobs, client, scheduler)
     run = prepare_run(
         data, atlas, atlas_config=atlas_config, views=views, gradient=gradient, cmap=cmap, vmin=vmin,
         vmax=vmax, center=center, nan_color=nan_color, missing_color=missing_color,
