@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import signal
+import subprocess
 import sys
 import threading
 import time
@@ -231,3 +232,55 @@ def test_real_renderer_jobs_and_dask_are_byte_identical_to_serial(tmp_path, clus
     redness = [float(((im[..., 0] - im[..., 2]) * brain).sum() / brain.sum()) for im in (early, late)]
     assert redness[1] > redness[0]
     assert len(serial.files) == 4
+
+
+def test_ctrl_c_stops_every_worker_process(tmp_path, tiny, table):
+    """SIGINT to the parent (workers ignore it): the run stops at once and no worker is left behind."""
+    psutil = pytest.importorskip("psutil")
+    rows = "".join(f"S{i:02d},{i % 4},{i % 3},{i}\n" for i in range(200))
+    table.write_text("Image-name-unique,Left-insula,Right-insula,Left-precuneus\n" + rows)
+    out = tmp_path / "out"
+    script = (
+        "import sys; sys.path.insert(0, sys.argv[1])\n"
+        "from _parallel_renderers import SlowStandIn\n"
+        "from brainpainter.render import render\n"
+        "from brainpainter.testing import registered_renderer\n"
+        "if __name__ == '__main__':\n"
+        "    with registered_renderer('slow', SlowStandIn):\n"
+        "        render(sys.argv[2], 'dk', out=sys.argv[3], template=sys.argv[4], renderer='slow', jobs=2,\n"
+        "               views='lateral-left', width=40, height=30, progress=False)\n"
+    )
+    proc = subprocess.Popen([sys.executable, "-c", script, str(Path(__file__).parent), str(table), str(out),
+                             str(tiny)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and not (out.is_dir() and len(list(out.glob("*.png"))) >= 2):
+        time.sleep(0.05)
+    workers = psutil.Process(proc.pid).children(recursive=True)
+    assert len(workers) >= 2
+    proc.send_signal(signal.SIGINT)
+    t0 = time.monotonic()
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode != 0 and "KeyboardInterrupt" in err
+    assert time.monotonic() - t0 < 15  # not after the remaining ~200 images
+    assert len(list(out.glob("*.png"))) < 200 and not (out / "manifest.json").exists()
+    psutil.wait_procs(workers, timeout=10)
+    assert not [w.pid for w in workers if w.is_running() and w.status() != psutil.STATUS_ZOMBIE]
+
+
+def test_figure_and_movie_with_jobs_match_serial(tmp_path, tiny, table):
+    from brainpainter.figure import make_figure
+    from brainpainter.movie import make_movie
+
+    kw = {"template": str(tiny), "views": "lateral-left,subcortical", "width": 40, "height": 30,
+          "progress": False}
+    with stand_in() as renderer:
+        fig = make_figure(table, "dk", renderer=renderer, rows="S01,S03,S02", **kw)
+        fig2 = make_figure(table, "dk", renderer=renderer, rows="S01,S03,S02", jobs=2, **kw)
+        movie = dict(rows="S00,S05,S07", frames_per_step=4, hold=2, **kw)
+        a = make_movie(table, "dk", out=tmp_path / "serial.gif", renderer=renderer, **movie)
+        b = make_movie(table, "dk", out=tmp_path / "jobs.gif", renderer=renderer, jobs=2, **movie)
+    assert list(fig2.images) == list(fig.images)
+    assert all(np.array_equal(fig2.images[k], v) for k, v in fig.images.items())
+    assert a.n_frames == b.n_frames == 2 * 4 + 1 + 3 * 2
+    # frames rendered in parallel, encoded in order: the same file
+    assert (tmp_path / "jobs.gif").read_bytes() == (tmp_path / "serial.gif").read_bytes()
