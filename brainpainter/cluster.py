@@ -127,7 +127,7 @@ class DaskRunner(Runner):
     _plugin: str | None = field(default=None, init=False, repr=False)
     _futures: list[Any] = field(default_factory=list, init=False, repr=False)
 
-    def start(self) -> None:
+    def _start(self) -> None:
         distributed = import_distributed()
         assert self.spec is not None
         if self.client is None:

@@ -299,14 +299,23 @@ class Runner:
         Time each worker took to start its painter (import the renderer, load the scene).
     retried : list of str
         One line per task that failed and was sent again.
+    start_wall : float
+        Seconds :meth:`start` took (starting processes or reaching the cluster, and warming every painter).
     """
 
     n_workers: int = 1
     startup_seconds: list[float] = field(default_factory=list)
     retried: list[str] = field(default_factory=list)
+    start_wall: float = 0.0
 
     def start(self) -> None:
         """Start the workers and their painters; raises what a painter that cannot start raises."""
+        t0 = time.perf_counter()
+        self._start()
+        self.start_wall = time.perf_counter() - t0
+
+    def _start(self) -> None:
+        """What :meth:`start` does (timed by it)."""
 
     def map(self, chunks: Iterable[Sequence[Item]], *, ordered: bool = False,
             encode: bool = False) -> Iterator[tuple[int, list[Any]]]:
@@ -322,6 +331,7 @@ class Runner:
     def summary(self) -> dict[str, Any]:
         """What ran where, for :class:`~brainpainter.render.RenderResult` (never in the manifest)."""
         return {"backend": type(self).__name__, "workers": self.n_workers,
+                "start_wall": round(self.start_wall, 3),
                 "startup_seconds": [round(s, 3) for s in self.startup_seconds], "retried": list(self.retried)}
 
     def __enter__(self) -> Runner:
@@ -338,7 +348,7 @@ class SerialRunner(Runner):
 
     painter: Any = None
 
-    def start(self) -> None:
+    def _start(self) -> None:
         t0 = time.perf_counter()
         self.painter.load()
         self.startup_seconds = [time.perf_counter() - t0]
@@ -423,7 +433,7 @@ class LocalRunner(Runner):
     threads: int | None = None
     _pool: Any = field(default=None, init=False, repr=False)
 
-    def start(self) -> None:
+    def _start(self) -> None:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
