@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import os
 import sys
+import time
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -140,7 +141,7 @@ class DaskRunner(Runner):
                 ) from None
             self._own_client = True
         try:
-            workers = self.client.scheduler_info().get("workers", {})
+            workers = self.client.nthreads()  # {address: threads} of every worker
             if not workers:
                 try:
                     self.client.wait_for_workers(1, timeout=WORKER_WAIT_S)
@@ -149,7 +150,7 @@ class DaskRunner(Runner):
                         f"the Dask cluster has no workers after {WORKER_WAIT_S:g} s; start some (e.g. "
                         "cluster.scale(8)) and run again."
                     ) from None
-                workers = self.client.scheduler_info().get("workers", {})
+                workers = self.client.nthreads()
             plugin = PainterPlugin(self.spec, self.threads)
             self.client.register_plugin(plugin, name=plugin.name)
             self._plugin = plugin.name
@@ -160,7 +161,7 @@ class DaskRunner(Runner):
         except BaseException:
             self.close()
             raise
-        self.n_workers = max(1, len(self.client.scheduler_info().get("workers", {})))
+        self.n_workers = max(1, len(self.client.nthreads()))
         self.startup_seconds = [seconds for _, _, seconds in done]
 
     def map(self, chunks: Iterable[Sequence[Item]], *, ordered: bool = False,
@@ -197,9 +198,17 @@ class DaskRunner(Runner):
         def wait_any(futures: list[Any]) -> Iterable[Any]:
             return wait(futures, return_when="FIRST_COMPLETED").done
 
+        asked = [time.monotonic()]
+
+        def window() -> int:
+            """Two tasks per worker in flight; workers that join later (cluster.scale) get work too."""
+            if time.monotonic() - asked[0] > 2.0:
+                asked[0] = time.monotonic()
+                self.n_workers = max(1, len(self.client.nthreads()))
+            return 2 * self.n_workers + 2
+
         try:
-            yield from drive(chunks, submit, wait_any, collect, window=2 * self.n_workers + 2,
-                              ordered=ordered)
+            yield from drive(chunks, submit, wait_any, collect, window=window, ordered=ordered)
         except BaseException:
             if self._futures:
                 self.client.cancel(self._futures)  # queued tasks go; running ones end with their chunk

@@ -534,7 +534,8 @@ def make_figure(
     nan, missing = swatches_needed(table, chosen, run.views, painter.scene.hidden)
     plan = [(i, view) for i in chosen for view in run.views]
     items = [Item(region_colors(table.row(i), table.atlas, run.scale), view) for i, view in plan]
-    with make_runner(painter, template, jobs=jobs, client=client, scheduler=scheduler) as runner, \
+    with make_runner(painter, template, jobs=jobs, client=client, scheduler=scheduler,
+                     n_items=len(plan)) as runner, \
             tqdm(total=len(plan), unit="img", desc="rendering", disable=not progress) as bar:
         pixels = paint_all(runner, items, bar)
     images = {(table.images[i], view.name): px for (i, view), px in zip(plan, pixels, strict=True)}

@@ -698,7 +698,6 @@ def make_movie(
         per_view = [orbit_views(painter, v, [v.azimuth + a for a in azimuths], w / h) for v in run.views]
     else:
         per_view = [[v] * n for v in run.views]
-    runner = make_runner(painter, template, jobs=jobs, client=client, scheduler=scheduler)
     key_values = table.values[keys]
     names = [table.images[i] for i in keys]
 
@@ -715,6 +714,8 @@ def make_movie(
         if not states or states[-1] != state:
             states.append(state)
         frame_state.append(len(states) - 1)
+    runner = make_runner(painter, template, jobs=jobs, client=client, scheduler=scheduler,
+                         n_items=len(states))
 
     def chunks() -> Iterator[list[Item]]:
         for a, b, weight, state_views in states:

@@ -247,18 +247,21 @@ class WarmPainter:
 # -- the generic loop ------------------------------------------------------------------
 def drive(chunks: Iterable[Sequence[Item]], submit: Callable[[Sequence[Item]], Any],
            wait_any: Callable[[list[Any]], Iterable[Any]], collect: Callable[[Any, Sequence[Item]], Any],
-           window: int, ordered: bool) -> Iterator[tuple[int, list[Any]]]:
+           window: int | Callable[[], int], ordered: bool) -> Iterator[tuple[int, list[Any]]]:
     """Keep at most `window` chunks submitted or waiting; yield ``(chunk index, results)``.
 
     `collect(future, chunk)` returns the chunk's results, or a new future
     (a retry) wrapped in ``Retry``. With `ordered`, results come in chunk order.
+    `window` may be a callable, asked again after each batch of results (a
+    cluster whose workers come and go).
     """
     source = enumerate(chunks)
     pending: dict[Any, tuple[int, Sequence[Item]]] = {}
     ready: dict[int, list[Any]] = {}
     next_index, exhausted = 0, False
     while True:
-        while not exhausted and len(pending) + len(ready) < window:
+        limit = window() if callable(window) else window
+        while not exhausted and len(pending) + len(ready) < limit:
             try:
                 index, chunk = next(source)
             except StopIteration:
@@ -522,7 +525,7 @@ def check_options(jobs: int | str | None = 1, client: Any = None, scheduler: str
 
 
 def make_runner(painter: Painter, template: Any = None, *, jobs: int | str | None = 1, client: Any = None,
-                scheduler: str | None = None) -> Runner:
+                scheduler: str | None = None, n_items: int | None = None) -> Runner:
     """The runner for a run's options: serial, local processes, or Dask.
 
     Parameters
@@ -537,8 +540,12 @@ def make_runner(painter: Painter, template: Any = None, *, jobs: int | str | Non
     scheduler : str, optional
         Dask scheduler address; default ``$BRAINPAINTER_SCHEDULER`` only where
         the caller (the CLI) passes it.
+    n_items : int, optional
+        Images (or frames) to paint: no more local workers than that are started.
     """
     n = check_options(jobs, client, scheduler)
+    if n_items is not None:
+        n = min(n, max(1, n_items))
     if client is not None or scheduler:
         from brainpainter.cluster import DaskRunner
 

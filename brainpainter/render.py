@@ -371,7 +371,8 @@ def render(
             "make the image names differ in letters or digits."
         )
     painter = Painter(atlas, template, surface, hide, settings, renderer)
-    runner = make_runner(painter, template, jobs=jobs, client=client, scheduler=scheduler)
+    runner = make_runner(painter, template, jobs=jobs, client=client, scheduler=scheduler,
+                         n_items=len(table.images) * len(view_list))
     # The renderer (or every worker's) starts before any output exists: one that cannot start leaves none.
     runner.start()
     try:

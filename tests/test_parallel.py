@@ -176,8 +176,7 @@ def test_dask_retries_a_failed_task_and_reports_it(tmp_path, tiny, table, cluste
     assert par.manifest["files"] == serial.manifest["files"]
 
 
-def test_killing_a_dask_worker_mid_run_loses_no_image(tmp_path, tiny, table):
-    distributed = pytest.importorskip("distributed")
+def test_killing_a_dask_worker_mid_run_loses_no_image(tmp_path, tiny, table, cluster):
     rows = "".join(f"S{i:02d},{i % 4},{i % 3},{i}\n" for i in range(24))
     table.write_text("Image-name-unique,Left-insula,Right-insula,Left-precuneus\n" + rows)
     kw = {**KW, "views": "lateral-left"}
@@ -185,8 +184,8 @@ def test_killing_a_dask_worker_mid_run_loses_no_image(tmp_path, tiny, table):
         render(table, "dk", out=tmp_path / "serial", template=str(tiny), renderer="slow", **kw)
     out = tmp_path / "dask"
     killed: list[int] = []
-    with local_cluster(distributed) as c, distributed.Client(c) as client, \
-            registered_renderer("slow", SlowStandIn):
+    client = cluster  # its nanny restarts the killed worker for the tests after this one
+    with registered_renderer("slow", SlowStandIn):
         pids = client.run(os.getpid)
 
         def kill_when_started():
