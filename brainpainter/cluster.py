@@ -196,7 +196,8 @@ class DaskRunner(Runner):
             return Retry(submit(chunk, attempt + 1))
 
         def wait_any(futures: list[Any]) -> Iterable[Any]:
-            return wait(futures, return_when="FIRST_COMPLETED").done
+            with self.client.as_current():  # wait() uses the current client; ours need not be the default
+                return wait(futures, return_when="FIRST_COMPLETED").done
 
         asked = [time.monotonic()]
 

@@ -48,7 +48,8 @@ def table(tmp_path):
 @pytest.fixture(scope="module")
 def cluster():
     distributed = pytest.importorskip("distributed")
-    with local_cluster(distributed) as c, distributed.Client(c) as client:
+    # not the default client: brainpainter must use the client it is given, not a global one
+    with local_cluster(distributed) as c, distributed.Client(c, set_as_default=False) as client:
         yield client
 
 
