@@ -13,6 +13,7 @@ from __future__ import annotations
 import os
 import sys
 import time
+import uuid
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -61,7 +62,7 @@ class PainterPlugin(WorkerPlugin):
     def __init__(self, spec: PainterSpec, threads: int = 1) -> None:
         self.spec = spec
         self.threads = threads
-        self.name = f"brainpainter-{spec.token}"
+        self.name = f"brainpainter-{spec.token}-{uuid.uuid4().hex[:8]}"  # one per run, even of one spec
         self.warm: WarmPainter | None = None
 
     def setup(self, worker: Any) -> None:
