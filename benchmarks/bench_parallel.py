@@ -5,7 +5,8 @@ as a user's run does), renders the same table into its own folder, and the
 outputs are compared byte for byte. Printed per mode: wall time of the whole
 ``render()`` call, time to start the workers (spawn, import, load the scene:
 ``start``), each worker's painter start-up, images per second after start-up,
-and the speed-up over the serial run. The Dask cluster's own start-up (before
+the speed-up over the serial run, and the CPU seconds per image of all the
+run's processes (workers included). The Dask cluster's own start-up (before
 ``render()``) is printed apart, since a cluster normally outlives one run.
 
     python benchmarks/bench_parallel.py                      # the issue's: 100 rows x 3 views, 1200x900
@@ -21,6 +22,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -95,18 +97,22 @@ def main() -> None:
             spec = {"mode": mode, "example": str(EXAMPLE), "rows": args.rows, "views": args.views,
                     "size": args.size, "jobs": args.jobs, "out": str(Path(tmp) / mode)}
             t = time.perf_counter()
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
             out = subprocess.run([sys.executable, "-c", CHILD, json.dumps(spec)], capture_output=True,
                                  text=True, check=False)
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
             if out.returncode != 0:
                 sys.exit(f"{mode} failed:\n{out.stderr[-3000:]}")
             r = json.loads(out.stdout.strip().splitlines()[-1])
             r["process"] = time.perf_counter() - t
+            # CPU seconds of the run's processes (workers included): on a busy machine, the fairer measure
+            r["cpu"] = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
             results[mode] = r
             print(json.dumps(r), f"load {loadavg()}", flush=True)
         base = results.get("serial")
         print("\n| run | workers | render() wall | start of workers | painter start-up each | "
-              "images/s after start | speed-up | identical to serial |")
-        print("|---|---|---|---|---|---|---|---|")
+              "images/s after start | speed-up | CPU s per image (all processes) | identical to serial |")
+        print("|---|---|---|---|---|---|---|---|---|")
         for mode, r in results.items():
             rate = r["images"] / max(1e-9, r["wall"] - r["start"])
             speed = f"x{base['wall'] / r['wall']:.2f}" if base else "-"
@@ -114,7 +120,7 @@ def main() -> None:
                 "yes" if same(Path(tmp) / "serial", Path(tmp) / mode) else "NO")
             startup = ", ".join(f"{s:.1f}" for s in r["startup"])
             print(f"| {mode} | {r['workers']} | {r['wall']:.1f} s | {r['start']:.1f} s | {startup} s | "
-                  f"{rate:.2f} | {speed} | {ident} |")
+                  f"{rate:.2f} | {speed} | {r['cpu'] / r['images']:.2f} | {ident} |")
         if "dask" in results:
             print(f"\nDask LocalCluster start (before render()): {results['dask']['cluster_s']:.1f} s")
     print(f"load after {loadavg()}")
