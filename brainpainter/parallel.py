@@ -138,7 +138,7 @@ class PainterSpec:
 
     @classmethod
     def of(cls, painter: Painter, template: Any = None) -> PainterSpec:
-        """The spec of a (not yet loaded) painter; `template` is what the caller gave, if a name."""
+        """The spec of a (not yet loaded) painter; `template` is what the caller gave (a name or a folder)."""
         from brainpainter import registry
 
         klass = registry.renderers.get(painter.renderer)
@@ -147,7 +147,9 @@ class PainterSpec:
                   if isinstance(klass, type) and "<locals>" not in qual else None)
         return cls(
             atlas=painter.atlas,
-            template=template if isinstance(template, str) else str(painter.scene.template.path),
+            # a template name travels as a name (resolved by each worker); a folder as an absolute path
+            template=(template if isinstance(template, str) and not os.path.exists(template)
+                      else os.path.abspath(painter.scene.template.path)),
             surface=painter.surface, hidden=tuple(str(h) for h in painter.hidden),
             settings=painter.settings, renderer=painter.renderer, renderer_target=target,
             medial_wall_color=tuple(float(c) for c in painter.scene.medial_wall_color),  # type: ignore[arg-type]
