@@ -160,6 +160,9 @@ def test_dask_cluster_writes_the_serial_files_and_manifest(tmp_path, tiny, table
     assert same_files(tmp_path / "serial", tmp_path / "dask") == []
     assert par.manifest == serial.manifest and par.workers["backend"] == "DaskRunner"
     assert list(mem.images) == [(f["image"], f["view"]) for f in serial.manifest["files"]]
+    for (image, view), pixels in mem.images.items():  # PNG bytes decoded: the exact pixels
+        with Image.open(tmp_path / "serial" / f"{image}_{view}.png") as png:
+            assert np.array_equal(pixels, np.asarray(png))
     # the run's worker plugin is gone afterwards (its painters closed)
     plugins = cluster.run(lambda dask_worker: sorted(dask_worker.plugins))
     assert not any(name.startswith("brainpainter-") for names in plugins.values() for name in names)
