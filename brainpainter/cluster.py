@@ -98,7 +98,7 @@ def _dask_paint(name: str, items: Sequence[Item]) -> list[bytes]:
 
 
 def _describe(chunk: Sequence[Item]) -> str:
-    names = [str((item.metadata or {}).get("brainpainter:image", "?")) for item in chunk]
+    names = [item.label or str((item.metadata or {}).get("brainpainter:image", "?")) for item in chunk]
     return ", ".join(dict.fromkeys(names))
 
 

@@ -533,7 +533,8 @@ def make_figure(
     painter = Painter(table.atlas, template, surface, hide, run.settings, renderer)
     nan, missing = swatches_needed(table, chosen, run.views, painter.scene.hidden)
     plan = [(i, view) for i in chosen for view in run.views]
-    items = [Item(region_colors(table.row(i), table.atlas, run.scale), view) for i, view in plan]
+    items = [Item(region_colors(table.row(i), table.atlas, run.scale), view, label=table.images[i])
+             for i, view in plan]
     with make_runner(painter, template, jobs=jobs, client=client, scheduler=scheduler,
                      n_items=len(plan)) as runner, \
             tqdm(total=len(plan), unit="img", desc="rendering", disable=not progress) as bar:

@@ -722,7 +722,8 @@ def make_movie(
             values = interpolate(key_values[a], key_values[b], weight)
             colors = region_colors(dict(zip(table.regions, values.tolist(), strict=True)), table.atlas,
                                    run.scale)
-            yield [Item(colors, view) for view in state_views]
+            label = names[a] if a == b else f"{names[a]} {ARROW} {names[b]} ({weight:.3f})"
+            yield [Item(colors, view, label=label) for view in state_views]
 
     def frames() -> Iterator[np.ndarray]:
         i = 0

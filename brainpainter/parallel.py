@@ -193,12 +193,15 @@ class Item:
         sRGB 0-1 colour of each region key (:func:`brainpainter.render.region_colors`).
     view : View
     metadata : dict of str to str, optional
-        PNG text chunks; with them the worker returns the finished PNG file's bytes.
+        PNG text chunks, for images returned as PNG files.
+    label : str
+        What the image is (an image name, a frame), for messages about a failed task.
     """
 
     colors: Mapping[str, RGB]
     view: View
     metadata: Mapping[str, str] | None = None
+    label: str = ""
 
 
 def paint_items(painter: Painter, items: Iterable[Item], encode: bool) -> list[Any]:

@@ -413,8 +413,8 @@ def render(
             else:
                 chunks = chunked(plan, runner.chunk_size(len(plan)))
                 items = ([Item(region_colors(table.row(i), atlas, scale), view,
-                               None if out_dir is None else path_meta(i, view)[1]) for i, view in chunk]
-                         for chunk in chunks)
+                               None if out_dir is None else path_meta(i, view)[1], table.images[i])
+                          for i, view in chunk] for chunk in chunks)
                 by_index: dict[int, list[np.ndarray]] = {}
                 for index, results in runner.map(items, encode=out_dir is not None):
                     if out_dir is None:
