@@ -2,10 +2,14 @@
 
 Prints images per second, median seconds per image, time to the first image
 from a cold process, and peak memory for two row counts (to show that memory
-does not grow with the number of rows).
+does not grow with the number of rows). Then, in the same run, the peer
+comparison: brainpainter's render + read-back of one 1200x900 view against
+PyVista/VTK's (off screen, SSAA, the same left-hemisphere mesh and colours,
+a real render forced before every read-back), and their ratio.
 
     python benchmarks/bench_render.py                 # 50 rows x 3 default views, 1200x900
     python benchmarks/bench_render.py --rows 10 --quality fast
+    python benchmarks/bench_render.py --no-peer       # without PyVista (pip install -e .[bench])
 
 Record results in docs/benchmarks.md with the machine they ran on.
 """
@@ -48,8 +52,76 @@ render(big, "dk", out=args["out"], views=args["views"], width=args["width"], hei
 t_end = time.perf_counter()
 peak_mb = next(int(l.split()[1]) for l in open("/proc/self/status") if l.startswith("VmHWM:")) / 1024
 print(json.dumps({"t_first": stamps[0] - t0, "t_total": t_end - t0, "stamps": [s - t0 for s in stamps],
-                  "peak_mb": peak_mb}))
+                  "peak_mb": peak_mb, "cpu_s": time.process_time()}))
 """
+
+
+# Render + read-back of one view, brainpainter and PyVista/VTK alike: the left hemisphere's pial
+# mesh of the bundled template, lateral-left, a random colour per region for every image.
+PEER = r"""
+import json, sys, time
+import numpy as np
+args = json.loads(sys.argv[1])
+from brainpainter.render import Painter
+from brainpainter.scene import RenderSettings
+from brainpainter.views import get_view
+painter = Painter("dk", settings=RenderSettings(args["width"], args["height"]))
+view = get_view("lateral-left")
+part = next(p for p in painter.scene.geometry.parts if p.name == "cortex-lh")
+rng = np.random.default_rng(0)
+palettes = [rng.random((painter.scene.geometry.n_slots, 3)) for _ in range(args["n"] + 2)]
+keys = painter.scene.geometry.keys
+times, cpu = [], []
+if args["engine"] == "brainpainter":
+    painter.load()
+    for i, pal in enumerate(palettes):
+        colors = {k: tuple(pal[3 + j]) for j, k in enumerate(keys)}
+        t, c = time.perf_counter(), time.process_time()
+        img = painter.paint_colors(colors, view)
+        times.append(time.perf_counter() - t)
+        cpu.append(time.process_time() - c)
+else:
+    import pyvista as pv
+    pose = painter.scene.geometry.camera(view, args["width"] / args["height"])
+    faces = np.hstack([np.full((len(part.triangles), 1), 3), part.triangles]).astype(np.int64).ravel()
+    mesh = pv.PolyData(part.vertices.astype(np.float64), faces)
+    mesh.point_data["Normals"] = part.normals
+    mesh.point_data["rgb"] = np.zeros((len(part.vertices), 3), np.uint8)
+    pl = pv.Plotter(off_screen=True, window_size=(args["width"], args["height"]))
+    pl.set_background("white")
+    pl.add_mesh(mesh, scalars="rgb", rgb=True, smooth_shading=True)
+    pl.enable_anti_aliasing("ssaa")
+    pl.camera.SetParallelProjection(True)
+    pl.camera.position = tuple(pose.location)
+    pl.camera.focal_point = tuple(pose.location - 100 * pose.back)
+    pl.camera.up = tuple(pose.up)
+    pl.camera.parallel_scale = pose.ortho_scale / args["width"] * args["height"] / 2
+    pl.renderer.ResetCameraClippingRange()
+    for pal in palettes:
+        t, c = time.perf_counter(), time.process_time()
+        mesh.point_data["rgb"][:] = np.round(pal[part.palette_index] * 255).astype(np.uint8)
+        mesh.point_data["rgb"] = mesh.point_data["rgb"]  # marks the array modified
+        pl.render()  # force a real render: a screenshot alone may return the last frame
+        img = pl.screenshot(return_img=True)
+        times.append(time.perf_counter() - t)
+        cpu.append(time.process_time() - c)
+    assert img.shape[:2] == (args["height"], args["width"])
+    pl.close()
+print(json.dumps({"times": times[2:], "cpu": cpu[2:]}))
+"""
+
+
+def run_peer(engine: str, args: argparse.Namespace, n: int = 20) -> tuple[float, float]:
+    """Median wall and CPU seconds of one render + read-back."""
+    cfg = {"engine": engine, "width": args.width, "height": args.height, "n": n}
+    proc = subprocess.run([sys.executable, "-c", PEER, json.dumps(cfg)], capture_output=True, text=True,
+                          check=True)
+    out = _last_json(proc.stdout)
+    return statistics.median(out["times"]), statistics.median(out["cpu"])
+
+
+def _last_json(text: str) -> dict:
+    return json.loads([line for line in text.splitlines() if line.startswith("{")][-1])
 
 
 def run_child(rows: int, args: argparse.Namespace) -> dict:
@@ -61,7 +133,7 @@ def run_child(rows: int, args: argparse.Namespace) -> dict:
         proc = subprocess.run([sys.executable, "-c", code, json.dumps(cfg)], capture_output=True,
                               text=True, check=True)
         wall = time.perf_counter() - start
-        result = json.loads(proc.stdout.strip().splitlines()[-1])
+        result = _last_json(proc.stdout)
         result["wall"] = wall
         result["n_images"] = len(list(Path(out).glob("*.png")))
         return result
@@ -75,6 +147,7 @@ def main() -> None:
     parser.add_argument("--views", default="lateral-left,medial-left,subcortical")
     parser.add_argument("--size", default="1200x900")
     parser.add_argument("--quality", default="default")
+    parser.add_argument("--no-peer", action="store_true", help="skip the PyVista/VTK comparison")
     args = parser.parse_args()
     args.width, args.height = (int(x) for x in args.size.split("x"))
 
@@ -89,6 +162,8 @@ def main() -> None:
         "size": args.size,
         "quality": args.quality,
         "images_per_second": round(n / big["t_total"], 2),
+        # CPU seconds (all threads) per image: what the run costs whatever the machine's load
+        "cpu_s_per_image_incl_startup": round(big["cpu_s"] / n, 3),
         "amortised_s_per_image_incl_startup": round(amortised, 3),
         "median_s_per_image_steady": round(statistics.median(per_image), 3) if per_image else None,
         "time_to_first_image_cold_s": round(big["t_first"], 2),
@@ -96,6 +171,19 @@ def main() -> None:
         f"peak_memory_mb_{args.small_rows}_rows": round(small["peak_mb"]),
         f"peak_memory_mb_{args.rows}_rows": round(big["peak_mb"]),
     }
+    if not args.no_peer:
+        ours = run_peer("brainpainter", args)
+        try:
+            theirs = run_peer("pyvista", args)
+        except subprocess.CalledProcessError as exc:
+            report["peer_error"] = exc.stderr.strip().splitlines()[-1:]
+        else:
+            report["render_readback_median_s"] = {"brainpainter": round(ours[0], 4),
+                                                  "pyvista_vtk_ssaa": round(theirs[0], 4)}
+            report["render_readback_median_cpu_s"] = {"brainpainter": round(ours[1], 4),
+                                                      "pyvista_vtk_ssaa": round(theirs[1], 4)}
+            report["pyvista_over_brainpainter"] = round(theirs[0] / ours[0], 2)
+            report["pyvista_over_brainpainter_cpu"] = round(theirs[1] / ours[1], 2)
     print(json.dumps(report, indent=2))
 
 

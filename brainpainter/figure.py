@@ -157,11 +157,12 @@ def select_rows(images: Sequence[str], rows: Iterable[str | int] | str | None) -
 
 def drawn_keys(atlas: Atlas, views: Sequence[View], hidden: Iterable[str] = ()) -> list[str]:
     """Region keys that some view draws: its hemispheres' cortex, or the subcortical structures."""
+    from brainpainter.framing import shows
+
     hidden = set(hidden)
-    hemis = {h for v in views if v.content == "cortex" for h in v.hemis}
-    sub = any(v.content == "subcortical" for v in views)
-    return [r.key for r in atlas.regions if r.key not in hidden
-            and ((r.kind == "cortical" and r.hemi in hemis) or (r.kind == "subcortical" and sub))]
+    return [r.key for r in atlas.regions if r.key not in hidden and any(
+        shows(v, "cortex", r.hemi) if r.kind == "cortical" else shows(v, "subcortical", None)
+        for v in views)]
 
 
 def swatches_needed(table: RegionTable, rows: Sequence[int], views: Sequence[View],

@@ -270,41 +270,13 @@ def key_frames(table: RegionTable, rows: Sequence[int], times: Mapping[str, floa
 
 
 # -- orbit -----------------------------------------------------------------------------
-def _view_points(painter: Painter, view: View, limit: int = 20_000) -> np.ndarray:
-    """Vertices of what `view` draws (sub-sampled), for keeping the scale fixed in an orbit."""
-    scene = painter.scene
-    tpl = scene.template
-    parts: list[np.ndarray] = []
-    if view.content == "subcortical":
-        parts.append(np.asarray(tpl.subcortical().vertices))
-    else:
-        for hemi in view.hemis:
-            mesh = tpl.cortex(scene.labels, hemi)
-            parts.append(np.asarray(mesh.vertices.get(scene.surface, next(iter(mesh.vertices.values())))))
-    for hemi in view.glass:
-        parts.append(np.asarray(tpl.glass(hemi)[0]))
-    pts = np.vstack(parts).astype(float) if parts else np.zeros((1, 3))
-    step = max(1, len(pts) // limit)
-    return pts[::step]
-
-
-def _extent(points: np.ndarray, azimuth: float, elevation: float, aspect: float) -> float | None:
-    """Width the camera must see for `points` from this direction (None straight above/below)."""
-    az, el = np.radians(azimuth), np.radians(elevation)
-    if abs(np.cos(el)) < 1e-6:
-        return None
-    back = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
-    right = np.cross(-back, [0.0, 0.0, 1.0])
-    right /= np.linalg.norm(right)
-    up = np.cross(right, -back)
-    u, v = points @ right, points @ up
-    return max(float(np.ptp(u)), float(np.ptp(v)) * aspect)
-
-
 def orbit_views(painter: Painter, view: View, azimuths: Sequence[float], aspect: float) -> list[View]:
     """`view` turned to each azimuth, zoomed so the image scale stays that of the widest direction."""
-    points = _view_points(painter, view)
-    extents = [_extent(points, az, view.elevation, aspect) for az in azimuths]
+    from brainpainter.framing import extent
+
+    # the hull points the camera frames (brainpainter.geometry), so the orbit and each image agree
+    points = np.vstack([p.hull for p in painter.scene.geometry.visible(view)])
+    extents = [extent(points, az, view.elevation, aspect) for az in azimuths]
     widest = max((e for e in extents if e), default=None)
     out = []
     for az, e in zip(azimuths, extents, strict=True):

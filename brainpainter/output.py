@@ -62,8 +62,36 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
         raise
 
 
+# Imported with this module, early and on the caller's thread: fpng's import walks the
+# interpreter stack (lazy_loader), which takes seconds on a PNG worker thread once bpy is loaded.
+try:
+    import fpng as _fpng
+except ImportError:  # pragma: no cover - fpng is a dependency; Pillow is the fallback
+    _fpng = None
+
+
+def _png_chunk(kind: bytes, data: bytes) -> bytes:
+    import struct
+    import zlib
+
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+
 def png_bytes(image: np.ndarray, metadata: dict[str, str] | None = None) -> bytes:
-    """Encode an RGBA uint8 image, shape (h, w, 4), as PNG with text chunks."""
+    """Encode an RGBA uint8 image, shape (h, w, 4), as PNG with iTXt text chunks.
+
+    Uses ``fpng`` (about 10x faster than zlib level 6, lossless, files ~20 %
+    larger) when it is installed, else Pillow with ``compress_level=1``. The
+    text chunks go right after the header, as Pillow writes them.
+    """
+    pixels = np.ascontiguousarray(image, dtype=np.uint8)
+    if _fpng is not None and pixels.ndim == 3 and pixels.shape[2] in (3, 4):
+        data = _fpng.from_ndarray(pixels)
+        chunks = b"".join(
+            _png_chunk(b"iTXt", k.encode("latin-1") + b"\0\0\0\0\0" + str(v).encode("utf-8"))
+            for k, v in (metadata or {}).items())
+        head = 8 + 25  # signature, IHDR chunk
+        return data[:head] + chunks + data[head:]
     import io
 
     from PIL import Image
@@ -73,7 +101,7 @@ def png_bytes(image: np.ndarray, metadata: dict[str, str] | None = None) -> byte
     for k, v in (metadata or {}).items():
         info.add_itxt(k, v)
     buf = io.BytesIO()
-    Image.fromarray(np.ascontiguousarray(image), mode="RGBA").save(buf, format="PNG", pnginfo=info)
+    Image.fromarray(pixels).save(buf, format="PNG", pnginfo=info, compress_level=1)
     return buf.getvalue()
 
 

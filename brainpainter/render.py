@@ -25,6 +25,7 @@ from brainpainter.colormap import (
 )
 from brainpainter.colors import ColorLike, to_rgb
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.geometry import Palette
 from brainpainter.inputs import RegionTable, read_table
 from brainpainter.scene import RGB, RenderSettings, Scene
 from brainpainter.template import Template, load_template
@@ -152,7 +153,9 @@ class Painter:
     def paint_colors(self, colors: Mapping[str, RGB], view: View) -> np.ndarray:
         """Render explicit region colours (group keys colour their members); RGBA uint8, (h, w, 4)."""
         assert isinstance(self.atlas, Atlas)
-        return self.load().render(self.atlas.expand(colors), view)
+        scene = self.scene
+        palette = Palette(self.atlas.expand(colors), lambda: scene.geometry)
+        return self.load().render(palette, view)
 
     def paint(self, values: Mapping[str, float], view: View, scale: ColourScale) -> np.ndarray:
         """Render region values through `scale`; returns RGBA uint8, shape (h, w, 4)."""

@@ -1,7 +1,8 @@
 """The scene description handed from the core engine to a renderer.
 
 The core maps values to colours; a renderer only sees a :class:`Scene`
-(loaded once) and, per image, a mapping of region key to sRGB colour plus a
+(loaded once; ``scene.geometry`` holds its ready-to-draw parts) and, per
+image, a :class:`~brainpainter.geometry.Palette` plus a
 :class:`~brainpainter.views.View`. Renderers never parse input tables.
 
 Region keys are BrainPainter's column names: ``"Left-insula"``,
@@ -13,9 +14,9 @@ a template are already keys. Cortex labels with no colour in the mapping
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Protocol
+from functools import cached_property
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -23,10 +24,15 @@ from brainpainter.errors import choice_error
 from brainpainter.template import SURFACES, Template
 from brainpainter.views import View
 
+if TYPE_CHECKING:
+    from brainpainter.geometry import Palette, SceneGeometry
+
 RGB = tuple[float, float, float]
 QUALITIES = ("fast", "default", "high")
 SHADINGS = ("default", "flat")
-LIGHTINGS = ("studio", "soft", "flat-studio")
+LIGHTINGS = ("studio", "soft", "flat-studio", "sulc")
+#: Lighting presets that darken sulci (they need the cortex's sulcal depth).
+SULC_LIGHTINGS = ("flat-studio", "sulc")
 
 
 @dataclass(frozen=True)
@@ -40,11 +46,15 @@ class RenderSettings:
     background : tuple of float, shape (3,), or None
         sRGB 0-1; ``None`` renders a transparent background.
     quality : {"fast", "default", "high"}
-        Workbench without / with anti-aliasing; ``high`` = Cycles path tracing.
+        ``fast``: no anti-aliasing; ``default``: 2x2 supersampling; ``high``:
+        path tracing (Cycles), or 3x3 supersampling for flat shading.
     shading : {"default", "flat"}
         ``flat`` draws exact, unlit colours.
-    lighting : str
-        Lighting preset for default shading.
+    lighting : {"studio", "soft", "flat-studio", "sulc"}
+        Lighting preset for default shading: ``studio`` key + fill + ambient
+        light that follow the camera; ``soft`` more ambient, flatter; ``sulc``
+        studio plus a slight darkening of sulci (sulcal depth);
+        ``flat-studio`` unlit colours darkened in sulci.
     glass_opacity : float
         Opacity of the glass brain, 0-1.
     """
@@ -102,29 +112,43 @@ class Scene:
         if self.surface not in SURFACES:
             raise choice_error("surface", self.surface, SURFACES)
 
+    @cached_property
+    def geometry(self) -> SceneGeometry:
+        """Ready-to-draw parts and palette slots (:class:`~brainpainter.geometry.SceneGeometry`)."""
+        from brainpainter.geometry import SceneGeometry
+
+        return SceneGeometry(self)
+
 
 class Renderer(Protocol):
-    """What a ``brainpainter.renderers`` entry point must provide.
+    """What a ``brainpainter.renderers`` entry point must provide (see ``docs/renderers.md``).
 
     The entry point names a class; ``cls(scene)`` loads the scene once (the
-    expensive part) and then ``render`` only re-colours and re-aims it.
+    expensive part: upload ``scene.geometry``'s parts) and then ``render``
+    only re-colours (a palette upload) and re-aims (the view's camera from
+    ``scene.geometry.camera``). Check a renderer with
+    :func:`brainpainter.testing.check_renderer`.
     """
 
     def __init__(self, scene: Scene) -> None: ...
 
-    def render(self, colors: Mapping[str, RGB], view: View) -> np.ndarray:
+    def render(self, palette: Palette, view: View) -> np.ndarray:
         """Render one image.
 
         Parameters
         ----------
-        colors : mapping of str to (r, g, b)
-            sRGB 0-1 colour of every region key to colour.
+        palette : brainpainter.geometry.Palette
+            ``palette.rgb`` (float32, shape (n_slots, 3), sRGB 0-1) colours the
+            per-vertex palette indices of ``scene.geometry``; the palette is also
+            the mapping region key -> sRGB of the colours given.
         view : View
+            ``scene.geometry.visible(view)`` and ``scene.geometry.camera(view, aspect)``
+            say what to draw and from where.
 
         Returns
         -------
         ndarray of uint8, shape (height, width, 4)
-            RGBA pixels, row 0 at the top, sRGB.
+            RGBA pixels, row 0 at the top, sRGB, straight (not premultiplied) alpha.
         """
         ...
 

@@ -193,7 +193,10 @@ class StandInRenderer:
 
         type(self).calls.append((dict(colors), view))
         s = self.scene.settings
-        parts = ["subcortical"] if view.content == "subcortical" else list(view.hemis)
+        from brainpainter.framing import shows
+
+        kinds = {"lh": ("cortex", "lh"), "rh": ("cortex", "rh"), "subcortical": ("subcortical", None)}
+        parts = [p for p, (kind, hemi) in kinds.items() if shows(view, kind, hemi)]
         default = {"subcortical": (0.8, 0.8, 0.8)}
         stripes = []
         for part in parts:
@@ -293,6 +296,279 @@ def check_atlas(atlas: Any, template: str | Path = "fsaverage") -> dict[str, Any
         "n_cortical": {h: len(a.cortical(h)) for h in ("lh", "rh")}, "n_subcortical": len(a.subcortical()),
         "n_regions_matched": summary["n_regions_matched"], "unmatched_columns": summary["unmatched_columns"],
     }
+
+
+# -- renderer conformance ------------------------------------------------------------------
+#: Distinct flat colours of the tiny template's regions (sRGB 0-1).
+_CONFORMANCE_COLORS = {
+    "Left-insula": (0.90, 0.10, 0.10), "Left-precuneus": (0.10, 0.75, 0.20),
+    "Left-superiorfrontal": (0.15, 0.25, 0.95), "Left-unknown": (0.95, 0.85, 0.10),
+    "Right-insula": (0.85, 0.15, 0.85), "Right-precuneus": (0.10, 0.80, 0.85),
+    "Right-superiorfrontal": (1.00, 0.55, 0.05), "Right-unknown": (0.45, 0.20, 0.70),
+    "Left-Hippocampus": (0.60, 0.05, 0.05), "Right-Hippocampus": (0.05, 0.35, 0.60),
+}
+CONFORMANCE_CHECKS = ("orientation", "flat_colors", "nan_missing", "transparent", "glass", "no_holes",
+                      "repeatable", "memory")
+
+
+def _near(img: Any, rgb: Any, tol: float) -> Any:
+    import numpy as np
+
+    target = np.round(np.asarray(rgb, dtype=float)[:3] * 255)
+    return np.abs(img[..., :3].astype(float) - target).max(axis=-1) <= tol
+
+
+def _expected_layout(scene: Any, view: Any, width: int, height: int) -> dict[int, tuple[Any, float]]:
+    """Per palette slot: area-weighted pixel centroid and pixel area of its faces facing the camera."""
+    import numpy as np
+
+    from brainpainter import framing
+
+    geometry = scene.geometry
+    pose = geometry.camera(view, width / height)
+    px_per_mm = width / pose.ortho_scale
+    out: dict[int, tuple[Any, float]] = {}
+    for part in geometry.visible(view):
+        if part.kind == "glass":
+            continue
+        tri = part.triangles.astype(np.int64)
+        v = part.vertices.astype(float)
+        cross = np.cross(v[tri[:, 1]] - v[tri[:, 0]], v[tri[:, 2]] - v[tri[:, 0]])
+        area = np.clip(cross @ pose.back, 0.0, None) / 2.0 * px_per_mm**2  # projected, pixels
+        centre = framing.to_pixels(v[tri].mean(axis=1), pose, width, height)
+        slot = part.palette_index[tri[:, 0]]
+        for s in np.unique(slot):
+            m = (slot == s) & (area > 0)
+            if m.any():
+                out[int(s)] = ((centre[m] * area[m, None]).sum(axis=0) / area[m].sum(), float(area[m].sum()))
+    return out
+
+
+def check_renderer(renderer: str | type, size: tuple[int, int] = (160, 120),
+                   checks: tuple[str, ...] = CONFORMANCE_CHECKS, n_memory: int = 200) -> dict[str, Any]:
+    """Check a renderer against the renderer contract (``docs/renderers.md``).
+
+    Raises AssertionError listing every failure.
+
+    Renders :func:`write_tiny_template` (two labelled spheres, two boxes, glass
+    spheres) and checks, without a GPU where the renderer needs none:
+
+    ``orientation``
+        every preset view puts each region where core's camera
+        (:meth:`brainpainter.geometry.SceneGeometry.camera`) projects it, and
+        the drawn silhouette fills the framed rectangle;
+    ``flat_colors``
+        ``shading="flat"`` draws every colour exactly (to 1/255), also inside
+        anti-aliased images;
+    ``nan_missing``
+        through :class:`brainpainter.render.Painter`, NaN values and absent
+        regions get the scale's colours exactly;
+    ``transparent``
+        ``background=None`` leaves the background at alpha 0 and the brain opaque;
+    ``glass``
+        the glass brain is visible and the structures show through it;
+    ``no_holes``
+        no background pixel inside a silhouette;
+    ``repeatable``
+        the same palette and view give the same pixels after other images;
+    ``memory``
+        resident memory stays flat over `n_memory` renders.
+
+    Parameters
+    ----------
+    renderer : str or type
+        Registry name (``"blender"``) or a renderer class.
+    size : (int, int)
+        Image width and height.
+    checks : tuple of str
+        Subset of :data:`CONFORMANCE_CHECKS`.
+    n_memory : int
+
+    Returns
+    -------
+    dict
+        Check name -> a short measurement (for reports).
+    """
+    import os
+    import tempfile
+
+    import numpy as np
+    from scipy import ndimage
+
+    from brainpainter import registry
+    from brainpainter.colormap import make_scale
+    from brainpainter.geometry import Palette
+    from brainpainter.render import Painter
+    from brainpainter.scene import RenderSettings, Scene
+    from brainpainter.template import load_template
+    from brainpainter.views import PRESETS, get_view
+
+    unknown = [c for c in checks if c not in CONFORMANCE_CHECKS]
+    if unknown:
+        raise ValueError(f"unknown checks {unknown}; choose from {CONFORMANCE_CHECKS}")
+    cls = registry.renderers.get(renderer) if isinstance(renderer, str) else renderer
+    name = renderer if isinstance(renderer, str) else getattr(cls, "__name__", str(cls))
+    width, height = size
+    white = (1.0, 1.0, 1.0)
+    problems: list[str] = []
+    report: dict[str, Any] = {}
+
+    with tempfile.TemporaryDirectory(prefix="bp-conformance-") as tmp:
+        template = load_template(write_tiny_template(Path(tmp) / "tiny"))
+
+        def make(**kw: Any) -> tuple[Any, Any]:
+            scene = Scene(template, "dk", settings=RenderSettings(width=width, height=height, **kw))
+            return scene, cls(scene)
+
+        def paint(scene: Any, r: Any, colors: Any, view: Any) -> Any:
+            img = np.asarray(r.render(Palette(colors, scene.geometry), view))
+            if img.shape != (height, width, 4) or img.dtype != np.uint8:
+                raise AssertionError(f"renderer {name!r} returned {img.dtype} {img.shape}, "
+                                     f"not uint8 {(height, width, 4)}")
+            return img
+
+        palette_rgb = [*_CONFORMANCE_COLORS.values()]
+        if {"orientation", "no_holes", "repeatable", "flat_colors"} & set(checks):
+            scene, r = make(quality="fast", shading="flat", glass_opacity=0.0, background=white)
+            try:
+                worst = 0.0
+                for view in PRESETS.values():
+                    img = paint(scene, r, _CONFORMANCE_COLORS, view)
+                    brain = ~_near(img, white, 0)
+                    if "orientation" in checks:
+                        layout = _expected_layout(scene, view, width, height)
+                        rgb_of = scene.geometry.default_rgb.copy()
+                        for key, slot in scene.geometry.slot_of.items():
+                            if key in _CONFORMANCE_COLORS:
+                                rgb_of[slot] = _CONFORMANCE_COLORS[key]
+                        for slot, (centre, area) in layout.items():
+                            mask = _near(img, rgb_of[slot], 1)
+                            if mask.sum() < 0.6 * area or area < 30:  # hidden behind another part
+                                continue
+                            ys, xs = np.nonzero(mask)
+                            err = float(np.hypot(xs.mean() + 0.5 - centre[0], ys.mean() + 0.5 - centre[1]))
+                            worst = max(worst, err)
+                            if err > 0.04 * width:
+                                problems.append(f"orientation: {view.name}: the colour of slot {slot} is "
+                                                f"centred {err:.1f} px from where the camera puts it")
+                        ys, xs = np.nonzero(brain)
+                        if not len(xs):
+                            problems.append(f"orientation: {view.name}: nothing was drawn")
+                    if "no_holes" in checks and view.content == "cortex" and len(view.hemis) == 1:
+                        holes = ndimage.binary_fill_holes(brain) & ~brain
+                        if holes.sum():
+                            problems.append(f"no_holes: {view.name}: {int(holes.sum())} background "
+                                            "pixels inside the silhouette")
+                    if "flat_colors" in checks:
+                        allowed = np.round(np.array([*palette_rgb, *scene.geometry.default_rgb, white]) * 255)
+                        dev = np.abs(img[..., :3].reshape(-1, 1, 3).astype(float) - allowed[None]).max(-1)
+                        bad = int((dev.min(axis=1) > 1).sum())
+                        if bad:
+                            problems.append(f"flat_colors: {view.name}: {bad} pixels are none of the "
+                                            "given colours (quality fast, flat shading)")
+                report["orientation_worst_px"] = round(worst, 2)
+                if "repeatable" in checks:
+                    a = paint(scene, r, _CONFORMANCE_COLORS, get_view("lateral-left"))
+                    paint(scene, r, {k: (0.5, 0.5, 0.5) for k in _CONFORMANCE_COLORS}, get_view("dorsal"))
+                    if not np.array_equal(a, paint(scene, r, _CONFORMANCE_COLORS, get_view("lateral-left"))):
+                        problems.append("repeatable: the same palette and view gave different pixels")
+            finally:
+                r.close()
+        if "flat_colors" in checks:
+            scene, r = make(quality="default", shading="flat", glass_opacity=0.0, background=white)
+            try:
+                img = paint(scene, r, _CONFORMANCE_COLORS, get_view("lateral-left"))
+                for key in ("Left-insula", "Left-precuneus", "Left-superiorfrontal", "Left-unknown"):
+                    rgb = _CONFORMANCE_COLORS[key]
+                    core = ndimage.binary_erosion(_near(img, rgb, 40), iterations=3)
+                    if core.sum() < 20:
+                        problems.append(f"flat_colors: {key} hardly appears in lateral-left")
+                    elif not _near(img, rgb, 1)[core].all():
+                        problems.append(f"flat_colors: anti-aliased interior of {key} is not exact")
+            finally:
+                r.close()
+        if "nan_missing" in checks:
+            scale = make_scale(gradient=["blue", "red"], vmin=0, vmax=1, nan_color="#1f77b4",
+                               missing_color="#2ca02c")
+            with Painter("dk", template, settings=RenderSettings(width=width, height=height, shading="flat",
+                                                                  glass_opacity=0.0),
+                         renderer=name if isinstance(renderer, str) else _register_temp(cls)) as painter:
+                img = painter.paint({"Left-insula": float("nan"), "Left-precuneus": 1.0},
+                                    get_view("lateral-left"), scale)  # Left-superiorfrontal: missing
+            for what, rgb in (("NaN", scale.nan_color), ("missing", scale.missing_color),
+                              ("value 1", (1.0, 0.0, 0.0))):
+                if ndimage.binary_erosion(_near(img, rgb, 1), iterations=2).sum() < 10:
+                    problems.append(f"nan_missing: the {what} colour {rgb} is not drawn exactly")
+        if "transparent" in checks:
+            scene, r = make(quality="default", shading="flat", glass_opacity=0.0, background=None)
+            try:
+                img = paint(scene, r, _CONFORMANCE_COLORS, get_view("lateral-left"))
+            finally:
+                r.close()
+            alpha = img[..., 3]
+            opaque = ndimage.binary_erosion(alpha > 0, iterations=2)
+            if alpha[0, 0] or alpha[-1, -1] or alpha[0, -1] or alpha[-1, 0]:
+                problems.append("transparent: the background corners are not transparent")
+            if opaque.sum() < 100 or (alpha[opaque] != 255).any():
+                problems.append("transparent: the brain is not opaque")
+            elif not _near(img, _CONFORMANCE_COLORS["Left-insula"], 1)[opaque].any():
+                problems.append("transparent: colours change on a transparent background")
+        if "glass" in checks:
+            scene, bare = make(quality="fast", shading="flat", glass_opacity=0.0, background=white)
+            view = get_view("subcortical")
+            try:
+                ref = paint(scene, bare, _CONFORMANCE_COLORS, view)
+            finally:
+                bare.close()
+            scene, r = make(quality="fast", shading="flat", glass_opacity=0.12, background=white)
+            try:
+                img = paint(scene, r, _CONFORMANCE_COLORS, view)
+            finally:
+                r.close()
+            inside = ~_near(ref, white, 0)
+            glass_only = ~inside & ~_near(img, white, 0)
+            report["glass_pixels"] = int(glass_only.sum())
+            if glass_only.sum() < 0.05 * width * height:
+                problems.append("glass: the glass brain is not drawn around the structures")
+            if inside.sum() < 50:
+                problems.append("glass: the structures are not drawn in the subcortical view")
+            else:  # seen through the glass, each structure keeps its hue (dominant channel)
+                kept = (img[..., :3].argmax(-1) == ref[..., :3].argmax(-1))[inside].mean()
+                report["glass_hue_kept"] = round(float(kept), 3)
+                if kept < 0.9:
+                    problems.append(f"glass: the structures do not show through the glass ({kept:.0%} keep "
+                                    "their hue)")
+        if "memory" in checks and Path("/proc/self/statm").exists():
+            def rss_mb() -> float:
+                with open("/proc/self/statm") as fh:
+                    return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+            scene, r = make(quality="fast", glass_opacity=0.12, background=white)
+            rng = np.random.default_rng(0)
+            views = [get_view(n) for n in ("lateral-left", "dorsal", "subcortical")]
+            try:
+                for i in range(20):
+                    paint(scene, r, {"Left-insula": tuple(rng.random(3))}, views[i % 3])
+                before = rss_mb()
+                for i in range(n_memory):
+                    paint(scene, r, {"Left-insula": tuple(rng.random(3))}, views[i % 3])
+                grown = rss_mb() - before
+            finally:
+                r.close()
+            report["memory_growth_mb"] = round(grown, 1)
+            if grown > 20:
+                problems.append(f"memory: resident memory grew by {grown:.1f} MB over {n_memory} renders")
+    if problems:
+        raise AssertionError(f"renderer {name!r} fails the conformance suite:\n  " + "\n  ".join(problems))
+    return report
+
+
+def _register_temp(cls: type) -> str:
+    from brainpainter import registry
+
+    name = f"conformance-{id(cls)}"
+    registry.renderers.register(name, lambda: cls, replace=True)
+    return name
 
 
 try:  # fixtures for plugin test suites: pytest_plugins = ["brainpainter.testing"]

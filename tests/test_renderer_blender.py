@@ -18,11 +18,11 @@ import pytest
 import trimesh
 from scipy import ndimage
 
+from brainpainter import framing as camera
 from brainpainter.errors import BrainPainterError
 from brainpainter.scene import RenderSettings, Scene
 from brainpainter.template import load_template
 from brainpainter.views import PRESETS, View, get_view
-from brainpainter_blender import camera
 
 ROOT = Path(__file__).resolve().parents[1]
 REGIONS = ("unknown", "antsup", "antinf", "postsup", "postinf")
@@ -348,7 +348,7 @@ def test_glass_is_visible_and_structures_show_through(template):
 
 @pytest.mark.render
 def test_subcortical_without_colour_is_neutral_and_cortex_uses_medial_wall(flat):
-    from brainpainter_blender.materials import NEUTRAL_GREY
+    from brainpainter.geometry import NEUTRAL_GREY
 
     img = flat.render({}, get_view("subcortical-left"))
     assert _mask(img, NEUTRAL_GREY, 30).sum() > 50
@@ -418,9 +418,13 @@ def test_many_renders_do_not_grow_memory(template):
 def test_close_frees_blender_data_and_refuses_to_render(template):
     import bpy
 
+    gpu_path = _renderer(template, quality="fast")  # draws with the gpu module: no Blender objects
+    gpu_path.close()  # (its process-wide 4x4 dummy scene stays, made once)
+    with pytest.raises(BrainPainterError, match="closed"):
+        gpu_path.render({}, get_view("dorsal"))
     before = (len(bpy.data.objects), len(bpy.data.meshes), len(bpy.data.materials),
               len(bpy.data.scenes))
-    r = _renderer(template, quality="fast")
+    r = _renderer(template, quality="high")  # Cycles builds objects, materials and a scene
     assert len(bpy.data.objects) > before[0]
     r.close()
     r.close()
@@ -501,3 +505,70 @@ def test_real_brain_has_no_cracks():
             assert holes.sum() == 0, f"{view.name}: {holes.sum()} background pixels in the brain"
     finally:
         renderer.close()
+
+
+@pytest.fixture(scope="module")
+def bundled_lh():
+    """Default settings on the bundled template: every left-hemisphere region key."""
+    from brainpainter.render import Painter
+
+    painter = Painter("dk")
+    keys = [r.key for r in painter.atlas.regions if r.key.startswith("Left-")]
+    yield painter, keys
+    painter.close()
+
+
+def _brain(img: np.ndarray) -> np.ndarray:
+    return img[~_mask(img, BACKGROUND, 0)][:, :3].astype(float)
+
+
+@pytest.mark.render
+@pytest.mark.integration
+def test_default_lighting_keeps_the_legend_colours_and_shows_folds(bundled_lh):
+    painter, keys = bundled_lh
+    view = get_view("lateral-left")
+    white = _brain(painter.paint_colors(dict.fromkeys(keys, (1.0, 1.0, 1.0)), view))
+    assert (np.median(white, axis=0) >= 215).all(), np.median(white, axis=0)
+    assert (np.percentile(white, 90, axis=0) >= 240).all()
+    luminance = white @ np.array([0.2126, 0.7152, 0.0722])
+    assert luminance.std() >= 12, "the folds do not show"
+    yellow = _brain(painter.paint_colors(dict.fromkeys(keys, (1.0, 1.0, 0.0)), view))
+    r, g, b = np.median(yellow, axis=0)
+    assert r >= 215 and g >= 215 and b <= 15, (r, g, b)
+
+
+@pytest.mark.render
+@pytest.mark.integration
+def test_sulcal_depth_lighting_darkens_sulci_slightly():
+    from brainpainter.render import Painter
+
+    view = get_view("lateral-left")
+    lum = {}
+    for surface, lighting in (("pial", "studio"), ("pial", "sulc"), ("inflated", "studio"),
+                              ("inflated", "sulc")):
+        with Painter("dk", surface=surface, settings=RenderSettings(480, 360, lighting=lighting)) as painter:
+            keys = [r.key for r in painter.atlas.regions if r.key.startswith("Left-")]
+            img = painter.paint_colors(dict.fromkeys(keys, (1.0, 1.0, 1.0)), view)
+            lum[surface, lighting] = img[..., :3].astype(float) @ np.array([0.2126, 0.7152, 0.0722])
+    for surface in ("pial", "inflated"):
+        darker = lum[surface, "studio"] - lum[surface, "sulc"]  # same pixels: only the shading differs
+        p10, p50, p95 = np.percentile(darker[lum[surface, "studio"] < 254.5], [10, 50, 95])
+        # crowns keep their colour, sulci darken slightly
+        assert p10 < 1 and 8 < p95 < 60 and p50 < p95 - 5, (surface, p10, p50, p95)
+
+
+@pytest.mark.render
+@pytest.mark.integration
+def test_flat_shading_is_exact_on_the_bundled_template():
+    from brainpainter.render import Painter
+
+    rng = np.random.default_rng(1)
+    with Painter("dk", settings=RenderSettings(600, 450, shading="flat")) as painter:
+        colors = {r.key: tuple(rng.integers(0, 256, 3) / 255) for r in painter.atlas.regions}
+        img = painter.paint_colors(colors, get_view("lateral-left"))
+    exact = np.zeros(img.shape[:2], bool)
+    for rgb in {*colors.values(), painter.scene.medial_wall_color, BACKGROUND}:
+        exact |= _mask(img, rgb, 1)
+    interior = ndimage.binary_erosion(~_mask(img, BACKGROUND, 0), iterations=2)
+    # anti-aliased borders blend two colours; everything else is exact to 1/255
+    assert exact[interior].mean() > 0.85

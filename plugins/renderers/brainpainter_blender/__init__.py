@@ -1,4 +1,4 @@
-"""Blender renderer plugin for brainpainter (``bpy``, Workbench and Cycles).
+"""Blender renderer plugin for brainpainter (``bpy``: its ``gpu`` module by default, Cycles for high quality).
 
 Registered under the ``brainpainter.renderers`` entry point ``blender``.
 Importing this package does not import ``bpy``; creating a

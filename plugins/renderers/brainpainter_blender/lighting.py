@@ -1,12 +1,10 @@
-"""Render engine, lighting and colour management of a Blender scene.
+"""Cycles (``quality="high"``): render engine, lights and colour management of a Blender scene.
 
-``quality`` picks the engine: Workbench without anti-aliasing (``fast``),
-Workbench with FXAA (``default``) or Cycles path tracing (``high``; Cycles
-ignores ``lighting`` and uses three soft lights that follow the camera).
-``shading = "flat"`` draws unlit material colours; otherwise a soft studio
-light that follows the camera, so every view is lit alike. Colour management
-is ``Standard`` with no look, exposure 0 and gamma 1 (no Filmic/AgX tone
-mapping), so flat colours come out as given and hues are preserved.
+The default draw path does not use a Blender scene (see
+:mod:`brainpainter_blender.gpu_draw`); Cycles path-traces ``high`` quality
+with default shading, with three soft lights that follow the camera. Colour
+management is ``Standard`` with no look, exposure 0 and gamma 1 (no
+Filmic/AgX tone mapping), so hues are preserved.
 """
 
 from __future__ import annotations
@@ -14,23 +12,11 @@ from __future__ import annotations
 from brainpainter.scene import RenderSettings
 from brainpainter_blender.materials import srgb_to_linear
 
-#: Workbench anti-aliasing per quality (``high`` only for flat shading, see below).
-WORKBENCH_AA = {"fast": "OFF", "default": "FXAA", "high": "8"}
 #: Cycles samples for quality ``high`` (denoised).
 CYCLES_SAMPLES = 16
 #: Fixed Cycles seed: the same input gives the same pixels.
 CYCLES_SEED = 0
 
-# Workbench lighting per preset: (light, studio light, specular highlights, cavity).
-# Studio lights are camera-relative, so every view is lit alike.
-_WORKBENCH_LIGHTING = {
-    # Key light from the upper left, subtle specular: clear shape, saturated colours.
-    "studio": ("STUDIO", "studio.sl", True, False),
-    # Bright, nearly shadowless: colours closest to the legend.
-    "soft": ("STUDIO", "paint.sl", False, False),
-    # Unlit colours with screen-space ridges and valleys for shape (illustration style).
-    "flat-studio": ("FLAT", "Default", False, True),
-}
 # Cycles lights, in camera space (x right, y up, z towards the viewer):
 # (name, direction the light comes from, strength in W/m^2 for a sun, angle).
 # A sun of strength pi lights a facing white diffuse surface to exactly 1.
@@ -72,47 +58,13 @@ def configure(bpy, scene, settings: RenderSettings) -> None:
     background = settings.background if settings.background is not None else (1.0, 1.0, 1.0)
     world.color = srgb_to_linear(background)
 
-    if uses_cycles(settings):
-        _configure_cycles(bpy, scene, world, background)
-    else:
-        _configure_workbench(scene, settings)
+    _configure_cycles(bpy, scene, world, background)
 
 
 def uses_cycles(settings: RenderSettings) -> bool:
     """Cycles draws ``high`` quality, except flat shading: unlit colours need no
-    path tracing, so those come from Workbench with 8x anti-aliasing."""
+    path tracing, so those come from the gpu path with 3x3 supersampling."""
     return settings.quality == "high" and settings.shading != "flat"
-
-
-def _configure_workbench(scene, settings: RenderSettings) -> None:
-    scene.render.engine = "BLENDER_WORKBENCH"
-    display = scene.display
-    display.render_aa = WORKBENCH_AA[settings.quality]
-    shading = display.shading
-    shading.color_type = "MATERIAL"
-    shading.show_xray = False
-    shading.show_shadows = False
-    shading.show_object_outline = False
-    shading.show_backface_culling = False
-    shading.use_dof = False
-    shading.background_type = "WORLD"
-    if settings.shading == "flat":
-        shading.light = "FLAT"
-        shading.show_cavity = False
-        shading.show_specular_highlight = False
-        return
-    light, studio, specular, cavity = _WORKBENCH_LIGHTING[settings.lighting]
-    shading.light = light
-    if light == "STUDIO":
-        shading.studio_light = studio
-        shading.use_world_space_lighting = False
-        shading.studiolight_intensity = 1.0
-    shading.show_specular_highlight = specular
-    shading.show_cavity = cavity
-    if cavity:
-        shading.cavity_type = "SCREEN"
-        shading.curvature_ridge_factor = 1.0
-        shading.curvature_valley_factor = 1.0
 
 
 def _configure_cycles(bpy, scene, world, background) -> None:

@@ -1,8 +1,8 @@
 """Materials: one per region, recoloured in place for every image.
 
-A region material carries its colour twice: ``diffuse_color`` (what the
-Workbench engine draws with ``color_type = "MATERIAL"``) and the Principled
-BSDF's base colour (what Cycles draws). Blender stores both as scene-linear
+Used by the Cycles path (``quality="high"``). A region material carries its
+colour in the Principled BSDF's base colour (and ``diffuse_color``, which
+Blender's viewport shows). Blender stores both as scene-linear
 values, so sRGB inputs are linearised here; with the ``Standard`` view
 transform the rendered pixel is the sRGB colour again.
 """
@@ -13,11 +13,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-#: Colour of subcortical structures that have no colour in the mapping (sRGB).
-NEUTRAL_GREY = (0.8, 0.8, 0.8)
-#: Colour of the glass brain (sRGB).
-GLASS_COLOR = (0.78, 0.80, 0.84)
-# Cycles' unlit glass is darkened to read like Workbench's lit glass.
+from brainpainter.geometry import GLASS_COLOR
+
+# Cycles' unlit glass is darkened to read like the lit glass of the default draw path.
 _GLASS_CYCLES_SHADE = 0.6
 # Surface finish in Cycles: matte, like a plastic model.
 _ROUGHNESS = 0.6
@@ -76,11 +74,9 @@ def new_region_material(bpy, name: str):
 def new_glass_material(bpy, name: str, opacity: float):
     """A light, semi-transparent material for the glass brain.
 
-    Workbench blends materials whose ``diffuse_color`` alpha is below 1 (order
-    independent, in linear light) and shades them with the studio light. In
-    Cycles the glass is an unlit grey mixed with full transparency (no lighting
-    to sample, hence no noise), more opaque where the surface turns away from
-    the camera so the outline reads like Workbench's shaded glass.
+    In Cycles the glass is an unlit grey mixed with full transparency (no
+    lighting to sample, hence no noise), more opaque where the surface turns
+    away from the camera, as the default draw path's glass.
     """
     mat = bpy.data.materials.new(name)
     mat.surface_render_method = "BLENDED"

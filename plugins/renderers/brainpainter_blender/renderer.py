@@ -1,9 +1,14 @@
 """The Blender renderer: load a scene once, then recolour, re-aim and render.
 
-Every :class:`BlenderRenderer` owns a Blender scene of its own (objects,
-materials, camera), so several renderers can live in one process; bpy calls
-are serialised by one process-wide lock. ``close`` deletes everything the
-renderer created, so a long-lived process does not grow.
+Two draw paths behind one class. The default is Blender's ``gpu`` module
+(:mod:`brainpainter_blender.gpu_draw`): the scene's geometry is uploaded once
+as indexed batches and each image uploads a palette, draws with
+supersampling and reads the pixels back. ``quality="high"`` with default
+shading path-traces with Cycles instead (GPU when one is present): that path
+builds Blender objects with one material per region and recolours the
+materials. What is drawn and from where comes from core
+(``scene.geometry``), the same for both paths. bpy calls are serialised by
+one process-wide lock; ``close`` frees everything the renderer created.
 """
 
 from __future__ import annotations
@@ -18,10 +23,12 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
+from brainpainter import framing
 from brainpainter.errors import BrainPainterError
+from brainpainter.geometry import Palette
 from brainpainter.scene import RGB, Scene
 from brainpainter.views import View
-from brainpainter_blender import _bpy, camera, lighting, materials, scene_builder
+from brainpainter_blender import _bpy, lighting, materials, scene_builder
 
 _ids = itertools.count()
 
@@ -32,13 +39,15 @@ class BlenderRenderer:
     Parameters
     ----------
     scene : brainpainter.scene.Scene
-        Loaded once: both hemispheres' cortex for ``scene.surface`` and
-        ``scene.labels``, the subcortical structures and the glass hulls.
+        Loaded once: ``scene.geometry`` (both hemispheres' cortex for
+        ``scene.surface`` and ``scene.labels``, the subcortical structures and
+        the glass hulls).
 
     Examples
     --------
     >>> r = BlenderRenderer(scene)                      # doctest: +SKIP
-    >>> rgba = r.render({"Left-insula": (1, 0, 0)}, get_view("lateral-left"))  # doctest: +SKIP
+    >>> rgba = r.render(Palette({"Left-insula": (1, 0, 0)}, scene.geometry),
+    ...                 get_view("lateral-left"))       # doctest: +SKIP
     >>> r.close()                                       # doctest: +SKIP
     """
 
@@ -48,16 +57,23 @@ class BlenderRenderer:
         self.scene = scene
         self._bpy = bpy = _bpy.import_bpy()
         self._tag = f"bp{next(_ids)}"
-        self._tmp = Path(tempfile.mkdtemp(prefix="brainpainter-blender-"))
-        self._file = self._tmp / "render.tif"
-        # The temporary folder goes even if close() is never called.
-        weakref.finalize(self, shutil.rmtree, self._tmp, True)
         self._closed = False
         self._colors: dict[int, tuple[float, ...]] = {}
+        self._gpu = None
+        self.cycles = lighting.uses_cycles(scene.settings)
         with _bpy.LOCK:
             try:
-                with _bpy.quiet():  # Cycles prints notices while probing for GPUs
-                    self._build(bpy)
+                if self.cycles:
+                    self._tmp = Path(tempfile.mkdtemp(prefix="brainpainter-blender-"))
+                    self._file = self._tmp / "render.tif"
+                    # The temporary folder goes even if close() is never called.
+                    weakref.finalize(self, shutil.rmtree, self._tmp, True)
+                    with _bpy.quiet():  # Cycles prints notices while probing for GPUs
+                        self._build(bpy)
+                else:
+                    from brainpainter_blender.gpu_draw import GpuDraw
+
+                    self._gpu = GpuDraw(scene.geometry, scene.settings)
             except BaseException:
                 self._free()
                 raise
@@ -78,18 +94,16 @@ class BlenderRenderer:
         self._camera = bpy.data.objects.new(f"{self._tag}:camera", cam_data)
         bscene.collection.objects.link(self._camera)
         bscene.camera = self._camera
-        self._lamps = []
-        if lighting.uses_cycles(settings):
-            self._lamps = lighting.add_camera_lights(bpy, bscene, self._camera, bscene.collection)
+        self._lamps = lighting.add_camera_lights(bpy, bscene, self._camera, bscene.collection)
         self._parts = scene_builder.build(bpy, self.scene, self._tag, bscene.collection)
 
     # -- per image -------------------------------------------------------------
-    def render(self, colors: Mapping[str, RGB], view: View) -> np.ndarray:
+    def render(self, palette: Mapping[str, RGB], view: View) -> np.ndarray:
         """Render one image.
 
         Parameters
         ----------
-        colors : mapping of str to (r, g, b)
+        palette : brainpainter.geometry.Palette, or a mapping of str to (r, g, b)
             sRGB 0-1 colour per region key; cortex regions without a colour
             are drawn in ``scene.medial_wall_color``, subcortical ones in a
             neutral light grey.
@@ -98,54 +112,44 @@ class BlenderRenderer:
         Returns
         -------
         ndarray of uint8, shape (height, width, 4)
-            RGBA, row 0 at the top, sRGB.
+            RGBA, row 0 at the top, sRGB, straight alpha.
         """
         if self._closed:
             raise BrainPainterError("this BlenderRenderer was closed; create a new one to render.")
+        if not isinstance(palette, Palette):
+            palette = Palette(palette, self.scene.geometry)
         with _bpy.LOCK:
-            visible = self._show(view)
-            if not visible:
-                raise BrainPainterError(
-                    f"view {view.name!r} shows nothing: content={view.content!r}, "
-                    f"hemis={list(view.hemis)}, glass={list(view.glass)}; the template or the "
-                    "hidden regions leave no object to draw."
-                )
-            self._recolor(colors)
-            self._aim(view, visible)
-            return self._render_pixels()
-
-    def _show(self, view: View) -> list[scene_builder.Part]:
-        visible = []
-        for part in self._parts:
-            if view.content == "subcortical":
-                on = part.kind == "subcortical" or (part.kind == "glass" and part.hemi in view.glass)
+            if self._gpu is not None:
+                pixels = self._gpu.render(palette.rgb, view)
             else:
-                on = (part.kind == "cortex" and part.hemi in view.hemis) or (
-                    part.kind == "glass" and part.hemi in view.glass)
+                self._show(view)
+                self._recolor(palette)
+                self._aim(view)
+                pixels = self._render_pixels()
+        _bpy.release_memory()
+        return pixels
+
+    def _show(self, view: View) -> None:
+        self.scene.geometry.visible(view)  # a view that shows nothing is an error
+        for part in self._parts:
+            on = framing.shows(view, part.kind, part.hemi)
             if part.obj.hide_render == on:
                 part.obj.hide_render = not on
-            if on:
-                visible.append(part)
-        return visible
 
-    def _recolor(self, colors: Mapping[str, RGB]) -> None:
-        medial = tuple(self.scene.medial_wall_color)
+    def _recolor(self, palette: Palette) -> None:
+        rgb = palette.rgb
         for part in self._parts:
-            default = medial if part.kind == "cortex" else materials.NEUTRAL_GREY
-            for key, mat in part.slots:
-                rgb = colors.get(key)
-                rgb = default if rgb is None else tuple(float(c) for c in rgb[:3])
-                if self._colors.get(id(mat)) != rgb:
-                    materials.set_color(mat, rgb)
-                    self._colors[id(mat)] = rgb
+            for slot, mat in part.slots:
+                color = tuple(float(c) for c in rgb[slot])
+                if self._colors.get(id(mat)) != color:
+                    materials.set_color(mat, color)
+                    self._colors[id(mat)] = color
 
-    def _aim(self, view: View, visible: list[scene_builder.Part]) -> None:
+    def _aim(self, view: View) -> None:
         from mathutils import Matrix
 
         settings = self.scene.settings
-        points = np.vstack([p.hull for p in visible])
-        pose = camera.frame(points, view.azimuth, view.elevation, view.zoom,
-                            settings.width / settings.height)
+        pose = self.scene.geometry.camera(view, settings.width / settings.height)
         m = np.eye(4)
         m[:3, :3], m[:3, 3] = pose.rotation, pose.location
         self._camera.matrix_world = Matrix(m.tolist())
@@ -166,9 +170,7 @@ class BlenderRenderer:
             text = " ".join("".join(log).split())[-300:]
             raise BrainPainterError(f"Blender failed to render: {failed} {text}".strip())
         with Image.open(self._file) as im:
-            pixels = np.array(im.convert("RGBA"))
-        _bpy.release_memory()
-        return pixels
+            return np.array(im.convert("RGBA"))
 
     # -- lifetime --------------------------------------------------------------
     def close(self) -> None:
@@ -180,6 +182,11 @@ class BlenderRenderer:
 
     def _free(self) -> None:
         self._closed = True
+        if self._gpu is not None:
+            self._gpu.close()
+            self._gpu = None
+        if not self.cycles:
+            return
         bpy = self._bpy
         prefix = self._tag + ":"
         for coll in (bpy.data.objects, bpy.data.meshes, bpy.data.materials,

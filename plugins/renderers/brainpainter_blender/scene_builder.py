@@ -1,9 +1,10 @@
-"""Build Blender objects from a template once: cortex, subcortical structures, glass.
+"""Cycles path: build Blender objects once from core's geometry (``scene.geometry``).
 
-Each hemisphere's cortex is one mesh object with one material slot per
-region and per-polygon material indices from the template's ``face_label``,
-so neighbouring regions share vertices (no cracks) and recolouring an image
-only changes material colours. Faces of hidden regions are dropped here.
+Each part (cortex of each hemisphere, subcortical structures, glass hulls)
+becomes one mesh object with one material per palette slot it uses and
+per-polygon material indices, so recolouring an image only changes material
+colours. Normals are core's (smooth across region borders, where core stores
+a vertex once per region). Hidden regions have no faces in the geometry.
 """
 
 from __future__ import annotations
@@ -11,11 +12,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import ConvexHull, QhullError
 
-from brainpainter.atlas import HEMI_PREFIX
+from brainpainter.geometry import PartGeometry
 from brainpainter.scene import Scene
-from brainpainter.template import HEMIS
 from brainpainter_blender import materials
 
 
@@ -28,32 +27,19 @@ class Part:
     obj : bpy.types.Object
     kind : {"cortex", "subcortical", "glass"}
     hemi : str or None
-    slots : list of (str, bpy.types.Material)
-        Region key of every material slot, in slot order (empty for glass).
-    hull : ndarray of float, shape (n, 3)
-        Points whose projections bound the object (convex-hull vertices).
+    slots : list of (int, bpy.types.Material)
+        Palette slot of every material slot, in slot order (empty for glass).
     """
 
     obj: object
     kind: str
     hemi: str | None
-    slots: list[tuple[str, object]] = field(default_factory=list)
-    hull: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
-
-
-def _hull_points(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    used = vertices[np.unique(faces)] if len(faces) else np.zeros((0, 3))
-    if len(used) < 5:
-        return used.astype(float)
-    try:
-        return used[ConvexHull(used).vertices].astype(float)
-    except QhullError:  # flat or degenerate: every point bounds it
-        return used.astype(float)
+    slots: list[tuple[int, object]] = field(default_factory=list)
 
 
 def mesh_object(bpy, name: str, vertices: np.ndarray, faces: np.ndarray,
                 material_index: np.ndarray | None, mats: list, collection,
-                smooth: bool = True):
+                normals: np.ndarray | None = None):
     """A triangle-mesh object built with ``foreach_set`` (fast for 10^5 faces).
 
     Parameters
@@ -67,8 +53,8 @@ def mesh_object(bpy, name: str, vertices: np.ndarray, faces: np.ndarray,
     mats : list of bpy.types.Material
     collection : bpy.types.Collection
         Where the object is linked.
-    smooth : bool
-        Smooth (vertex-normal) shading.
+    normals : ndarray of float, shape (n_vertices, 3), optional
+        Custom vertex normals; smooth shading either way.
     """
     faces = np.ascontiguousarray(faces, dtype=np.int32)
     n_faces = len(faces)
@@ -84,35 +70,33 @@ def mesh_object(bpy, name: str, vertices: np.ndarray, faces: np.ndarray,
     if material_index is not None and n_faces:
         mesh.polygons.foreach_set("material_index", np.ascontiguousarray(material_index, np.int32))
     mesh.update(calc_edges=True)
-    if smooth:
-        mesh.shade_smooth()
+    mesh.shade_smooth()
+    if normals is not None and n_faces:
+        mesh.normals_split_custom_set_from_vertices(np.asarray(normals, dtype=np.float64).tolist())
     obj = bpy.data.objects.new(name, mesh)
     collection.objects.link(obj)
     return obj
 
 
-def _labelled_part(bpy, tag: str, kind: str, hemi: str | None, vertices: np.ndarray,
-                   faces: np.ndarray, face_label: np.ndarray, keys: list[str],
-                   hidden: frozenset[str], collection) -> Part | None:
-    """An object for labelled faces, one material per label actually used."""
-    keep = np.array([k not in hidden for k in keys], dtype=bool)
-    face_label = np.asarray(face_label, dtype=np.int64)
-    mask = keep[face_label] if len(keys) else np.zeros(len(faces), bool)
-    faces, face_label = faces[mask], face_label[mask]
-    if not len(faces):
-        return None
-    used = np.unique(face_label)
-    slot_of = np.full(len(keys), -1, dtype=np.int64)
-    slot_of[used] = np.arange(len(used))
-    slots = [(keys[i], materials.new_region_material(bpy, f"{tag}:{keys[i]}")) for i in used]
-    name = f"{tag}:{kind}" + (f"-{hemi}" if hemi else "")
-    obj = mesh_object(bpy, name, vertices, faces, slot_of[face_label],
-                      [m for _, m in slots], collection)
-    return Part(obj, kind, hemi, slots, _hull_points(vertices, faces))
+def _part_object(bpy, tag: str, part: PartGeometry, glass_mat, collection) -> Part:
+    """An object for one geometry part; opaque parts get one material per palette slot used."""
+    tri = part.triangles.astype(np.int64)
+    name = f"{tag}:{part.name}"
+    if part.kind == "glass":
+        obj = mesh_object(bpy, name, part.vertices, tri, None, [glass_mat], collection, part.normals)
+        # In Cycles the glass neither shadows nor reflects onto the structures inside.
+        obj.visible_shadow = obj.visible_diffuse = obj.visible_glossy = False
+        return Part(obj, part.kind, part.hemi, [])
+    face_slot = part.palette_index[tri[:, 0]]
+    used, index = np.unique(face_slot, return_inverse=True)
+    slots = [(int(s), materials.new_region_material(bpy, f"{tag}:slot{int(s)}")) for s in used]
+    obj = mesh_object(bpy, name, part.vertices, tri, index, [m for _, m in slots], collection,
+                      part.normals)
+    return Part(obj, part.kind, part.hemi, slots)
 
 
 def build(bpy, scene: Scene, tag: str, collection) -> list[Part]:
-    """Every object of `scene`, linked into `collection`, all hidden from render.
+    """Every part of ``scene.geometry`` as an object linked into `collection`, hidden from render.
 
     Parameters
     ----------
@@ -126,35 +110,8 @@ def build(bpy, scene: Scene, tag: str, collection) -> list[Part]:
     -------
     list of Part
     """
-    template, hidden = scene.template, frozenset(scene.hidden)
-    parts: list[Part] = []
-    for hemi in HEMIS:
-        cm = template.cortex(scene.labels, hemi)
-        if scene.surface not in cm.vertices:
-            from brainpainter.errors import choice_error
-
-            raise choice_error("surface", scene.surface, list(cm.vertices),
-                               f"Template {template.name!r} lacks it.")
-        keys = [HEMI_PREFIX[hemi] + n for n in cm.label_names]
-        part = _labelled_part(bpy, tag, "cortex", hemi, cm.vertices[scene.surface], cm.faces,
-                              cm.face_label, keys, hidden, collection)
-        if part is not None:
-            parts.append(part)
-    if template.manifest.get("subcortical"):
-        sub = template.subcortical()
-        part = _labelled_part(bpy, tag, "subcortical", None, sub.vertices, sub.faces,
-                              sub.face_label, list(sub.label_names), hidden, collection)
-        if part is not None:
-            parts.append(part)
     glass_mat = materials.new_glass_material(bpy, f"{tag}:glass", scene.settings.glass_opacity)
-    for hemi in HEMIS:
-        if hemi not in template.manifest.get("glass", {}):
-            continue
-        verts, faces = template.glass(hemi)
-        obj = mesh_object(bpy, f"{tag}:glass-{hemi}", verts, faces, None, [glass_mat], collection)
-        # In Cycles the glass neither shadows nor reflects onto the structures inside.
-        obj.visible_shadow = obj.visible_diffuse = obj.visible_glossy = False
-        parts.append(Part(obj, "glass", hemi, [], _hull_points(verts, faces)))
+    parts = [_part_object(bpy, tag, p, glass_mat, collection) for p in scene.geometry.parts]
     for part in parts:
         part.obj.hide_render = True
     return parts
