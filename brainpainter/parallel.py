@@ -395,12 +395,13 @@ def prepare_worker(threads: int) -> None:
     the user set it. A process spawned by one that had imported ``bpy``
     inherits Blender's own script folders on ``sys.path``, where a ``bpy``
     package would shadow the ``bpy`` module; they are removed (Blender adds
-    them back when it loads).
+    them back when it loads). The PNG encoder is imported now, before Blender.
     """
     os.environ.setdefault("LP_NUM_THREADS", str(threads))
     if "bpy" not in sys.modules:
         marker = f"{os.sep}bpy{os.sep}"
         sys.path[:] = [p for p in sys.path if marker not in os.path.join(str(p), "")]
+    import brainpainter.output  # noqa: F401 - its PNG encoder imports slowly once bpy is loaded
 
 
 def _init_process(spec: PainterSpec, threads: int) -> None:
