@@ -355,6 +355,10 @@ from brainpainter.cli_media import figure, movie  # noqa: E402
 cli.add_command(figure)
 cli.add_command(movie)
 
+from brainpainter.web.command import serve  # noqa: E402
+
+cli.add_command(serve)
+
 
 def main(argv: list[str] | None = None) -> None:
     """Console entry point: user errors become one line and exit code 2."""

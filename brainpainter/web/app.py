@@ -1,0 +1,510 @@
+"""The ASGI application: one page and a JSON API.
+
+API (all JSON unless said; errors are ``{"error": "one line"}`` with the CLI's messages)::
+
+    GET  /                         the page (static HTML/CSS/JS from the package)
+    GET  /openapi.json             the API schema
+    GET  /healthz                  the process answers
+    GET  /readyz                   database writable, a worker and the preview renderer warm (else 503)
+    GET  /api/meta                 atlases, views, colour maps, option defaults, limits
+    POST /api/uploads?name=&atlas=&image_column=&value=&region_column=&strict=
+                                   body: the table file (CSV/TSV/XLSX bytes, or pasted text)
+                                   -> {"upload_id", "name", "report", "images"} (`check --json`'s report)
+    POST /api/check                {"upload_id", "options"} -> the check report for those options
+    POST /api/preview              {"upload_id", "options", "row", "view"} -> image/png
+    POST /api/jobs                 {"upload_id", "kind", "options", "figure"|"movie"} -> 202 {job}
+    GET  /api/jobs/{id}            status, progress, files
+    DELETE /api/jobs/{id}          cancel
+    GET  /api/jobs/{id}/files/{name}   one of the job's own files (?download=1: as attachment)
+
+Every response carries a strict Content-Security-Policy; every request is
+logged as one JSON line on the ``brainpainter.web.access`` logger.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import secrets
+import threading
+import time
+from collections.abc import Awaitable, Callable
+from contextlib import asynccontextmanager
+from importlib import resources
+from typing import Any, Literal
+
+from fastapi import FastAPI, Query, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import FileResponse, JSONResponse, Response
+from fastapi.staticfiles import StaticFiles
+from pydantic import BaseModel, ConfigDict, Field
+from starlette.concurrency import run_in_threadpool
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from brainpainter.errors import BrainPainterError
+from brainpainter.web.config import ServerConfig
+from brainpainter.web.options import RenderOptions, TableOptions, prepare, table_stream, upload_name
+from brainpainter.web.pool import Pool, PreviewBusy, PreviewUnavailable, preview_settings
+from brainpainter.web.store import LimitError, Store, valid_id
+
+access_log = logging.getLogger("brainpainter.web.access")
+log = logging.getLogger("brainpainter.web")
+
+CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' blob: data:; "
+       "connect-src 'self'; font-src 'self'; form-action 'none'; base-uri 'none'; frame-ancestors 'none'")
+SECURITY_HEADERS = [
+    (b"content-security-policy", CSP.encode()),
+    (b"x-content-type-options", b"nosniff"),
+    (b"x-frame-options", b"DENY"),
+    (b"referrer-policy", b"no-referrer"),
+    (b"cross-origin-opener-policy", b"same-origin"),
+    (b"cross-origin-resource-policy", b"same-origin"),
+]
+JSON_BODY_LIMIT = 64 * 1024
+MAX_LISTED_IMAGES = 5000  # image names sent to the page for its row chooser
+STATE_CHANGING = ("POST", "PUT", "DELETE", "PATCH")
+
+
+class ApiError(Exception):
+    def __init__(self, status: int, message: str, headers: dict[str, str] | None = None) -> None:
+        super().__init__(message)
+        self.status, self.headers = status, headers or {}
+
+
+def _one_line(exc: BaseException) -> str:
+    text = str(exc)
+    return text.splitlines()[0] if text else type(exc).__name__
+
+
+# -- request bodies -------------------------------------------------------------------------
+class CheckRequest(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    upload_id: str
+    options: RenderOptions = Field(default_factory=RenderOptions)
+
+
+class PreviewRequest(CheckRequest):
+    row: int | str = Field(0, description="Row number (0-based) or image name.")
+    view: str = Field("lateral-left", description="A view name or camera:AZ:EL[:ZOOM].")
+
+
+class FigureParams(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    format: Literal["pdf", "png"] = "pdf"
+    grid: bool = False
+    title: str | None = Field(None, max_length=200)
+    label: str | None = Field(None, max_length=200)
+    dpi: float = Field(150.0, ge=50, le=600)
+
+
+class MovieParams(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    format: Literal["mp4", "gif"] = "mp4"
+    frames_per_step: int = Field(12, ge=1, le=120)
+    easing: Literal["linear", "smooth"] = "linear"
+    hold: int = Field(0, ge=0, le=120)
+    fps: float = Field(24.0, ge=1, le=60)
+    title: str | None = Field(None, max_length=200)
+    label: str | None = Field(None, max_length=200)
+
+
+class JobRequest(CheckRequest):
+    kind: Literal["images", "figure", "movie"] = "images"
+    figure: FigureParams = Field(default_factory=FigureParams)
+    movie: MovieParams = Field(default_factory=MovieParams)
+
+
+# -- middleware ---------------------------------------------------------------------------
+class _TooLarge(StarletteHTTPException):
+    """A request body over its limit (raised while it is read: the app answers 413 with the message)."""
+
+    def __init__(self, what: str, limit: int) -> None:
+        super().__init__(413, f"the {what} is larger than this server's limit; at most "
+                              f"{limit / 2**20:.3g} MB is read, to keep memory bounded. Split the table or "
+                              "remove unneeded columns.")
+
+
+class RateLimiter:
+    """Token bucket per client: `per_minute` state-changing requests a minute, bursts up to a quarter."""
+
+    def __init__(self, per_minute: int) -> None:
+        self.rate = per_minute / 60.0
+        self.burst = max(5.0, per_minute / 4)
+        self._buckets: dict[str, tuple[float, float]] = {}
+        self._lock = threading.Lock()
+
+    def allow(self, client: str) -> float:
+        """0 when allowed; else the seconds to wait."""
+        now = time.monotonic()
+        with self._lock:
+            if len(self._buckets) > 10_000:  # keep memory bounded: forget full buckets
+                self._buckets = {k: v for k, v in self._buckets.items()
+                                 if (now - v[1]) * self.rate + v[0] < self.burst}
+            tokens, last = self._buckets.get(client, (self.burst, now))
+            tokens = min(self.burst, tokens + (now - last) * self.rate)
+            if tokens < 1.0:
+                self._buckets[client] = (tokens, now)
+                return (1.0 - tokens) / self.rate
+            self._buckets[client] = (tokens - 1.0, now)
+            return 0.0
+
+
+class Guard:
+    """Pure ASGI middleware: security headers, body size limits, rate limit, access log."""
+
+    def __init__(self, app: Any, config: ServerConfig) -> None:
+        self.app = app
+        self.config = config
+        self.limiter = RateLimiter(config.rate_per_minute)
+
+    async def __call__(self, scope: dict, receive: Callable, send: Callable) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        t0 = time.perf_counter()
+        rid = secrets.token_hex(6)
+        client = (scope.get("client") or ("-", 0))[0]
+        method, path = scope["method"], scope["path"]
+        is_upload = path == "/api/uploads"
+        limit = self.config.max_upload_bytes if is_upload else JSON_BODY_LIMIT
+        what = "upload" if is_upload else "request body"
+        state = {"status": 0, "bytes": 0, "started": False}
+
+        async def send_wrapper(message: dict) -> None:
+            if message["type"] == "http.response.start":
+                state["status"], state["started"] = message["status"], True
+                headers = [h for h in message.get("headers", []) if h[0].lower() != b"server"]
+                headers += [*SECURITY_HEADERS, (b"x-request-id", rid.encode())]
+                if path.startswith("/api/"):
+                    headers.append((b"cache-control", b"no-store"))
+                message = {**message, "headers": headers}
+            elif message["type"] == "http.response.body":
+                state["bytes"] += len(message.get("body", b""))
+            await send(message)
+
+        received = 0
+
+        async def receive_wrapper() -> dict:
+            nonlocal received
+            message = await receive()
+            if message["type"] == "http.request":
+                received += len(message.get("body", b""))
+                if received > limit:
+                    raise _TooLarge(what, limit)
+            return message
+
+        try:
+            length = dict(scope.get("headers", [])).get(b"content-length")
+            if length is not None and length.isdigit() and int(length) > limit:
+                raise _TooLarge(what, limit)
+            if method in STATE_CHANGING and path.startswith("/api/"):
+                wait = self.limiter.allow(client)
+                if wait:
+                    await _send_json(send_wrapper, 429, {"error": f"too many requests from {client}; at most "
+                                                         f"{self.config.rate_per_minute} a minute. Retry in "
+                                                         f"{wait:.0f} s."},
+                                     {"retry-after": str(max(1, round(wait)))})
+                    return
+            await self.app(scope, receive_wrapper, send_wrapper)
+        except _TooLarge as exc:
+            if not state["started"]:
+                await _send_json(send_wrapper, 413, {"error": exc.detail})
+        finally:
+            access_log.info(json.dumps({
+                "t": round(time.time(), 3), "id": rid, "client": client, "method": method, "path": path,
+                "status": state["status"], "ms": round((time.perf_counter() - t0) * 1000, 1),
+                "bytes_in": received, "bytes_out": state["bytes"]}))
+
+
+async def _send_json(send: Callable[[dict], Awaitable[None]], status: int, body: dict,
+                     headers: dict[str, str] | None = None) -> None:
+    raw = json.dumps(body).encode()
+    hdrs = [(b"content-type", b"application/json"), (b"content-length", str(len(raw)).encode())]
+    hdrs += [(k.encode(), v.encode()) for k, v in (headers or {}).items()]
+    await send({"type": "http.response.start", "status": status, "headers": hdrs})
+    await send({"type": "http.response.body", "body": raw})
+
+
+# -- the app ------------------------------------------------------------------------------
+def _static_dir() -> Any:
+    return resources.files("brainpainter.web") / "static"
+
+
+def create_app(config: ServerConfig | None = None) -> FastAPI:
+    """The application for `config` (its pool starts and stops with the app's lifespan)."""
+    config = config or ServerConfig()
+    store = Store(config.data_dir)
+    pool = Pool(config, store)
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI):
+        pool.start()
+        try:
+            yield
+        finally:
+            pool.stop()
+
+    app = FastAPI(title="brainpainter", version=_version(), lifespan=lifespan, docs_url=None, redoc_url=None,
+                  description="Upload a table of values per brain region, check it, preview and render it.")
+    app.state.config, app.state.store, app.state.pool = config, store, pool
+    app.add_middleware(Guard, config=config)
+
+    @app.exception_handler(BrainPainterError)
+    async def _bp_error(request: Request, exc: BrainPainterError) -> JSONResponse:
+        return JSONResponse({"error": _one_line(exc)}, status_code=400)
+
+    @app.exception_handler(ApiError)
+    async def _api_error(request: Request, exc: ApiError) -> JSONResponse:
+        return JSONResponse({"error": _one_line(exc)}, status_code=exc.status, headers=exc.headers)
+
+    @app.exception_handler(RequestValidationError)
+    async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
+        return JSONResponse({"error": _validation_line(exc)}, status_code=422)
+
+    @app.exception_handler(StarletteHTTPException)
+    async def _http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
+        return JSONResponse({"error": str(exc.detail)}, status_code=exc.status_code,
+                            headers=getattr(exc, "headers", None))
+
+    @app.exception_handler(Exception)
+    async def _internal(request: Request, exc: Exception) -> JSONResponse:
+        log.exception("internal error on %s %s", request.method, request.url.path)
+        return JSONResponse({"error": f"internal error: {type(exc).__name__} (logged on the server)"},
+                            status_code=500)
+
+    # -- page and probes --------------------------------------------------------------------
+    @app.get("/", include_in_schema=False)
+    async def index() -> Response:
+        html = (_static_dir() / "index.html").read_bytes()
+        return Response(html, media_type="text/html; charset=utf-8")
+
+    app.mount("/static", StaticFiles(directory=str(_static_dir())), name="static")
+
+    @app.get("/healthz", tags=["probes"])
+    async def healthz() -> dict[str, str]:
+        """The server process answers."""
+        return {"status": "ok"}
+
+    @app.get("/readyz", tags=["probes"])
+    async def readyz() -> JSONResponse:
+        """Ready to take work: database writable, a job worker warm, the preview renderer warm."""
+        try:
+            db_ok = await run_in_threadpool(store.ping)
+        except Exception:
+            db_ok = False
+        workers = await run_in_threadpool(store.workers)
+        ready_workers = [w for w in workers if w["state"] in ("ready", "busy")]
+        checks = {"database": db_ok,
+                  "workers": len(ready_workers) >= min(1, config.workers) and pool.alive_workers() >= min(
+                      1, config.workers),
+                  "preview": pool.preview_ready or not config.preview}
+        ok = all(checks.values())
+        return JSONResponse({"status": "ready" if ok else "starting", "checks": checks,
+                             "jobs": await run_in_threadpool(store.counts)}, status_code=200 if ok else 503)
+
+    @app.get("/api/meta", tags=["api"])
+    async def meta() -> dict[str, Any]:
+        """What the page needs to draw its form: choices, defaults and limits."""
+        return await run_in_threadpool(_meta, config)
+
+    # -- uploads and checks -------------------------------------------------------------------
+    @app.post("/api/uploads", tags=["api"], openapi_extra={"requestBody": {
+        "required": True, "content": {"application/octet-stream": {"schema": {"type": "string",
+                                                                              "format": "binary"}}}}})
+    async def upload(request: Request, name: str = Query("table.csv", max_length=200),
+                     atlas: str | None = Query(None, max_length=100),
+                     image_column: str | None = Query(None, max_length=200),
+                     value: str | None = Query(None, max_length=200),
+                     region_column: str | None = Query(None, max_length=200),
+                     strict: bool = False) -> dict[str, Any]:
+        """Upload a table (the raw file as the body) and get the ``check`` report; nothing is kept
+        when the table would not render."""
+        chunks, size = [], 0
+        async for chunk in request.stream():
+            size += len(chunk)
+            chunks.append(chunk)
+        data = b"".join(chunks)
+        shown = upload_name(name)
+        opts = TableOptions(atlas=atlas or None, image_column=image_column or None, value=value or None,
+                            region_column=region_column or None, strict=strict)
+        report, images = await run_in_threadpool(_check, data, shown, opts, {})
+        upload_id = await run_in_threadpool(store.add_upload, _client(request), shown, data,
+                                            config.result_ttl_s, config.max_uploads_per_client)
+        return {"upload_id": upload_id, "name": shown, "size": size, "report": report,
+                "images": images[:MAX_LISTED_IMAGES]}
+
+    @app.post("/api/check", tags=["api"])
+    async def check(body: CheckRequest) -> dict[str, Any]:
+        """The ``check`` report of an upload with these options (the colour scale included)."""
+        name, data = await run_in_threadpool(_upload, store, body.upload_id)
+        o = body.options
+        scale = {"gradient": o.gradient, "cmap": o.cmap, "vmin": o.vmin, "vmax": o.vmax, "center": o.center}
+        return (await run_in_threadpool(_check, data, name, o, scale))[0]
+
+    # -- preview -------------------------------------------------------------------------------
+    @app.post("/api/preview", tags=["api"], responses={200: {"content": {"image/png": {}}}})
+    async def preview(body: PreviewRequest) -> Response:
+        """One row from one view, small, rendered by the warm preview painter."""
+        name, data = await run_in_threadpool(_upload, store, body.upload_id)
+        req = await run_in_threadpool(_preview_request, data, name, body, config)
+        try:
+            png, ms = await run_in_threadpool(pool.preview, req)
+        except PreviewBusy as exc:
+            raise ApiError(503, str(exc), {"retry-after": "2"}) from None
+        except PreviewUnavailable as exc:
+            raise ApiError(503, str(exc), {"retry-after": "5"}) from None
+        return Response(png, media_type="image/png", headers={"x-render-ms": str(ms)})
+
+    # -- jobs ----------------------------------------------------------------------------------
+    @app.post("/api/jobs", tags=["api"], status_code=202)
+    async def submit(body: JobRequest, request: Request) -> dict[str, Any]:
+        """Queue a job: ``images`` (every row from every view, as PNGs plus a zip), ``figure`` (PDF/PNG)
+        or ``movie`` (MP4/GIF)."""
+        name, data = await run_in_threadpool(_upload, store, body.upload_id)
+        prep = await run_in_threadpool(prepare, data, name, body.options, max_images=config.max_images,
+                                       max_pixels=config.max_pixels)
+        n_rows, n_views = len(prep.run.table.images), len(prep.run.views)
+        if body.kind == "movie" and n_rows < 2:
+            raise BrainPainterError(f"a movie needs at least 2 rows (key frames); the table has {n_rows}.")
+        params = body.figure.model_dump() if body.kind == "figure" else (
+            body.movie.model_dump() if body.kind == "movie" else {})
+        total = n_rows * n_views if body.kind == "images" else 1
+        try:
+            job_id = await run_in_threadpool(
+                store.submit, _client(request), body.kind, body.options.model_dump(), params, name, data,
+                total, max_per_client=config.max_jobs_per_client, max_queued=config.max_queued)
+        except LimitError as exc:
+            raise ApiError(exc.status, str(exc), {"retry-after": str(exc.retry_after)}) from None
+        return _public(await run_in_threadpool(store.get, job_id))
+
+    @app.get("/api/jobs/{job_id}", tags=["api"])
+    async def job_status(job_id: str) -> dict[str, Any]:
+        """Status, progress and files of a job."""
+        return _public(await run_in_threadpool(_job, store, job_id))
+
+    @app.delete("/api/jobs/{job_id}", tags=["api"])
+    async def cancel(job_id: str) -> dict[str, Any]:
+        """Cancel a queued or running job."""
+        await run_in_threadpool(_job, store, job_id)
+        await run_in_threadpool(store.cancel, job_id)
+        return _public(await run_in_threadpool(_job, store, job_id))
+
+    @app.get("/api/jobs/{job_id}/files/{file_name}", tags=["api"])
+    async def job_file(job_id: str, file_name: str, download: bool = False) -> FileResponse:
+        """One file the job made (only names listed in its ``files``)."""
+        job = await run_in_threadpool(_job, store, job_id)
+        if file_name not in job["files"]:
+            raise ApiError(404, f"job {job_id} has no file {file_name[:100]!r}; its files are listed in "
+                                f"GET /api/jobs/{job_id}.")
+        path = store.job_dir(job_id) / "out" / job["files"][job["files"].index(file_name)]
+        if not path.is_file():
+            raise ApiError(410, "the job's files have expired or were removed; render again.")
+        return FileResponse(path, filename=file_name if download else None,
+                            content_disposition_type="attachment" if download else "inline")
+
+    return app
+
+
+# -- helpers ------------------------------------------------------------------------------------
+def _version() -> str:
+    from brainpainter import __version__
+
+    return __version__
+
+
+def _client(request: Request) -> str:
+    return request.client.host if request.client else "-"
+
+
+def _upload(store: Store, upload_id: str) -> tuple[str, bytes]:
+    got = store.get_upload(upload_id) if valid_id(upload_id) else None
+    if got is None:
+        raise ApiError(404, "upload not found (it expired, or the id is wrong); upload the table again.")
+    return got
+
+
+def _job(store: Store, job_id: str) -> dict[str, Any]:
+    job = store.get(job_id) if valid_id(job_id) else None
+    if job is None:
+        raise ApiError(404, "job not found (it expired, or the id is wrong).")
+    return job
+
+
+def _public(job: dict[str, Any] | None) -> dict[str, Any]:
+    assert job is not None
+    base = f"/api/jobs/{job['id']}"
+    return {
+        "id": job["id"], "kind": job["kind"], "status": job["status"], "progress": job["progress"],
+        "total": job["total"], "error": job["error"], "input": job["input_name"], "created": job["created"],
+        "finished": job["finished"], "expires": job["expires"], "attempt": job["attempt"],
+        "files": [{"name": f, "url": f"{base}/files/{f}"} for f in job["files"]], "url": base,
+    }
+
+
+def _check(data: bytes, name: str, opts: TableOptions,
+           scale: dict[str, Any]) -> tuple[dict[str, Any], list[str]]:
+    """``brainpainter check --json`` for uploaded bytes, and every image name; raises the first error
+    as the CLI does."""
+    from brainpainter.inputs import inspect_table
+    from brainpainter.report import check_report
+
+    table = inspect_table(table_stream(data, name), opts.atlas, image_column=opts.image_column,
+                          value=opts.value, region_column=opts.region_column, strict=opts.strict)
+    report = check_report(table, **scale)
+    if report["errors"]:
+        raise BrainPainterError(report["errors"][0])
+    return report, list(table.images)
+
+
+def _preview_request(data: bytes, name: str, body: PreviewRequest, config: ServerConfig) -> dict[str, Any]:
+    from brainpainter.render import region_colors
+    from brainpainter.views import parse_views
+
+    prep = prepare(data, name, body.options, max_pixels=config.max_pixels)
+    table = prep.run.table
+    if isinstance(body.row, int) or str(body.row).isdigit():
+        i = int(body.row)
+        if not 0 <= i < len(table.images):
+            raise BrainPainterError(f"row must be 0..{len(table.images) - 1}; {body.row} was given.")
+    elif body.row in table.images:
+        i = table.images.index(body.row)
+    else:
+        raise BrainPainterError(f"row {str(body.row)[:100]!r} is not an image of the table; it has "
+                                f"{list(table.images[:5])}{'...' if len(table.images) > 5 else ''}.")
+    views = parse_views(body.view)
+    return {"atlas": table.atlas.name, "surface": body.options.surface, "hidden": prep.hidden,
+            "settings": preview_settings(prep.run.settings, config.preview_max_width),
+            "colors": region_colors(table.row(i), table.atlas, prep.run.scale), "view": views[0]}
+
+
+def _meta(config: ServerConfig) -> dict[str, Any]:
+    import matplotlib
+
+    from brainpainter import registry
+    from brainpainter.render import HIDE_GROUPS
+    from brainpainter.views import PRESETS
+
+    return {
+        "version": _version(),
+        "atlases": registry.atlases.names(),
+        "views": list(PRESETS),
+        "cmaps": sorted(n for n in matplotlib.colormaps if not n.endswith("_r")),
+        "hide_groups": list(HIDE_GROUPS),
+        "defaults": RenderOptions().model_dump(),
+        "limits": {"max_upload_mb": config.max_upload_mb, "max_images": config.max_images,
+                   "max_pixels": config.max_pixels, "max_jobs_per_client": config.max_jobs_per_client,
+                   "result_ttl_s": config.result_ttl_s, "job_time_limit_s": config.job_time_limit_s},
+        "renderer": config.renderer,
+    }
+
+
+def _validation_line(exc: RequestValidationError) -> str:
+    errors = exc.errors()
+    if not errors:
+        return "the request is not valid JSON of the expected form."
+    e = errors[0]
+    loc = ".".join(str(p) for p in e.get("loc", ()) if p not in ("body", "query"))
+    given = e.get("input")
+    shown = "" if isinstance(given, dict | list) or given is None else f"; {str(given)[:80]!r} was given"
+    more = f" ({len(errors) - 1} more problem(s))" if len(errors) > 1 else ""
+    return f"option {loc or 'body'!r}: {e.get('msg', 'invalid')}{shown}.{more}"

@@ -1,0 +1,82 @@
+"""Settings of a ``brainpainter serve`` instance: where it keeps data, how many workers, every limit."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import platformdirs
+
+
+def default_data_dir() -> Path:
+    """``$XDG_DATA_HOME/brainpainter/serve`` (platform equivalent elsewhere)."""
+    return Path(platformdirs.user_data_dir("brainpainter")) / "serve"
+
+
+@dataclass(frozen=True)
+class ServerConfig:
+    """One server's settings (the ``serve`` options; limits have safe defaults for a public lab server).
+
+    Attributes
+    ----------
+    data_dir : Path
+        Holds ``jobs.sqlite3`` and one folder per upload and per job (named by their random ids).
+    workers : int
+        Job worker processes (each holds warm painters). 0 runs no jobs (API tests).
+    preview : bool
+        Start the preview process (one warm painter for the live preview).
+    renderer : str
+        Renderer name in the ``brainpainter.renderers`` registry.
+    max_upload_mb : float
+        Largest accepted upload.
+    max_images : int
+        Largest rows x views of one job.
+    max_pixels : int
+        Largest width x height of one rendered view.
+    max_jobs_per_client : int
+        Queued or running jobs one client (IP address) may have at once.
+    max_uploads_per_client : int
+        Uploads kept per client; older ones are deleted (jobs keep their own copy).
+    max_queued : int
+        Queued jobs of all clients; beyond it submissions get 503.
+    rate_per_minute : int
+        Requests that change state (uploads, jobs, previews) per client and minute.
+    job_time_limit_s : float
+        A job running longer fails and its worker is restarted.
+    result_ttl_s : float
+        Finished jobs and uploads are deleted this long after they finish / arrive.
+    max_attempts : int
+        A job whose worker died this many times fails instead of being re-queued.
+    threads_per_worker : int
+        ``LP_NUM_THREADS`` (Mesa llvmpipe threads) of each rendering process;
+        0 = CPU cores divided among the workers and the preview process.
+    """
+
+    data_dir: Path = field(default_factory=default_data_dir)
+    workers: int = 1
+    preview: bool = True
+    renderer: str = "blender"
+    max_upload_mb: float = 10.0
+    max_images: int = 600
+    max_pixels: int = 2400 * 1800
+    max_jobs_per_client: int = 4
+    max_uploads_per_client: int = 100
+    max_queued: int = 100
+    rate_per_minute: int = 240
+    job_time_limit_s: float = 1800.0
+    result_ttl_s: float = 24 * 3600.0
+    max_attempts: int = 3
+    threads_per_worker: int = 0
+    preview_max_width: int = 480
+
+    @property
+    def max_upload_bytes(self) -> int:
+        return int(self.max_upload_mb * 1024 * 1024)
+
+    def lp_threads(self) -> int:
+        """Mesa threads per rendering process, so that processes do not oversubscribe the cores."""
+        if self.threads_per_worker > 0:
+            return self.threads_per_worker
+        procs = max(1, self.workers) + (1 if self.preview else 0)
+        return max(1, (os.cpu_count() or 1) // procs)

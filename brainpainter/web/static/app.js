@@ -1,0 +1,329 @@
+// brainpainter's page: upload -> check report -> live preview -> jobs. Plain JS, no build step,
+// nothing from outside this server (the Content-Security-Policy allows only 'self').
+"use strict";
+
+const $ = (id) => document.getElementById(id);
+const state = { uploadId: null, file: null, name: null, report: null, meta: null,
+                previewCtl: null, previewTimer: null, previewUrl: null, seq: 0 };
+const DEFAULT_VIEWS = ["lateral-left", "medial-left", "subcortical"];
+
+function el(tag, attrs = {}, ...children) {
+  const node = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) {
+    if (k === "text") node.textContent = v;
+    else if (v !== null && v !== undefined && v !== false) node.setAttribute(k, v === true ? "" : v);
+  }
+  for (const c of children) node.append(c);
+  return node;
+}
+
+function showError(message) {
+  const box = $("error");
+  box.textContent = message || "";
+  box.hidden = !message;
+}
+
+async function api(path, opts = {}) {
+  const res = await fetch(path, opts);
+  if (!res.ok) {
+    let msg = `${res.status} ${res.statusText}`;
+    try { const j = await res.json(); if (j.error) msg = j.error; } catch (e) { /* not JSON */ }
+    const err = new Error(msg); err.status = res.status; throw err;
+  }
+  return res;
+}
+
+// -- the form ----------------------------------------------------------------------------
+function viewIcon(name) {
+  // A top view of the head (nose up) with the camera's direction, or a side glyph for views from above/below.
+  const ns = "http://www.w3.org/2000/svg";
+  const svg = document.createElementNS(ns, "svg");
+  svg.setAttribute("width", "22"); svg.setAttribute("height", "22"); svg.setAttribute("viewBox", "-11 -11 22 22");
+  svg.setAttribute("aria-hidden", "true");
+  const head = document.createElementNS(ns, "ellipse");
+  head.setAttribute("rx", "6"); head.setAttribute("ry", "7.5");
+  head.setAttribute("fill", name.startsWith("subcortical") ? "#f3e1c9" : "#e7b8a8");
+  head.setAttribute("stroke", "#555"); head.setAttribute("stroke-width", "1");
+  svg.append(head);
+  const az = { "lateral-left": 180, "medial-left": 0, "lateral-right": 0, "medial-right": 180,
+               anterior: 90, posterior: 270, subcortical: 160, "subcortical-left": 180 }[name];
+  if (az !== undefined) {
+    const a = (az * Math.PI) / 180, x = 9.5 * Math.cos(a), y = -9.5 * Math.sin(a);
+    const dot = document.createElementNS(ns, "circle");
+    dot.setAttribute("cx", x.toFixed(1)); dot.setAttribute("cy", y.toFixed(1)); dot.setAttribute("r", "2.2");
+    dot.setAttribute("fill", "#1a5fb4");
+    svg.append(dot);
+  } else {
+    const mark = document.createElementNS(ns, "text");
+    mark.setAttribute("text-anchor", "middle"); mark.setAttribute("dy", "3.5"); mark.setAttribute("font-size", "9");
+    mark.textContent = name.includes("dorsal") ? "↓" : "↑";
+    svg.append(mark);
+  }
+  return svg;
+}
+
+function fillForm(meta) {
+  for (const a of meta.atlases) $("atlas").append(el("option", { value: a, text: a }));
+  for (const c of meta.cmaps) $("cmap").append(el("option", { value: c, text: c, selected: c === "viridis" }));
+  const views = $("views");
+  for (const v of meta.views) {
+    const box = el("input", { type: "checkbox", name: "views", value: v, checked: DEFAULT_VIEWS.includes(v) });
+    views.append(el("label", {}, box, viewIcon(v), v));
+  }
+  for (const g of meta.hide_groups) {
+    $("hide-groups").append(el("label", { class: "check" },
+      el("input", { type: "checkbox", name: "hide-group", value: g }), g));
+  }
+  for (const v of meta.views) $("pview").append(el("option", { value: v, text: v }));
+  const d = meta.defaults;
+  $("size").value = d.size; $("glass_opacity").value = d.glass_opacity;
+}
+
+function numberOrNull(id) {
+  const v = $(id).value.trim();
+  return v === "" ? null : Number(v);
+}
+
+function textOrNull(id) {
+  const v = $(id).value.trim();
+  return v === "" ? null : v;
+}
+
+function options() {
+  const useCmap = $("use-cmap").checked;
+  const views = [...document.querySelectorAll('input[name="views"]:checked')].map((b) => b.value);
+  const hide = [...document.querySelectorAll('input[name="hide-group"]:checked')].map((b) => b.value);
+  const more = $("hide").value.split(",").map((s) => s.trim()).filter(Boolean);
+  return {
+    atlas: textOrNull("atlas"), image_column: textOrNull("image_column"), value: textOrNull("value"),
+    region_column: textOrNull("region_column"), strict: $("strict").checked,
+    views: views.join(",") || "lateral-left", surface: $("surface").value,
+    gradient: useCmap ? null : textOrNull("gradient"), cmap: useCmap ? $("cmap").value : null,
+    vmin: numberOrNull("vmin"), vmax: numberOrNull("vmax"), center: numberOrNull("center"),
+    nan_color: $("nan_color").value, missing_color: $("missing_color").value,
+    hide: [...hide, ...more], background: $("background").value, transparent: $("transparent").checked,
+    size: $("size").value.trim(), quality: $("quality").value, shading: $("shading").value,
+    lighting: $("lighting").value, glass_opacity: Number($("glass_opacity").value || 0),
+  };
+}
+
+// -- upload and the check report ----------------------------------------------------------
+async function upload(blob, name) {
+  state.file = blob; state.name = name;
+  $("file-name").textContent = name;
+  showError("");
+  const o = options();
+  const q = new URLSearchParams({ name });
+  for (const k of ["atlas", "image_column", "value", "region_column"]) if (o[k]) q.set(k, o[k]);
+  if (o.strict) q.set("strict", "true");
+  setReady(false);
+  $("report").textContent = "Checking…";
+  try {
+    const res = await api(`/api/uploads?${q}`, { method: "POST", body: blob,
+                                                 headers: { "content-type": "application/octet-stream" } });
+    const j = await res.json();
+    state.uploadId = j.upload_id; state.report = j.report;
+    showReport(j.report);
+    fillRows(j.images, j.report.n_images);
+    setReady(true);
+    schedulePreview(0);
+  } catch (e) {
+    state.uploadId = null;
+    $("report").textContent = "";
+    showError(e.message);
+  }
+}
+
+function showReport(r) {
+  const box = $("report");
+  box.replaceChildren();
+  box.append(el("p", { class: "ok", text: `OK: ${r.summary}` }));
+  const dl = el("dl");
+  const add = (k, v) => dl.append(el("dt", { text: k }), el("dd", { text: v }));
+  for (const i of r.inputs) { add("format", i.format); add("shape", i.shape.description); }
+  add("atlas", r.atlas.name + (r.atlas.inferred ? ` (inferred: ${r.atlas.reason})` : " (given)"));
+  add("images", `${r.n_images}: ${r.images.slice(0, 6).join(", ")}${r.n_images > 6 ? ", …" : ""}`);
+  add("regions", `${r.n_regions_with_value} of ${r.n_regions_in_atlas} have a value`);
+  if (r.values.range) add("values", `${r.values.range[0]} .. ${r.values.range[1]}`);
+  if (r.values.scale) add("scale", `${r.values.scale.name}: ${r.values.scale.vmin} .. ${r.values.scale.vmax}`);
+  add("empty cells", String(r.cells.n_empty));
+  box.append(dl);
+  const list = (title, items) => {
+    if (!items.length) return;
+    box.append(el("h3", { text: title }));
+    const ul = el("ul");
+    for (const t of items) ul.append(el("li", { text: t }));
+    box.append(ul);
+  };
+  list("Columns and the regions they set", r.names.filter((n) => n.status === "region")
+    .map((n) => `${n.name} → ${n.regions.join(", ")}`));
+  list("Unmatched names", r.names.filter((n) => n.status === "unmatched")
+    .map((n) => `${n.name}` + (n.closest && n.closest.length ? ` (closest: ${n.closest.join(", ")})` : "")
+      + (n.region_of_atlas && n.region_of_atlas.length ? ` (a region of ${n.region_of_atlas.join(", ")})` : "")));
+  list("Set aside (not regions)", r.names.filter((n) => n.status === "ignored").map((n) => `${n.name}: ${n.reason}`));
+  list("Notes", [...r.values.hints, ...r.notes]);
+}
+
+function fillRows(images, total) {
+  const sel = $("row");
+  sel.replaceChildren();
+  images.forEach((name, i) => sel.append(el("option", { value: String(i), text: name })));
+  if (total > images.length) sel.append(el("option", { disabled: true, text: `… ${total - images.length} more` }));
+  sel.value = String(Math.max(0, images.length - 1));
+}
+
+function setReady(on) {
+  for (const b of document.querySelectorAll("#render-all, button[data-kind]")) b.disabled = !on;
+}
+
+// -- live preview -----------------------------------------------------------------------
+function schedulePreview(delay = 200) {
+  clearTimeout(state.previewTimer);
+  state.previewTimer = setTimeout(preview, delay);
+}
+
+async function preview() {
+  if (!state.uploadId) return;
+  if (state.previewCtl) state.previewCtl.abort();
+  const ctl = new AbortController();
+  state.previewCtl = ctl;
+  const seq = ++state.seq;
+  const t0 = performance.now();
+  $("preview-status").textContent = "Rendering preview…";
+  const body = { upload_id: state.uploadId, options: options(), row: Number($("row").value || 0),
+                 view: $("pview").value };
+  refreshScale(body.options, ctl.signal);
+  try {
+    const res = await api("/api/preview", { method: "POST", signal: ctl.signal,
+      headers: { "content-type": "application/json" }, body: JSON.stringify(body) });
+    const blob = await res.blob();
+    if (seq !== state.seq) return;
+    if (state.previewUrl) URL.revokeObjectURL(state.previewUrl);
+    state.previewUrl = URL.createObjectURL(blob);
+    const img = $("preview");
+    img.src = state.previewUrl; img.hidden = false;
+    img.dataset.seq = String(seq);
+    img.alt = `Preview of ${$("row").selectedOptions[0]?.textContent || "row"} from ${body.view}`;
+    $("preview-status").textContent =
+      `${$("row").selectedOptions[0]?.textContent || ""} · ${body.view} · rendered in ${res.headers.get("x-render-ms")} ms ` +
+      `(round trip ${Math.round(performance.now() - t0)} ms)`;
+    showError("");
+  } catch (e) {
+    if (e.name === "AbortError") return;
+    $("preview-status").textContent = "No preview.";
+    showError(e.message);
+  }
+}
+
+async function refreshScale(opts, signal) {
+  // the check report again with the colour options: value range against the scale, hints
+  try {
+    const res = await api("/api/check", { method: "POST", signal, headers: { "content-type": "application/json" },
+                                          body: JSON.stringify({ upload_id: state.uploadId, options: opts }) });
+    state.report = await res.json();
+    showReport(state.report);
+  } catch (e) { /* the preview shows the error */ }
+}
+
+// -- jobs -------------------------------------------------------------------------------
+async function submit(kind, format) {
+  if (!state.uploadId) return;
+  showError("");
+  const body = { upload_id: state.uploadId, kind, options: options() };
+  if (kind === "figure") body.figure = { format };
+  if (kind === "movie") body.movie = { format };
+  let job;
+  try {
+    const res = await api("/api/jobs", { method: "POST", headers: { "content-type": "application/json" },
+                                         body: JSON.stringify(body) });
+    job = await res.json();
+  } catch (e) { showError(e.message); return; }
+  const label = kind === "images" ? "All images" : `${kind} (${format.toUpperCase()})`;
+  const box = el("div", { class: "job", "data-job": job.id });
+  const progId = `prog-${job.id.slice(0, 8)}`;
+  const status = el("p", { text: `${label}: queued` });
+  const prog = el("progress", { id: progId, max: String(Math.max(1, job.total)), value: "0" });
+  const cancel = el("button", { type: "button", text: "Cancel" });
+  cancel.addEventListener("click", () => api(job.url, { method: "DELETE" }).catch((e) => showError(e.message)));
+  box.append(el("label", { for: progId, text: label }), prog, status, cancel);
+  $("jobs").prepend(box);
+  for (let i = 0; i < 7200; i++) { // bounded: at most about an hour of polling
+    await new Promise((r) => setTimeout(r, 500));
+    try { job = await (await api(job.url)).json(); } catch (e) { status.textContent = e.message; return; }
+    prog.value = job.progress;
+    status.textContent = `${label}: ${job.status} (${job.progress}/${job.total})`;
+    if (["done", "failed", "cancelled", "expired"].includes(job.status)) break;
+  }
+  cancel.remove();
+  if (job.status !== "done") { status.textContent = `${label}: ${job.status}${job.error ? ": " + job.error : ""}`; return; }
+  showResult(box, job, label);
+}
+
+function showResult(box, job, label) {
+  const links = el("p", { class: "row wrap" });
+  const gallery = el("div", { class: "gallery" });
+  const images = job.kind === "images";
+  for (const f of job.files) {
+    if (!images || f.name.endsWith(".zip")) {
+      links.append(el("a", { href: `${f.url}?download=1`, download: f.name,
+                             text: images ? `Download all (${f.name})` : `Download ${f.name}` }));
+    }
+    if (f.name.endsWith(".png") || f.name.endsWith(".gif")) {
+      gallery.append(el("figure", {}, el("img", { src: f.url, alt: f.name, loading: "lazy" }),
+                        el("figcaption", { text: f.name })));
+    }
+  }
+  box.append(links, gallery);
+  box.querySelector("p").textContent = `${label}: done`;
+}
+
+// -- wiring -----------------------------------------------------------------------------
+function wire() {
+  const drop = $("drop"), file = $("file");
+  drop.addEventListener("click", () => file.click());
+  drop.addEventListener("keydown", (e) => { if (e.key === "Enter" || e.key === " ") { e.preventDefault(); file.click(); } });
+  drop.addEventListener("dragover", (e) => { e.preventDefault(); drop.classList.add("over"); });
+  drop.addEventListener("dragleave", () => drop.classList.remove("over"));
+  drop.addEventListener("drop", (e) => {
+    e.preventDefault(); drop.classList.remove("over");
+    const f = e.dataTransfer.files[0];
+    if (f) upload(f, f.name);
+  });
+  file.addEventListener("change", () => { if (file.files[0]) upload(file.files[0], file.files[0].name); });
+  $("paste-go").addEventListener("click", () => {
+    const text = $("paste").value;
+    upload(new Blob([text], { type: "text/plain" }), text.includes("\t") ? "pasted.tsv" : "pasted.csv");
+  });
+  $("example").addEventListener("click", async () => {
+    const res = await api("/static/brainpainter_dk.csv");
+    upload(await res.blob(), "brainpainter_dk.csv");
+  });
+  // table options: upload again (the check report changes); other options: new preview
+  for (const node of document.querySelectorAll("[data-table]")) {
+    node.addEventListener("change", () => { if (state.file) upload(state.file, state.name); });
+  }
+  for (const r of document.querySelectorAll('input[name="scale"]')) {
+    r.addEventListener("change", () => {
+      $("cmap").disabled = !$("use-cmap").checked; $("gradient").disabled = $("use-cmap").checked;
+    });
+  }
+  $("options").addEventListener("input", () => schedulePreview());
+  $("options").addEventListener("change", () => schedulePreview());
+  $("options").addEventListener("submit", (e) => e.preventDefault());
+  $("row").addEventListener("change", () => schedulePreview(0));
+  $("pview").addEventListener("change", () => schedulePreview(0));
+  $("render-all").addEventListener("click", () => submit("images"));
+  for (const b of document.querySelectorAll("button[data-kind]")) {
+    b.addEventListener("click", () => submit(b.dataset.kind, b.dataset.format));
+  }
+}
+
+async function start() {
+  wire();
+  try {
+    state.meta = await (await api("/api/meta")).json();
+    fillForm(state.meta);
+  } catch (e) { showError(`The server did not answer: ${e.message}`); }
+}
+
+document.addEventListener("DOMContentLoaded", start);

@@ -1,0 +1,402 @@
+"""Uploads and jobs in SQLite (stdlib ``sqlite3``, WAL) with their files under the data folder.
+
+Layout of the data folder::
+
+    jobs.sqlite3            uploads, jobs, job events, workers
+    uploads/<id>.bin        an uploaded table, as sent
+    jobs/<id>/input.bin     the job's table (a copy: the job does not depend on the upload)
+    jobs/<id>/out/          what the job made
+
+Ids are 32 random hex digits (:func:`secrets.token_hex`); they are the only
+names that become paths, and only after :func:`valid_id` has checked them.
+
+A job's life: ``queued`` -> ``running`` (claimed by one worker with a new
+``attempt`` number) -> ``done`` | ``failed`` | ``cancelled``; later
+``expired`` (files deleted). Every change a worker makes names the attempt it
+claimed, so a worker that was given up on (dead, or its server restarted)
+can no longer change the job: a job is finished at most once, and a job that
+was running when the server stopped is queued again (``attempt`` + 1).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import secrets
+import shutil
+import sqlite3
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+from brainpainter.output import atomic_write_bytes
+
+_ID = re.compile(r"^[0-9a-f]{32}$")
+ACTIVE = ("queued", "running")
+FORGET_AFTER_S = 30 * 24 * 3600.0  # an expired job's row is kept this long (its id then answers 404)
+
+SCHEMA = """
+CREATE TABLE IF NOT EXISTS uploads (
+    id TEXT PRIMARY KEY, client TEXT NOT NULL, name TEXT NOT NULL, size INTEGER NOT NULL,
+    created REAL NOT NULL, expires REAL NOT NULL
+);
+CREATE TABLE IF NOT EXISTS jobs (
+    id TEXT PRIMARY KEY, client TEXT NOT NULL, kind TEXT NOT NULL, status TEXT NOT NULL,
+    options TEXT NOT NULL, params TEXT NOT NULL, input_name TEXT NOT NULL,
+    created REAL NOT NULL, started REAL, finished REAL, expires REAL,
+    progress INTEGER NOT NULL DEFAULT 0, total INTEGER NOT NULL DEFAULT 0,
+    attempt INTEGER NOT NULL DEFAULT 0, worker TEXT, heartbeat REAL,
+    error TEXT, files TEXT NOT NULL DEFAULT '[]', completions INTEGER NOT NULL DEFAULT 0
+);
+CREATE INDEX IF NOT EXISTS jobs_status ON jobs (status, created);
+CREATE INDEX IF NOT EXISTS jobs_client ON jobs (client, status);
+CREATE TABLE IF NOT EXISTS events (
+    job_id TEXT NOT NULL, attempt INTEGER NOT NULL, event TEXT NOT NULL, worker TEXT, detail TEXT,
+    t REAL NOT NULL
+);
+CREATE INDEX IF NOT EXISTS events_job ON events (job_id);
+CREATE TABLE IF NOT EXISTS workers (
+    name TEXT PRIMARY KEY, pid INTEGER, state TEXT NOT NULL, heartbeat REAL NOT NULL
+);
+"""
+
+
+_HELD_LOCKS: dict[str, Any] = {}
+
+
+def lock_data_dir(data_dir: str | Path) -> None:
+    """Hold ``DATA_DIR/server.lock`` for the life of this process: one server per data folder.
+
+    A second server on the same folder would re-queue the first one's running jobs. The lock
+    (``flock``) goes with the process, even on ``kill -9``; calling again in the same process is a no-op.
+
+    Raises
+    ------
+    BrainPainterError
+        Another process holds the folder.
+    """
+    import fcntl
+
+    from brainpainter.errors import BrainPainterError
+
+    root = Path(data_dir).resolve()
+    if str(root) in _HELD_LOCKS:
+        return
+    root.mkdir(parents=True, exist_ok=True)
+    fh = open(root / "server.lock", "a+")  # held open (and locked) for the life of the process
+    try:
+        fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        fh.close()
+        raise BrainPainterError(
+            f"another brainpainter serve is using --data-dir {str(root)!r}; stop it, or give this server "
+            "its own --data-dir."
+        ) from None
+    _HELD_LOCKS[str(root)] = fh
+
+
+def unlock_data_dir(data_dir: str | Path) -> None:
+    """Let go of the folder locked by :func:`lock_data_dir` in this process (no-op when not held)."""
+    fh = _HELD_LOCKS.pop(str(Path(data_dir).resolve()), None)
+    if fh is not None:
+        fh.close()  # closing the file releases the flock
+
+
+class LimitError(Exception):
+    """A submission refused by a limit; `status` is the HTTP status (429 or 503)."""
+
+    def __init__(self, message: str, status: int, retry_after: int = 10) -> None:
+        super().__init__(message)
+        self.status = status
+        self.retry_after = retry_after
+
+
+def new_id() -> str:
+    """An unguessable id: 128 random bits as 32 hex digits."""
+    return secrets.token_hex(16)
+
+
+def valid_id(text: str) -> bool:
+    """True when `text` is an id this store could have made (so it is safe as a path part)."""
+    return bool(_ID.match(text or ""))
+
+
+class Store:
+    """The server's persistent state (one object per process; connections are per thread/call).
+
+    Parameters
+    ----------
+    data_dir : path
+        Created if needed.
+    """
+
+    def __init__(self, data_dir: str | Path) -> None:
+        self.root = Path(data_dir)
+        (self.root / "uploads").mkdir(parents=True, exist_ok=True)
+        (self.root / "jobs").mkdir(parents=True, exist_ok=True)
+        self.path = self.root / "jobs.sqlite3"
+        with self.connect() as db:
+            db.execute("PRAGMA journal_mode=WAL")
+            db.executescript(SCHEMA)
+
+    # -- plumbing ------------------------------------------------------------------------
+    @contextmanager
+    def connect(self) -> Iterator[sqlite3.Connection]:
+        db = sqlite3.connect(self.path, timeout=30.0, isolation_level=None)
+        db.row_factory = sqlite3.Row
+        db.execute("PRAGMA busy_timeout=30000")
+        db.execute("PRAGMA synchronous=NORMAL")
+        try:
+            yield db
+        finally:
+            db.close()
+
+    @contextmanager
+    def transaction(self) -> Iterator[sqlite3.Connection]:
+        """``BEGIN IMMEDIATE`` ... ``COMMIT`` (rolled back on error): one writer at a time."""
+        with self.connect() as db:
+            db.execute("BEGIN IMMEDIATE")
+            try:
+                yield db
+            except BaseException:
+                db.execute("ROLLBACK")
+                raise
+            db.execute("COMMIT")
+
+    def job_dir(self, job_id: str) -> Path:
+        if not valid_id(job_id):
+            raise ValueError("not a job id")
+        return self.root / "jobs" / job_id
+
+    def upload_path(self, upload_id: str) -> Path:
+        if not valid_id(upload_id):
+            raise ValueError("not an upload id")
+        return self.root / "uploads" / f"{upload_id}.bin"
+
+    def ping(self) -> bool:
+        """The database answers and is writable."""
+        with self.transaction() as db:
+            db.execute("SELECT count(*) FROM jobs").fetchone()
+        return True
+
+    # -- uploads -------------------------------------------------------------------------
+    def add_upload(self, client: str, name: str, data: bytes, ttl_s: float, keep: int = 20) -> str:
+        """Store an upload; the client's uploads beyond its newest `keep` are deleted (disk stays bounded;
+        jobs keep their own copy of their table)."""
+        upload_id = new_id()
+        atomic_write_bytes(self.upload_path(upload_id), data)
+        now = time.time()
+        with self.transaction() as db:
+            db.execute("INSERT INTO uploads VALUES (?, ?, ?, ?, ?, ?)",
+                       (upload_id, client, name, len(data), now, now + ttl_s))
+            old = [r["id"] for r in db.execute(
+                "SELECT id FROM uploads WHERE client = ? ORDER BY created DESC, rowid DESC LIMIT -1 OFFSET ?",
+                (client, keep)).fetchall()]
+            db.executemany("DELETE FROM uploads WHERE id = ?", [(i,) for i in old])
+        for i in old:
+            self.upload_path(i).unlink(missing_ok=True)
+        return upload_id
+
+    def get_upload(self, upload_id: str) -> tuple[str, bytes] | None:
+        """``(name, bytes)`` of a live upload, or None."""
+        if not valid_id(upload_id):
+            return None
+        with self.connect() as db:
+            row = db.execute("SELECT name, expires FROM uploads WHERE id = ?", (upload_id,)).fetchone()
+        if row is None or row["expires"] < time.time():
+            return None
+        try:
+            return row["name"], self.upload_path(upload_id).read_bytes()
+        except OSError:
+            return None
+
+    # -- jobs: the server's side -----------------------------------------------------------
+    def submit(self, client: str, kind: str, options: dict[str, Any], params: dict[str, Any],
+               input_name: str, data: bytes, total: int, *, max_per_client: int, max_queued: int) -> str:
+        """Queue a job, or raise :class:`LimitError` (nothing stored then)."""
+        job_id = new_id()
+        folder = self.job_dir(job_id)
+        (folder / "out").mkdir(parents=True)
+        atomic_write_bytes(folder / "input.bin", data)
+        try:
+            with self.transaction() as db:
+                mine = db.execute("SELECT count(*) FROM jobs WHERE client = ? AND status IN (?, ?)",
+                                  (client, *ACTIVE)).fetchone()[0]
+                if mine >= max_per_client:
+                    raise LimitError(f"you have {mine} job(s) queued or running; at most {max_per_client} "
+                                     "at once. Wait for one to finish, then submit again.", 429)
+                queued = db.execute("SELECT count(*) FROM jobs WHERE status = 'queued'").fetchone()[0]
+                if queued >= max_queued:
+                    raise LimitError(f"the server has {queued} jobs waiting, its limit; try again in a "
+                                     "minute.", 503, retry_after=30)
+                db.execute(
+                    "INSERT INTO jobs (id, client, kind, status, options, params, input_name, created, total)"
+                    " VALUES (?, ?, ?, 'queued', ?, ?, ?, ?, ?)",
+                    (job_id, client, kind, json.dumps(options), json.dumps(params), input_name, time.time(),
+                     total))
+                self._event(db, job_id, 0, "queued", None)
+        except BaseException:
+            shutil.rmtree(folder, ignore_errors=True)
+            raise
+        return job_id
+
+    def get(self, job_id: str) -> dict[str, Any] | None:
+        if not valid_id(job_id):
+            return None
+        with self.connect() as db:
+            row = db.execute("SELECT * FROM jobs WHERE id = ?", (job_id,)).fetchone()
+        return None if row is None else _job(row)
+
+    def cancel(self, job_id: str) -> bool:
+        """Cancel a queued or running job (its worker stops at the next image)."""
+        with self.transaction() as db:
+            row = db.execute("SELECT attempt FROM jobs WHERE id = ? AND status IN (?, ?)",
+                             (job_id, *ACTIVE)).fetchone()
+            if row is None:
+                return False
+            db.execute("UPDATE jobs SET status = 'cancelled', finished = ?, attempt = attempt + 1 "
+                       "WHERE id = ?", (time.time(), job_id))
+            self._event(db, job_id, row["attempt"], "cancelled", None)
+        return True
+
+    def events(self, job_id: str) -> list[dict[str, Any]]:
+        with self.connect() as db:
+            rows = db.execute("SELECT * FROM events WHERE job_id = ? ORDER BY rowid", (job_id,)).fetchall()
+        return [dict(r) for r in rows]
+
+    def counts(self) -> dict[str, int]:
+        with self.connect() as db:
+            rows = db.execute("SELECT status, count(*) AS n FROM jobs GROUP BY status").fetchall()
+        return {r["status"]: r["n"] for r in rows}
+
+    # -- jobs: the workers' side ------------------------------------------------------------
+    def claim(self, worker: str) -> dict[str, Any] | None:
+        """Take the oldest queued job for `worker` (with a new attempt number), or None."""
+        with self.transaction() as db:
+            row = db.execute("SELECT id FROM jobs WHERE status = 'queued' ORDER BY created, rowid "
+                             "LIMIT 1").fetchone()
+            if row is None:
+                return None
+            now = time.time()
+            db.execute("UPDATE jobs SET status = 'running', attempt = attempt + 1, worker = ?, heartbeat = ?,"
+                       " started = ? WHERE id = ?", (worker, now, now, row["id"]))
+            job = _job(db.execute("SELECT * FROM jobs WHERE id = ?", (row["id"],)).fetchone())
+            self._event(db, job["id"], job["attempt"], "started", worker)
+        return job
+
+    def progress(self, job_id: str, attempt: int, done: int) -> bool:
+        """Record progress; False when the job is no longer this attempt's (cancelled, given up)."""
+        with self.transaction() as db:
+            cur = db.execute("UPDATE jobs SET progress = ?, heartbeat = ? WHERE id = ? AND attempt = ? AND "
+                             "status = 'running'", (done, time.time(), job_id, attempt))
+        return cur.rowcount == 1
+
+    def finish(self, job_id: str, attempt: int, files: list[str], ttl_s: float) -> bool:
+        """Mark the job done with its output files; False (nothing changed) when the attempt is stale."""
+        now = time.time()
+        with self.transaction() as db:
+            cur = db.execute(
+                "UPDATE jobs SET status = 'done', finished = ?, expires = ?, files = ?, progress = total, "
+                "completions = completions + 1 WHERE id = ? AND attempt = ? AND status = 'running'",
+                (now, now + ttl_s, json.dumps(files), job_id, attempt))
+            if cur.rowcount == 1:
+                self._event(db, job_id, attempt, "done", None)
+        return cur.rowcount == 1
+
+    def fail(self, job_id: str, attempt: int | None, error: str, ttl_s: float) -> bool:
+        now = time.time()
+        with self.transaction() as db:
+            sql = ("UPDATE jobs SET status = 'failed', finished = ?, expires = ?, error = ?, "
+                   "attempt = attempt + 1 WHERE id = ? AND status = 'running'")
+            args: tuple = (now, now + ttl_s, error[:500], job_id)
+            if attempt is not None:
+                sql += " AND attempt = ?"
+                args += (attempt,)
+            cur = db.execute(sql, args)
+            if cur.rowcount == 1:
+                self._event(db, job_id, attempt or 0, "failed", error[:500])
+        return cur.rowcount == 1
+
+    def requeue(self, *, worker: str | None = None, max_attempts: int, ttl_s: float) -> list[str]:
+        """Queue again the running jobs of `worker` (all running jobs when None), with a new attempt.
+
+        Jobs that already started `max_attempts` times fail instead (a job that kills its worker
+        every time must not loop forever).
+        """
+        now = time.time()
+        with self.transaction() as db:
+            sql, args = "SELECT id, attempt FROM jobs WHERE status = 'running'", ()
+            if worker is not None:
+                sql, args = sql + " AND worker = ?", (worker,)
+            rows = db.execute(sql, args).fetchall()
+            for r in rows:
+                if r["attempt"] >= max_attempts:
+                    msg = (f"the job stopped its worker {r['attempt']} times; it is not tried again. Try a "
+                           "smaller size or fewer views, or report it.")
+                    db.execute("UPDATE jobs SET status = 'failed', error = ?, finished = ?, expires = ?, "
+                               "attempt = attempt + 1 WHERE id = ?", (msg, now, now + ttl_s, r["id"]))
+                    self._event(db, r["id"], r["attempt"], "failed", msg)
+                else:
+                    db.execute("UPDATE jobs SET status = 'queued', worker = NULL, attempt = attempt + 1 "
+                               "WHERE id = ?", (r["id"],))
+                    self._event(db, r["id"], r["attempt"], "requeued", worker)
+        return [r["id"] for r in rows]
+
+    def overdue(self, limit_s: float) -> list[dict[str, Any]]:
+        """Running jobs that started more than `limit_s` seconds ago."""
+        with self.connect() as db:
+            rows = db.execute("SELECT * FROM jobs WHERE status = 'running' AND started < ?",
+                              (time.time() - limit_s,)).fetchall()
+        return [_job(r) for r in rows]
+
+    # -- workers -------------------------------------------------------------------------
+    def worker_state(self, name: str, pid: int, state: str) -> None:
+        with self.transaction() as db:
+            db.execute("INSERT OR REPLACE INTO workers VALUES (?, ?, ?, ?)", (name, pid, state, time.time()))
+
+    def workers(self) -> list[dict[str, Any]]:
+        with self.connect() as db:
+            return [dict(r) for r in db.execute("SELECT * FROM workers ORDER BY name").fetchall()]
+
+    def forget_workers(self) -> None:
+        with self.transaction() as db:
+            db.execute("DELETE FROM workers")
+
+    # -- expiry --------------------------------------------------------------------------
+    def expire(self, now: float | None = None) -> int:
+        """Delete the files of finished jobs and uploads past their time; returns how many went."""
+        now = time.time() if now is None else now
+        with self.transaction() as db:
+            jobs = [r["id"] for r in db.execute(
+                "SELECT id FROM jobs WHERE status IN ('done', 'failed', 'cancelled') AND "
+                "coalesce(expires, finished) < ?", (now,)).fetchall()]
+            db.execute("UPDATE jobs SET status = 'expired', files = '[]' WHERE status IN "
+                       "('done', 'failed', 'cancelled') AND coalesce(expires, finished) < ?", (now,))
+            uploads = [r["id"] for r in db.execute("SELECT id FROM uploads WHERE expires < ?",
+                                                   (now,)).fetchall()]
+            db.execute("DELETE FROM uploads WHERE expires < ?", (now,))
+            # rows of long-expired jobs go too (their files went when they expired)
+            gone = now - FORGET_AFTER_S
+            db.execute("DELETE FROM events WHERE job_id IN (SELECT id FROM jobs WHERE status = 'expired' AND "
+                       "coalesce(expires, finished) < ?)", (gone,))
+            db.execute("DELETE FROM jobs WHERE status = 'expired' AND coalesce(expires, finished) < ?",
+                       (gone,))
+        for job_id in jobs:
+            shutil.rmtree(self.job_dir(job_id), ignore_errors=True)
+        for upload_id in uploads:
+            self.upload_path(upload_id).unlink(missing_ok=True)
+        return len(jobs) + len(uploads)
+
+    @staticmethod
+    def _event(db: sqlite3.Connection, job_id: str, attempt: int, event: str, detail: str | None) -> None:
+        db.execute("INSERT INTO events (job_id, attempt, event, detail, t) VALUES (?, ?, ?, ?, ?)",
+                   (job_id, attempt, event, detail, time.time()))
+
+
+def _job(row: sqlite3.Row) -> dict[str, Any]:
+    job = dict(row)
+    for key in ("options", "params", "files"):
+        job[key] = json.loads(job[key])
+    return job

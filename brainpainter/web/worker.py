@@ -1,0 +1,273 @@
+"""The processes that render: job workers and the preview process.
+
+Each process sets ``LP_NUM_THREADS`` (Mesa's rendering threads) before the
+renderer loads, keeps up to two warm :class:`~brainpainter.render.Painter`\\ s
+(the renderer and template load once per process; a new scene is built only
+when the atlas, surface, hidden structures or image settings change) and
+stops by itself when the server process that started it is gone.
+
+A job worker takes queued jobs from the :class:`~brainpainter.web.store.Store`
+one at a time. An ``images`` job writes ``{image}_{view}.png`` files
+atomically and skips those already there, so a job re-queued after a crash or
+a server restart resumes where it stopped; the zip and the manifest are made
+last, then the job is marked done (at most once: see the store).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+import traceback
+import zipfile
+from collections import OrderedDict
+from pathlib import Path
+from typing import Any
+
+POLL_S = 0.2
+HEARTBEAT_S = 5.0
+
+#: Job kinds and the output file name stems they make.
+KINDS = ("images", "figure", "movie")
+
+
+class PainterCache:
+    """Up to `size` painters, keyed by everything that needs a new scene; least recently used closes."""
+
+    def __init__(self, renderer: str, size: int = 2) -> None:
+        self.renderer = renderer
+        self.size = size
+        self._painters: OrderedDict[tuple, Any] = OrderedDict()
+
+    def get(self, atlas: Any, surface: str, hidden: list[str], settings: Any) -> Any:
+        from brainpainter.render import Painter
+
+        key = (atlas.name, surface, tuple(sorted(hidden)), settings)
+        painter = self._painters.get(key)
+        if painter is None:
+            painter = Painter(atlas, "fsaverage", surface, hidden, settings, self.renderer)
+            painter.load()
+            self._painters[key] = painter
+            while len(self._painters) > self.size:
+                self._painters.popitem(last=False)[1].close()
+        self._painters.move_to_end(key)
+        return painter
+
+    def warm(self, width: int, height: int) -> None:
+        """Load the renderer and the default scene (dk, pial, default settings at this size)."""
+        from brainpainter.atlas import get_atlas
+        from brainpainter.scene import RenderSettings
+        from brainpainter.views import get_view
+
+        painter = self.get(get_atlas("dk"), "pial", [], RenderSettings(width=width, height=height))
+        painter.paint_colors({}, get_view("lateral-left"))
+
+    def close(self) -> None:
+        while self._painters:
+            self._painters.popitem()[1].close()
+
+
+def _orphaned(parent: int) -> bool:
+    return os.getppid() != parent
+
+
+def _set_threads(lp_threads: int) -> None:
+    os.environ["LP_NUM_THREADS"] = str(max(1, int(lp_threads)))
+
+
+# -- job worker -------------------------------------------------------------------------
+def job_worker_main(data_dir: str, name: str, renderer: str, lp_threads: int, ttl_s: float,
+                    time_limit_s: float, warm: bool = True) -> None:
+    """Entry point of a job worker process: take jobs until the parent process is gone."""
+    _set_threads(lp_threads)
+    from brainpainter.web.store import Store
+
+    parent = os.getppid()
+    store = Store(data_dir)
+    store.worker_state(name, os.getpid(), "starting")
+    painters = PainterCache(renderer)
+    if warm:
+        painters.warm(320, 240)
+    store.worker_state(name, os.getpid(), "ready")
+    last_beat = time.monotonic()
+    try:
+        while not _orphaned(parent):
+            job = store.claim(name)
+            if job is None:
+                time.sleep(POLL_S)
+                if time.monotonic() - last_beat > HEARTBEAT_S:
+                    store.worker_state(name, os.getpid(), "ready")
+                    last_beat = time.monotonic()
+                continue
+            store.worker_state(name, os.getpid(), "busy")
+            run_job(store, job, painters, ttl_s=ttl_s, time_limit_s=time_limit_s, parent=parent)
+            store.worker_state(name, os.getpid(), "ready")
+            last_beat = time.monotonic()
+    finally:
+        painters.close()
+
+
+class _Stop(Exception):
+    """The job was cancelled or given to another attempt, or the server is gone: stop quietly."""
+
+
+def run_job(store: Any, job: dict[str, Any], painters: PainterCache, *, ttl_s: float, time_limit_s: float,
+            parent: int | None = None) -> None:
+    """Run one claimed job and record its end (done or failed) under its attempt number."""
+    from brainpainter.errors import BrainPainterError
+
+    job_id, attempt = job["id"], job["attempt"]
+    started = time.time() if job.get("started") is None else job["started"]
+
+    def tick(done: int) -> None:
+        if parent is not None and _orphaned(parent):
+            raise _Stop
+        if time.time() - started > time_limit_s:
+            raise BrainPainterError(f"the job ran longer than this server's limit of {time_limit_s:g} s; "
+                                    "choose fewer rows or views, or a smaller size.")
+        if not store.progress(job_id, attempt, done):
+            raise _Stop
+
+    try:
+        folder = store.job_dir(job_id)
+        files = _KIND_RUNNERS[job["kind"]](folder, job, painters, tick)
+    except _Stop:
+        return
+    except BrainPainterError as exc:
+        store.fail(job_id, attempt, str(exc).splitlines()[0] if str(exc) else type(exc).__name__, ttl_s)
+        return
+    except Exception as exc:
+        traceback.print_exc(file=sys.stderr)
+        store.fail(job_id, attempt, f"internal error: {type(exc).__name__}: {exc}", ttl_s)
+        return
+    store.finish(job_id, attempt, files, ttl_s)
+
+
+def _prepared(folder: Path, job: dict[str, Any]) -> Any:
+    from brainpainter.web.options import RenderOptions, prepare
+
+    data = (folder / "input.bin").read_bytes()
+    return data, prepare(data, job["input_name"], RenderOptions(**job["options"]))
+
+
+def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
+    from brainpainter import __version__
+    from brainpainter.output import PngWriter, write_json
+
+    _, prep = _prepared(folder, job)
+    run = prep.run
+    table = run.table
+    painter = painters.get(table.atlas, prep.options.surface, prep.hidden, run.settings)
+    out = folder / "out"
+    settings = {"atlas": table.atlas.name, "template": "fsaverage", "surface": prep.options.surface,
+                "views": [v.to_dict() for v in run.views], "scale": run.scale.to_dict(),
+                "hidden": sorted(painter.scene.hidden), "renderer": painters.renderer,
+                **run.settings.to_dict()}
+    entries, done = [], 0
+    with PngWriter() as writer:
+        for i, image in enumerate(table.images):
+            values = table.row(i)
+            for view in run.views:
+                path = out / f"{prep.file_names[i]}_{view.name}.png"
+                if not path.exists():  # written atomically: present means complete (a resumed job)
+                    meta = {"Software": f"brainpainter {__version__}", "brainpainter:image": image,
+                            "brainpainter:view": view.name,
+                            "brainpainter:settings": json.dumps(settings, sort_keys=True)}
+                    writer.submit(path, painter.paint(values, view, run.scale), meta)
+                entries.append({"file": path.name, "image": image, "row": i, "view": view.name})
+                done += 1
+                tick(done)
+    manifest = {"software": {"brainpainter": __version__}, "input": table.summary(), "settings": settings,
+                "files": entries}
+    write_json(out / "manifest.json", manifest)
+    names = [e["file"] for e in entries] + ["manifest.json"]
+    _write_zip(out, names, f"brainpainter-{job['id'][:8]}.zip")
+    return [*names, f"brainpainter-{job['id'][:8]}.zip"]
+
+
+def _write_zip(out: Path, names: list[str], zip_name: str) -> None:
+    """Zip `names` (files in `out`) into `out/zip_name`, atomically."""
+    tmp = out / f".{zip_name}.part"
+    with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_STORED) as zf:  # PNGs are compressed already
+        for n in names:
+            zf.write(out / n, arcname=n)
+    os.replace(tmp, out / zip_name)
+
+
+def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
+    kwargs = prep.options.run_kwargs()
+    kwargs.update(atlas=prep.run.table.atlas, hide=prep.hidden, surface=prep.options.surface,
+                  renderer=renderer, progress=False)
+    return kwargs
+
+
+def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
+    from brainpainter.figure import make_figure
+    from brainpainter.web.options import table_stream
+
+    data, prep = _prepared(folder, job)
+    p = job["params"]
+    name = f"figure.{p.get('format', 'pdf')}"
+    tick(0)
+    make_figure(table_stream(data, job["input_name"]), out=folder / "out" / name, grid=bool(p.get("grid")),
+                title=p.get("title") or None, label=p.get("label") or None, dpi=float(p.get("dpi", 150)),
+                **_media_kwargs(prep, painters.renderer))
+    return [name]
+
+
+def _run_movie(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
+    from brainpainter.movie import make_movie
+    from brainpainter.web.options import table_stream
+
+    data, prep = _prepared(folder, job)
+    p = job["params"]
+    name = f"movie.{p.get('format', 'mp4')}"
+    tick(0)
+    make_movie(table_stream(data, job["input_name"]), out=folder / "out" / name,
+               frames_per_step=int(p.get("frames_per_step", 12)), easing=p.get("easing", "linear"),
+               hold=int(p.get("hold", 0)), fps=float(p.get("fps", 24.0)), title=p.get("title") or None,
+               label=p.get("label") or None, **_media_kwargs(prep, painters.renderer))
+    return [name]
+
+
+_KIND_RUNNERS = {"images": _run_images, "figure": _run_figure, "movie": _run_movie}
+
+
+# -- preview process ----------------------------------------------------------------------
+def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int, int]) -> None:
+    """Entry point of the preview process: answer render requests on `conn` until the parent is gone.
+
+    A request is ``{"atlas", "surface", "hidden", "settings", "colors", "view"}``; the answer is
+    ``("ok", png_bytes, milliseconds)`` or ``("error", one_line_message, 0)``.
+    """
+    _set_threads(lp_threads)
+    from brainpainter.atlas import get_atlas
+    from brainpainter.errors import BrainPainterError
+    from brainpainter.output import png_bytes
+
+    parent = os.getppid()
+    painters = PainterCache(renderer)
+    try:
+        painters.warm(*warm_size)
+        conn.send(("ready", b"", 0))
+        while not _orphaned(parent):
+            if not conn.poll(1.0):
+                continue
+            try:
+                req = conn.recv()
+            except EOFError:
+                break
+            t0 = time.perf_counter()
+            try:
+                atlas = get_atlas(req["atlas"])
+                painter = painters.get(atlas, req["surface"], req["hidden"], req["settings"])
+                pixels = painter.paint_colors(req["colors"], req["view"])
+                conn.send(("ok", png_bytes(pixels), int((time.perf_counter() - t0) * 1000)))
+            except BrainPainterError as exc:
+                conn.send(("error", str(exc).splitlines()[0], 0))
+            except Exception as exc:
+                traceback.print_exc(file=sys.stderr)
+                conn.send(("error", f"internal error: {type(exc).__name__}: {exc}", 0))
+    finally:
+        painters.close()
