@@ -82,6 +82,17 @@ class Atlas:
         label set a region of this atlas stands for (``("Left-frontal",
         ("Left-superiorfrontal", ...))``). Regions not listed stand for
         themselves. Empty for ordinary atlases.
+    volume_dirs : tuple of Path
+        Folders of volumetric atlases (``subcortical.npz`` meshes, see
+        :mod:`brainpainter.volumes`) drawn as the template's subcortical part
+        instead of its own structures; see
+        :meth:`brainpainter.template.Template.with_volumes`.
+    sources : tuple of (str, str)
+        For an atlas combined from several (``schaefer400_7n+tian_s2``): each
+        region key and the atlas it comes from. Empty otherwise.
+    template_dir : Path or None
+        A template of the atlas's own (a volume atlas of a brain without
+        cortical surfaces, e.g. a mouse), used unless another template is named.
     """
 
     name: str
@@ -93,6 +104,9 @@ class Atlas:
     aliases: tuple[str, ...] = ()
     label_dir: Path | None = None
     members: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    volume_dirs: tuple[Path, ...] = ()
+    sources: tuple[tuple[str, str], ...] = ()
+    template_dir: Path | None = None
     _by_key: dict[str, Region] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -150,6 +164,7 @@ class Atlas:
             "n_subcortical": len(self.subcortical()),
             "label_dir": None if self.label_dir is None else str(self.label_dir),
             "groups": {k: list(m) for k, m in self.members},
+            "volume_dirs": [str(p) for p in self.volume_dirs],
             "regions": [
                 {
                     "key": r.key,
@@ -240,14 +255,69 @@ def load_atlas_dir(path: str | Path) -> Atlas:
         citation=meta.get("citation", ""),
         aliases=tuple(meta.get("aliases", ())),
         label_dir=path if (path / "labels.json").is_file() else None,
+        volume_dirs=(path,) if (path / "subcortical.npz").is_file() else (),
+        template_dir=path / "template" if (path / "template" / "manifest.json").is_file() else None,
     )
 
 
 def get_atlas(name: str) -> Atlas:
-    """The registered atlas called `name` (or one of its aliases)."""
+    """The registered atlas called `name` (or one of its aliases).
+
+    ``"A+B+..."`` combines a cortical atlas with volumetric ones (:func:`combine_atlases`),
+    e.g. ``"schaefer400_7n+tian_s2"``.
+    """
     from brainpainter import registry
 
+    if "+" in str(name):
+        return combine_atlases([registry.atlases.get(part.strip()) for part in str(name).split("+")])
     return registry.atlases.get(name)
+
+
+def combine_atlases(atlases: list[Atlas] | tuple[Atlas, ...]) -> Atlas:
+    """One atlas from a cortical atlas and one or more volumetric atlases (or volumetric atlases only).
+
+    The cortex is drawn with the cortical atlas (its regions and label set);
+    the subcortical views show the meshes of every volumetric atlas in place of
+    the template's own structures, so the cortical atlas's subcortical (aseg)
+    regions are left out. One table gives values to regions of all of them.
+
+    Parameters
+    ----------
+    atlases : sequence of Atlas
+        At most one without volume meshes (the cortical atlas), any number with.
+
+    Returns
+    -------
+    Atlas
+        Named ``"A+B"``; ``sources`` says which atlas each region key comes from.
+    """
+    atlases = list(atlases)
+    cortical = [a for a in atlases if not a.volume_dirs]
+    volumes = [a for a in atlases if a.volume_dirs]
+    name = "+".join(a.name for a in atlases)
+    if len(cortical) > 1 or not volumes:
+        raise BrainPainterError(
+            f"atlas {name!r} combines {[a.name for a in cortical]} without volume meshes; combine one "
+            "cortical atlas with volumetric atlases (brainpainter atlas add NAME --volume ...), e.g. "
+            "schaefer400_7n+tian_s2")
+    base = cortical[0] if cortical else volumes[0]
+    regions: list[Region] = list(base.cortical()) if cortical else []
+    sources = {r.key: base.name for r in regions}
+    for v in volumes:
+        for r in v.regions:
+            if r.key in sources:
+                raise BrainPainterError(f"region {r.key!r} is in both {sources[r.key]!r} and {v.name!r}; "
+                                        "combine atlases whose region names differ")
+            sources[r.key] = v.name
+            regions.append(r)
+    citations = list(dict.fromkeys(a.citation for a in atlases if a.citation))
+    return Atlas(
+        name=name, title=" + ".join(a.title for a in atlases), template_labels=base.template_labels,
+        regions=tuple(regions), description="; ".join(a.description for a in atlases if a.description),
+        citation="\n".join(citations), label_dir=base.label_dir if cortical else None,
+        members=base.members if cortical else (),
+        volume_dirs=tuple(d for v in volumes for d in v.volume_dirs), sources=tuple(sources.items()),
+    )
 
 
 def list_atlases() -> list[str]:

@@ -4,7 +4,9 @@ The original BrainPainter's "Custom" atlas drew several DK regions as one user
 label (a lobe). Here that is a small TOML file::
 
     [atlas]
-    base = "dk"                  # required: any installed or user atlas
+    base = "dk"                  # required: any installed or user atlas, or a combination of a
+                                 # cortical and volumetric atlases ("schaefer400_7n+tian_s2"; then
+                                 # [groups] may be left out)
     name = "lobes"               # optional (default: the file name); 'atlas add NAME' overrides it
     title = "Lobes"              # optional; also description, citation
     ungrouped = "keep"           # "keep" (default): regions in no group stay regions of their own;
@@ -38,6 +40,8 @@ from typing import Any
 from brainpainter.atlas import HEMI_PREFIX, Atlas, Region
 from brainpainter.errors import BrainPainterError, choice_error
 
+MAX_CONFIG_BYTES = 1024 * 1024  # a region-group config is a few KB
+_LOADING: set[str] = set()  # names of group atlases being built (to catch cycles)
 ATLAS_KEYS = ("base", "name", "title", "description", "citation", "ungrouped")
 UNGROUPED = ("keep", "drop")
 _SIDES = {"left-": "lh", "right-": "rh"}
@@ -58,17 +62,29 @@ def load_atlas_config(path: str | Path, name: str | None = None) -> Atlas:
         Unreadable TOML, unknown keys, unknown base atlas or region, a region
         in two groups; one line naming the file.
     """
+    from brainpainter.files import read_input
+
     path = Path(path).expanduser()
+    raw = read_input(path, "atlas config", MAX_CONFIG_BYTES,
+                     hint="give the path of a TOML file with [atlas] and [groups] (see docs/atlases.md)")
     try:
-        config = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise BrainPainterError(f"cannot read atlas config {path}: {exc.strerror or exc}; give the path of "
-                                "a TOML file with [atlas] and [groups] (see docs/atlases.md)") from None
+        config = tomllib.loads(raw.decode("utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise BrainPainterError(f"{path} is not valid TOML: {exc}; see docs/atlases.md for the "
-                                "format") from None
-    return atlas_from_config(config, source=str(path), name=name or config.get("atlas", {}).get("name")
-                             or path.name.split(".")[0])
+        raise BrainPainterError(f"{path} is not valid TOML: {' '.join(str(exc).split())[:200]}; see "
+                                "docs/atlases.md for the format") from None
+    meta = config.get("atlas", {})
+    if not isinstance(meta, dict) or not isinstance(config.get("groups", {}), dict):
+        raise _fail(str(path), "[atlas] and [groups] must be tables, e.g. [atlas] base = \"dk\"; see "
+                               "docs/atlases.md")
+    given = meta.get("name")
+    if given is not None and not isinstance(given, str):
+        raise _fail(str(path), f"[atlas] name must be a text; {given!r} was given")
+    return atlas_from_config(config, source=str(path), name=name or given or path.name.split(".")[0])
+
+
+def _cycle(base: str) -> str:
+    return (f"[atlas] base {base!r} leads back to this atlas (a cycle of region-group atlases); base it on "
+            "an atlas with label maps, e.g. dk")
 
 
 def _fail(source: str, msg: str) -> BrainPainterError:
@@ -98,8 +114,8 @@ def _palette(n: int, avoid: list[tuple[int, int, int]] = ()) -> list[tuple[int, 
 
 def atlas_from_config(config: dict[str, Any], source: str, name: str) -> Atlas:
     """Build a group atlas from a parsed config (see the module docstring for the schema)."""
-    from brainpainter import registry
     from brainpainter.colors import to_rgb
+    from brainpainter.readers import has_control
 
     extra = sorted(set(config) - {"atlas", "groups"})
     if extra:
@@ -113,14 +129,28 @@ def atlas_from_config(config: dict[str, Any], source: str, name: str) -> Atlas:
         raise _fail(source, f"[atlas] has the unknown key {bad[0]!r}; allowed: {list(ATLAS_KEYS)}")
     if "base" not in meta:
         raise _fail(source, '[atlas] needs base = "ATLAS", the atlas whose regions are grouped (e.g. "dk")')
+    if not isinstance(meta["base"], str):
+        raise _fail(source, f'[atlas] base must be an atlas name such as "dk"; {meta["base"]!r} was given')
+    if meta["base"].strip().lower() == str(name).strip().lower():
+        raise _fail(source, f"[atlas] base {meta['base']!r} is the atlas being defined; a region-group atlas "
+                            "groups the regions of another atlas (e.g. base = \"dk\")")
+    if meta["base"].strip().lower() in _LOADING:
+        raise _fail(source, _cycle(meta["base"]))
+    _LOADING.add(str(name).strip().lower())
     try:
-        base: Atlas = registry.atlases.get(str(meta["base"]))
+        from brainpainter.atlas import get_atlas
+
+        base: Atlas = get_atlas(str(meta["base"]))  # "schaefer400_7n+tian_s2" combines atlases
     except BrainPainterError as exc:
-        raise _fail(source, f"[atlas] base: {exc}") from None
+        raise _fail(source, f"[atlas] base: {str(exc)[:300]}") from None
+    except RecursionError:
+        raise _fail(source, _cycle(meta["base"])) from None
+    finally:
+        _LOADING.discard(str(name).strip().lower())
     ungrouped = meta.get("ungrouped", "keep")
     if ungrouped not in UNGROUPED:
         raise _fail(source, str(choice_error("[atlas] ungrouped", ungrouped, UNGROUPED)))
-    if not groups:
+    if not groups and "+" not in str(meta["base"]):
         raise _fail(source, "[groups] is empty; add e.g. frontal = [\"superiorfrontal\", ...]")
 
     by_key = {r.key.lower(): r for r in base.regions}
@@ -158,8 +188,9 @@ def atlas_from_config(config: dict[str, Any], source: str, name: str) -> Atlas:
             value = value["regions"]
         if not isinstance(value, list) or not value or not all(isinstance(m, str) for m in value):
             raise _fail(source, f"group {gname!r} must list region names, e.g. {gname} = [\"insula\"]")
-        if not gname.strip() or any(c in gname for c in "\t\n\r,|"):
-            raise _fail(source, f"group name {gname!r} must be non-empty without tabs, commas or '|'")
+        if not gname.strip() or any(c in gname for c in "\t\n\r,|") or has_control(gname):
+            raise _fail(source, f"group name {gname[:40]!r} must be non-empty without tabs, commas, '|' or "
+                                "control characters")
         side = next((h for p, h in _SIDES.items() if gname.lower().startswith(p) and len(gname) > len(p)),
                     None)
         core = gname.split("-", 1)[1] if side else gname
@@ -243,4 +274,6 @@ def atlas_from_config(config: dict[str, Any], source: str, name: str) -> Atlas:
         citation=str(meta.get("citation") or base.citation),
         label_dir=base.label_dir,
         members=tuple(members_out),
+        volume_dirs=base.volume_dirs,
+        sources=tuple((k, v) for k, v in base.sources if k in {r.key for r in regions}),
     )

@@ -43,6 +43,10 @@ def _legend(entries: list[tuple[str, tuple[int, int, int]]], width: int) -> np.n
     return np.asarray(img)
 
 
+#: Most region names drawn in a reference image's legend; atlases with more get none.
+MAX_LEGEND = 120
+
+
 def reference_image(atlas: Atlas, path: str | Path, *, views: str = "lateral-left,medial-left,subcortical",
                     size: tuple[int, int] = (800, 600), template: str = "fsaverage", surface: str = "pial",
                     quality: str = "default", renderer: str = "blender", legend: bool = True) -> np.ndarray:
@@ -79,8 +83,12 @@ def reference_image(atlas: Atlas, path: str | Path, *, views: str = "lateral-lef
             if r.kind in kinds:
                 first.setdefault(r.name, r.color)
         entries = list(first.items())
-        if entries:
+        if 0 < len(entries) <= MAX_LEGEND:  # a legend of hundreds of parcels (Schaefer) reads as noise
             image = np.concatenate([image, _legend(entries, image.shape[1])], axis=0)
-    write_png(path, image, {"Software": f"brainpainter {__version__}", "brainpainter:atlas": atlas.name,
-                            "brainpainter:views": ",".join(v.name for v in view_list)})
+    from brainpainter.transaction import FileTransaction
+
+    with FileTransaction(path) as tx:  # locked, staged, verified, published atomically
+        write_png(tx.tmp, image, {"Software": f"brainpainter {__version__}", "brainpainter:atlas": atlas.name,
+                                  "brainpainter:views": ",".join(v.name for v in view_list)})
+        tx.commit(size=(image.shape[1], image.shape[0]))
     return image

@@ -8,7 +8,6 @@ inside the commands, so ``brainpainter --help`` stays fast.
 from __future__ import annotations
 
 import json
-import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -16,6 +15,7 @@ from typing import Any
 import click
 
 from brainpainter.cli_options import (
+    FINITE,
     input_options,
     parallel_options,
     parse_size,
@@ -86,8 +86,9 @@ def atlas_list(as_json: bool) -> None:
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
 @click.option("--image", type=click.Path(path_type=Path, dir_okay=False), default=None,
               help="Also draw a reference PNG: every region in its colour-table colour, views side by side.")
-@click.option("--views", default="lateral-left,medial-left,subcortical", show_default=True,
-              help="Views of the reference image.")
+@click.option("--views", default=None,
+              help="Views of the reference image [default: lateral-left,medial-left,subcortical; "
+                   "subcortical,subcortical-dorsal for an atlas without cortical regions].")
 @click.option("--size", default="800x600", show_default=True, help="Size of each view, WIDTHxHEIGHT.")
 @click.option("--template", default="fsaverage", show_default=True, help="Template name or folder.")
 @click.option("--surface", default="pial", show_default=True,
@@ -95,7 +96,7 @@ def atlas_list(as_json: bool) -> None:
 @click.option("--quality", default="default", show_default=True,
               type=click.Choice(["fast", "default", "high"]))
 @click.option("--renderer", default="blender", show_default=True)
-def atlas_show(name: str, as_json: bool, image: Path | None, views: str, size: str, template: str,
+def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, size: str, template: str,
                surface: str, quality: str, renderer: str) -> None:
     """Regions of atlas NAME, with hemisphere, colour and aliases; --image draws them."""
     from brainpainter.atlas import get_atlas
@@ -103,7 +104,10 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str, size: s
     a = get_atlas(name)
     if image is not None:
         from brainpainter.atlas_image import reference_image
+        from brainpainter.render import VOLUME_VIEWS
 
+        if views is None:
+            views = "lateral-left,medial-left,subcortical" if a.cortical() else ",".join(VOLUME_VIEWS)
         reference_image(a, image, views=views, size=parse_size(size), template=template, surface=surface,
                         quality=quality, renderer=renderer)
         if not as_json:
@@ -136,6 +140,17 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str, size: s
                    "on the template's surface).")
 @click.option("--config", "config", type=click.Path(path_type=Path, dir_okay=False), default=None,
               help="Region-group TOML file (a base atlas and named groups of its regions).")
+@click.option("--volume", "volume", type=click.Path(path_type=Path, dir_okay=False), default=None,
+              help="Label volume (NIfTI/MGH of integer labels): one smooth mesh per label, drawn in the "
+                   "subcortical views.")
+@click.option("--lut", "lut", type=click.Path(path_type=Path, dir_okay=False), default=None,
+              help="Look-up table for --volume: FreeSurfer LUT, BIDS dseg.tsv or CSV of index,name.")
+@click.option("--space", default="MNI152NLin2009cAsym", show_default=True,
+              type=click.Choice(["MNI152NLin2009cAsym", "MNI152NLin6Asym", "fsaverage", "template"]),
+              help="Space of --volume (mapped into the template's; see docs/atlases.md).")
+@click.option("--own-template", is_flag=True,
+              help="With --volume: the volume is a brain of its own (e.g. a mouse atlas): make a template of "
+                   "its labels only (no cortex) in the volume's coordinates; --space is not used.")
 @click.option("--template", default="fsaverage", show_default=True,
               help="Template the label maps were made for.")
 @click.option("--title", default="", help="Human title (default: NAME).")
@@ -144,25 +159,38 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str, size: s
 @click.option("--replace", is_flag=True, help="Replace your atlas of the same name.")
 @click.option("--out", "out", type=click.Path(path_type=Path, file_okay=False), default=None,
               help="Write the atlas folder to OUT (e.g. into an atlas plugin) instead of adding it.")
-def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, template: str, title: str,
-              description: str, citation: str, replace: bool, out: Path | None) -> None:
-    """Add atlas NAME from label maps (--annot) or from region groups (--config).
+def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: Path | None, lut: Path | None,
+              space: str, own_template: bool, template: str, title: str, description: str, citation: str,
+              replace: bool, out: Path | None) -> None:
+    """Add atlas NAME from label maps (--annot), a label volume (--volume) or region groups (--config).
 
     \b
     Examples:
       brainpainter atlas add yeo7 --annot lh=lh.Yeo2011_7Networks_N1000.annot \\
                                   --annot rh=rh.Yeo2011_7Networks_N1000.annot
       brainpainter atlas add lobes --config lobes.toml
+      brainpainter atlas add tian_s2 --volume Tian_S2.nii.gz --lut Tian_S2.csv --space MNI152NLin6Asym
     """
     import time
 
     from brainpainter import registry, user_atlases
 
-    if bool(annots) == (config is not None):
-        raise BrainPainterError("give either --annot lh=FILE --annot rh=FILE or --config FILE.toml "
-                                "(one of them)")
+    if sum([bool(annots), config is not None, volume is not None]) != 1:
+        raise BrainPainterError("give either --annot lh=FILE --annot rh=FILE, --volume FILE --lut FILE or "
+                                "--config FILE.toml (one of them)")
+    if own_template and volume is None:
+        raise BrainPainterError("--own-template goes with --volume FILE --lut FILE (a brain made of volume "
+                                "labels)")
+    if (volume is None) != (lut is None):
+        raise BrainPainterError("--volume and --lut go together: the look-up table names the volume's labels")
     t0 = time.perf_counter()
-    if config is not None:
+    if volume is not None:
+        from brainpainter.volumes import add_volume_atlas
+
+        folder = add_volume_atlas(name, volume, lut, space=space, template=template, title=title,
+                                  description=description, citation=citation, replace=replace, out=out,
+                                  own_template=own_template)
+    elif config is not None:
         if out is not None:
             raise BrainPainterError("--out is for label maps (--annot); a config is a file you can ship "
                                     "as it is")
@@ -239,9 +267,9 @@ def _one_or_many(inputs: tuple[Path, ...]) -> Path | list[Path]:
 @input_options
 @click.option("--gradient", default=None, help="Colour scale to compare the values with (as for render).")
 @click.option("--cmap", default=None, help="Colour map to compare the values with (as for render).")
-@click.option("--vmin", type=float, default=None)
-@click.option("--vmax", type=float, default=None)
-@click.option("--center", type=float, default=None)
+@click.option("--vmin", type=FINITE, default=None)
+@click.option("--vmax", type=FINITE, default=None)
+@click.option("--center", type=FINITE, default=None)
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
 def check(inputs: tuple[Path, ...], atlas: str | None, image_column: str | None, value: str | None,
           region_column: str | None, strict: bool, gradient: str | None, cmap: str | None,
@@ -288,9 +316,12 @@ def render(inputs: tuple[Path, ...], out: Path, quiet: bool, **options: Any) -> 
 
     result = run(_one_or_many(inputs), out=out, progress=not quiet, **render_kwargs(options))
     from brainpainter.inputs import summary_line
+    from brainpainter.report import input_warnings
 
     s = result.manifest["input"]
     click.echo(f"input: {summary_line(s)}")
+    for line in input_warnings(s):
+        click.echo(f"warning: {line}")
     click.echo(
         f"{len(result.files)} image(s) written to {out} "
         f"({s['n_images']} row(s); {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
@@ -361,30 +392,10 @@ cli.add_command(serve)
 
 
 def main(argv: list[str] | None = None) -> None:
-    """Console entry point: user errors become one line and exit code 2."""
-    try:
-        cli.main(args=argv, prog_name="brainpainter", standalone_mode=False)
-    except click.exceptions.Abort:
-        click.echo("aborted", err=True)
-        sys.exit(130)
-    except click.ClickException as exc:
-        # click's own usage errors: one line, exit 2
-        msg = exc.format_message().replace("\n", " ")
-        click.echo(f"error: {msg}", err=True)
-        sys.exit(exc.exit_code)
-    except BrainPainterError as exc:
-        click.echo(f"error: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}", err=True)
-        sys.exit(exc.exit_code)
-    except KeyboardInterrupt:
-        click.echo("interrupted", err=True)
-        sys.exit(130)
-    except Exception as exc:  # no traceback for users; BRAINPAINTER_DEBUG=1 shows it
-        if os.environ.get("BRAINPAINTER_DEBUG"):
-            raise
-        click.echo(f"internal error: {type(exc).__name__}: {exc} (set BRAINPAINTER_DEBUG=1 for a "
-                   "traceback and please report it)", err=True)
-        sys.exit(1)
-    sys.exit(0)
+    """Console entry point: user errors become one line and exit code 2 (see :mod:`brainpainter.guard`)."""
+    from brainpainter.guard import run
+
+    sys.exit(run(cli, argv))
 
 
 if __name__ == "__main__":  # pragma: no cover

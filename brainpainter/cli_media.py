@@ -12,6 +12,7 @@ from typing import Any
 import click
 
 from brainpainter.cli_options import (
+    FINITE,
     input_options,
     make_render_options,
     parallel_options,
@@ -45,10 +46,10 @@ def _rows(value: str | None) -> list[str] | None:
               help="Colour-bar label, e.g. 'z-score' or 'atrophy (SD from controls)'.")
 @click.option("--ticks", default=None,
               help="Colour-bar ticks, e.g. 0,1.5,3 (default: the gradient's colours).")
-@click.option("--dpi", type=float, default=300.0, show_default=True, help="Resolution of PNG/TIFF output.")
-@click.option("--fig-width", type=float, default=None,
+@click.option("--dpi", type=FINITE, default=300.0, show_default=True, help="Resolution of PNG/TIFF output.")
+@click.option("--fig-width", type=FINITE, default=None,
               help="Figure width in inches (default 7.2, two journal columns; 3.5 for 1-2 image columns).")
-@click.option("--font-size", type=float, default=8.0, show_default=True, help="Text size in points.")
+@click.option("--font-size", type=FINITE, default=8.0, show_default=True, help="Text size in points.")
 @click.option("--view-labels", is_flag=True,
               help="Name the views (row labels in a grid, headings otherwise).")
 @render_options
@@ -102,8 +103,8 @@ def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, ti
                    "frames in proportion to their gaps, and the caption shows the time.")
 @click.option("--hold", type=int, default=0, show_default=True,
               help="Extra frames showing each key frame still.")
-@click.option("--fps", type=float, default=24.0, show_default=True, help="Frames per second.")
-@click.option("--orbit", type=float, default=0.0, show_default=True,
+@click.option("--fps", type=FINITE, default=24.0, show_default=True, help="Frames per second.")
+@click.option("--orbit", type=FINITE, default=0.0, show_default=True,
               help="Degrees the camera turns around the brain over the movie (360: one full turn).")
 @click.option("--rows", default=None,
               help="Image names to use as key frames, comma-separated (default: all).")

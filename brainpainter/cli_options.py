@@ -32,6 +32,27 @@ INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
 
 
+class FiniteFloat(click.ParamType):
+    """A float option that refuses NaN and infinities (``--vmin nan``) before anything runs."""
+
+    name = "number"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> float:
+        import math
+
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            self.fail(f"{value!r} is not a number.", param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value!r} is not a finite number; give a number such as 1.5.", param, ctx)
+        return number
+
+
+#: Click type of every float option: finite numbers only.
+FINITE = FiniteFloat()
+
+
 def split_commas(ctx: click.Context, param: click.Parameter, value: tuple[str, ...]) -> list[str]:
     """Callback for repeatable options that also take comma-separated lists."""
     return [v.strip() for item in value for v in item.split(",") if v.strip()]
@@ -53,9 +74,9 @@ def make_render_options(views: str = DEFAULT_VIEWS, size: str = DEFAULT_SIZE) ->
                      help="Control colours, e.g. white,yellow,orange,red (the default). Values 0..N-1."),
         click.option("--cmap", default=None,
                      help="A matplotlib colour map instead of a gradient, e.g. viridis."),
-        click.option("--vmin", type=float, default=None, help="Value at the first colour."),
-        click.option("--vmax", type=float, default=None, help="Value at the last colour."),
-        click.option("--center", type=float, default=None, help="Diverging: value at the middle colour."),
+        click.option("--vmin", type=FINITE, default=None, help="Value at the first colour."),
+        click.option("--vmax", type=FINITE, default=None, help="Value at the last colour."),
+        click.option("--center", type=FINITE, default=None, help="Diverging: value at the middle colour."),
         click.option("--nan-color", default="#8c8c8c", show_default=True, help="Colour of empty cells."),
         click.option("--missing-color", default="#d0d0d0", show_default=True,
                      help="Colour of regions with no column."),
@@ -73,7 +94,7 @@ def make_render_options(views: str = DEFAULT_VIEWS, size: str = DEFAULT_SIZE) ->
         click.option("--lighting", default="studio", show_default=True,
                      type=click.Choice(["studio", "soft", "flat-studio", "sulc"]),
                      help="sulc: studio light with sulci darkened slightly (sulcal depth)."),
-        click.option("--glass-opacity", type=float, default=0.12, show_default=True),
+        click.option("--glass-opacity", type=FINITE, default=0.12, show_default=True),
         click.option("--renderer", default="blender", show_default=True),
         click.option("--atlas-config", type=click.Path(dir_okay=False), default=None,
                      help="Region-group TOML file defining the atlas (instead of --atlas); "

@@ -109,6 +109,19 @@ def check_out_file(out: str | Path, suffixes: Iterable[str], what: str = "--out"
     return path
 
 
+def check_figure_text(font_size: float, fig_width: float | None) -> None:
+    """Font size in 1..72 points, figure width in 1..40 inches (or None); finite numbers only."""
+    try:
+        ok = 1.0 <= float(font_size) <= 72.0 and (fig_width is None or 1.0 <= float(fig_width) <= 40.0)
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise BrainPainterError(
+            f"font size must be 1..72 points and figure width 1..40 inches; font_size={font_size}, "
+            f"fig_width={fig_width} were given."
+        )
+
+
 def select_rows(images: Sequence[str], rows: Iterable[str | int] | str | None) -> list[int]:
     """Positions of the chosen rows.
 
@@ -296,11 +309,7 @@ def compose_figure(
     """
     from brainpainter.colorbar import colorbar_height, draw_colorbar, fit_axes, new_figure, text_color
 
-    if font_size <= 0 or (fig_width is not None and not 1.0 <= fig_width <= 40.0):
-        raise BrainPainterError(
-            f"font size must be > 0 and figure width in 1..40 inches; font_size={font_size}, "
-            f"fig_width={fig_width} were given."
-        )
+    check_figure_text(font_size, fig_width)
     crops = {v: common_crop([images[(i, v)] for i in image_names], background) for v in view_names}
     aspect = {v: (crops[v][0].stop - crops[v][0].start) / max(1, crops[v][1].stop - crops[v][1].start)
               for v in view_names}  # height / width
@@ -404,11 +413,19 @@ class FigureResult:
 
 
 def save_figure(fig: Figure, path: Path, dpi: float, transparent: bool = False) -> None:
-    """Write `fig` to `path` atomically; the format follows the file ending."""
+    """Write `fig` to `path` atomically, verified; the format follows the file ending."""
+    from brainpainter.transaction import FileTransaction
+
+    with FileTransaction(path) as tx:
+        tx.tmp.write_bytes(figure_bytes(fig, path, dpi, transparent))
+        tx.commit()
+
+
+def figure_bytes(fig: Figure, path: Path, dpi: float, transparent: bool = False) -> bytes:
+    """`fig` encoded in the format of `path`'s ending (PNG, TIFF, PDF, SVG)."""
     import matplotlib
 
     from brainpainter import __version__
-    from brainpainter.output import atomic_write_bytes
 
     fmt = FIGURE_FORMATS[path.suffix.lower()]
     software = f"brainpainter {__version__}"
@@ -425,8 +442,7 @@ def save_figure(fig: Figure, path: Path, dpi: float, transparent: bool = False) 
     with matplotlib.rc_context(rc):
         fig.savefig(buf, format=fmt, dpi=dpi, metadata=metadata, transparent=transparent,
                     facecolor="none" if transparent else fig.get_facecolor(), **extra)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write_bytes(path, buf.getvalue())
+    return buf.getvalue()
 
 
 def make_figure(
@@ -511,14 +527,18 @@ def make_figure(
     -------
     FigureResult
     """
+    from contextlib import nullcontext
+
     from tqdm.auto import tqdm
 
     from brainpainter.colorbar import resolve_ticks
     from brainpainter.parallel import Item, check_options, make_runner, paint_all
     from brainpainter.render import Painter, prepare_run, region_colors
+    from brainpainter.transaction import FileTransaction
 
     if not 50 <= float(dpi) <= 1200:
         raise BrainPainterError(f"dpi must be between 50 and 1200; {dpi} was given.")
+    check_figure_text(font_size, fig_width)
     path = check_out_file(out, FIGURE_FORMATS) if out is not None else None
     check_options(jobs, client, scheduler)
     run = prepare_run(
@@ -536,16 +556,19 @@ def make_figure(
     plan = [(i, view) for i in chosen for view in run.views]
     items = [Item(region_colors(table.row(i), table.atlas, run.scale), view, label=table.images[i])
              for i, view in plan]
-    with make_runner(painter, template, jobs=jobs, client=client, scheduler=scheduler,
-                     n_items=len(plan)) as runner, \
-            tqdm(total=len(plan), unit="img", desc="rendering", disable=not progress) as bar:
-        pixels = paint_all(runner, items, bar)
-    images = {(table.images[i], view.name): px for (i, view), px in zip(plan, pixels, strict=True)}
-    layout = compose_figure(
-        images, [table.images[i] for i in chosen], [v.name for v in run.views], run.scale, grid=grid,
-        title=title, label=label, ticks=ticks, dpi=dpi, fig_width=fig_width, font_size=font_size,
-        view_labels=view_labels, nan=nan, missing=missing, background=background,
-    )
-    if path is not None:
-        save_figure(layout.figure, path, dpi, transparent=background is None)
+    # the output folder is locked from before the first render until the figure is published
+    with FileTransaction(path) if path is not None else nullcontext() as tx:
+        with make_runner(painter, template, jobs=jobs, client=client, scheduler=scheduler,
+                         n_items=len(plan)) as runner, \
+                tqdm(total=len(plan), unit="img", desc="rendering", disable=not progress) as bar:
+            pixels = paint_all(runner, items, bar)
+        images = {(table.images[i], view.name): px for (i, view), px in zip(plan, pixels, strict=True)}
+        layout = compose_figure(
+            images, [table.images[i] for i in chosen], [v.name for v in run.views], run.scale, grid=grid,
+            title=title, label=label, ticks=ticks, dpi=dpi, fig_width=fig_width, font_size=font_size,
+            view_labels=view_labels, nan=nan, missing=missing, background=background,
+        )
+        if tx is not None:
+            tx.tmp.write_bytes(figure_bytes(layout.figure, path, dpi, transparent=background is None))
+            tx.commit()
     return FigureResult(layout.figure, path, run.scale, images, layout.colorbar_ax, layout.image_axes)

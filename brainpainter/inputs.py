@@ -262,8 +262,9 @@ def _validate_images(images: list[str], source: str, where: list[str], column: s
 
 
 def _convert(cells: Sequence[Any], raw: RawTable, column: str, rows: Sequence[int],
-             problems: list[CellProblem], decimal: list[bool]) -> np.ndarray:
+             problems: list[CellProblem], decimal: list[Any]) -> np.ndarray:
     out = np.full(len(cells), np.nan)
+    decimal_at: dict[str, tuple[str, str, str]] = decimal[1]  # first cell with a decimal comma / point
     for k, cell in enumerate(cells):
         v = to_number(cell, raw.decimal_comma)
         if v is None:
@@ -277,8 +278,12 @@ def _convert(cells: Sequence[Any], raw: RawTable, column: str, rows: Sequence[in
             msg = (f"{raw.source}: column {column!r} {raw.where(rows[k])} is infinite ({str(cell)[:30]!r}); "
                    "cells must be finite numbers or empty (empty = no data).")
         else:
-            if raw.decimal_comma and isinstance(cell, str) and "," in cell:
-                decimal[0] = True
+            if raw.decimal_comma and isinstance(cell, str):
+                if "," in cell:
+                    decimal[0] = True
+                    decimal_at.setdefault("comma", (str(cell).strip(), raw.where(rows[k]), column))
+                elif "." in cell:
+                    decimal_at.setdefault("point", (str(cell).strip(), raw.where(rows[k]), column))
             out[k] = v
             continue
         if len(problems) < MAX_PROBLEMS:
@@ -315,9 +320,10 @@ def _read_part(raw: RawTable, shape: TableShape, resolver: NameResolver) -> _Par
     for j, h in enumerate(raw.header):
         _check_name(h, source, f"column {j + 1}", "column name")
     problems: list[CellProblem] = []
-    decimal = [False]
+    decimal: list[Any] = [False, {}]
     names: list[NameReport] = []
     columns = _Columns(source, "columns" if shape.kind == "wide" else "names")
+    empty_columns: list[str] = []
     if shape.kind == "wide":
         images, numbered = _image_names(raw, shape)
         seen_names: set[str] = set()
@@ -335,10 +341,7 @@ def _read_part(raw: RawTable, shape: TableShape, resolver: NameResolver) -> _Par
                 continue
             vals = _convert([row[j] for row in raw.rows], raw, h, range(len(raw.rows)), problems, decimal)
             if not np.isfinite(vals).any() and not any(p.column == h for p in problems):
-                problems.append(CellProblem(
-                    source, "", h, "", "empty column",
-                    f"{source}: column {h!r} (region {r.keys[0]!r}) has no value in any row; fill it or drop "
-                    "the column (regions without a column are drawn in the missing colour)."))
+                empty_columns.append(h)
             for key in r.keys:
                 columns.take(key, vals, h)
     elif shape.kind == "long":
@@ -348,6 +351,17 @@ def _read_part(raw: RawTable, shape: TableShape, resolver: NameResolver) -> _Par
         names, images = _read_transposed(raw, shape, resolver, problems, decimal, columns)
         numbered = False
     notes = []
+    if empty_columns:
+        notes.append(f"{source}: {len(empty_columns)} column(s) have no value in any row ({empty_columns[:3]}"
+                     f"{'...' if len(empty_columns) > 3 else ''}); their regions are drawn in the NaN colour")
+    at = decimal[1]
+    if "comma" in at and "point" in at:
+        (c_text, c_where, c_col), (p_text, p_where, p_col) = at["comma"], at["point"]
+        raise BrainPainterError(
+            f"{source}: decimal commas ({c_text!r}, column {c_col!r} {c_where}) and decimal points "
+            f"({p_text!r}, column {p_col!r} {p_where}) are mixed, so {p_text!r} could mean "
+            f"{p_text.replace('.', '')!r} (a thousands point); save the table with one decimal separator."
+        )
     if decimal[0]:
         notes.append(f"{source}: decimal commas read as decimal points")
     return _Part(source, raw.format, shape, images, numbered, columns.data, names, problems, notes)
@@ -529,6 +543,7 @@ def inspect_table(
         part.shape = _with_flavour(shape, part.names, raw)
         parts.append(part)
     table = _merge(parts, atlas, guess)
+    _check_file_names(table)
     errors = [p.message for p in table.problems]
     if not table.regions:
         errors.append(_no_regions_error(table, resolver))
@@ -541,6 +556,21 @@ def inspect_table(
             + "; rename them or drop --strict."
         )
     return _replace(table, errors=tuple(errors))
+
+
+def _check_file_names(table: RegionTable) -> None:
+    """Refuse image names that become the same file name (ignoring case, as macOS and Windows do)."""
+    from brainpainter.output import safe_name
+
+    seen: dict[str, str] = {}
+    for name in table.images:
+        other = seen.setdefault(safe_name(name).lower(), name)
+        if other != name:
+            raise BrainPainterError(
+                f"{table.source}: image names {other!r} and {name!r} become the same file name "
+                f"({safe_name(name)!r}, ignoring case as macOS and Windows do) after removing unsafe "
+                "characters; make the image names differ in letters or digits."
+            )
 
 
 def _no_regions_error(table: RegionTable, resolver: NameResolver) -> str:
@@ -598,6 +628,15 @@ def _merge(parts: list[_Part], atlas: Atlas, guess: AtlasGuess | None) -> Region
                 f"({[len(p.images) for p in parts]}); add an image-name column to merge them by name."
             )
         images = list(dict.fromkeys(i for p in parts for i in p.images))
+        folded: dict[str, str] = {}
+        for name in images:
+            other = folded.setdefault(name.lower(), name)
+            if other != name:
+                src = {n: p.source for p in parts for n in p.images}
+                raise BrainPainterError(
+                    f"image names {other!r} ({src[other]}) and {name!r} ({src[name]}) differ only in case, "
+                    "so they would be two half-empty images; spell the image names the same in every input."
+                )
         pos = {name: k for k, name in enumerate(images)}
         owner: dict[str, _Part] = {}
         keys, cols = [], []

@@ -113,14 +113,19 @@ def read_label_map(path: str | Path, hemi: str) -> LabelMap:
     BrainPainterError
         Missing or unreadable file, or no colour table.
     """
+    from brainpainter.files import check_input
+    from brainpainter.readers import has_control
+
     path = Path(path).expanduser()
-    if not path.is_file():
-        raise BrainPainterError(f"label map {path} does not exist; give a FreeSurfer .annot or a GIFTI "
-                                ".label.gii file made for the template's surface")
+    check_input(path, "label map", hint="give a FreeSurfer .annot or a GIFTI .label.gii file made for the "
+                                        "template's surface")
     low = path.name.lower()
     if not low.endswith(LABEL_SUFFIXES):
         raise BrainPainterError(f"label map {path} must be a FreeSurfer .annot or a GIFTI .label.gii file "
                                 f"(allowed endings: {list(LABEL_SUFFIXES)})")
+    named = hemi_of(path)
+    if named is not None and named != hemi:
+        raise _swapped(path, hemi, named, "its file name")
     try:
         if low.endswith(".annot"):
             from nibabel.freesurfer import read_annot
@@ -130,7 +135,7 @@ def read_label_map(path: str | Path, hemi: str) -> LabelMap:
             colors = np.asarray(ctab, dtype=np.int64)[:, :3]
             labels = np.asarray(labels, dtype=np.int64)
         else:
-            labels, names, colors = _read_gifti_labels(path)
+            labels, names, colors = _read_gifti_labels(path, hemi)
     except BrainPainterError:
         raise
     except Exception as exc:  # nibabel raises ValueError, struct.error, OSError, ExpatError...
@@ -139,6 +144,10 @@ def read_label_map(path: str | Path, hemi: str) -> LabelMap:
     if not names:
         raise BrainPainterError(f"{path} has no colour table, so it names no regions; give a label map "
                                 "whose colour table names its regions")
+    bad = next((n for n in names if has_control(n)), None)
+    if bad is not None:
+        raise BrainPainterError(f"{path}: the region name {bad[:40]!r} contains control or text-direction "
+                                "characters; names may hold letters, digits, spaces and punctuation only")
     if (labels < 0).any():  # vertices outside the colour table: a non-region entry
         fill = next((i for i, n in enumerate(names) if is_non_region(n)), None)
         if fill is None:
@@ -149,12 +158,25 @@ def read_label_map(path: str | Path, hemi: str) -> LabelMap:
     return LabelMap(hemi, path, labels, tuple(names), np.asarray(colors).clip(0, 255).astype(np.uint8))
 
 
-def _read_gifti_labels(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
+def _swapped(path: Path, hemi: str, named: str, how: str) -> BrainPainterError:
+    side = {"lh": "left", "rh": "right"}
+    return BrainPainterError(
+        f"label map {path} is given for the {side[hemi]} hemisphere ({hemi}=...), but {how} says "
+        f"{side[named]}; swap the files (--annot {named}={path.name}), or rename the file if it is right")
+
+
+def _read_gifti_labels(path: Path, hemi: str | None = None) -> tuple[np.ndarray, list[str], np.ndarray]:
     import nibabel as nib
 
     img = nib.load(str(path))
     if not getattr(img, "darrays", None):
         raise BrainPainterError(f"{path} holds no data array; a GIFTI label file has one label per vertex")
+    meta = {**dict(img.meta or {}), **dict(img.darrays[0].meta or {})}
+    structure = str(meta.get("AnatomicalStructurePrimary", "")).lower()
+    side = "lh" if structure.endswith("left") else "rh" if structure.endswith("right") else None
+    given = hemi_of(path) if hemi is None else hemi
+    if side is not None and given is not None and side != given:
+        raise _swapped(path, given, side, f"its AnatomicalStructurePrimary ({structure!r})")
     keys = np.asarray(img.darrays[0].data).astype(np.int64).ravel()
     table = list(img.labeltable.labels)
     names = [str(lab.label) for lab in table]
@@ -206,6 +228,35 @@ def check_vertex_count(template: Template, label_map: LabelMap) -> None:
             f"surface); give the file made for {subject}, or a template built from your surface "
             "(--template)"
         )
+
+
+def labels_at_vertices(source_label: np.ndarray, base: CortexMesh) -> np.ndarray:
+    """Labels of `base`'s vertices from one label per full-resolution source vertex.
+
+    Parameters
+    ----------
+    source_label : ndarray of int, shape (n_source_vertices,)
+    base : CortexMesh
+        Its ``source_vertex`` (shape (n,)) indexes `source_label`; a vertex
+        with no source vertex (-1, added on an edge by a mesh builder) takes
+        the label of a neighbour that has one.
+
+    Returns
+    -------
+    ndarray of int16, shape (n,)
+    """
+    sv = np.asarray(base.source_vertex, dtype=np.int64)
+    out = np.where(sv >= 0, np.asarray(source_label)[np.maximum(sv, 0)], -1).astype(np.int64)
+    edges = np.concatenate([base.faces[:, [0, 1]], base.faces[:, [1, 2]], base.faces[:, [2, 0]]])
+    edges = np.concatenate([edges, edges[:, ::-1]]).astype(np.int64)
+    while (out < 0).any():
+        known = out[edges[:, 1]] >= 0
+        todo = known & (out[edges[:, 0]] < 0)
+        if not todo.any():
+            out[out < 0] = 0
+            break
+        out[edges[todo, 0]] = out[edges[todo, 1]]
+    return out.astype(np.int16)
 
 
 def split_faces(faces: np.ndarray, vertex_label: np.ndarray) -> tuple[
@@ -326,6 +377,7 @@ class HemiLabels:
     names: tuple[str, ...]
     colors: np.ndarray  # uint8, shape (n_names, 3)
     source: str
+    source_label: np.ndarray | None = None  # int16, shape (n_source_vertices,): the whole label map
 
     def region_faces(self) -> dict[str, int]:
         counts = np.bincount(self.face_label.astype(np.int64), minlength=len(self.names))
@@ -391,7 +443,8 @@ def build_label_set(name: str, template: Template, maps: dict[str, LabelMap],
             raise BrainPainterError(f"{m.source} has {len(m.names)} colour-table entries; at most 32767")
         vertex_label = m.labels[cm.source_vertex].astype(np.int16)
         face_label = split_faces(cm.faces, vertex_label)[1]
-        hl = HemiLabels(hemi, vertex_label, face_label.astype(np.int16), m.names, m.colors, m.source.name)
+        hl = HemiLabels(hemi, vertex_label, face_label.astype(np.int16), m.names, m.colors, m.source.name,
+                        m.labels.astype(np.int16))
         hemis[hemi] = hl
         with_vertices = {m.names[i] for i in np.unique(m.labels).tolist() if not is_non_region(m.names[i])}
         too_small[hemi] = sorted(with_vertices - {n for _, n, _ in hl.regions()})
@@ -407,13 +460,21 @@ def _hex(rgb) -> str:
     return "#{:02x}{:02x}{:02x}".format(*(int(c) for c in rgb[:3]))
 
 
-def write_label_set(folder: Path, label_set: LabelSet, template: Template) -> dict:
-    """Write ``labels.json`` and ``cortex-{hemi}-{name}.npz`` into `folder`; returns the JSON."""
+def write_label_set(folder: Path, label_set: LabelSet, template: Template, *,
+                    per_source_vertex: bool = False) -> dict:
+    """Write ``labels.json`` and ``cortex-{hemi}-{name}.npz`` into `folder`; returns the JSON.
+
+    With `per_source_vertex` the files hold the whole label map (``source_label``,
+    one per full-resolution vertex) instead of the labels of the base mesh's
+    vertices: a little larger, but it fits the template after a rebuild.
+    """
     from brainpainter_builder.writer import save_npz
 
+    where = "full-resolution vertices (mapped to" if per_source_vertex else "vertices of"
     entry: dict = {"source": ", ".join(label_set.hemis[h].source for h in HEMIS),
-                   "method": f"label map at the vertices of the template's {label_set.base!r} meshes; "
-                             "faces with several labels split through edge midpoints",
+                   "method": f"label map at the {where} the template's {label_set.base!r} meshes"
+                             f"{')' if per_source_vertex else ''}; faces with several labels split "
+                             "through edge midpoints",
                    "regions": [], "cortex": {}}
     for hemi in HEMIS:
         hl = label_set.hemis[hemi]
@@ -421,10 +482,15 @@ def write_label_set(folder: Path, label_set: LabelSet, template: Template) -> di
             if n not in entry["regions"]:
                 entry["regions"].append(n)
         file = f"cortex-{hemi}-{label_set.name}.npz"
-        save_npz(folder / file, {"vertex_label": hl.vertex_label})
         base = template.cortex(label_set.base, hemi)
+        if per_source_vertex and hl.source_label is not None:
+            save_npz(folder / file, {"source_label": hl.source_label})
+            guard = {}
+        else:
+            save_npz(folder / file, {"vertex_label": hl.vertex_label})
+            guard = {"base_faces_sha256": faces_digest(base.faces)}
         entry["cortex"][hemi] = {
-            "file": file, "base": label_set.base, "base_faces_sha256": faces_digest(base.faces),
+            "file": file, "base": label_set.base, **guard,
             "names": list(hl.names), "colors": [_hex(c) for c in hl.colors],
             "n_base_vertices": len(base.source_vertex), "n_faces": len(hl.face_label),
             "n_source_vertices": source_vertex_count(template, hemi),
@@ -494,14 +560,15 @@ def write_license(folder: Path, template: Template, sources: list[str]) -> bool:
 def write_atlas_folder(folder: Path, label_set: LabelSet, template: Template, *, title: str = "",
                        description: str = "", citation: str = "", aliases: tuple[str, ...] = (),
                        region_aliases: dict[str, tuple[str, ...]] | None = None,
-                       subcortical: bool = True, extra: dict | None = None) -> None:
+                       subcortical: bool = True, extra: dict | None = None,
+                       per_source_vertex: bool = False) -> None:
     """Write a complete atlas folder (``atlas.json``, ``regions.tsv``, overlay, licence) into `folder`.
 
     The folder loads with :func:`brainpainter.atlas.load_atlas_dir`; it is what
     ``brainpainter atlas add`` stores and what an atlas plugin ships.
     """
     folder.mkdir(parents=True, exist_ok=True)
-    write_label_set(folder, label_set, template)
+    write_label_set(folder, label_set, template, per_source_vertex=per_source_vertex)
     sub = template_subcortical(template) if subcortical else ()
     regions = atlas_regions(label_set, region_aliases, sub)
     write_regions_tsv(regions, folder / "regions.tsv")

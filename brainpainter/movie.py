@@ -27,8 +27,7 @@ so a failure or Ctrl-C leaves no partial file.
 from __future__ import annotations
 
 import math
-import os
-import tempfile
+import struct
 import time
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -50,7 +49,9 @@ if TYPE_CHECKING:  # pragma: no cover
 
 MOVIE_FORMATS = (".mp4", ".gif")
 EASINGS = ("linear", "smooth")
-MAX_FRAMES = 20_000
+MAX_FRAMES = 20_000  # frames of one movie (MP4); GIFs: MAX_GIF_FRAMES
+MAX_GIF_FRAMES = 2_000  # a GIF is for slides and web pages; longer movies: MP4
+GIF_PALETTE_FRAMES = 12  # frames sampled for a GIF's palette
 MAX_FRAME_PIXELS = 8192 * 8192
 ARROW = "\u2192"
 
@@ -409,9 +410,11 @@ class _Mp4Writer:
     def __init__(self, path: Path, size: tuple[int, int], fps: float) -> None:
         import imageio_ffmpeg
 
+        self.path = path
+
         self._gen = imageio_ffmpeg.write_frames(
             str(path), size, fps=fps, codec="libx264", pix_fmt_in="rgb24", pix_fmt_out="yuv420p",
-            quality=None, macro_block_size=2, ffmpeg_log_level="error",
+            quality=None, macro_block_size=2, ffmpeg_log_level="quiet",  # failures: verified after
             # sRGB frames -> BT.709 YUV, tagged as such so players convert back the same way
             output_params=["-crf", "18", "-preset", "medium", "-vf", "scale=out_color_matrix=bt709",
                            "-x264-params", "colorprim=bt709:transfer=bt709:colormatrix=bt709",
@@ -420,62 +423,88 @@ class _Mp4Writer:
         self._gen.send(None)
 
     def write(self, frame: np.ndarray) -> None:
-        self._gen.send(np.ascontiguousarray(frame))
+        try:
+            self._gen.send(np.ascontiguousarray(frame))
+        except (OSError, RuntimeError, StopIteration) as exc:
+            raise self._failed(exc) from None
 
     def close(self) -> None:
-        self._gen.close()
+        try:
+            self._gen.close()
+        except (OSError, RuntimeError) as exc:
+            raise self._failed(exc) from None
+
+    def _failed(self, exc: BaseException) -> BrainPainterError:
+        from brainpainter.transaction import _broken
+
+        return _broken(self.path, f"the video encoder (ffmpeg) stopped: {type(exc).__name__}")
 
     def abort(self) -> None:
         self._gen.close()  # ffmpeg finishes the temporary file, which is then deleted
 
 
 class _GifWriter:
-    """GIF through pillow: one palette for the whole movie, Floyd-Steinberg dithered.
+    """GIF written frame by frame: one palette for the whole movie, Floyd-Steinberg dithered.
 
     A shared palette keeps still parts (colour bar, unchanged regions) identical
-    from frame to frame, so dithering does not flicker; frames are kept in
-    memory until the end (GIFs are meant to be small).
+    from frame to frame, so dithering does not flicker. The palette comes from
+    a mosaic of up to 12 frames spread over the movie (given up front), and each
+    frame is quantised and appended to the file as it comes, so memory does
+    not grow with the number of frames.
     """
 
     def __init__(self, path: Path, size: tuple[int, int], fps: float,
-                 background: tuple[int, int, int] = (255, 255, 255)) -> None:
+                 background: tuple[int, int, int] = (255, 255, 255),
+                 samples: Sequence[np.ndarray] = ()) -> None:
         self.path, self.fps, self.background = path, fps, tuple(int(c) for c in background)
-        self.frames: list[np.ndarray] = []
+        self.size = size
+        self.n_frames = 0
+        self._palette = self.palette(samples)
+        self._fh = path.open("wb")
+        colors = bytes(self._palette.getpalette()[: 3 * 256])
+        colors += bytes(self.background) * ((768 - len(colors)) // 3)
+        self._fh.write(b"GIF89a" + struct.pack("<HHBBB", size[0], size[1], 0xF7, 255, 0) + colors)
+        # loop forever (NETSCAPE2.0 application extension)
+        self._fh.write(b"!\xff\x0bNETSCAPE2.0\x03\x01" + struct.pack("<H", 0) + b"\x00")
 
-    def write(self, frame: np.ndarray) -> None:
-        self.frames.append(np.ascontiguousarray(frame))
-
-    def abort(self) -> None:
-        self.frames.clear()
-
-    def palette(self) -> Any:
-        """255 colours from a mosaic of up to 12 frames, plus the exact background colour."""
+    def palette(self, samples: Sequence[np.ndarray]) -> Any:
+        """255 colours from a mosaic of the sample frames, plus the exact background colour."""
         from PIL import Image
 
-        picks = np.linspace(0, len(self.frames) - 1, min(len(self.frames), 12)).round().astype(int)
-        mosaic = np.concatenate([self.frames[i][::2, ::2] for i in sorted(set(picks.tolist()))], axis=0)
-        sampled = Image.fromarray(mosaic).quantize(colors=255, method=Image.Quantize.MEDIANCUT,
-                                                   dither=Image.Dither.NONE)
-        colors = np.array(sampled.getpalette()[: 3 * 255], dtype=np.uint8).reshape(-1, 3)
+        colors = np.array([self.background], np.uint8)
+        if len(samples):
+            mosaic = np.concatenate([f[::2, ::2] for f in samples], axis=0)
+            sampled = Image.fromarray(np.ascontiguousarray(mosaic)).quantize(
+                colors=255, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+            colors = np.array(sampled.getpalette()[: 3 * 255], dtype=np.uint8).reshape(-1, 3)[:255]
         colors = np.vstack([colors, np.array([self.background] * (256 - len(colors)), np.uint8)])
         palette = Image.new("P", (1, 1))
         palette.putpalette(colors.ravel().tolist())
         return palette
 
-    def close(self) -> None:
-        from PIL import Image
+    def write(self, frame: np.ndarray) -> None:
+        from PIL import GifImagePlugin, Image
 
-        palette = self.palette()
-        images = []
-        for f in self.frames:
-            im = Image.fromarray(f).quantize(palette=palette, dither=Image.Dither.FLOYDSTEINBERG)
-            # pillow's palette look-up is approximate: put the background back exactly (index 255)
-            bg = Image.fromarray(((f == self.background).all(axis=-1) * 255).astype(np.uint8))
-            im.paste(255, mask=bg)
-            images.append(im)
-        first, *rest = images
-        first.save(self.path, format="GIF", save_all=True, append_images=rest, loop=0,
-                   duration=max(20, round(1000 / self.fps / 10) * 10), disposal=1, optimize=False)
+        im = Image.fromarray(np.ascontiguousarray(frame)).quantize(palette=self._palette,
+                                                                 dither=Image.Dither.FLOYDSTEINBERG)
+        # pillow's palette look-up is approximate: put the background back exactly (index 255)
+        bg = Image.fromarray(((frame == self.background).all(axis=-1) * 255).astype(np.uint8))
+        im.paste(255, mask=bg)
+        params = {"duration": max(20, round(1000 / self.fps / 10) * 10), "disposal": 1}
+        write_frame = getattr(GifImagePlugin, "_write_frame_data", None)
+        if write_frame is not None:  # straight into the file
+            write_frame(self._fh, im, (0, 0), params)
+        else:  # pragma: no cover - older/newer pillow: the public (but leakier) frame encoder
+            for part in GifImagePlugin.getdata(im, **params):
+                self._fh.write(part)
+        self.n_frames += 1
+
+    def abort(self) -> None:
+        self._fh.close()
+
+    def close(self) -> None:
+        self._fh.write(b";")
+        self._fh.close()
 
 
 # -- the job ------------------------------------------------------------------------------
@@ -613,9 +642,9 @@ def make_movie(
 
     from brainpainter.colorbar import resolve_ticks
     from brainpainter.figure import check_out_file, select_rows, swatches_needed
-    from brainpainter.output import set_default_mode
     from brainpainter.parallel import Item, check_options, make_runner
     from brainpainter.render import Painter, prepare_run, region_colors
+    from brainpainter.transaction import FileTransaction
 
     start = time.perf_counter()
     path = check_out_file(out, MOVIE_FORMATS)
@@ -656,6 +685,10 @@ def make_movie(
     keys, key_times = key_frames(table, chosen, times, time_column)
     plan = plan_frames(key_times, int(frames_per_step), easing, int(hold), proportional=times is not None)
     n = len(plan)
+    if fmt == ".gif" and n > MAX_GIF_FRAMES:
+        raise BrainPainterError(f"the GIF would have {n} frames; at most {MAX_GIF_FRAMES} are made (a GIF "
+                                "is for slides and web pages). Write an .mp4, or lower --frames-per-step or "
+                                "--hold.")
     w, h = run.settings.width, run.settings.height
     if len(run.views) * w * h > MAX_FRAME_PIXELS:
         raise BrainPainterError(f"frames of {len(run.views)} views at {w}x{h} are too large; use fewer views "
@@ -682,50 +715,50 @@ def make_movie(
     states: list[tuple[int, int, float, tuple[View, ...]]] = []
     frame_state: list[int] = []
     for i, f in enumerate(plan):
-        state = (f.a, f.b, f.weight, tuple(per_view[k][i] for k in range(len(run.views))))
-        if not states or states[-1] != state:
-            states.append(state)
+        key = (f.a, f.b, f.weight, tuple(per_view[k][i] for k in range(len(run.views))))
+        if not states or states[-1] != key:
+            states.append(key)
         frame_state.append(len(states) - 1)
     runner = make_runner(painter, template, jobs=jobs, client=client, scheduler=scheduler,
                          n_items=len(states))
 
-    def chunks() -> Iterator[list[Item]]:
-        for a, b, weight, state_views in states:
+    def chunks(wanted: Iterable[int]) -> Iterator[list[Item]]:
+        for s in wanted:
+            a, b, weight, state_views = states[s]
             values = interpolate(key_values[a], key_values[b], weight)
             colors = region_colors(dict(zip(table.regions, values.tolist(), strict=True)), table.atlas,
                                    run.scale)
             label = names[a] if a == b else f"{names[a]} {ARROW} {names[b]} ({weight:.3f})"
             yield [Item(colors, view, label=label) for view in state_views]
 
-    def frames() -> Iterator[np.ndarray]:
-        i = 0
-        for s, renders in runner.map(chunks(), ordered=True):  # rendered in parallel, encoded in order
-            while i < n and frame_state[i] == s:
-                yield composer.compose(renders, caption(plan[i]), plan[i].clock)
-                i += 1
+    def frames(wanted: Sequence[int]) -> Iterator[tuple[int, np.ndarray]]:
+        """``(frame index, frame)`` for the frames `wanted` (increasing), rendered in parallel, in order."""
+        wanted_states = list(dict.fromkeys(frame_state[i] for i in wanted))
+        todo = iter(wanted)
+        i = next(todo, None)
+        for k, renders in runner.map(chunks(wanted_states), ordered=True):
+            while i is not None and frame_state[i] == wanted_states[k]:
+                yield i, composer.compose(renders, caption(plan[i]), plan[i].clock)
+                i = next(todo, None)
 
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp_name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=f".part{fmt}")
-    os.close(fd)
-    tmp = Path(tmp_name)
-    try:
+    # the output folder is locked from before the first frame until the movie is published
+    with FileTransaction(path) as tx, runner, \
+            tqdm(total=n, unit="frame", desc="movie", disable=not progress) as bar:
+        samples: dict[int, np.ndarray] = {}
+        if fmt == ".gif":  # the palette comes from up to 12 frames spread over the movie
+            picks = np.linspace(0, n - 1, min(n, GIF_PALETTE_FRAMES)).round().astype(int)
+            samples = dict(frames(sorted(set(picks.tolist()))))
         writer: _Mp4Writer | _GifWriter = (
-            _Mp4Writer(tmp, composer.size, float(fps)) if fmt == ".mp4"
-            else _GifWriter(tmp, composer.size, float(fps), tuple(composer.bg.tolist())))
+            _Mp4Writer(tx.tmp, composer.size, float(fps)) if fmt == ".mp4"
+            else _GifWriter(tx.tmp, composer.size, float(fps), tuple(composer.bg.tolist()),
+                            list(samples.values())))
         try:
-            with runner, tqdm(total=n, unit="frame", desc="movie", disable=not progress) as bar:
-                for frame in frames():
-                    writer.write(frame)
-                    bar.update(1)
+            for i, frame in frames(range(n)):  # encoded in order
+                writer.write(samples.pop(i) if i in samples else frame)
+                bar.update(1)
         except BaseException:
             writer.abort()
             raise
         writer.close()
-        if tmp.stat().st_size == 0:
-            raise BrainPainterError(f"writing {str(path)!r} failed: the encoder wrote nothing.")
-        set_default_mode(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+        tx.commit(size=composer.size if fmt == ".gif" else None, frames=n)
     return MovieResult(path, n, composer.size, float(fps), names, key_times, time.perf_counter() - start)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import os
 import re
 import tempfile
@@ -51,12 +50,20 @@ def set_default_mode(path: Path | str) -> None:
 
 def atomic_write_bytes(path: Path, data: bytes) -> None:
     """Write via a temporary file in the same folder, then rename."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    from brainpainter.transaction import os_error
+
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    except OSError as exc:
+        raise os_error(exc, "cannot write", path) from None
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
         set_default_mode(tmp)
         os.replace(tmp, path)
+    except OSError as exc:
+        Path(tmp).unlink(missing_ok=True)
+        raise os_error(exc, "cannot write", path) from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
@@ -110,7 +117,9 @@ def write_png(path: Path, image: np.ndarray, metadata: dict[str, str] | None = N
 
 
 def write_json(path: Path, obj: object) -> None:
-    atomic_write_bytes(path, (json.dumps(obj, indent=2, sort_keys=False) + "\n").encode())
+    from brainpainter.transaction import json_bytes
+
+    atomic_write_bytes(path, json_bytes(obj))
 
 
 class PngWriter:
@@ -132,6 +141,11 @@ class PngWriter:
         while len(self._pending) >= self._max:
             self._pending.popleft().result()
         self._pending.append(self._pool.submit(write_png, path, image, metadata))
+
+    def wait(self) -> None:
+        """Wait until every queued image is written; re-raise the first error."""
+        while self._pending:
+            self._pending.popleft().result()
 
     def __enter__(self) -> PngWriter:
         return self

@@ -31,6 +31,8 @@ from brainpainter.errors import BrainPainterError
 
 MAX_BYTES = 32 * 1024 * 1024
 MAX_COLUMNS = 16_384  # Excel's own limit; a region table has a few hundred at most
+MAX_ROWS = 1_000_000  # rows of a sheet (Excel's own limit is 1,048,576)
+MAX_CELLS = 1_000_000  # cells of a sheet (a region table has far fewer); read in a few seconds
 MAX_UNZIPPED = 8  # an .xlsx may expand to at most this many times MAX_BYTES
 TEXT_SUFFIXES = (".csv", ".tsv", ".tab", ".txt", ".dat", "")
 EXCEL_SUFFIXES = (".xlsx", ".xlsm")
@@ -131,29 +133,11 @@ def _too_big(name: str, size: int, limit: int) -> BrainPainterError:
 
 
 def _read_path(path: Path) -> RawTable:
-    name = str(path)
-    try:
-        if not path.exists():
-            raise BrainPainterError(
-                f"input file {name!r} does not exist; give the path of a table (CSV, TSV or .xlsx)."
-            )
-        if not path.is_file():
-            raise BrainPainterError(
-                f"input {name!r} is not a regular file (a folder or device); give the path of a table file."
-            )
-        size = path.stat().st_size
-        limit = max_bytes()
-        if size > limit:
-            raise _too_big(name, size, limit)
-        with path.open("rb") as fh:
-            raw = fh.read(limit + 1)
-    except OSError as exc:
-        raise BrainPainterError(
-            f"cannot read input file {name!r} ({exc.strerror or exc}); check the path and permissions."
-        ) from None
-    if len(raw) > limit:
-        raise _too_big(name, len(raw), limit)
-    return parse_bytes(raw, name, path.suffix.lower())
+    from brainpainter.files import read_input
+
+    raw = read_input(path, "input file", max_bytes(), hint="give the path of a table (CSV, TSV or .xlsx)",
+                     env="BRAINPAINTER_MAX_INPUT_MB")
+    return parse_bytes(raw, str(path), path.suffix.lower())
 
 
 # -- bytes -------------------------------------------------------------------------
@@ -369,7 +353,7 @@ def _read_xlsx(raw: bytes, source: str) -> RawTable:
             wb = load_workbook(io.BytesIO(raw), read_only=True, data_only=True)
             try:
                 for ws in wb.worksheets:
-                    rows = [_trim([_xl_cell(v) for v in row]) for row in ws.iter_rows(values_only=True)]
+                    rows = _sheet_rows(ws, source)
                     if any(rows):
                         sheets.append((ws.title, rows))
             finally:
@@ -391,6 +375,8 @@ def _read_xlsx(raw: bytes, source: str) -> RawTable:
             "alone in the workbook (delete or move the other sheets), or export that sheet as CSV."
         )
     title, rows = sheets[0]
+    if _has_formulas(raw):
+        _refuse_uncached_formulas(raw, source, title, rows)
     start = next(i for i, r in enumerate(rows) if r)
     header = ["" if v is None else str(v).strip() for v in rows[start]]
     if len(header) > MAX_COLUMNS:
@@ -410,6 +396,74 @@ def _read_xlsx(raw: bytes, source: str) -> RawTable:
         body.append(row + [None] * (len(header) - len(row)))
         line_of_row.append(i)
     return RawTable(header, body, source, f"Excel workbook, sheet {title!r}", line_of_row=line_of_row)
+
+
+def _sheet_rows(ws: Any, source: str) -> list[list[Cell]]:
+    """The rows of a read-only worksheet, bounded in rows and cells whatever its XML claims."""
+    from openpyxl.utils import get_column_letter
+
+    claimed_rows, claimed_cols = ws.max_row or 0, ws.max_column or 0
+    if claimed_rows > MAX_ROWS or claimed_cols > MAX_COLUMNS:
+        raise BrainPainterError(
+            f"input {source!r} sheet {ws.title!r} claims {claimed_rows} rows x {claimed_cols} columns "
+            f"(A1:{get_column_letter(max(1, min(claimed_cols, 18278)))}{claimed_rows}); at most {MAX_ROWS} "
+            f"rows and {MAX_COLUMNS} columns are read. Open and save it again in a spreadsheet program, or "
+            "export the sheet as CSV."
+        )
+    ws.reset_dimensions()  # rows come as stored, not padded to the claimed size
+    rows: list[list[Cell]] = []
+    cells = 0
+    for row in ws.iter_rows(values_only=True):
+        cells += len(row)
+        if len(rows) >= MAX_ROWS or cells > MAX_CELLS:
+            raise BrainPainterError(
+                f"input {source!r} sheet {ws.title!r} has more than {MAX_ROWS} rows or {MAX_CELLS} cells; "
+                "a region table has one row per image (or per region and image). Split the workbook or "
+                "export the sheet as CSV."
+            )
+        rows.append(_trim([_xl_cell(v) for v in row]))
+    return rows
+
+
+def _has_formulas(raw: bytes) -> bool:
+    """Whether any worksheet of the workbook holds a formula (an ``<f>`` element), read in chunks."""
+    with zipfile.ZipFile(io.BytesIO(raw)) as zf:
+        for name in zf.namelist():
+            if not name.startswith("xl/worksheets/"):
+                continue
+            with zf.open(name) as fh:
+                tail = b""
+                while chunk := fh.read(1 << 20):
+                    text = tail + chunk
+                    if b"<f>" in text or b"<f " in text or b":f>" in text or b":f " in text:
+                        return True
+                    tail = text[-8:]
+    return False
+
+
+def _refuse_uncached_formulas(raw: bytes, source: str, title: str, rows: list[list[Cell]]) -> None:
+    """Empty cells that hold a formula without a saved result (written by a script, never opened)."""
+    from openpyxl import load_workbook
+
+    wb = load_workbook(io.BytesIO(raw), read_only=True, data_only=False)
+    try:
+        ws = wb[title]
+        ws.reset_dimensions()
+        for i, (row, values) in enumerate(zip(ws.iter_rows(), rows, strict=False)):
+            for j, cell in enumerate(row):
+                value = getattr(cell, "value", None)
+                cached = values[j] if j < len(values) else None
+                if cached is None and (getattr(cell, "data_type", "") == "f" or
+                                       (isinstance(value, str) and value.startswith("="))):
+                    where = getattr(cell, "coordinate", f"row {i + 1}")
+                    raise BrainPainterError(
+                        f"input {source!r} sheet {title!r} cell {where} "
+                        f"holds the formula {str(value)[:40]!r} without a saved result, so its value is "
+                        "unknown; open and save the workbook in a spreadsheet program (which stores the "
+                        "results), or export the sheet as CSV."
+                    )
+    finally:
+        wb.close()
 
 
 def _xl_cell(v: Any) -> Cell:
@@ -508,9 +562,12 @@ def _from_mapping(data: Mapping[Any, Any], source: str) -> RawTable:
     return RawTable(header, rows, source, source)
 
 
-_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
+# C0/C1 controls, line separators, and invisible format characters: zero-width spaces and joiners,
+# text-direction marks, embeddings, overrides and isolates (a "bidi override" makes a name read
+# differently from what it is), the word joiner and a byte-order mark inside the text.
+_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u061c\u200b-\u200f\u2028-\u202e\u2060-\u2069\ufeff]")
 
 
 def has_control(text: str) -> bool:
-    """Whether `text` holds control characters (terminal escapes, NUL, line breaks)."""
+    """Whether `text` holds control characters (terminal escapes, NUL, line breaks, bidi overrides)."""
     return _CONTROL.search(text) is not None

@@ -24,6 +24,7 @@ FreeSurfer stats tables          ``lh_insula_thickness``, ``lh_insula_area``
 ENIGMA                           ``L_insula``, ``L_insula_thickavg``,
                                  ``Lhippo``, ``Rthal``, ``LLatVent``
 ggseg                            ``lh_insula``
+atlas label list (Schaefer)      ``7Networks_LH_Vis_1`` (a ``_LH_`` token)
 ==============================  =========================================
 """
 
@@ -31,6 +32,7 @@ from __future__ import annotations
 
 import csv
 import difflib
+import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from functools import cache
@@ -57,6 +59,8 @@ _AFFIXES: dict[str, tuple[tuple[str, str, str], ...]] = {
         ("_R", "suffix", "other"), ("-R", "suffix", "other"), ("_right", "suffix", "other"),
     ),
 }
+# A hemisphere inside a name, between underscores: Schaefer 2018's 7Networks_LH_Vis_1.
+_HEMI_TOKEN = re.compile(r"_([LR]H)_", re.IGNORECASE)
 # ENIGMA's subcortical codes carry the hemisphere as a bare letter: Lhippo, RLatVent.
 _ENIGMA_LETTER = {"lh": "L", "rh": "R"}
 
@@ -208,6 +212,12 @@ class NameResolver:
         return out[:n]
 
 
+def _embedded_hemi(name: str) -> str | None:
+    """Hemisphere written inside a name as a ``_LH_`` / ``_RH_`` token (``7Networks_LH_Vis_1``), or None."""
+    hit = _HEMI_TOKEN.search(name)
+    return None if hit is None else hit.group(1).lower()
+
+
 def _hemi_free_names(region: Region, extra: dict[str, list[tuple[str, str]]]) -> tuple[
         list[tuple[str, str, int]], list[tuple[str, str]]]:
     """Hemisphere-free names of `region` as (name, naming, rank) and full aliases as (name, naming)."""
@@ -217,6 +227,8 @@ def _hemi_free_names(region: Region, extra: dict[str, list[tuple[str, str]]]) ->
         hemi, _ = _split_affix(normalise(alias))
         if hemi is not None:
             full.append((alias, "FreeSurfer look-up table"))
+        elif _embedded_hemi(alias) == region.hemi:
+            full.append((alias, "atlas label list"))  # Schaefer/CBIG, nilearn: 7Networks_LH_Vis_1
         else:
             free.append((alias, "FreeSurfer look-up table", 2))
     for alias, source in extra.get(normalise(region.name), []):

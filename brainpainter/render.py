@@ -28,7 +28,7 @@ from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.geometry import Palette
 from brainpainter.inputs import RegionTable, read_table
 from brainpainter.scene import RGB, RenderSettings, Scene
-from brainpainter.template import Template, load_template
+from brainpainter.template import Template, load_template, template_for
 from brainpainter.views import View, parse_views
 
 # Named groups for --hide: structure names (hemisphere-free) they cover.
@@ -84,6 +84,10 @@ def region_colors(values: Mapping[str, float], atlas: Atlas, scale: ColourScale)
     return atlas.expand(colors)  # a region group's colour goes to each of its member regions
 
 
+#: Default views of an atlas without cortical regions (volumetric atlases).
+VOLUME_VIEWS = ("subcortical", "subcortical-dorsal")
+
+
 @dataclass
 class Painter:
     """A loaded scene plus a renderer, reused for every image.
@@ -119,13 +123,17 @@ class Painter:
             self.atlas = load_atlas_config(self.atlas_config)
         if isinstance(self.atlas, str):
             self.atlas = get_atlas(self.atlas)
+        if self.atlas.template_dir is not None and self.template == "fsaverage":
+            self.template = str(self.atlas.template_dir)  # an atlas with a brain of its own (volume only)
         if not isinstance(self.template, Template):
             self.template = load_template(self.template)
         if self.atlas.label_dir is not None and self.atlas.template_labels not in self.template.label_sets:
-            # a custom or plugin atlas brings its own label set for this template
-            self.template = self.template.with_label_sets(self.atlas.label_dir)
+            # a custom or plugin atlas brings its own label set for this template (and volume meshes)
+            self.template = template_for(self.atlas, self.template)
             for hemi in ("lh", "rh"):
                 self.template.cortex(self.atlas.template_labels, hemi)  # fail now if it does not fit
+        elif self.atlas.volume_dirs:  # a volumetric atlas: its meshes are the subcortical part
+            self.template = template_for(self.atlas, self.template)
         self.scene = Scene(
             template=self.template,
             labels=self.atlas.template_labels,
@@ -262,10 +270,17 @@ def prepare_run(
         atlas = get_atlas(atlas)
     make_scale(gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center,
                nan_color=nan_color, missing_color=missing_color)
+    if views is None and isinstance(atlas, Atlas) and not atlas.cortical():
+        views = VOLUME_VIEWS  # a volumetric atlas alone: its structures, not a grey cortex
     view_list = parse_views(views)
     for what, n in (("width", width), ("height", height)):
-        if not 16 <= int(n) <= 8192:
-            raise BrainPainterError(f"{what} must be between 16 and 8192 pixels; {n} was given.")
+        try:
+            ok = float(n) == int(n) and 16 <= int(n) <= 8192
+        except (TypeError, ValueError, OverflowError):
+            ok = False
+        if not ok:
+            raise BrainPainterError(f"{what} must be between 16 and 8192 pixels (a whole number); {n!r} was "
+                                    "given.")
     if not 0.0 <= glass_opacity <= 1.0:
         raise BrainPainterError(f"glass opacity must be in [0, 1]; {glass_opacity} was given.")
     settings = RenderSettings(
@@ -351,9 +366,12 @@ def render(
     -------
     RenderResult
     """
+    from contextlib import nullcontext
+
     from brainpainter import __version__
-    from brainpainter.output import PngWriter, atomic_write_bytes, prepare_out_dir, safe_name, write_json
+    from brainpainter.output import PngWriter, atomic_write_bytes, safe_name
     from brainpainter.parallel import Item, SerialRunner, check_options, chunked, make_runner
+    from brainpainter.transaction import FolderTransaction
 
     # Validate everything before the first image so bad input leaves nothing behind.
     check_options(jobs, client, scheduler)
@@ -366,29 +384,23 @@ def render(
     )
     table, scale, view_list, settings = run.table, run.scale, run.views, run.settings
     atlas = table.atlas
-    names = [safe_name(n) for n in table.images]
-    clash = sorted({n for n in names if names.count(n) > 1})
-    if clash:
-        raise BrainPainterError(
-            f"image names {clash[:3]} become the same file name after removing unsafe characters; "
-            "make the image names differ in letters or digits."
-        )
+    names = [safe_name(n) for n in table.images]  # distinct, even ignoring case: checked by read_table
     painter = Painter(atlas, template, surface, hide, settings, renderer)
     runner = make_runner(painter, template, jobs=jobs, client=client, scheduler=scheduler,
                          n_items=len(table.images) * len(view_list))
     # The renderer (or every worker's) starts before any output exists: one that cannot start leaves none.
     runner.start()
     try:
-        out_dir = prepare_out_dir(out) if out is not None else None
+        tx = FolderTransaction(out) if out is not None else None  # lock, stage, verify, publish
         settings_dict = {
             "atlas": atlas.name, "template": painter.scene.template.name, "surface": surface,
             "views": [v.to_dict() for v in view_list], "scale": scale.to_dict(),
             "hidden": sorted(painter.scene.hidden), "renderer": renderer, **settings.to_dict(),
         }
 
-        def path_meta(i: int, view: View) -> tuple[Path, dict[str, str]]:
-            assert out_dir is not None
-            return out_dir / f"{names[i]}_{view.name}.png", {
+        def path_meta(i: int, view: View) -> tuple[str, dict[str, str]]:
+            """File name and PNG text of one image."""
+            return f"{names[i]}_{view.name}.png", {
                 "Software": f"brainpainter {__version__}",
                 "brainpainter:image": table.images[i],
                 "brainpainter:view": view.name,
@@ -396,47 +408,53 @@ def render(
             }
 
         plan = [(i, view) for i in range(len(table.images)) for view in view_list]
-        files = [path_meta(i, view)[0] for i, view in plan] if out_dir is not None else []
+        files = [tx.out / path_meta(i, view)[0] for i, view in plan] if tx is not None else []
         entries = [{"file": path.name, "image": table.images[i], "row": i, "view": view.name}
-                   for path, (i, view) in zip(files, plan, strict=False)]  # none without out_dir
+                   for path, (i, view) in zip(files, plan, strict=False)]  # none without an output folder
         images: dict[tuple[str, str], np.ndarray] = {}
+        size = (settings.width, settings.height)
         from tqdm.auto import tqdm
 
-        with tqdm(total=len(plan), unit="img", desc="rendering", disable=not progress) as bar:
+        with tx or nullcontext(), tqdm(total=len(plan), unit="img", desc="rendering",
+                                       disable=not progress) as bar:
             if isinstance(runner, SerialRunner):
                 with PngWriter() as writer:
                     for i, view in plan:
                         pixels = painter.paint(table.row(i), view, scale)
-                        if out_dir is None:
+                        if tx is None:
                             images[(table.images[i], view.name)] = pixels
                         else:
-                            path, meta = path_meta(i, view)
-                            writer.submit(path, pixels, meta)
+                            name, meta = path_meta(i, view)
+                            writer.submit(tx.path(name), pixels, meta)
+                            tx.expect(name, size=size)
                         bar.update(1)
+                    writer.wait()
             else:
                 chunks = chunked(plan, runner.chunk_size(len(plan)))
                 items = ([Item(region_colors(table.row(i), atlas, scale), view,
-                               None if out_dir is None else path_meta(i, view)[1], table.images[i])
+                               None if tx is None else path_meta(i, view)[1], table.images[i])
                           for i, view in chunk] for chunk in chunks)
                 by_index: dict[int, list[np.ndarray]] = {}
-                for index, results in runner.map(items, encode=out_dir is not None):
-                    if out_dir is None:
+                for index, results in runner.map(items, encode=tx is not None):
+                    if tx is None:
                         by_index[index] = results
-                    else:
+                    else:  # the workers' PNG files: the bytes a serial run writes
                         for (i, view), data in zip(chunks[index], results, strict=True):
-                            atomic_write_bytes(path_meta(i, view)[0], data)
+                            name = path_meta(i, view)[0]
+                            atomic_write_bytes(tx.path(name), data)
+                            tx.expect(name, size=size)
                     bar.update(len(results))
                 for index in sorted(by_index):
                     for (i, view), pixels in zip(chunks[index], by_index[index], strict=True):
                         images[(table.images[i], view.name)] = pixels
+            manifest = {
+                "software": {"brainpainter": __version__},
+                "input": table.summary(),
+                "settings": settings_dict,
+                "files": entries,
+            }
+            if tx is not None:
+                tx.commit(manifest)  # verify every PNG, then publish them and the manifest last
     finally:
         runner.close()
-    manifest = {
-        "software": {"brainpainter": __version__},
-        "input": table.summary(),
-        "settings": settings_dict,
-        "files": entries,
-    }
-    if out_dir is not None:
-        write_json(out_dir / "manifest.json", manifest)
     return RenderResult(files, images, manifest, runner.summary())

@@ -67,11 +67,14 @@ def check_report(table: RegionTable, **scale_options: Any) -> dict[str, Any]:
         ``gradient``, ``cmap``, ``vmin``, ``vmax``, ``center`` as for render.
     """
     summary = table.summary()
+    origin = dict(table.atlas.sources)
     names = []
     n_suggested = 0
     for n in table.names:
         entry: dict[str, Any] = {"source": n.source, "name": n.name, "status": n.status,
                                  "regions": list(n.keys), "naming": n.naming, "reason": n.reason}
+        if origin and n.keys:  # a combined atlas: which of its atlases the name matched
+            entry["atlas"] = origin.get(n.keys[0], table.atlas.name)
         if n.status == UNMATCHED and n_suggested < MAX_SUGGESTED:
             entry.update(_closest(n.name, table))
             n_suggested += 1
@@ -143,7 +146,8 @@ def format_report(report: dict[str, Any]) -> str:
     out.append(f"\nregions {len(regions)} name(s) set {report['n_regions_with_value']} of "
                f"{report['n_regions_in_atlas']} {a['name']} regions:")
     for n in regions:
-        out.append(f"    {n['name']:<40} -> {', '.join(n['regions'])}  [{n['naming']}]")
+        out.append(f"    {n['name']:<40} -> {', '.join(n['regions'])}  [{n['naming']}]"
+                   + (f"  ({n['atlas']})" if "atlas" in n else ""))
     ignored = [n for n in report["names"] if n["status"] == "ignored"]
     if ignored:
         out.append(f"\nnot regions ({len(ignored)}), set aside:")
@@ -188,3 +192,37 @@ def format_report(report: dict[str, Any]) -> str:
     if not report["ok"]:
         out.append(f"        render would stop: {report['errors'][0]}")
     return "\n".join(out)
+
+
+def input_warnings(summary: dict[str, Any], max_names: int = 8) -> list[str]:
+    """Warnings ``render``, ``figure`` and ``movie`` print about their input (as ``check`` reports it).
+
+    Parameters
+    ----------
+    summary : dict
+        :meth:`RegionTable.summary` (``manifest["input"]``).
+
+    Returns
+    -------
+    list of str
+        The notes (empty columns, decimal commas, images missing from an
+        input) and the unmatched names, each with its closest region names.
+    """
+    from brainpainter.atlas import get_atlas
+    from brainpainter.errors import BrainPainterError
+
+    lines = list(summary.get("notes", []))
+    unmatched = summary.get("unmatched_columns", [])
+    if unmatched:
+        try:
+            resolver: NameResolver | None = NameResolver.for_atlas(get_atlas(summary["atlas"]))
+        except BrainPainterError:  # an atlas from --atlas-config is not registered
+            resolver = None
+        shown = []
+        for name in unmatched[:max_names]:
+            close = resolver.suggest(name) if resolver is not None else []
+            shown.append(f"{name!r}" + (f" (did you mean {close[0]!r}?)" if close else ""))
+        more = f" and {len(unmatched) - max_names} more" if len(unmatched) > max_names else ""
+        lines.append(f"{len(unmatched)} name(s) match no {summary['atlas']} region and were not drawn: "
+                     f"{', '.join(shown)}{more}; see 'brainpainter check' (--strict makes this an error)")
+    return lines

@@ -137,11 +137,16 @@ def _image_column_wide(raw: RawTable, resolver: NameResolver) -> tuple[int | Non
     if raw.index_column is not None:
         return raw.header.index(raw.index_column), f"image names from the {raw.format}'s index"
     lower = [h.lower() for h in raw.header]
-    for name in IMAGE_COLUMN_NAMES:
-        if name in lower:
-            j = lower.index(name)
-            if resolver.lookup(raw.header[j]).status != REGION:
-                return j, f"image names in column {raw.header[j]!r}"
+    found = [lower.index(name) for name in IMAGE_COLUMN_NAMES
+             if name in lower and resolver.lookup(raw.header[lower.index(name)]).status != REGION]
+    if len(found) > 1:
+        names = [raw.header[j] for j in found]
+        raise BrainPainterError(
+            f"{raw.source}: columns {names} could both hold the image names; choose one with "
+            f"--image-column, e.g. --image-column {names[0]!r}."
+        )
+    if found:
+        return found[0], f"image names in column {raw.header[found[0]]!r}"
     if raw.header and (FS_APARC.fullmatch(raw.header[0]) or FS_ASEG.fullmatch(raw.header[0])):
         return 0, f"subject names in FreeSurfer's first column {raw.header[0]!r}"
     return None, "no image-name column, rows numbered"

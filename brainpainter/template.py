@@ -26,6 +26,10 @@ the template's own label-set meshes (entry key ``base``; ``base_faces_sha256``
 guards against a rebuilt template): ``vertex_label`` (one per vertex; faces
 whose vertices differ are split through edge midpoints when loaded, see
 :func:`brainpainter.labelset.split_mesh`) or ``face_label`` (one per face).
+An overlay file may instead hold ``source_label``: one label per vertex of the
+full-resolution surface the template was built from (e.g. all 163842 of
+fsaverage); it is mapped through the base mesh's ``source_vertex`` when
+loaded, so it survives a rebuild of the template (no digest needed).
 :meth:`Template.with_label_sets` adds such a folder's label sets to a template.
 """
 
@@ -137,10 +141,18 @@ class Template:
                 f"template {self.name!r} has no label set {labels!r}; it has {self.label_sets}. "
                 "Build the template with that atlas (brainpainter template build --atlas ...)."
             )
+        if hemi not in self.manifest["labels"][labels].get("cortex", {}):
+            # a template without this hemisphere's cortex (made of volume labels only): an empty mesh
+            return CortexMesh(hemi=hemi, labels=labels, faces=np.zeros((0, 3), np.int32),
+                              face_label=np.zeros(0, np.int16), label_names=(),
+                              vertices={s: np.zeros((0, 3), np.float32) for s in self.surfaces},
+                              source_vertex=np.zeros(0, np.int32))
         entry = self.manifest["labels"][labels]["cortex"][hemi]
         z = self._npz(entry["file"])
         if "base" in entry:  # an overlay: labels for the vertices or faces of one of our own meshes
             base = self.cortex(entry["base"], hemi)
+            if "source_label" in z:  # one label per full-resolution vertex: fits any rebuild of the base
+                return self._source_labelled(base, z["source_label"], labels, entry)
             per_vertex = "vertex_label" in z
             n = len(z["vertex_label"]) if per_vertex else len(z["face_label"])
             digest = entry.get("base_faces_sha256")
@@ -170,6 +182,24 @@ class Template:
             vertices={s: z[s] for s in self.surfaces if s in z},
             source_vertex=z["source_vertex"],
         )
+
+    def _source_labelled(self, base: CortexMesh, source_label: np.ndarray, labels: str,
+                         entry: dict) -> CortexMesh:
+        """`base` labelled by `source_label` (one label per vertex of the full-resolution surface)."""
+        from brainpainter.labelset import labels_at_vertices, split_mesh
+
+        n_source = int(entry.get("n_source_vertices", len(source_label)))
+        if len(source_label) != n_source or int(base.source_vertex.max(initial=-1)) >= n_source:
+            raise BrainPainterError(
+                f"label set {labels!r} ({entry['file']}) labels {len(source_label)} source vertices, but the "
+                f"{entry['base']!r} mesh of template {self.name!r} was made from a surface with more; "
+                "use the template the atlas was made for."
+            )
+        key = f"{entry['file']}#{labels}"
+        if key not in self._cache:
+            vertex_label = labels_at_vertices(source_label, base)
+            self._cache[key] = split_mesh(base, vertex_label, labels, tuple(entry["names"]))
+        return self._cache[key]
 
     def with_label_sets(self, folder: str | Path) -> Template:
         """This template plus the label sets of an overlay folder (``labels.json``).
@@ -202,11 +232,49 @@ class Template:
         return Template(path=self.path, manifest=manifest, _cache=self._cache)
 
     def subcortical(self) -> LabelledMesh:
-        """All subcortical structures (names as in FreeSurfer's aseg LUT)."""
+        """All subcortical structures (names as in FreeSurfer's aseg LUT, or a volume atlas's keys)."""
         entry = self.manifest["subcortical"]
-        z = self._npz(entry["file"])
-        return LabelledMesh(z["vertices"], z["faces"], z["face_label"],
-                            tuple(s["name"] for s in entry["structures"]))
+        names = tuple(s["name"] for s in entry["structures"])
+        files = entry.get("parts", [entry["file"]])
+        arrays = [self._npz(f) for f in files]
+        if len(arrays) == 1:
+            z = arrays[0]
+            return LabelledMesh(z["vertices"], z["faces"], z["face_label"], names)
+        verts, faces, labels, n_v, n_l = [], [], [], 0, 0
+        for z in arrays:
+            verts.append(z["vertices"])
+            faces.append(z["faces"] + n_v)
+            labels.append(z["face_label"] + n_l)
+            n_v += len(z["vertices"])
+            n_l += int(z["face_label"].max()) + 1 if len(z["face_label"]) else 0
+        return LabelledMesh(np.concatenate(verts), np.concatenate(faces).astype(np.int32),
+                            np.concatenate(labels).astype(np.int16), names)
+
+    def with_volumes(self, folders: list[Path] | tuple[Path, ...]) -> Template:
+        """This template with the meshes of volumetric atlases as its subcortical part.
+
+        Each folder holds ``atlas.json`` and ``subcortical.npz`` written by
+        :func:`brainpainter.volumes.build_volume_atlas` for this template; its
+        structures replace the template's own (aseg) ones, several folders are
+        drawn together.
+        """
+        structures, parts = [], []
+        for folder in folders:
+            folder = Path(folder)
+            try:
+                meta = json.loads((folder / "atlas.json").read_text(encoding="utf-8"))
+            except (OSError, ValueError) as exc:
+                raise BrainPainterError(f"cannot read volume atlas {folder}: {exc}") from None
+            if meta.get("template") != self.name:
+                raise BrainPainterError(
+                    f"the volume atlas in {folder} was made for template {meta.get('template')!r}, not "
+                    f"{self.name!r}; render with --template {meta.get('template')} or add it again with "
+                    f"--template {self.name}.")
+            structures.extend({"name": s["name"]} for s in meta["structures"])
+            parts.append(str((folder / "subcortical.npz").absolute()))
+        manifest = dict(self.manifest)
+        manifest["subcortical"] = {"file": parts[0], "parts": parts, "structures": structures}
+        return Template(path=self.path, manifest=manifest, _cache=self._cache)
 
     def glass(self, hemi: str) -> tuple[np.ndarray, np.ndarray]:
         """Glass-brain hull of one hemisphere: ``(vertices (n, 3), faces (m, 3))``."""
@@ -220,6 +288,21 @@ class Template:
 
     def files(self) -> list[Path]:
         return sorted(p for p in self.path.iterdir() if p.is_file())
+
+
+def template_for(atlas, template: Template) -> Template:
+    """`template` with what `atlas` brings: its cortex label set overlay and its volume meshes.
+
+    Parameters
+    ----------
+    atlas : brainpainter.atlas.Atlas
+    template : Template
+    """
+    if atlas.label_dir is not None and atlas.template_labels not in template.label_sets:
+        template = template.with_label_sets(atlas.label_dir)
+    if atlas.volume_dirs:
+        template = template.with_volumes(atlas.volume_dirs)
+    return template
 
 
 def load_template(name_or_path: str | Path = "fsaverage") -> Template:

@@ -84,6 +84,25 @@ def installed(root: Path) -> Iterator[None]:
         registry.reset_all()
 
 
+def pip_install(src: Path, target: Path, scratch: Path) -> Path:
+    """Install the distribution in folder `src` into `target` with pip (no index, no dependencies).
+
+    `src` is copied to `scratch` first (without build leftovers), so the
+    source tree is left as it was. Returns `target`, for :func:`installed`.
+    """
+    import shutil
+    import subprocess
+
+    copy = Path(scratch) / Path(src).name
+    shutil.copytree(src, copy, ignore=shutil.ignore_patterns("build", "*.egg-info", "__pycache__"))
+    subprocess.run(
+        [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-build-isolation",
+         "--no-index", "--target", str(target), str(copy)],
+        check=True, capture_output=True,
+    )
+    return Path(target)
+
+
 def write_tiny_template(path: Path, labels: Mapping[str, tuple[str, ...]] | None = None) -> Path:
     """Write a small synthetic template (two icospheres, two boxes, glass spheres).
 
@@ -258,13 +277,11 @@ def check_atlas(atlas: Any, template: str | Path = "fsaverage") -> dict[str, Any
     from brainpainter import registry
     from brainpainter.atlas import Atlas
     from brainpainter.render import render
-    from brainpainter.template import load_template
+    from brainpainter.template import load_template, template_for
 
     a: Atlas = registry.atlases.get(atlas) if isinstance(atlas, str) else atlas
     problems: list[str] = []
-    tpl = load_template(template)
-    if a.template_labels not in tpl.label_sets and a.label_dir is not None:
-        tpl = tpl.with_label_sets(a.label_dir)
+    tpl = template_for(a, load_template(template))
     if a.template_labels not in tpl.label_sets:
         raise AssertionError(f"atlas {a.name!r}: template {tpl.name!r} has no label set "
                              f"{a.template_labels!r} (it has {tpl.label_sets}) and the atlas brings none "

@@ -18,7 +18,6 @@ failed ``add`` leaves nothing behind.
 
 from __future__ import annotations
 
-import os
 import re
 import shutil
 import tempfile
@@ -104,28 +103,26 @@ def check_syntax(name: str) -> str:
     return name
 
 
+def _is_user_atlas(folder: Path) -> bool:
+    return (folder / "atlas.json").is_file() or (folder / CONFIG_FILE).is_file()
+
+
 @contextmanager
 def staged_folder(name: str, out: Path | None = None) -> Iterator[Path]:
-    """Yield a hidden temporary folder; on success it replaces ``atlases_dir()/name`` (or `out`)."""
-    target = Path(out) if out is not None else atlases_dir() / name
-    if out is not None and target.exists() and (not target.is_dir() or any(target.iterdir())):
-        raise BrainPainterError(f"output folder {target} exists and is not empty; give a new folder")
-    target.parent.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=f".{target.name}.adding-", dir=target.parent))
-    try:
+    """Yield a hidden temporary folder; on success it replaces ``atlases_dir()/name`` (or `out`).
+
+    `out` must be new or empty; in the user's atlas folder only an atlas
+    folder is replaced (``--replace``). The parent folder is locked meanwhile.
+    """
+    from brainpainter.transaction import replace_folder
+
+    if out is not None:
+        with replace_folder(out, lambda p: False, "output folder", "Give a new or empty folder.") as stage:
+            yield stage
+        return
+    with replace_folder(atlases_dir() / name, _is_user_atlas, "atlas folder",
+                        f"Remove it by hand or choose another name than {name!r}.") as stage:
         yield stage
-        os.chmod(stage, 0o755)
-        old = None
-        if target.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old-", dir=target.parent))
-            old.rmdir()
-            target.rename(old)
-        stage.rename(target)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
-    finally:
-        if stage.exists():
-            shutil.rmtree(stage, ignore_errors=True)
 
 
 def parse_annot_options(values: list[str] | tuple[str, ...]) -> dict[str, Path]:
@@ -188,7 +185,11 @@ def add_label_map(name: str, annots: Mapping[str, str | Path], *, template: str 
     if out is None:
         check_name(name, replace=replace)
     else:
+        from brainpainter.transaction import check_replaceable
+
         check_syntax(name)
+        check_replaceable(Path(out).expanduser(), lambda p: False, "output folder",
+                          "Give a new or empty folder.")
     tpl = load_template(template)
     maps = {h: read_label_map(annots[h], h) for h in ("lh", "rh") if h in annots}
     label_set = build_label_set(name, tpl, maps)
@@ -210,8 +211,11 @@ def add_config(name: str, config: str | Path, *, replace: bool = False) -> Path:
     check_name(name, replace=replace)
     config = Path(config).expanduser()
     load_atlas_config(config, name=name)  # every error before anything is written
+    from brainpainter.files import read_input
+
+    text = read_input(config, "atlas config")
     with staged_folder(name) as stage:
-        shutil.copyfile(config, stage / CONFIG_FILE)
+        (stage / CONFIG_FILE).write_bytes(text)
         load_atlas_config(stage / CONFIG_FILE, name=name)
     registry.atlases.reset()
     return atlases_dir() / name

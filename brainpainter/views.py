@@ -66,6 +66,7 @@ PRESETS: dict[str, View] = {
         View("subcortical", "subcortical", (), 160.0, 20.0, glass=("rh",)),
         View("subcortical-left", "subcortical", (), 180.0, 0.0, glass=("rh",)),
         View("subcortical-dorsal", "subcortical", (), 0.0, 90.0, glass=_BOTH),
+        View("subcortical-ventral", "subcortical", (), 0.0, -90.0, glass=_BOTH),
     )
 }
 DEFAULT_VIEWS = ("lateral-left", "medial-left", "subcortical")
@@ -104,9 +105,14 @@ def get_view(name: str) -> View:
 def camera_view(azimuth: float, elevation: float, zoom: float = 1.0,
                 hemis: tuple[str, ...] = _BOTH, name: str | None = None) -> View:
     """A free camera on the cortex of `hemis`."""
-    if not -90.0 <= elevation <= 90.0 or not zoom > 0:
+    import math
+
+    if not math.isfinite(float(azimuth)):
+        raise BrainPainterError(f"azimuth must be a finite number of degrees; {azimuth} was given.")
+    if not -90.0 <= elevation <= 90.0 or not 0 < zoom <= 100:
         raise BrainPainterError(
-            f"elevation must be in [-90, 90] and zoom > 0; elevation={elevation}, zoom={zoom} were given."
+            f"elevation must be in [-90, 90] and zoom in (0, 100]; elevation={elevation}, zoom={zoom} were "
+            "given."
         )
     name = name or f"az{azimuth:g}-el{elevation:g}" + (f"-zoom{zoom:g}" if zoom != 1 else "")
     return View(name, "cortex", tuple(hemis), float(azimuth) % 360.0, float(elevation), float(zoom))

@@ -22,7 +22,14 @@ from brainpainter.cli import cli
 from brainpainter.errors import BrainPainterError
 from brainpainter.render import Painter
 from brainpainter.template import load_template
-from brainpainter.testing import StandInRenderer, check_atlas, installed, stand_in, write_tiny_template
+from brainpainter.testing import (
+    StandInRenderer,
+    check_atlas,
+    installed,
+    pip_install,
+    stand_in,
+    write_tiny_template,
+)
 
 REPO = Path(__file__).resolve().parents[1]
 PLUGIN = REPO / "plugins" / "atlases" / "brainpainter-atlas-yeo7"
@@ -34,15 +41,7 @@ NETWORKS = [f"7Networks_{i}" for i in range(1, 8)]
 @pytest.fixture(scope="module")
 def site(tmp_path_factory) -> Path:
     """The plugin as pip installs it, into a throw-away site-packages folder."""
-    src = tmp_path_factory.mktemp("src") / "plugin"
-    shutil.copytree(PLUGIN, src, ignore=shutil.ignore_patterns("build", "*.egg-info", "__pycache__"))
-    target = tmp_path_factory.mktemp("site")
-    subprocess.run(
-        [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-build-isolation",
-         "--no-index", "--target", str(target), str(src)],
-        check=True, capture_output=True,
-    )
-    return target
+    return pip_install(PLUGIN, tmp_path_factory.mktemp("site"), tmp_path_factory.mktemp("src"))
 
 
 def test_pip_installed_plugin_is_listed_and_renders(site, tmp_path):

@@ -131,7 +131,7 @@ def test_unreadable_input_and_unwritable_output(tmp_path):
     blocker.write_text("")
     proc = run("render", str(csv), "--out", str(blocker / "out"), "--views", "lateral-left",
                "--quality", "fast")
-    assert proc.returncode == 2 and "not writable" in proc.stderr
+    assert proc.returncode == 2 and "is a file, not a folder" in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
 
 

@@ -143,7 +143,7 @@ def test_unwritable_output_folder(tmp_path, solid, tiny):
     blocker.write_text("x")
     with pytest.raises(BrainPainterError, match="is not a folder"):
         render(data, "dk", out=blocker, template=str(tiny), renderer=solid, progress=False)
-    with pytest.raises(BrainPainterError, match="not writable"):
+    with pytest.raises(BrainPainterError, match="is a file, not a folder"):
         render(data, "dk", out=blocker / "sub", template=str(tiny), renderer=solid, progress=False)
 
 
@@ -168,6 +168,6 @@ def test_png_writer_writes_in_order_and_reraises(tmp_path):
         for k in range(5):
             writer.submit(tmp_path / f"{k}.png", img)
     assert sorted(p.name for p in tmp_path.iterdir()) == [f"{k}.png" for k in range(5)]
-    with pytest.raises(FileNotFoundError), PngWriter() as writer:
+    with pytest.raises(BrainPainterError, match="cannot write"), PngWriter() as writer:
         writer.submit(tmp_path / "missing-folder" / "x.png", img)
     assert not (tmp_path / "missing-folder").exists()

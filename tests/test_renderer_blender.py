@@ -252,7 +252,7 @@ def test_orientation_of_every_preset(flat, name):
         "dorsal": ("up", None, "right"), "ventral": ("up", None, "left"),
         "anterior": (None, "up", "left"), "posterior": (None, "up", "right"),
         "subcortical": ("left", "up", None), "subcortical-left": ("left", "up", None),
-        "subcortical-dorsal": ("up", None, "right"),
+        "subcortical-dorsal": ("up", None, "right"), "subcortical-ventral": ("up", None, "left"),
     }[name]
     unit = {"left": (-1, 0), "right": (1, 0), "up": (0, -1), "down": (0, 1)}
 

@@ -1,3 +1,4 @@
+# ruff: noqa: E501  (a table of cases: one case per line reads best)
 """The bad-input corpus: malformed and hostile tables, each with its expected one-line error.
 
 Every case is generated (nothing large is committed): ``write(case, folder)``
@@ -8,6 +9,12 @@ line on stderr containing ``case.message``, no traceback and no file written.
 ``SAFE`` lists hostile inputs that are *accepted*: image names that look like
 paths are sanitised into file names inside the output folder.
 
+``INPROCESS`` lists more cases of every class (output safety, the input
+opener, bombs, ambiguity, non-finite options, configs, locks); they run in
+the test process through :func:`brainpainter.guard.run` with click's
+``CliRunner`` streams, which is fast, and are checked the same way.
+Arguments may hold ``{tiny}``: the path of a tiny synthetic template.
+
 Run ``python tests/bad_inputs/corpus.py FOLDER`` to write the whole corpus
 to FOLDER (one sub-folder per case) for manual inspection.
 """
@@ -16,7 +23,9 @@ from __future__ import annotations
 
 import gzip
 import io
+import os
 import random
+import re
 import sys
 import zipfile
 from collections.abc import Callable
@@ -43,6 +52,12 @@ class Case:
     command : {"check", "render"}
     env : dict of str to str
         Extra environment variables.
+    code : int
+        Expected exit code (2: a user error; 0: accepted, ``message`` is then expected on stdout).
+    patch : dict of str to object
+        ``"module:ATTR"`` -> value set for the run (small limits make bombs cheap; in-process cases only).
+    lock : str, optional
+        Folder (relative to the case folder) that another run holds locked meanwhile (in-process only).
     """
 
     id: str
@@ -51,6 +66,9 @@ class Case:
     message: str
     command: str = "check"
     env: dict[str, str] = field(default_factory=dict)
+    code: int = 2
+    patch: dict[str, object] = field(default_factory=dict)
+    lock: str | None = None
 
 
 def csv(*lines: str) -> bytes:
@@ -176,12 +194,10 @@ CASES: list[Case] = [
     Case("inf", {"in.csv": csv(HEADER.strip(), "A,inf,1")}, ["in.csv"], "is infinite"),
     Case("minus-infinity", {"in.csv": csv(HEADER.strip(), "A,1,-Infinity")}, ["in.csv"], "is infinite"),
     Case("overflow-to-inf", {"in.csv": csv(HEADER.strip(), "A,1e999,1")}, ["in.csv"], "is infinite"),
-    Case("column-all-nan", {"in.csv": csv(HEADER.strip(), "A,1,", "B,2,NaN")}, ["in.csv"],
-         "column 'Right-insula' (region 'Right-insula') has no value in any row"),
     Case("render-non-numeric", {"in.csv": csv(HEADER.strip(), "A,1,high")}, ["in.csv"],
          "'high', which is not a number", command="render"),
-    Case("render-all-nan", {"in.csv": csv(HEADER.strip(), "A,1,")}, ["in.csv"], "has no value in any row",
-         command="render"),
+    Case("check-collide-as-files", {"in.csv": csv(HEADER.strip(), "a/B,1,2", "a_b,2,3")}, ["in.csv"],
+         "become the same file name"),
     # -- image names ----------------------------------------------------------------------------------
     Case("image-name-with-nul", {"in.csv": csv(HEADER.strip(), "a\x00b,1,2")}, ["in.csv"], "NUL"),
     Case("image-name-with-escape", {"in.csv": csv(HEADER.strip(), "\x1b[31mred,1,2")}, ["in.csv"],
@@ -215,6 +231,329 @@ CASES: list[Case] = [
          ["a.csv", "b.csv"], "has no image-name column"),
     Case("second-input-empty", {"a.csv": GOOD, "b.csv": b""}, ["a.csv", "b.csv"], "'b.csv' is empty"),
 ]
+
+# -- in-process cases ----------------------------------------------------------------------------------
+def _fifo(path: Path) -> None:
+    os.mkfifo(path)
+
+
+def _link_to(target: str) -> Callable[[Path], None]:
+    def make(path: Path) -> None:
+        path.symlink_to(target)
+    return make
+
+
+def _folder(files: dict[str, bytes]) -> Callable[[Path], None]:
+    def make(path: Path) -> None:
+        path.mkdir()
+        for name, data in files.items():
+            (path / name).write_bytes(data)
+    return make
+
+
+def _xlsx_xml(sheet_xml: Callable[[bytes], bytes]) -> bytes:
+    """A real workbook whose sheet XML is rewritten by `sheet_xml` (bombs, lies in <dimension>)."""
+    base = xlsx({"S": [["Image-name-unique", "Left-insula"], ["A", 1]]})
+    zin = zipfile.ZipFile(io.BytesIO(base))
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as out:
+        for info in zin.infolist():
+            data = zin.read(info)
+            if info.filename.startswith("xl/worksheets/sheet"):
+                data = sheet_xml(data)
+            out.writestr(info, data)
+    return buf.getvalue()
+
+
+def _dimension(ref: bytes) -> bytes:
+    return _xlsx_xml(lambda x: re.sub(rb'<dimension ref="[^"]*"\s*/>', b'<dimension ref="' + ref + b'"/>', x))
+
+
+def _far_row(r: int) -> bytes:
+    return _xlsx_xml(lambda x: x.replace(b"</sheetData>", b'<row r="%d"><c r="B%d"><v>1</v></c></row></sheetData>'
+                                         % (r, r)))
+
+
+def _wide_row() -> bytes:
+    return _xlsx_xml(lambda x: x.replace(b"</sheetData>", b'<row r="3"><c r="XFD3"><v>1</v></c></row>'
+                                         b'<row r="4"><c r="A4"><v>1</v></c></row></sheetData>'))
+
+
+def _formula(cached: bool) -> bytes:
+    value = b"<v>2</v>" if cached else b"<v />"
+    return _xlsx_xml(lambda x: re.sub(rb'<c r="B2"( t="n")?><v>1</v></c>', b'<c r="B2"><f>1+1</f>' + value
+                                      + b"</c>", x))
+
+
+def _annot(path: Path) -> None:
+    import numpy as np
+    from nibabel.freesurfer import write_annot
+
+    ctab = np.array([[25, 5, 25, 0, 0], [200, 0, 0, 0, 0]], dtype=np.int32)
+    write_annot(str(path), np.array([0, 1, 1, 0]), ctab, [b"unknown", b"net1"], fill_ctab=True)
+
+
+def _gifti(structure: str) -> Callable[[Path], None]:
+    def make(path: Path) -> None:
+        import nibabel as nib
+        import numpy as np
+
+        table = nib.gifti.GiftiLabelTable()
+        for key, name in ((0, "unknown"), (1, "net1")):
+            label = nib.gifti.GiftiLabel(key=key, red=1.0, green=0.0, blue=0.0, alpha=1.0)
+            label.label = name
+            table.labels.append(label)
+        arr = nib.gifti.GiftiDataArray(np.array([0, 1, 1, 0], dtype=np.int32), intent="NIFTI_INTENT_LABEL",
+                                       datatype="NIFTI_TYPE_INT32")
+        img = nib.gifti.GiftiImage(darrays=[arr], labeltable=table,
+                                   meta=nib.gifti.GiftiMetaData({"AnatomicalStructurePrimary": structure}))
+        nib.save(img, str(path))
+    return make
+
+
+def toml(text: str) -> bytes:
+    return text.strip().encode() + b"\n"
+
+
+LOBES = toml('[atlas]\nbase = "dk"\n[groups]\nfrontal = ["superiorfrontal"]\n')
+RENDER = ["--renderer", "solid", "--template", "{tiny}", "--views", "lateral-left", "--size", "32x32", "-q"]
+TEMPLATE_MANIFEST = b'{"format": "brainpainter-template", "format_version": 1}'
+RENDER_MANIFEST = b'{"software": {"brainpainter": "0.1.0"}, "files": []}'
+LONG_NAME = "x" * 300
+ONE_ROW_EMPTY = csv(HEADER.strip(), "A,1,")
+
+
+def _movie(args: list[str], message: str, cid: str, files: dict[str, Content] | None = None,
+           **kw: object) -> Case:
+    return Case(cid, files or {"in.csv": csv(HEADER.strip(), "A,1,2", "B,2,3")}, ["in.csv", *RENDER, *args],
+                message, command="movie", **kw)  # type: ignore[arg-type]
+
+
+def _figure(args: list[str], message: str, cid: str, files: dict[str, Content] | None = None,
+            **kw: object) -> Case:
+    return Case(cid, files or {"in.csv": GOOD}, ["in.csv", *RENDER, *args], message, command="figure",
+                **kw)  # type: ignore[arg-type]
+
+
+def _render(args: list[str], message: str, cid: str, files: dict[str, Content] | None = None,
+            **kw: object) -> Case:
+    return Case(cid, files or {"in.csv": GOOD}, ["in.csv", *RENDER, *args], message, command="render",
+                **kw)  # type: ignore[arg-type]
+
+
+INPROCESS: list[Case] = [
+    # -- never delete what brainpainter did not make (template build, atlas add --out) ---------------------
+    Case("template-into-render-folder", {"renders": _folder({"manifest.json": RENDER_MANIFEST, "a.png": PNG}),
+                                         "subj": _folder({})},
+         ["build", "subj", "--out", "renders"], "was not made by brainpainter", command="template"),
+    Case("template-into-foreign-folder", {"data": _folder({"table.csv": GOOD}), "subj": _folder({})},
+         ["build", "subj", "--out", "data"], "was not made by brainpainter", command="template"),
+    Case("template-out-empty-string", {"manifest.json": TEMPLATE_MANIFEST, "in.csv": GOOD, "subj": _folder({})},
+         ["build", "subj", "--out", ""], "the current folder", command="template"),
+    Case("template-out-dot", {"manifest.json": TEMPLATE_MANIFEST, "subj": _folder({})},
+         ["build", "subj", "--out", "."], "the current folder", command="template"),
+    Case("template-out-is-file", {"t": b"mine", "subj": _folder({})}, ["build", "subj", "--out", "t"],
+         "is a file", command="template"),
+    Case("template-out-symlink", {"real": _folder({"manifest.json": TEMPLATE_MANIFEST}),
+                                  "link": _link_to("real"), "subj": _folder({})},
+         ["build", "subj", "--out", "link"], "is a symbolic link", command="template"),
+    Case("template-out-fake-manifest", {"t": _folder({"manifest.json": b'{"format": "other"}', "x": b"1"}),
+                                        "subj": _folder({})},
+         ["build", "subj", "--out", "t"], "was not made by brainpainter", command="template"),
+    Case("template-out-manifest-not-json", {"t": _folder({"manifest.json": b"\xff\x00", "x": b"1"}),
+                                            "subj": _folder({})},
+         ["build", "subj", "--out", "t"], "was not made by brainpainter", command="template"),
+    Case("template-out-name-too-long", {"subj": _folder({})}, ["build", "subj", "--out", LONG_NAME],
+         "too long", command="template"),
+    Case("template-subject-missing", {}, ["build", "nosubj", "--out", "t"], "nosubj", command="template"),
+    Case("template-subject-is-fifo", {"subj": _fifo}, ["build", "subj", "--out", "t"], "subj",
+         command="template"),
+    Case("atlas-add-out-not-empty", {"lh.a.annot": _annot, "rh.a.annot": _annot, "o": _folder({"x": b"1"})},
+         ["add", "net", "--annot", "lh=lh.a.annot", "--annot", "rh=rh.a.annot", "--out", "o"],
+         "was not made by brainpainter", command="atlas"),
+    Case("atlas-add-out-name-too-long", {"lh.a.annot": _annot, "rh.a.annot": _annot},
+         ["add", "net", "--annot", "lh=lh.a.annot", "--annot", "rh=rh.a.annot", "--out", LONG_NAME],
+         "too long", command="atlas"),
+    # -- output folders and files ----------------------------------------------------------------------------
+    _render(["--out", "o"], "is in use by another brainpainter run", "render-locked-folder", lock="o"),
+    _figure(["--out", "f/fig.png"], "is in use by another brainpainter run", "figure-locked-folder", lock="f"),
+    _movie(["--out", "m/movie.gif"], "is in use by another brainpainter run", "movie-locked-folder", lock="m"),
+    _render(["--out", "blocker/out"], "not a folder", "render-out-under-a-file",
+            files={"in.csv": GOOD, "blocker": b""}),
+    _render(["--out", "out.png"], "is a file", "render-out-is-a-file",
+            files={"in.csv": GOOD, "out.png": PNG}),
+    _render(["--out", LONG_NAME], "too long", "render-out-name-too-long"),
+    _render(["--out", "a/" + LONG_NAME + "/b"], "too long", "render-out-deep-name-too-long"),
+    _figure(["--out", LONG_NAME + ".png"], "too long", "figure-out-name-too-long"),
+    _figure(["--out", "fig.bmp"], "must be a file name ending in", "figure-bad-ending"),
+    _figure(["--out", "d.png"], "is a folder", "figure-out-is-folder", files={"in.csv": GOOD, "d.png": _folder({})}),
+    _figure(["--out", "blocker/fig.png"], "is a file, not a folder", "figure-out-under-a-file",
+            files={"in.csv": GOOD, "blocker": b""}),
+    _movie(["--out", "m.avi"], "must be a file name ending in", "movie-bad-ending"),
+    _movie(["--out", LONG_NAME + ".mp4"], "too long", "movie-out-name-too-long"),
+    _movie(["--out", "m.gif", "--frames-per-step", "2500"], "at most 2000 are made", "gif-frame-cap"),
+    _movie(["--out", "m.mp4", "--frames-per-step", "30000"], "between 1 and 20000", "movie-frame-cap"),
+    _movie(["--out", "m.mp4", "--hold", "-1"], "hold must be 0 or more", "movie-negative-hold"),
+    _movie(["--out", "m.mp4", "--transparent"], "no transparency", "movie-transparent"),
+    # -- the input opener: regular files only, size limits ----------------------------------------------------
+    Case("table-is-fifo", {"in.csv": _fifo}, ["in.csv"], "is not a regular file (a named pipe"),
+    Case("table-is-dev-null", {}, ["/dev/null"], "is not a regular file (a device)"),
+    Case("table-symlink-to-dev-zero", {"in.csv": _link_to("/dev/zero")}, ["in.csv"], "is not a regular file"),
+    Case("table-dangling-symlink", {"in.csv": _link_to("nowhere.csv")}, ["in.csv"], "does not exist"),
+    Case("table-is-folder", {"d.csv": _folder({})}, ["d.csv"], "is a directory"),
+    Case("table-name-too-long", {}, [LONG_NAME + ".csv"], "too long"),
+    Case("render-table-is-fifo", {"in.csv": _fifo}, ["in.csv", "--out", "o", *RENDER], "named pipe",
+         command="render"),
+    Case("config-is-dev-zero", {"in.csv": GOOD}, ["in.csv", "--atlas-config", "/dev/zero", "--out", "o",
+                                                   *RENDER], "is not a regular file (a device)", command="render"),
+    Case("config-is-fifo", {"in.csv": GOOD, "c.toml": _fifo},
+         ["in.csv", "--atlas-config", "c.toml", "--out", "o", *RENDER], "named pipe", command="render"),
+    Case("config-symlink-to-dev-zero", {"in.csv": GOOD, "c.toml": _link_to("/dev/zero")},
+         ["in.csv", "--atlas-config", "c.toml", "--out", "o", *RENDER], "not a regular file", command="render"),
+    Case("config-too-big", {"in.csv": GOOD, "c.toml": b"# " + b"x" * (2 * 2**20) + b"\n"},
+         ["in.csv", "--atlas-config", "c.toml", "--out", "o", *RENDER], "at most 1 MB is read", command="render"),
+    Case("config-missing", {"in.csv": GOOD}, ["in.csv", "--atlas-config", "no.toml", "--out", "o", *RENDER],
+         "does not exist", command="render"),
+    Case("atlas-add-config-fifo", {"c.toml": _fifo}, ["add", "lobes", "--config", "c.toml"], "named pipe",
+         command="atlas"),
+    Case("atlas-add-config-dev-zero", {}, ["add", "lobes", "--config", "/dev/zero"], "not a regular file",
+         command="atlas"),
+    Case("annot-is-fifo", {"lh.a.annot": _fifo, "rh.a.annot": _annot},
+         ["add", "net", "--annot", "lh=lh.a.annot", "--annot", "rh=rh.a.annot"], "named pipe", command="atlas"),
+    Case("annot-is-dev-zero", {"rh.a.annot": _annot},
+         ["add", "net", "--annot", "lh=/dev/zero", "--annot", "rh=rh.a.annot"], "not a regular file",
+         command="atlas"),
+    Case("annot-is-folder", {"lh.a.annot": _folder({}), "rh.a.annot": _annot},
+         ["add", "net", "--annot", "lh=lh.a.annot", "--annot", "rh=rh.a.annot"], "is a folder", command="atlas"),
+    Case("annot-too-big", {"lh.a.annot": b"\0" * 4096, "rh.a.annot": _annot},
+         ["add", "net", "--annot", "lh=lh.a.annot", "--annot", "rh=rh.a.annot"], "at most",
+         command="atlas", patch={"brainpainter.files:LIMITS": {"label map": 1024}}),
+    Case("annot-garbage", {"lh.a.annot": GARBAGE, "rh.a.annot": _annot},
+         ["add", "net", "--annot", "lh=lh.a.annot", "--annot", "rh=rh.a.annot"], "cannot read",
+         command="atlas"),
+    # -- bounded parsing: workbook bombs -----------------------------------------------------------------------
+    Case("xlsx-dimension-claims-whole-sheet", {"in.xlsx": _dimension(b"A1:XFD1048576")}, ["in.xlsx"],
+         "claims 1048576 rows"),
+    Case("xlsx-dimension-beyond-excel", {"in.xlsx": _dimension(b"A1:ZZZZ2")}, ["in.xlsx"],
+         "as an Excel workbook"),
+    Case("xlsx-dimension-claims-2m-rows", {"in.xlsx": _dimension(b"A1:B2000000")}, ["in.xlsx"],
+         "claims 2000000 rows"),
+    Case("xlsx-far-row", {"in.xlsx": _far_row(5000)}, ["in.xlsx"], "more than 1000 rows",
+         patch={"brainpainter.readers:MAX_ROWS": 1000}),
+    Case("xlsx-cell-bomb", {"in.xlsx": _wide_row()}, ["in.xlsx"], "cells",
+         patch={"brainpainter.readers:MAX_CELLS": 500}),
+    Case("xlsx-formula-without-result", {"in.xlsx": _formula(False)}, ["in.xlsx"], "without a saved result"),
+    Case("render-xlsx-formula-without-result", {"in.xlsx": _formula(False)}, ["in.xlsx", "--out", "o", *RENDER],
+         "without a saved result", command="render"),
+    Case("xlsx-zip-bomb-small-limit", {"in.xlsx": _zip_bomb(2)}, ["in.xlsx"], "when unzipped",
+         env={"BRAINPAINTER_MAX_INPUT_MB": "0.1"}),
+    Case("csv-over-limit", {"in.csv": csv(HEADER.strip(), *[f"s{i},1,2" for i in range(2000)])}, ["in.csv"],
+         "to keep memory bounded", env={"BRAINPAINTER_MAX_INPUT_MB": "0.01"}),
+    # -- ambiguity is an error ------------------------------------------------------------------------------------
+    Case("lh-rh-image-names-differ-in-case",
+         {"lh.csv": csv("Image-name-unique,Left-insula", "sub-A,1"),
+          "rh.csv": csv("Image-name-unique,Right-insula", "sub-a,2")}, ["lh.csv", "rh.csv"],
+         "differ only in case"),
+    Case("render-lh-rh-image-names-differ-in-case",
+         {"lh.csv": csv("Image-name-unique,Left-insula", "sub-A,1"),
+          "rh.csv": csv("Image-name-unique,Right-insula", "sub-a,2")}, ["lh.csv", "rh.csv", "--out", "o", *RENDER],
+         "differ only in case", command="render"),
+    Case("names-collide-ignoring-case", {"in.csv": csv(HEADER.strip(), "a/B,1,2", "a_b,2,3")}, ["in.csv"],
+         "become the same file name"),
+    Case("names-collide-space", {"in.csv": csv(HEADER.strip(), "a b,1,2", "A_B,2,3")}, ["in.csv"],
+         "become the same file name"),
+    Case("render-names-collide-ignoring-case", {"in.csv": csv(HEADER.strip(), "x:Y,1,2", "X/y,2,3")},
+         ["in.csv", "--out", "o", *RENDER], "become the same file name", command="render"),
+    Case("two-image-columns", {"in.csv": csv("Image-name-unique,subject,Left-insula", "A,s1,1")}, ["in.csv"],
+         "could both hold the image names"),
+    Case("two-image-columns-id", {"in.csv": csv("subject,id,Left-insula", "A,1,1")}, ["in.csv"],
+         "could both hold the image names"),
+    Case("mixed-decimals-semicolon", {"in.csv": csv("Image-name-unique;Left-insula;Right-insula", "A;1,5;1.234")},
+         ["in.csv"], "are mixed"),
+    Case("mixed-decimals-tab", {"in.tsv": csv("Image-name-unique\tLeft-insula", "A\t1,5", "B\t2.5")}, ["in.tsv"],
+         "are mixed"),
+    Case("mixed-decimals-long", {"in.csv": csv("Structure;d", "L_insula;0,2", "R_insula;0.25")}, ["in.csv"],
+         "are mixed"),
+    Case("bidi-override-in-image-name", {"in.csv": csv(HEADER.strip(), "abc\u202edef,1,2")}, ["in.csv"],
+         "contains control characters"),
+    Case("bidi-isolate-in-column", {"in.csv": csv("Image-name-unique,Left-insula,x\u2066y", "A,1,2")}, ["in.csv"],
+         "contains control characters"),
+    Case("zero-width-space-in-name", {"in.csv": csv(HEADER.strip(), "sub\u200b1,1,2")}, ["in.csv"],
+         "contains control characters"),
+    Case("rtl-mark-in-column", {"in.csv": csv("Image-name-unique,Left-insula,Right-insula\u200f", "A,1,2")}, ["in.csv"],
+         "contains control characters"),
+    Case("bom-inside-name", {"in.csv": csv(HEADER.strip(), "a\ufeffb,1,2")}, ["in.csv"],
+         "contains control characters"),
+    Case("render-bidi-name", {"in.csv": csv(HEADER.strip(), "\u202egnp.exe,1,2")}, ["in.csv", "--out", "o", *RENDER],
+         "contains control characters", command="render"),
+    Case("swapped-annot-names", {"lh.a.annot": _annot, "rh.a.annot": _annot},
+         ["add", "net", "--annot", "lh=rh.a.annot", "--annot", "rh=lh.a.annot"], "swap the files",
+         command="atlas"),
+    Case("swapped-gifti-structure", {"a.label.gii": _gifti("CortexRight"), "b.label.gii": _gifti("CortexLeft")},
+         ["add", "net", "--annot", "lh=a.label.gii", "--annot", "rh=b.label.gii"], "AnatomicalStructurePrimary",
+         command="atlas"),
+    Case("group-name-with-bidi", {"c.toml": toml('[atlas]\nbase = "dk"\n[groups]\n"fr\u202eontal" = ["insula"]')},
+         ["add", "lobes", "--config", "c.toml"], "control characters", command="atlas"),
+    # -- finite numbers only, checked before anything is written -----------------------------------------------
+    _render(["--out", "o", "--vmin", "nan"], "is not a finite number", "vmin-nan"),
+    _render(["--out", "o", "--vmax", "inf"], "is not a finite number", "vmax-inf"),
+    _render(["--out", "o", "--center", "-inf"], "is not a finite number", "center-minus-inf"),
+    _render(["--out", "o", "--center", "nan"], "is not a finite number", "center-nan"),
+    _render(["--out", "o", "--glass-opacity", "nan"], "is not a finite number", "glass-opacity-nan"),
+    _render(["--out", "o", "--vmin", "1e999"], "is not a finite number", "vmin-overflow"),
+    _render(["--out", "o", "--views", "camera:nan:0"], "azimuth must be a finite number", "camera-azimuth-nan"),
+    _render(["--out", "o", "--views", "camera:inf:0"], "azimuth must be a finite number", "camera-azimuth-inf"),
+    _render(["--out", "o", "--views", "camera:0:nan"], "elevation must be in", "camera-elevation-nan"),
+    _render(["--out", "o", "--views", "camera:0:0:nan"], "zoom in", "camera-zoom-nan"),
+    _render(["--out", "o", "--views", "camera:0:0:inf"], "zoom in", "camera-zoom-inf"),
+    _render(["--out", "o", "--views", "camera:0:0:0"], "zoom in", "camera-zoom-zero"),
+    _render(["--out", "o", "--views", "camera:0:91"], "elevation must be in", "camera-elevation-91"),
+    _render(["--out", "o", "--size", "nanxnan"], "WIDTHxHEIGHT", "size-nan"),
+    _render(["--out", "o", "--size", "0x10"], "between 16 and 8192", "size-zero"),
+    _figure(["--out", "f.png", "--font-size", "nan"], "is not a finite number", "font-size-nan"),
+    _figure(["--out", "f.png", "--font-size", "inf"], "is not a finite number", "font-size-inf"),
+    _figure(["--out", "f.png", "--font-size", "0"], "font size must be", "font-size-zero"),
+    _figure(["--out", "f.png", "--font-size", "1e6"], "font size must be", "font-size-huge"),
+    _figure(["--out", "f.png", "--dpi", "nan"], "is not a finite number", "dpi-nan"),
+    _figure(["--out", "f.png", "--dpi", "5"], "dpi must be between", "dpi-tiny"),
+    _figure(["--out", "f.png", "--fig-width", "inf"], "is not a finite number", "fig-width-inf"),
+    _movie(["--out", "m.mp4", "--fps", "nan"], "is not a finite number", "fps-nan"),
+    _movie(["--out", "m.mp4", "--fps", "1000"], "fps must be between", "fps-huge"),
+    _movie(["--out", "m.mp4", "--orbit", "inf"], "is not a finite number", "orbit-inf"),
+    Case("check-vmin-nan", {"in.csv": GOOD}, ["in.csv", "--vmin", "nan"], "is not a finite number"),
+    # -- region-group configs --------------------------------------------------------------------------------------
+    Case("toml-atlas-is-string", {"in.csv": GOOD, "c.toml": toml('atlas = "dk"')},
+         ["in.csv", "--atlas-config", "c.toml", "--out", "o", *RENDER], "must be tables", command="render"),
+    Case("toml-groups-is-list", {"c.toml": toml('groups = [1, 2]\n[atlas]\nbase = "dk"')},
+         ["add", "lobes", "--config", "c.toml"], "must be tables", command="atlas"),
+    Case("toml-base-is-number", {"c.toml": toml('[atlas]\nbase = 3\n[groups]\nf = ["insula"]')},
+         ["add", "lobes", "--config", "c.toml"], "base must be an atlas name", command="atlas"),
+    Case("toml-name-is-table", {"in.csv": GOOD, "c.toml": toml('[atlas]\nbase = "dk"\nname = {a = 1}\n[groups]\n'
+                                                               'f = ["insula"]')},
+         ["in.csv", "--atlas-config", "c.toml", "--out", "o", *RENDER], "name must be a text", command="render"),
+    Case("toml-refers-to-itself", {"lobes.toml": toml('[atlas]\nbase = "lobes"\n[groups]\nf = ["insula"]')},
+         ["add", "lobes", "--config", "lobes.toml"], "is the atlas being defined", command="atlas"),
+    Case("toml-refers-to-itself-by-case", {"c.toml": toml('[atlas]\nbase = "LOBES"\n[groups]\nf = ["insula"]')},
+         ["add", "lobes", "--config", "c.toml"], "is the atlas being defined", command="atlas"),
+    Case("toml-invalid", {"c.toml": b"[atlas\nbase = 1\n"}, ["add", "lobes", "--config", "c.toml"],
+         "is not valid TOML", command="atlas"),
+    Case("toml-binary", {"c.toml": GARBAGE}, ["add", "lobes", "--config", "c.toml"], "is not valid TOML",
+         command="atlas"),
+    Case("toml-empty", {"c.toml": b""}, ["add", "lobes", "--config", "c.toml"], "needs base", command="atlas"),
+    Case("atlas-add-both-sources", {"c.toml": LOBES}, ["add", "lobes", "--config", "c.toml", "--annot", "x"],
+         "one of them", command="atlas"),
+    # -- accepted, with a stated warning -------------------------------------------------------------------------
+    Case("one-row-empty-column", {"in.csv": ONE_ROW_EMPTY}, ["in.csv", "--out", "o", *RENDER],
+         "drawn in the NaN colour", command="render", code=0),
+    Case("check-one-row-empty-column", {"in.csv": ONE_ROW_EMPTY}, ["in.csv"], "drawn in the NaN colour", code=0),
+    Case("render-misspelled-column", {"in.csv": csv("Image-name-unique,Left-insula,Left-insulaa", "A,1,2")},
+         ["in.csv", "--out", "o", *RENDER], "'Left-insulaa' (did you mean 'Left-insula'?)", command="render",
+         code=0),
+    Case("xlsx-formula-with-result", {"in.xlsx": _formula(True)}, ["in.xlsx"], "values 2..2", code=0),
+    Case("decimal-commas-only", {"in.csv": csv("Image-name-unique;Left-insula", "A;1,5")}, ["in.csv"],
+         "decimal commas read as decimal points", code=0),
+]
+
 
 # Hostile image names that are accepted: each becomes a safe file name inside the output folder.
 SAFE = {

@@ -143,6 +143,7 @@ def build_template(subject_dir: str | Path, out_dir: str | Path, *,
     from tqdm import tqdm
 
     atlases, surfaces = _check_args(atlases, surfaces, target_faces)
+    writer.check_out_dir(out_dir)  # before minutes of work: never replace what brainpainter did not make
     subject = sources.Subject(subject_dir, gcs_dir=gcs_dir)
     for label_set in atlases:
         subject.check_label_set(label_set)

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.files import check_input
 
 HEMIS = ("lh", "rh")
 
@@ -151,6 +152,7 @@ class Subject:
         path = self.path / "surf" / f"{hemi}.{surf}"
         if not path.is_file():
             raise _missing(path, "FreeSurfer surface")
+        check_input(path, "subject file")  # a regular file within the size limit
         try:
             vertices, faces = read_geometry(str(path))
         except Exception as exc:  # nibabel raises ValueError, struct.error, OSError...
@@ -211,7 +213,7 @@ class Subject:
         for annot in ANNOTATIONS.get(label_set, (label_set,)):
             path = self.path / "label" / f"{hemi}.{annot}.annot"
             if path.is_file():
-                return path
+                return check_input(path, "subject file")
         return None
 
     def gcs_path(self, hemi: str, label_set: str) -> Path | None:
@@ -326,6 +328,7 @@ class Subject:
         path = self.path / "mri" / "aseg.mgz"
         if not path.is_file():
             raise _missing(path, "subcortical segmentation")
+        check_input(path, "subject file")
         try:
             img = nib.load(str(path))
             data = np.asarray(img.dataobj)

@@ -172,8 +172,9 @@ def mesh_mask(mask: np.ndarray, vox2ras: np.ndarray, *, smooth_iterations: int =
 
 def build_structures(aseg: np.ndarray, vox2ras: np.ndarray, voxel_volume: float,
                      regions: tuple[Region, ...] | None = None, *, min_island: int = 8,
-                     target_fraction: float = 0.3, progress=None) -> list[Structure]:
-    """Mesh every structure of the aseg look-up table.
+                     target_fraction: float = 0.3, progress=None,
+                     source: str = "mri/aseg.mgz") -> list[Structure]:
+    """Mesh every structure of the aseg look-up table (or of any label volume's `regions`).
 
     Parameters
     ----------
@@ -189,6 +190,8 @@ def build_structures(aseg: np.ndarray, vox2ras: np.ndarray, voxel_volume: float,
         dropped (single stray voxels would show as specks).
     progress : callable, optional
         Called with each structure's name before it is meshed.
+    source : str
+        Name of the volume, for the error message.
     """
     from scipy import ndimage
 
@@ -197,8 +200,8 @@ def build_structures(aseg: np.ndarray, vox2ras: np.ndarray, voxel_volume: float,
     missing = [r.key for r in regions if r.index < 1 or bbox[r.index - 1] is None]
     if missing:
         raise BrainPainterError(
-            f"mri/aseg.mgz has no voxels for {missing}; expected all of the structures in "
-            "aseg.tsv (FreeSurferColorLUT indices), as recon-all's aseg has them"
+            f"{source} has no voxels for {missing}; expected all of the structures in "
+            "its look-up table (aseg.tsv: FreeSurferColorLUT indices, as recon-all's aseg has them)"
         )
     out = []
     for region in regions:

@@ -13,8 +13,6 @@ import contextlib
 import io
 import json
 import os
-import shutil
-import tempfile
 import zipfile
 from collections.abc import Iterator, Mapping
 from pathlib import Path
@@ -122,36 +120,44 @@ def find_license(subject_dir: str | Path) -> Path | None:
     return None
 
 
+TEMPLATE_HINT = ("give a new or empty folder with --out (an existing folder is replaced only when it is a "
+                 "template made by brainpainter)")
+
+
+def is_template_dir(path: Path) -> bool:
+    """Whether `path` holds a template made by this program (its manifest says ``brainpainter-template``)."""
+    from brainpainter.template import FORMAT
+
+    manifest = Path(path) / "manifest.json"
+    try:
+        if not manifest.is_file() or manifest.is_symlink() or manifest.stat().st_size > 64 * 2**20:
+            return False
+        data = json.loads(manifest.read_text(encoding="utf-8"))
+    except (OSError, ValueError, UnicodeDecodeError):
+        return False
+    return isinstance(data, dict) and data.get("format") == FORMAT
+
+
+def check_out_dir(out_dir: str | Path) -> None:
+    """Refuse an output that is not new, empty or a template made by brainpainter (before building)."""
+    from brainpainter.transaction import check_replaceable
+
+    check_replaceable(Path(out_dir).expanduser(), is_template_dir, "template folder",
+                      f"It is not a template; {TEMPLATE_HINT}.")
+
+
 @contextlib.contextmanager
 def staged_dir(out_dir: str | Path) -> Iterator[Path]:
     """Yield a hidden sibling directory; move it to `out_dir` if the block succeeds.
 
-    An existing `out_dir` is replaced only if it is a template (has a
-    ``manifest.json``) or empty. On any error the staging directory is deleted,
-    so a failed build leaves nothing behind.
+    An existing `out_dir` is replaced only if it is empty or a template made
+    by brainpainter (``manifest.json`` with ``"format": "brainpainter-template"``);
+    anything else is refused and left untouched. The parent folder is locked
+    while building; on any error the staging directory is deleted, so a failed
+    build leaves nothing behind.
     """
-    out_dir = Path(out_dir).expanduser().absolute()
-    if out_dir.exists():
-        if not out_dir.is_dir():
-            raise BrainPainterError(f"output {out_dir} exists and is not a directory; "
-                                    "give a new folder name")
-        if not (out_dir / "manifest.json").is_file() and any(out_dir.iterdir()):
-            raise BrainPainterError(
-                f"output folder {out_dir} exists, is not empty and is not a template; "
-                "give a new folder (an existing template folder is replaced)")
-    out_dir.parent.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.building-", dir=out_dir.parent))
-    try:
+    from brainpainter.transaction import replace_folder
+
+    with replace_folder(out_dir, is_template_dir, "template folder",
+                        f"It is not a template; {TEMPLATE_HINT}.") as stage:
         yield stage
-        os.chmod(stage, 0o755)
-        if out_dir.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old-", dir=out_dir.parent))
-            old.rmdir()
-            out_dir.rename(old)
-            stage.rename(out_dir)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            stage.rename(out_dir)
-    finally:
-        if stage.exists():
-            shutil.rmtree(stage, ignore_errors=True)
