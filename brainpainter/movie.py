@@ -753,8 +753,9 @@ def make_movie(
             else _GifWriter(tx.tmp, composer.size, float(fps), tuple(composer.bg.tolist()),
                             list(samples.values())))
         try:
-            for i, frame in frames(range(n)):  # encoded in order
-                writer.write(samples.pop(i) if i in samples else frame)
+            rest = frames([i for i in range(n) if i not in samples])  # rendered in parallel
+            for i in range(n):  # encoded in order
+                writer.write(samples.pop(i) if i in samples else next(rest)[1])
                 bar.update(1)
         except BaseException:
             writer.abort()
