@@ -11,14 +11,17 @@ meshes (the *base*), kept in a label-set overlay folder (``labels.json`` +
 per hemisphere for the Yeo networks on fsaverage.
 
 Faces: a face whose three vertices share a label gets that label. A face whose
-vertices differ is split when the overlay is loaded (:func:`split_faces`,
-"marching triangles"): the boundary runs through the midpoints of its
-label-crossing edges (and its centroid when all three labels differ). An
-edge's midpoint is shared by both faces on that edge, so the mesh stays
-closed, without T-junctions. The template builder's triangle-majority rule
-(one whole face per label) would snap new boundaries to the long interior
-triangles of the decimated mesh, giving a visible sawtooth at large image
-sizes; splitting follows the boundary as closely as the vertices allow.
+vertices differ is split when the mesh is loaded (:func:`split_mesh`,
+"marching triangles"): the boundary crosses each label-crossing edge once
+(and runs through the face's centroid when all three labels differ). The
+crossing point is shared by both faces on that edge, so the mesh stays
+closed, without T-junctions. Where on the edge it lies comes from
+:func:`smooth_crossings`: the zero of the difference of the two labels'
+indicator functions after a few steps of mesh smoothing, i.e. the boundary
+is the iso-line of a smoothed label map, not the zigzag through edge
+midpoints (or the staircase of whole triangles) that vertex labels alone
+give. The same code splits the built-in atlases (their template files carry
+``vertex_label``) and the label sets added from label maps (overlays).
 
 Which base: all label-set meshes of a template have about the same vertex
 count, but each keeps its own region boundaries at full resolution. The base
@@ -205,7 +208,7 @@ def source_vertex_count(template: Template, hemi: str) -> int:
         elif "n_source_faces" in entry:
             counts.setdefault(int(entry["n_source_faces"]) // 2 + 2, name)
         else:
-            sv = template.cortex(name, hemi).source_vertex
+            sv = template.base_cortex(name, hemi).source_vertex
             if np.array_equal(sv, np.arange(len(sv))):
                 counts.setdefault(len(sv), name)
     if len(counts) != 1:
@@ -259,7 +262,8 @@ def labels_at_vertices(source_label: np.ndarray, base: CortexMesh) -> np.ndarray
     return out.astype(np.int16)
 
 
-def split_faces(faces: np.ndarray, vertex_label: np.ndarray) -> tuple[
+def split_faces(faces: np.ndarray, vertex_label: np.ndarray,
+                crossing: np.ndarray | None = None) -> tuple[
         np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Split faces whose vertices carry different labels ("marching triangles").
 
@@ -267,6 +271,10 @@ def split_faces(faces: np.ndarray, vertex_label: np.ndarray) -> tuple[
     ----------
     faces : ndarray of int, shape (m, 3)
     vertex_label : ndarray of int, shape (n,)
+    crossing : ndarray of float, shape (n_edges,), optional
+        Where the boundary crosses each label-crossing edge, as a fraction of
+        the way from its lower-numbered to its higher-numbered vertex, for the
+        edges in the order of :func:`crossing_edges`. Default 0.5 (midpoints).
 
     Returns
     -------
@@ -274,18 +282,19 @@ def split_faces(faces: np.ndarray, vertex_label: np.ndarray) -> tuple[
         Faces with one label each; indices ``>= n`` are new vertices. Winding kept.
     face_label : ndarray of int64, shape (m2,)
     parents : ndarray of int64, shape (k, 3)
-        For new vertex ``n + i``: the vertices it lies between (an edge midpoint
-        repeats its second vertex).
+        For new vertex ``n + i``: the vertices it lies between (an edge
+        crossing repeats its second vertex).
     weights : ndarray of float64, shape (k, 3)
-        Interpolation weights over `parents` (``0.5, 0.5, 0`` or ``1/3`` each).
+        Interpolation weights over `parents` (``1 - t, t, 0`` on an edge,
+        ``1/3`` each at a centroid).
 
     Notes
     -----
     A face with two labels, rotated to ``(o, a, b)`` with ``o`` the odd one,
     becomes ``(o, m_oa, m_ob)`` and the quad ``(m_oa, a, b, m_ob)``; a face
     with three labels becomes three quads around its centroid. Only
-    label-crossing edges get a midpoint, and both faces on such an edge are
-    split, so no T-junction appears.
+    label-crossing edges get a new vertex, and both faces on such an edge
+    are split, so no T-junction appears.
     """
     faces = np.asarray(faces, dtype=np.int64)
     vl = np.asarray(vertex_label, dtype=np.int64)
@@ -318,32 +327,131 @@ def split_faces(faces: np.ndarray, vertex_label: np.ndarray) -> tuple[
         np.stack([r, m_ca, g], 1), np.stack([r, g, m_bc], 1),
     ]).reshape(-1, 3)
     out_label = np.concatenate([lab[pure, 0], vl[o], vl[a], vl[a], vl[p], vl[p], vl[q], vl[q], vl[r], vl[r]])
+    t = np.full(len(uniq), 0.5) if crossing is None else np.asarray(crossing, dtype=np.float64)
+    if t.shape != (len(uniq),):
+        raise ValueError(f"crossing has shape {t.shape}; expected ({len(uniq)},), one per crossing edge")
     parents = np.concatenate([np.stack([uniq // n, uniq % n, uniq % n], 1),
                               np.stack([p, q, r], 1)]).reshape(-1, 3)
-    weights = np.concatenate([np.tile([0.5, 0.5, 0.0], (len(uniq), 1)),
+    weights = np.concatenate([np.stack([1.0 - t, t, np.zeros_like(t)], 1),
                               np.full((k3, 3), 1.0 / 3.0)]).reshape(-1, 3)
     return out_faces, out_label, parents, weights
 
 
+def crossing_edges(faces: np.ndarray, vertex_label: np.ndarray) -> np.ndarray:
+    """Edges whose two vertices carry different labels, shape (n_edges, 2), sorted, lower vertex first."""
+    faces = np.asarray(faces, dtype=np.int64)
+    vl = np.asarray(vertex_label, dtype=np.int64)
+    n = len(vl)
+    e = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    e = e[vl[e[:, 0]] != vl[e[:, 1]]]
+    uniq = np.unique(e[:, 0] * n + e[:, 1])
+    return np.stack([uniq // n, uniq % n], 1)
+
+
+#: Smoothing steps of the label indicators that place boundary crossings (:func:`smooth_crossings`).
+CROSSING_SMOOTHING = 3
+#: Crossings stay this far (fraction of the edge) from either end, so no face degenerates.
+CROSSING_CLAMP = 0.05
+
+
+def smooth_crossings(faces: np.ndarray, vertex_label: np.ndarray,
+                     steps: int = CROSSING_SMOOTHING) -> np.ndarray:
+    """Where a smooth label boundary crosses each label-crossing edge.
+
+    For an edge ``(u, v)`` with labels ``A`` at ``u`` and ``B`` at ``v``, the
+    indicator functions of ``A`` and ``B`` (1 on the label's vertices, 0
+    elsewhere) are smoothed by `steps` steps of neighbour averaging over the
+    mesh; the boundary crosses the edge where their difference, linear along
+    the edge, is zero. This is the iso-line of a blurred label map: it keeps
+    the label of every vertex but no longer zigzags from edge midpoint to
+    edge midpoint. Where both ends fall on one side (a vertex whose label
+    its neighbourhood outvotes: a spike of a noisy label map), the crossing
+    goes as close to the outvoted vertex as allowed.
+
+    Parameters
+    ----------
+    faces : ndarray of int, shape (m, 3)
+    vertex_label : ndarray of int, shape (n,)
+    steps : int
+        Smoothing steps (each reaches one ring of neighbours further); 0 gives midpoints.
+
+    Returns
+    -------
+    t : ndarray of float64, shape (n_edges,)
+        For the edges of :func:`crossing_edges`: fraction of the way from the
+        lower- to the higher-numbered vertex, within
+        ``[CROSSING_CLAMP, 1 - CROSSING_CLAMP]``.
+    """
+    from scipy import sparse
+
+    edges = crossing_edges(faces, vertex_label)
+    if steps <= 0 or len(edges) == 0:
+        return np.full(len(edges), 0.5)
+    faces = np.asarray(faces, dtype=np.int64)
+    vl = np.asarray(vertex_label, dtype=np.int64)
+    n = len(vl)
+    ij = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    rows = np.concatenate([ij[:, 0], ij[:, 1], np.arange(n)])
+    cols = np.concatenate([ij[:, 1], ij[:, 0], np.arange(n)])
+    adj = sparse.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+    adj.data[:] = 1.0  # duplicate edges summed: back to 0/1
+    step = sparse.diags(1.0 / np.asarray(adj.sum(axis=1)).ravel()) @ adj
+    ends = np.unique(edges)
+    reach = step[ends]
+    for _ in range(steps - 1):
+        reach = reach @ step
+    names, compact = np.unique(vl, return_inverse=True)
+    onehot = sparse.csr_matrix((np.ones(n), (np.arange(n), compact)), shape=(n, len(names)))
+    smooth = (reach @ onehot).tocsr()  # smoothed indicators at the edge ends, shape (len(ends), n_labels)
+    row = np.searchsorted(ends, edges)
+    la, lb = compact[edges[:, 0]], compact[edges[:, 1]]
+
+    def diff(r):
+        return (np.asarray(smooth[r, la]).ravel() - np.asarray(smooth[r, lb]).ravel())
+
+    du, dv = diff(row[:, 0]), diff(row[:, 1])  # A - B at u (expected > 0) and at v (< 0)
+    ok = (du > 0) & (dv < 0)
+    t = np.where(ok, du / np.where(ok, du - dv, 1.0), 0.5)
+    # Both ends look like B after smoothing: u is a lone spike of A, so the border hugs u
+    # (and hugs v in the mirror case); the spike shrinks instead of showing as a tooth.
+    t = np.where(~ok & (du <= 0) & (dv < 0), 0.0, np.where(~ok & (du > 0) & (dv >= 0), 1.0, t))
+    return t.clip(CROSSING_CLAMP, 1.0 - CROSSING_CLAMP)
+
+
 def split_mesh(base: CortexMesh, vertex_label: np.ndarray, labels: str,
-               names: tuple[str, ...]) -> CortexMesh:
-    """`base` with faces labelled (and split where needed) by `vertex_label`, all surfaces."""
-    faces, face_label, parents, weights = split_faces(base.faces, vertex_label)
-    vertices = {}
-    for surface, v in base.vertices.items():
-        added = np.einsum("kj,kjd->kd", weights, v[parents].astype(np.float64))
-        vertices[surface] = np.concatenate([v, added]).astype(np.float32)
+               names: tuple[str, ...], crossing: np.ndarray | None = None) -> CortexMesh:
+    """`base` with faces labelled (and split where needed) by `vertex_label`, all surfaces.
+
+    Boundary crossings are `crossing` (stored ``boundary_t``, one per edge of
+    :func:`crossing_edges`, as :func:`smooth_crossings` computed them when
+    the file was written) or, when not given or not matching, computed now
+    with :func:`smooth_crossings`. Per-vertex arrays (positions of every
+    surface, `sulc`) are interpolated at the new vertices.
+    """
+    n_edges = len(crossing_edges(base.faces, vertex_label)) if crossing is not None else -1
+    if crossing is not None and np.shape(crossing) == (n_edges,):
+        t = np.asarray(crossing, dtype=np.float64)
+    else:
+        t = smooth_crossings(base.faces, vertex_label)
+    faces, face_label, parents, weights = split_faces(base.faces, vertex_label, t)
+
+    def extend(values: np.ndarray) -> np.ndarray:
+        v = np.asarray(values)
+        added = np.einsum("kj,kj...->k...", weights, v[parents].astype(np.float64))
+        return np.concatenate([v, added]).astype(np.float32)
+
     source = np.concatenate([base.source_vertex, np.full(len(parents), -1, dtype=np.int32)]).astype(np.int32)
     return CortexMesh(hemi=base.hemi, labels=labels, faces=faces.astype(np.int32),
-                      face_label=face_label.astype(np.int16), label_names=names, vertices=vertices,
-                      source_vertex=source)
+                      face_label=face_label.astype(np.int16), label_names=names,
+                      vertices={s: extend(v) for s, v in base.vertices.items()},
+                      source_vertex=source, sulc=None if base.sulc is None else extend(base.sulc))
 
 
 def _straddle_area(template: Template, base: str, maps: dict[str, LabelMap]) -> float:
     """Pial area of `base` faces whose three vertices do not share one label."""
     total = 0.0
     for hemi, m in maps.items():
-        cm = template.cortex(base, hemi)
+        cm = template.base_cortex(base, hemi)
         lab = m.labels[cm.source_vertex][cm.faces]
         mixed = ~((lab[:, 0] == lab[:, 1]) & (lab[:, 1] == lab[:, 2]))
         v = cm.vertices.get("pial", next(iter(cm.vertices.values()))).astype(np.float64)
@@ -438,7 +546,7 @@ def build_label_set(name: str, template: Template, maps: dict[str, LabelMap],
     too_small: dict[str, list[str]] = {}
     for hemi in HEMIS:
         m = maps[hemi]
-        cm = template.cortex(base, hemi)
+        cm = template.base_cortex(base, hemi)
         if len(m.names) > np.iinfo(np.int16).max:
             raise BrainPainterError(f"{m.source} has {len(m.names)} colour-table entries; at most 32767")
         vertex_label = m.labels[cm.source_vertex].astype(np.int16)
@@ -482,12 +590,13 @@ def write_label_set(folder: Path, label_set: LabelSet, template: Template, *,
             if n not in entry["regions"]:
                 entry["regions"].append(n)
         file = f"cortex-{hemi}-{label_set.name}.npz"
-        base = template.cortex(label_set.base, hemi)
+        base = template.base_cortex(label_set.base, hemi)
         if per_source_vertex and hl.source_label is not None:
             save_npz(folder / file, {"source_label": hl.source_label})
             guard = {}
         else:
-            save_npz(folder / file, {"vertex_label": hl.vertex_label})
+            crossing = smooth_crossings(base.faces, hl.vertex_label).astype(np.float32)
+            save_npz(folder / file, {"vertex_label": hl.vertex_label, "boundary_t": crossing})
             guard = {"base_faces_sha256": faces_digest(base.faces)}
         entry["cortex"][hemi] = {
             "file": file, "base": label_set.base, **guard,

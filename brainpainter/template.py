@@ -16,6 +16,19 @@ neighbouring regions share their boundary vertices exactly. The pial, white
 and inflated surfaces share one topology (``faces``) and differ in vertex
 positions; inflated positions are already offset so hemispheres never overlap.
 
+Optional cortex arrays (a reader that does not know them ignores them):
+``vertex_label`` (int16, one per vertex: the label of the full-resolution
+vertex, index into the names) makes :meth:`Template.cortex` split the faces
+that straddle a region boundary when loading, so borders follow the label
+boundary instead of the triangles (:func:`brainpainter.labelset.split_mesh`,
+the same code as for label-set overlays); ``face_label`` stays the
+whole-triangle labelling for older readers; ``boundary_t`` (float32, one
+per label-crossing edge) caches where the border crosses each edge
+(:func:`brainpainter.labelset.smooth_crossings`), so loading only splits.
+``sulc`` (float32, one per
+vertex) is FreeSurfer's sulcal depth (``surf/?h.sulc``, mm, positive in
+sulci) for shading.
+
 Label-set overlays
 ------------------
 A custom or plugin atlas brings its own label set in a folder beside its
@@ -77,7 +90,10 @@ class CortexMesh:
         One entry per surface (``"pial"``, ``"white"``, ``"inflated"``).
     source_vertex : ndarray of int32, shape (n_vertices,)
         Index of each vertex in the full-resolution FreeSurfer surface; -1 for
-        a vertex added on an edge or face by a label-set overlay.
+        a vertex added on an edge or face where a region boundary was split.
+    sulc : ndarray of float32, shape (n_vertices,), or None
+        Sulcal depth (FreeSurfer ``?h.sulc``, mm; positive in sulci, negative
+        on gyral crowns), when the template has it.
     """
 
     hemi: str
@@ -87,6 +103,7 @@ class CortexMesh:
     label_names: tuple[str, ...]
     vertices: dict[str, np.ndarray]
     source_vertex: np.ndarray
+    sulc: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -134,23 +151,56 @@ class Template:
                 self._cache[file] = {k: z[k] for k in z.files}
         return self._cache[file]
 
-    def cortex(self, labels: str, hemi: str) -> CortexMesh:
-        """The hemisphere `hemi` split by label set `labels`."""
+    def _entry(self, labels: str, hemi: str) -> dict:
         if labels not in self.manifest["labels"]:
             raise BrainPainterError(
                 f"template {self.name!r} has no label set {labels!r}; it has {self.label_sets}. "
                 "Build the template with that atlas (brainpainter template build --atlas ...)."
             )
-        if hemi not in self.manifest["labels"][labels].get("cortex", {}):
-            # a template without this hemisphere's cortex (made of volume labels only): an empty mesh
+        return self.manifest["labels"][labels]["cortex"][hemi]
+
+    def base_cortex(self, labels: str, hemi: str) -> CortexMesh:
+        """The stored mesh of one of the template's own label sets, faces not split.
+
+        Its vertices are all vertices of the full-resolution surface
+        (`source_vertex` >= 0) and its faces are labelled whole (majority of
+        the vertex labels): the mesh that label-set overlays label.
+        """
+        entry = self._entry(labels, hemi)
+        if "base" in entry:
+            raise BrainPainterError(f"label set {labels!r} of template {self.name!r} is an overlay on "
+                                    f"{entry['base']!r}, not a mesh of its own")
+        z = self._npz(entry["file"])
+        return CortexMesh(
+            hemi=hemi,
+            labels=labels,
+            faces=z["faces"],
+            face_label=z["face_label"],
+            label_names=tuple(entry["names"]),
+            vertices={s: z[s] for s in self.surfaces if s in z},
+            source_vertex=z["source_vertex"],
+            sulc=z.get("sulc"),
+        )
+
+    def cortex(self, labels: str, hemi: str) -> CortexMesh:
+        """The hemisphere `hemi` split by label set `labels`.
+
+        Where per-vertex labels are known (``vertex_label`` in the template
+        file, or a per-vertex overlay), faces that straddle a region boundary
+        are split so that the border follows it (computed once per template
+        object). A template without this hemisphere's cortex (made of volume
+        labels only) gives an empty mesh.
+        """
+        label_set = self.manifest["labels"].get(labels)
+        if label_set is not None and hemi not in label_set.get("cortex", {}):
             return CortexMesh(hemi=hemi, labels=labels, faces=np.zeros((0, 3), np.int32),
                               face_label=np.zeros(0, np.int16), label_names=(),
                               vertices={s: np.zeros((0, 3), np.float32) for s in self.surfaces},
                               source_vertex=np.zeros(0, np.int32))
-        entry = self.manifest["labels"][labels]["cortex"][hemi]
+        entry = self._entry(labels, hemi)
         z = self._npz(entry["file"])
         if "base" in entry:  # an overlay: labels for the vertices or faces of one of our own meshes
-            base = self.cortex(entry["base"], hemi)
+            base = self.base_cortex(entry["base"], hemi)
             if "source_label" in z:  # one label per full-resolution vertex: fits any rebuild of the base
                 return self._source_labelled(base, z["source_label"], labels, entry)
             per_vertex = "vertex_label" in z
@@ -166,22 +216,18 @@ class Template:
             if not per_vertex:
                 return CortexMesh(hemi=hemi, labels=labels, faces=base.faces, face_label=z["face_label"],
                                   label_names=tuple(entry["names"]), vertices=base.vertices,
-                                  source_vertex=base.source_vertex)
-            from brainpainter.labelset import split_mesh
+                                  source_vertex=base.source_vertex, sulc=base.sulc)
+        else:
+            base = self.base_cortex(labels, hemi)
+            if "vertex_label" not in z:
+                return base
+        from brainpainter.labelset import split_mesh
 
-            key = f"{entry['file']}#{labels}"  # computed once per template object
-            if key not in self._cache:
-                self._cache[key] = split_mesh(base, z["vertex_label"], labels, tuple(entry["names"]))
-            return self._cache[key]
-        return CortexMesh(
-            hemi=hemi,
-            labels=labels,
-            faces=z["faces"],
-            face_label=z["face_label"],
-            label_names=tuple(entry["names"]),
-            vertices={s: z[s] for s in self.surfaces if s in z},
-            source_vertex=z["source_vertex"],
-        )
+        key = f"{entry['file']}#{labels}"  # computed once per template object
+        if key not in self._cache:
+            self._cache[key] = split_mesh(base, z["vertex_label"], labels, tuple(entry["names"]),
+                                          z.get("boundary_t"))
+        return self._cache[key]
 
     def _source_labelled(self, base: CortexMesh, source_label: np.ndarray, labels: str,
                          entry: dict) -> CortexMesh:

@@ -145,7 +145,7 @@ def test_overlay_mesh_is_closed_and_keeps_the_base_vertices():
     entry = json.loads((DATA / "labels.json").read_text())["labels"]["yeo7"]["cortex"]
     for hemi in ("lh", "rh"):
         cm = tpl.cortex("yeo7", hemi)
-        base = tpl.cortex(entry[hemi]["base"], hemi)
+        base = tpl.base_cortex(entry[hemi]["base"], hemi)
         n = len(base.source_vertex)
         assert open_edge_count(cm.faces) == 0
         assert np.array_equal(cm.vertices["pial"][:n], base.vertices["pial"])

@@ -168,6 +168,7 @@ def build_template(subject_dir: str | Path, out_dir: str | Path, *,
                         f"{subject.path / 'surf' / f'{hemi}.{s}'} does not share the triangles "
                         f"of {hemi}.pial; all surfaces of a hemisphere must come from one recon-all run")
             bar.update()
+        sulc = {h: subject.sulc(h) for h in HEMIS}
         offsets = {h: {} for h in HEMIS}
         if "inflated" in surfaces:
             off = cortex.inflated_offsets(surf["lh"]["inflated"][0], surf["rh"]["inflated"][0],
@@ -187,7 +188,7 @@ def build_template(subject_dir: str | Path, out_dir: str | Path, *,
                 step(f"{label_set} {hemi}: split and decimate")
                 meshes[label_set][hemi] = cortex.build_labelled_surface(
                     surf[hemi], annot.labels, annot.names, annot.ctab, target_faces,
-                    offsets=offsets[hemi])
+                    offsets=offsets[hemi], sulc=sulc[hemi])
                 bar.update()
 
         # 3. subcortical ----------------------------------------------------------
@@ -244,6 +245,10 @@ def _write(stage: Path, *, name, subject, version, surfaces, target_faces, meshe
             arrays = {"faces": m.faces, "face_label": m.face_label}
             arrays.update({s: m.vertices[s] for s in surfaces})
             arrays["source_vertex"] = m.source_vertex
+            arrays["vertex_label"] = m.vertex_label
+            arrays["boundary_t"] = m.boundary_t
+            if m.sulc is not None:
+                arrays["sulc"] = m.sulc
             writer.save_npz(stage / file, arrays)
             for s in surfaces:
                 all_vertices[s].append(m.vertices[s])
@@ -256,6 +261,8 @@ def _write(stage: Path, *, name, subject, version, surfaces, target_faces, meshe
                 "n_faces": len(m.faces),
                 "n_source_faces": m.n_source_faces,
                 "open_edges": cortex.open_edge_count(m.faces),
+                "self_intersecting_faces": {s: {"decimated": b, "template": a}
+                                            for s, (b, a) in (m.self_intersections or {}).items()},
                 "region_faces": {n: int(counts[i]) for i, n in enumerate(m.names) if counts[i]},
             }
             totals["cortex"] += len(m.faces)
@@ -300,6 +307,9 @@ def _write(stage: Path, *, name, subject, version, surfaces, target_faces, meshe
                     "volume_error": s.volume_mm3 / s.voxel_volume_mm3 - 1.0,
                     "smoothed_volume_error": s.smoothed_volume_mm3 / s.voxel_volume_mm3 - 1.0,
                     "watertight": s.watertight,
+                    "blur_voxels": s.blur,
+                    "self_intersecting_faces": {"decimated": s.self_intersections[0],
+                                                "template": s.self_intersections[1]},
                 }
                 for s in structures
             ],

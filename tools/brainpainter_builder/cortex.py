@@ -19,6 +19,23 @@ vertices, so each surviving vertex is an original FreeSurfer vertex; its
 index (carried through MeshLab as vertex quality) is ``source_vertex``, and
 the white and inflated surfaces take the same topology with their own
 positions at those indices. All of this is checked after every decimation.
+
+Smooth borders
+--------------
+Faces whose three vertices do not share one label (the faces a region
+boundary runs through) are locked as well, so they reach the template
+unchanged, and the template stores every vertex's label (``vertex_label``)
+beside the whole-face labels. When the template is loaded, core splits
+those faces along a smoothed boundary
+(:func:`brainpainter.labelset.split_mesh`, the same code that splits
+custom label sets), so borders no longer step along triangles.
+
+Folds
+-----
+FreeSurfer's fsaverage pial and white surfaces cross themselves in a few
+places; after decimation every surface is freed of self-intersections by
+local smoothing (:func:`.clean.remove_self_intersections`), which moves a
+few hundred vertices by up to a few millimetres and changes no face.
 """
 
 from __future__ import annotations
@@ -52,6 +69,16 @@ class LabelledSurface:
         Index of each vertex in the full-resolution surface.
     n_source_faces : int
         Face count before decimation.
+    vertex_label : ndarray of int16, shape (n_vertices,)
+        Index into `names` per vertex (the full-resolution vertex's label).
+    boundary_t : ndarray of float32, shape (n_crossing_edges,)
+        Where the border crosses each label-crossing edge
+        (:func:`brainpainter.labelset.smooth_crossings`), stored so that
+        loading the template only has to split.
+    sulc : ndarray of float32, shape (n_vertices,), or None
+        Sulcal depth per vertex, when given.
+    self_intersections : dict of str to (int, int)
+        Per surface: self-intersecting faces before and after cleaning.
     """
 
     faces: np.ndarray
@@ -61,6 +88,10 @@ class LabelledSurface:
     vertices: dict[str, np.ndarray]
     source_vertex: np.ndarray
     n_source_faces: int
+    vertex_label: np.ndarray
+    boundary_t: np.ndarray
+    sulc: np.ndarray | None = None
+    self_intersections: dict[str, tuple[int, int]] | None = None
 
 
 def assign_face_labels(faces: np.ndarray, vertex_labels: np.ndarray) -> np.ndarray:
@@ -113,7 +144,8 @@ def open_edge_count(faces: np.ndarray) -> int:
 
 
 def decimate(vertices: np.ndarray, faces: np.ndarray, face_label: np.ndarray,
-             target_faces: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+             target_faces: int, vertex_labels: np.ndarray | None = None) -> tuple[
+                 np.ndarray, np.ndarray, np.ndarray]:
     """Quadric decimation that keeps every region boundary vertex in place.
 
     Parameters
@@ -127,6 +159,8 @@ def decimate(vertices: np.ndarray, faces: np.ndarray, face_label: np.ndarray,
         Wanted face count of the whole mesh. Faces along region boundaries are
         kept, so the result can have more faces than asked when boundaries
         alone need them.
+    vertex_labels : ndarray of int, shape (n_vertices,), optional
+        Per-vertex labels: faces whose vertices differ are kept unchanged too.
 
     Returns
     -------
@@ -148,6 +182,9 @@ def decimate(vertices: np.ndarray, faces: np.ndarray, face_label: np.ndarray,
     # Faces along a boundary edge (two boundary vertices) are left out of the
     # selection; every boundary vertex lies on such an edge, so it is locked.
     locked = np.count_nonzero(boundary[faces], axis=1) >= 2
+    if vertex_labels is not None:
+        lab = np.asarray(vertex_labels, dtype=np.int64)[faces]
+        locked |= (lab[:, 0] != lab[:, 1]) | (lab[:, 1] != lab[:, 2])
     quality = face_label.astype(np.float64) + np.where(locked, _LOCK, 0.0)
     ms = pymeshlab.MeshSet()
     ms.add_mesh(pymeshlab.Mesh(
@@ -198,7 +235,9 @@ def canonical_faces(faces: np.ndarray, face_label: np.ndarray) -> tuple[np.ndarr
 def build_labelled_surface(surfaces: dict[str, tuple[np.ndarray, np.ndarray]],
                            vertex_labels: np.ndarray, names: tuple[str, ...], ctab: np.ndarray,
                            target_faces: int | None,
-                           offsets: dict[str, np.ndarray] | None = None) -> LabelledSurface:
+                           offsets: dict[str, np.ndarray] | None = None,
+                           sulc: np.ndarray | None = None,
+                           clean: bool = True) -> LabelledSurface:
     """Split one hemisphere by one label set and decimate it on the pial surface.
 
     Parameters
@@ -214,19 +253,31 @@ def build_labelled_surface(surfaces: dict[str, tuple[np.ndarray, np.ndarray]],
         Faces wanted per hemisphere; None keeps full resolution.
     offsets : dict of str to ndarray, shape (3,), optional
         Translation added to a surface (the inflated hemisphere offset).
+    sulc : ndarray of float, shape (n,), optional
+        Sulcal depth per full-resolution vertex (``surf/?h.sulc``).
+    clean : bool
+        Remove self-intersections of every surface (:mod:`.clean`).
     """
+    from brainpainter.labelset import smooth_crossings
+    from brainpainter_builder.clean import remove_self_intersections
+
     pial_v, faces = surfaces["pial"]
+    vertex_labels = np.asarray(vertex_labels)
     labels = assign_face_labels(faces, vertex_labels)
     if target_faces is not None and target_faces < len(faces):
-        out_faces, out_label, source = decimate(pial_v, faces, labels, target_faces)
+        out_faces, out_label, source = decimate(pial_v, faces, labels, target_faces, vertex_labels)
     else:
         out_faces, out_label, source = faces, labels, np.arange(len(pial_v), dtype=np.int64)
     out_faces, out_label = canonical_faces(out_faces, out_label)
     offsets = offsets or {}
-    vertices = {
-        name: (v[source] + np.asarray(offsets.get(name, 0.0), dtype=np.float64)).astype(np.float32)
-        for name, (v, _) in surfaces.items()
-    }
+    vertices = {}
+    crossings = {}
+    for name, (v, _) in surfaces.items():
+        pos = v[source].astype(np.float64)
+        if clean:
+            cleaned = remove_self_intersections(pos, out_faces)
+            pos, crossings[name] = cleaned.vertices, (cleaned.before, cleaned.after)
+        vertices[name] = (pos + np.asarray(offsets.get(name, 0.0), dtype=np.float64)).astype(np.float32)
     return LabelledSurface(
         faces=out_faces.astype(np.int32),
         face_label=out_label.astype(np.int16),
@@ -235,6 +286,10 @@ def build_labelled_surface(surfaces: dict[str, tuple[np.ndarray, np.ndarray]],
         vertices=vertices,
         source_vertex=source.astype(np.int32),
         n_source_faces=len(faces),
+        vertex_label=vertex_labels[source].astype(np.int16),
+        boundary_t=smooth_crossings(out_faces, vertex_labels[source]).astype(np.float32),
+        sulc=None if sulc is None else np.asarray(sulc, dtype=np.float32)[source],
+        self_intersections=crossings if clean else None,
     )
 
 

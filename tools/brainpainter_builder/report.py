@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from brainpainter.template import SURFACES, Template, load_template
+from brainpainter_builder.clean import count_self_intersections
 
 #: Largest allowed |mesh volume / voxel volume - 1| of a subcortical structure.
 VOLUME_TOLERANCE = 0.05
@@ -58,18 +59,25 @@ def _cortex_checks(tpl: Template) -> tuple[dict, list[str]]:
             bad_shape = [s for s in SURFACES if s in mesh.vertices and mesh.vertices[s].shape != (n_v, 3)]
             missing_surf = [s for s in tpl.surfaces if s not in mesh.vertices]
             opened = _open_edges(mesh.faces)
+            crossing = entry["cortex"][hemi].get("self_intersecting_faces", {})
             out[labels][hemi] = {
                 "n_vertices": n_v,
-                "n_faces": len(mesh.faces),
+                "n_faces": len(tpl.base_cortex(labels, hemi).faces) if "base" not in entry["cortex"][hemi]
+                else len(mesh.faces),
+                "n_faces_drawn": len(mesh.faces),
                 "n_regions": len(wanted) - len(empty),
                 "regions_without_faces": empty,
                 "open_edges": {s: opened for s in tpl.surfaces if s in mesh.vertices},
+                "self_intersecting_faces": crossing,
             }
             where = f"cortex {labels}/{hemi}"
             if empty:
                 problems.append(f"{where}: regions without faces {empty}")
             if opened:
                 problems.append(f"{where}: {opened} open boundary edges (expected 0)")
+            folded = {s: c["template"] for s, c in crossing.items() if c.get("template")}
+            if folded:
+                problems.append(f"{where}: self-intersecting faces {folded} (expected 0)")
             if missing_surf or bad_shape:
                 problems.append(f"{where}: surfaces missing {missing_surf} or misshapen {bad_shape}")
             if len(mesh.faces) and (mesh.faces.min() < 0 or mesh.faces.max() >= n_v):
@@ -97,6 +105,10 @@ def _subcortical_checks(tpl: Template) -> tuple[dict, list[str]]:
         ref = s.get("voxel_volume_mm3")
         if ref and abs(s["volume_mm3"] / ref - 1.0) > VOLUME_TOLERANCE:
             off.append(f"{s['name']} ({s['volume_mm3'] / ref - 1.0:+.1%})")
+    folded = {s["name"]: s["self_intersecting_faces"]["template"] for s in tpl.manifest["subcortical"][
+        "structures"] if s.get("self_intersecting_faces", {}).get("template")}
+    if folded:
+        problems.append(f"subcortical: self-intersecting faces {folded} (expected 0)")
     if off:
         problems.append(f"subcortical: mesh volume off the voxel volume by more than "
                         f"{VOLUME_TOLERANCE:.0%}: {off}")
@@ -105,6 +117,10 @@ def _subcortical_checks(tpl: Template) -> tuple[dict, list[str]]:
         "n_faces": len(sub.faces),
         "structures_without_faces": empty,
         "open_edges": _open_edges(sub.faces),
+        "self_intersecting_faces": {
+            k: sum(s.get("self_intersecting_faces", {}).get(k, 0)
+                   for s in tpl.manifest["subcortical"]["structures"])
+            for k in ("decimated", "template")},
     }, problems
 
 
@@ -123,9 +139,12 @@ def _check(path: Path, max_size_mb: float | None) -> tuple[dict, list[str]]:
     glass = {}
     for hemi in ("lh", "rh"):
         v, f = tpl.glass(hemi)
-        glass[hemi] = {"n_vertices": len(v), "n_faces": len(f), "open_edges": _open_edges(f)}
+        glass[hemi] = {"n_vertices": len(v), "n_faces": len(f), "open_edges": _open_edges(f),
+                       "self_intersecting_faces": count_self_intersections(v, f)}
         if glass[hemi]["open_edges"]:
             problems.append(f"glass/{hemi}: {glass[hemi]['open_edges']} open edges")
+        if glass[hemi]["self_intersecting_faces"]:
+            problems.append(f"glass/{hemi}: {glass[hemi]['self_intersecting_faces']} self-intersecting faces")
     files = {p.name: p.stat().st_size for p in tpl.files()}
     size = sum(files.values())
     if max_size_mb is not None and size > max_size_mb * 1e6:
@@ -151,8 +170,9 @@ def template_report(path: str | Path) -> dict:
     Returns
     -------
     dict
-        ``manifest``; ``checks`` (per label set and hemisphere: faces,
-        vertices, regions without faces, open boundary edges per surface;
+        ``manifest``; ``checks`` (per label set and hemisphere: faces
+        stored and drawn (after splitting boundary faces), vertices,
+        regions without faces, open boundary edges per surface;
         subcortical structures without faces; glass hulls); ``files`` (bytes
         per file), ``size_bytes`` / ``size_mb`` (total on disk), ``load_s``
         (seconds to load the template and read all its arrays), ``problems``
@@ -177,20 +197,31 @@ def format_report(report: dict) -> str:
         parts = []
         for hemi, c in per_hemi.items():
             opened = sorted(set(c["open_edges"].values()))
-            parts.append(f"{hemi} {c['n_regions']} regions, {c['n_faces']} faces, "
+            drawn = c.get("n_faces_drawn", c["n_faces"])
+            parts.append(f"{hemi} {c['n_regions']} regions, {c['n_faces']} faces"
+                         f"{f' ({drawn} drawn, boundary faces split)' if drawn != c['n_faces'] else ''}, "
                          f"open edges {'/'.join(map(str, opened))}")
             if c["regions_without_faces"]:
                 parts[-1] += f", without faces: {c['regions_without_faces']}"
         lines.append(f"  {labels} ({entry.get('source', '?')}): " + "; ".join(parts))
+        folds = [f"{hemi} {s} {c['decimated']}->{c['template']}" for hemi, h in per_hemi.items()
+                 for s, c in h.get("self_intersecting_faces", {}).items()]
+        if folds:
+            lines.append("    self-intersecting faces (decimated -> template): " + ", ".join(folds))
     sub = report["checks"]["subcortical"]
     structures = m["subcortical"]["structures"]
     worst = max(structures, key=lambda s: abs(s.get("volume_error", 0.0)), default=None)
     line = f"  subcortical: {sub['n_structures']} structures, {sub['n_faces']} faces"
     if worst is not None and "volume_error" in worst:
         line += f", worst volume error {worst['volume_error']:+.2%} ({worst['name']})"
+    crossing = sub.get("self_intersecting_faces", {})
+    if crossing:
+        line += (f", self-intersecting faces {crossing.get('decimated', 0)} (first decimation) -> "
+                 f"{crossing.get('template', 0)}")
     lines.append(line)
     glass = report["checks"]["glass"]
-    lines.append("  glass: " + ", ".join(f"{h} {g['n_faces']} faces" for h, g in glass.items()))
+    lines.append("  glass: " + ", ".join(f"{h} {g['n_faces']} faces, {g['self_intersecting_faces']} "
+                                         "self-intersecting" for h, g in glass.items()))
     if report["problems"]:
         lines.append("  PROBLEMS:")
         lines += [f"    - {p}" for p in report["problems"]]

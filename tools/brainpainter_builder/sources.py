@@ -174,6 +174,22 @@ class Subject:
             )
         return vertices, faces
 
+    def sulc(self, hemi: str) -> np.ndarray | None:
+        """Sulcal depth ``surf/{hemi}.sulc`` (mm, positive in sulci), shape (n,); None if absent."""
+        from nibabel.freesurfer import read_morph_data
+
+        path = self.path / "surf" / f"{hemi}.sulc"
+        if not path.is_file():
+            return None
+        try:
+            values = np.asarray(read_morph_data(str(path)), dtype=np.float64)
+        except Exception as exc:  # nibabel raises ValueError, struct.error, OSError...
+            raise _unreadable(path, "a FreeSurfer curvature (morph) file", exc) from None
+        self._check_count(path, len(values), hemi, "values")
+        if not np.isfinite(values).all():
+            raise BrainPainterError(f"{path} has non-finite values; expected sulcal depths in mm")
+        return values
+
     def n_vertices(self, hemi: str) -> int:
         """Vertex count of the hemisphere (read from its pial surface if needed)."""
         if hemi not in self._n_vertices:

@@ -2,11 +2,17 @@
 
 For each structure of ``data/aseg.tsv`` (FreeSurferColorLUT indices): the
 voxels with that label (islands under `min_island` voxels dropped) are
-meshed by marching cubes at level 0.5, smoothed with Taubin's
-non-shrinking filter, decimated with MeshLab's quadric edge collapse, and
-finally offset along their normals so that the enclosed volume equals the
-voxel volume (Taubin smoothing and decimation of thin structures such as the
-inferior lateral ventricle otherwise lose a few per cent). Vertices are
+blurred with a Gaussian of :data:`BLUR_VOXELS` (when the blurred mask still
+keeps :data:`BLUR_KEEP` of the voxels in as many pieces: not for thin
+structures such as the inferior lateral ventricle), meshed by marching
+cubes at level 0.5, smoothed with Taubin's non-shrinking filter, decimated
+with MeshLab's quadric edge collapse, and offset along their normals so that
+the enclosed volume equals the voxel volume (smoothing and decimation of
+thin structures otherwise lose a few per cent). Decimation can fold a thin
+part through another: a mesh with self-intersecting faces (:mod:`.clean`)
+is made again with less decimation (:data:`DECIMATION_FRACTIONS`). The blur fills the one-voxel pits and
+clefts of the 1 mm segmentation (the cerebellar cortex's folia), which
+Taubin smoothing alone leaves as a pitted surface. Vertices are
 mapped from voxel indices ``(i, j, k)`` — marching cubes returns them in
 array-axis order — to surface (tkr-RAS) millimetres with
 ``vox2ras_tkr``; the triangle winding is flipped when that map is a
@@ -23,6 +29,14 @@ import numpy as np
 
 from brainpainter.atlas import Region, read_regions_tsv
 from brainpainter.errors import BrainPainterError
+from brainpainter_builder.clean import count_self_intersections
+
+#: Gaussian blur (sigma, voxels) of a structure's mask before marching cubes.
+BLUR_VOXELS = 1.0
+#: Decimation fractions tried, in order after the asked one, until a mesh has no self-intersection.
+DECIMATION_FRACTIONS = (0.35, 0.4, 0.5, 0.7)
+#: A structure is blurred only if the blurred mask keeps this fraction of its voxels.
+BLUR_KEEP = 0.9
 
 
 @dataclass(frozen=True)
@@ -46,6 +60,11 @@ class Structure:
     smoothed_volume_mm3 : float
         Mesh volume after smoothing and decimation, before the volume match.
     watertight : bool
+    blur : float
+        Gaussian blur of the mask before meshing, voxels (0: none).
+    self_intersections : tuple of int
+        Self-intersecting faces at the asked decimation, and in the mesh kept
+        (decimated less where the first one crossed itself).
     """
 
     name: str
@@ -57,6 +76,8 @@ class Structure:
     voxel_volume_mm3: float
     smoothed_volume_mm3: float
     watertight: bool
+    blur: float = 0.0
+    self_intersections: tuple[int, int] = (0, 0)
 
 
 def aseg_table_path() -> Path:
@@ -100,7 +121,7 @@ def _match_volume(vertices: np.ndarray, faces: np.ndarray, target: float,
 
 def mesh_mask(mask: np.ndarray, vox2ras: np.ndarray, *, smooth_iterations: int = 30,
               target_fraction: float = 0.3, min_faces: int = 400,
-              voxel_volume: float | None = None) -> tuple[np.ndarray, np.ndarray, float]:
+              voxel_volume: float | None = None, blur: float = 0.0) -> tuple[np.ndarray, np.ndarray, float]:
     """Closed, smooth surface of a binary voxel mask in world coordinates.
 
     Parameters
@@ -116,6 +137,8 @@ def mesh_mask(mask: np.ndarray, vox2ras: np.ndarray, *, smooth_iterations: int =
         Never decimate below this many faces.
     voxel_volume : float, optional
         mm^3 per voxel; default ``|det(vox2ras[:3, :3])|``.
+    blur : float
+        Gaussian blur (sigma, voxels) of the mask before marching cubes; 0 for none.
 
     Returns
     -------
@@ -133,12 +156,17 @@ def mesh_mask(mask: np.ndarray, vox2ras: np.ndarray, *, smooth_iterations: int =
 
     mask = np.asarray(mask, dtype=bool)
     idx = np.argwhere(mask)
-    lo = idx.min(axis=0) - 2
-    hi = idx.max(axis=0) + 3
+    pad = 2 + int(np.ceil(3 * blur))
+    lo = idx.min(axis=0) - pad
+    hi = idx.max(axis=0) + pad + 1
     sub = np.zeros(tuple(hi - lo), dtype=np.float32)
     inner = mask[tuple(slice(max(a, 0), b) for a, b in zip(lo, hi, strict=True))]
     off = np.maximum(-lo, 0)
     sub[tuple(slice(o, o + s) for o, s in zip(off, inner.shape, strict=True))] = inner
+    if blur > 0:
+        from scipy import ndimage
+
+        sub = ndimage.gaussian_filter(sub, blur)
     verts, faces, _, _ = marching_cubes(sub, level=0.5, method="lewiner", allow_degenerate=False)
     verts = verts.astype(np.float64) + lo  # voxel indices (i, j, k) of the full volume
     tm = trimesh.Trimesh(verts, faces, process=True)
@@ -219,8 +247,16 @@ def build_structures(aseg: np.ndarray, vox2ras: np.ndarray, voxel_volume: float,
             mask = keep[pieces]
         shift = np.eye(4)
         shift[:3, 3] = [s.start for s in pad]
-        verts, faces, smoothed = mesh_mask(mask, vox2ras @ shift, target_fraction=target_fraction,
-                                 voxel_volume=voxel_volume)
+        blur = blur_for(mask)
+        # Decimation can fold a thin part through another; keep more faces until nothing crosses.
+        first = None
+        for fraction in (*(f for f in DECIMATION_FRACTIONS if f > target_fraction), 1.0):
+            verts, faces, smoothed = mesh_mask(mask, vox2ras @ shift, target_fraction=min(
+                target_fraction if first is None else fraction, 1.0), voxel_volume=voxel_volume, blur=blur)
+            crossing = count_self_intersections(verts, faces)
+            first = crossing if first is None else first
+            if crossing == 0:
+                break
         counts = _edge_counts(faces)
         out.append(Structure(
             name=region.key, index=region.index, vertices=verts, faces=faces,
@@ -228,8 +264,25 @@ def build_structures(aseg: np.ndarray, vox2ras: np.ndarray, voxel_volume: float,
             voxel_volume_mm3=n_voxels * voxel_volume,
             smoothed_volume_mm3=smoothed,
             watertight=bool(len(counts) and np.all(counts == 2)),
+            blur=blur, self_intersections=(first, crossing),
         ))
     return out
+
+
+def blur_for(mask: np.ndarray, sigma: float = BLUR_VOXELS, keep: float = BLUR_KEEP) -> float:
+    """`sigma` if blurring `mask` keeps `keep` of its voxels in as many pieces, else 0.
+
+    Thin structures (the inferior lateral ventricle) would shrink or break
+    apart at level 0.5 of a blurred mask; they are meshed unblurred.
+    """
+    from scipy import ndimage
+
+    mask = np.pad(np.asarray(mask, dtype=bool), int(np.ceil(3 * sigma)) + 1)
+    blurred = ndimage.gaussian_filter(mask.astype(np.float32), sigma) >= 0.5
+    n_before = ndimage.label(mask, structure=np.ones((3, 3, 3), dtype=bool))[1]
+    n_after = ndimage.label(blurred, structure=np.ones((3, 3, 3), dtype=bool))[1]
+    kept = np.count_nonzero(blurred & mask) / max(np.count_nonzero(mask), 1)
+    return float(sigma) if kept >= keep and n_after <= n_before else 0.0
 
 
 def _edge_counts(faces: np.ndarray) -> np.ndarray:
