@@ -17,6 +17,7 @@ import click
 from brainpainter.cli_options import (
     FINITE,
     input_options,
+    parallel_options,
     parse_size,
     render_kwargs,
     render_options,
@@ -306,6 +307,7 @@ def check(inputs: tuple[Path, ...], atlas: str | None, image_column: str | None,
               help="Image names to render, comma-separated, in this order (default: all rows).")
 @render_options
 @input_options
+@parallel_options
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, **options: Any) -> None:
     """Render every image of INPUT tables (CSV, TSV, .xlsx; see 'check') from every view.
@@ -327,6 +329,11 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
         f"({s['n_images']} row(s); {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
         f"{len(s['unmatched_columns'])} unmatched column(s))"
     )
+    w = result.workers
+    if w.get("backend") in ("LocalRunner", "DaskRunner"):
+        where = "processes" if w["backend"] == "LocalRunner" else "Dask workers"
+        click.echo(f"rendered by {w['workers']} {where} (painter start-up {max(w['startup_seconds']):.1f} s"
+                   + (f"; {len(w['retried'])} task(s) retried" if w["retried"] else "") + ")")
 
 
 # -- template -----------------------------------------------------------------

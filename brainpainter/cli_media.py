@@ -11,7 +11,14 @@ from typing import Any
 
 import click
 
-from brainpainter.cli_options import FINITE, input_options, make_render_options, render_kwargs, render_options
+from brainpainter.cli_options import (
+    FINITE,
+    input_options,
+    make_render_options,
+    parallel_options,
+    render_kwargs,
+    render_options,
+)
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 
@@ -47,6 +54,7 @@ def _rows(value: str | None) -> list[str] | None:
               help="Name the views (row labels in a grid, headings otherwise).")
 @render_options
 @input_options
+@parallel_options
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, title: str | None,
            label: str | None, ticks: str | None, dpi: float, fig_width: float | None, font_size: float,
@@ -105,6 +113,7 @@ def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, ti
 @click.option("--ticks", default=None, help="Colour-bar ticks, e.g. 0,1.5,3.")
 @make_render_options(size="800x600")
 @input_options
+@parallel_options
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def movie(inputs: tuple[Path, ...], out: Path, frames_per_step: int, easing: str, time_column: str | None,
           hold: int, fps: float, orbit: float, rows: str | None, title: str | None, label: str | None,

@@ -29,6 +29,7 @@ RENDER_OPTION_NAMES = (
     "glass_opacity", "renderer", "atlas_config",
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
+PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
 
 
 class FiniteFloat(click.ParamType):
@@ -135,6 +136,20 @@ def input_options(f: F) -> F:
     return f
 
 
+def parallel_options(f: F) -> F:
+    """``--jobs`` and ``--scheduler``: where the images are rendered (see brainpainter.parallel)."""
+    for opt in reversed([
+        click.option("--jobs", "-j", default="1", show_default=True, metavar="N|auto",
+                     help="Render in N processes on this machine ('auto': one per core); output identical "
+                          "to one process."),
+        click.option("--scheduler", default=None, envvar="BRAINPAINTER_SCHEDULER", metavar="ADDRESS",
+                     help="Render on a Dask cluster, e.g. tcp://host:8786 (default: "
+                          "$BRAINPAINTER_SCHEDULER); needs pip install 'brainpainter[cluster]'."),
+    ]):
+        f = opt(f)
+    return f
+
+
 def parse_size(size: str) -> tuple[int, int]:
     """``"1200x900"`` -> ``(1200, 900)``."""
     try:
@@ -150,7 +165,8 @@ def render_kwargs(options: dict[str, Any]) -> dict[str, Any]:
     ``--size`` becomes ``width``/``height`` and ``--transparent`` a ``None``
     background; everything else keeps its name.
     """
-    out = {name: options.pop(name) for name in (*RENDER_OPTION_NAMES, *INPUT_OPTION_NAMES) if name in options}
+    names = (*RENDER_OPTION_NAMES, *INPUT_OPTION_NAMES, *PARALLEL_OPTION_NAMES)
+    out = {name: options.pop(name) for name in names if name in options}
     if "size" in out:
         out["width"], out["height"] = parse_size(out.pop("size"))
     if out.pop("transparent", False):

@@ -487,6 +487,9 @@ def make_figure(
     strict: bool = False,
     progress: bool = True,
     atlas_config: str | Path | None = None,
+    jobs: int | str = 1,
+    client: Any = None,
+    scheduler: str | None = None,
 ) -> FigureResult:
     """Render rows of a region-value table and lay them out as a figure with a colour bar.
 
@@ -520,6 +523,8 @@ def make_figure(
         Show a progress bar.
     atlas_config : path, optional
         Region-group TOML file defining the atlas, as for :func:`brainpainter.render.render`.
+    jobs, client, scheduler
+        Render on worker processes or a Dask cluster, as for :func:`brainpainter.render.render`.
 
     Returns
     -------
@@ -530,13 +535,15 @@ def make_figure(
     from tqdm.auto import tqdm
 
     from brainpainter.colorbar import resolve_ticks
-    from brainpainter.render import Painter, prepare_run
+    from brainpainter.parallel import Item, check_options, make_runner, paint_all
+    from brainpainter.render import Painter, prepare_run, region_colors
     from brainpainter.transaction import FileTransaction
 
     if not 50 <= float(dpi) <= 1200:
         raise BrainPainterError(f"dpi must be between 50 and 1200; {dpi} was given.")
     check_figure_text(font_size, fig_width)
     path = check_out_file(out, FIGURE_FORMATS) if out is not None else None
+    check_options(jobs, client, scheduler)
     run = prepare_run(
         data, atlas, views=views, gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center,
         nan_color=nan_color, missing_color=missing_color, background=background, width=width,
@@ -549,16 +556,16 @@ def make_figure(
     chosen = select_rows(table.images, rows)
     painter = Painter(table.atlas, template, surface, hide, run.settings, renderer)
     nan, missing = swatches_needed(table, chosen, run.views, painter.scene.hidden)
-    images: dict[tuple[str, str], np.ndarray] = {}
+    plan = [(i, view) for i in chosen for view in run.views]
+    items = [Item(region_colors(table.row(i), table.atlas, run.scale), view, label=table.images[i])
+             for i, view in plan]
     # the output folder is locked from before the first render until the figure is published
     with FileTransaction(path) if path is not None else nullcontext() as tx:
-        with painter, tqdm(total=len(chosen) * len(run.views), unit="img", desc="rendering",
-                           disable=not progress) as bar:
-            for i in chosen:
-                values = table.row(i)
-                for view in run.views:
-                    images[(table.images[i], view.name)] = painter.paint(values, view, run.scale)
-                    bar.update(1)
+        with make_runner(painter, template, jobs=jobs, client=client, scheduler=scheduler,
+                         n_items=len(plan)) as runner, \
+                tqdm(total=len(plan), unit="img", desc="rendering", disable=not progress) as bar:
+            pixels = paint_all(runner, items, bar)
+        images = {(table.images[i], view.name): px for (i, view), px in zip(plan, pixels, strict=True)}
         layout = compose_figure(
             images, [table.images[i] for i in chosen], [v.name for v in run.views], run.scale, grid=grid,
             title=title, label=label, ticks=ticks, dpi=dpi, fig_width=fig_width, font_size=font_size,

@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 import struct
 import time
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -581,6 +581,9 @@ def make_movie(
     strict: bool = False,
     progress: bool = True,
     atlas_config: str | Path | None = None,
+    jobs: int | str = 1,
+    client: Any = None,
+    scheduler: str | None = None,
 ) -> MovieResult:
     """Make a movie through the rows of a region-value table.
 
@@ -627,6 +630,9 @@ def make_movie(
         Show a progress bar.
     atlas_config : path, optional
         Region-group TOML file defining the atlas, as for :func:`brainpainter.render.render`.
+    jobs, client, scheduler
+        Render frames on worker processes or a Dask cluster, as for
+        :func:`brainpainter.render.render`; frames are encoded in order.
 
     Returns
     -------
@@ -636,11 +642,13 @@ def make_movie(
 
     from brainpainter.colorbar import resolve_ticks
     from brainpainter.figure import check_out_file, select_rows, swatches_needed
-    from brainpainter.render import Painter, prepare_run
+    from brainpainter.parallel import Item, check_options, make_runner
+    from brainpainter.render import Painter, prepare_run, region_colors
     from brainpainter.transaction import FileTransaction
 
     start = time.perf_counter()
     path = check_out_file(out, MOVIE_FORMATS)
+    check_options(jobs, client, scheduler)
     fmt = path.suffix.lower()
     if background is None:
         raise BrainPainterError("a movie has no transparency; give a background colour (--background) "
@@ -703,37 +711,51 @@ def make_movie(
             return f"{time_column}: {format_clock(f.clock, key_times)}"
         return names[f.a] if f.a == f.b else f"{names[f.a]} {ARROW} {names[f.b]}"
 
-    state: dict[str, Any] = {"previous": None}
-
-    def frame(i: int) -> np.ndarray:
-        f = plan[i]
+    # Frames that repeat the previous frame's renders (held key frames) reuse them.
+    states: list[tuple[int, int, float, tuple[View, ...]]] = []
+    frame_state: list[int] = []
+    for i, f in enumerate(plan):
         key = (f.a, f.b, f.weight, tuple(per_view[k][i] for k in range(len(run.views))))
-        previous = state["previous"]
-        if previous is not None and previous[0] == key:
-            renders = previous[1]  # a held key frame: nothing changed
-        else:
-            values = interpolate(key_values[f.a], key_values[f.b], f.weight)
-            region_values = dict(zip(table.regions, values.tolist(), strict=True))
-            renders = [painter.paint(region_values, per_view[k][i], run.scale)
-                       for k in range(len(run.views))]
-            state["previous"] = (key, renders)
-        return composer.compose(renders, caption(f), f.clock)
+        if not states or states[-1] != key:
+            states.append(key)
+        frame_state.append(len(states) - 1)
+    runner = make_runner(painter, template, jobs=jobs, client=client, scheduler=scheduler,
+                         n_items=len(states))
+
+    def chunks(wanted: Iterable[int]) -> Iterator[list[Item]]:
+        for s in wanted:
+            a, b, weight, state_views = states[s]
+            values = interpolate(key_values[a], key_values[b], weight)
+            colors = region_colors(dict(zip(table.regions, values.tolist(), strict=True)), table.atlas,
+                                   run.scale)
+            label = names[a] if a == b else f"{names[a]} {ARROW} {names[b]} ({weight:.3f})"
+            yield [Item(colors, view, label=label) for view in state_views]
+
+    def frames(wanted: Sequence[int]) -> Iterator[tuple[int, np.ndarray]]:
+        """``(frame index, frame)`` for the frames `wanted` (increasing), rendered in parallel, in order."""
+        wanted_states = list(dict.fromkeys(frame_state[i] for i in wanted))
+        todo = iter(wanted)
+        i = next(todo, None)
+        for k, renders in runner.map(chunks(wanted_states), ordered=True):
+            while i is not None and frame_state[i] == wanted_states[k]:
+                yield i, composer.compose(renders, caption(plan[i]), plan[i].clock)
+                i = next(todo, None)
 
     # the output folder is locked from before the first frame until the movie is published
-    with FileTransaction(path) as tx, painter, \
+    with FileTransaction(path) as tx, runner, \
             tqdm(total=n, unit="frame", desc="movie", disable=not progress) as bar:
         samples: dict[int, np.ndarray] = {}
         if fmt == ".gif":  # the palette comes from up to 12 frames spread over the movie
             picks = np.linspace(0, n - 1, min(n, GIF_PALETTE_FRAMES)).round().astype(int)
-            for i in sorted(set(picks.tolist())):
-                samples[i] = frame(i)
+            samples = dict(frames(sorted(set(picks.tolist()))))
         writer: _Mp4Writer | _GifWriter = (
             _Mp4Writer(tx.tmp, composer.size, float(fps)) if fmt == ".mp4"
             else _GifWriter(tx.tmp, composer.size, float(fps), tuple(composer.bg.tolist()),
                             list(samples.values())))
         try:
-            for i in range(n):
-                writer.write(samples.pop(i) if i in samples else frame(i))
+            rest = frames([i for i in range(n) if i not in samples])  # rendered in parallel
+            for i in range(n):  # encoded in order
+                writer.write(samples.pop(i) if i in samples else next(rest)[1])
                 bar.update(1)
         except BaseException:
             writer.abort()

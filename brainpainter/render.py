@@ -224,6 +224,9 @@ class RenderResult:
         The colour scale of the run (for a colour bar).
     table : RegionTable
         The table as read.
+    workers : dict
+        Where it ran (``backend``, ``workers``, ``startup_seconds``, ``retried``);
+        not part of the manifest, which is the same however the run was split.
     """
 
     files: list[Path]
@@ -231,6 +234,7 @@ class RenderResult:
     manifest: dict[str, Any]
     scale: ColourScale | None = None
     table: RegionTable | None = None
+    workers: dict[str, Any] = field(default_factory=dict)
 
     def _repr_html_(self) -> str:  # notebooks: show the images
         import base64
@@ -362,6 +366,9 @@ def render(
     atlas_config: str | Path | None = None,
     painter: Painter | None = None,
     rows: Iterable[str | int] | str | None = None,
+    jobs: int | str = 1,
+    client: Any = None,
+    scheduler: str | None = None,
 ) -> RenderResult:
     """Render every row of a region-value table from every view.
 
@@ -397,6 +404,13 @@ def render(
     rows : iterable of str or int, or a comma-separated str, optional
         Image names (or 0-based positions) to render, in that order; default all
         rows. The colour scale is computed over all rows either way.
+    jobs : int or "auto"
+        Worker processes on this machine (``"auto"``: one per core), each with
+        a warm renderer; the output is byte-identical to ``jobs=1``.
+    client : distributed.Client, optional
+        Render on this Dask cluster instead (see :mod:`brainpainter.parallel`).
+    scheduler : str, optional
+        A Dask scheduler address (``tcp://host:8786``) to connect to instead of `client`.
 
     Returns
     -------
@@ -405,7 +419,8 @@ def render(
     from contextlib import nullcontext
 
     from brainpainter import __version__
-    from brainpainter.output import PngWriter, safe_name
+    from brainpainter.output import PngWriter, atomic_write_bytes, safe_name
+    from brainpainter.parallel import Item, SerialRunner, check_options, chunked, make_runner
     from brainpainter.transaction import FolderTransaction
 
     if painter is not None:
@@ -419,6 +434,7 @@ def render(
         shading, lighting, glass_opacity = ps.shading, ps.lighting, ps.glass_opacity
         surface, renderer = painter.surface, painter.renderer
     # Validate everything before the first image so bad input leaves nothing behind.
+    check_options(jobs, client, scheduler)
     run = prepare_run(
         data, atlas, atlas_config=atlas_config, views=views, gradient=gradient, cmap=cmap, vmin=vmin,
         vmax=vmax, center=center, nan_color=nan_color, missing_color=missing_color,
@@ -439,51 +455,79 @@ def render(
         raise BrainPainterError(
             f"the table was read with atlas {atlas.name!r} but the painter draws {painter.atlas.name!r}; "  # type: ignore[union-attr]
             "give atlas= the painter's atlas, or make a Painter for this one.")
-    painter.load()  # a renderer that cannot start (e.g. no bpy) fails before any output exists
-    tx = FolderTransaction(out) if out is not None else None  # lock, stage, verify, publish
-
-    settings_dict = {
-        "atlas": atlas.name, "template": painter.scene.template.name, "surface": surface,
-        "views": [v.to_dict() for v in view_list], "scale": scale.to_dict(),
-        "hidden": sorted(painter.scene.hidden), "renderer": renderer, **settings.to_dict(),
-    }
-    files: list[Path] = []
-    images: dict[tuple[str, str], np.ndarray] = {}
-    entries = []
-    total = len(chosen) * len(view_list)
-    from tqdm.auto import tqdm
-
-    with tx or nullcontext(), painter if own else nullcontext(painter), PngWriter() as writer, \
-            tqdm(total=total, unit="img", desc="rendering", disable=not progress) as bar:
-        for i in chosen:
-            image, values = table.images[i], table.row(i)
-            for view in view_list:
-                pixels = painter.paint(values, view, scale)
-                if tx is None:
-                    images[(image, view.name)] = pixels
-                else:
-                    path = tx.out / f"{names[i]}_{view.name}.png"
-                    meta = {
-                        "Software": f"brainpainter {__version__}",
-                        "brainpainter:image": image,
-                        "brainpainter:view": view.name,
-                        "brainpainter:settings": json.dumps(settings_dict, sort_keys=True),
-                    }
-                    writer.submit(tx.path(path.name), pixels, meta)
-                    tx.expect(path.name, size=(settings.width, settings.height))
-                    files.append(path)
-                    entries.append({"file": path.name, "image": image, "row": i, "view": view.name})
-                bar.update(1)
-        writer.wait()
-        manifest = {
-            "software": {"brainpainter": __version__},
-            "input": table.summary(),
-            "settings": settings_dict,
-            "files": entries,
+    runner = make_runner(painter, template, jobs=jobs, client=client, scheduler=scheduler,
+                         n_items=len(chosen) * len(view_list))
+    # The renderer (or every worker's) starts before any output exists: one that cannot start leaves none.
+    runner.start()
+    try:
+        tx = FolderTransaction(out) if out is not None else None  # lock, stage, verify, publish
+        settings_dict = {
+            "atlas": atlas.name, "template": painter.scene.template.name, "surface": surface,
+            "views": [v.to_dict() for v in view_list], "scale": scale.to_dict(),
+            "hidden": sorted(painter.scene.hidden), "renderer": renderer, **settings.to_dict(),
         }
-        if tx is not None:
-            tx.commit(manifest)  # verify every PNG, then publish them and the manifest last
-    return RenderResult(files, images, manifest, scale, table)
+
+        def path_meta(i: int, view: View) -> tuple[str, dict[str, str]]:
+            """File name and PNG text of one image."""
+            return f"{names[i]}_{view.name}.png", {
+                "Software": f"brainpainter {__version__}",
+                "brainpainter:image": table.images[i],
+                "brainpainter:view": view.name,
+                "brainpainter:settings": json.dumps(settings_dict, sort_keys=True),
+            }
+
+        plan = [(i, view) for i in chosen for view in view_list]
+        files = [tx.out / path_meta(i, view)[0] for i, view in plan] if tx is not None else []
+        entries = [{"file": path.name, "image": table.images[i], "row": i, "view": view.name}
+                   for path, (i, view) in zip(files, plan, strict=False)]  # none without an output folder
+        images: dict[tuple[str, str], np.ndarray] = {}
+        size = (settings.width, settings.height)
+        from tqdm.auto import tqdm
+
+        with tx or nullcontext(), tqdm(total=len(plan), unit="img", desc="rendering",
+                                       disable=not progress) as bar:
+            if isinstance(runner, SerialRunner):
+                with PngWriter() as writer:
+                    for i, view in plan:
+                        pixels = painter.paint(table.row(i), view, scale)
+                        if tx is None:
+                            images[(table.images[i], view.name)] = pixels
+                        else:
+                            name, meta = path_meta(i, view)
+                            writer.submit(tx.path(name), pixels, meta)
+                            tx.expect(name, size=size)
+                        bar.update(1)
+                    writer.wait()
+            else:
+                chunks = chunked(plan, runner.chunk_size(len(plan)))
+                items = ([Item(region_colors(table.row(i), atlas, scale), view,
+                               None if tx is None else path_meta(i, view)[1], table.images[i])
+                          for i, view in chunk] for chunk in chunks)
+                by_index: dict[int, list[np.ndarray]] = {}
+                for index, results in runner.map(items, encode=tx is not None):
+                    if tx is None:
+                        by_index[index] = results
+                    else:  # the workers' PNG files: the bytes a serial run writes
+                        for (i, view), data in zip(chunks[index], results, strict=True):
+                            name = path_meta(i, view)[0]
+                            atomic_write_bytes(tx.path(name), data)
+                            tx.expect(name, size=size)
+                    bar.update(len(results))
+                for index in sorted(by_index):
+                    for (i, view), pixels in zip(chunks[index], by_index[index], strict=True):
+                        images[(table.images[i], view.name)] = pixels
+            manifest = {
+                "software": {"brainpainter": __version__},
+                "input": table.summary(),
+                "settings": settings_dict,
+                "files": entries,
+            }
+            if tx is not None:
+                tx.commit(manifest)  # verify every PNG, then publish them and the manifest last
+    finally:
+        if own or not isinstance(runner, SerialRunner):  # a painter given by the caller stays open
+            runner.close()
+    return RenderResult(files, images, manifest, scale, table, runner.summary())
 
 
 def _check_painter_options(painter: Painter, given: Mapping[str, Any]) -> None:
