@@ -8,6 +8,7 @@ inside the commands, so ``brainpainter --help`` stays fast.
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -436,7 +437,17 @@ def main(argv: list[str] | None = None) -> None:
     """Console entry point: user errors become one line and exit code 2 (see :mod:`brainpainter.guard`)."""
     from brainpainter.guard import run
 
-    sys.exit(run(cli, join_split_lists(sys.argv[1:] if argv is None else list(argv))))
+    code = run(cli, join_split_lists(sys.argv[1:] if argv is None else list(argv)))
+    if argv is None and "bpy" in sys.modules:
+        # Blender's own exit handlers (bpy 5.1+) write a shader cache under ~/.cache after the run's
+        # private cache folder is gone; the run is complete and published, so leave without them.
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError):
+                pass
+        os._exit(code)
+    sys.exit(code)
 
 
 if __name__ == "__main__":  # pragma: no cover
