@@ -429,7 +429,26 @@ def json_bytes(obj: object) -> bytes:
 
 
 # -- transactions ------------------------------------------------------------------------------
-class FolderTransaction:
+class _Staged:
+    """What every output transaction does on the way out: drop the stage, release the lock,
+    and after a failure remove the output folders it created (left empty)."""
+
+    stage: Path | None
+    committed: bool
+    _lock: Any
+    _created: Any
+
+    def __exit__(self, *exc: object) -> None:
+        try:
+            if self.stage is not None:
+                shutil.rmtree(self.stage, ignore_errors=True)
+        finally:
+            self._lock.__exit__(None, None, None)
+            if not self.committed:
+                remove_empty(self._created)  # a failed run leaves no empty output folder behind
+
+
+class FolderTransaction(_Staged):
     """Write several files and a manifest into an output folder, all or nothing.
 
     Usage::
@@ -517,17 +536,8 @@ class FolderTransaction:
         self.committed = True
         return published
 
-    def __exit__(self, *exc: object) -> None:
-        try:
-            if self.stage is not None:
-                shutil.rmtree(self.stage, ignore_errors=True)
-        finally:
-            self._lock.__exit__(None, None, None)
-            if not self.committed:
-                remove_empty(self._created)  # a failed run leaves no empty output folder behind
 
-
-class FileTransaction:
+class FileTransaction(_Staged):
     """Write one output file (figure, movie) through a staging file; publish it if it verifies.
 
     Usage::
@@ -578,15 +588,6 @@ class FileTransaction:
             raise os_error(exc, "cannot write", self.target) from None
         self.committed = True
         return self.target
-
-    def __exit__(self, *exc: object) -> None:
-        try:
-            if self.stage is not None:
-                shutil.rmtree(self.stage, ignore_errors=True)
-        finally:
-            self._lock.__exit__(None, None, None)
-            if not self.committed:
-                remove_empty(self._created)
 
 
 # -- whole folders (templates, atlases) -------------------------------------------------------------
