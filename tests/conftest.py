@@ -1,4 +1,4 @@
-"""Shared fixtures: isolated HOME/caches, paths to ../shared/data."""
+"""Shared fixtures: isolated HOME/caches, paths to ../shared/data, big corpus files written once."""
 
 from __future__ import annotations
 
@@ -29,3 +29,17 @@ def fsaverage5() -> Path:
     if not path.is_dir():
         pytest.skip(f"shared data not found at {path} (needs ../shared/data beside the repo)")
     return path
+
+
+@pytest.fixture(scope="session")
+def big_files(tmp_path_factory) -> dict:
+    """The bad-input corpus's large files, written once per session: ``{writer: path}``.
+
+    ``corpus.write(case, folder, big_files)`` hard-links them into a case folder
+    instead of writing 50 MB again (the corpus, the upload path and the memory test share one).
+    """
+    from bad_inputs import corpus
+
+    path = tmp_path_factory.mktemp("big") / "50mb.csv"
+    corpus._big_table(path)
+    return {corpus._big_table: path}

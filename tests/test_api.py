@@ -10,17 +10,9 @@ import pytest
 
 import brainpainter
 from brainpainter.errors import BrainPainterError
-from brainpainter.testing import StandInRenderer, registered_renderer, write_tiny_template
+from brainpainter.testing import StandInRenderer, stand_in, write_tiny_template
 
 VALUES = {"Left-insula": 3.0, "Left-precuneus": 1.0, "Left-superiorfrontal": 0.0}
-
-
-class CountingRenderer(StandInRenderer):
-    scenes = 0
-
-    def __init__(self, scene):
-        type(self).scenes += 1
-        super().__init__(scene)
 
 
 @pytest.fixture
@@ -30,8 +22,8 @@ def tiny(tmp_path):
 
 @pytest.fixture
 def counting():
-    CountingRenderer.scenes = 0
-    with registered_renderer("counting", CountingRenderer) as name:
+    """A registered stand-in renderer; StandInRenderer.scenes counts the scenes it was given."""
+    with stand_in("counting") as name:
         yield name
 
 
@@ -53,7 +45,7 @@ def test_render_three_times_in_one_process(tiny, counting):
                                      width=40, height=30, progress=False)
         assert callable(brainpainter.render)
         assert set(result.images) == {("1", "lateral-left")}
-    assert CountingRenderer.scenes == 3
+    assert StandInRenderer.scenes == 3
 
 
 def test_render_with_a_painter_builds_no_new_scene(tiny, counting, tmp_path):
@@ -64,7 +56,7 @@ def test_render_with_a_painter_builds_no_new_scene(tiny, counting, tmp_path):
                                 out=tmp_path / "o", progress=False)
         c = brainpainter.render(VALUES, painter=painter, views="lateral-left", progress=False)
         assert painter._renderer is not None  # still open for the next table
-    assert CountingRenderer.scenes == 1
+    assert StandInRenderer.scenes == 1
     assert a.images[("1", "lateral-left")].shape == (30, 40, 4)  # the painter's size
     assert len(b.files) == 2 and b.manifest["settings"]["width"] == 40
     np.testing.assert_array_equal(a.images[("1", "lateral-left")], c.images[("1", "lateral-left")])
@@ -89,7 +81,7 @@ def test_render_with_a_painter_refuses_other_scene_options(tiny, counting, kwarg
     with pytest.raises(BrainPainterError, match="painter") as err:
         brainpainter.render(VALUES, painter=painter, progress=False, **kwargs)
     assert message in str(err.value)
-    assert CountingRenderer.scenes == 0  # refused before any scene was built
+    assert StandInRenderer.scenes == 0  # refused before any scene was built
 
 
 def test_render_rows_selects_and_orders(tiny, counting, tmp_path):
@@ -139,7 +131,7 @@ def test_plot_reuses_a_painter_and_picks_a_row(tiny, counting):
     df = pd.DataFrame(table, index=["pre", "post"]).rename_axis("Image-name-unique").reset_index()
     a = brainpainter.plot(df, ax=axes[0], row="pre", painter=painter, colorbar=False)
     b = brainpainter.plot(df, ax=axes[1], row="post", painter=painter, orientation="horizontal")
-    assert CountingRenderer.scenes == 1 and a.colorbar_ax is None and b.colorbar_ax is not None
+    assert StandInRenderer.scenes == 1 and a.colorbar_ax is None and b.colorbar_ax is not None
     assert not np.array_equal(a.image, b.image)
     with pytest.raises(BrainPainterError, match="orientation"):
         brainpainter.plot(df, ax=axes[0], painter=painter, orientation="diagonal")

@@ -1,15 +1,28 @@
-"""The bad-input corpus (tests/bad_inputs/corpus.py) through the real CLI.
+"""The bad-input corpus through real ``python -m brainpainter`` processes: a sample, one case per reason.
 
-Each case runs ``python -m brainpainter check|render`` in its own empty
-folder and must exit with code 2, print exactly one line (``error: ...``,
-containing the expected text) on stderr and no traceback, and leave the
-folder exactly as it was: no output folder, no partial file. The cases run
-in parallel subprocesses (once per module) and are then checked one by one.
+The whole corpus runs in-process (test_bad_inputs_inprocess.py). These
+cases run as real processes because a process is what they check:
+
+* the console entry point: ``main()`` turns the run's result into the
+  process's exit code (``sys.exit``), and nothing else reaches the real
+  stderr (no warning at start-up or exit);
+* plugin discovery in a fresh interpreter: the stand-in renderer ``solid`` is
+  found as an installed entry point (``PYTHONPATH``), as a user's plugin is;
+* ``os._exit``: a run that loaded Blender leaves without its exit handlers;
+  its one error line must still be flushed to the real stderr;
+* hostile file descriptors (a FIFO without a writer, an endless device): a
+  regression would block or fill memory, and only a separate process can be
+  stopped by a timeout without taking the test run with it;
+* peak memory of a whole interpreter reading a big file (``VmHWM``).
+
+Each must exit with code 2, print exactly one line (``error: ...``,
+containing the expected text) on stderr and no traceback, and leave its
+folder exactly as it was.
 """
 
 from __future__ import annotations
 
-import importlib.util
+import fcntl
 import os
 import subprocess
 import sys
@@ -17,44 +30,34 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
+from bad_inputs import corpus
 
 from brainpainter.testing import fake_distribution, write_tiny_template
 
-HERE = Path(__file__).parent
-_spec = importlib.util.spec_from_file_location("bad_input_corpus", HERE / "bad_inputs" / "corpus.py")
-corpus = importlib.util.module_from_spec(_spec)
-sys.modules[_spec.name] = corpus
-_spec.loader.exec_module(corpus)
-
-SOLID = '''
-import numpy as np
-
-
-class SolidRenderer:
-    def __init__(self, scene):
-        self.scene = scene
-
-    def render(self, colors, view):
-        s = self.scene.settings
-        img = np.zeros((s.height, s.width, 4), np.uint8)
-        img[..., 3] = 255
-        return img
-
-    def close(self):
-        pass
-'''
+#: Case id -> why it runs as a real process.
+REAL_PROCESS = {
+    "non-numeric-cell": "the console entry point's exit code and the real stderr",
+    "render-non-numeric": "the stand-in renderer found as an installed entry point in a fresh interpreter",
+    "device-file": "an endless device: a regression would fill memory (the process has a timeout)",
+    "table-is-fifo": "a FIFO without a writer: a regression would block (the process has a timeout)",
+}
+SAMPLE = [c for c in [*corpus.CASES, *corpus.INPROCESS] if c.id in REAL_PROCESS]
 
 
 @pytest.fixture(scope="module")
 def plugin_env(tmp_path_factory):
-    """Environment whose Python sees a stand-in renderer 'solid' (an installed entry point)."""
-    site = fake_distribution(tmp_path_factory.mktemp("site"), "bp-solid",
-                             {"brainpainter.renderers": {"solid": "bp_solid:SolidRenderer"}},
-                             {"bp_solid.py": SOLID})
+    """Environment whose Python sees the stand-in renderer as 'solid' (an installed entry point)."""
+    entry = {"brainpainter.renderers": {"solid": "brainpainter.testing:StandInRenderer"}}
+    site = fake_distribution(tmp_path_factory.mktemp("site"), "bp-solid", entry, {})
     env = {k: v for k, v in os.environ.items() if k != "BRAINPAINTER_DEBUG"}
     env["PYTHONPATH"] = os.pathsep.join([str(site), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
     env["HOME"] = str(tmp_path_factory.mktemp("home"))
     return env
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory) -> Path:
+    return write_tiny_template(tmp_path_factory.mktemp("tpl") / "tiny")
 
 
 def _run(args: list[str], cwd: Path, env: dict[str, str]) -> subprocess.CompletedProcess:
@@ -63,45 +66,64 @@ def _run(args: list[str], cwd: Path, env: dict[str, str]) -> subprocess.Complete
 
 
 def _tree(folder: Path) -> dict[str, int]:
-    return {str(p.relative_to(folder)): p.stat().st_size for p in sorted(folder.rglob("*"))}
+    return {str(p.relative_to(folder)): p.lstat().st_size for p in sorted(folder.rglob("*"))}
 
 
-@pytest.fixture(scope="module")
-def results(tmp_path_factory, plugin_env):
-    """Run every case once, in parallel: id -> (process, files before, files after)."""
-    root = tmp_path_factory.mktemp("corpus")
-    jobs = {}
-    for case in corpus.CASES:
-        folder = root / case.id
-        corpus.write(case, folder)
-        args = [case.command, *case.args]
-        if case.command == "render":
-            args += ["--out", "out", "--renderer", "solid", "--quiet"]
-        jobs[case.id] = (folder, args, {**plugin_env, **case.env}, _tree(folder))
-    with ThreadPoolExecutor(max_workers=min(8, 2 * (os.cpu_count() or 2))) as pool:
-        futures = {cid: pool.submit(_run, args, folder, env) for cid, (folder, args, env, _) in jobs.items()}
-        return {cid: (futures[cid].result(), jobs[cid][3], _tree(jobs[cid][0])) for cid in jobs}
-
-
-def test_corpus_is_big_enough():
-    ids = [c.id for c in corpus.CASES]
-    assert len(ids) == len(set(ids)) and len(ids) >= 40
-
-
-@pytest.mark.parametrize("case", corpus.CASES, ids=lambda c: c.id)
-def test_bad_input_fails_cleanly(results, case):
-    proc, before, after = results[case.id]
+def one_error_line(proc: subprocess.CompletedProcess, message: str) -> None:
     lines = proc.stderr.strip().splitlines()
     assert proc.returncode == 2, (proc.returncode, proc.stderr[-2000:])
     assert "Traceback" not in proc.stderr + proc.stdout
     assert len(lines) == 1 and lines[0].startswith("error: "), proc.stderr[-2000:]
-    assert case.message in lines[0], lines[0]
+    assert message in lines[0], lines[0]
     assert len(lines[0]) < 600
+
+
+@pytest.fixture(scope="module")
+def results(tmp_path_factory, plugin_env, tiny):
+    """Run the sample once, in parallel: id -> (process, files before, files after)."""
+    root = tmp_path_factory.mktemp("corpus")
+    jobs = {}
+    for case in SAMPLE:
+        folder = root / case.id
+        corpus.write(case, folder)
+        args = [case.command, *[a.replace("{tiny}", str(tiny)) for a in case.args]]
+        jobs[case.id] = (folder, args, {**plugin_env, **case.env}, _tree(folder))
+    with ThreadPoolExecutor(max_workers=len(jobs)) as pool:
+        futures = {cid: pool.submit(_run, args, folder, env) for cid, (folder, args, env, _) in jobs.items()}
+        return {cid: (futures[cid].result(), jobs[cid][3], _tree(jobs[cid][0])) for cid in jobs}
+
+
+def test_the_sample_names_each_reason_once():
+    assert sorted(c.id for c in SAMPLE) == sorted(REAL_PROCESS)
+
+
+@pytest.mark.parametrize("case", SAMPLE, ids=lambda c: c.id)
+def test_bad_input_fails_cleanly_in_a_real_process(results, case):
+    proc, before, after = results[case.id]
+    one_error_line(proc, case.message)
     assert after == before  # nothing written, nothing half-written
 
 
-def test_path_like_image_names_stay_inside_the_output_folder(tmp_path, plugin_env):
-    tiny = write_tiny_template(tmp_path / "tiny")
+def test_error_after_blender_loaded_reaches_stderr(tmp_path, plugin_env, tiny):
+    """The renderer starts before the output folder is locked: the error comes after ``import bpy``,
+    and the run leaves through ``os._exit`` (main), which must not lose the line."""
+    pytest.importorskip("bpy")
+    (tmp_path / "in.csv").write_bytes(corpus.GOOD)
+    (tmp_path / "o").mkdir()
+    lock_fd = os.open(tmp_path / "o", os.O_RDONLY)
+    fcntl.flock(lock_fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # "another run" holds the folder
+    try:
+        before = _tree(tmp_path)
+        proc = _run(["render", "in.csv", "--out", "o", "--renderer", "blender", "--template", str(tiny),
+                     "--views", "lateral-left", "--size", "32x32", "--quality", "fast", "-q"], tmp_path,
+                    plugin_env)
+    finally:
+        os.close(lock_fd)
+    one_error_line(proc, "is in use by another brainpainter run")
+    assert _tree(tmp_path) == before
+
+
+def test_path_like_image_names_stay_inside_the_output_folder(tmp_path, plugin_env, tiny):
     work = tmp_path / "a" / "b" / "work"
     work.mkdir(parents=True)
     rows = "".join(f'"{name}",{i}\n' for i, name in enumerate(corpus.SAFE))
@@ -125,9 +147,9 @@ PEAK_KB = ("def peak_kb():\n"
            "            return int(line.split()[1])\n")
 
 
-def test_fifty_megabytes_are_refused_with_little_memory(tmp_path, plugin_env):
-    big = tmp_path / "big.csv"
-    corpus._big_table(big)
+@pytest.mark.slow
+def test_fifty_megabytes_are_refused_with_little_memory(big_files, plugin_env):
+    big = big_files[corpus._big_table]
     assert big.stat().st_size > 50 * 2**20
     code = ("import sys\nfrom brainpainter.table.region_table import read_table\n"
             "try:\n    read_table(sys.argv[1])\nexcept Exception as exc:\n    print(type(exc).__name__)\n"
@@ -139,6 +161,7 @@ def test_fifty_megabytes_are_refused_with_little_memory(tmp_path, plugin_env):
     assert int(peak_kb) < 200 * 1024  # the file is never loaded (peak RSS of the whole interpreter)
 
 
+@pytest.mark.slow
 def test_largest_accepted_file_reads_in_bounded_memory(tmp_path, plugin_env):
     """A 30 MB table (just under the 32 MB limit) is read; peak memory stays under 20x its size."""
     path = tmp_path / "30mb.csv"

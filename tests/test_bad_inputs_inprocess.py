@@ -1,39 +1,33 @@
-"""The in-process half of the bad-input corpus (``corpus.INPROCESS``), run through the CLI guard.
+"""The whole bad-input corpus (``corpus.CASES`` and ``corpus.INPROCESS``), in-process through the CLI.
 
-Each case runs :func:`brainpainter.cli.guard.run` (what ``brainpainter`` runs)
-in click's ``CliRunner`` isolation, inside its own folder, with a stand-in
-renderer: a user error must give exit code 2, exactly one line on stderr
-(``error: ...`` with the expected text), no traceback, and leave the case
-folder, HOME and the temporary folder exactly as they were. Accepted cases
-(``code=0``) must print the expected warning and write only into ``o/``.
+Each case runs :func:`brainpainter.cli.main.main` (what the ``brainpainter``
+console script runs, given the arguments) in click's ``CliRunner`` isolation,
+inside its own folder, with a stand-in renderer registered as ``solid``: a
+user error must give exit code 2, exactly one line on stderr (``error: ...``
+with the expected text), no traceback, and leave the case folder, HOME and
+the temporary folder exactly as they were. Accepted cases (``code=0``) must
+print the expected warning and write only into ``o/``. What only a real
+process shows (the console entry point, signals, os._exit, real streams and
+file descriptors) is checked on a sample in test_bad_inputs.py.
 """
 
 from __future__ import annotations
 
 import fcntl
 import importlib
-import importlib.util
 import os
-import sys
 import tempfile
 from pathlib import Path
 
 import pytest
+from bad_inputs import corpus
 from click.testing import CliRunner
 
 from brainpainter.atlas import registry
-from brainpainter.cli.guard import run
-from brainpainter.cli.main import cli
+from brainpainter.cli.main import main
 from brainpainter.testing import stand_in, write_tiny_template
 
-HERE = Path(__file__).parent
-if "bad_input_corpus" in sys.modules:
-    corpus = sys.modules["bad_input_corpus"]
-else:
-    _spec = importlib.util.spec_from_file_location("bad_input_corpus", HERE / "bad_inputs" / "corpus.py")
-    corpus = importlib.util.module_from_spec(_spec)
-    sys.modules[_spec.name] = corpus
-    _spec.loader.exec_module(corpus)
+ALL = [*corpus.CASES, *corpus.INPROCESS]
 
 
 def _tree(folder: Path) -> dict[str, int]:
@@ -51,51 +45,67 @@ def tiny(tmp_path_factory) -> Path:
     return write_tiny_template(tmp_path_factory.mktemp("tpl") / "tiny")
 
 
-def invoke(args: list[str], env: dict[str, str] | None = None) -> tuple[int, str, str]:
+def invoke(args: list[str]) -> tuple[int, str, str]:
     """Run the CLI in-process as ``brainpainter ARGS``: (exit code, stdout, stderr)."""
     runner = CliRunner()
-    with runner.isolation(env=env) as (out, err, _):
-        code = run(cli, args)
+    with runner.isolation() as (out, err, _):
+        try:
+            main(args)
+            code = 0
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else 1
     return code, out.getvalue().decode(), err.getvalue().decode() if err else ""
 
 
 def test_corpus_has_150_cases_of_every_class():
-    ids = [c.id for c in corpus.CASES] + [c.id for c in corpus.INPROCESS]
+    ids = [c.id for c in ALL]
     assert len(ids) == len(set(ids))
     assert len(ids) >= 150, len(ids)
-    commands = {c.command for c in corpus.INPROCESS}
+    commands = {c.command for c in ALL}
     assert {"check", "render", "figure", "movie", "atlas", "template"} <= commands
 
 
-@pytest.mark.parametrize("case", corpus.INPROCESS, ids=lambda c: c.id)
-def test_bad_input_in_process(case, tmp_path, tiny, monkeypatch):
-    folder = tmp_path / "case"
-    corpus.write(case, folder)
+def _prepare(case: corpus.Case, folder: Path, monkeypatch: pytest.MonkeyPatch, request) -> Path:
+    """Write the case, apply its patches and environment, give it an empty TMPDIR (returned)."""
+    shared = request.getfixturevalue("big_files") if corpus._big_table in case.files.values() else None
+    corpus.write(case, folder, shared)
+    if case.lock:
+        (folder / case.lock).mkdir(exist_ok=True)
     for target, value in case.patch.items():
         module, attr = target.split(":")
         monkeypatch.setattr(importlib.import_module(module), attr, value)
     for key, value in case.env.items():
         monkeypatch.setenv(key, value)
-    temp = tmp_path / "tmp"
+    temp = folder.parent / "tmp"
     temp.mkdir()
     monkeypatch.setenv("TMPDIR", str(temp))
     monkeypatch.setattr(tempfile, "tempdir", str(temp))
-    home = Path(os.environ["HOME"])
     monkeypatch.chdir(folder)
-    args = [case.command, *[a.replace("{tiny}", str(tiny)) for a in case.args]]
+    return temp
+
+
+def _run_locked(case: corpus.Case, folder: Path, args: list[str]) -> tuple[int, str, str]:
     lock_fd = None
     if case.lock:
-        (folder / case.lock).mkdir(exist_ok=True)
         lock_fd = os.open(folder / case.lock, os.O_RDONLY)
         fcntl.flock(lock_fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # "another run" holds the folder
-    before, home_before = _tree(folder), _tree(home)
     try:
         with stand_in("solid"):
-            code, out, err = invoke(args)
+            return invoke(args)
     finally:
         if lock_fd is not None:
             os.close(lock_fd)
         registry.atlases.reset()
+
+
+@pytest.mark.parametrize("case", ALL, ids=lambda c: c.id)
+def test_bad_input_in_process(case, tmp_path, tiny, monkeypatch, request):
+    folder = tmp_path / "case"
+    temp = _prepare(case, folder, monkeypatch, request)
+    home = Path(os.environ["HOME"])
+    args = [case.command, *[a.replace("{tiny}", str(tiny)) for a in case.args]]
+    before, home_before = _tree(folder), _tree(home)
+    code, out, err = _run_locked(case, folder, args)
     lines = err.strip().splitlines()
     assert "Traceback" not in out + err
     assert _tree(temp) == {}, "temporary files left behind"

@@ -7,9 +7,8 @@ import json
 import pytest
 from click.testing import CliRunner
 
-from brainpainter.atlas import registry
 from brainpainter.cli.main import cli, main
-from brainpainter.testing import write_tiny_template
+from brainpainter.testing import stand_in, write_tiny_template
 
 GOOD = ("Image-name-unique,Left-insula,lh_precuneus_thickness,eTIV,Age,Left-insulaa\n"
         "A,1,2,1500000,30,1\nB,2,,1,31,2\n")
@@ -100,23 +99,8 @@ def test_several_inputs_are_merged(tmp_path):
     assert any("not in" in n for n in report["notes"])
 
 
-class _Blank:
-    def __init__(self, scene):
-        self.scene = scene
-
-    def render(self, colors, view):
-        import numpy as np
-
-        s = self.scene.settings
-        return np.full((s.height, s.width, 4), 255, np.uint8)
-
-    def close(self):
-        pass
-
-
 def test_render_prints_the_summary_line_and_writes_it_to_the_manifest(tmp_path):
-    registry.renderers.register("blank", lambda: _Blank, replace=True)
-    try:
+    with stand_in("blank"):
         tiny = write_tiny_template(tmp_path / "tiny")
         path = tmp_path / "in.csv"
         path.write_text("Structure;d\nL_insula;0,5\nRhippo;1,25\nICV;3\n")
@@ -134,5 +118,3 @@ def test_render_prints_the_summary_line_and_writes_it_to_the_manifest(tmp_path):
         assert summary["value_range"] == [0.5, 1.25] and summary["inputs"][0]["shape"]["value_column"] == "d"
         assert any("decimal commas" in n for n in summary["notes"])
         assert sorted(p.name for p in out.iterdir()) == ["d_lateral-left.png", "manifest.json"]
-    finally:
-        registry.renderers.unregister("blank")

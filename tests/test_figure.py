@@ -19,41 +19,20 @@ from PIL import Image
 from brainpainter.errors import BrainPainterError
 from brainpainter.media.colorbar import bar_colors
 from brainpainter.media.figure import common_crop, content_box, make_figure, select_rows
-from brainpainter.testing import registered_renderer, write_tiny_template
+from brainpainter.testing import StandInRenderer, stand_in, write_tiny_template
 
 REGIONS = ("Left-insula", "Left-precuneus")
 W, H = 160, 120
 THREE = "Image-name-unique,Left-insula,Left-precuneus\nstage-1,0,0\nstage-2,1.5,1\nstage-3,3,2\n"
 
 
-class StripeRenderer:
-    """A 'brain' in the middle of the image: one stripe per region of REGIONS, in its colour."""
-
-    def __init__(self, scene):
-        self.scene = scene
-
-    def render(self, colors, view):
-        s = self.scene.settings
-        img = np.zeros((s.height, s.width, 4), np.uint8)
-        if s.background is not None:
-            img[..., :3] = np.round(np.array(s.background) * 255)
-            img[..., 3] = 255
-        top, bottom = s.height // 4, 3 * s.height // 4
-        if view.content == "subcortical":  # a smaller brain in this view
-            top, bottom = s.height // 3, 2 * s.height // 3
-        edges = np.linspace(s.width // 8, s.width - s.width // 8, len(REGIONS) + 1).astype(int)
-        for k, key in enumerate(REGIONS):
-            img[top:bottom, edges[k]:edges[k + 1], :3] = np.round(np.array(colors[key]) * 255)
-            img[top:bottom, edges[k]:edges[k + 1], 3] = 255
-        return img
-
-    def close(self):
-        pass
+#: A 'brain' in the middle of the image: one stripe per region of REGIONS, in its colour.
+Stripes = StandInRenderer.with_(layout="band", regions=REGIONS)
 
 
 @pytest.fixture
 def stripes():
-    with registered_renderer("stripes", StripeRenderer) as registered:
+    with stand_in("stripes", Stripes) as registered:
         yield registered
 
 

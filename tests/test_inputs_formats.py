@@ -21,7 +21,7 @@ import pytest
 from brainpainter.atlas.model import get_atlas
 from brainpainter.rendering.painter import render
 from brainpainter.table.region_table import read_table
-from brainpainter.testing import registered_renderer, write_tiny_template
+from brainpainter.testing import StandInRenderer, stand_in, write_tiny_template
 
 PARC = {"dk": "aparc", "destrieux": "aparc.a2009s", "dkt": "aparc.DKTatlas"}
 ENIGMA_SUBCORTICAL = ["LLatVent", "RLatVent", "Lthal", "Rthal", "Lcaud", "Rcaud", "Lput", "Rput", "Lpal",
@@ -251,27 +251,13 @@ def test_ggseg_long_table(tmp_path):
 
 
 # -- rendering ------------------------------------------------------------------------------
-class KeyStripRenderer:
-    """Stand-in renderer: pixel (0, k) has the colour of the atlas's k-th region key."""
-
-    def __init__(self, scene):
-        self.scene = scene
-
-    def render(self, colors, view):
-        s = self.scene.settings
-        img = np.zeros((s.height, s.width, 4), np.uint8)
-        rgb = np.round(np.array(list(colors.values())) * 255).astype(np.uint8)[: s.width]
-        img[0, : len(rgb), :3] = rgb
-        img[..., 3] = 255
-        return img
-
-    def close(self):
-        pass
+#: Stand-in renderer: pixel (0, k) has the colour of the atlas's k-th region key.
+KeyStrip = StandInRenderer.with_(layout="keys")
 
 
 @pytest.fixture
 def strip():
-    with registered_renderer("keystrip", KeyStripRenderer) as registered:
+    with stand_in("keystrip", KeyStrip) as registered:
         yield registered
 
 

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import subprocess
 import sys
-import typing
 
 import numpy as np
 import pytest
@@ -26,42 +25,18 @@ from brainpainter.media.movie import (
     make_movie,
     plan_frames,
 )
-from brainpainter.testing import registered_renderer, write_tiny_template
+from brainpainter.testing import StandInRenderer, registered_renderer, stand_in, write_tiny_template
 
 REGIONS = ("Left-insula", "Left-precuneus")
 W, H = 160, 120
 
 
-class StripeRenderer:
-    """Paints stripe k (of the middle half of the image) in the colour of REGIONS[k]."""
+def _fails_after_three(n: int) -> BaseException | None:
+    return BrainPainterError("stand-in renderer failed on purpose") if n > 3 else None
 
-    views: typing.ClassVar[list] = []
-    fail_after: int | None = None
 
-    def __init__(self, scene):
-        self.scene = scene
-        self.n = 0
-
-    def render(self, colors, view):
-        type(self).views.append(view)
-        self.n += 1
-        if self.fail_after is not None and self.n > self.fail_after:
-            raise BrainPainterError("stand-in renderer failed on purpose")
-        s = self.scene.settings
-        img = np.zeros((s.height, s.width, 4), np.uint8)
-        if s.background is not None:
-            img[..., :3] = np.round(np.array(s.background) * 255)
-            img[..., 3] = 255
-        x0, x1 = s.width // 8, s.width - s.width // 8
-        edges = np.linspace(x0, x1, len(REGIONS) + 1).astype(int)
-        for k, key in enumerate(REGIONS):
-            img[s.height // 4: 3 * s.height // 4, edges[k]:edges[k + 1], :3] = np.round(
-                np.array(colors[key]) * 255)
-            img[s.height // 4: 3 * s.height // 4, edges[k]:edges[k + 1], 3] = 255
-        return img
-
-    def close(self):
-        pass
+#: The stand-in paints stripe k (of the middle half of the image) in the colour of REGIONS[k].
+Stripes = StandInRenderer.with_(layout="band", regions=REGIONS)
 
 
 def stripe_centre(k: int) -> tuple[int, int]:
@@ -72,9 +47,7 @@ def stripe_centre(k: int) -> tuple[int, int]:
 
 @pytest.fixture
 def stripes():
-    StripeRenderer.views = []
-    StripeRenderer.fail_after = None
-    with registered_renderer("stripes", StripeRenderer) as registered:
+    with stand_in("stripes", Stripes) as registered:
         yield registered
 
 
@@ -244,10 +217,10 @@ def test_orbit_turns_the_camera_at_a_fixed_scale(tmp_path, stripes, tiny):
     # anterior: both hemispheres (two spheres side by side in the tiny template), from the front
     result = make_movie(data, "dk", out=tmp_path / "o.gif", views="anterior", frames_per_step=4,
                         orbit=360, template=tiny, renderer=stripes, width=W, height=H, progress=False)
-    az = [v.azimuth for v in StripeRenderer.views]
+    az = [view.azimuth for _, view in Stripes.calls]
     assert len(az) == result.n_frames == 5 and az[0] == 90.0
     assert np.allclose(np.diff(az) % 360, 72.0)  # 360 degrees over 5 frames: the loop closes
-    zooms = np.array([v.zoom for v in StripeRenderer.views])
+    zooms = np.array([view.zoom for _, view in Stripes.calls])
     # every direction is framed at the scale of the widest one (tight framing / zoom), so the
     # brain keeps its size on screen as it turns
     assert zooms.max() <= 1.0 + 1e-9 and zooms.min() < 0.9
@@ -260,16 +233,16 @@ def test_several_views_side_by_side(tmp_path, stripes, tiny):
                         frames_per_step=2, template=tiny, renderer=stripes, width=W, height=H,
                         title="progression", progress=False)
     assert result.frame_size[0] == 2 * W
-    assert [v.name for v in StripeRenderer.views[:2]] == ["lateral-left", "medial-left"]
+    assert [view.name for _, view in Stripes.calls[:2]] == ["lateral-left", "medial-left"]
 
 
 def test_a_failure_while_rendering_leaves_no_file(tmp_path, stripes, tiny):
     data = table(tmp_path, "Image-name-unique,Left-insula\nA,0\nB,3\n")
     out_dir = tmp_path / "out"
     out_dir.mkdir()
-    StripeRenderer.fail_after = 3
     for name in ("m.mp4", "m.gif"):
-        with pytest.raises(BrainPainterError, match="on purpose"):
+        failing = Stripes.with_(fail=_fails_after_three)  # the 4th image of each movie fails
+        with registered_renderer(stripes, failing), pytest.raises(BrainPainterError, match="on purpose"):
             make_movie(data, "dk", out=out_dir / name, views="lateral-left", frames_per_step=6,
                        template=tiny, renderer=stripes, width=W, height=H, progress=False)
     assert list(out_dir.iterdir()) == []

@@ -4,8 +4,8 @@ Every test checks the guarantees of docs/reliability.md: one line on stderr
 and the documented exit code, nothing published by a failed run, no staging
 folder left by a run that could clean up, a manifest that always describes
 the files beside it (0 stale manifests), and nothing written outside the
-output folder. A stand-in renderer plugin (installed as a fake distribution)
-paints flat or noisy images, optionally slowly, so runs can be interrupted.
+output folder. The stand-in renderer, installed as a plugin (a fake
+distribution), paints noisy images or not, optionally slowly, so runs can be interrupted.
 """
 
 from __future__ import annotations
@@ -22,31 +22,15 @@ import pytest
 
 from brainpainter.testing import fake_distribution, write_tiny_template
 
-PLUGIN = '''
-import os, time
-import numpy as np
+# The stand-in renderer as an installed plugin: BP_DELAY seconds an image; BP_NOISE=1 incompressible pixels.
+PLUGIN = """
+import os
 
+from brainpainter.testing import StandInRenderer
 
-class SlowRenderer:
-    def __init__(self, scene):
-        self.scene = scene
-        self.delay = float(os.environ.get("BP_DELAY", "0"))
-        self.noise = os.environ.get("BP_NOISE") == "1"
-        self.rng = np.random.default_rng(0)
-
-    def render(self, colors, view):
-        time.sleep(self.delay)
-        s = self.scene.settings
-        if self.noise:
-            img = self.rng.integers(0, 256, (s.height, s.width, 4), dtype=np.uint8)
-        else:
-            img = np.zeros((s.height, s.width, 4), np.uint8)
-        img[..., 3] = 255
-        return img
-
-    def close(self):
-        pass
-'''
+SlowRenderer = StandInRenderer.with_(delay=float(os.environ.get("BP_DELAY", "0")),
+                                     noise=os.environ.get("BP_NOISE") == "1")
+"""
 
 
 @pytest.fixture(scope="module")

@@ -15,32 +15,15 @@ from PIL import Image
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.rendering.painter import Painter, render, resolve_hidden
-from brainpainter.testing import registered_renderer, write_tiny_template
+from brainpainter.testing import StandInRenderer, stand_in, write_tiny_template
 
-
-class SolidRenderer:
-    instances = 0
-
-    def __init__(self, scene):
-        type(self).instances += 1
-        self.scene = scene
-
-    def render(self, colors, view):
-        s = self.scene.settings
-        rgb = np.round(np.array(colors["Left-insula"]) * 255).astype(np.uint8)
-        img = np.zeros((s.height, s.width, 4), np.uint8)
-        img[..., :3] = rgb
-        img[..., 3] = 255
-        return img
-
-    def close(self):
-        pass
+#: Paints each image in the colour of Left-insula.
+Solid = StandInRenderer.with_(layout="solid", regions=("Left-insula",))
 
 
 @pytest.fixture
 def solid():
-    SolidRenderer.instances = 0
-    with registered_renderer("solid", SolidRenderer) as registered:
+    with stand_in("solid", Solid) as registered:
         yield registered
 
 
@@ -63,7 +46,7 @@ def test_one_png_per_row_and_view_with_manifest(tmp_path, solid, tiny):
     names = sorted(p.name for p in out.iterdir())
     views = ("lateral-left", "medial-left", "subcortical")
     assert names == sorted([f"{i}_{v}.png" for i in "AB" for v in views] + ["manifest.json"])
-    assert SolidRenderer.instances == 1  # scene loaded once for all 6 images
+    assert Solid.scenes == 1  # scene loaded once for all 6 images
     manifest = json.loads((out / "manifest.json").read_text())
     pairs = [(f["image"], f["view"]) for f in manifest["files"]]
     assert pairs[:2] == [("A", "lateral-left"), ("A", "medial-left")]

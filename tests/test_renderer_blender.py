@@ -7,7 +7,6 @@ with the real template format. Tests that render are marked ``render``.
 
 from __future__ import annotations
 
-import json
 import os
 import subprocess
 import sys
@@ -23,6 +22,7 @@ from brainpainter.errors import BrainPainterError
 from brainpainter.rendering import framing as camera
 from brainpainter.rendering.scene import RenderSettings, Scene
 from brainpainter.rendering.views import PRESETS, View, get_view
+from brainpainter.testing import CortexMesh, Structure, write_template
 
 ROOT = Path(__file__).resolve().parents[1]
 REGIONS = ("unknown", "antsup", "antinf", "postsup", "postinf")
@@ -47,14 +47,8 @@ def _ellipsoid(centre, radii, subdivisions=4) -> trimesh.Trimesh:
 
 
 def _write_template(path: Path) -> Path:
-    """A two-hemisphere template in brainpainter's template format."""
-    path.mkdir(parents=True, exist_ok=True)
-    manifest = {
-        "format": "brainpainter-template", "format_version": 1, "name": "synthetic",
-        "surfaces": ["pial", "white", "inflated"], "labels": {"test": {"cortex": {}}},
-        "glass": {}, "bounds": {},
-    }
-    allv = []
+    """A two-hemisphere template of ellipsoids (label set "test"), written with the test template writer."""
+    cortex, glass = {}, {}
     for hemi, centre in CENTRES.items():
         m = _ellipsoid(np.array(centre), RADII)
         v = m.vertices.astype(np.float32)
@@ -63,33 +57,15 @@ def _write_template(path: Path) -> Path:
         label = 1 + (c[:, 1] < 0) * 2 + (c[:, 2] < 0)  # antsup, antinf, postsup, postinf
         label = np.where(medial, 0, label).astype(np.int16)
         shift = np.float32(-8 if hemi == "lh" else 8)
-        inflated = v * np.float32(1.1) + np.array([shift, 0, 0], np.float32)
-        file = f"cortex-{hemi}-test.npz"
-        np.savez_compressed(path / file, faces=m.faces.astype(np.int32), face_label=label,
-                            pial=v, white=v * np.float32(0.9), inflated=inflated,
-                            source_vertex=np.arange(len(v), dtype=np.int32))
-        manifest["labels"]["test"]["cortex"][hemi] = {"file": file, "names": list(REGIONS)}
+        cortex[hemi] = CortexMesh(v, m.faces.astype(np.int32), label, REGIONS, white=v * np.float32(0.9),
+                                  inflated=v * np.float32(1.1) + np.array([shift, 0, 0], np.float32))
         g = _ellipsoid(np.array(centre), RADII * 1.06, subdivisions=3)
-        np.savez_compressed(path / f"glass-{hemi}.npz", vertices=g.vertices.astype(np.float32),
-                            faces=g.faces.astype(np.int32))
-        manifest["glass"][hemi] = {"file": f"glass-{hemi}.npz"}
-        allv.append(v)
-    verts, faces, labels, off = [], [], [], 0
-    for i, (centre, size) in enumerate(STRUCTURES.values()):
-        box = trimesh.creation.box(extents=(size, size, size))
-        verts.append(box.vertices + centre)
-        faces.append(box.faces + off)
-        labels.append(np.full(len(box.faces), i))
-        off += len(box.vertices)
-    np.savez_compressed(path / "subcortical.npz", vertices=np.vstack(verts).astype(np.float32),
-                        faces=np.vstack(faces).astype(np.int32),
-                        face_label=np.concatenate(labels).astype(np.int16))
-    manifest["subcortical"] = {"file": "subcortical.npz",
-                               "structures": [{"name": n} for n in STRUCTURES]}
-    allv = np.vstack(allv)
-    manifest["bounds"]["pial"] = [allv.min(0).tolist(), allv.max(0).tolist()]
-    (path / "manifest.json").write_text(json.dumps(manifest), encoding="utf-8")
-    return path
+        glass[hemi] = (g.vertices.astype(np.float32), g.faces.astype(np.int32))
+    boxes = {name: (trimesh.creation.box(extents=(size, size, size)), centre)
+             for name, (centre, size) in STRUCTURES.items()}
+    structures = [Structure(name, (box.vertices + centre).astype(np.float32), box.faces.astype(np.int32))
+                  for name, (box, centre) in boxes.items()]
+    return write_template(path, {"test": cortex}, structures, glass, name="synthetic")
 
 
 @pytest.fixture(scope="module")

@@ -223,21 +223,13 @@ def test_gif_memory_does_not_grow_with_frames(tmp_path):
 def test_sigterm_cleans_up_and_exits_143(tmp_path, monkeypatch):
     from brainpainter.cli.guard import Terminated, run
     from brainpainter.cli.main import cli
-    from brainpainter.testing import StandInRenderer, registered_renderer, write_tiny_template
+    from brainpainter.testing import StandInRenderer, stand_in, write_tiny_template
 
-    class Dies(StandInRenderer):
-        n = 0
-
-        def render(self, colors, view):
-            type(self).n += 1
-            if type(self).n == 2:
-                raise Terminated()
-            return super().render(colors, view)
-
+    dies = StandInRenderer.with_(fail=lambda n: Terminated() if n == 2 else None)  # SIGTERM at image 2
     tiny = write_tiny_template(tmp_path / "tiny")
     (tmp_path / "in.csv").write_text("Image-name-unique,Left-insula\na,1\nb,2\nc,3\n")
     monkeypatch.chdir(tmp_path)
-    with registered_renderer("dies", Dies), CliRunner().isolation() as (_out, err, _):
+    with stand_in("dies", dies), CliRunner().isolation() as (_out, err, _):
         code = run(cli, ["render", "in.csv", "--out", "o", "--renderer", "dies", "--template", str(tiny),
                          "--views", "lateral-left", "--size", "16x16", "-q"])
     assert code == 143
@@ -262,20 +254,12 @@ def test_internal_error_is_one_line(monkeypatch):
 
 def test_check_and_render_agree_on_every_check_case(tmp_path, monkeypatch):
     """Every table 'check' refuses, 'render' refuses with the same line (one shared validation)."""
-    import importlib.util
-    import sys
+    from bad_inputs import corpus
 
     from brainpainter.cli.guard import run
     from brainpainter.cli.main import cli
     from brainpainter.testing import stand_in, write_tiny_template
 
-    corpus = sys.modules.get("bad_input_corpus")
-    if corpus is None:
-        spec = importlib.util.spec_from_file_location("bad_input_corpus",
-                                                      Path(__file__).parent / "bad_inputs" / "corpus.py")
-        corpus = importlib.util.module_from_spec(spec)
-        sys.modules[spec.name] = corpus
-        spec.loader.exec_module(corpus)
     tiny = write_tiny_template(tmp_path / "tiny")
     cases = [c for c in corpus.CASES if c.command == "check" and not c.env and c.id != "50-MB-file"]
     assert len(cases) > 40

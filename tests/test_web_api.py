@@ -6,16 +6,15 @@ renderer (an installed entry point), so these tests need no Blender.
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import logging
 import re
 import sys
 from html.parser import HTMLParser
-from pathlib import Path
 
 import numpy as np
 import pytest
+from bad_inputs import corpus
 from web_support import EXAMPLE, STANDIN, env_with_site, png_pixels, standin_site, wait_for, zip_pngs
 
 pytest.importorskip("fastapi")
@@ -24,12 +23,6 @@ from fastapi.testclient import TestClient
 from brainpainter.web.app import create_app
 from brainpainter.web.config import ServerConfig
 from brainpainter.web.store import Store
-
-HERE = Path(__file__).parent
-_spec = importlib.util.spec_from_file_location("bad_input_corpus", HERE / "bad_inputs" / "corpus.py")
-corpus = importlib.util.module_from_spec(_spec)
-sys.modules.setdefault(_spec.name, corpus)
-_spec.loader.exec_module(corpus)
 
 SMALL = {"size": "64x48", "views": "lateral-left,subcortical"}
 
@@ -171,12 +164,13 @@ NOT_UPLOADS = {"missing-file", "device-file", "same-region-in-two-inputs", "name
 
 
 @pytest.mark.parametrize("case", [c for c in corpus.CASES if c.id not in NOT_UPLOADS], ids=lambda c: c.id)
-def test_bad_input_corpus_through_the_upload_path(server, case, tmp_path, monkeypatch):
+def test_bad_input_corpus_through_the_upload_path(server, case, tmp_path, monkeypatch, big_files):
     store: Store = server.app.state.store
     for k, v in case.env.items():
         monkeypatch.setenv(k, v)
-    corpus.write(case, tmp_path)
-    inputs, params = _check_params(case.args)
+    corpus.write(case, tmp_path, big_files)
+    stand_in = case.command == "render" and case.args[-len(corpus.STAND_IN):] == corpus.STAND_IN
+    inputs, params = _check_params(case.args[: -len(corpus.STAND_IN)] if stand_in else case.args)
     assert len(inputs) == 1
     data = (tmp_path / inputs[0]).read_bytes()
     before_uploads = sorted(p.name for p in (store.root / "uploads").iterdir())

@@ -2,18 +2,18 @@
 """The bad-input corpus: malformed and hostile tables, each with its expected one-line error.
 
 Every case is generated (nothing large is committed): ``write(case, folder)``
-writes its files into an empty folder, and the test runs the real CLI there
-(``python -m brainpainter check|render ...``) and expects exit code 2, one
-line on stderr containing ``case.message``, no traceback and no file written.
+writes its files into an empty folder, and the test runs the CLI there
+(``brainpainter check|render ...``, in-process through click's ``CliRunner``
+streams; a sample also as a real process) and expects exit code 2, one line
+on stderr containing ``case.message``, no traceback and no file written.
 
 ``SAFE`` lists hostile inputs that are *accepted*: image names that look like
 paths are sanitised into file names inside the output folder.
 
 ``INPROCESS`` lists more cases of every class (output safety, the input
-opener, bombs, ambiguity, non-finite options, configs, locks); they run in
-the test process through :func:`brainpainter.cli.guard.run` with click's
-``CliRunner`` streams, which is fast, and are checked the same way.
-Arguments may hold ``{tiny}``: the path of a tiny synthetic template.
+opener, bombs, ambiguity, non-finite options, configs, locks), which need
+what only the in-process harness gives (patched limits, held locks, the tiny
+template): arguments may hold ``{tiny}``, the path of a tiny synthetic template.
 
 Run ``python tests/bad_inputs/corpus.py FOLDER`` to write the whole corpus
 to FOLDER (one sub-folder per case) for manual inspection.
@@ -124,6 +124,8 @@ PNG = b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\x00\x00\x00\x01\x00\x00\x00\x01\x08\
 GOOD = csv(HEADER.strip(), "A,1,2")
 DESTRIEUX = csv("Image-name-unique,Left-G_cuneus,Right-S_central", "A,1,2")
 LONG = csv("Structure,d.icv,se.icv", "L_insula,0.2,0.1", "R_insula,0.3,0.1")
+#: What the render cases of CASES add: an output folder and the stand-in renderer (default template).
+STAND_IN = ["--out", "out", "--renderer", "solid", "--quiet"]
 
 CASES: list[Case] = [
     # -- empty and truncated ------------------------------------------------------------------
@@ -194,7 +196,7 @@ CASES: list[Case] = [
     Case("inf", {"in.csv": csv(HEADER.strip(), "A,inf,1")}, ["in.csv"], "is infinite"),
     Case("minus-infinity", {"in.csv": csv(HEADER.strip(), "A,1,-Infinity")}, ["in.csv"], "is infinite"),
     Case("overflow-to-inf", {"in.csv": csv(HEADER.strip(), "A,1e999,1")}, ["in.csv"], "is infinite"),
-    Case("render-non-numeric", {"in.csv": csv(HEADER.strip(), "A,1,high")}, ["in.csv"],
+    Case("render-non-numeric", {"in.csv": csv(HEADER.strip(), "A,1,high")}, ["in.csv", *STAND_IN],
          "'high', which is not a number", command="render"),
     Case("check-collide-as-files", {"in.csv": csv(HEADER.strip(), "a/B,1,2", "a_b,2,3")}, ["in.csv"],
          "become the same file name"),
@@ -208,8 +210,8 @@ CASES: list[Case] = [
          "'A' appears at line 2 and line 3"),
     Case("image-names-differ-in-case", {"in.csv": csv(HEADER.strip(), "sub-A,1,2", "sub-a,2,3")}, ["in.csv"],
          "differ only in case"),
-    Case("image-names-collide-as-files", {"in.csv": csv(HEADER.strip(), "a/b,1,2", "a:b,2,3")}, ["in.csv"],
-         "become the same file name", command="render"),
+    Case("image-names-collide-as-files", {"in.csv": csv(HEADER.strip(), "a/b,1,2", "a:b,2,3")},
+         ["in.csv", *STAND_IN], "become the same file name", command="render"),
     Case("empty-image-name", {"in.csv": csv(HEADER.strip(), ",1,2")}, ["in.csv"], "empty image name"),
     # -- options and layouts ----------------------------------------------------------------------------
     Case("image-column-missing", {"in.csv": GOOD}, ["in.csv", "--image-column", "subject"],
@@ -566,12 +568,18 @@ SAFE = {
 }
 
 
-def write(case: Case, folder: Path) -> None:
-    """Write the files of `case` into `folder`."""
+def write(case: Case, folder: Path, shared: dict[Callable[[Path], None], Path] | None = None) -> None:
+    """Write the files of `case` into `folder`.
+
+    `shared` maps a file-writing function (``_big_table``) to a file it already
+    wrote: that file is hard-linked instead of written again.
+    """
     folder.mkdir(parents=True, exist_ok=True)
     for name, content in case.files.items():
         path = folder / name
-        if callable(content):
+        if callable(content) and shared and content in shared:
+            os.link(shared[content], path)
+        elif callable(content):
             content(path)
         else:
             path.write_bytes(content)
