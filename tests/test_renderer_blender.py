@@ -22,7 +22,8 @@ from brainpainter.errors import BrainPainterError
 from brainpainter.rendering import framing as camera
 from brainpainter.rendering.scene import RenderSettings, Scene
 from brainpainter.rendering.views import PRESETS, View, get_view
-from brainpainter.testing import CortexMesh, Structure, write_template
+from brainpainter.testing import CortexMesh, Structure, growth_per_image, write_template
+from brainpainter.testing.memory import can_measure
 
 ROOT = Path(__file__).resolve().parents[1]
 REGIONS = ("unknown", "antsup", "antinf", "postsup", "postinf")
@@ -367,27 +368,38 @@ def test_deterministic_and_reusable(flat, template):
     assert np.array_equal(a, flat.render(c1, view))
 
 
-@pytest.mark.render
-def test_many_renders_do_not_grow_memory(template):
-    def rss_mb() -> float:
-        with open("/proc/self/statm") as fh:
-            return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
-
-    if not Path("/proc/self/statm").exists():
-        pytest.skip("needs /proc")
+def _blender_mb_per_image(template, leak_mb: float = 0.0) -> float:
+    """Memory growth per image of the Blender renderer (plus `leak_mb` kept per image, to test the check)."""
     r = _renderer(template, quality="fast", width=160, height=120)
     rng = np.random.default_rng(0)
     views = [get_view(n) for n in ("lateral-left", "dorsal", "subcortical")]
+    kept = []
+
+    def one(i: int) -> None:
+        r.render({"Left-antsup": tuple(rng.random(3))}, views[i % 3])
+        if leak_mb:
+            kept.append(np.ones(int(leak_mb * 2**20), np.uint8))
+
     try:
-        for i in range(15):
-            r.render({"Left-antsup": tuple(rng.random(3))}, views[i % 3])
-        before = rss_mb()
-        for i in range(60):
-            r.render({"Left-antsup": tuple(rng.random(3))}, views[i % 3])
-        grown = rss_mb() - before
+        return growth_per_image(one, n=120)
     finally:
         r.close()
-    assert grown < 25, f"memory grew by {grown:.1f} MB over 60 renders"
+
+
+@pytest.mark.render
+def test_many_renders_do_not_grow_memory(template):
+    if not can_measure():
+        pytest.skip("needs /proc")
+    grown = _blender_mb_per_image(template)
+    assert grown < 0.1, f"memory grew by {grown:.3f} MB per image over 120 renders"
+
+
+@pytest.mark.render
+def test_the_memory_check_sees_a_small_leak_beside_blender(template):
+    """The same measurement, with 0.3 MB kept per image, fails: the check would catch such a leak."""
+    if not can_measure():
+        pytest.skip("needs /proc")
+    assert _blender_mb_per_image(template, leak_mb=0.3) > 0.2
 
 
 @pytest.mark.render

@@ -17,7 +17,7 @@ import pytest
 from brainpainter.atlas.labelset import crossing_edges, smooth_crossings, split_faces
 from brainpainter.atlas.template import HEMIS, load_template
 from brainpainter.media.imagemetrics import border_ratio
-from brainpainter.testing import write_tiny_template
+from brainpainter.testing.templates import save_arrays, write_tiny_template
 from brainpainter_builder.clean import count_self_intersections, remove_self_intersections
 from brainpainter_builder.cortex import open_edge_count
 from brainpainter_builder.subcortical import BLUR_VOXELS, blur_for
@@ -88,7 +88,7 @@ def test_template_splits_faces_when_vertex_labels_are_stored(tmp_path):
         y = z["pial"][:, 1]
         z["vertex_label"] = np.where(y > 3.0, 0, 1).astype(np.int16)
         z["sulc"] = (z["pial"][:, 2] / 50).astype(np.float32)
-        np.savez_compressed(file, **z)
+        save_arrays(file, z)
     tpl = load_template(path)
     base, cm = tpl.base_cortex("dk", "lh"), tpl.cortex("dk", "lh")
     assert len(base.faces) == 1280 and len(cm.faces) > len(base.faces)

@@ -1,18 +1,24 @@
-"""Memory growth per image: resident memory sampled after each render, with a robust slope.
+"""Memory growth per image: memory sampled after each render, with a robust slope.
 
 A renderer (or a pipeline) that keeps something per image grows by that much
 per image; one-off growth (a cache filled once, the allocator taking a new
-arena) does not. :func:`growth_per_image` renders after a warm-up, samples the
-resident set size after every image and returns the Theil-Sen slope (the
+arena) does not. :func:`growth_per_image` renders after a warm-up, samples
+two measures after every image and returns the larger Theil-Sen slope (the
 median of the slopes between all pairs of samples), which ignores spikes and
-a single step but follows a steady leak even when the allocator hands out
-memory in chunks of several images.
+a single step but follows a steady leak even when memory comes in chunks of
+several images:
+
+* the resident set size, which sees every allocation (Blender's C heap too)
+  but not one that reuses memory freed earlier in the process;
+* the bytes allocated through Python and numpy since the measurement began
+  (:mod:`tracemalloc`), which sees such a leak however much memory is free.
 """
 
 from __future__ import annotations
 
 import gc
 import os
+import tracemalloc
 from collections.abc import Callable
 from pathlib import Path
 
@@ -41,7 +47,7 @@ def theil_sen(samples: ArrayLike) -> float:
 
 
 def growth_per_image(render_one: Callable[[int], object], n: int = 120, warmup: int = 20) -> float:
-    """Resident memory growth per image in MB: the Theil-Sen slope over `n` images after `warmup` ones.
+    """Memory growth per image in MB: the larger Theil-Sen slope of resident and traced memory.
 
     Parameters
     ----------
@@ -58,8 +64,16 @@ def growth_per_image(render_one: Callable[[int], object], n: int = 120, warmup: 
     for i in range(warmup):
         render_one(i)
     gc.collect()
-    samples = []
-    for i in range(n):
-        render_one(warmup + i)
-        samples.append(rss_mb())
-    return theil_sen(samples)
+    started = not tracemalloc.is_tracing()
+    if started:
+        tracemalloc.start()
+    rss, traced = [], []
+    try:
+        for i in range(n):
+            render_one(warmup + i)
+            rss.append(rss_mb())
+            traced.append(tracemalloc.get_traced_memory()[0] / 2**20)
+    finally:
+        if started:
+            tracemalloc.stop()
+    return max(theil_sen(rss), theil_sen(traced))

@@ -51,6 +51,8 @@ class StandInRenderer:
         ``fail(n)`` -> an exception to raise at this class's n-th image in this process (1-based), or None.
     leak_mb : float
         Memory kept for ever per image (a leak, for testing memory checks).
+    record : bool
+        Whether ``calls`` records each image (off for memory measurements).
     calls : list of (dict, View)
         ``(colors, view)`` of every image of this class.
     scenes, images : int
@@ -63,6 +65,7 @@ class StandInRenderer:
     noise: ClassVar[bool] = False
     fail: ClassVar[Callable[[int], BaseException | None] | None] = None
     leak_mb: ClassVar[float] = 0.0
+    record: ClassVar[bool] = True
     calls: ClassVar[list[tuple[dict[str, Any], Any]]] = []
     scenes: ClassVar[int] = 0
     images: ClassVar[int] = 0
@@ -80,7 +83,8 @@ class StandInRenderer:
     @classmethod
     def with_(cls, **params: Any) -> type[StandInRenderer]:
         """A subclass with the given parameters (see the class attributes), e.g. ``with_(delay=0.1)``."""
-        unknown = sorted(set(params) - {"layout", "regions", "delay", "noise", "fail", "leak_mb"})
+        unknown = sorted(set(params) - {"layout", "regions", "delay", "noise", "fail", "leak_mb",
+                                        "record"})
         if unknown or params.get("layout", cls.layout) not in LAYOUTS:
             raise ValueError(f"unknown stand-in parameters {unknown} or layout; layouts: {LAYOUTS}")
         if params.get("fail") is not None:
@@ -111,7 +115,8 @@ class StandInRenderer:
         """Draw one image, shape (height, width, 4), uint8 RGBA."""
         cls = type(self)
         cls.images += 1
-        cls.calls.append((dict(colors), view))
+        if cls.record:
+            cls.calls.append((dict(colors), view))
         failure = cls.fail(cls.images) if cls.fail is not None else None
         if failure is not None:
             raise failure
