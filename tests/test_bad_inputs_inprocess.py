@@ -67,7 +67,7 @@ def test_corpus_has_150_cases_of_every_class():
 
 def _prepare(case: corpus.Case, folder: Path, monkeypatch: pytest.MonkeyPatch, request) -> Path:
     """Write the case, apply its patches and environment, give it an empty TMPDIR (returned)."""
-    shared = request.getfixturevalue("big_files") if corpus._big_table in case.files.values() else None
+    shared = request.getfixturevalue("big_files") if corpus.is_big(case) else None
     corpus.write(case, folder, shared)
     if case.lock:
         (folder / case.lock).mkdir(exist_ok=True)
@@ -98,7 +98,7 @@ def _run_locked(case: corpus.Case, folder: Path, args: list[str]) -> tuple[int, 
         registry.atlases.reset()
 
 
-@pytest.mark.parametrize("case", ALL, ids=lambda c: c.id)
+@pytest.mark.parametrize("case", corpus.params(ALL))
 def test_bad_input_in_process(case, tmp_path, tiny, monkeypatch, request):
     folder = tmp_path / "case"
     temp = _prepare(case, folder, monkeypatch, request)

@@ -1,7 +1,7 @@
 """Fuzzing the reader: generated inputs, no exception but BrainPainterError.
 
-300 examples by default (seconds); ``BRAINPAINTER_FUZZ_EXAMPLES=10000``
-runs the long campaign.
+Marked ``slow``: 300 examples by default (seconds, what CI runs);
+``BRAINPAINTER_FUZZ_EXAMPLES=10000`` runs the long campaign.
 
 Each example is built in memory (bytes, dicts, DataFrames, lists of inputs)
 from one hypothesis-drawn seed, which keeps generation cheap (the whole run
@@ -21,6 +21,7 @@ import random
 
 import numpy as np
 import pandas as pd
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -146,6 +147,7 @@ STATS = {"ok": 0, "error": 0}
 EXAMPLES = int(os.environ.get("BRAINPAINTER_FUZZ_EXAMPLES", "300"))
 
 
+@pytest.mark.slow
 @settings(max_examples=EXAMPLES, deadline=None, database=None, derandomize=True,
           suppress_health_check=list(HealthCheck))
 @given(case=CASES)
@@ -169,6 +171,7 @@ def test_reader_raises_only_brainpainter_errors(case):
     assert rng is None or all(math.isfinite(v) for v in rng)
 
 
+@pytest.mark.slow
 def test_fuzz_reached_both_outcomes():
     """Runs after the fuzz test (file order): both good and bad tables were generated."""
     if STATS["ok"] + STATS["error"] == 0:  # run alone (-k): fuzz first

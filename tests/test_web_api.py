@@ -163,12 +163,12 @@ NOT_UPLOADS = {"missing-file", "device-file", "same-region-in-two-inputs", "name
                "second-input-empty"}
 
 
-@pytest.mark.parametrize("case", [c for c in corpus.CASES if c.id not in NOT_UPLOADS], ids=lambda c: c.id)
-def test_bad_input_corpus_through_the_upload_path(server, case, tmp_path, monkeypatch, big_files):
+@pytest.mark.parametrize("case", corpus.params([c for c in corpus.CASES if c.id not in NOT_UPLOADS]))
+def test_bad_input_corpus_through_the_upload_path(server, case, tmp_path, monkeypatch, request):
     store: Store = server.app.state.store
     for k, v in case.env.items():
         monkeypatch.setenv(k, v)
-    corpus.write(case, tmp_path, big_files)
+    corpus.write(case, tmp_path, request.getfixturevalue("big_files") if corpus.is_big(case) else None)
     stand_in = case.command == "render" and case.args[-len(corpus.STAND_IN):] == corpus.STAND_IN
     inputs, params = _check_params(case.args[: -len(corpus.STAND_IN)] if stand_in else case.args)
     assert len(inputs) == 1

@@ -568,6 +568,19 @@ SAFE = {
 }
 
 
+def is_big(case: Case) -> bool:
+    """Whether `case` writes a big file (tests mark it ``slow`` and share the file, see ``write``)."""
+    return _big_table in case.files.values()
+
+
+def params(cases: list[Case]) -> list[object]:
+    """`cases` as pytest parameters, the big ones marked ``slow``."""
+    import pytest
+
+    return [pytest.param(c, id=c.id, marks=pytest.mark.slow) if is_big(c) else pytest.param(c, id=c.id)
+            for c in cases]
+
+
 def write(case: Case, folder: Path, shared: dict[Callable[[Path], None], Path] | None = None) -> None:
     """Write the files of `case` into `folder`.
 
