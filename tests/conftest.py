@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import shutil
 from pathlib import Path
 
 import pytest
@@ -21,6 +23,21 @@ def _isolated_home(tmp_path_factory, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(home / ".cache"))
     monkeypatch.setenv("XDG_CONFIG_HOME", str(home / ".config"))
     monkeypatch.delenv("BRAINPAINTER_DEBUG", raising=False)
+
+
+@pytest.fixture
+def without_root_powers() -> list[str]:
+    """Command prefix that makes a process obey file permissions, also when the tests run as root.
+
+    Root ignores permission bits through its capabilities (CAP_DAC_OVERRIDE); ``setpriv`` starts
+    the command as root without any capability, so a folder without write permission refuses it
+    too. Empty for other users.
+    """
+    if os.geteuid() != 0:
+        return []
+    if shutil.which("setpriv") is None:
+        pytest.skip("running as root without setpriv (util-linux) to drop root's capabilities")
+    return ["setpriv", "--inh-caps=-all", "--bounding-set=-all", "--"]
 
 
 @pytest.fixture

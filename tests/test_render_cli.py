@@ -20,9 +20,9 @@ pytestmark = pytest.mark.render
 RED, GREEN, BLUE, YELLOW = (1.0, 0.0, 0.0), (0.0, 0.8, 0.0), (0.0, 0.0, 1.0), (1.0, 1.0, 0.0)
 
 
-def run(*args, cwd=None, env=None):
-    return subprocess.run([sys.executable, "-m", "brainpainter", *args], capture_output=True, text=True,
-                          cwd=cwd, env=env)
+def run(*args, cwd=None, env=None, prefix=()):
+    return subprocess.run([*prefix, sys.executable, "-m", "brainpainter", *args], capture_output=True,
+                          text=True, cwd=cwd, env=env)
 
 
 def test_two_row_original_csv_gives_six_pngs_and_manifest(tmp_path):
@@ -119,14 +119,16 @@ def test_option_errors_are_one_line(tmp_path, args, message):
     assert not (tmp_path / "out").exists()
 
 
-def test_unreadable_input_and_unwritable_output(tmp_path):
+def test_unreadable_input_and_unwritable_output(tmp_path, without_root_powers):
     csv = tmp_path / "in.csv"
     csv.write_text("Image-name-unique,Left-insula\na,1\n")
     csv.chmod(0)
-    proc = run("render", str(csv), "--out", str(tmp_path / "out"))
+    proc = run("render", str(csv), "--out", str(tmp_path / "out"), prefix=without_root_powers)
     csv.chmod(0o644)
-    if os.geteuid() != 0:  # root reads anything
-        assert proc.returncode == 2 and "cannot read" in proc.stderr
+    # root too, without its powers; click's check of INPUT answers before brainpainter's opener
+    assert proc.returncode == 2 and str(csv) in proc.stderr, proc.stderr
+    assert "is not readable" in proc.stderr or "cannot read" in proc.stderr, proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1 and not (tmp_path / "out").exists()
     blocker = tmp_path / "blocker"
     blocker.write_text("")
     proc = run("render", str(csv), "--out", str(blocker / "out"), "--views", "lateral-left",
