@@ -49,6 +49,18 @@ def fsaverage5() -> Path:
 
 
 @pytest.fixture(scope="session")
+def tiny(tmp_path_factory) -> Path:
+    """The tiny synthetic template (:func:`brainpainter.testing.write_tiny_template`), written once.
+
+    Shared by every test that asks for it: read it, never change it (a test that changes a
+    template writes its own).
+    """
+    from brainpainter.testing import write_tiny_template
+
+    return write_tiny_template(tmp_path_factory.mktemp("tpl") / "tiny")
+
+
+@pytest.fixture(scope="session")
 def big_files(tmp_path_factory) -> dict:
     """The bad-input corpus's large files, written once per session: ``{writer: path}``.
 

@@ -10,14 +10,9 @@ import pytest
 
 import brainpainter
 from brainpainter.errors import BrainPainterError
-from brainpainter.testing import StandInRenderer, stand_in, write_tiny_template
+from brainpainter.testing import StandInRenderer, stand_in
 
 VALUES = {"Left-insula": 3.0, "Left-precuneus": 1.0, "Left-superiorfrontal": 0.0}
-
-
-@pytest.fixture
-def tiny(tmp_path):
-    return write_tiny_template(tmp_path / "tiny")
 
 
 @pytest.fixture

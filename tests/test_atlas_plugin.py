@@ -28,7 +28,6 @@ from brainpainter.testing import (
     installed,
     pip_install,
     stand_in,
-    write_tiny_template,
 )
 
 REPO = Path(__file__).resolve().parents[1]
@@ -119,9 +118,8 @@ def test_main_distribution_does_not_take_the_plugin_package():
 
 
 # -- label-set overlays -------------------------------------------------------------------------------
-def test_overlay_for_another_template_is_a_one_line_error(tmp_path):
+def test_overlay_for_another_template_is_a_one_line_error(tiny):
     atlas = load_atlas_dir(DATA)
-    tiny = write_tiny_template(tmp_path / "tiny")
     with stand_in() as renderer, pytest.raises(BrainPainterError) as err:
         Painter(atlas, str(tiny), renderer=renderer)
     assert "were made for template 'fsaverage', not 'tiny'" in str(err.value)

@@ -32,7 +32,7 @@ from pathlib import Path
 import pytest
 from bad_inputs import corpus
 
-from brainpainter.testing import fake_distribution, write_tiny_template
+from brainpainter.testing import fake_distribution
 
 #: Case id -> why it runs as a real process.
 REAL_PROCESS = {
@@ -53,11 +53,6 @@ def plugin_env(tmp_path_factory):
     env["PYTHONPATH"] = os.pathsep.join([str(site), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
     env["HOME"] = str(tmp_path_factory.mktemp("home"))
     return env
-
-
-@pytest.fixture(scope="module")
-def tiny(tmp_path_factory) -> Path:
-    return write_tiny_template(tmp_path_factory.mktemp("tpl") / "tiny")
 
 
 def _run(args: list[str], cwd: Path, env: dict[str, str]) -> subprocess.CompletedProcess:

@@ -25,7 +25,7 @@ from click.testing import CliRunner
 
 from brainpainter.atlas import registry
 from brainpainter.cli.main import main
-from brainpainter.testing import stand_in, write_tiny_template
+from brainpainter.testing import stand_in
 
 ALL = [*corpus.CASES, *corpus.INPROCESS]
 
@@ -38,11 +38,6 @@ def _tree(folder: Path) -> dict[str, int]:
         except OSError:
             pass
     return out
-
-
-@pytest.fixture(scope="module")
-def tiny(tmp_path_factory) -> Path:
-    return write_tiny_template(tmp_path_factory.mktemp("tpl") / "tiny")
 
 
 def invoke(args: list[str]) -> tuple[int, str, str]:

@@ -8,7 +8,7 @@ import pytest
 from click.testing import CliRunner
 
 from brainpainter.cli.main import cli, main
-from brainpainter.testing import stand_in, write_tiny_template
+from brainpainter.testing import stand_in
 
 GOOD = ("Image-name-unique,Left-insula,lh_precuneus_thickness,eTIV,Age,Left-insulaa\n"
         "A,1,2,1500000,30,1\nB,2,,1,31,2\n")
@@ -99,9 +99,8 @@ def test_several_inputs_are_merged(tmp_path):
     assert any("not in" in n for n in report["notes"])
 
 
-def test_render_prints_the_summary_line_and_writes_it_to_the_manifest(tmp_path):
+def test_render_prints_the_summary_line_and_writes_it_to_the_manifest(tmp_path, tiny):
     with stand_in("blank"):
-        tiny = write_tiny_template(tmp_path / "tiny")
         path = tmp_path / "in.csv"
         path.write_text("Structure;d\nL_insula;0,5\nRhippo;1,25\nICV;3\n")
         out = tmp_path / "out"

@@ -19,7 +19,7 @@ from PIL import Image
 from brainpainter.errors import BrainPainterError
 from brainpainter.media.colorbar import bar_colors
 from brainpainter.media.figure import common_crop, content_box, make_figure, select_rows
-from brainpainter.testing import StandInRenderer, stand_in, write_tiny_template
+from brainpainter.testing import StandInRenderer, stand_in
 
 REGIONS = ("Left-insula", "Left-precuneus")
 W, H = 160, 120
@@ -34,11 +34,6 @@ Stripes = StandInRenderer.with_(layout="band", regions=REGIONS)
 def stripes():
     with stand_in("stripes", Stripes) as registered:
         yield registered
-
-
-@pytest.fixture
-def tiny(tmp_path):
-    return str(write_tiny_template(tmp_path / "tiny"))
 
 
 def table(tmp_path, text, name="in.csv"):
@@ -195,7 +190,7 @@ def test_cli_figure_with_stand_in_renderer(tmp_path, stripes, tiny):
     out = tmp_path / "fig" / "grid.png"
     result = CliRunner().invoke(cli, [
         "figure", str(data), "--atlas", "dk", "--out", str(out), "--grid", "--rows", "stage-1,stage-3",
-        "--views", "lateral-left", "--size", f"{W}x{H}", "--template", tiny, "--renderer", stripes,
+        "--views", "lateral-left", "--size", f"{W}x{H}", "--template", str(tiny), "--renderer", stripes,
         "--label", "z-score", "--title", "T", "--dpi", "150", "-q"])
     assert result.exit_code == 0, result.output
     assert "2 row(s) x 1 view(s)" in result.output and "at 150 dpi" in result.output

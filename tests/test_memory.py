@@ -20,17 +20,12 @@ from brainpainter.io.output import png_bytes
 from brainpainter.rendering.painter import Painter
 from brainpainter.rendering.scene import RenderSettings
 from brainpainter.rendering.views import get_view
-from brainpainter.testing import StandInRenderer, growth_per_image, stand_in, theil_sen, write_tiny_template
+from brainpainter.testing import StandInRenderer, growth_per_image, stand_in, theil_sen
 from brainpainter.testing.memory import can_measure
 
 pytestmark = pytest.mark.skipif(not can_measure(), reason="needs /proc/self/statm (Linux)")
 LIMIT_MB = 0.1
 N_IMAGES = 150
-
-
-@pytest.fixture(scope="module")
-def tiny(tmp_path_factory):
-    return write_tiny_template(tmp_path_factory.mktemp("tpl") / "tiny")
 
 
 def per_image_mb(tiny, cls: type[StandInRenderer]) -> float:

@@ -25,7 +25,7 @@ from brainpainter.media.movie import (
     make_movie,
     plan_frames,
 )
-from brainpainter.testing import StandInRenderer, registered_renderer, stand_in, write_tiny_template
+from brainpainter.testing import StandInRenderer, registered_renderer, stand_in
 
 REGIONS = ("Left-insula", "Left-precuneus")
 W, H = 160, 120
@@ -49,11 +49,6 @@ def stripe_centre(k: int) -> tuple[int, int]:
 def stripes():
     with stand_in("stripes", Stripes) as registered:
         yield registered
-
-
-@pytest.fixture
-def tiny(tmp_path):
-    return str(write_tiny_template(tmp_path / "tiny"))
 
 
 def table(tmp_path, text, name="in.csv"):
@@ -255,7 +250,7 @@ def test_cli_movie_with_stand_in_renderer(tmp_path, stripes, tiny):
     out = tmp_path / "m.mp4"
     result = CliRunner().invoke(cli, [
         "movie", str(data), "--atlas", "dk", "--out", str(out), "--views", "lateral-left",
-        "--frames-per-step", "3", "--fps", "6", "--size", f"{W}x{H}", "--template", tiny,
+        "--frames-per-step", "3", "--fps", "6", "--size", f"{W}x{H}", "--template", str(tiny),
         "--renderer", stripes, "--label", "atrophy", "-q"])
     assert result.exit_code == 0, result.output
     assert "4 frames" in result.output and out.is_file()

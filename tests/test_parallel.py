@@ -24,17 +24,12 @@ from brainpainter.cli.main import cli
 from brainpainter.errors import BrainPainterError
 from brainpainter.rendering.painter import render
 from brainpainter.rendering.parallel import chunk_size, chunked, drive, resolve_jobs
-from brainpainter.testing import StandInRenderer, registered_renderer, stand_in, write_tiny_template
+from brainpainter.testing import StandInRenderer, registered_renderer, stand_in
 
 sys.path.insert(0, str(Path(__file__).parent))  # so that this process and its workers import the module
 from _parallel_renderers import FlakyStandIn, SlowStandIn
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "brainpainter_dk.csv"
-
-
-@pytest.fixture(scope="module")
-def tiny(tmp_path_factory):
-    return write_tiny_template(tmp_path_factory.mktemp("tpl") / "tiny")
 
 
 @pytest.fixture

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from brainpainter.testing import fake_distribution, write_tiny_template
+from brainpainter.testing import fake_distribution
 
 # The stand-in renderer as an installed plugin: BP_DELAY seconds an image; BP_NOISE=1 incompressible pixels.
 PLUGIN = """
@@ -42,11 +42,6 @@ def env(tmp_path_factory):
             if k not in ("BRAINPAINTER_DEBUG", "MPLCONFIGDIR") and not k.startswith("BLENDER_USER")}
     base["PYTHONPATH"] = os.pathsep.join([str(site), base.get("PYTHONPATH", "")]).rstrip(os.pathsep)
     return base
-
-
-@pytest.fixture(scope="module")
-def tiny(tmp_path_factory) -> Path:
-    return write_tiny_template(tmp_path_factory.mktemp("tpl") / "tiny")
 
 
 def table(path: Path, n: int) -> Path:

@@ -15,7 +15,7 @@ from PIL import Image
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.rendering.painter import Painter, render, resolve_hidden
-from brainpainter.testing import StandInRenderer, stand_in, write_tiny_template
+from brainpainter.testing import StandInRenderer, stand_in
 
 #: Paints each image in the colour of Left-insula.
 Solid = StandInRenderer.with_(layout="solid", regions=("Left-insula",))
@@ -25,11 +25,6 @@ Solid = StandInRenderer.with_(layout="solid", regions=("Left-insula",))
 def solid():
     with stand_in("solid", Solid) as registered:
         yield registered
-
-
-@pytest.fixture
-def tiny(tmp_path):
-    return write_tiny_template(tmp_path / "tiny")
 
 
 def csv(tmp_path, text):

@@ -220,13 +220,12 @@ def test_gif_memory_does_not_grow_with_frames(tmp_path):
 
 
 # -- the CLI guard -------------------------------------------------------------------------------------------
-def test_sigterm_cleans_up_and_exits_143(tmp_path, monkeypatch):
+def test_sigterm_cleans_up_and_exits_143(tmp_path, monkeypatch, tiny):
     from brainpainter.cli.guard import Terminated, run
     from brainpainter.cli.main import cli
-    from brainpainter.testing import StandInRenderer, stand_in, write_tiny_template
+    from brainpainter.testing import StandInRenderer, stand_in
 
     dies = StandInRenderer.with_(fail=lambda n: Terminated() if n == 2 else None)  # SIGTERM at image 2
-    tiny = write_tiny_template(tmp_path / "tiny")
     (tmp_path / "in.csv").write_text("Image-name-unique,Left-insula\na,1\nb,2\nc,3\n")
     monkeypatch.chdir(tmp_path)
     with stand_in("dies", dies), CliRunner().isolation() as (_out, err, _):
@@ -252,15 +251,14 @@ def test_internal_error_is_one_line(monkeypatch):
     assert code == 1 and len(text.strip().splitlines()) == 1 and len(text) < 600
 
 
-def test_check_and_render_agree_on_every_check_case(tmp_path, monkeypatch):
+def test_check_and_render_agree_on_every_check_case(tmp_path, monkeypatch, tiny):
     """Every table 'check' refuses, 'render' refuses with the same line (one shared validation)."""
     from bad_inputs import corpus
 
     from brainpainter.cli.guard import run
     from brainpainter.cli.main import cli
-    from brainpainter.testing import stand_in, write_tiny_template
+    from brainpainter.testing import stand_in
 
-    tiny = write_tiny_template(tmp_path / "tiny")
     cases = [c for c in corpus.CASES if c.command == "check" and not c.env and c.id != "50-MB-file"]
     assert len(cases) > 40
     for case in cases:
@@ -333,13 +331,12 @@ def test_real_render_writes_nothing_outside_the_output_folder(tmp_path):
     ("movie", {"fps": float("nan")}, "fps"),
     ("movie", {"orbit": float("inf")}, "orbit"),
 ])
-def test_library_api_refuses_non_finite_numbers(tmp_path, function, kwargs, message):
+def test_library_api_refuses_non_finite_numbers(tmp_path, function, kwargs, message, tiny):
     from brainpainter.media.figure import make_figure
     from brainpainter.media.movie import make_movie
     from brainpainter.rendering.painter import render
-    from brainpainter.testing import stand_in, write_tiny_template
+    from brainpainter.testing import stand_in
 
-    tiny = write_tiny_template(tmp_path / "tiny")
     table = {"A": {"Left-insula": 1.0}, "B": {"Left-insula": 2.0}}
     out = {"render": tmp_path / "o", "figure": tmp_path / "o" / "f.png", "movie": tmp_path / "o" / "m.gif"}
     call = {"render": render, "figure": make_figure, "movie": make_movie}[function]
