@@ -28,6 +28,8 @@ and in a test::
 
 from __future__ import annotations
 
+import sys
+
 from .atlas_check import check_atlas
 from .conformance import CONFORMANCE_CHECKS, check_renderer
 from .distributions import fake_distribution, installed, pip_install
@@ -41,9 +43,8 @@ __all__ = [
     "registered_renderer", "rss_mb", "stand_in", "theil_sen", "write_template", "write_tiny_template",
 ]
 
-try:  # fixtures for plugin test suites: pytest_plugins = ["brainpainter.testing"]
+if "pytest" in sys.modules:  # fixtures for plugin test suites: pytest_plugins = ["brainpainter.testing"]
+    # (a process that only loads the stand-in renderer, e.g. as an installed plugin, does not import pytest)
     from .fixtures import brainpainter_home, stand_in_renderer
 
     __all__ += ["brainpainter_home", "stand_in_renderer"]
-except ImportError:  # pragma: no cover - pytest is only needed by test suites
-    pass

@@ -34,7 +34,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage
 
 from .memory import can_measure, growth_per_image
 from .templates import write_tiny_template
@@ -149,6 +148,8 @@ def _orientation(run: _Run, scene: Any, view: Any, img: NDArray[np.uint8]) -> fl
 
 def _per_view(run: _Run, scene: Any, view: Any, img: NDArray[np.uint8]) -> float:
     """The checks made on every preset view (fast quality, flat shading); the orientation error (px)."""
+    from scipy import ndimage
+
     brain = ~near(img, WHITE, 0)
     worst = _orientation(run, scene, view, img) if "orientation" in run.checks else 0.0
     if "no_holes" in run.checks and view.content == "cortex" and len(view.hemis) == 1:
@@ -186,6 +187,8 @@ def _views(run: _Run) -> None:
 
 def _antialiased(run: _Run) -> None:
     """flat_colors with anti-aliasing: the interior of each region keeps its exact colour."""
+    from scipy import ndimage
+
     img = run.one_image("lateral-left", quality="default", shading="flat", glass_opacity=0.0,
                         background=WHITE)
     for key in ("Left-insula", "Left-precuneus", "Left-superiorfrontal", "Left-unknown"):
@@ -198,6 +201,8 @@ def _antialiased(run: _Run) -> None:
 
 def _nan_missing(run: _Run) -> None:
     """NaN values and absent regions get the scale's colours exactly, through the Painter."""
+    from scipy import ndimage
+
     from brainpainter.color.scale import make_scale
     from brainpainter.rendering.painter import Painter
     from brainpainter.rendering.scene import RenderSettings
@@ -216,6 +221,8 @@ def _nan_missing(run: _Run) -> None:
 
 def _transparent(run: _Run) -> None:
     """A transparent background leaves alpha 0 around an opaque brain of unchanged colours."""
+    from scipy import ndimage
+
     img = run.one_image("lateral-left", quality="default", shading="flat", glass_opacity=0.0, background=None)
     alpha = img[..., 3]
     opaque = ndimage.binary_erosion(alpha > 0, iterations=2)
