@@ -28,10 +28,16 @@ class StandInRenderer:
     """A renderer without Blender: paints the colours a real one would, in a simple layout.
 
     Loading checks what a real renderer needs: the scene's label set exists on
-    both hemispheres and the surface is there.
+    both hemispheres and the surface is there. The parameters are class
+    attributes: set them on a subclass or with :meth:`with_`.
 
-    Attributes (parameters; set them on a subclass or with :meth:`with_`)
-    ----------------------------------------------------------------------
+    Parameters
+    ----------
+    scene : Scene
+        What to draw (template, label set, surface, settings, hidden keys).
+
+    Attributes
+    ----------
     layout : {"faces", "band", "solid", "keys"}
         ``faces`` (default): full-height stripes, one per face of the view's
         structures sampled evenly (grouped by label), each in its colour
