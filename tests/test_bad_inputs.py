@@ -15,6 +15,9 @@ cases run as real processes because a process is what they check:
   stopped by a timeout without taking the test run with it;
 * peak memory of a whole interpreter reading a big file (``VmHWM``).
 
+Signals (Ctrl-C, SIGTERM, kill -9), full disks, read-only folders and two
+runs at once are real processes in test_reliability.py.
+
 Each must exit with code 2, print exactly one line (``error: ...``,
 containing the expected text) on stderr and no traceback, and leave its
 folder exactly as it was.
