@@ -34,7 +34,7 @@ import json, sys, time
 t0 = time.perf_counter()
 import pandas as pd
 import brainpainter
-from brainpainter.rendering.painter import render
+from brainpainter.rendering.run import render
 args = json.loads(sys.argv[1])
 frame = pd.read_csv(args["example"])
 rows = [frame.iloc[i % len(frame)].copy() for i in range(args["rows"])]

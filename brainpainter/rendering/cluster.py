@@ -22,6 +22,7 @@ from distributed import get_worker, wait
 from distributed.diagnostics.plugin import WorkerPlugin
 
 from brainpainter.errors import BrainPainterError
+from brainpainter.rendering.options import import_distributed
 from brainpainter.rendering.parallel import (
     RETRIES,
     WORKER_WAIT_S,
@@ -33,7 +34,6 @@ from brainpainter.rendering.parallel import (
     chunk_size,
     decode_png,
     drive,
-    import_distributed,
     paint_items,
     prepare_worker,
 )

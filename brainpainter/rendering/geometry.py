@@ -22,16 +22,38 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.rendering import framing
+from brainpainter.rendering.settings import RGB, SULC_LIGHTINGS, RenderSettings
 from brainpainter.rendering.views import View
 
 if TYPE_CHECKING:
-    from brainpainter.rendering.scene import RGB, Scene
+    from brainpainter.atlas.template import Template
+
+
+class SceneParts(Protocol):
+    """What :class:`SceneGeometry` reads of a :class:`~brainpainter.rendering.scene.Scene`.
+
+    (A protocol, so that scene.py, whose ``Scene.geometry`` builds a
+    :class:`SceneGeometry`, and this module do not import each other.)
+    """
+
+    @property
+    def template(self) -> Template: ...
+    @property
+    def labels(self) -> str: ...
+    @property
+    def surface(self) -> str: ...
+    @property
+    def hidden(self) -> frozenset[str]: ...
+    @property
+    def settings(self) -> RenderSettings: ...
+    @property
+    def medial_wall_color(self) -> RGB: ...
 
 #: Colour of subcortical structures that have no colour in the mapping (sRGB).
 NEUTRAL_GREY = (0.8, 0.8, 0.8)
@@ -248,11 +270,10 @@ class SceneGeometry:
         Colour of each slot when the palette gives none.
     """
 
-    def __init__(self, scene: Scene) -> None:
+    def __init__(self, scene: SceneParts) -> None:
         from brainpainter.atlas.model import HEMI_PREFIX
         from brainpainter.atlas.template import HEMIS
         from brainpainter.errors import choice_error
-        from brainpainter.rendering.scene import SULC_LIGHTINGS
 
         template, hidden = scene.template, frozenset(scene.hidden)
         settings = scene.settings
