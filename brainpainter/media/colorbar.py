@@ -141,8 +141,6 @@ def draw_colorbar(
         from brainpainter.errors import choice_error
 
         raise choice_error("orientation", orientation, ORIENTATIONS)
-    from matplotlib.patches import Patch
-
     tick_values = resolve_ticks(scale, ticks)
     _, colors = bar_colors(scale)
     horizontal = orientation == "horizontal"
@@ -168,6 +166,15 @@ def draw_colorbar(
         axis.set_label_text(label, fontsize=fontsize, color=color)
         if not horizontal:
             ax.yaxis.set_label_position("right")
+    _swatches(ax, scale, nan, missing, nan_label, missing_label, fontsize, color, horizontal)
+    return ax
+
+
+def _swatches(ax: Axes, scale: ColourScale, nan: bool, missing: bool, nan_label: str, missing_label: str,
+              fontsize: float, color: Any, horizontal: bool) -> None:
+    """Swatches of the NaN and missing colours beside a horizontal bar, or below a vertical one."""
+    from matplotlib.patches import Patch
+
     handles = []
     if nan:
         handles.append(Patch(facecolor=scale.nan_color, edgecolor=color, linewidth=0.6, label=nan_label))
@@ -181,7 +188,6 @@ def draw_colorbar(
                            handleheight=1.0, handletextpad=0.4, columnspacing=0.9, borderaxespad=0.6,
                            labelcolor=color, **where)
         legend.set_in_layout(False)
-    return ax
 
 
 def colorbar_figure(

@@ -125,10 +125,8 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
 
     Parameters
     ----------
-    data : path, DataFrame, dict, or a list of these
-        See :func:`brainpainter.table.region_table.read_table`.
-    atlas : str or Atlas, optional
-        Inferred from the region names when not given.
+    data, atlas
+        The table and its atlas, as for :func:`brainpainter.render`.
     out : path, optional
         ``.png``, ``.tif``/``.tiff`` (at `dpi`), ``.pdf`` or ``.svg`` (renders
         embedded at full resolution). Written atomically. Without it only the

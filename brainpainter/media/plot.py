@@ -32,7 +32,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from brainpainter.atlas.model import Atlas
     from brainpainter.rendering.options import RenderKwargs
-    from brainpainter.rendering.painter import Painter
+    from brainpainter.rendering.painter import Painter, RenderResult
 
 ORIENTATIONS = ("vertical", "horizontal")
 
@@ -111,11 +111,8 @@ def plot(values: Any, view: str = "lateral-left", *, ax: Axes | None = None, row
         if reserved in render_options:
             raise BrainPainterError(f"plot() draws one view of one row into an Axes; {reserved}= is not "
                                     "one of its options (use view=, row=, or brainpainter.render).")
-    from brainpainter.media.colorbar import draw_colorbar
-    from brainpainter.media.drawn import common_crop, swatches_needed
+    from brainpainter.media.drawn import common_crop
     from brainpainter.rendering.run import render
-    from brainpainter.rendering.views import parse_views
-    from brainpainter.table.rows import select_rows
 
     result = render(values, atlas, views=[view], rows=[row], painter=painter, progress=False,
                     **render_options)
@@ -133,16 +130,25 @@ def plot(values: Any, view: str = "lateral-left", *, ax: Axes | None = None, row
     artist = ax.imshow(image, interpolation="antialiased")
     ax.set_axis_off()
     ax.set_aspect("equal")
-    cax = None
-    if colorbar:
-        if orientation == "vertical":
-            cax = ax.inset_axes((1.03, 0.15, 0.045, 0.7))
-        else:
-            cax = ax.inset_axes((0.15, -0.09, 0.7, 0.05))
-        table = result.table
-        assert table is not None
-        nan, missing = swatches_needed(table, select_rows(table.images, [row]), parse_views([view_name]),
-                                       result.manifest["settings"]["hidden"])
-        draw_colorbar(cax, scale, label=label, ticks=ticks, orientation=orientation, nan=nan,
-                      missing=missing)
+    cax = _colorbar(ax, result, row, view_name, label, ticks, orientation) if colorbar else None
     return PlotResult(ax, artist, cax, image, scale)
+
+
+def _colorbar(ax: Axes, result: RenderResult, row: str | int, view_name: str, label: str | None,
+              ticks: Sequence[float] | str | None, orientation: str) -> Axes:
+    """The colour bar of a plot in an inset of `ax`, with the swatches of the colours it draws."""
+    from brainpainter.media.colorbar import draw_colorbar
+    from brainpainter.media.drawn import swatches_needed
+    from brainpainter.rendering.views import parse_views
+    from brainpainter.table.rows import select_rows
+
+    if orientation == "vertical":
+        cax = ax.inset_axes((1.03, 0.15, 0.045, 0.7))
+    else:
+        cax = ax.inset_axes((0.15, -0.09, 0.7, 0.05))
+    table, scale = result.table, result.scale
+    assert table is not None and scale is not None
+    nan, missing = swatches_needed(table, select_rows(table.images, [row]), parse_views([view_name]),
+                                   result.manifest["settings"]["hidden"])
+    draw_colorbar(cax, scale, label=label, ticks=ticks, orientation=orientation, nan=nan, missing=missing)
+    return cax

@@ -67,6 +67,8 @@ N_FIXED_SLOTS = 3
 class PartGeometry:
     """One drawable part of a scene, indexed, ready for a vertex buffer.
 
+    Renderers upload it once, when the scene loads.
+
     Attributes
     ----------
     name : str

@@ -43,6 +43,8 @@ if TYPE_CHECKING:
 class Scene:
     """Everything loaded once per run.
 
+    What a renderer draws is ``scene.geometry``, built from these on first use.
+
     Attributes
     ----------
     template : Template
