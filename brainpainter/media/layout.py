@@ -195,7 +195,8 @@ def plan_grid(aspect: Mapping[str, float], image_names: Sequence[str], view_name
             f"the figure is too narrow for {n_cols} image columns at {width:g} in; give a larger "
             "figure width (--fig-width) or fewer rows/views."
         )
-    height = top + sum(row_h) + GAP_IN * (len(row_h) - 1) + 0.08 + colorbar_h(usable)
+    bottom = 0.08 + colorbar_h(usable)
+    height = top + sum(row_h) + GAP_IN * (len(row_h) - 1) + bottom
     return Grid(width, height, left, top, usable, col_w, row_h, row_heads, col_heads)
 
 
