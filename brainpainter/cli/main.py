@@ -97,7 +97,7 @@ def atlas_list(as_json: bool) -> None:
     rows = []
     for name in registry.atlases.names():
         entry = next((e for e in registry.atlases.entries() if e.name == name), None)
-        row = {"name": name, "aliases": list(entry.aliases) if entry else [],
+        row: dict[str, Any] = {"name": name, "aliases": list(entry.aliases) if entry else [],
                "distribution": entry.distribution if entry else "(session)"}
         try:
             a = registry.atlases.get(name)
@@ -218,7 +218,7 @@ def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: P
     if (volume is None) != (lut is None):
         raise BrainPainterError("--volume and --lut go together: the look-up table names the volume's labels")
     t0 = time.perf_counter()
-    if volume is not None:
+    if volume is not None and lut is not None:
         from brainpainter.atlas.volumes import add_volume_atlas
 
         folder = add_volume_atlas(name, volume, lut, space=space, template=template, title=title,

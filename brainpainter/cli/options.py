@@ -23,6 +23,10 @@ from brainpainter.rendering.options import DEFAULT_VIEWS, RunnerOptions, SceneOp
 from brainpainter.rendering.settings import RenderSettings, parse_size
 from brainpainter.table.options import TableOptions
 
+__all__ = ["DEFAULT_SIZE", "DEFAULT_VIEWS", "FINITE", "field_option", "input_options", "make_render_options",
+           "option_group", "parallel_options", "parse_size", "render_kwargs", "render_options",
+           "split_commas"]
+
 F = TypeVar("F", bound=Callable[..., Any])
 
 DEFAULT_SIZE = RenderSettings().size
@@ -37,7 +41,7 @@ INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
 
 
-class FiniteFloat(click.ParamType):
+class FiniteFloat(click.ParamType):  # type: ignore[type-arg]
     """A float option that refuses NaN and infinities (``--vmin nan``) before anything runs."""
 
     name = "number"

@@ -10,9 +10,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TypedDict, Unpack
+from typing import Any, TypedDict, Unpack
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.color.rgb import ColorLike, to_hex, to_rgb
 from brainpainter.errors import BrainPainterError, nearest
@@ -41,7 +42,7 @@ class ColourScale:
         The gradient (``"white,yellow,orange,red"``) or colour-map name.
     """
 
-    colors: np.ndarray
+    colors: NDArray[Any]
     vmin: float
     vmax: float
     center: float | None = None
@@ -69,7 +70,7 @@ class ColourScale:
     def n_colors(self) -> int:
         return len(self.colors)
 
-    def position(self, values: np.ndarray) -> np.ndarray:
+    def position(self, values: NDArray[Any]) -> NDArray[Any]:
         """Fractional position along the control colours, in [0, N-1].
 
         Parameters
@@ -90,7 +91,7 @@ class ColourScale:
                          0.5 + 0.5 * (v - c) / (self.vmax - c))
         return np.clip(t, 0.0, 1.0) * top
 
-    def __call__(self, values: np.ndarray | Sequence[float] | float) -> np.ndarray:
+    def __call__(self, values: NDArray[Any] | Sequence[float] | float) -> NDArray[Any]:
         """Colours for values.
 
         Parameters
@@ -117,7 +118,7 @@ class ColourScale:
         out[nan] = self.nan_color
         return out[0] if scalar else out
 
-    def ticks(self) -> np.ndarray:
+    def ticks(self) -> NDArray[Any]:
         """Values at the control colours of a gradient (or 5 ticks for a colour map)."""
         n = self.n_colors if self.n_colors <= 12 else 5
         pos = np.linspace(0.0, 1.0, n)
@@ -126,7 +127,7 @@ class ColourScale:
         c = self.center
         return np.where(pos < 0.5, self.vmin + 2 * pos * (c - self.vmin), c + (2 * pos - 1) * (self.vmax - c))
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         """JSON-ready settings (for manifests and PNG metadata)."""
         return {
             "name": self.name,
@@ -139,7 +140,7 @@ class ColourScale:
         }
 
 
-def gradient_colors(gradient: Sequence[ColorLike] | str) -> np.ndarray:
+def gradient_colors(gradient: Sequence[ColorLike] | str) -> NDArray[Any]:
     """Parse a gradient: a list of colours or a comma/space separated string.
 
     Returns
@@ -159,7 +160,7 @@ def gradient_colors(gradient: Sequence[ColorLike] | str) -> np.ndarray:
     return np.array([to_rgb(c) for c in items], dtype=float)
 
 
-def cmap_colors(name: str, n: int = 256) -> np.ndarray:
+def cmap_colors(name: str, n: int = 256) -> NDArray[Any]:
     """Sample a matplotlib colour map by name.
 
     Returns
@@ -223,7 +224,7 @@ class ScaleOptions:
     nan_color: ColorLike = field(default=DEFAULT_NAN_COLOR, metadata={"help": "Colour of empty cells."})
     missing_color: ColorLike = field(default=DEFAULT_MISSING_COLOR, metadata={
         "help": "Colour of regions with no column."})
-    _colors: np.ndarray = field(init=False, repr=False, compare=False)
+    _colors: NDArray[Any] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         gradient, cmap = self.gradient, self.cmap
@@ -245,7 +246,7 @@ class ScaleOptions:
         gradient = self.gradient if self.gradient is not None else DEFAULT_GRADIENT
         return gradient if isinstance(gradient, str) else ",".join(str(g) for g in gradient)
 
-    def limits(self, data: np.ndarray | Sequence[float] | None = None) -> tuple[float, float]:
+    def limits(self, data: NDArray[Any] | Sequence[float] | None = None) -> tuple[float, float]:
         """``(vmin, vmax)``: as given, else from the finite values of `data` (shape any)."""
         values = np.asarray(data if data is not None else [], dtype=float).ravel()
         finite = values[np.isfinite(values)]
@@ -263,7 +264,7 @@ class ScaleOptions:
             hi = lo + 1.0
         return lo, hi
 
-    def scale(self, data: np.ndarray | Sequence[float] | None = None) -> ColourScale:
+    def scale(self, data: NDArray[Any] | Sequence[float] | None = None) -> ColourScale:
         """The colour scale for a run whose values (all rows) are `data`, shape any."""
         lo, hi = self.limits(data)
         return ColourScale(
@@ -277,7 +278,7 @@ class ScaleOptions:
         )
 
 
-def make_scale(data: np.ndarray | Sequence[float] | None = None,
+def make_scale(data: NDArray[Any] | Sequence[float] | None = None,
                **options: Unpack[ScaleKwargs]) -> ColourScale:
     """Build the colour scale for a run: ``ScaleOptions(**options).scale(data)``.
 

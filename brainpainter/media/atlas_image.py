@@ -9,8 +9,10 @@ and colours below them, so users can see which region is which.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.errors import BrainPainterError
@@ -21,7 +23,7 @@ def atlas_colors(atlas: Atlas) -> dict[str, tuple[float, float, float]]:
     return {r.key: (r.color[0] / 255, r.color[1] / 255, r.color[2] / 255) for r in atlas.regions}
 
 
-def _legend(entries: list[tuple[str, tuple[int, int, int]]], width: int) -> np.ndarray:
+def _legend(entries: list[tuple[str, tuple[int, int, int]]], width: int) -> NDArray[Any]:
     """RGBA legend, shape (h, width, 4): a swatch and a name per entry, in columns."""
     from PIL import Image, ImageDraw, ImageFont
 
@@ -49,7 +51,7 @@ MAX_LEGEND = 120
 
 def reference_image(atlas: Atlas, path: str | Path, *, views: str = "lateral-left,medial-left,subcortical",
                     size: tuple[int, int] = (800, 600), template: str = "fsaverage", surface: str = "pial",
-                    quality: str = "default", renderer: str = "blender", legend: bool = True) -> np.ndarray:
+                    quality: str = "default", renderer: str = "blender", legend: bool = True) -> NDArray[Any]:
     """Draw `atlas` in its own colours from `views` and write a PNG to `path`.
 
     Returns
@@ -79,7 +81,7 @@ def reference_image(atlas: Atlas, path: str | Path, *, views: str = "lateral-lef
     colors = atlas_colors(atlas)
     with make_runner(painter, scene.template) as runner:  # serial: one painter in this process
         panels = paint_all(runner, [Item(colors, v, label=atlas.name) for v in view_list])
-    image = np.concatenate(panels, axis=1)
+    image: NDArray[Any] = np.concatenate(panels, axis=1)
     if legend:
         kinds = {"cortical" if v.content == "cortex" else "subcortical" for v in view_list}
         first: dict[str, tuple[int, int, int]] = {}

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.color.rgb import ColorLike, to_rgb
@@ -38,7 +40,7 @@ def swatches_needed(table: RegionTable, rows: Sequence[int], views: Sequence[Vie
     return nan, missing
 
 
-def content_box(image: np.ndarray, background: ColorLike | None, tol: int = 6) -> tuple[int, int, int, int]:
+def content_box(image: NDArray[Any], background: ColorLike | None, tol: int = 6) -> tuple[int, int, int, int]:
     """Rows and columns holding the brain: ``(top, bottom, left, right)``, end-exclusive.
 
     ``(0, 0, 0, 0)`` when the image is background only.
@@ -61,7 +63,7 @@ def content_box(image: np.ndarray, background: ColorLike | None, tol: int = 6) -
     return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
 
 
-def common_crop(images: Sequence[np.ndarray], background: ColorLike | None,
+def common_crop(images: Sequence[NDArray[Any]], background: ColorLike | None,
                 pad: float = 0.02) -> tuple[slice, slice]:
     """One crop holding the brain in all `images` (same shape), with `pad` of the size around it.
 

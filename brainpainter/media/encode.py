@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
 
@@ -36,7 +37,7 @@ class _Mp4Writer:
         )
         self._gen.send(None)
 
-    def write(self, frame: np.ndarray) -> None:
+    def write(self, frame: NDArray[Any]) -> None:
         try:
             self._gen.send(np.ascontiguousarray(frame))
         except (OSError, RuntimeError, StopIteration) as exc:
@@ -69,7 +70,7 @@ class _GifWriter:
 
     def __init__(self, path: Path, size: tuple[int, int], fps: float,
                  background: tuple[int, int, int] = (255, 255, 255),
-                 samples: Sequence[np.ndarray] = ()) -> None:
+                 samples: Sequence[NDArray[Any]] = ()) -> None:
         self.path, self.fps, self.background = path, fps, tuple(int(c) for c in background)
         self.size = size
         self.n_frames = 0
@@ -81,7 +82,7 @@ class _GifWriter:
         # loop forever (NETSCAPE2.0 application extension)
         self._fh.write(b"!\xff\x0bNETSCAPE2.0\x03\x01" + struct.pack("<H", 0) + b"\x00")
 
-    def palette(self, samples: Sequence[np.ndarray]) -> Any:
+    def palette(self, samples: Sequence[NDArray[Any]]) -> Any:
         """255 colours from a mosaic of the sample frames, plus the exact background colour."""
         from PIL import Image
 
@@ -90,13 +91,13 @@ class _GifWriter:
             mosaic = np.concatenate([f[::2, ::2] for f in samples], axis=0)
             sampled = Image.fromarray(np.ascontiguousarray(mosaic)).quantize(
                 colors=255, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
-            colors = np.array(sampled.getpalette()[: 3 * 255], dtype=np.uint8).reshape(-1, 3)[:255]
+            colors = np.array((sampled.getpalette() or [])[: 3 * 255], dtype=np.uint8).reshape(-1, 3)[:255]
         colors = np.vstack([colors, np.array([self.background] * (256 - len(colors)), np.uint8)])
         palette = Image.new("P", (1, 1))
         palette.putpalette(colors.ravel().tolist())
         return palette
 
-    def write(self, frame: np.ndarray) -> None:
+    def write(self, frame: NDArray[Any]) -> None:
         from PIL import GifImagePlugin, Image
 
         im = Image.fromarray(np.ascontiguousarray(frame)).quantize(palette=self._palette,
@@ -109,7 +110,7 @@ class _GifWriter:
         if write_frame is not None:  # straight into the file
             write_frame(self._fh, im, (0, 0), params)
         else:  # pragma: no cover - older/newer pillow: the public (but leakier) frame encoder
-            for part in GifImagePlugin.getdata(im, **params):
+            for part in GifImagePlugin.getdata(im, **params):  # type: ignore[arg-type]
                 self._fh.write(part)
         self.n_frames += 1
 

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any, Unpack
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.model import HEMI_PREFIX, Atlas
 from brainpainter.atlas.template import Template
@@ -62,20 +63,21 @@ class RegionMesh:
 
     name: str
     part: str
-    vertices: np.ndarray
-    faces: np.ndarray
-    normals: np.ndarray
+    vertices: NDArray[Any]
+    faces: NDArray[Any]
+    normals: NDArray[Any]
     color: RGB
 
 
-def _vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+def _vertex_normals(vertices: NDArray[Any], faces: NDArray[Any]) -> NDArray[Any]:
     import trimesh
 
     mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
     return np.asarray(mesh.vertex_normals, dtype=np.float32)
 
 
-def _submesh(vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, ...]:
+def _submesh(vertices: NDArray[Any], normals: NDArray[Any],
+             faces: NDArray[Any]) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any]]:
     """``(vertices, faces, normals)`` of the part of a mesh that `faces` use, renumbered."""
     used, inverse = np.unique(faces, return_inverse=True)
     return (vertices[used].astype(np.float32), inverse.reshape(faces.shape).astype(np.int32),
@@ -106,7 +108,7 @@ def region_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
         cm = template.cortex(scene.labels, hemi)
         verts = cm.vertices[scene.surface]
         normals = _vertex_normals(verts, cm.faces)
-        wall: list[np.ndarray] = []
+        wall: list[NDArray[Any]] = []
         for i, label in enumerate(cm.label_names):
             key = HEMI_PREFIX[hemi] + label
             faces = cm.faces[cm.face_label == i]
@@ -130,7 +132,7 @@ def region_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
     return out
 
 
-def srgb_to_linear(c: np.ndarray) -> np.ndarray:
+def srgb_to_linear(c: NDArray[Any]) -> NDArray[Any]:
     """sRGB 0-1 -> linear 0-1 (glTF material colours are linear)."""
     c = np.asarray(c, dtype=float)
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
@@ -149,15 +151,18 @@ def glb_bytes(meshes: Sequence[RegionMesh]) -> bytes:
     scene = trimesh.Scene()
     for m in meshes:
         linear = srgb_to_linear(np.asarray(m.color))
-        material = PBRMaterial(name=m.name, baseColorFactor=[*linear, 1.0], metallicFactor=0.0,
-                               roughnessFactor=0.75, doubleSided=True)
+        material = PBRMaterial(  # type: ignore[no-untyped-call]
+            name=m.name, baseColorFactor=[*linear, 1.0], metallicFactor=0.0, roughnessFactor=0.75,
+            doubleSided=True)
         mesh = trimesh.Trimesh(vertices=m.vertices @ RAS_TO_GLTF.T, faces=m.faces,
                                vertex_normals=m.normals @ RAS_TO_GLTF.T, process=False,
-                               visual=trimesh.visual.TextureVisuals(material=material))
+                               visual=trimesh.visual.TextureVisuals(  # type: ignore[no-untyped-call]
+                                   material=material))
         hex_color = "#{:02x}{:02x}{:02x}".format(*(round(float(v) * 255) for v in m.color))
         scene.add_geometry(mesh, node_name=m.name, geom_name=m.name,
                            metadata={"part": m.part, "color": hex_color})
-    return scene.export(file_type="glb", include_normals=True)
+    glb: bytes = scene.export(file_type="glb", include_normals=True)  # type: ignore[no-untyped-call]
+    return glb
 
 
 def _viewer_script() -> str:

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Unpack
 
-import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.color.scale import ColourScale
@@ -76,7 +76,7 @@ class FigureResult:
     figure: Figure
     path: Path | None
     scale: ColourScale
-    images: dict[tuple[str, str], np.ndarray]
+    images: dict[tuple[str, str], NDArray[Any]]
     colorbar_ax: Axes
     image_axes: dict[tuple[str, str], Axes] = field(default_factory=dict)
 
@@ -106,13 +106,15 @@ def figure_bytes(fig: Figure, path: Path, dpi: float, transparent: bool = False)
                                        "svg": {"Creator": software}}.get(fmt)
     for ax in fig.axes:
         for im in ax.get_images():
-            if im.get_array() is not None and im.get_array().ndim == 3 and im.get_array().shape[1] > 1:
+            array = im.get_array()
+            if array is not None and array.ndim == 3 and array.shape[1] > 1:
                 # vector formats embed the full render; raster formats resample it smoothly
                 im.set_interpolation("none" if fmt in VECTOR_FORMATS else "antialiased")
     buf = io.BytesIO()
-    rc = {"pdf.fonttype": 42, "ps.fonttype": 42, "svg.fonttype": "none", "svg.hashsalt": "brainpainter"}
+    rc: dict[str, Any] = {"pdf.fonttype": 42, "ps.fonttype": 42, "svg.fonttype": "none",
+                          "svg.hashsalt": "brainpainter"}
     extra: dict[str, Any] = {"pil_kwargs": {"compression": "tiff_lzw"}} if fmt == "tiff" else {}
-    with matplotlib.rc_context(rc):
+    with matplotlib.rc_context(rc):  # type: ignore[arg-type]
         fig.savefig(buf, format=fmt, dpi=dpi, metadata=metadata, transparent=transparent,
                     facecolor="none" if transparent else fig.get_facecolor(), **extra)
     return buf.getvalue()

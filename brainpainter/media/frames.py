@@ -12,6 +12,7 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.color.rgb import ColorLike, to_rgb
 from brainpainter.color.scale import ColourScale
@@ -45,7 +46,7 @@ def _font(size: int) -> Any:
     return ImageFont.truetype(path, max(6, int(size)))
 
 
-def _over(rgba: np.ndarray, bg: np.ndarray) -> np.ndarray:
+def _over(rgba: NDArray[Any], bg: NDArray[Any]) -> NDArray[Any]:
     """Composite RGBA uint8 over an RGB background colour; returns RGB uint8."""
     if rgba.shape[-1] == 3:
         return rgba
@@ -93,8 +94,8 @@ class FrameComposer:
         self.header = round(52 * u) if title else 0
         cb_w = min(width - 2 * pad, max(round(520 * u), 240))
         side = width >= cb_w + max(round(360 * u), 200) + 3 * pad
-        cb_args = {"label": label, "ticks": ticks, "nan": nan, "missing": missing,
-                   "fontsize": max(6.0, 16.0 * u)}
+        cb_args: dict[str, Any] = {"label": label, "ticks": ticks, "nan": nan, "missing": missing,
+                                   "fontsize": max(6.0, 16.0 * u)}
         cb_h = max(56, round(110 * u), math.ceil(colorbar_height(scale, cb_w / 100.0, **cb_args) * 100))
         cb_h += cb_h % 2
         caption_h = round(92 * u)
@@ -119,7 +120,7 @@ class FrameComposer:
             canvas = np.asarray(im).copy()
         self.canvas = canvas
 
-    def compose(self, renders: Sequence[np.ndarray], caption: str, clock: float) -> np.ndarray:
+    def compose(self, renders: Sequence[NDArray[Any]], caption: str, clock: float) -> NDArray[Any]:
         """One frame, RGB uint8 of shape (height, width, 3) (both even)."""
         from PIL import Image, ImageDraw
 

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, TypedDict
+from typing import TYPE_CHECKING, Any, TypedDict
 
-import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.color.rgb import ColorLike
 from brainpainter.color.scale import ColourScale
@@ -200,7 +200,7 @@ def plan_grid(aspect: Mapping[str, float], image_names: Sequence[str], view_name
     return Grid(width, height, left, top, usable, col_w, row_h, row_heads, col_heads)
 
 
-def compose_figure(images: Mapping[tuple[str, str], np.ndarray], image_names: Sequence[str],
+def compose_figure(images: Mapping[tuple[str, str], NDArray[Any]], image_names: Sequence[str],
                    view_names: Sequence[str], scale: ColourScale, opts: FigureOptions | None = None, *,
                    nan: bool = False, missing: bool = False,
                    background: ColorLike | None = "white") -> FigureLayout:
@@ -245,7 +245,7 @@ def compose_figure(images: Mapping[tuple[str, str], np.ndarray], image_names: Se
     return layout
 
 
-def draw_images(layout: FigureLayout, grid: Grid, images: Mapping[tuple[str, str], np.ndarray],
+def draw_images(layout: FigureLayout, grid: Grid, images: Mapping[tuple[str, str], NDArray[Any]],
                 crops: Mapping[str, tuple[slice, slice]], image_names: Sequence[str],
                 view_names: Sequence[str], by_column: bool) -> None:
     """One axes per render, cropped; images as columns when `by_column` (a grid figure)."""

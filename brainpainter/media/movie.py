@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any, Unpack
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.errors import BrainPainterError
@@ -345,7 +346,7 @@ class MovieFrames:
             label = names[a] if a == b else f"{names[a]} {ARROW} {names[b]} ({weight:.3f})"
             yield [Item(colors, view, label=label) for view in state_views]
 
-    def frames(self, runner: Runner, wanted: Sequence[int]) -> Iterator[tuple[int, np.ndarray]]:
+    def frames(self, runner: Runner, wanted: Sequence[int]) -> Iterator[tuple[int, NDArray[Any]]]:
         """``(frame index, frame)`` for the frames `wanted` (increasing), rendered in parallel, in order."""
         wanted_states = list(dict.fromkeys(self.frame_state[i] for i in wanted))
         todo = iter(wanted)
@@ -367,7 +368,7 @@ def encode(path: Path, frames: MovieFrames, runner: Runner, fps: float, progress
     # the output folder is locked from before the first frame until the movie is published
     with FileTransaction(path) as tx, runner, \
             tqdm(total=n, unit="frame", desc="movie", disable=not progress) as bar:
-        samples: dict[int, np.ndarray] = {}
+        samples: dict[int, NDArray[Any]] = {}
         if gif:  # the palette comes from up to 12 frames spread over the movie
             picks = np.linspace(0, n - 1, min(n, GIF_PALETTE_FRAMES)).round().astype(int)
             samples = dict(frames.frames(runner, sorted(set(picks.tolist()))))

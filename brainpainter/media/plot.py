@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Unpack
 
-import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.color.scale import ColourScale
 from brainpainter.errors import BrainPainterError, choice_error
@@ -57,7 +57,7 @@ class PlotResult:
     ax: Axes
     artist: AxesImage
     colorbar_ax: Axes | None
-    image: np.ndarray
+    image: NDArray[Any]
     scale: ColourScale
 
 
@@ -114,8 +114,8 @@ def plot(values: Any, view: str = "lateral-left", *, ax: Axes | None = None, row
     from brainpainter.media.drawn import common_crop
     from brainpainter.rendering.run import render
 
-    result = render(values, atlas, views=[view], rows=[row], painter=painter, progress=False,
-                    **render_options)
+    options: dict[str, Any] = {**render_options, "views": [view]}
+    result = render(values, atlas, rows=[row], painter=painter, progress=False, **options)
     (_, view_name), image = next(iter(result.images.items()))
     scale = result.scale
     assert scale is not None

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError, ColumnNotFoundError, choice_error, nearest
 from brainpainter.table.region_table import RegionTable
@@ -24,7 +25,7 @@ MAX_FRAMES = 20_000  # frames of one movie (MP4); GIFs: brainpainter.media.encod
 
 
 # -- timing ------------------------------------------------------------------------
-def ease(t: np.ndarray | float, easing: str = "linear") -> np.ndarray | float:
+def ease(t: NDArray[Any] | float, easing: str = "linear") -> NDArray[Any] | float:
     """Map the fraction `t` in [0, 1] of a step to the interpolation weight.
 
     ``linear``: t; ``smooth``: smoothstep ``3t^2 - 2t^3`` (zero speed at both
@@ -109,7 +110,7 @@ def plan_frames(times: Sequence[float], frames_per_step: int, easing: str = "lin
     return plan
 
 
-def interpolate(a: np.ndarray, b: np.ndarray, weight: float) -> np.ndarray:
+def interpolate(a: NDArray[Any], b: NDArray[Any], weight: float) -> NDArray[Any]:
     """Values between two key frames: ``(1 - w) a + w b``.
 
     NaN in either key frame gives NaN strictly between them; at ``w = 0``

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas, get_atlas
 from brainpainter.atlas.template import Template, load_template, template_for
@@ -176,14 +177,15 @@ class Painter:
             self._renderer = self._renderer_class(self.scene)
         return self._renderer
 
-    def paint_colors(self, colors: Mapping[str, RGB], view: View) -> np.ndarray:
+    def paint_colors(self, colors: Mapping[str, RGB], view: View) -> NDArray[Any]:
         """Render explicit region colours (group keys colour their members); RGBA uint8, (h, w, 4)."""
         assert isinstance(self.atlas, Atlas)
         scene = self.scene
         palette = Palette(self.atlas.expand(colors), lambda: scene.geometry)
-        return self.load().render(palette, view)
+        pixels: NDArray[Any] = self.load().render(palette, view)
+        return pixels
 
-    def paint(self, values: Mapping[str, float], view: View, scale: ColourScale) -> np.ndarray:
+    def paint(self, values: Mapping[str, float], view: View, scale: ColourScale) -> NDArray[Any]:
         """Render region values through `scale`; returns RGBA uint8, shape (h, w, 4)."""
         assert isinstance(self.atlas, Atlas)
         return self.paint_colors(region_colors(values, self.atlas, scale), view)
@@ -225,7 +227,7 @@ class RenderResult:
     """
 
     files: list[Path]
-    images: dict[tuple[str, str], np.ndarray]
+    images: dict[tuple[str, str], NDArray[Any]]
     manifest: dict[str, Any]
     scale: ColourScale | None = None
     table: RegionTable | None = None

@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.rendering.options import cpu_count, resolve_jobs
@@ -184,7 +185,7 @@ def paint_items(painter: Painter, items: Iterable[Item], encode: bool) -> list[A
     return out
 
 
-def decode_png(data: bytes) -> np.ndarray:
+def decode_png(data: bytes) -> NDArray[Any]:
     """PNG bytes -> RGBA uint8 array of shape (h, w, 4) (lossless: the array that was encoded)."""
     from PIL import Image
 
@@ -339,7 +340,7 @@ class SerialRunner(Runner):
         self.painter.close()
 
 
-def paint_all(runner: Runner, items: Sequence[Item], bar: Any = None) -> list[np.ndarray]:
+def paint_all(runner: Runner, items: Sequence[Item], bar: Any = None) -> list[NDArray[Any]]:
     """Paint `items` with `runner`: RGBA uint8 arrays of shape (h, w, 4), in the order of `items`.
 
     `bar` (a tqdm progress bar) advances by each finished chunk's images.
@@ -417,8 +418,10 @@ class LocalRunner(Runner):
 
         threads = self.threads or render_threads(self.n_workers)
         # spawn: a fresh interpreter per worker; forking a process with Blender loaded is unsafe.
-        self._pool = ProcessPoolExecutor(self.n_workers, mp_context=multiprocessing.get_context("spawn"),
-                                         initializer=_init_process, initargs=(self.spec, threads))
+        self._pool = ProcessPoolExecutor(
+            self.n_workers, mp_context=multiprocessing.get_context("spawn"),
+            initializer=_init_process,  # type: ignore[arg-type]
+            initargs=(self.spec, threads))  # type: ignore[arg-type]
         try:
             warm = [self._pool.submit(_process_warm) for _ in range(self.n_workers)]
             loads = {pid: seconds for pid, seconds in (f.result() for f in warm)}

@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Unpack
 
-import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas, get_atlas
 from brainpainter.color.scale import ColourScale
@@ -202,8 +202,8 @@ def painter_options(painter: Painter, options: Options) -> Options:
     clash = [name for name in ("template", "surface", "renderer")
              if getattr(options.scene, name) != getattr(defaults.scene, name)
              and getattr(options.scene, name) != own_scene[name]]
-    if options.scene.hide and frozenset(resolve_hidden(options.scene.hide, painter.atlas)) \
-            != painter.scene.hidden:  # type: ignore[arg-type]
+    assert isinstance(painter.atlas, Atlas)
+    if options.scene.hide and resolve_hidden(options.scene.hide, painter.atlas) != painter.scene.hidden:
         clash.append("hide")
     clash += [name for name in option_names(GROUPS["settings"])
               if getattr(options.settings, name) != getattr(defaults.settings, name)
@@ -237,7 +237,7 @@ def png_metadata(image: str, view: View, settings: Mapping[str, Any]) -> dict[st
 
 
 def write_images(run: Run, painter: Painter, runner: Runner, chosen: Sequence[int], out: str | Path | None,
-                 progress: bool) -> tuple[list[Path], dict[tuple[str, str], np.ndarray], dict[str, Any]]:
+                 progress: bool) -> tuple[list[Path], dict[tuple[str, str], NDArray[Any]], dict[str, Any]]:
     """Paint the chosen rows from every view; write them to `out` (a transaction) or keep them.
 
     Returns
@@ -258,7 +258,7 @@ def write_images(run: Run, painter: Painter, runner: Runner, chosen: Sequence[in
     plan = run.items(chosen)
     tx = FolderTransaction(out) if out is not None else None  # lock, stage, verify, publish
     files = [tx.out / f"{names[i]}_{view.name}.png" for i, view in plan] if tx is not None else []
-    images: dict[tuple[str, str], np.ndarray] = {}
+    images: dict[tuple[str, str], NDArray[Any]] = {}
     with tx or nullcontext(), tqdm(total=len(plan), unit="img", desc="rendering",
                                    disable=not progress) as bar:
         painted = paint(run, runner, plan, settings if tx is not None else None)

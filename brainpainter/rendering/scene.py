@@ -16,9 +16,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
-import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.template import SURFACES, Template
 from brainpainter.errors import choice_error
@@ -89,7 +89,7 @@ class Renderer(Protocol):
 
     def __init__(self, scene: Scene) -> None: ...
 
-    def render(self, palette: Palette, view: View) -> np.ndarray:
+    def render(self, palette: Palette, view: View) -> NDArray[Any]:
         """Render one image.
 
         Parameters

@@ -9,7 +9,7 @@ when it is made.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TypedDict
+from typing import Any, TypedDict
 
 from brainpainter.color.rgb import ColorLike, to_rgb
 from brainpainter.errors import BrainPainterError, choice_error
@@ -45,16 +45,16 @@ class SettingsKwargs(TypedDict, total=False):
     glass_opacity: float
 
 
-def check_pixels(what: str, n: object) -> int:
+def check_pixels(what: str, n: Any) -> int:
     """`n` as a whole number of pixels in 16..8192, or a one-line error naming `what`."""
     try:
-        ok = float(n) == int(n) and MIN_PIXELS <= int(n) <= MAX_PIXELS  # type: ignore[call-overload]
+        ok = float(n) == int(n) and MIN_PIXELS <= int(n) <= MAX_PIXELS
     except (TypeError, ValueError, OverflowError):
         ok = False
     if not ok:
         raise BrainPainterError(f"{what} must be between {MIN_PIXELS} and {MAX_PIXELS} pixels (a whole "
                                 f"number); {n!r} was given.")
-    return int(n)  # type: ignore[call-overload]
+    return int(n)
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ web API show; ``read_table(data, atlas, **options.kwargs())`` reads with them.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
-from typing import TypedDict
+from typing import TypedDict, cast
 
 
 class TableKwargs(TypedDict, total=False):
@@ -47,4 +47,4 @@ class TableOptions:
 
     def kwargs(self) -> TableKwargs:
         """The options as keyword arguments of ``read_table``."""
-        return TableKwargs(**asdict(self))  # type: ignore[typeddict-item]
+        return cast(TableKwargs, asdict(self))

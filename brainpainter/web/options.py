@@ -110,7 +110,7 @@ class RenderOptions(TableOptions):
 def table_stream(data: bytes, name: str) -> io.BytesIO:
     """The uploaded bytes as a named stream for the readers: `name` is only a label, never opened."""
     stream = io.BytesIO(data)
-    stream.name = name  # type: ignore[attr-defined]
+    stream.name = name
     return stream
 
 

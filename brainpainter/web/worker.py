@@ -37,7 +37,7 @@ class PainterCache:
     def __init__(self, renderer: str, size: int = 2) -> None:
         self.renderer = renderer
         self.size = size
-        self._painters: OrderedDict[tuple, Any] = OrderedDict()
+        self._painters: OrderedDict[tuple[Any, ...], Any] = OrderedDict()
 
     def get(self, atlas: Any, surface: str, hidden: list[str], settings: Any) -> Any:
         from brainpainter.rendering.painter import Painter
@@ -194,7 +194,7 @@ def _write_zip(out: Path, names: list[str], zip_name: str) -> None:
 
 
 def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
-    kwargs = prep.options.run_kwargs()
+    kwargs: dict[str, Any] = prep.options.run_kwargs()
     kwargs.update(atlas=prep.run.table.atlas, hide=prep.hidden, surface=prep.options.surface,
                   renderer=renderer, progress=False)
     return kwargs
