@@ -36,8 +36,7 @@ from brainpainter.media.drawn import common_crop, content_box, swatches_needed
 from brainpainter.media.layout import FigureKwargs, FigureOptions, compose_figure
 from brainpainter.media.outfile import check_out_file
 from brainpainter.rendering.options import Options, RenderKwargs, take
-from brainpainter.rendering.parallel import paint_all
-from brainpainter.rendering.run import make_runner, prepare_run
+from brainpainter.rendering.run import make_runner, paint, prepare_run
 from brainpainter.table.rows import select_rows
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -167,14 +166,15 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     painter = run.painter()
     nan, missing = swatches_needed(table, chosen, run.views, painter.scene.hidden)
     plan = run.items(chosen)
-    items = [run.item(i, view) for i, view in plan]
     background = run.settings.background
     # the output folder is locked from before the first render until the figure is published
     with FileTransaction(path) if path is not None else nullcontext() as tx:
         with make_runner(painter, checked.scene.template, checked.runner, n_items=len(plan)) as runner, \
                 tqdm(total=len(plan), unit="img", desc="rendering", disable=not progress) as bar:
-            pixels = paint_all(runner, items, bar)
-        images = {(table.images[i], view.name): px for (i, view), px in zip(plan, pixels, strict=True)}
+            images: dict[tuple[str, str], NDArray[Any]] = {}
+            for (i, view), pixels in paint(run, runner, plan):
+                images[(table.images[i], view.name)] = pixels
+                bar.update(1)
         layout = compose_figure(images, [table.images[i] for i in chosen], [v.name for v in run.views],
                                 run.scale, figure_opts, nan=nan, missing=missing, background=background)
         if tx is not None and path is not None:
