@@ -9,13 +9,16 @@ call runs one Python function with a GPU context current. Shaders, batches
 and offscreen buffers survive between calls.
 
 Per renderer, every part of ``scene.geometry`` becomes one indexed batch
-(uploaded once); an image uploads only the palette (a 1-D float texture of
-linear colours), draws the visible parts into a supersampled float buffer
-(opaque parts with depth, then the glass: back faces, then front faces,
-blended, no depth writes) and averages each SxS block in a second pass that
-also converts linear light to sRGB, un-premultiplies alpha and flips rows,
-so the read-back (into a flat ``gpu.types.Buffer``; ``np.array`` of a
-multi-dimensional Buffer gives wrong strides) is already the image.
+(uploaded once, in an order that suits a software rasteriser's vertex
+cache: :mod:`brainpainter_blender.meshorder`); an image uploads only the
+palette (a 1-D float texture of linear colours), draws the visible parts
+into a supersampled buffer of 16-bit linear light (opaque parts with depth,
+then the glass: back faces, then front faces, blended, no depth writes) and
+averages each SxS block in a second pass (S a compile-time constant) that
+also un-premultiplies alpha and flips rows into an sRGB target, which encodes
+linear light to sRGB as it is written. So the read-back (into a flat
+``gpu.types.Buffer``; ``np.array`` of a multi-dimensional Buffer gives wrong
+strides) is already the image.
 
 Lighting is per vertex, in linear light, from lights fixed to the camera:
 a key light from the upper left, a fill light from the right and an
@@ -35,7 +38,7 @@ from brainpainter.framing import view_projection
 from brainpainter.geometry import PartGeometry, SceneGeometry
 from brainpainter.scene import RenderSettings
 from brainpainter.views import View
-from brainpainter_blender import _bpy
+from brainpainter_blender import _bpy, meshorder
 
 
 @dataclass(frozen=True)
@@ -78,7 +81,9 @@ FLAT = Lighting(ambient=1.0, key=0.0, fill=0.0, lit=False)
 SUPERSAMPLING = {"fast": 1, "default": 2, "high": 3}
 #: Face culling of opaque parts ("BACK": half the triangles are never rasterised; "NONE": draw all).
 CULL_OPAQUE = "BACK"
-#: Largest supersampled buffer (pixels; 8 bytes each as RGBA16F): huge images get less supersampling.
+#: Format of the supersampled buffer (linear light, premultiplied alpha; 8 bytes a pixel).
+HI_FORMAT = "RGBA16"
+#: Largest supersampled buffer (pixels; 8 bytes each): huge images get less supersampling.
 MAX_SUPERSAMPLED_PIXELS = 64_000_000
 #: Glass: opacity at grazing angles, as a multiple of the opacity facing the camera.
 GLASS_EDGE = 2.5
@@ -122,25 +127,21 @@ void main()
 """
 
 _RESOLVE_FRAGMENT = """
-float to_srgb(float c)
-{
-  c = clamp(c, 0.0, 1.0);
-  return c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1.0 / 2.4) - 0.055;
-}
-
 void main()
 {
+  /* FACTOR (the supersampling factor) is a compile-time constant, so the loops unroll */
   ivec2 p = ivec2(gl_FragCoord.xy);
-  int src_y = out_height - 1 - p.y;  /* flipped: row 0 of the read-back is the image's top row */
+  /* flipped: row 0 of the read-back is the image's top row */
+  ivec2 src = ivec2(p.x, out_height - 1 - p.y) * FACTOR;
   vec4 sum = vec4(0.0);
-  for (int j = 0; j < factor; j++) {
-    for (int i = 0; i < factor; i++) {
-      sum += texelFetch(image, ivec2(p.x * factor + i, src_y * factor + j), 0);
+  for (int j = 0; j < FACTOR; j++) {
+    for (int i = 0; i < FACTOR; i++) {
+      sum += texelFetch(image, src + ivec2(i, j), 0);
     }
   }
-  sum /= float(factor * factor);
-  vec3 rgb = sum.a > 0.0 ? sum.rgb / sum.a : vec3(0.0);
-  fragColor = vec4(to_srgb(rgb.r), to_srgb(rgb.g), to_srgb(rgb.b), sum.a);
+  sum *= 1.0 / float(FACTOR * FACTOR);
+  /* linear light out: the sRGB target encodes it */
+  fragColor = vec4(sum.a > 0.0 ? sum.rgb / sum.a : vec3(0.0), sum.a);
 }
 """
 
@@ -211,29 +212,23 @@ def in_gpu_context(job):
     return _engine.pop("result", None)
 
 
-_shaders: dict[str, Any] = {}
+_shaders: dict[Any, Any] = {}
 
 
-def _shaders_get() -> tuple[Any, Any]:
-    """The part and resolve shaders (compiled once per process, in a GPU context)."""
+def _part_shader() -> Any:
+    """The shader of every part (compiled once per process, in a GPU context)."""
     if "part" in _shaders:
-        return _shaders["part"], _shaders["resolve"]
+        return _shaders["part"]
     import gpu
 
     iface = gpu.types.GPUStageInterfaceInfo("brainpainter_part")
     iface.smooth("VEC4", "color")
     info = gpu.types.GPUShaderCreateInfo()
-    info.push_constant("MAT4", "mvp")
-    info.push_constant("VEC3", "back")
-    info.push_constant("VEC3", "key_dir")
-    info.push_constant("VEC3", "fill_dir")
-    info.push_constant("FLOAT", "ambient")
-    info.push_constant("FLOAT", "key")
-    info.push_constant("FLOAT", "fill")
-    info.push_constant("FLOAT", "sulc_strength")
-    info.push_constant("FLOAT", "glass_alpha")
-    info.push_constant("FLOAT", "glass_edge")
-    info.push_constant("INT", "mode")
+    for kind, name in (("MAT4", "mvp"), ("VEC3", "back"), ("VEC3", "key_dir"), ("VEC3", "fill_dir"),
+                       ("FLOAT", "ambient"), ("FLOAT", "key"), ("FLOAT", "fill"),
+                       ("FLOAT", "sulc_strength"), ("FLOAT", "glass_alpha"), ("FLOAT", "glass_edge"),
+                       ("INT", "mode")):
+        info.push_constant(kind, name)
     info.sampler(0, "FLOAT_1D", "palette")
     info.vertex_in(0, "VEC3", "pos")
     info.vertex_in(1, "VEC3", "nrm")
@@ -243,22 +238,35 @@ def _shaders_get() -> tuple[Any, Any]:
     info.fragment_out(0, "VEC4", "fragColor")
     info.vertex_source(_VERTEX)
     info.fragment_source(_FRAGMENT)
-    part = gpu.shader.create_from_info(info)
+    return _keep("part", gpu.shader.create_from_info(info), iface)
+
+
+def _resolve_shader(factor: int) -> Any:
+    """The resolve shader for one supersampling factor (compiled once per process and factor)."""
+    key = ("resolve", factor)
+    if key in _shaders:
+        return _shaders[key]
+    import gpu
 
     info = gpu.types.GPUShaderCreateInfo()
-    info.push_constant("INT", "factor")
+    info.define("FACTOR", str(int(factor)))
     info.push_constant("INT", "out_height")
     info.sampler(0, "FLOAT_2D", "image")
     info.vertex_in(0, "VEC2", "pos")
     info.fragment_out(0, "VEC4", "fragColor")
     info.vertex_source(_RESOLVE_VERTEX)
     info.fragment_source(_RESOLVE_FRAGMENT)
-    resolve = gpu.shader.create_from_info(info)
+    return _keep(key, gpu.shader.create_from_info(info))
+
+
+def _keep(key: Any, shader: Any, *extra: Any) -> Any:
     if not _shaders:
         # Drop them before Blender's own exit handler, which reports GPU blocks still held.
         atexit.register(_shaders.clear)
-    _shaders.update(part=part, resolve=resolve, iface=iface)
-    return part, resolve
+    _shaders[key] = shader
+    for i, obj in enumerate(extra):
+        _shaders[(key, i)] = obj
+    return shader
 
 
 class GpuDraw:
@@ -279,6 +287,8 @@ class GpuDraw:
         self._palette_tex: Any = None
         self._hi: Any = None
         self._lo: Any = None
+        self._lo_tex: Any = None
+        self._resolve: Any = None
         self._quad: Any = None
         in_gpu_context(self._upload)
 
@@ -295,19 +305,24 @@ class GpuDraw:
         import gpu
         from gpu_extras.batch import batch_for_shader
 
-        part_shader, resolve = _shaders_get()
+        part_shader = _part_shader()
         for p in self.geometry.parts:
+            order, triangles = meshorder.cache_friendly(p.vertices, p.triangles)
             self._batches[p.name] = batch_for_shader(
                 part_shader, "TRIS",
-                {"pos": p.vertices, "nrm": p.normals,
-                 "pal": p.palette_index.astype(np.float32), "sulc": p.sulc},
-                indices=p.triangles.astype(np.int32),
+                {"pos": p.vertices[order], "nrm": p.normals[order],
+                 "pal": p.palette_index[order].astype(np.float32), "sulc": p.sulc[order]},
+                indices=triangles,
             )
-        self._quad = batch_for_shader(resolve, "TRIS", {"pos": [(-1, -1), (3, -1), (-1, 3)]})
         s = self.settings
         self.factor = f = self._factor()
-        self._hi = gpu.types.GPUOffScreen(s.width * f, s.height * f, format="RGBA16F")
-        self._lo = gpu.types.GPUOffScreen(s.width, s.height, format="RGBA8")
+        self._resolve = _resolve_shader(f)
+        self._quad = batch_for_shader(self._resolve, "TRIS", {"pos": [(-1, -1), (3, -1), (-1, 3)]})
+        # Linear light in 16-bit integers: as exact as half floats for 0-1 and cheaper to write.
+        self._hi = gpu.types.GPUOffScreen(s.width * f, s.height * f, format=HI_FORMAT)
+        # The resolve writes linear light; the sRGB target encodes it (cheaper than pow() per pixel).
+        self._lo_tex = gpu.types.GPUTexture((s.width, s.height), format="SRGB8_A8")
+        self._lo = gpu.types.GPUFrameBuffer(color_slots=self._lo_tex)
 
     def render(self, palette_rgb: np.ndarray, view: View) -> np.ndarray:
         """Draw one image; `palette_rgb` is sRGB 0-1, shape (n_slots, 3). Returns RGBA uint8 (h, w, 4)."""
@@ -333,7 +348,7 @@ class GpuDraw:
         from mathutils import Matrix, Vector
 
         s, light = self.settings, self.lighting
-        part_shader, resolve = _shaders_get()
+        part_shader, resolve = _part_shader(), self._resolve
         mvp = Matrix(view_projection(pose, s.width / s.height).tolist())
         cam = pose.rotation  # columns: right, up, back (camera space -> world)
 
@@ -384,16 +399,15 @@ class GpuDraw:
                 gpu.state.depth_mask_set(True)
             gpu.state.depth_test_set("NONE")
         with self._lo.bind():
-            fb = gpu.state.active_framebuffer_get()
-            fb.clear(color=(0.0, 0.0, 0.0, 0.0))
+            # the resolve writes every pixel: no clear
             resolve.bind()
-            resolve.uniform_int("factor", self.factor)
             resolve.uniform_int("out_height", s.height)
             resolve.uniform_sampler("image", self._hi.texture_color)
             self._quad.draw(resolve)
             buf = gpu.types.Buffer("UBYTE", s.width * s.height * 4)
-            fb.read_color(0, 0, s.width, s.height, 4, 0, "UBYTE", data=buf)
-        return np.frombuffer(buf, dtype=np.uint8).reshape(s.height, s.width, 4).copy()
+            self._lo.read_color(0, 0, s.width, s.height, 4, 0, "UBYTE", data=buf)
+        # a view of the Buffer's memory (kept alive by the array), no copy
+        return np.frombuffer(buf, dtype=np.uint8).reshape(s.height, s.width, 4)
 
     def close(self) -> None:
         """Free the batches, textures and offscreen buffers (in a GPU context)."""
@@ -401,10 +415,9 @@ class GpuDraw:
             return
 
         def drop() -> None:
-            for off in (self._hi, self._lo):
-                if off is not None:
-                    off.free()
-            self._hi = self._lo = self._quad = self._palette_tex = None
+            if self._hi is not None:
+                self._hi.free()
+            self._hi = self._lo = self._lo_tex = self._quad = self._palette_tex = None
             self._batches.clear()
 
         in_gpu_context(drop)
