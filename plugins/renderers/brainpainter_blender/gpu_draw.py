@@ -85,6 +85,8 @@ CULL_OPAQUE = "BACK"
 HI_FORMAT = "RGBA16"
 #: Largest supersampled buffer (pixels; 8 bytes each): huge images get less supersampling.
 MAX_SUPERSAMPLED_PIXELS = 64_000_000
+#: Views whose framing a renderer keeps (a movie's orbit has one per frame).
+MAX_CACHED_VIEWS = 64
 #: Glass: opacity at grazing angles, as a multiple of the opacity facing the camera.
 GLASS_EDGE = 2.5
 
@@ -269,6 +271,33 @@ def _keep(key: Any, shader: Any, *extra: Any) -> Any:
     return shader
 
 
+@dataclass(frozen=True)
+class _Aim:
+    """A view's parts and camera uniforms (``mathutils`` values, world space)."""
+
+    visible: list[PartGeometry]
+    mvp: Any
+    back: Any
+    key_dir: Any
+    fill_dir: Any
+
+
+def _aim_for(geometry: SceneGeometry, view: View, settings: RenderSettings, light: Lighting) -> _Aim:
+    """The parts `view` shows, its view-projection matrix and the camera-fixed light directions."""
+    from mathutils import Matrix, Vector
+
+    aspect = settings.width / settings.height
+    pose = geometry.camera(view, aspect)
+    cam = pose.rotation  # columns: right, up, back (camera space -> world)
+
+    def world(d: tuple[float, float, float]) -> Vector:
+        v = cam @ np.asarray(d, float)
+        return Vector((v / np.linalg.norm(v)).tolist())
+
+    return _Aim(geometry.visible(view), Matrix(view_projection(pose, aspect).tolist()),
+                world((0.0, 0.0, 1.0)), world(light.key_dir), world(light.fill_dir))
+
+
 class GpuDraw:
     """Draws a scene's geometry with Blender's ``gpu`` module (see the module docstring).
 
@@ -283,6 +312,7 @@ class GpuDraw:
         self.settings = settings
         self.lighting = FLAT if settings.shading == "flat" else LIGHTING[settings.lighting]
         self._batches: dict[str, Any] = {}
+        self._aims: dict[View, _Aim] = {}
         self._palette_key: bytes | None = None
         self._palette_tex: Any = None
         self._hi: Any = None
@@ -326,10 +356,23 @@ class GpuDraw:
 
     def render(self, palette_rgb: np.ndarray, view: View) -> np.ndarray:
         """Draw one image; `palette_rgb` is sRGB 0-1, shape (n_slots, 3). Returns RGBA uint8 (h, w, 4)."""
-        s = self.settings
-        visible = self.geometry.visible(view)
-        pose = self.geometry.camera(view, s.width / s.height)
-        return in_gpu_context(lambda: self._draw(np.asarray(palette_rgb, np.float32), visible, pose))
+        aim = self._aim(view)
+        return in_gpu_context(lambda: self._draw(np.asarray(palette_rgb, np.float32), aim))
+
+    def _aim(self, view: View) -> _Aim:
+        """What `view` draws and its camera uniforms, computed once per view.
+
+        Besides sparing the work, the cache keeps numpy's threaded BLAS out of
+        the per-image path: a camera's framing multiplies thousands of hull
+        points, which wakes OpenBLAS's worker thread, and that thread then
+        spins (``sched_yield``) on a core the rasteriser needs.
+        """
+        aim = self._aims.get(view)
+        if aim is None:
+            if len(self._aims) >= MAX_CACHED_VIEWS:  # a movie's orbit: many views, each used once
+                self._aims.clear()
+            aim = self._aims[view] = _aim_for(self.geometry, view, self.settings, self.lighting)
+        return aim
 
     def _palette(self, rgb: np.ndarray) -> Any:
         import gpu
@@ -343,19 +386,11 @@ class GpuDraw:
             self._palette_key = key
         return self._palette_tex
 
-    def _draw(self, rgb: np.ndarray, visible: list[PartGeometry], pose) -> np.ndarray:
+    def _draw(self, rgb: np.ndarray, aim: _Aim) -> np.ndarray:
         import gpu
-        from mathutils import Matrix, Vector
 
-        s, light = self.settings, self.lighting
+        s, light, visible = self.settings, self.lighting, aim.visible
         part_shader, resolve = _part_shader(), self._resolve
-        mvp = Matrix(view_projection(pose, s.width / s.height).tolist())
-        cam = pose.rotation  # columns: right, up, back (camera space -> world)
-
-        def world(d) -> Vector:
-            v = cam @ np.asarray(d, float)
-            return Vector((v / np.linalg.norm(v)).tolist())
-
         tex = self._palette(rgb)
         bg = s.background
         clear = (0.0, 0.0, 0.0, 0.0) if bg is None else (*srgb_to_linear(np.asarray(bg)).tolist(), 1.0)
@@ -363,10 +398,10 @@ class GpuDraw:
             fb = gpu.state.active_framebuffer_get()
             fb.clear(color=clear, depth=1.0)
             part_shader.bind()
-            part_shader.uniform_float("mvp", mvp)
-            part_shader.uniform_float("back", world((0.0, 0.0, 1.0)))
-            part_shader.uniform_float("key_dir", world(light.key_dir))
-            part_shader.uniform_float("fill_dir", world(light.fill_dir))
+            part_shader.uniform_float("mvp", aim.mvp)
+            part_shader.uniform_float("back", aim.back)
+            part_shader.uniform_float("key_dir", aim.key_dir)
+            part_shader.uniform_float("fill_dir", aim.fill_dir)
             part_shader.uniform_float("ambient", light.ambient)
             part_shader.uniform_float("key", light.key if light.lit else 0.0)
             part_shader.uniform_float("fill", light.fill if light.lit else 0.0)
