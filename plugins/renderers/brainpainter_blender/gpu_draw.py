@@ -18,7 +18,9 @@ averages each SxS block in a second pass (S a compile-time constant) that
 also un-premultiplies alpha and flips rows into an sRGB target, which encodes
 linear light to sRGB as it is written. So the read-back (into a flat
 ``gpu.types.Buffer``; ``np.array`` of a multi-dimensional Buffer gives wrong
-strides) is already the image.
+strides) is already the image. The GLSL sources are in
+:mod:`brainpainter_blender.gpu_shaders`; :meth:`GpuDraw.profile` times the
+steps of one image.
 
 Lighting is per vertex, in linear light, from lights fixed to the camera:
 a key light from the upper left, a fill light from the right and an
@@ -27,7 +29,8 @@ ambient term (:data:`LIGHTING`).
 
 from __future__ import annotations
 
-import atexit
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -38,7 +41,7 @@ from brainpainter.framing import view_projection
 from brainpainter.geometry import PartGeometry, SceneGeometry
 from brainpainter.scene import RenderSettings
 from brainpainter.views import View
-from brainpainter_blender import _bpy, meshorder
+from brainpainter_blender import _bpy, gpu_shaders, meshorder
 
 
 @dataclass(frozen=True)
@@ -89,64 +92,6 @@ MAX_SUPERSAMPLED_PIXELS = 64_000_000
 MAX_CACHED_VIEWS = 64
 #: Glass: opacity at grazing angles, as a multiple of the opacity facing the camera.
 GLASS_EDGE = 2.5
-
-_MODE_LIT, _MODE_GLASS = 0, 1
-
-_VERTEX = """
-void main()
-{
-  vec3 base = texelFetch(palette, int(pal + 0.5), 0).rgb;
-  vec3 n = normalize(nrm);
-  if (dot(n, back) < 0.0) {
-    n = -n;  /* seen from inside (a hole, the cut medial wall): light the side we see */
-  }
-  float shade = ambient + key * max(dot(n, key_dir), 0.0) + fill * max(dot(n, fill_dir), 0.0);
-  shade *= 1.0 - sulc_strength * sulc;
-  vec3 c = base * shade;
-  if (mode == 1) {
-    float facing = clamp(abs(dot(normalize(nrm), back)), 0.0, 1.0);
-    float a = clamp(mix(glass_alpha * glass_edge, glass_alpha, facing), 0.0, 1.0);
-    color = vec4(base * a, a);
-  } else {
-    color = vec4(c, 1.0);
-  }
-  gl_Position = mvp * vec4(pos, 1.0);
-}
-"""
-
-_FRAGMENT = """
-void main()
-{
-  fragColor = color;
-}
-"""
-
-_RESOLVE_VERTEX = """
-void main()
-{
-  gl_Position = vec4(pos, 0.0, 1.0);
-}
-"""
-
-_RESOLVE_FRAGMENT = """
-void main()
-{
-  /* FACTOR (the supersampling factor) is a compile-time constant, so the loops unroll */
-  ivec2 p = ivec2(gl_FragCoord.xy);
-  /* flipped: row 0 of the read-back is the image's top row */
-  ivec2 src = ivec2(p.x, out_height - 1 - p.y) * FACTOR;
-  vec4 sum = vec4(0.0);
-  for (int j = 0; j < FACTOR; j++) {
-    for (int i = 0; i < FACTOR; i++) {
-      sum += texelFetch(image, src + ivec2(i, j), 0);
-    }
-  }
-  sum *= 1.0 / float(FACTOR * FACTOR);
-  /* linear light out: the sRGB target encodes it */
-  fragColor = vec4(sum.a > 0.0 ? sum.rgb / sum.a : vec3(0.0), sum.a);
-}
-"""
-
 
 def srgb_to_linear(rgb: np.ndarray) -> np.ndarray:
     """The IEC 61966-2-1 sRGB transfer function inverted, for an array of sRGB 0-1 values."""
@@ -214,63 +159,6 @@ def in_gpu_context(job):
     return _engine.pop("result", None)
 
 
-_shaders: dict[Any, Any] = {}
-
-
-def _part_shader() -> Any:
-    """The shader of every part (compiled once per process, in a GPU context)."""
-    if "part" in _shaders:
-        return _shaders["part"]
-    import gpu
-
-    iface = gpu.types.GPUStageInterfaceInfo("brainpainter_part")
-    iface.smooth("VEC4", "color")
-    info = gpu.types.GPUShaderCreateInfo()
-    for kind, name in (("MAT4", "mvp"), ("VEC3", "back"), ("VEC3", "key_dir"), ("VEC3", "fill_dir"),
-                       ("FLOAT", "ambient"), ("FLOAT", "key"), ("FLOAT", "fill"),
-                       ("FLOAT", "sulc_strength"), ("FLOAT", "glass_alpha"), ("FLOAT", "glass_edge"),
-                       ("INT", "mode")):
-        info.push_constant(kind, name)
-    info.sampler(0, "FLOAT_1D", "palette")
-    info.vertex_in(0, "VEC3", "pos")
-    info.vertex_in(1, "VEC3", "nrm")
-    info.vertex_in(2, "FLOAT", "pal")
-    info.vertex_in(3, "FLOAT", "sulc")
-    info.vertex_out(iface)
-    info.fragment_out(0, "VEC4", "fragColor")
-    info.vertex_source(_VERTEX)
-    info.fragment_source(_FRAGMENT)
-    return _keep("part", gpu.shader.create_from_info(info), iface)
-
-
-def _resolve_shader(factor: int) -> Any:
-    """The resolve shader for one supersampling factor (compiled once per process and factor)."""
-    key = ("resolve", factor)
-    if key in _shaders:
-        return _shaders[key]
-    import gpu
-
-    info = gpu.types.GPUShaderCreateInfo()
-    info.define("FACTOR", str(int(factor)))
-    info.push_constant("INT", "out_height")
-    info.sampler(0, "FLOAT_2D", "image")
-    info.vertex_in(0, "VEC2", "pos")
-    info.fragment_out(0, "VEC4", "fragColor")
-    info.vertex_source(_RESOLVE_VERTEX)
-    info.fragment_source(_RESOLVE_FRAGMENT)
-    return _keep(key, gpu.shader.create_from_info(info))
-
-
-def _keep(key: Any, shader: Any, *extra: Any) -> Any:
-    if not _shaders:
-        # Drop them before Blender's own exit handler, which reports GPU blocks still held.
-        atexit.register(_shaders.clear)
-    _shaders[key] = shader
-    for i, obj in enumerate(extra):
-        _shaders[(key, i)] = obj
-    return shader
-
-
 @dataclass(frozen=True)
 class _Aim:
     """A view's parts and camera uniforms (``mathutils`` values, world space)."""
@@ -335,7 +223,7 @@ class GpuDraw:
         import gpu
         from gpu_extras.batch import batch_for_shader
 
-        part_shader = _part_shader()
+        part_shader = gpu_shaders.part_shader()
         for p in self.geometry.parts:
             order, triangles = meshorder.cache_friendly(p.vertices, p.triangles)
             self._batches[p.name] = batch_for_shader(
@@ -346,7 +234,7 @@ class GpuDraw:
             )
         s = self.settings
         self.factor = f = self._factor()
-        self._resolve = _resolve_shader(f)
+        self._resolve = gpu_shaders.resolve_shader(f)
         self._quad = batch_for_shader(self._resolve, "TRIS", {"pos": [(-1, -1), (3, -1), (-1, 3)]})
         # Linear light in 16-bit integers: as exact as half floats for 0-1 and cheaper to write.
         self._hi = gpu.types.GPUOffScreen(s.width * f, s.height * f, format=HI_FORMAT)
@@ -386,63 +274,102 @@ class GpuDraw:
             self._palette_key = key
         return self._palette_tex
 
-    def _draw(self, rgb: np.ndarray, aim: _Aim) -> np.ndarray:
+    def profile(self, palette_rgb: np.ndarray, view: View) -> dict[str, float]:
+        """Seconds each step of one image takes, each waited for (``benchmarks/bench_render.py --profile``).
+
+        Returns
+        -------
+        dict of str to float
+            ``palette``, ``clear``, ``draw <part>`` per opaque part, ``glass``,
+            ``resolve`` and ``read-back``; waiting for each step to finish
+            (a 1-pixel read) removes the overlap of an ordinary image.
+        """
         import gpu
 
-        s, light, visible = self.settings, self.lighting, aim.visible
-        part_shader, resolve = _part_shader(), self._resolve
-        tex = self._palette(rgb)
-        bg = s.background
-        clear = (0.0, 0.0, 0.0, 0.0) if bg is None else (*srgb_to_linear(np.asarray(bg)).tolist(), 1.0)
-        with self._hi.bind():
+        times: dict[str, float] = {}
+        aim = self._aim(view)
+
+        def mark(step: str) -> None:
             fb = gpu.state.active_framebuffer_get()
-            fb.clear(color=clear, depth=1.0)
-            part_shader.bind()
-            part_shader.uniform_float("mvp", aim.mvp)
-            part_shader.uniform_float("back", aim.back)
-            part_shader.uniform_float("key_dir", aim.key_dir)
-            part_shader.uniform_float("fill_dir", aim.fill_dir)
-            part_shader.uniform_float("ambient", light.ambient)
-            part_shader.uniform_float("key", light.key if light.lit else 0.0)
-            part_shader.uniform_float("fill", light.fill if light.lit else 0.0)
-            part_shader.uniform_float("glass_alpha", float(s.glass_opacity))
-            part_shader.uniform_float("glass_edge", GLASS_EDGE)
-            part_shader.uniform_sampler("palette", tex)
-            gpu.state.depth_test_set("LESS_EQUAL")
-            gpu.state.depth_mask_set(True)
-            gpu.state.blend_set("NONE")
-            # Parts are closed surfaces: faces turned away are always hidden behind others.
-            gpu.state.face_culling_set(CULL_OPAQUE)
-            part_shader.uniform_int("mode", _MODE_LIT)
-            for p in visible:
-                if p.kind == "glass":
-                    continue
-                part_shader.uniform_float("sulc_strength", light.sulc if p.kind == "cortex" else 0.0)
-                self._batches[p.name].draw(part_shader)
-            glass = [p for p in visible if p.kind == "glass"]
-            if glass and s.glass_opacity > 0:
-                gpu.state.depth_mask_set(False)
-                gpu.state.blend_set("ALPHA_PREMULT")
-                part_shader.uniform_int("mode", _MODE_GLASS)
-                part_shader.uniform_float("sulc_strength", 0.0)
-                for cull in ("FRONT", "BACK"):  # far side first, then the near side over it
-                    gpu.state.face_culling_set(cull)
-                    for p in glass:
-                        self._batches[p.name].draw(part_shader)
-                gpu.state.face_culling_set("NONE")
-                gpu.state.blend_set("NONE")
-                gpu.state.depth_mask_set(True)
-            gpu.state.depth_test_set("NONE")
+            fb.read_color(0, 0, 1, 1, 4, 0, "UBYTE", data=gpu.types.Buffer("UBYTE", 4))
+            now = time.perf_counter()
+            times[step] = now - times.pop("_t")
+            times["_t"] = now
+
+        def job() -> None:
+            times["_t"] = time.perf_counter()
+            self._draw(np.asarray(palette_rgb, np.float32), aim, mark)
+
+        in_gpu_context(job)
+        times.pop("_t")
+        return times
+
+    def _draw(self, rgb: np.ndarray, aim: _Aim, mark: Callable[[str], None] | None = None) -> np.ndarray:
+        import gpu
+
+        mark = mark or (lambda step: None)
+        tex = self._palette(rgb)
+        mark("palette")
+        with self._hi.bind():
+            self._draw_parts(aim, tex, mark)
         with self._lo.bind():
             # the resolve writes every pixel: no clear
+            resolve, s = self._resolve, self.settings
             resolve.bind()
             resolve.uniform_int("out_height", s.height)
             resolve.uniform_sampler("image", self._hi.texture_color)
             self._quad.draw(resolve)
+            mark("resolve")
             buf = gpu.types.Buffer("UBYTE", s.width * s.height * 4)
             self._lo.read_color(0, 0, s.width, s.height, 4, 0, "UBYTE", data=buf)
+            mark("read-back")
         # a view of the Buffer's memory (kept alive by the array), no copy
         return np.frombuffer(buf, dtype=np.uint8).reshape(s.height, s.width, 4)
+
+    def _draw_parts(self, aim: _Aim, tex: Any, mark: Callable[[str], None]) -> None:
+        """Clear the supersampled buffer and draw the opaque parts, then the glass."""
+        import gpu
+
+        s, light = self.settings, self.lighting
+        bg = s.background
+        clear = (0.0, 0.0, 0.0, 0.0) if bg is None else (*srgb_to_linear(np.asarray(bg)).tolist(), 1.0)
+        gpu.state.active_framebuffer_get().clear(color=clear, depth=1.0)
+        mark("clear")
+        shader = gpu_shaders.part_shader()
+        shader.bind()
+        for name, value in (("mvp", aim.mvp), ("back", aim.back), ("key_dir", aim.key_dir),
+                            ("fill_dir", aim.fill_dir), ("ambient", light.ambient),
+                            ("key", light.key if light.lit else 0.0),
+                            ("fill", light.fill if light.lit else 0.0),
+                            ("glass_alpha", float(s.glass_opacity)), ("glass_edge", GLASS_EDGE)):
+            shader.uniform_float(name, value)
+        shader.uniform_sampler("palette", tex)
+        gpu.state.depth_test_set("LESS_EQUAL")
+        gpu.state.depth_mask_set(True)
+        gpu.state.blend_set("NONE")
+        # Parts are closed surfaces: faces turned away are always hidden behind others.
+        gpu.state.face_culling_set(CULL_OPAQUE)
+        shader.uniform_int("mode", gpu_shaders.MODE_LIT)
+        for p in aim.visible:
+            if p.kind != "glass":
+                shader.uniform_float("sulc_strength", light.sulc if p.kind == "cortex" else 0.0)
+                self._batches[p.name].draw(shader)
+                mark(f"draw {p.name}")
+        glass = [p for p in aim.visible if p.kind == "glass"]
+        if glass and s.glass_opacity > 0:
+            gpu.state.depth_mask_set(False)
+            gpu.state.blend_set("ALPHA_PREMULT")
+            shader.uniform_int("mode", gpu_shaders.MODE_GLASS)
+            shader.uniform_float("sulc_strength", 0.0)
+            for cull in ("FRONT", "BACK"):  # far side first, then the near side over it
+                gpu.state.face_culling_set(cull)
+                for p in glass:
+                    self._batches[p.name].draw(shader)
+            mark("glass")
+            gpu.state.blend_set("NONE")
+            gpu.state.depth_mask_set(True)
+        gpu.state.face_culling_set("NONE")
+        gpu.state.depth_test_set("NONE")
 
     def close(self) -> None:
         """Free the batches, textures and offscreen buffers (in a GPU context)."""
