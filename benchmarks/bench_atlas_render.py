@@ -25,10 +25,10 @@ import numpy as np
 
 
 def bench(atlas_name: str, view: str, width: int, height: int, repeats: int) -> dict:
-    from brainpainter.atlas import get_atlas
-    from brainpainter.colormap import make_scale
-    from brainpainter.render import Painter, RenderSettings
-    from brainpainter.views import get_view
+    from brainpainter.atlas.model import get_atlas
+    from brainpainter.color.scale import make_scale
+    from brainpainter.rendering.painter import Painter, RenderSettings
+    from brainpainter.rendering.views import get_view
 
     atlas = get_atlas(atlas_name)
     t0 = time.perf_counter()

@@ -42,14 +42,14 @@ import json, sys, time
 t0 = time.perf_counter()
 import pandas as pd
 import brainpainter
-from brainpainter.render import render
+from brainpainter.rendering.painter import render
 args = json.loads(sys.argv[1])
 frame = pd.read_csv(args["example"])
 rows = [frame.iloc[i % len(frame)].copy() for i in range(args["rows"])]
 big = pd.DataFrame(rows).reset_index(drop=True)
 big["Image-name-unique"] = [f"row{i:03d}" for i in range(len(big))]
 stamps = []
-import brainpainter.output as output
+import brainpainter.io.output as output
 _orig = output.write_png
 def timed_write(path, image, metadata=None):
     _orig(path, image, metadata)
@@ -70,9 +70,9 @@ PEER = r"""
 import json, sys, time
 import numpy as np
 args = json.loads(sys.argv[1])
-from brainpainter.render import Painter
-from brainpainter.scene import RenderSettings
-from brainpainter.views import get_view
+from brainpainter.rendering.painter import Painter
+from brainpainter.rendering.scene import RenderSettings
+from brainpainter.rendering.views import get_view
 painter = Painter("dk", settings=RenderSettings(args["width"], args["height"]))
 view = get_view("lateral-left")
 part = next(p for p in painter.scene.geometry.parts if p.name == "cortex-lh")
@@ -129,10 +129,10 @@ def mark(name):
 import numpy as np
 import pandas
 mark("import numpy, pandas")
-from brainpainter.render import Painter
-from brainpainter.output import png_bytes
-from brainpainter.scene import RenderSettings
-from brainpainter.views import get_view
+from brainpainter.rendering.painter import Painter
+from brainpainter.io.output import png_bytes
+from brainpainter.rendering.scene import RenderSettings
+from brainpainter.rendering.views import get_view
 mark("import brainpainter")
 args = json.loads(sys.argv[1])
 painter = Painter("dk", settings=RenderSettings(args["width"], args["height"], quality=args["quality"]))

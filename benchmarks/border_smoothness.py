@@ -2,7 +2,7 @@
 
 Every cortical region of the atlas gets one of two colours (alternating in
 atlas order); the lateral-left view is rendered with ``--shading flat`` and
-:func:`brainpainter.imagemetrics.border_ratio` divides the length of the
+:func:`brainpainter.media.imagemetrics.border_ratio` divides the length of the
 borders between the two colours by their length after a 1.5 px Gaussian
 smoothing. Target (issue 10): <= 1.09 for the built-in atlases.
 
@@ -25,9 +25,9 @@ COLOR_B = (40, 90, 220)
 def two_colour_render(atlas: str = "dk", template: str = "fsaverage", view: str = "lateral-left",
                       width: int = 2400, height: int = 1800, renderer: str = "blender") -> np.ndarray:
     """Flat-shaded render with the atlas's cortical regions in `COLOR_A` / `COLOR_B`; RGBA (h, w, 4)."""
-    from brainpainter.render import Painter
-    from brainpainter.scene import RenderSettings
-    from brainpainter.views import get_view
+    from brainpainter.rendering.painter import Painter
+    from brainpainter.rendering.scene import RenderSettings
+    from brainpainter.rendering.views import get_view
 
     settings = RenderSettings(width=width, height=height, shading="flat")
     with Painter(atlas, template, settings=settings, renderer=renderer) as painter:
@@ -38,7 +38,7 @@ def two_colour_render(atlas: str = "dk", template: str = "fsaverage", view: str 
 
 
 def main() -> None:
-    from brainpainter.imagemetrics import border_ratio
+    from brainpainter.media.imagemetrics import border_ratio
 
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)

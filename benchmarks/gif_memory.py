@@ -1,7 +1,7 @@
 """Peak memory of writing a long GIF movie (issue 11: GIF frames are streamed, not kept).
 
 Writes N composed-size frames (smoothly changing colours, like a movie) through
-brainpainter.movie._GifWriter and prints the peak resident memory of the process
+brainpainter.media.movie._GifWriter and prints the peak resident memory of the process
 (VmHWM) against the memory the frames themselves would take if kept in a list.
 
     python benchmarks/gif_memory.py [N] [WIDTH] [HEIGHT] [--old PATH/TO/OLD/movie.py]
@@ -30,7 +30,7 @@ def peak_mb() -> float:
 def main() -> None:
     import importlib.util
 
-    from brainpainter.transaction import gif_info
+    from brainpainter.io.transaction import gif_info
 
     args = sys.argv[1:]
     old = None
@@ -45,7 +45,7 @@ def main() -> None:
         spec.loader.exec_module(module)
         writer_class = module._GifWriter
     else:
-        from brainpainter.movie import _GifWriter as writer_class
+        from brainpainter.media.movie import _GifWriter as writer_class
     n = int(args[0]) if len(args) > 0 else 325
     w = int(args[1]) if len(args) > 1 else 1200
     h = int(args[2]) if len(args) > 2 else 500

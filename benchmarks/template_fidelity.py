@@ -24,11 +24,11 @@ FSAVERAGE = REPO.parent / "shared" / "data" / "freesurfer" / "subjects" / "fsave
 def main() -> None:
     from skimage.metrics import structural_similarity
 
-    from brainpainter.colormap import make_scale
-    from brainpainter.inputs import read_table
-    from brainpainter.render import Painter
-    from brainpainter.scene import RenderSettings
-    from brainpainter.views import get_view
+    from brainpainter.color.scale import make_scale
+    from brainpainter.rendering.painter import Painter
+    from brainpainter.rendering.scene import RenderSettings
+    from brainpainter.rendering.views import get_view
+    from brainpainter.table.region_table import read_table
     from brainpainter_builder.build import build_template
 
     parser = argparse.ArgumentParser(description=__doc__,

@@ -1,5 +1,5 @@
 """``python -m brainpainter`` runs the CLI."""
 
-from brainpainter.cli import main
+from brainpainter.cli.main import main
 
 main()

@@ -3,7 +3,7 @@
 ``fake_distribution`` writes a minimal installed distribution (a package plus
 its ``.dist-info`` with ``entry_points.txt``) into a folder, exactly what pip
 would leave in site-packages; put that folder on ``sys.path`` and call
-:func:`brainpainter.registry.reset_all` to make the registries see it.
+:func:`brainpainter.atlas.registry.reset_all` to make the registries see it.
 
 For atlas plugin authors: :func:`check_atlas` runs every check brainpainter
 makes of an atlas (it loads through the registry, its label set fits the
@@ -71,8 +71,7 @@ def fake_distribution(
 @contextmanager
 def installed(root: Path) -> Iterator[None]:
     """Put `root` on ``sys.path`` and refresh the registries for the duration."""
-    from brainpainter import registry
-
+    from brainpainter.atlas import registry
     sys.path.insert(0, str(root))
     registry.reset_all()
     try:
@@ -124,7 +123,7 @@ def write_tiny_template(path: Path, labels: Mapping[str, tuple[str, ...]] | None
     import numpy as np
     import trimesh
 
-    from brainpainter.template import FORMAT, FORMAT_VERSION
+    from brainpainter.atlas.template import FORMAT, FORMAT_VERSION
 
     labels = labels or {"dk": ("insula", "precuneus", "superiorfrontal", "unknown")}
     path.mkdir(parents=True, exist_ok=True)
@@ -212,7 +211,7 @@ class StandInRenderer:
 
         type(self).calls.append((dict(colors), view))
         s = self.scene.settings
-        from brainpainter.framing import shows
+        from brainpainter.rendering.framing import shows
 
         kinds = {"lh": ("cortex", "lh"), "rh": ("cortex", "rh"), "subcortical": ("subcortical", None)}
         parts = [p for p, (kind, hemi) in kinds.items() if shows(view, kind, hemi)]
@@ -239,8 +238,7 @@ class StandInRenderer:
 @contextmanager
 def registered_renderer(name: str, cls: type) -> Iterator[str]:
     """Register renderer class `cls` under `name` for the duration; yields `name`."""
-    from brainpainter import registry
-
+    from brainpainter.atlas import registry
     registry.renderers.register(name, lambda: cls, replace=True)
     try:
         yield name
@@ -274,10 +272,10 @@ def check_atlas(atlas: Any, template: str | Path = "fsaverage") -> dict[str, Any
     """
     import numpy as np
 
-    from brainpainter import registry
-    from brainpainter.atlas import Atlas
-    from brainpainter.render import render
-    from brainpainter.template import load_template, template_for
+    from brainpainter.atlas import registry
+    from brainpainter.atlas.model import Atlas
+    from brainpainter.atlas.template import load_template, template_for
+    from brainpainter.rendering.painter import render
 
     a: Atlas = registry.atlases.get(atlas) if isinstance(atlas, str) else atlas
     problems: list[str] = []
@@ -339,8 +337,7 @@ def _expected_layout(scene: Any, view: Any, width: int, height: int) -> dict[int
     """Per palette slot: area-weighted pixel centroid and pixel area of its faces facing the camera."""
     import numpy as np
 
-    from brainpainter import framing
-
+    from brainpainter.rendering import framing
     geometry = scene.geometry
     pose = geometry.camera(view, width / height)
     px_per_mm = width / pose.ortho_scale
@@ -372,13 +369,13 @@ def check_renderer(renderer: str | type, size: tuple[int, int] = (160, 120),
 
     ``orientation``
         every preset view puts each region where core's camera
-        (:meth:`brainpainter.geometry.SceneGeometry.camera`) projects it, and
+        (:meth:`brainpainter.rendering.geometry.SceneGeometry.camera`) projects it, and
         the drawn silhouette fills the framed rectangle;
     ``flat_colors``
         ``shading="flat"`` draws every colour exactly (to 1/255), also inside
         anti-aliased images;
     ``nan_missing``
-        through :class:`brainpainter.render.Painter`, NaN values and absent
+        through :class:`brainpainter.rendering.painter.Painter`, NaN values and absent
         regions get the scale's colours exactly;
     ``transparent``
         ``background=None`` leaves the background at alpha 0 and the brain opaque;
@@ -412,13 +409,13 @@ def check_renderer(renderer: str | type, size: tuple[int, int] = (160, 120),
     import numpy as np
     from scipy import ndimage
 
-    from brainpainter import registry
-    from brainpainter.colormap import make_scale
-    from brainpainter.geometry import Palette
-    from brainpainter.render import Painter
-    from brainpainter.scene import RenderSettings, Scene
-    from brainpainter.template import load_template
-    from brainpainter.views import PRESETS, get_view
+    from brainpainter.atlas import registry
+    from brainpainter.atlas.template import load_template
+    from brainpainter.color.scale import make_scale
+    from brainpainter.rendering.geometry import Palette
+    from brainpainter.rendering.painter import Painter
+    from brainpainter.rendering.scene import RenderSettings, Scene
+    from brainpainter.rendering.views import PRESETS, get_view
 
     unknown = [c for c in checks if c not in CONFORMANCE_CHECKS]
     if unknown:
@@ -581,8 +578,7 @@ def check_renderer(renderer: str | type, size: tuple[int, int] = (160, 120),
 
 
 def _register_temp(cls: type) -> str:
-    from brainpainter import registry
-
+    from brainpainter.atlas import registry
     name = f"conformance-{id(cls)}"
     registry.renderers.register(name, lambda: cls, replace=True)
     return name
@@ -601,8 +597,8 @@ if _pytest is not None:
 
         Returns the (not yet created) user-atlas folder.
         """
-        from brainpainter import registry
-        from brainpainter.user_atlases import atlases_dir
+        from brainpainter.atlas import registry
+        from brainpainter.atlas.user import atlases_dir
 
         home = tmp_path / "home"
         monkeypatch.setenv("HOME", str(home))

@@ -36,9 +36,10 @@ def counting():
 
 
 def test_public_names_stay_callable_after_their_modules_are_imported():
-    code = ("import brainpainter, brainpainter.render, brainpainter.figure, brainpainter.movie\n"
-            "import brainpainter.plotting, brainpainter.interactive\n"
-            "from brainpainter.render import Painter\n"
+    code = ("import brainpainter, brainpainter.rendering.painter\n"
+            "import brainpainter.media.figure, brainpainter.media.movie\n"
+            "import brainpainter.media.plot, brainpainter.media.export\n"
+            "from brainpainter.rendering.painter import Painter\n"
             "names = ['render', 'figure', 'movie', 'plot', 'export', 'Painter']\n"
             "print([callable(getattr(brainpainter, n)) for n in names])\n"
             "print(brainpainter.figure.__name__, brainpainter.movie.__name__)")
@@ -107,7 +108,7 @@ def test_render_rows_selects_and_orders(tiny, counting, tmp_path):
 def test_plot_draws_into_the_users_axes_with_a_colour_bar(tiny, counting):
     from matplotlib.figure import Figure
 
-    from brainpainter.colorbar import agg_canvas
+    from brainpainter.media.colorbar import agg_canvas
 
     fig = Figure(figsize=(6, 3))
     ax_line, ax_brain = fig.subplots(1, 2)
@@ -156,8 +157,7 @@ def test_render_result_shows_in_notebooks(tiny, counting, tmp_path):
 def test_missing_bpy_names_the_pythons_that_work(monkeypatch):
     import importlib.util
 
-    from brainpainter import pythons
-
+    from brainpainter.rendering import pythons
     real = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec",
                         lambda name, *a: None if name == "bpy" else real(name, *a))
@@ -179,7 +179,7 @@ def test_views_error_lists_current_names_first():
 
 
 def test_views_split_by_a_space_still_work(tiny, counting, tmp_path, capsys):
-    from brainpainter.cli import join_split_lists, main
+    from brainpainter.cli.main import join_split_lists, main
 
     assert join_split_lists(["render", "t.csv", "--views", "lateral-left,", "medial-left", "-o", "o"]) == [
         "render", "t.csv", "--views=lateral-left,medial-left", "-o", "o"]
@@ -197,7 +197,7 @@ def test_views_split_by_a_space_still_work(tiny, counting, tmp_path, capsys):
 def test_template_build_names_the_builder_extra_when_missing(monkeypatch, tmp_path, capsys):
     import importlib.util
 
-    from brainpainter.cli import main
+    from brainpainter.cli.main import main
 
     real = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec",

@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from brainpainter import registry
-from brainpainter.atlas import load_atlas_dir
-from brainpainter.cli import cli
+from brainpainter.atlas import registry
+from brainpainter.atlas.model import load_atlas_dir
+from brainpainter.atlas.template import load_template
+from brainpainter.cli.main import cli
 from brainpainter.errors import BrainPainterError
-from brainpainter.render import Painter
-from brainpainter.template import load_template
+from brainpainter.rendering.painter import Painter
 from brainpainter.testing import (
     StandInRenderer,
     check_atlas,

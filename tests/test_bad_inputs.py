@@ -129,7 +129,7 @@ def test_fifty_megabytes_are_refused_with_little_memory(tmp_path, plugin_env):
     big = tmp_path / "big.csv"
     corpus._big_table(big)
     assert big.stat().st_size > 50 * 2**20
-    code = ("import sys\nfrom brainpainter.inputs import read_table\n"
+    code = ("import sys\nfrom brainpainter.table.region_table import read_table\n"
             "try:\n    read_table(sys.argv[1])\nexcept Exception as exc:\n    print(type(exc).__name__)\n"
             + PEAK_KB + "print(peak_kb())\n")
     proc = subprocess.run([sys.executable, "-c", code, str(big)], capture_output=True, text=True,
@@ -143,7 +143,7 @@ def test_largest_accepted_file_reads_in_bounded_memory(tmp_path, plugin_env):
     """A 30 MB table (just under the 32 MB limit) is read; peak memory stays under 20x its size."""
     path = tmp_path / "30mb.csv"
     corpus._big_table(path, megabytes=30)
-    code = ("import sys\nfrom brainpainter.inputs import read_table\n"
+    code = ("import sys\nfrom brainpainter.table.region_table import read_table\n"
             "t = read_table(sys.argv[1])\n" + PEAK_KB + "print(t.values.shape[0], peak_kb())\n")
     proc = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True,
                           env=plugin_env, timeout=300)

@@ -1,6 +1,6 @@
 """The in-process half of the bad-input corpus (``corpus.INPROCESS``), run through the CLI guard.
 
-Each case runs :func:`brainpainter.guard.run` (what ``brainpainter`` runs)
+Each case runs :func:`brainpainter.cli.guard.run` (what ``brainpainter`` runs)
 in click's ``CliRunner`` isolation, inside its own folder, with a stand-in
 renderer: a user error must give exit code 2, exactly one line on stderr
 (``error: ...`` with the expected text), no traceback, and leave the case
@@ -21,9 +21,9 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from brainpainter import registry
-from brainpainter.cli import cli
-from brainpainter.guard import run
+from brainpainter.atlas import registry
+from brainpainter.cli.guard import run
+from brainpainter.cli.main import cli
 from brainpainter.testing import stand_in, write_tiny_template
 
 HERE = Path(__file__).parent

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from nibabel.freesurfer import write_annot, write_geometry
 
-from brainpainter.atlas import read_regions_tsv
+from brainpainter.atlas.model import read_regions_tsv
+from brainpainter.atlas.template import load_template
 from brainpainter.errors import BrainPainterError
-from brainpainter.template import load_template
 from brainpainter_builder import cortex, subcortical, writer
 from brainpainter_builder.build import build_template
 from brainpainter_builder.report import format_report, template_problems, template_report

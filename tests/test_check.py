@@ -7,8 +7,8 @@ import json
 import pytest
 from click.testing import CliRunner
 
-from brainpainter import registry
-from brainpainter.cli import cli, main
+from brainpainter.atlas import registry
+from brainpainter.cli.main import cli, main
 from brainpainter.testing import write_tiny_template
 
 GOOD = ("Image-name-unique,Left-insula,lh_precuneus_thickness,eTIV,Age,Left-insulaa\n"

@@ -9,7 +9,7 @@ import sys
 import pytest
 from click.testing import CliRunner
 
-from brainpainter.cli import cli
+from brainpainter.cli.main import cli
 
 
 def run_cli(*args: str) -> subprocess.CompletedProcess:

@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from brainpainter.colorbar import (
+from brainpainter.color.scale import make_scale
+from brainpainter.errors import BrainPainterError
+from brainpainter.media.colorbar import (
     bar_colors,
     colorbar_figure,
     colorbar_image,
@@ -15,8 +17,6 @@ from brainpainter.colorbar import (
     resolve_ticks,
     text_color,
 )
-from brainpainter.colormap import make_scale
-from brainpainter.errors import BrainPainterError
 
 
 def positions_along(pixels: np.ndarray, scale) -> np.ndarray:

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from brainpainter.colormap import ColourScale, make_scale
-from brainpainter.colors import to_rgb
+from brainpainter.color.rgb import to_rgb
+from brainpainter.color.scale import ColourScale, make_scale
 from brainpainter.errors import BrainPainterError
 
 ORANGE = np.array(to_rgb("orange"))

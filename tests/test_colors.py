@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from brainpainter.colors import to_hex, to_rgb
+from brainpainter.color.rgb import to_hex, to_rgb
 from brainpainter.errors import BrainPainterError
 
 

@@ -13,12 +13,13 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from brainpainter import registry, user_atlases
-from brainpainter.atlas_config import load_atlas_config
-from brainpainter.cli import cli, main
+from brainpainter.atlas import registry
+from brainpainter.atlas import user as user_atlases
+from brainpainter.atlas.config import load_atlas_config
+from brainpainter.atlas.template import load_template
+from brainpainter.cli.main import cli, main
 from brainpainter.errors import BrainPainterError
-from brainpainter.render import Painter, region_colors, render
-from brainpainter.template import load_template
+from brainpainter.rendering.painter import Painter, region_colors, render
 from brainpainter.testing import StandInRenderer, check_atlas, fake_distribution, installed, stand_in
 from brainpainter.testing import write_tiny_template as _tiny
 
@@ -163,7 +164,7 @@ def test_out_writes_a_plugin_ready_folder_without_adding(tmp_path, tiny, tiny_an
                          "--out", str(tmp_path / "pkg" / "toy"))
     assert code == 0, err
     assert "written to" in out and "toy" not in registry.atlases.names()
-    from brainpainter.atlas import load_atlas_dir
+    from brainpainter.atlas.model import load_atlas_dir
 
     atlas = load_atlas_dir(tmp_path / "pkg" / "toy")
     assert atlas.label_dir == tmp_path / "pkg" / "toy" and len(atlas.cortical("rh")) == 2
@@ -182,7 +183,7 @@ def test_remove_undoes_add(tiny, tiny_annots):
 
 
 def test_failed_add_leaves_nothing(monkeypatch, tiny, tiny_annots):
-    import brainpainter.labelset as ls
+    import brainpainter.atlas.labelset as ls
 
     def broken(folder, *args, **kwargs):
         (folder / "atlas.json").write_text("{}")
@@ -226,7 +227,7 @@ def test_annot_option_parsing(tmp_path):
 def test_plugin_of_the_same_name_wins_over_a_user_atlas(tmp_path, tiny, tiny_annots):
     user_atlases.add_label_map("toy", tiny_annots, template=str(tiny))
     root = fake_distribution(tmp_path / "site", "toy-plugin", {"brainpainter.atlases": {"toy": "toy_p:toy"}},
-                             {"toy_p/__init__.py": "from brainpainter.atlas import get_atlas\n"
+                             {"toy_p/__init__.py": "from brainpainter.atlas.model import get_atlas\n"
                                                    "def toy():\n    return get_atlas('dk')\n"})
     with installed(root):
         assert next(e for e in registry.atlases.entries() if e.name == "toy").distribution == "toy-plugin"
@@ -289,7 +290,7 @@ def test_hide_and_values_of_a_group_reach_its_members(tmp_path):
         painter = Painter(atlas, "fsaverage", hidden=["Left-insula", "frontal"], renderer=renderer)
         assert {"Left-superiorfrontal", "Right-frontalpole", "Left-insula"} <= painter.scene.hidden
         assert "Right-insula" not in painter.scene.hidden
-    from brainpainter.colormap import make_scale
+    from brainpainter.color.scale import make_scale
 
     colors = region_colors({"Left-temporal": 1.0}, atlas, make_scale(vmin=0, vmax=1))
     assert colors["Left-bankssts"] == colors["Left-temporal"] != colors["Left-frontal"]

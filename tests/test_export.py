@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 import brainpainter
-from brainpainter.atlas import get_atlas
-from brainpainter.cli import main
+from brainpainter.atlas.model import get_atlas
+from brainpainter.cli.main import main
 from brainpainter.errors import BrainPainterError
 
 pytestmark = pytest.mark.integration  # the bundled fsaverage template

@@ -16,9 +16,9 @@ import pytest
 from click.testing import CliRunner
 from PIL import Image
 
-from brainpainter.colorbar import bar_colors
 from brainpainter.errors import BrainPainterError
-from brainpainter.figure import common_crop, content_box, make_figure, select_rows
+from brainpainter.media.colorbar import bar_colors
+from brainpainter.media.figure import common_crop, content_box, make_figure, select_rows
 from brainpainter.testing import registered_renderer, write_tiny_template
 
 REGIONS = ("Left-insula", "Left-precuneus")
@@ -180,7 +180,7 @@ def test_swatches_only_when_their_colours_are_drawn(tmp_path, stripes, tiny):
 
 
 def _lh_names():
-    from brainpainter.atlas import get_atlas
+    from brainpainter.atlas.model import get_atlas
 
     return [r.name for r in get_atlas("dk").cortical("lh")]
 
@@ -210,7 +210,7 @@ def test_transparent_png(tmp_path, stripes, tiny):
 
 # -- CLI and errors ----------------------------------------------------------------------------
 def test_cli_figure_with_stand_in_renderer(tmp_path, stripes, tiny):
-    from brainpainter.cli import cli
+    from brainpainter.cli.main import cli
 
     data = table(tmp_path, THREE)
     out = tmp_path / "fig" / "grid.png"

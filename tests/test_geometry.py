@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 import trimesh
 
-from brainpainter import framing
+from brainpainter.atlas.template import load_template
 from brainpainter.errors import BrainPainterError
-from brainpainter.geometry import (
+from brainpainter.rendering import framing
+from brainpainter.rendering.geometry import (
     GLASS_SLOT,
     MEDIAL_SLOT,
     NEUTRAL_GREY,
@@ -18,10 +19,9 @@ from brainpainter.geometry import (
     split_by_label,
     vertex_normals,
 )
-from brainpainter.scene import Scene
-from brainpainter.template import load_template
+from brainpainter.rendering.scene import Scene
+from brainpainter.rendering.views import PRESETS, View, get_view
 from brainpainter.testing import write_tiny_template
-from brainpainter.views import PRESETS, View, get_view
 
 
 @pytest.fixture(scope="module")
@@ -109,7 +109,7 @@ def test_lateral_left_puts_anterior_on_the_left(scene):
 
 
 def test_sulcal_depth_only_when_the_lighting_uses_it(scene):
-    from brainpainter.scene import RenderSettings
+    from brainpainter.rendering.scene import RenderSettings
 
     assert not scene.geometry.parts[0].sulc.any()  # studio lighting: not computed
     lit = Scene(scene.template, "dk", settings=RenderSettings(lighting="sulc"))

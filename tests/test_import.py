@@ -19,7 +19,7 @@ def test_import_does_not_import_bpy_or_heavy_modules():
 
 
 def test_help_does_not_import_bpy():
-    code = ("import sys\nfrom brainpainter.cli import main\nsys.argv=['brainpainter','--help']\n"
+    code = ("import sys\nfrom brainpainter.cli.main import main\nsys.argv=['brainpainter','--help']\n"
             "try:\n    main()\nexcept SystemExit:\n    pass")
     mods = _modules_after(code)
     assert "bpy" not in mods
@@ -27,6 +27,6 @@ def test_help_does_not_import_bpy():
 
 
 def test_atlas_list_does_not_import_bpy():
-    code = ("import sys\nfrom brainpainter.cli import main\nsys.argv=['brainpainter','atlas','list']\n"
+    code = ("import sys\nfrom brainpainter.cli.main import main\nsys.argv=['brainpainter','atlas','list']\n"
             "try:\n    main()\nexcept SystemExit:\n    pass")
     assert "bpy" not in _modules_after(code)

@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.inputs import read_table
+from brainpainter.table.region_table import read_table
 
 
 def write(tmp_path, text, name="in.csv"):
@@ -113,8 +113,8 @@ def test_binary_and_missing_files(tmp_path):
     ],
 )
 def test_alias_table(atlas, name, keys):
-    from brainpainter.atlas import get_atlas
-    from brainpainter.regionnames import NameResolver
+    from brainpainter.atlas.model import get_atlas
+    from brainpainter.table.names import NameResolver
 
     r = NameResolver.for_atlas(get_atlas(atlas)).lookup(name)
     assert (r.status, r.keys) == ("region", keys)
@@ -125,14 +125,14 @@ def test_alias_table(atlas, name, keys):
     "EstimatedTotalIntraCranialVol", "ICV", "LThickness", "Left-vessel", "CC_Anterior", "unknown",
     "Right-unknown", "ctx_lh_Medial_wall"])
 def test_non_region_names_are_recognised(name):
-    from brainpainter.atlas import get_atlas
-    from brainpainter.regionnames import NameResolver
+    from brainpainter.atlas.model import get_atlas
+    from brainpainter.table.names import NameResolver
 
     assert NameResolver.for_atlas(get_atlas("dk")).lookup(name).status == "ignored"
 
 
 def test_atlas_inference():
-    from brainpainter.atlas import get_atlas
+    from brainpainter.atlas.model import get_atlas
 
     dkt = get_atlas("dkt")
     full_dkt = {r.key: [1.0] for r in dkt.regions}
@@ -209,7 +209,7 @@ def test_long_table_with_image_column(tmp_path):
 
 
 def test_inspect_lists_every_bad_cell(tmp_path):
-    from brainpainter.inputs import inspect_table
+    from brainpainter.table.region_table import inspect_table
 
     path = write(tmp_path, "Image-name-unique,Left-insula,Right-insula\na,x,inf\nb,1,y\n")
     table = inspect_table(path)

@@ -18,9 +18,9 @@ import json
 import numpy as np
 import pytest
 
-from brainpainter.atlas import get_atlas
-from brainpainter.inputs import read_table
-from brainpainter.render import render
+from brainpainter.atlas.model import get_atlas
+from brainpainter.rendering.painter import render
+from brainpainter.table.region_table import read_table
 from brainpainter.testing import registered_renderer, write_tiny_template
 
 PARC = {"dk": "aparc", "destrieux": "aparc.a2009s", "dkt": "aparc.DKTatlas"}
@@ -314,7 +314,7 @@ def test_every_format_renders(tmp_path, strip, tiny, name):
     first = next(k for k in keys if k in table.regions)
     from PIL import Image
 
-    from brainpainter.colormap import make_scale
+    from brainpainter.color.scale import make_scale
 
     scale = make_scale(data=table.values)
     expected = np.round(scale(np.array([table.row(0)[first]]))[0] * 255).astype(int)

@@ -24,10 +24,10 @@ import pandas as pd
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from brainpainter.atlas import get_atlas
+from brainpainter.atlas.model import get_atlas
 from brainpainter.errors import BrainPainterError
-from brainpainter.inputs import inspect_table, read_table
-from brainpainter.report import check_report, format_report
+from brainpainter.table.region_table import inspect_table, read_table
+from brainpainter.table.report import check_report, format_report
 
 DK, DESTRIEUX = get_atlas("dk"), get_atlas("destrieux")
 REGION_NAMES = [

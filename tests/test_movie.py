@@ -17,9 +17,9 @@ from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from brainpainter.colormap import make_scale
+from brainpainter.color.scale import make_scale
 from brainpainter.errors import BrainPainterError
-from brainpainter.movie import (
+from brainpainter.media.movie import (
     ease,
     format_clock,
     interpolate,
@@ -276,7 +276,7 @@ def test_a_failure_while_rendering_leaves_no_file(tmp_path, stripes, tiny):
 
 
 def test_cli_movie_with_stand_in_renderer(tmp_path, stripes, tiny):
-    from brainpainter.cli import cli
+    from brainpainter.cli.main import cli
 
     data = table(tmp_path, "Image-name-unique,Left-insula\nA,0\nB,3\n")
     out = tmp_path / "m.mp4"

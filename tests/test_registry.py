@@ -10,14 +10,14 @@ import textwrap
 import pytest
 from click.testing import CliRunner
 
-from brainpainter import registry
-from brainpainter.cli import cli
+from brainpainter.atlas import registry
+from brainpainter.cli.main import cli
 from brainpainter.errors import BrainPainterError
 from brainpainter.testing import fake_distribution, installed
 
 ATLAS_MODULE = textwrap.dedent(
     '''
-    from brainpainter.atlas import Atlas, Region
+    from brainpainter.atlas.model import Atlas, Region
 
     def toy():
         return Atlas(name="toy", title="Toy atlas", template_labels="dk", regions=(
@@ -111,7 +111,7 @@ def test_plugin_breaking_the_contract_is_named(tmp_path):
         tmp_path / "site", "wrong-atlas", {"brainpainter.atlases": {"wrong": "wrong_atlas:thing"}},
         {"wrong_atlas/__init__.py": "thing = 42\n"},
     )
-    expected = r"'wrong'.*not a brainpainter\.atlas\.Atlas"
+    expected = r"'wrong'.*not a brainpainter\.atlas\.model\.Atlas"
     with installed(root), pytest.raises(BrainPainterError, match=expected):
         registry.atlases.get("wrong")
 

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from brainpainter.render import Painter
-from brainpainter.scene import RenderSettings
-from brainpainter.views import get_view
+from brainpainter.rendering.painter import Painter
+from brainpainter.rendering.scene import RenderSettings
+from brainpainter.rendering.views import get_view
 
 pytestmark = pytest.mark.render
 
@@ -92,7 +92,7 @@ def test_dorsal_and_anterior_views_place_hemispheres(painter):
 
 
 def test_flat_colours_are_exact_on_the_real_brain(painter):
-    from brainpainter.colormap import make_scale
+    from brainpainter.color.scale import make_scale
 
     scale = make_scale()  # white, yellow, orange, red on 0..3
     img = painter.paint({"Left-superiorfrontal": 1.2}, get_view("lateral-left"), scale)

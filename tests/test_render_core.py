@@ -14,7 +14,7 @@ import pytest
 from PIL import Image
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.render import Painter, render, resolve_hidden
+from brainpainter.rendering.painter import Painter, render, resolve_hidden
 from brainpainter.testing import registered_renderer, write_tiny_template
 
 
@@ -94,9 +94,9 @@ def test_image_names_are_sanitised(tmp_path, solid, tiny):
 
 
 def test_absent_and_nan_regions_get_their_colours(solid, tiny):
-    from brainpainter.colormap import make_scale
-    from brainpainter.scene import RenderSettings
-    from brainpainter.views import get_view
+    from brainpainter.color.scale import make_scale
+    from brainpainter.rendering.scene import RenderSettings
+    from brainpainter.rendering.views import get_view
 
     painter = Painter("dk", str(tiny), renderer=solid, settings=RenderSettings(width=4, height=4))
     scale = make_scale(nan_color="#000080", missing_color="#008000")
@@ -107,7 +107,7 @@ def test_absent_and_nan_regions_get_their_colours(solid, tiny):
 
 
 def test_hide_groups_and_names():
-    from brainpainter.atlas import get_atlas
+    from brainpainter.atlas.model import get_atlas
 
     dk = get_atlas("dk")
     assert resolve_hidden(["cerebellum"], dk) == {
@@ -161,7 +161,7 @@ def test_written_files_get_the_usual_permissions(tmp_path, solid, tiny):
 
 
 def test_png_writer_writes_in_order_and_reraises(tmp_path):
-    from brainpainter.output import PngWriter
+    from brainpainter.io.output import PngWriter
 
     img = np.zeros((4, 4, 4), np.uint8)
     with PngWriter(max_pending=1) as writer:

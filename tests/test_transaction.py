@@ -1,4 +1,4 @@
-"""The output transaction (brainpainter.transaction) and the CLI guard, in-process and fast."""
+"""The output transaction (brainpainter.io.transaction) and the CLI guard, in-process and fast."""
 
 from __future__ import annotations
 
@@ -12,8 +12,8 @@ import pytest
 from click.testing import CliRunner
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.output import png_bytes
-from brainpainter.transaction import FileTransaction, FolderTransaction, gif_info, mp4_boxes, verify_file
+from brainpainter.io.output import png_bytes
+from brainpainter.io.transaction import FileTransaction, FolderTransaction, gif_info, mp4_boxes, verify_file
 
 
 def _png(w: int = 8, h: int = 6) -> bytes:
@@ -21,7 +21,7 @@ def _png(w: int = 8, h: int = 6) -> bytes:
 
 
 def _gif(path: Path, n: int = 5, size: tuple[int, int] = (40, 30)) -> Path:
-    from brainpainter.movie import _GifWriter
+    from brainpainter.media.movie import _GifWriter
 
     rng = np.random.default_rng(1)
     frames = [rng.integers(0, 255, (size[1], size[0], 3), dtype=np.uint8) for _ in range(n)]
@@ -33,7 +33,7 @@ def _gif(path: Path, n: int = 5, size: tuple[int, int] = (40, 30)) -> Path:
 
 
 def _mp4(path: Path, n: int = 6) -> Path:
-    from brainpainter.movie import _Mp4Writer
+    from brainpainter.media.movie import _Mp4Writer
 
     writer = _Mp4Writer(path, (32, 32), 10.0)
     for i in range(n):
@@ -172,7 +172,7 @@ def test_lock_is_exclusive(tmp_path):
 
 
 def test_template_folder_rules(tmp_path, monkeypatch):
-    from brainpainter.transaction import replace_folder
+    from brainpainter.io.transaction import replace_folder
 
     def ours(p: Path) -> bool:
         return (p / "mine").is_file()
@@ -197,7 +197,7 @@ def test_template_folder_rules(tmp_path, monkeypatch):
 
 # -- bounded memory for GIFs -------------------------------------------------------------------------------
 def test_gif_memory_does_not_grow_with_frames(tmp_path):
-    from brainpainter.movie import _GifWriter
+    from brainpainter.media.movie import _GifWriter
 
     size = (320, 240)
     frame = np.random.default_rng(2).integers(0, 255, (size[1], size[0], 3), dtype=np.uint8)
@@ -221,8 +221,8 @@ def test_gif_memory_does_not_grow_with_frames(tmp_path):
 
 # -- the CLI guard -------------------------------------------------------------------------------------------
 def test_sigterm_cleans_up_and_exits_143(tmp_path, monkeypatch):
-    from brainpainter.cli import cli
-    from brainpainter.guard import Terminated, run
+    from brainpainter.cli.guard import Terminated, run
+    from brainpainter.cli.main import cli
     from brainpainter.testing import StandInRenderer, registered_renderer, write_tiny_template
 
     class Dies(StandInRenderer):
@@ -248,7 +248,7 @@ def test_sigterm_cleans_up_and_exits_143(tmp_path, monkeypatch):
 def test_internal_error_is_one_line(monkeypatch):
     import click
 
-    from brainpainter.guard import run
+    from brainpainter.cli.guard import run
 
     @click.command()
     def boom() -> None:
@@ -265,8 +265,8 @@ def test_check_and_render_agree_on_every_check_case(tmp_path, monkeypatch):
     import importlib.util
     import sys
 
-    from brainpainter.cli import cli
-    from brainpainter.guard import run
+    from brainpainter.cli.guard import run
+    from brainpainter.cli.main import cli
     from brainpainter.testing import stand_in, write_tiny_template
 
     corpus = sys.modules.get("bad_input_corpus")
@@ -294,10 +294,10 @@ def test_check_and_render_agree_on_every_check_case(tmp_path, monkeypatch):
 
 
 def test_a_cycle_of_group_atlases_is_one_short_line(tmp_path, monkeypatch):
-    from brainpainter import registry
-    from brainpainter.cli import cli
-    from brainpainter.guard import run
-    from brainpainter.user_atlases import atlases_dir
+    from brainpainter.atlas import registry
+    from brainpainter.atlas.user import atlases_dir
+    from brainpainter.cli.guard import run
+    from brainpainter.cli.main import cli
 
     for name, base in (("aa", "bb"), ("bb", "aa")):
         folder = atlases_dir() / name
@@ -350,9 +350,9 @@ def test_real_render_writes_nothing_outside_the_output_folder(tmp_path):
     ("movie", {"orbit": float("inf")}, "orbit"),
 ])
 def test_library_api_refuses_non_finite_numbers(tmp_path, function, kwargs, message):
-    from brainpainter.figure import make_figure
-    from brainpainter.movie import make_movie
-    from brainpainter.render import render
+    from brainpainter.media.figure import make_figure
+    from brainpainter.media.movie import make_movie
+    from brainpainter.rendering.painter import render
     from brainpainter.testing import stand_in, write_tiny_template
 
     tiny = write_tiny_template(tmp_path / "tiny")

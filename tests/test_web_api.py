@@ -46,8 +46,7 @@ def server(tmp_path_factory, site):
     for k, v in env_with_site(site).items():
         mp.setenv(k, v)
     sys.path.insert(0, str(site))
-    from brainpainter import registry
-
+    from brainpainter.atlas import registry
     registry.reset_all()
     config = ServerConfig(data_dir=tmp_path_factory.mktemp("data"), workers=1, renderer=STANDIN,
                           max_jobs_per_client=50, rate_per_minute=100_000, max_upload_mb=10)
@@ -133,8 +132,8 @@ def test_probes_schema_and_meta(server):
 
 # -- upload = check ----------------------------------------------------------------------
 def test_upload_returns_the_check_report_of_the_cli(server, tmp_path):
-    from brainpainter.inputs import inspect_table
-    from brainpainter.report import check_report
+    from brainpainter.table.region_table import inspect_table
+    from brainpainter.table.report import check_report
 
     got = upload(server, EXAMPLE.read_bytes(), "brainpainter_dk.csv")
     want = check_report(inspect_table(EXAMPLE))
@@ -156,7 +155,7 @@ def test_pasted_tab_separated_text_and_options(server):
 
 
 def _check_params(args: list[str]) -> tuple[list[str], dict]:
-    from brainpainter.cli import check
+    from brainpainter.cli.main import check
 
     ctx = check.make_context("check", list(args), resilient_parsing=False)
     p = ctx.params

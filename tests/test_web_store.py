@@ -100,7 +100,7 @@ def test_worker_resumes_a_requeued_job_without_redrawing_what_exists(tmp_path):
         done_before = ["stage-1_lateral-left.png", "stage-1_subcortical.png", "stage-2_lateral-left.png"]
         import numpy as np
 
-        from brainpainter.output import png_bytes
+        from brainpainter.io.output import png_bytes
 
         for n in done_before:
             (out / n).write_bytes(png_bytes(np.zeros((24, 32, 4), np.uint8)))

@@ -6,11 +6,11 @@ config
     :class:`ServerConfig`: data folder, worker count and every limit.
 options
     The render options as a pydantic model with the CLI's names and defaults,
-    checked by the same :func:`brainpainter.render.prepare_run` as the CLI.
+    checked by the same :func:`brainpainter.rendering.painter.prepare_run` as the CLI.
 store
     Uploads and jobs in SQLite (WAL) under the data folder.
 worker
-    Worker processes: each keeps warm :class:`~brainpainter.render.Painter`\\ s and
+    Worker processes: each keeps warm :class:`~brainpainter.rendering.painter.Painter`\\ s and
     runs queued jobs; the preview process renders one image at a time.
 pool
     Starts, watches and restarts those processes; re-queues jobs of dead

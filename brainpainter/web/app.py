@@ -408,7 +408,6 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
 # -- helpers ------------------------------------------------------------------------------------
 def _version() -> str:
     from brainpainter import __version__
-
     return __version__
 
 
@@ -445,8 +444,8 @@ def _check(data: bytes, name: str, opts: TableOptions,
            scale: dict[str, Any]) -> tuple[dict[str, Any], list[str]]:
     """``brainpainter check --json`` for uploaded bytes, and every image name; raises the first error
     as the CLI does."""
-    from brainpainter.inputs import inspect_table
-    from brainpainter.report import check_report
+    from brainpainter.table.region_table import inspect_table
+    from brainpainter.table.report import check_report
 
     table = inspect_table(table_stream(data, name), opts.atlas, image_column=opts.image_column,
                           value=opts.value, region_column=opts.region_column, strict=opts.strict)
@@ -457,8 +456,8 @@ def _check(data: bytes, name: str, opts: TableOptions,
 
 
 def _preview_request(data: bytes, name: str, body: PreviewRequest, config: ServerConfig) -> dict[str, Any]:
-    from brainpainter.render import region_colors
-    from brainpainter.views import parse_views
+    from brainpainter.rendering.painter import region_colors
+    from brainpainter.rendering.views import parse_views
 
     prep = prepare(data, name, body.options, max_pixels=config.max_pixels)
     table = prep.run.table
@@ -480,9 +479,9 @@ def _preview_request(data: bytes, name: str, body: PreviewRequest, config: Serve
 def _meta(config: ServerConfig) -> dict[str, Any]:
     import matplotlib
 
-    from brainpainter import registry
-    from brainpainter.render import HIDE_GROUPS
-    from brainpainter.views import PRESETS
+    from brainpainter.atlas import registry
+    from brainpainter.rendering.painter import HIDE_GROUPS
+    from brainpainter.rendering.views import PRESETS
 
     return {
         "version": _version(),

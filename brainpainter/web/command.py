@@ -60,8 +60,7 @@ def serve(host: str, port: int, data_dir: Path | None, workers: int, no_preview:
             raise BrainPainterError(f"--{key.replace('_', '-')} must be at least 1; {limits[key]} was given.")
     config = ServerConfig(data_dir=data_dir or default_data_dir(), workers=workers, preview=not no_preview,
                           renderer=renderer, **limits)
-    from brainpainter import registry
-
+    from brainpainter.atlas import registry
     registry.renderers.get(renderer)  # an unknown renderer fails now, with the CLI's message
     try:
         config.data_dir.mkdir(parents=True, exist_ok=True)

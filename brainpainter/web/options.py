@@ -3,8 +3,8 @@
 :class:`RenderOptions` mirrors ``brainpainter render``'s options (Python
 names: ``nan_color``, ``glass_opacity``...; ``size`` is ``WIDTHxHEIGHT``;
 ``transparent`` replaces the background). :func:`prepare` turns an uploaded
-table and options into a :class:`~brainpainter.render.Run` through
-:func:`brainpainter.render.prepare_run`, exactly as the CLI does, plus the
+table and options into a :class:`~brainpainter.rendering.painter.Run` through
+:func:`brainpainter.rendering.painter.prepare_run`, exactly as the CLI does, plus the
 checks a server adds (no paths, size limits). Nothing here imports bpy.
 """
 
@@ -16,7 +16,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from brainpainter.cli_options import DEFAULT_SIZE, DEFAULT_VIEWS, parse_size
+from brainpainter.cli.options import DEFAULT_SIZE, DEFAULT_VIEWS, parse_size
 from brainpainter.errors import BrainPainterError
 
 #: Suffixes an uploaded file name may have (only used to sniff the format; never a path).
@@ -64,7 +64,7 @@ class RenderOptions(TableOptions):
                 "region_column": self.region_column, "strict": self.strict}
 
     def run_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of :func:`brainpainter.render.prepare_run` (without `data` and `atlas`)."""
+        """Keyword arguments of ``prepare_run`` (without `data` and `atlas`)."""
         width, height = parse_size(self.size)
         return {
             "views": self.views, "gradient": self.gradient, "cmap": self.cmap, "vmin": self.vmin,
@@ -90,7 +90,7 @@ def upload_name(name: str | None) -> str:
     """A display name for an upload (``table.csv``): letters, digits and ``._-`` only; known suffix kept."""
     from pathlib import PurePosixPath
 
-    from brainpainter.output import safe_name
+    from brainpainter.io.output import safe_name
 
     raw = (name or "table.csv").replace("\\", "/")
     base = PurePosixPath(raw).name or "table.csv"
@@ -103,7 +103,7 @@ def upload_name(name: str | None) -> str:
 class Prepared:
     """A checked run plus what the server needs to render it."""
 
-    run: Any  # brainpainter.render.Run
+    run: Any  # brainpainter.rendering.painter.Run
     options: RenderOptions
     hidden: list[str]
     file_names: list[str]
@@ -130,8 +130,8 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     BrainPainterError
         The CLI's one-line message for the first problem.
     """
-    from brainpainter.output import safe_name
-    from brainpainter.render import prepare_run, resolve_hidden
+    from brainpainter.io.output import safe_name
+    from brainpainter.rendering.painter import prepare_run, resolve_hidden
 
     kwargs = options.run_kwargs()
     if max_pixels is not None and kwargs["width"] * kwargs["height"] > max_pixels:

@@ -31,7 +31,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from brainpainter.output import atomic_write_bytes
+from brainpainter.io.output import atomic_write_bytes
 
 _ID = re.compile(r"^[0-9a-f]{32}$")
 ACTIVE = ("queued", "running")

@@ -1,7 +1,7 @@
 """The processes that render: job workers and the preview process.
 
 Each process sets ``LP_NUM_THREADS`` (Mesa's rendering threads) before the
-renderer loads, keeps up to two warm :class:`~brainpainter.render.Painter`\\ s
+renderer loads, keeps up to two warm :class:`~brainpainter.rendering.painter.Painter`\\ s
 (the renderer and template load once per process; a new scene is built only
 when the atlas, surface, hidden structures or image settings change) and
 stops by itself when the server process that started it is gone.
@@ -41,7 +41,7 @@ class PainterCache:
         self._painters: OrderedDict[tuple, Any] = OrderedDict()
 
     def get(self, atlas: Any, surface: str, hidden: list[str], settings: Any) -> Any:
-        from brainpainter.render import Painter
+        from brainpainter.rendering.painter import Painter
 
         key = (atlas.name, surface, tuple(sorted(hidden)), settings)
         painter = self._painters.get(key)
@@ -56,9 +56,9 @@ class PainterCache:
 
     def warm(self, width: int, height: int) -> None:
         """Load the renderer and the default scene (dk, pial, default settings at this size)."""
-        from brainpainter.atlas import get_atlas
-        from brainpainter.scene import RenderSettings
-        from brainpainter.views import get_view
+        from brainpainter.atlas.model import get_atlas
+        from brainpainter.rendering.scene import RenderSettings
+        from brainpainter.rendering.views import get_view
 
         painter = self.get(get_atlas("dk"), "pial", [], RenderSettings(width=width, height=height))
         painter.paint_colors({}, get_view("lateral-left"))
@@ -153,7 +153,7 @@ def _prepared(folder: Path, job: dict[str, Any]) -> Any:
 
 def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
     from brainpainter import __version__
-    from brainpainter.output import PngWriter, write_json
+    from brainpainter.io.output import PngWriter, write_json
 
     _, prep = _prepared(folder, job)
     run = prep.run
@@ -203,7 +203,7 @@ def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
 
 
 def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
-    from brainpainter.figure import make_figure
+    from brainpainter.media.figure import make_figure
     from brainpainter.web.options import table_stream
 
     data, prep = _prepared(folder, job)
@@ -217,7 +217,7 @@ def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
 
 
 def _run_movie(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
-    from brainpainter.movie import make_movie
+    from brainpainter.media.movie import make_movie
     from brainpainter.web.options import table_stream
 
     data, prep = _prepared(folder, job)
@@ -242,9 +242,9 @@ def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int
     ``("ok", png_bytes, milliseconds)`` or ``("error", one_line_message, 0)``.
     """
     _set_threads(lp_threads)
-    from brainpainter.atlas import get_atlas
+    from brainpainter.atlas.model import get_atlas
     from brainpainter.errors import BrainPainterError
-    from brainpainter.output import png_bytes
+    from brainpainter.io.output import png_bytes
 
     parent = os.getppid()
     painters = PainterCache(renderer)

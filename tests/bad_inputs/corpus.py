@@ -11,7 +11,7 @@ paths are sanitised into file names inside the output folder.
 
 ``INPROCESS`` lists more cases of every class (output safety, the input
 opener, bombs, ambiguity, non-finite options, configs, locks); they run in
-the test process through :func:`brainpainter.guard.run` with click's
+the test process through :func:`brainpainter.cli.guard.run` with click's
 ``CliRunner`` streams, which is fast, and are checked the same way.
 Arguments may hold ``{tiny}``: the path of a tiny synthetic template.
 
@@ -427,7 +427,7 @@ INPROCESS: list[Case] = [
          ["add", "net", "--annot", "lh=lh.a.annot", "--annot", "rh=rh.a.annot"], "is a folder", command="atlas"),
     Case("annot-too-big", {"lh.a.annot": b"\0" * 4096, "rh.a.annot": _annot},
          ["add", "net", "--annot", "lh=lh.a.annot", "--annot", "rh=rh.a.annot"], "at most",
-         command="atlas", patch={"brainpainter.files:LIMITS": {"label map": 1024}}),
+         command="atlas", patch={"brainpainter.io.files:LIMITS": {"label map": 1024}}),
     Case("annot-garbage", {"lh.a.annot": GARBAGE, "rh.a.annot": _annot},
          ["add", "net", "--annot", "lh=lh.a.annot", "--annot", "rh=rh.a.annot"], "cannot read",
          command="atlas"),
@@ -439,9 +439,9 @@ INPROCESS: list[Case] = [
     Case("xlsx-dimension-claims-2m-rows", {"in.xlsx": _dimension(b"A1:B2000000")}, ["in.xlsx"],
          "claims 2000000 rows"),
     Case("xlsx-far-row", {"in.xlsx": _far_row(5000)}, ["in.xlsx"], "more than 1000 rows",
-         patch={"brainpainter.readers:MAX_ROWS": 1000}),
+         patch={"brainpainter.io.readers:MAX_ROWS": 1000}),
     Case("xlsx-cell-bomb", {"in.xlsx": _wide_row()}, ["in.xlsx"], "cells",
-         patch={"brainpainter.readers:MAX_CELLS": 500}),
+         patch={"brainpainter.io.readers:MAX_CELLS": 500}),
     Case("xlsx-formula-without-result", {"in.xlsx": _formula(False)}, ["in.xlsx"], "without a saved result"),
     Case("render-xlsx-formula-without-result", {"in.xlsx": _formula(False)}, ["in.xlsx", "--out", "o", *RENDER],
          "without a saved result", command="render"),

@@ -26,8 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
+from brainpainter.atlas.template import FORMAT, FORMAT_VERSION, HEMIS, SURFACES
 from brainpainter.errors import BrainPainterError, choice_error
-from brainpainter.template import FORMAT, FORMAT_VERSION, HEMIS, SURFACES
 from brainpainter_builder import cortex, glass, report, sources, subcortical, writer
 
 #: Faces per hemisphere and label set of a default build (full fsaverage: 327680).

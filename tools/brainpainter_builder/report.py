@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from brainpainter.template import SURFACES, Template, load_template
+from brainpainter.atlas.template import SURFACES, Template, load_template
 from brainpainter_builder.clean import count_self_intersections
 
 #: Largest allowed |mesh volume / voxel volume - 1| of a subcortical structure.

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from brainpainter.errors import BrainPainterError, choice_error
-from brainpainter.files import check_input
+from brainpainter.io.files import check_input
 
 HEMIS = ("lh", "rh")
 

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from brainpainter.atlas import Region, read_regions_tsv
+from brainpainter.atlas.model import Region, read_regions_tsv
 from brainpainter.errors import BrainPainterError
 from brainpainter_builder.clean import count_self_intersections
 

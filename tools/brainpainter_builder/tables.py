@@ -24,7 +24,7 @@ import json
 import shutil
 from pathlib import Path
 
-from brainpainter.atlas import Region, write_regions_tsv
+from brainpainter.atlas.model import Region, write_regions_tsv
 from brainpainter.errors import BrainPainterError
 from brainpainter_builder.subcortical import aseg_table_path
 

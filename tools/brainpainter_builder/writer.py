@@ -126,7 +126,7 @@ TEMPLATE_HINT = ("give a new or empty folder with --out (an existing folder is r
 
 def is_template_dir(path: Path) -> bool:
     """Whether `path` holds a template made by this program (its manifest says ``brainpainter-template``)."""
-    from brainpainter.template import FORMAT
+    from brainpainter.atlas.template import FORMAT
 
     manifest = Path(path) / "manifest.json"
     try:
@@ -140,7 +140,7 @@ def is_template_dir(path: Path) -> bool:
 
 def check_out_dir(out_dir: str | Path) -> None:
     """Refuse an output that is not new, empty or a template made by brainpainter (before building)."""
-    from brainpainter.transaction import check_replaceable
+    from brainpainter.io.transaction import check_replaceable
 
     check_replaceable(Path(out_dir).expanduser(), is_template_dir, "template folder",
                       f"It is not a template; {TEMPLATE_HINT}.")
@@ -156,7 +156,7 @@ def staged_dir(out_dir: str | Path) -> Iterator[Path]:
     while building; on any error the staging directory is deleted, so a failed
     build leaves nothing behind.
     """
-    from brainpainter.transaction import replace_folder
+    from brainpainter.io.transaction import replace_folder
 
     with replace_folder(out_dir, is_template_dir, "template folder",
                         f"It is not a template; {TEMPLATE_HINT}.") as stage:

@@ -36,9 +36,9 @@ from pathlib import Path
 
 import numpy as np
 
-from brainpainter.atlas import read_regions_tsv, write_regions_tsv
-from brainpainter.labelset import LabelMap, build_label_set, read_label_map, write_atlas_folder
-from brainpainter.template import load_template
+from brainpainter.atlas.labelset import LabelMap, build_label_set, read_label_map, write_atlas_folder
+from brainpainter.atlas.model import read_regions_tsv, write_regions_tsv
+from brainpainter.atlas.template import load_template
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "bp_atlas_schaefer_yeo" / "data"

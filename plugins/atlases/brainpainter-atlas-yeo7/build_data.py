@@ -14,7 +14,7 @@ import shutil
 import sys
 from pathlib import Path
 
-from brainpainter.user_atlases import add_label_map
+from brainpainter.atlas.user import add_label_map
 
 HERE = Path(__file__).resolve().parent
 OUT = HERE / "bp_atlas_yeo7" / "data" / "yeo7"

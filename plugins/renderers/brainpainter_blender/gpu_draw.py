@@ -37,10 +37,10 @@ from typing import Any
 import numpy as np
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.framing import view_projection
-from brainpainter.geometry import PartGeometry, SceneGeometry
-from brainpainter.scene import RenderSettings
-from brainpainter.views import View
+from brainpainter.rendering.framing import view_projection
+from brainpainter.rendering.geometry import PartGeometry, SceneGeometry
+from brainpainter.rendering.scene import RenderSettings
+from brainpainter.rendering.views import View
 from brainpainter_blender import _bpy, gpu_shaders, meshorder
 
 
@@ -191,8 +191,8 @@ class GpuDraw:
 
     Parameters
     ----------
-    geometry : brainpainter.geometry.SceneGeometry
-    settings : brainpainter.scene.RenderSettings
+    geometry : brainpainter.rendering.geometry.SceneGeometry
+    settings : brainpainter.rendering.scene.RenderSettings
     """
 
     def __init__(self, geometry: SceneGeometry, settings: RenderSettings) -> None:

@@ -9,7 +9,7 @@ Filmic/AgX tone mapping), so hues are preserved.
 
 from __future__ import annotations
 
-from brainpainter.scene import RenderSettings
+from brainpainter.rendering.scene import RenderSettings
 from brainpainter_blender.materials import srgb_to_linear
 
 #: Cycles samples for quality ``high`` (denoised).
@@ -35,7 +35,7 @@ def configure(bpy, scene, settings: RenderSettings) -> None:
     ----------
     bpy : module
     scene : bpy.types.Scene
-    settings : brainpainter.scene.RenderSettings
+    settings : brainpainter.rendering.scene.RenderSettings
     """
     render = scene.render
     render.resolution_x, render.resolution_y = int(settings.width), int(settings.height)

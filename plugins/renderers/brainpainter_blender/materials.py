@@ -13,7 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from brainpainter.geometry import GLASS_COLOR
+from brainpainter.rendering.geometry import GLASS_COLOR
 
 # Cycles' unlit glass is darkened to read like the lit glass of the default draw path.
 _GLASS_CYCLES_SHADE = 0.6

@@ -23,22 +23,22 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from brainpainter import framing
 from brainpainter.errors import BrainPainterError
-from brainpainter.geometry import Palette
-from brainpainter.scene import RGB, Scene
-from brainpainter.views import View
+from brainpainter.rendering import framing
+from brainpainter.rendering.geometry import Palette
+from brainpainter.rendering.scene import RGB, Scene
+from brainpainter.rendering.views import View
 from brainpainter_blender import _bpy, lighting, materials, scene_builder
 
 _ids = itertools.count()
 
 
 class BlenderRenderer:
-    """Render a :class:`~brainpainter.scene.Scene` with Blender (``bpy``).
+    """Render a :class:`~brainpainter.rendering.scene.Scene` with Blender (``bpy``).
 
     Parameters
     ----------
-    scene : brainpainter.scene.Scene
+    scene : brainpainter.rendering.scene.Scene
         Loaded once: ``scene.geometry`` (both hemispheres' cortex for
         ``scene.surface`` and ``scene.labels``, the subcortical structures and
         the glass hulls).
@@ -103,11 +103,11 @@ class BlenderRenderer:
 
         Parameters
         ----------
-        palette : brainpainter.geometry.Palette, or a mapping of str to (r, g, b)
+        palette : brainpainter.rendering.geometry.Palette, or a mapping of str to (r, g, b)
             sRGB 0-1 colour per region key; cortex regions without a colour
             are drawn in ``scene.medial_wall_color``, subcortical ones in a
             neutral light grey.
-        view : brainpainter.views.View
+        view : brainpainter.rendering.views.View
 
         Returns
         -------

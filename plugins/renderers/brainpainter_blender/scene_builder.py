@@ -13,8 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from brainpainter.geometry import PartGeometry
-from brainpainter.scene import Scene
+from brainpainter.rendering.geometry import PartGeometry
+from brainpainter.rendering.scene import Scene
 from brainpainter_blender import materials
 
 
@@ -101,7 +101,7 @@ def build(bpy, scene: Scene, tag: str, collection) -> list[Part]:
     Parameters
     ----------
     bpy : module
-    scene : brainpainter.scene.Scene
+    scene : brainpainter.rendering.scene.Scene
     tag : str
         Prefix of datablock names (unique per renderer).
     collection : bpy.types.Collection

@@ -2,7 +2,7 @@
 
 Each atlas is a data folder (``data/NAME``: ``atlas.json``, ``regions.tsv`` and
 a label-set overlay ``labels.json``) loaded with
-:func:`brainpainter.atlas.load_atlas_dir`; the per-vertex parcel labels are in
+:func:`brainpainter.atlas.model.load_atlas_dir`; the per-vertex parcel labels are in
 ``data/labels`` (one file per Schaefer scale and hemisphere, shared by the 7-
 and 17-network versions, which are the same parcels). ``build_data.py`` beside
 this package makes the data from the annotations.
@@ -18,7 +18,7 @@ from collections.abc import Callable
 from importlib import resources
 from pathlib import Path
 
-from brainpainter.atlas import Atlas, load_atlas_dir
+from brainpainter.atlas.model import Atlas, load_atlas_dir
 
 DATA = Path(str(resources.files(__name__) / "data"))
 #: Names of the atlases in this distribution (as the entry points register them).

@@ -12,7 +12,7 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
-from brainpainter.atlas import Atlas, load_atlas_dir
+from brainpainter.atlas.model import Atlas, load_atlas_dir
 
 DATA = Path(str(resources.files(__name__) / "data" / "yeo7"))
 

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from brainpainter import registry
-from brainpainter.render import render
+from brainpainter.atlas import registry
+from brainpainter.rendering.painter import render
 from brainpainter.testing import check_atlas
 
 

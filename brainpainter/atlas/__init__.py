@@ -1,0 +1,3 @@
+"""The atlas model: atlases, templates (meshes), label sets, user atlases and their configs,
+volumes, and the plugin registry.
+"""

@@ -1,0 +1,279 @@
+"""Read-only, lazy plugin registries fed by entry points.
+
+Three groups exist: ``brainpainter.atlases``, ``brainpainter.renderers`` and
+``brainpainter.templates``. Built-in atlases, the Blender renderer and the
+default template register through the same entry points a third-party
+distribution would use. An entry is imported only when first asked for; a
+plugin that fails to import is recorded and reported, never fatal.
+
+Several names pointing at the same ``module:attr`` target are aliases of one
+entry (``dkt`` and ``tourville``); the first name in sorted order that is not
+listed as an alias by the object itself is the canonical one.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.metadata as md
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+from brainpainter.errors import BrainPainterError, PluginError, choice_error
+
+GROUPS = ("brainpainter.atlases", "brainpainter.renderers", "brainpainter.templates")
+
+# Names a user may know that live in optional distributions: name -> pip hint.
+KNOWN_ELSEWHERE: Mapping[str, Mapping[str, str]] = MappingProxyType({
+    "brainpainter.renderers": MappingProxyType({}),
+    "brainpainter.atlases": MappingProxyType({}),
+    "brainpainter.templates": MappingProxyType({}),
+})
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One registered plugin entry (not yet imported)."""
+
+    name: str
+    target: str  # "module:attr"
+    distribution: str
+    aliases: tuple[str, ...] = ()
+
+
+@dataclass
+class Registry:
+    """Lazy mapping from plugin name to the object its entry point names.
+
+    Parameters
+    ----------
+    group : str
+        Entry-point group, e.g. ``"brainpainter.atlases"``.
+    kind : str
+        Human word for error messages, e.g. ``"atlas"``.
+    validate : callable, optional
+        ``validate(name, obj) -> obj`` checks the plugin contract and may
+        normalise the object (e.g. call a factory); raises PluginError.
+    local_source : callable, optional
+        ``local_source() -> {name: (location, factory)}``: entries kept in a
+        folder rather than installed (user atlases); listed with distribution
+        ``"user"``. An installed entry of the same name wins and the local one
+        is reported in :meth:`errors`.
+    """
+
+    group: str
+    kind: str
+    validate: Callable[[str, Any], Any] | None = None
+    local_source: Callable[[], Mapping[str, tuple[str, Callable[[], Any]]]] | None = None
+    _local: dict[str, Callable[[], Any]] = field(default_factory=dict, repr=False)
+    _entries: dict[str, Entry] | None = field(default=None, repr=False)
+    _alias: dict[str, str] = field(default_factory=dict, repr=False)
+    _loaded: dict[str, Any] = field(default_factory=dict, repr=False)
+    _errors: dict[str, str] = field(default_factory=dict, repr=False)
+    _extra: dict[str, Callable[[], Any]] = field(default_factory=dict, repr=False)
+
+    # -- discovery -------------------------------------------------------
+    def _discover(self) -> dict[str, Entry]:
+        if self._entries is not None:
+            return self._entries
+        by_target: dict[tuple[str, str], list[tuple[str, str]]] = {}
+        clashes: dict[str, list[str]] = {}
+        seen: dict[str, str] = {}
+        for ep in md.entry_points(group=self.group):
+            dist = ep.dist.name if ep.dist is not None else "?"
+            if ep.name in seen and seen[ep.name] != ep.value:
+                clashes.setdefault(ep.name, [seen[ep.name]]).append(ep.value)
+                continue
+            seen[ep.name] = ep.value
+            by_target.setdefault((ep.value, dist), []).append((ep.name, dist))
+        entries: dict[str, Entry] = {}
+        for (target, dist), names in by_target.items():
+            names = sorted({n for n, _ in names})
+            canonical, aliases = names[0], tuple(names[1:])
+            # Prefer the shortest name that is not an English word alias like
+            # "tourville": keep sorted order but let the target's attr win.
+            attr = target.rpartition(":")[2]
+            if attr in names:
+                canonical = attr
+                aliases = tuple(n for n in names if n != attr)
+            entries[canonical] = Entry(canonical, target, dist, aliases)
+            for a in aliases:
+                self._alias[a] = canonical
+        for name, targets in clashes.items():
+            self._errors[name] = (
+                f"two plugins register the {self.kind} name {name!r} "
+                f"({', '.join(targets)}); uninstall one of them"
+            )
+            entries.pop(name, None)
+        self._local = {}
+        if self.local_source is not None:
+            taken = {n.lower(): n for n in (*entries, *self._alias)}
+            for name, (where, factory) in sorted(self.local_source().items()):
+                if name.lower() in taken:
+                    self._errors[f"{name} (user)"] = (
+                        f"the user {self.kind} {name!r} in {where} has the name of an installed "
+                        f"{self.kind} and is ignored; remove it (brainpainter {self.kind} remove {name}) "
+                        "and add it again under another name"
+                    )
+                    continue
+                entries[name] = Entry(name, where, "user")
+                self._local[name] = factory
+        self._entries = entries
+        return entries
+
+    def names(self) -> list[str]:
+        """Canonical names of all registered entries, sorted (no import)."""
+        return sorted({*self._discover(), *self._extra})
+
+    def entries(self) -> list[Entry]:
+        """All entry-point entries, sorted by name (no import)."""
+        return [self._discover()[n] for n in sorted(self._discover())]
+
+    def errors(self) -> dict[str, str]:
+        """Names whose import or validation failed, with the reason."""
+        self._discover()
+        return dict(self._errors)
+
+    def canonical(self, name: str) -> str:
+        """Resolve an alias or different case to the canonical name."""
+        entries = self._discover()
+        key = str(name).strip().lower()
+        for n in (*entries, *self._extra):
+            if n.lower() == key:
+                return n
+        for a, n in self._alias.items():
+            if a.lower() == key:
+                return n
+        # Names the objects themselves declare (an atlas.json's "aliases"): only on a miss, as
+        # it imports every entry; a broken one is skipped here and reported by errors().
+        for n in (*entries, *self._extra):
+            try:
+                declared = getattr(self.get(n), "aliases", ())
+            except BrainPainterError:
+                continue
+            if key in {str(a).lower() for a in declared}:
+                self._alias[key] = n
+                return n
+        allowed = [*entries, *self._extra, *self._alias]
+        hint = KNOWN_ELSEWHERE.get(self.group, {}).get(key, "")
+        if not hint:
+            hint = f"Run 'brainpainter {self.kind} list' to see what is installed."
+        raise choice_error(f"'{self.kind}'", name, allowed, hint)
+
+    def register(self, name: str, factory: Callable[[], Any], *, replace: bool = False) -> None:
+        """Register an in-process entry (tests, user atlases). Duplicates refused."""
+        if not replace and (name in self._discover() or name in self._extra):
+            raise BrainPainterError(
+                f"a {self.kind} named {name!r} is already registered; "
+                "choose another name or pass replace=True"
+            )
+        self._extra[name] = factory
+        self._loaded.pop(name, None)
+
+    def unregister(self, name: str) -> None:
+        self._extra.pop(name, None)
+        self._loaded.pop(name, None)
+
+    # -- loading ----------------------------------------------------------
+    def get(self, name: str) -> Any:
+        """Import (once) and return the object registered under `name`."""
+        canonical = self.canonical(name)
+        if canonical in self._loaded:
+            return self._loaded[canonical]
+        try:
+            if canonical in self._extra:
+                obj = self._extra[canonical]()
+            elif canonical in self._local:
+                obj = self._local[canonical]()
+            else:
+                entry = self._discover()[canonical]
+                obj = load_target(entry.target)
+            if self.validate is not None:
+                obj = self.validate(canonical, obj)
+        except BrainPainterError as exc:
+            self._errors[canonical] = str(exc)
+            raise
+        except Exception as exc:  # a broken plugin must not crash the caller
+            entry = self._discover().get(canonical)
+            where = f" from {entry.distribution} ({entry.target})" if entry else ""
+            msg = f"the {self.kind} plugin {canonical!r}{where} failed to load: {type(exc).__name__}: {exc}"
+            self._errors[canonical] = msg
+            raise PluginError(msg + "; reinstall or uninstall that plugin") from exc
+        self._loaded[canonical] = obj
+        return obj
+
+    def load_all(self) -> dict[str, Any]:
+        """Load every entry, collecting failures in :meth:`errors`."""
+        out = {}
+        for name in self.names():
+            try:
+                out[name] = self.get(name)
+            except BrainPainterError:
+                pass
+        return out
+
+    def reset(self) -> None:
+        """Forget discovery and loaded objects (after installing a plugin)."""
+        self._entries = None
+        self._alias.clear()
+        self._loaded.clear()
+        self._errors.clear()
+
+
+def load_target(target: str) -> Any:
+    """Import ``"package.module:attr.sub"`` and return the attribute."""
+    module_name, _, attr = target.partition(":")
+    obj: Any = importlib.import_module(module_name)
+    for part in filter(None, attr.split(".")):
+        obj = getattr(obj, part)
+    return obj
+
+
+def _validate_atlas(name: str, obj: Any) -> Any:
+    from brainpainter.atlas.model import Atlas
+
+    if callable(obj) and not isinstance(obj, Atlas):
+        obj = obj()
+    if not isinstance(obj, Atlas):
+        raise PluginError(
+            f"the atlas plugin {name!r} gave a {type(obj).__name__}, not a brainpainter.atlas.model.Atlas"
+        )
+    if not obj.regions:
+        raise PluginError(f"the atlas plugin {name!r} defines no regions")
+    return obj
+
+
+def _user_atlases() -> Mapping[str, tuple[str, Callable[[], Any]]]:
+    from brainpainter.atlas.user import local_entries
+
+    return local_entries()
+
+
+def _validate_renderer(name: str, obj: Any) -> Any:
+    for method in ("render",):
+        if not callable(getattr(obj, method, None)):
+            raise PluginError(f"the renderer plugin {name!r} has no {method}() method")
+    return obj
+
+
+def _validate_template(name: str, obj: Any) -> Any:
+    from pathlib import Path
+
+    if callable(obj):
+        obj = obj()
+    path = Path(obj)
+    if not (path / "manifest.json").is_file():
+        raise PluginError(f"the template plugin {name!r} points at {path}, which has no manifest.json")
+    return path
+
+
+atlases = Registry("brainpainter.atlases", "atlas", _validate_atlas, local_source=_user_atlases)
+renderers = Registry("brainpainter.renderers", "renderer", _validate_renderer)
+templates = Registry("brainpainter.templates", "template", _validate_template)
+
+
+def reset_all() -> None:
+    """Forget every registry's discovery (after installing or removing plugins)."""
+    for reg in (atlases, renderers, templates):
+        reg.reset()

@@ -1,0 +1,384 @@
+"""Templates: everything a renderer needs to draw one brain.
+
+A template is a directory::
+
+    manifest.json                  metadata (see below)
+    cortex-{hemi}-{labels}.npz     one hemisphere split by one label set
+    subcortical.npz                aseg structures
+    glass-{hemi}.npz               smooth hull of the pial surface
+    LICENSE.FreeSurfer.txt         licence Part B and attribution (derived data)
+
+All arrays are plain ``.npz`` (loaded with ``allow_pickle=False``); all
+coordinates are FreeSurfer tkr-RAS millimetres (x right, y anterior, z
+superior). Cortex files hold one mesh per hemisphere whose faces carry a
+region label: the per-region meshes are ``faces[face_label == i]``, so
+neighbouring regions share their boundary vertices exactly. The pial, white
+and inflated surfaces share one topology (``faces``) and differ in vertex
+positions; inflated positions are already offset so hemispheres never overlap.
+
+Optional cortex arrays (a reader that does not know them ignores them):
+``vertex_label`` (int16, one per vertex: the label of the full-resolution
+vertex, index into the names) makes :meth:`Template.cortex` split the faces
+that straddle a region boundary when loading, so borders follow the label
+boundary instead of the triangles (:func:`brainpainter.atlas.labelset.split_mesh`,
+the same code as for label-set overlays); ``face_label`` stays the
+whole-triangle labelling for older readers; ``boundary_t`` (float32, one
+per label-crossing edge) caches where the border crosses each edge
+(:func:`brainpainter.atlas.labelset.smooth_crossings`), so loading only splits.
+``sulc`` (float32, one per
+vertex) is FreeSurfer's sulcal depth (``surf/?h.sulc``, mm, positive in
+sulci) for shading.
+
+Label-set overlays
+------------------
+A custom or plugin atlas brings its own label set in a folder beside its
+``atlas.json``: ``labels.json`` (format ``brainpainter-labels``, the same
+``labels`` entries as a manifest, for one named template) plus
+``cortex-{hemi}-{labels}.npz`` files. An overlay file holds labels for one of
+the template's own label-set meshes (entry key ``base``; ``base_faces_sha256``
+guards against a rebuilt template): ``vertex_label`` (one per vertex; faces
+whose vertices differ are split through edge midpoints when loaded, see
+:func:`brainpainter.atlas.labelset.split_mesh`) or ``face_label`` (one per face).
+An overlay file may instead hold ``source_label``: one label per vertex of the
+full-resolution surface the template was built from (e.g. all 163842 of
+fsaverage); it is mapped through the base mesh's ``source_vertex`` when
+loaded, so it survives a rebuild of the template (no digest needed).
+:meth:`Template.with_label_sets` adds such a folder's label sets to a template.
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+
+from brainpainter.errors import BrainPainterError
+
+FORMAT = "brainpainter-template"
+FORMAT_VERSION = 1
+SURFACES = ("pial", "white", "inflated")
+HEMIS = ("lh", "rh")
+LABELS_FORMAT = "brainpainter-labels"
+LABELS_FILE = "labels.json"
+
+
+def faces_digest(faces: np.ndarray) -> str:
+    """SHA-256 of a face array (as little-endian int32), to recognise a mesh."""
+    return hashlib.sha256(np.ascontiguousarray(faces, dtype="<i4").tobytes()).hexdigest()
+
+
+@dataclass(frozen=True)
+class CortexMesh:
+    """One hemisphere, split into regions by one label set.
+
+    Attributes
+    ----------
+    hemi : {"lh", "rh"}
+    labels : str
+        Label-set name (``"dk"``, ``"destrieux"``, ``"dkt"``).
+    faces : ndarray of int32, shape (n_faces, 3)
+    face_label : ndarray of int16, shape (n_faces,)
+        Index into `label_names` for every face.
+    label_names : tuple of str
+        Names from the annotation colour table (``"insula"``, ``"unknown"``).
+    vertices : dict of str to ndarray of float32, shape (n_vertices, 3)
+        One entry per surface (``"pial"``, ``"white"``, ``"inflated"``).
+    source_vertex : ndarray of int32, shape (n_vertices,)
+        Index of each vertex in the full-resolution FreeSurfer surface; -1 for
+        a vertex added on an edge or face where a region boundary was split.
+    sulc : ndarray of float32, shape (n_vertices,), or None
+        Sulcal depth (FreeSurfer ``?h.sulc``, mm; positive in sulci, negative
+        on gyral crowns), when the template has it.
+    """
+
+    hemi: str
+    labels: str
+    faces: np.ndarray
+    face_label: np.ndarray
+    label_names: tuple[str, ...]
+    vertices: dict[str, np.ndarray]
+    source_vertex: np.ndarray
+    sulc: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class LabelledMesh:
+    """Meshes of several structures in one array set.
+
+    Attributes
+    ----------
+    vertices : ndarray of float32, shape (n_vertices, 3)
+    faces : ndarray of int32, shape (n_faces, 3)
+    face_label : ndarray of int16, shape (n_faces,)
+        Index into `label_names`.
+    label_names : tuple of str
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    face_label: np.ndarray
+    label_names: tuple[str, ...]
+
+
+@dataclass
+class Template:
+    """A loaded template directory. Arrays are read on first use and cached."""
+
+    path: Path
+    manifest: dict
+    _cache: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def name(self) -> str:
+        return self.manifest["name"]
+
+    @property
+    def label_sets(self) -> list[str]:
+        return sorted(self.manifest["labels"])
+
+    @property
+    def surfaces(self) -> list[str]:
+        return list(self.manifest["surfaces"])
+
+    def _npz(self, file: str) -> dict[str, np.ndarray]:
+        if file not in self._cache:
+            with np.load(self.path / file, allow_pickle=False) as z:
+                self._cache[file] = {k: z[k] for k in z.files}
+        return self._cache[file]
+
+    def _entry(self, labels: str, hemi: str) -> dict:
+        if labels not in self.manifest["labels"]:
+            raise BrainPainterError(
+                f"template {self.name!r} has no label set {labels!r}; it has {self.label_sets}. "
+                "Build the template with that atlas (brainpainter template build --atlas ...)."
+            )
+        return self.manifest["labels"][labels]["cortex"][hemi]
+
+    def base_cortex(self, labels: str, hemi: str) -> CortexMesh:
+        """The stored mesh of one of the template's own label sets, faces not split.
+
+        Its vertices are all vertices of the full-resolution surface
+        (`source_vertex` >= 0) and its faces are labelled whole (majority of
+        the vertex labels): the mesh that label-set overlays label.
+        """
+        entry = self._entry(labels, hemi)
+        if "base" in entry:
+            raise BrainPainterError(f"label set {labels!r} of template {self.name!r} is an overlay on "
+                                    f"{entry['base']!r}, not a mesh of its own")
+        z = self._npz(entry["file"])
+        return CortexMesh(
+            hemi=hemi,
+            labels=labels,
+            faces=z["faces"],
+            face_label=z["face_label"],
+            label_names=tuple(entry["names"]),
+            vertices={s: z[s] for s in self.surfaces if s in z},
+            source_vertex=z["source_vertex"],
+            sulc=z.get("sulc"),
+        )
+
+    def cortex(self, labels: str, hemi: str) -> CortexMesh:
+        """The hemisphere `hemi` split by label set `labels`.
+
+        Where per-vertex labels are known (``vertex_label`` in the template
+        file, or a per-vertex overlay), faces that straddle a region boundary
+        are split so that the border follows it (computed once per template
+        object). A template without this hemisphere's cortex (made of volume
+        labels only) gives an empty mesh.
+        """
+        label_set = self.manifest["labels"].get(labels)
+        if label_set is not None and hemi not in label_set.get("cortex", {}):
+            return CortexMesh(hemi=hemi, labels=labels, faces=np.zeros((0, 3), np.int32),
+                              face_label=np.zeros(0, np.int16), label_names=(),
+                              vertices={s: np.zeros((0, 3), np.float32) for s in self.surfaces},
+                              source_vertex=np.zeros(0, np.int32))
+        entry = self._entry(labels, hemi)
+        z = self._npz(entry["file"])
+        if "base" in entry:  # an overlay: labels for the vertices or faces of one of our own meshes
+            base = self.base_cortex(entry["base"], hemi)
+            if "source_label" in z:  # one label per full-resolution vertex: fits any rebuild of the base
+                return self._source_labelled(base, z["source_label"], labels, entry)
+            per_vertex = "vertex_label" in z
+            n = len(z["vertex_label"]) if per_vertex else len(z["face_label"])
+            digest = entry.get("base_faces_sha256")
+            if n != (len(base.source_vertex) if per_vertex else len(base.faces)) or (
+                    digest and faces_digest(base.faces) != digest):
+                raise BrainPainterError(
+                    f"label set {labels!r} ({entry['file']}) was made for the {entry['base']!r} mesh of "
+                    f"template {self.name!r} as it was then, and that mesh has changed; add the atlas "
+                    "again (brainpainter atlas add ... --replace)."
+                )
+            if not per_vertex:
+                return CortexMesh(hemi=hemi, labels=labels, faces=base.faces, face_label=z["face_label"],
+                                  label_names=tuple(entry["names"]), vertices=base.vertices,
+                                  source_vertex=base.source_vertex, sulc=base.sulc)
+        else:
+            base = self.base_cortex(labels, hemi)
+            if "vertex_label" not in z:
+                return base
+        from brainpainter.atlas.labelset import split_mesh
+
+        key = f"{entry['file']}#{labels}"  # computed once per template object
+        if key not in self._cache:
+            self._cache[key] = split_mesh(base, z["vertex_label"], labels, tuple(entry["names"]),
+                                          z.get("boundary_t"))
+        return self._cache[key]
+
+    def _source_labelled(self, base: CortexMesh, source_label: np.ndarray, labels: str,
+                         entry: dict) -> CortexMesh:
+        """`base` labelled by `source_label` (one label per vertex of the full-resolution surface)."""
+        from brainpainter.atlas.labelset import labels_at_vertices, split_mesh
+
+        n_source = int(entry.get("n_source_vertices", len(source_label)))
+        if len(source_label) != n_source or int(base.source_vertex.max(initial=-1)) >= n_source:
+            raise BrainPainterError(
+                f"label set {labels!r} ({entry['file']}) labels {len(source_label)} source vertices, but the "
+                f"{entry['base']!r} mesh of template {self.name!r} was made from a surface with more; "
+                "use the template the atlas was made for."
+            )
+        key = f"{entry['file']}#{labels}"
+        if key not in self._cache:
+            vertex_label = labels_at_vertices(source_label, base)
+            self._cache[key] = split_mesh(base, vertex_label, labels, tuple(entry["names"]))
+        return self._cache[key]
+
+    def with_label_sets(self, folder: str | Path) -> Template:
+        """This template plus the label sets of an overlay folder (``labels.json``).
+
+        The overlay's label sets win over the template's own ones of the same
+        name. An overlay made for another template is an error.
+        """
+        folder = Path(folder)
+        meta_file = folder / LABELS_FILE
+        try:
+            meta = json.loads(meta_file.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise BrainPainterError(f"cannot read label-set overlay {meta_file}: {exc}") from None
+        if meta.get("format") != LABELS_FORMAT or meta.get("format_version") != FORMAT_VERSION:
+            raise BrainPainterError(f"{meta_file} is not a {LABELS_FORMAT} version {FORMAT_VERSION} file; "
+                                    "add the atlas again with 'brainpainter atlas add'.")
+        if meta.get("template") != self.name:
+            raise BrainPainterError(
+                f"the label sets in {folder} were made for template {meta.get('template')!r}, not "
+                f"{self.name!r}; render with --template {meta.get('template')} or add the atlas again "
+                f"with --template {self.name}."
+            )
+        manifest = dict(self.manifest)
+        manifest["labels"] = dict(manifest["labels"])
+        for name, entry in meta.get("labels", {}).items():
+            entry = copy.deepcopy(entry)
+            for hemi_entry in entry.get("cortex", {}).values():
+                hemi_entry["file"] = str((folder / hemi_entry["file"]).absolute())
+            manifest["labels"][name] = entry
+        return Template(path=self.path, manifest=manifest, _cache=self._cache)
+
+    def subcortical(self) -> LabelledMesh:
+        """All subcortical structures (names as in FreeSurfer's aseg LUT, or a volume atlas's keys)."""
+        entry = self.manifest["subcortical"]
+        names = tuple(s["name"] for s in entry["structures"])
+        files = entry.get("parts", [entry["file"]])
+        arrays = [self._npz(f) for f in files]
+        if len(arrays) == 1:
+            z = arrays[0]
+            return LabelledMesh(z["vertices"], z["faces"], z["face_label"], names)
+        verts, faces, labels, n_v, n_l = [], [], [], 0, 0
+        for z in arrays:
+            verts.append(z["vertices"])
+            faces.append(z["faces"] + n_v)
+            labels.append(z["face_label"] + n_l)
+            n_v += len(z["vertices"])
+            n_l += int(z["face_label"].max()) + 1 if len(z["face_label"]) else 0
+        return LabelledMesh(np.concatenate(verts), np.concatenate(faces).astype(np.int32),
+                            np.concatenate(labels).astype(np.int16), names)
+
+    def with_volumes(self, folders: list[Path] | tuple[Path, ...]) -> Template:
+        """This template with the meshes of volumetric atlases as its subcortical part.
+
+        Each folder holds ``atlas.json`` and ``subcortical.npz`` written by
+        :func:`brainpainter.atlas.volumes.build_volume_atlas` for this template; its
+        structures replace the template's own (aseg) ones, several folders are
+        drawn together.
+        """
+        structures, parts = [], []
+        for folder in folders:
+            folder = Path(folder)
+            try:
+                meta = json.loads((folder / "atlas.json").read_text(encoding="utf-8"))
+            except (OSError, ValueError) as exc:
+                raise BrainPainterError(f"cannot read volume atlas {folder}: {exc}") from None
+            if meta.get("template") != self.name:
+                raise BrainPainterError(
+                    f"the volume atlas in {folder} was made for template {meta.get('template')!r}, not "
+                    f"{self.name!r}; render with --template {meta.get('template')} or add it again with "
+                    f"--template {self.name}.")
+            structures.extend({"name": s["name"]} for s in meta["structures"])
+            parts.append(str((folder / "subcortical.npz").absolute()))
+        manifest = dict(self.manifest)
+        manifest["subcortical"] = {"file": parts[0], "parts": parts, "structures": structures}
+        return Template(path=self.path, manifest=manifest, _cache=self._cache)
+
+    def glass(self, hemi: str) -> tuple[np.ndarray, np.ndarray]:
+        """Glass-brain hull of one hemisphere: ``(vertices (n, 3), faces (m, 3))``."""
+        z = self._npz(self.manifest["glass"][hemi]["file"])
+        return z["vertices"], z["faces"]
+
+    @cached_property
+    def bounds(self) -> np.ndarray:
+        """Bounding box of the pial surfaces, shape (2, 3): min and max corner."""
+        return np.asarray(self.manifest["bounds"]["pial"], dtype=float)
+
+    def files(self) -> list[Path]:
+        return sorted(p for p in self.path.iterdir() if p.is_file())
+
+
+def template_for(atlas, template: Template) -> Template:
+    """`template` with what `atlas` brings: its cortex label set overlay and its volume meshes.
+
+    Parameters
+    ----------
+    atlas : brainpainter.atlas.model.Atlas
+    template : Template
+    """
+    if atlas.label_dir is not None and atlas.template_labels not in template.label_sets:
+        template = template.with_label_sets(atlas.label_dir)
+    if atlas.volume_dirs:
+        template = template.with_volumes(atlas.volume_dirs)
+    return template
+
+
+def load_template(name_or_path: str | Path = "fsaverage") -> Template:
+    """Load a template by registry name or directory path.
+
+    Parameters
+    ----------
+    name_or_path : str or path-like
+        ``"fsaverage"`` (the bundled default), another registered template
+        name, or a directory made by ``brainpainter template build``.
+    """
+    path = Path(name_or_path)
+    if not (path / "manifest.json").is_file():
+        if isinstance(name_or_path, str) and "/" not in name_or_path and "\\" not in name_or_path:
+            from brainpainter.atlas import registry
+            path = registry.templates.get(name_or_path)
+        else:
+            raise BrainPainterError(
+                f"template {str(name_or_path)!r} is not a directory with a manifest.json; "
+                "give a registered template name (e.g. 'fsaverage') or a folder made by "
+                "'brainpainter template build'."
+            )
+    manifest_file = path / "manifest.json"
+    try:
+        manifest = json.loads(manifest_file.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise BrainPainterError(f"cannot read template manifest {manifest_file}: {exc}") from None
+    if manifest.get("format") != FORMAT or manifest.get("format_version") != FORMAT_VERSION:
+        raise BrainPainterError(
+            f"{manifest_file} is not a {FORMAT} version {FORMAT_VERSION} manifest; "
+            "rebuild it with 'brainpainter template build'."
+        )
+    return Template(path=path, manifest=manifest)

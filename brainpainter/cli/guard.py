@@ -1,0 +1,202 @@
+"""Run a CLI command so that every failure is one line on stderr and nothing leaks.
+
+:func:`run` wraps the click group:
+
+* user errors (:class:`~brainpainter.errors.BrainPainterError`, click usage
+  errors) -> ``error: ...`` on one line, exit code 2;
+* OS errors (full disk, read-only file system, name too long, closed pipe,
+  permission denied) -> one line, exit code 2;
+* SIGINT (Ctrl-C) -> ``interrupted``, exit code 130; SIGTERM ->
+  ``terminated``, exit code 143; the output transactions clean up on the way
+  out (:mod:`brainpainter.io.transaction`);
+* anything else is a bug: ``internal error: ...`` on one line, exit code 1
+  (``BRAINPAINTER_DEBUG=1`` shows the traceback).
+
+While a command runs, caches and temporary files of the libraries it loads
+(matplotlib's font cache, fontconfig, Blender's user folders, ffmpeg's and
+Python's temporary files) go to one temporary folder that is removed when the
+command ends, so a run writes nothing outside its output folder.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import shutil
+import signal
+import sys
+import tempfile
+import threading
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from typing import Any
+
+import click
+
+from brainpainter.errors import BrainPainterError
+
+EXIT_USER = 2
+EXIT_INTERNAL = 1
+EXIT_SIGINT = 130
+EXIT_SIGTERM = 143
+
+#: Environment variables pointed into the run's temporary folder (unless the user set them).
+CACHE_VARIABLES = {
+    "MPLCONFIGDIR": "matplotlib",
+    "XDG_CACHE_HOME": "cache",
+    "BLENDER_USER_CONFIG": "blender/config",
+    "BLENDER_USER_SCRIPTS": "blender/scripts",
+    "BLENDER_USER_DATAFILES": "blender/datafiles",
+    "BLENDER_USER_EXTENSIONS": "blender/extensions",
+    "BLENDER_USER_RESOURCES": "blender/resources",
+}
+
+
+class Stopped(BaseException):
+    """A signal asked the run to stop; ``with`` blocks clean up on the way out.
+
+    Not a KeyboardInterrupt, so that no library (click included) turns it into
+    something else; it is caught only by :func:`run`.
+    """
+
+    exit_code = EXIT_SIGINT
+    word = "interrupted"
+
+
+class Interrupted(Stopped):
+    """SIGINT (Ctrl-C)."""
+
+
+class Terminated(Stopped):
+    """SIGTERM."""
+
+    exit_code = EXIT_SIGTERM
+    word = "terminated"
+
+
+def _on_signal(signum: int, frame: Any) -> None:
+    # a second Ctrl-C must not cut the clean-up short (kill -9 still stops everything)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    raise Terminated() if signum == signal.SIGTERM else Interrupted()
+
+
+@contextmanager
+def private_temp() -> Iterator[str]:
+    """Point caches and temporary files at a fresh folder; remove it afterwards."""
+    root = tempfile.mkdtemp(prefix="brainpainter-run-")
+    saved = {k: os.environ.get(k) for k in (*CACHE_VARIABLES, "TMPDIR")}
+    saved_tempdir = tempfile.tempdir
+    try:
+        for var, sub in CACHE_VARIABLES.items():
+            if not os.environ.get(var):
+                os.environ[var] = os.path.join(root, sub)
+        tmp = os.path.join(root, "tmp")
+        os.makedirs(tmp)
+        os.environ["TMPDIR"] = tmp
+        tempfile.tempdir = tmp
+        yield root
+    finally:
+        tempfile.tempdir = saved_tempdir
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+        shutil.rmtree(root, ignore_errors=True)
+
+
+@contextmanager
+def signals_as_exceptions() -> Iterator[None]:
+    """SIGTERM raises :class:`Terminated` and SIGINT :class:`Interrupted` in the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old_term = signal.signal(signal.SIGTERM, _on_signal)
+    old_int = signal.signal(signal.SIGINT, _on_signal)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old_term)
+        signal.signal(signal.SIGINT, old_int)
+
+
+def _silence_stdout() -> None:
+    """After stdout failed (closed pipe, full device): send the rest to /dev/null, quietly."""
+    try:
+        fd = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(fd, sys.stdout.fileno())
+        os.close(fd)
+    except (OSError, ValueError, AttributeError):
+        pass
+
+
+def _say(line: str) -> None:
+    try:
+        click.echo(line, err=True)
+    except OSError:  # stderr itself is gone: nothing more can be said
+        pass
+
+
+def _one_line(text: str, limit: int = 500) -> str:
+    line = " ".join(str(text).split())
+    return line if len(line) <= limit else line[: limit - 3] + "..."
+
+
+def run(group: click.Group, argv: Sequence[str] | None = None, prog_name: str = "brainpainter") -> int:
+    """Run `group` with `argv`; returns the exit code (see the module docstring)."""
+    with signals_as_exceptions(), private_temp():
+        try:
+            group.main(args=list(argv) if argv is not None else None, prog_name=prog_name,
+                       standalone_mode=False)
+            sys.stdout.flush()
+            return 0
+        except Stopped as exc:
+            _say(f"{exc.word}: nothing was published; partial output was removed")
+            return exc.exit_code
+        except (KeyboardInterrupt, click.exceptions.Abort):
+            _say("interrupted: nothing was published; partial output was removed")
+            return EXIT_SIGINT
+        except SystemExit:
+            if type(sys.stdout).__name__ == "PacifyFlushWrapper":  # click's answer to a closed pipe
+                _silence_stdout()
+                _say("error: standard output was closed; the output shown may be incomplete.")
+                return EXIT_USER
+            raise
+        except click.exceptions.Exit as exc:
+            return exc.exit_code
+        except click.ClickException as exc:  # click's own usage errors
+            _say(f"error: {_one_line(exc.format_message())}")
+            return exc.exit_code
+        except BrainPainterError as exc:
+            _say(f"error: {_one_line(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)}")
+            return exc.exit_code
+        except OSError as exc:
+            from brainpainter.io.transaction import os_error
+
+            if exc.errno in (errno.EPIPE, errno.ENOSPC, errno.EIO) and exc.filename is None:
+                _silence_stdout()
+                what = "standard output was closed" if exc.errno == errno.EPIPE else (
+                    f"cannot write to standard output ({os.strerror(exc.errno)})")
+                _say(f"error: {what}; the output shown may be incomplete.")
+                return EXIT_USER
+            if exc.errno in _USER_ERRNOS:
+                _say(f"error: {_one_line(str(os_error(exc, 'cannot use')))}")
+                return EXIT_USER
+            return _internal(exc)
+        except RecursionError as exc:
+            return _internal(exc)
+        except Exception as exc:  # a bug: one line, no traceback (BRAINPAINTER_DEBUG=1 shows it)
+            return _internal(exc)
+
+
+_USER_ERRNOS = {errno.ENOSPC, errno.EROFS, errno.ENAMETOOLONG, errno.EACCES, errno.EPERM, errno.EDQUOT,
+                errno.ENOENT, errno.ENOTDIR, errno.EISDIR, errno.ELOOP, errno.EIO, errno.EEXIST}
+
+
+def _internal(exc: BaseException) -> int:
+    if os.environ.get("BRAINPAINTER_DEBUG"):
+        raise exc
+    _say(_one_line(f"internal error: {type(exc).__name__}: {exc} (set BRAINPAINTER_DEBUG=1 for a "
+                   "traceback and please report it)"))
+    return EXIT_INTERNAL

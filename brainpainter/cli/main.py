@@ -1,0 +1,431 @@
+"""The ``brainpainter`` command line: a click group of small commands.
+
+Every command maps user errors (:class:`BrainPainterError`) to one line on
+stderr and exit code 2. Heavy modules (bpy, nibabel, pandas) are imported
+inside the commands, so ``brainpainter --help`` stays fast.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+import click
+
+from brainpainter.cli.options import (
+    FINITE,
+    input_options,
+    parallel_options,
+    parse_size,
+    render_kwargs,
+    render_options,
+)
+from brainpainter.errors import BrainPainterError
+
+CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
+
+
+def _echo_json(obj: object) -> None:
+    click.echo(json.dumps(obj, indent=2))
+
+
+COMMANDS_GROUP = "brainpainter.commands"
+
+
+class CommandsFromPlugins(click.Group):
+    """The top-level group plus the commands that distributions add through ``brainpainter.commands``.
+
+    The template builder adds ``template`` this way, so core never imports it;
+    an entry point is imported only when its command runs (or ``--help`` lists it).
+    """
+
+    def _entry_points(self) -> dict[str, Any]:
+        from importlib.metadata import entry_points
+
+        return {ep.name: ep for ep in entry_points(group=COMMANDS_GROUP) if ep.name not in self.commands}
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted([*super().list_commands(ctx), *self._entry_points()])
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        command = super().get_command(ctx, cmd_name)
+        entry = None if command is not None else self._entry_points().get(cmd_name)
+        if entry is None:
+            return command
+        try:
+            loaded = entry.load()
+        except Exception as exc:  # a broken plugin: one line, not a traceback
+            raise BrainPainterError(f"the command {cmd_name!r} from {entry.value!r} could not be loaded "
+                                    f"({type(exc).__name__}: {exc}); reinstall the distribution that "
+                                    "provides it.") from exc
+        if not isinstance(loaded, click.Command):
+            raise BrainPainterError(f"the entry point {cmd_name!r} = {entry.value!r} is not a click "
+                                    "command; fix or uninstall the distribution that provides it.")
+        return loaded
+
+
+@click.group(cls=CommandsFromPlugins, context_settings=CONTEXT)
+@click.version_option(package_name="brainpainter", prog_name="brainpainter")
+def cli() -> None:
+    """Paint numbers per brain region onto 3D brains.
+
+    \b
+    Quick start:
+      brainpainter render examples/brainpainter_dk.csv --atlas dk --out out/
+      brainpainter atlas list
+      brainpainter atlas show dk
+    """
+
+
+# -- atlas --------------------------------------------------------------------
+@cli.group(context_settings=CONTEXT)
+def atlas() -> None:
+    """List, inspect, add and remove atlases."""
+
+
+@atlas.command("list", context_settings=CONTEXT)
+@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
+def atlas_list(as_json: bool) -> None:
+    """Atlases: built-in, from plugins, and yours (atlas add)."""
+    from brainpainter.atlas import registry
+    rows = []
+    for name in registry.atlases.names():
+        entry = next((e for e in registry.atlases.entries() if e.name == name), None)
+        row = {"name": name, "aliases": list(entry.aliases) if entry else [],
+               "distribution": entry.distribution if entry else "(session)"}
+        try:
+            a = registry.atlases.get(name)
+            row.update(title=a.title, n_cortical_per_hemisphere=len(a.cortical("lh")),
+                       n_subcortical=len(a.subcortical()), error=None)
+        except BrainPainterError as exc:
+            row.update(error=str(exc))
+        rows.append(row)
+    if as_json:
+        _echo_json(rows)
+        return
+    for r in rows:
+        alias = f" (alias: {', '.join(r['aliases'])})" if r["aliases"] else ""
+        if r["error"]:
+            click.echo(f"{r['name']}{alias}  BROKEN: {r['error']}")
+        else:
+            click.echo(f"{r['name']}{alias}  {r['title']}: {r['n_cortical_per_hemisphere']} cortical "
+                       f"regions per hemisphere, {r['n_subcortical']} subcortical  [{r['distribution']}]")
+
+
+@atlas.command("show", context_settings=CONTEXT)
+@click.argument("name")
+@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
+@click.option("--image", type=click.Path(path_type=Path, dir_okay=False), default=None,
+              help="Also draw a reference PNG: every region in its colour-table colour, views side by side.")
+@click.option("--views", default=None,
+              help="Views of the reference image [default: lateral-left,medial-left,subcortical; "
+                   "subcortical,subcortical-dorsal for an atlas without cortical regions].")
+@click.option("--size", default="800x600", show_default=True, help="Size of each view, WIDTHxHEIGHT.")
+@click.option("--template", default="fsaverage", show_default=True, help="Template name or folder.")
+@click.option("--surface", default="pial", show_default=True,
+              type=click.Choice(["pial", "white", "inflated"]))
+@click.option("--quality", default="default", show_default=True,
+              type=click.Choice(["fast", "default", "high"]))
+@click.option("--renderer", default="blender", show_default=True)
+def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, size: str, template: str,
+               surface: str, quality: str, renderer: str) -> None:
+    """Regions of atlas NAME, with hemisphere, colour and aliases; --image draws them."""
+    from brainpainter.atlas.model import get_atlas
+
+    a = get_atlas(name)
+    if image is not None:
+        from brainpainter.media.atlas_image import reference_image
+        from brainpainter.rendering.painter import VOLUME_VIEWS
+
+        if views is None:
+            views = "lateral-left,medial-left,subcortical" if a.cortical() else ",".join(VOLUME_VIEWS)
+        reference_image(a, image, views=views, size=parse_size(size), template=template, surface=surface,
+                        quality=quality, renderer=renderer)
+        if not as_json:
+            click.echo(f"reference image of {a.name} written to {image}")
+            return
+    if as_json:
+        _echo_json(a.to_dict())
+        return
+    click.echo(f"{a.name}: {a.title}")
+    if a.description:
+        click.echo(f"  {a.description}")
+    for hemi in ("lh", "rh"):
+        regs = a.cortical(hemi)
+        click.echo(f"\ncortical, {'left' if hemi == 'lh' else 'right'} hemisphere ({len(regs)}):")
+        for r in regs:
+            click.echo(f"  {r.key}")
+    sub = a.subcortical()
+    click.echo(f"\nsubcortical ({len(sub)}):")
+    for r in sub:
+        alias = f"  (also: {', '.join(r.aliases)})" if r.aliases else ""
+        click.echo(f"  {r.key}{alias}")
+    if a.citation:
+        click.echo(f"\nCite: {a.citation}")
+
+
+@atlas.command("add", context_settings=CONTEXT)
+@click.argument("name")
+@click.option("--annot", "annots", multiple=True, metavar="HEMI=FILE",
+              help="Label map per hemisphere: lh=FILE and rh=FILE (FreeSurfer .annot or GIFTI .label.gii "
+                   "on the template's surface).")
+@click.option("--config", "config", type=click.Path(path_type=Path, dir_okay=False), default=None,
+              help="Region-group TOML file (a base atlas and named groups of its regions).")
+@click.option("--volume", "volume", type=click.Path(path_type=Path, dir_okay=False), default=None,
+              help="Label volume (NIfTI/MGH of integer labels): one smooth mesh per label, drawn in the "
+                   "subcortical views.")
+@click.option("--lut", "lut", type=click.Path(path_type=Path, dir_okay=False), default=None,
+              help="Look-up table for --volume: FreeSurfer LUT, BIDS dseg.tsv or CSV of index,name.")
+@click.option("--space", default="MNI152NLin2009cAsym", show_default=True,
+              type=click.Choice(["MNI152NLin2009cAsym", "MNI152NLin6Asym", "fsaverage", "template"]),
+              help="Space of --volume (mapped into the template's; see docs/atlases.md).")
+@click.option("--own-template", is_flag=True,
+              help="With --volume: the volume is a brain of its own (e.g. a mouse atlas): make a template of "
+                   "its labels only (no cortex) in the volume's coordinates; --space is not used.")
+@click.option("--template", default="fsaverage", show_default=True,
+              help="Template the label maps were made for.")
+@click.option("--title", default="", help="Human title (default: NAME).")
+@click.option("--description", default="", help="One-line description.")
+@click.option("--citation", default="", help="What to cite.")
+@click.option("--replace", is_flag=True, help="Replace your atlas of the same name.")
+@click.option("--out", "out", type=click.Path(path_type=Path, file_okay=False), default=None,
+              help="Write the atlas folder to OUT (e.g. into an atlas plugin) instead of adding it.")
+def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: Path | None, lut: Path | None,
+              space: str, own_template: bool, template: str, title: str, description: str, citation: str,
+              replace: bool, out: Path | None) -> None:
+    """Add atlas NAME from label maps (--annot), a label volume (--volume) or region groups (--config).
+
+    \b
+    Examples:
+      brainpainter atlas add yeo7 --annot lh=lh.Yeo2011_7Networks_N1000.annot \\
+                                  --annot rh=rh.Yeo2011_7Networks_N1000.annot
+      brainpainter atlas add lobes --config lobes.toml
+      brainpainter atlas add tian_s2 --volume Tian_S2.nii.gz --lut Tian_S2.csv --space MNI152NLin6Asym
+    """
+    import time
+
+    from brainpainter.atlas import registry
+    from brainpainter.atlas import user as user_atlases
+    if sum([bool(annots), config is not None, volume is not None]) != 1:
+        raise BrainPainterError("give either --annot lh=FILE --annot rh=FILE, --volume FILE --lut FILE or "
+                                "--config FILE.toml (one of them)")
+    if own_template and volume is None:
+        raise BrainPainterError("--own-template goes with --volume FILE --lut FILE (a brain made of volume "
+                                "labels)")
+    if (volume is None) != (lut is None):
+        raise BrainPainterError("--volume and --lut go together: the look-up table names the volume's labels")
+    t0 = time.perf_counter()
+    if volume is not None:
+        from brainpainter.atlas.volumes import add_volume_atlas
+
+        folder = add_volume_atlas(name, volume, lut, space=space, template=template, title=title,
+                                  description=description, citation=citation, replace=replace, out=out,
+                                  own_template=own_template)
+    elif config is not None:
+        if out is not None:
+            raise BrainPainterError("--out is for label maps (--annot); a config is a file you can ship "
+                                    "as it is")
+        folder = user_atlases.add_config(name, config, replace=replace)
+    else:
+        folder = user_atlases.add_label_map(
+            name, user_atlases.parse_annot_options(annots), template=template, title=title,
+            description=description, citation=citation, replace=replace, out=out)
+    if out is not None:
+        from brainpainter.atlas.model import load_atlas_dir
+
+        a = load_atlas_dir(folder)
+    else:
+        a = registry.atlases.get(name)
+    n = {h: len(a.cortical(h)) for h in ("lh", "rh")}
+    where = "written to" if out is not None else "added in"
+    click.echo(f"atlas {name!r} {where} {folder} ({n['lh']} left, {n['rh']} right cortical regions, "
+               f"{len(a.subcortical())} subcortical; {time.perf_counter() - t0:.1f} s)")
+    if out is None:
+        click.echo(f"render with: brainpainter render TABLE --atlas {name} --out DIR")
+
+
+@atlas.command("remove", context_settings=CONTEXT)
+@click.argument("name")
+def atlas_remove(name: str) -> None:
+    """Remove atlas NAME that you added with 'atlas add'."""
+    from brainpainter.atlas import user as user_atlases
+    folder = user_atlases.remove(name)
+    click.echo(f"atlas {name!r} removed ({folder} deleted)")
+
+
+# -- plugins ------------------------------------------------------------------
+@cli.command(context_settings=CONTEXT)
+@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
+def plugins(as_json: bool) -> None:
+    """Installed plugins, and which failed to load and why."""
+    from brainpainter.atlas import registry
+    report = []
+    for reg in (registry.atlases, registry.renderers, registry.templates):
+        for entry in reg.entries():
+            status, error = "ok", None
+            try:
+                reg.get(entry.name)
+            except BrainPainterError as exc:
+                status, error = "failed", str(exc)
+            report.append({"group": reg.group, "name": entry.name, "aliases": list(entry.aliases),
+                           "target": entry.target, "distribution": entry.distribution,
+                           "status": status, "error": error})
+        for name, error in reg.errors().items():
+            if not any(r["group"] == reg.group and r["name"] == name for r in report):
+                report.append({"group": reg.group, "name": name, "aliases": [], "target": None,
+                               "distribution": None, "status": "failed", "error": error})
+    if as_json:
+        _echo_json(report)
+        return
+    for r in report:
+        line = f"{r['group']:<24} {r['name']:<12} {r['status']:<7} {r['distribution'] or ''}"
+        click.echo(line + (f"\n    {r['error']}" if r["error"] else ""))
+
+
+def _one_or_many(inputs: tuple[Path, ...]) -> Path | list[Path]:
+    return inputs[0] if len(inputs) == 1 else list(inputs)
+
+
+# -- check --------------------------------------------------------------------
+@cli.command(context_settings=CONTEXT)
+@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
+                type=click.Path(path_type=Path, dir_okay=False))
+@click.option("--atlas", "-a", default=None,
+              help="Atlas: dk, destrieux, dkt (alias tourville) or a plugin atlas. "
+                   "Default: inferred from the region names.")
+@input_options
+@click.option("--gradient", default=None, help="Colour scale to compare the values with (as for render).")
+@click.option("--cmap", default=None, help="Colour map to compare the values with (as for render).")
+@click.option("--vmin", type=FINITE, default=None)
+@click.option("--vmax", type=FINITE, default=None)
+@click.option("--center", type=FINITE, default=None)
+@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
+def check(inputs: tuple[Path, ...], atlas: str | None, image_column: str | None, value: str | None,
+          region_column: str | None, strict: bool, gradient: str | None, cmap: str | None,
+          vmin: float | None, vmax: float | None, center: float | None, as_json: bool) -> None:
+    """Read INPUT tables exactly as render would and report how, without rendering.
+
+    \b
+    Shows the shape detected, the atlas (inferred when --atlas is not given),
+    what each column or name resolved to (or the closest names), regions
+    without a value, bad cells and the value range against the colour scale.
+    Several INPUTs (e.g. lh and rh aparcstats2table files) are merged by image
+    name. Exit code 0: render would accept the table; 2: it would not.
+    """
+    from brainpainter.table.region_table import inspect_table
+    from brainpainter.table.report import check_report, format_report
+
+    table = inspect_table(_one_or_many(inputs), atlas, image_column=image_column, value=value,
+                          region_column=region_column, strict=strict)
+    report = check_report(table, gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center)
+    if as_json:
+        _echo_json(report)
+    else:
+        click.echo(format_report(report))
+    if report["errors"]:
+        raise BrainPainterError(report["errors"][0])
+
+
+# -- render -------------------------------------------------------------------
+@cli.command(context_settings=CONTEXT)
+@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
+                type=click.Path(path_type=Path, dir_okay=False))
+@click.option("--out", "-o", required=True, type=click.Path(path_type=Path, file_okay=False),
+              help="Output folder for {image}_{view}.png and manifest.json.")
+@click.option("--rows", default=None,
+              help="Image names to render, comma-separated, in this order (default: all rows).")
+@render_options
+@input_options
+@parallel_options
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
+def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, **options: Any) -> None:
+    """Render every image of INPUT tables (CSV, TSV, .xlsx; see 'check') from every view.
+
+    Several INPUTs (e.g. lh and rh aparcstats2table files) are merged by image name.
+    """
+    from brainpainter.rendering.painter import render as run
+
+    result = run(_one_or_many(inputs), out=out, progress=not quiet, rows=rows, **render_kwargs(options))
+    from brainpainter.table.region_table import summary_line
+    from brainpainter.table.report import input_warnings
+
+    s = result.manifest["input"]
+    click.echo(f"input: {summary_line(s)}")
+    for line in input_warnings(s):
+        click.echo(f"warning: {line}")
+    click.echo(
+        f"{len(result.files)} image(s) written to {out} "
+        f"({s['n_images']} row(s); {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
+        f"{len(s['unmatched_columns'])} unmatched column(s))"
+    )
+    w = result.workers
+    if w.get("backend") in ("LocalRunner", "DaskRunner"):
+        where = "processes" if w["backend"] == "LocalRunner" else "Dask workers"
+        click.echo(f"rendered by {w['workers']} {where} (painter start-up {max(w['startup_seconds']):.1f} s"
+                   + (f"; {len(w['retried'])} task(s) retried" if w["retried"] else "") + ")")
+
+
+from brainpainter.cli.media import figure, movie  # noqa: E402
+
+cli.add_command(figure)
+cli.add_command(movie)
+from brainpainter.cli.export import export  # noqa: E402
+
+cli.add_command(export)
+
+
+#: Options whose value is a comma-separated list.
+LIST_OPTIONS = ("--views", "--hide", "--rows", "--ticks", "--atlas")
+
+
+def join_split_lists(args: list[str]) -> list[str]:
+    """Rejoin a comma-separated option value that the shell split at a space.
+
+    ``--views lateral-left, medial-left`` reaches us as ``["--views",
+    "lateral-left,", "medial-left"]``; without this, ``medial-left`` would be
+    taken for an input file.
+    """
+    out: list[str] = []
+    i = 0
+    while i < len(args):
+        arg = args[i]
+        name = arg.split("=", 1)[0]
+        if name in LIST_OPTIONS and ("=" in arg or i + 1 < len(args)):
+            value = arg.split("=", 1)[1] if "=" in arg else args[i + 1]
+            i += 1 if "=" in arg else 2
+            while i < len(args) and (value.rstrip().endswith(",") or args[i].startswith(",")):
+                value += args[i]
+                i += 1
+            out.append(f"{name}={value}")
+            continue
+        out.append(arg)
+        i += 1
+    return out
+
+from brainpainter.web.command import serve  # noqa: E402
+
+cli.add_command(serve)
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Console entry point: user errors become one line and exit code 2 (:mod:`brainpainter.cli.guard`)."""
+    from brainpainter.cli.guard import run
+
+    code = run(cli, join_split_lists(sys.argv[1:] if argv is None else list(argv)))
+    if argv is None and "bpy" in sys.modules:
+        # Blender's own exit handlers (bpy 5.1+) write a shader cache under ~/.cache after the run's
+        # private cache folder is gone; the run is complete and published, so leave without them.
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError):
+                pass
+        os._exit(code)
+    sys.exit(code)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

@@ -1,0 +1,145 @@
+"""The ``figure`` and ``movie`` commands (registered on the ``brainpainter`` group in cli.py).
+
+Only click is imported at module level: matplotlib, pandas and bpy load when
+a command runs, so ``brainpainter --help`` stays light.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import click
+
+from brainpainter.cli.options import (
+    FINITE,
+    input_options,
+    make_render_options,
+    parallel_options,
+    render_kwargs,
+    render_options,
+)
+
+CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
+
+
+def _one_or_many(inputs: tuple[Path, ...]) -> Path | list[Path]:
+    return inputs[0] if len(inputs) == 1 else list(inputs)
+
+
+def _rows(value: str | None) -> list[str] | None:
+    return None if value is None else [r.strip() for r in value.split(",") if r.strip()]
+
+
+# -- figure --------------------------------------------------------------------------
+@click.command(context_settings=CONTEXT)
+@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
+                type=click.Path(path_type=Path, dir_okay=False))
+@click.option("--out", "-o", required=True, type=click.Path(path_type=Path),
+              help="Figure file: .png or .tif (at --dpi), .pdf or .svg (renders embedded, text as text).")
+@click.option("--grid", is_flag=True,
+              help="Rows of the input as columns (e.g. stages) and views as rows, headed by image names.")
+@click.option("--rows", default=None,
+              help="Image names to show, comma-separated, in this order (default: all rows).")
+@click.option("--title", default=None, help="A title above the figure.")
+@click.option("--label", default=None,
+              help="Colour-bar label, e.g. 'z-score' or 'atrophy (SD from controls)'.")
+@click.option("--ticks", default=None,
+              help="Colour-bar ticks, e.g. 0,1.5,3 (default: the gradient's colours).")
+@click.option("--dpi", type=FINITE, default=300.0, show_default=True, help="Resolution of PNG/TIFF output.")
+@click.option("--fig-width", type=FINITE, default=None,
+              help="Figure width in inches (default 7.2, two journal columns; 3.5 for 1-2 image columns).")
+@click.option("--font-size", type=FINITE, default=8.0, show_default=True, help="Text size in points.")
+@click.option("--view-labels", is_flag=True,
+              help="Name the views (row labels in a grid, headings otherwise).")
+@render_options
+@input_options
+@parallel_options
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
+def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, title: str | None,
+           label: str | None, ticks: str | None, dpi: float, fig_width: float | None, font_size: float,
+           view_labels: bool, quiet: bool, **options: Any) -> None:
+    """A publication figure of INPUT rows: renders, titles and one colour bar.
+
+    \b
+    Default: each row is a line of the chosen views side by side.
+    --grid:  rows of the input as columns (stages), views as rows.
+    One colour scale, computed over all rows, for the whole figure. Swatches
+    for the NaN and missing colours appear when those colours are drawn.
+
+    \b
+    Example:
+      brainpainter figure examples/brainpainter_dk.csv --atlas dk --grid \\
+          --views lateral-left,medial-left --label "atrophy (SD)" --out progression.pdf
+    """
+    from brainpainter.media.figure import make_figure
+
+    kwargs = render_kwargs(options)
+    result = make_figure(
+        _one_or_many(inputs), out=out, rows=_rows(rows), grid=grid, title=title, label=label, ticks=ticks,
+        dpi=dpi, fig_width=fig_width, font_size=font_size, view_labels=view_labels, progress=not quiet,
+        **kwargs,
+    )
+    w, h = result.figure.get_size_inches()
+    n_images = len({image for image, _ in result.images})
+    n_views = len({view for _, view in result.images})
+    click.echo(f"figure written to {result.path} ({n_images} row(s) x {n_views} view(s), "
+               f"{w:.2f} x {h:.2f} in" + (f" at {dpi:g} dpi)" if out.suffix.lower() in
+                                        (".png", ".tif", ".tiff") else ")"))
+
+
+# -- movie ---------------------------------------------------------------------------
+@click.command(context_settings=CONTEXT)
+@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
+                type=click.Path(path_type=Path, dir_okay=False))
+@click.option("--out", "-o", required=True, type=click.Path(path_type=Path),
+              help="Movie file: .mp4 (H.264) or .gif.")
+@click.option("--frames-per-step", type=int, default=24, show_default=True,
+              help="Frames from one key frame (row) to the next.")
+@click.option("--easing", type=click.Choice(["linear", "smooth"]), default="linear", show_default=True,
+              help="smooth: slow into and out of each key frame.")
+@click.option("--time-column", default=None,
+              help="Numeric column with each row's time (e.g. years): rows are sorted by it, steps get "
+                   "frames in proportion to their gaps, and the caption shows the time.")
+@click.option("--hold", type=int, default=0, show_default=True,
+              help="Extra frames showing each key frame still.")
+@click.option("--fps", type=FINITE, default=24.0, show_default=True, help="Frames per second.")
+@click.option("--orbit", type=FINITE, default=0.0, show_default=True,
+              help="Degrees the camera turns around the brain over the movie (360: one full turn).")
+@click.option("--rows", default=None,
+              help="Image names to use as key frames, comma-separated (default: all).")
+@click.option("--title", default=None, help="A title above the views.")
+@click.option("--label", default=None, help="Colour-bar label, e.g. 'z-score'.")
+@click.option("--ticks", default=None, help="Colour-bar ticks, e.g. 0,1.5,3.")
+@make_render_options(size="800x600")
+@input_options
+@parallel_options
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
+def movie(inputs: tuple[Path, ...], out: Path, frames_per_step: int, easing: str, time_column: str | None,
+          hold: int, fps: float, orbit: float, rows: str | None, title: str | None, label: str | None,
+          ticks: str | None, quiet: bool, **options: Any) -> None:
+    """A movie through the rows of INPUT: each row a key frame, values interpolated in between.
+
+    \b
+    Rows are key frames in table order (or sorted by --time-column); one colour
+    scale over the whole movie; the views side by side, with the stage or time,
+    a timeline and the colour bar under them. MP4 is H.264 (plays everywhere,
+    no ffmpeg install needed); GIF for slides and web pages.
+
+    \b
+    Example:
+      brainpainter movie examples/brainpainter_dk.csv --atlas dk --views lateral-left,medial-left \\
+          --frames-per-step 24 --easing smooth --hold 12 --out progression.mp4
+    """
+    from brainpainter.media.movie import make_movie
+
+    kwargs = render_kwargs(options)
+    result = make_movie(
+        _one_or_many(inputs), out=out, rows=_rows(rows), frames_per_step=frames_per_step, easing=easing,
+        time_column=time_column, hold=hold, fps=fps, orbit=orbit, title=title, label=label, ticks=ticks,
+        progress=not quiet, **kwargs,
+    )
+    w, h = result.frame_size
+    click.echo(f"movie written to {result.path}: {result.n_frames} frames of {w}x{h} at {result.fps:g} fps "
+               f"({result.duration:.1f} s; key frames {', '.join(result.keys)}; "
+               f"made in {result.seconds:.0f} s)")

@@ -1,0 +1,162 @@
+"""Write images and manifests safely: sanitised names, atomic writes, metadata."""
+
+from __future__ import annotations
+
+import os
+import re
+import tempfile
+from collections import deque
+from concurrent.futures import Future, ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+from brainpainter.errors import BrainPainterError
+
+_UNSAFE = re.compile(r"[^A-Za-z0-9._+-]+")
+MAX_NAME = 100
+
+
+def safe_name(name: str) -> str:
+    """A file-name-safe version of an image name (no path parts, <= 100 chars)."""
+    text = _UNSAFE.sub("_", str(name)).strip("._") or "image"
+    return text[:MAX_NAME]
+
+
+def prepare_out_dir(out: str | Path) -> Path:
+    """Create `out` if needed and check that files can be written there."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise BrainPainterError(
+            f"output {str(out)!r} exists and is not a folder; give a folder path with --out."
+        )
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=out, prefix=".bp-write-test-"):
+            pass
+    except OSError as exc:
+        raise BrainPainterError(
+            f"output folder {str(out)!r} is not writable ({exc.strerror or exc}); choose another --out."
+        ) from None
+    return out
+
+
+def set_default_mode(path: Path | str) -> None:
+    """Give a file made through a temporary file (mode 0600) the usual mode (0666 less the umask)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    os.chmod(path, 0o666 & ~mask)
+
+
+def atomic_write_bytes(path: Path, data: bytes) -> None:
+    """Write via a temporary file in the same folder, then rename."""
+    from brainpainter.io.transaction import os_error
+
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    except OSError as exc:
+        raise os_error(exc, "cannot write", path) from None
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+        set_default_mode(tmp)
+        os.replace(tmp, path)
+    except OSError as exc:
+        Path(tmp).unlink(missing_ok=True)
+        raise os_error(exc, "cannot write", path) from None
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+# Imported with this module, early and on the caller's thread: fpng's import walks the
+# interpreter stack (lazy_loader), which takes seconds on a PNG worker thread once bpy is loaded.
+try:
+    import fpng as _fpng
+except ImportError:  # pragma: no cover - fpng is a dependency; Pillow is the fallback
+    _fpng = None
+
+
+def _png_chunk(kind: bytes, data: bytes) -> bytes:
+    import struct
+    import zlib
+
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+
+def png_bytes(image: np.ndarray, metadata: dict[str, str] | None = None) -> bytes:
+    """Encode an RGBA uint8 image, shape (h, w, 4), as PNG with iTXt text chunks.
+
+    Uses ``fpng`` (about 10x faster than zlib level 6, lossless, files ~20 %
+    larger) when it is installed, else Pillow with ``compress_level=1``. The
+    text chunks go right after the header, as Pillow writes them.
+    """
+    pixels = np.ascontiguousarray(image, dtype=np.uint8)
+    if _fpng is not None and pixels.ndim == 3 and pixels.shape[2] in (3, 4):
+        data = _fpng.from_ndarray(pixels)
+        chunks = b"".join(
+            _png_chunk(b"iTXt", k.encode("latin-1") + b"\0\0\0\0\0" + str(v).encode("utf-8"))
+            for k, v in (metadata or {}).items())
+        head = 8 + 25  # signature, IHDR chunk
+        return data[:head] + chunks + data[head:]
+    import io
+
+    from PIL import Image
+    from PIL.PngImagePlugin import PngInfo
+
+    info = PngInfo()
+    for k, v in (metadata or {}).items():
+        info.add_itxt(k, v)
+    buf = io.BytesIO()
+    Image.fromarray(pixels).save(buf, format="PNG", pnginfo=info, compress_level=1)
+    return buf.getvalue()
+
+
+def write_png(path: Path, image: np.ndarray, metadata: dict[str, str] | None = None) -> None:
+    atomic_write_bytes(path, png_bytes(image, metadata))
+
+
+def write_json(path: Path, obj: object) -> None:
+    from brainpainter.io.transaction import json_bytes
+
+    atomic_write_bytes(path, json_bytes(obj))
+
+
+class PngWriter:
+    """Encode and write PNGs on a worker thread while the caller renders the next image.
+
+    PNG compression releases the GIL, so on a multi-core machine it overlaps
+    with rendering. At most `max_pending` images wait, which bounds memory.
+    Leaving the ``with`` block waits for every write and re-raises the first
+    error; each file is written atomically, so an error leaves no partial PNG.
+    """
+
+    def __init__(self, max_pending: int = 2) -> None:
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="brainpainter-png")
+        self._pending: deque[Future] = deque()
+        self._max = max_pending
+
+    def submit(self, path: Path, image: np.ndarray, metadata: dict[str, str] | None = None) -> None:
+        """Queue `image` (RGBA uint8, shape (h, w, 4)) for writing to `path`."""
+        while len(self._pending) >= self._max:
+            self._pending.popleft().result()
+        self._pending.append(self._pool.submit(write_png, path, image, metadata))
+
+    def wait(self) -> None:
+        """Wait until every queued image is written; re-raise the first error."""
+        while self._pending:
+            self._pending.popleft().result()
+
+    def __enter__(self) -> PngWriter:
+        return self
+
+    def __exit__(self, exc_type: object, *rest: object) -> None:
+        try:
+            while self._pending:
+                future = self._pending.popleft()
+                if exc_type is not None:
+                    future.cancel()
+                    continue
+                future.result()
+        finally:
+            self._pool.shutdown(wait=True)

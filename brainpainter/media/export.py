@@ -1,0 +1,428 @@
+"""Interactive 3D export: a glTF binary (``.glb``) or one self-contained HTML file.
+
+One row of a table becomes a coloured 3D brain: one mesh per drawn region
+(named by its region key, e.g. ``Left-insula``, in the region's colour), both
+cortical hemispheres plus the subcortical structures, in the template's
+millimetre space. The ``.glb`` opens in Blender, MeshLab, PowerPoint, or any
+glTF viewer. The ``.html`` file inlines a three.js viewer (vendored in
+``brainpainter/data``, MIT licence beside it) and the ``.glb``: it opens in any
+browser without a network, with rotate (drag), zoom (wheel), pan (right
+drag), a tooltip naming the region under the mouse, toggles for each part, and
+the colour bar.
+
+Nothing here needs Blender: the meshes come straight from the template.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from brainpainter.atlas.model import HEMI_PREFIX, Atlas
+from brainpainter.atlas.template import Template
+from brainpainter.color.rgb import ColorLike
+from brainpainter.color.scale import DEFAULT_MISSING_COLOR, DEFAULT_NAN_COLOR
+from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.rendering.scene import RGB, Scene
+
+FORMATS = ("glb", "html")
+#: Colour of subcortical structures the atlas does not colour (as the Blender renderer draws them).
+NEUTRAL_GREY: RGB = (0.8, 0.8, 0.8)
+#: glTF is y-up; brainpainter's templates are RAS (x right, y anterior, z superior).
+RAS_TO_GLTF = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
+
+
+@dataclass(frozen=True)
+class RegionMesh:
+    """One drawn part of the brain.
+
+    Attributes
+    ----------
+    name : str
+        Region key (``"Left-insula"``), or ``"Left-medial-wall"`` for the
+        cortex labels that are no region of the atlas.
+    part : {"lh", "rh", "subcortical"}
+    vertices : ndarray of float32, shape (n_vertices, 3)
+        RAS millimetres.
+    faces : ndarray of int32, shape (n_faces, 3)
+    normals : ndarray of float32, shape (n_vertices, 3)
+        Unit vertex normals of the whole hemisphere or structure set (no
+        seams at region borders).
+    color : tuple of float, shape (3,)
+        sRGB 0-1.
+    """
+
+    name: str
+    part: str
+    vertices: np.ndarray
+    faces: np.ndarray
+    normals: np.ndarray
+    color: RGB
+
+
+def _vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    import trimesh
+
+    mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+    return np.asarray(mesh.vertex_normals, dtype=np.float32)
+
+
+def _submesh(vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``(vertices, faces, normals)`` of the part of a mesh that `faces` use, renumbered."""
+    used, inverse = np.unique(faces, return_inverse=True)
+    return (vertices[used].astype(np.float32), inverse.reshape(faces.shape).astype(np.int32),
+            normals[used])
+
+
+def region_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
+    """Split the template of `scene` into one mesh per region, coloured by `colors`.
+
+    Parameters
+    ----------
+    scene : Scene
+        Template, label set, surface and hidden regions.
+    colors : dict of str to (r, g, b)
+        sRGB 0-1 colour of every region key (:func:`brainpainter.rendering.painter.region_colors`).
+        Cortex labels without a colour join one ``{Left,Right}-medial-wall``
+        mesh per hemisphere in ``scene.medial_wall_color``; subcortical
+        structures without one are drawn light grey.
+
+    Returns
+    -------
+    list of RegionMesh
+        Hidden regions and labels with no faces are left out.
+    """
+    template: Template = scene.template
+    out: list[RegionMesh] = []
+    for hemi in ("lh", "rh"):
+        cm = template.cortex(scene.labels, hemi)
+        verts = cm.vertices[scene.surface]
+        normals = _vertex_normals(verts, cm.faces)
+        wall: list[np.ndarray] = []
+        for i, label in enumerate(cm.label_names):
+            key = HEMI_PREFIX[hemi] + label
+            faces = cm.faces[cm.face_label == i]
+            if key in scene.hidden or not len(faces):
+                continue
+            if key not in colors:
+                wall.append(faces)
+                continue
+            out.append(RegionMesh(key, hemi, *_submesh(verts, normals, faces), colors[key]))
+        if wall:
+            out.append(RegionMesh(f"{HEMI_PREFIX[hemi]}medial-wall", hemi,
+                                  *_submesh(verts, normals, np.concatenate(wall)), scene.medial_wall_color))
+    sub = template.subcortical()
+    normals = _vertex_normals(sub.vertices, sub.faces)
+    for i, key in enumerate(sub.label_names):
+        faces = sub.faces[sub.face_label == i]
+        if key in scene.hidden or not len(faces):
+            continue
+        out.append(RegionMesh(key, "subcortical", *_submesh(sub.vertices, normals, faces),
+                              colors.get(key, NEUTRAL_GREY)))
+    return out
+
+
+def srgb_to_linear(c: np.ndarray) -> np.ndarray:
+    """sRGB 0-1 -> linear 0-1 (glTF material colours are linear)."""
+    c = np.asarray(c, dtype=float)
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def glb_bytes(meshes: Sequence[RegionMesh]) -> bytes:
+    """A glTF binary: one node and mesh per region, named by its key, with a PBR colour.
+
+    The scene is y-up (glTF's convention) with the template's millimetres; each
+    node's ``extras`` holds its ``part`` (``lh``, ``rh`` or ``subcortical``) and
+    its sRGB colour as ``#rrggbb``.
+    """
+    import trimesh
+    from trimesh.visual.material import PBRMaterial
+
+    scene = trimesh.Scene()
+    for m in meshes:
+        linear = srgb_to_linear(np.asarray(m.color))
+        material = PBRMaterial(name=m.name, baseColorFactor=[*linear, 1.0], metallicFactor=0.0,
+                               roughnessFactor=0.75, doubleSided=True)
+        mesh = trimesh.Trimesh(vertices=m.vertices @ RAS_TO_GLTF.T, faces=m.faces,
+                               vertex_normals=m.normals @ RAS_TO_GLTF.T, process=False,
+                               visual=trimesh.visual.TextureVisuals(material=material))
+        hex_color = "#{:02x}{:02x}{:02x}".format(*(round(float(v) * 255) for v in m.color))
+        scene.add_geometry(mesh, node_name=m.name, geom_name=m.name,
+                           metadata={"part": m.part, "color": hex_color})
+    return scene.export(file_type="glb", include_normals=True)
+
+
+def _viewer_script() -> str:
+    return (resources.files("brainpainter") / "data" / "three-viewer.min.js").read_text(encoding="utf-8")
+
+
+def _script_json(obj: Any) -> str:
+    """JSON safe inside a <script> element."""
+    return json.dumps(obj).replace("</", "<\\/")
+
+
+def html_page(glb: bytes, *, title: str, meshes: Sequence[RegionMesh], background: RGB | None,
+              colorbar_png: bytes | None = None, azimuth: float = 180.0) -> str:
+    """One self-contained HTML page showing `glb` with three.js (no network needed).
+
+    Parameters
+    ----------
+    glb : bytes
+        From :func:`glb_bytes`.
+    title : str
+        Shown in the page's corner and its title.
+    meshes : sequence of RegionMesh
+        For the part toggles.
+    background : (r, g, b) or None
+        Page background, sRGB 0-1 (None: white).
+    colorbar_png : bytes, optional
+        A colour bar image shown under the title.
+    azimuth : float
+        Start view, degrees as in :mod:`brainpainter.rendering.views` (180: from the left).
+    """
+    bg = "#{:02x}{:02x}{:02x}".format(*(round(v * 255) for v in (background or (1.0, 1.0, 1.0))))
+    dark = background is not None and sum(background) < 1.5
+    parts = [p for p in ("lh", "rh", "subcortical") if any(m.part == p for m in meshes)]
+    config = {"azimuth": azimuth, "parts": parts, "background": bg}
+    bar = (f'<img id="colorbar" alt="colour bar" src="data:image/png;base64,'
+           f'{base64.b64encode(colorbar_png).decode()}">' if colorbar_png else "")
+    names = {"lh": "left cortex", "rh": "right cortex", "subcortical": "subcortical"}
+    toggles = "".join(f'<label><input type="checkbox" data-part="{p}" checked> {names[p]}</label>'
+                      for p in parts)
+    return _PAGE.format(
+        title=html.escape(title), bg=bg, fg="#eee" if dark else "#222", bar=bar, toggles=toggles,
+        three=_viewer_script(), config=_script_json(config), glb=base64.b64encode(glb).decode(),
+        viewer=_VIEWER_JS,
+    )
+
+
+_PAGE = """<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<meta name="generator" content="brainpainter">
+<title>{title}</title>
+<style>
+html, body {{ margin: 0; height: 100%; overflow: hidden; background: {bg}; color: {fg};
+  font: 14px/1.4 system-ui, -apple-system, "Segoe UI", sans-serif; }}
+#view {{ position: absolute; inset: 0; }}
+#panel {{ position: absolute; left: 12px; top: 10px; max-width: 60%; }}
+#panel h1 {{ font-size: 16px; margin: 0 0 4px 0; font-weight: 600; }}
+#panel label {{ margin-right: 10px; user-select: none; }}
+#colorbar {{ display: block; max-width: 100%; margin: 4px 0; }}
+#help {{ position: absolute; left: 12px; bottom: 8px; opacity: 0.7; font-size: 12px; }}
+#tip {{ position: absolute; pointer-events: none; display: none; padding: 2px 6px; border-radius: 3px;
+  background: rgba(0, 0, 0, 0.78); color: #fff; font-size: 13px; white-space: nowrap; }}
+#error {{ position: absolute; left: 12px; top: 45%; display: none; color: #b00; }}
+</style></head>
+<body>
+<div id="view"></div>
+<div id="panel"><h1>{title}</h1>{bar}<div id="toggles">{toggles}
+<label><input type="checkbox" id="flat"> flat colours</label></div></div>
+<div id="help">drag: rotate &middot; wheel: zoom &middot; right-drag: pan &middot; double-click: reset</div>
+<div id="tip"></div><div id="error"></div>
+<script>{three}</script>
+<script id="brainpainter-config" type="application/json">{config}</script>
+<script id="brainpainter-glb" type="application/octet-stream">{glb}</script>
+<script>{viewer}</script>
+</body></html>
+"""
+
+# The viewer: load the inlined GLB, light it, orbit controls, a tooltip from a raycast,
+# part toggles, flat (unlit, exact) colours. window.brainpainterReady turns true once drawn.
+_VIEWER_JS = r"""
+(function () {
+  const T = window.BPTHREE;
+  const cfg = JSON.parse(document.getElementById("brainpainter-config").textContent);
+  const b64 = document.getElementById("brainpainter-glb").textContent.trim();
+  const bytes = Uint8Array.from(atob(b64), (c) => c.charCodeAt(0));
+  const view = document.getElementById("view"), tip = document.getElementById("tip");
+  let renderer;
+  try {
+    renderer = new T.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  } catch (e) {
+    const err = document.getElementById("error");
+    err.textContent = "This browser cannot show 3D graphics (WebGL is off); "
+      + "the .glb file opens in other viewers.";
+    err.style.display = "block";
+    return;
+  }
+  renderer.setPixelRatio(window.devicePixelRatio || 1);
+  renderer.outputColorSpace = T.SRGBColorSpace;
+  view.appendChild(renderer.domElement);
+  const scene = new T.Scene();
+  scene.background = new T.Color(cfg.background);
+  const camera = new T.PerspectiveCamera(30, 1, 1, 5000);
+  const controls = new T.OrbitControls(camera, renderer.domElement);
+  controls.enableDamping = false;
+  const hemi = new T.HemisphereLight(0xffffff, 0x888888, 1.6);
+  const key = new T.DirectionalLight(0xffffff, 1.6);
+  camera.add(key); key.position.set(0.3, 0.5, 1);
+  scene.add(hemi); scene.add(camera);
+  const meshes = [], lit = new Map(), flat = new Map();
+  let home = null;
+
+  function draw() { renderer.render(scene, camera); }
+  function resize() {
+    const w = view.clientWidth || window.innerWidth, h = view.clientHeight || window.innerHeight;
+    renderer.setSize(w, h); camera.aspect = w / h; camera.updateProjectionMatrix(); draw();
+  }
+  function reset() {
+    if (!home) return;
+    const a = cfg.azimuth * Math.PI / 180;  // RAS azimuth -> glTF: x = cos a, z = -sin a
+    camera.position.set(home.c.x + home.d * Math.cos(a), home.c.y, home.c.z - home.d * Math.sin(a));
+    camera.up.set(0, 1, 0); controls.target.copy(home.c); controls.update(); draw();
+  }
+
+  new T.GLTFLoader().parse(bytes.buffer, "", (gltf) => {
+    gltf.scene.traverse((o) => {
+      if (!o.isMesh) return;
+      meshes.push(o);
+      lit.set(o, o.material);
+      const m = o.material.clone();
+      flat.set(o, new T.MeshBasicMaterial({ color: m.color, side: m.side }));
+    });
+    scene.add(gltf.scene);
+    const box = new T.Box3().setFromObject(gltf.scene);
+    const c = box.getCenter(new T.Vector3()), size = box.getSize(new T.Vector3());
+    home = { c: c, d: 1.45 * Math.max(size.y, size.z) / (2 * Math.tan(camera.fov * Math.PI / 360)) };
+    resize(); reset();
+    window.brainpainterViewer = {
+      scene: scene, camera: camera, controls: controls, meshes: meshes, renderer: renderer, draw: draw };
+    window.brainpainterReady = true;
+  }, (e) => { console.error("brainpainter: cannot read the 3D model: " + e); });
+
+  controls.addEventListener("change", draw);
+  window.addEventListener("resize", resize);
+  renderer.domElement.addEventListener("dblclick", reset);
+  document.querySelectorAll("input[data-part]").forEach((box) => box.addEventListener("change", () => {
+    meshes.forEach((o) => { if (o.userData.part === box.dataset.part) o.visible = box.checked; });
+    draw();
+  }));
+  const flatBox = document.getElementById("flat");
+  function setFlat(on) { meshes.forEach((o) => { o.material = on ? flat.get(o) : lit.get(o); }); draw(); }
+  flatBox.addEventListener("change", () => setFlat(flatBox.checked));
+  if (location.hash === "#flat") { flatBox.checked = true; setTimeout(() => setFlat(true), 0); }
+
+  const ray = new T.Raycaster(), ndc = new T.Vector2();
+  renderer.domElement.addEventListener("pointermove", (ev) => {
+    const r = renderer.domElement.getBoundingClientRect();
+    ndc.set(((ev.clientX - r.left) / r.width) * 2 - 1, -((ev.clientY - r.top) / r.height) * 2 + 1);
+    ray.setFromCamera(ndc, camera);
+    const hit = ray.intersectObjects(meshes.filter((o) => o.visible), false)[0];
+    if (!hit) { tip.style.display = "none"; return; }
+    tip.textContent = hit.object.name;
+    tip.style.left = (ev.clientX + 14) + "px"; tip.style.top = (ev.clientY + 10) + "px";
+    tip.style.display = "block";
+  });
+  renderer.domElement.addEventListener("pointerleave", () => { tip.style.display = "none"; });
+})();
+"""
+
+
+def export(
+    data: Any,
+    out: str | Path,
+    *,
+    format: str | None = None,
+    row: str | int | None = None,
+    atlas: Atlas | str | None = None,
+    atlas_config: str | Path | None = None,
+    template: Template | str = "fsaverage",
+    surface: str = "pial",
+    hide: Iterable[str] = (),
+    gradient: Sequence[ColorLike] | str | None = None,
+    cmap: str | None = None,
+    vmin: float | None = None,
+    vmax: float | None = None,
+    center: float | None = None,
+    nan_color: ColorLike = DEFAULT_NAN_COLOR,
+    missing_color: ColorLike = DEFAULT_MISSING_COLOR,
+    background: ColorLike | None = "white",
+    title: str | None = None,
+    label: str | None = None,
+    image_column: str | None = None,
+    value: str | None = None,
+    region_column: str | None = None,
+    strict: bool = False,
+) -> Path:
+    """Write one row of a table as an interactive 3D brain: ``.glb`` or self-contained ``.html``.
+
+    Parameters
+    ----------
+    data : path, DataFrame, dict, or a list of these
+        As for :func:`brainpainter.render`.
+    out : path
+        File to write (its folder is created). Written atomically.
+    format : {"glb", "html"}, optional
+        Default: from the suffix of `out`.
+    row : str or int, optional
+        Image name (or 0-based position) of the row; needed when the table has
+        several rows.
+    atlas, atlas_config, template, surface, hide
+        As for :func:`brainpainter.render`.
+    gradient, cmap, vmin, vmax, center, nan_color, missing_color
+        Colour scale, see :func:`brainpainter.color.scale.make_scale` (over all rows).
+    background : colour or None
+        HTML page background.
+    title : str, optional
+        HTML heading; default the row's image name.
+    label : str, optional
+        Colour-bar label in the HTML page.
+    image_column, value, region_column, strict
+        How the table is read, see :func:`brainpainter.table.region_table.read_table`.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    from brainpainter.io.output import atomic_write_bytes
+    from brainpainter.media.figure import select_rows
+    from brainpainter.rendering.painter import load_scene, prepare_run, region_colors
+
+    out = Path(out)
+    fmt = (format or out.suffix.lstrip(".")).lower()
+    if fmt not in FORMATS:
+        raise choice_error("format", format or out.suffix or str(out), FORMATS,
+                           "Give --format, or an --out file ending in .glb or .html.")
+    run = prepare_run(data, atlas, atlas_config=atlas_config, gradient=gradient, cmap=cmap, vmin=vmin,
+                      vmax=vmax, center=center, nan_color=nan_color, missing_color=missing_color,
+                      background=background, image_column=image_column, value=value,
+                      region_column=region_column, strict=strict)
+    table = run.table
+    if row is None and len(table.images) > 1:
+        shown = list(table.images[:8]) + (["..."] if len(table.images) > 8 else [])
+        raise BrainPainterError(f"the table has {len(table.images)} rows {shown}; export draws one: "
+                                f"choose it with --row (row= in Python), e.g. --row {table.images[-1]}")
+    i = select_rows(table.images, [0 if row is None else row], what="--row")[0]
+    atlas_obj, scene = load_scene(table.atlas, template, surface, hide)
+    meshes = region_meshes(scene, region_colors(table.row(i), atlas_obj, run.scale))
+    if not meshes:
+        raise BrainPainterError("every region is hidden (--hide); nothing is left to export.")
+    glb = glb_bytes(meshes)
+    if fmt == "glb":
+        payload = glb
+    else:
+        from brainpainter.io.output import png_bytes
+        from brainpainter.media.colorbar import colorbar_image
+        from brainpainter.media.figure import swatches_needed
+        from brainpainter.rendering.views import parse_views
+
+        nan, missing = swatches_needed(table, [i], parse_views("lateral-left,medial-right,subcortical"),
+                                       scene.hidden)
+        bar = colorbar_image(run.scale, (420, 64 if label else 48), background=run.settings.background,
+                             label=label, nan=nan, missing=missing, fontsize=9.0)
+        payload = html_page(glb, title=title or table.images[i], meshes=meshes,
+                            background=run.settings.background,
+                            colorbar_png=png_bytes(bar)).encode("utf-8")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write_bytes(out, payload)
+    return out

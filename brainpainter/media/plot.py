@@ -1,0 +1,164 @@
+"""Draw a render into a matplotlib Axes of your own, with an optional colour bar.
+
+:func:`plot` is for composing panels with the rest of a paper's figure::
+
+    import matplotlib.pyplot as plt
+    import brainpainter
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(7, 3))
+    ax1.plot(years, volume)
+    brainpainter.plot("examples/brainpainter_dk.csv", row="stage-4", view="medial-left", ax=ax2,
+                      atlas="dk", label="atrophy (SD)")
+    fig.savefig("out/panel.pdf")
+
+The colour bar is :func:`brainpainter.media.colorbar.draw_colorbar`, the same as in
+``brainpainter figure``; matplotlib is imported when :func:`plot` runs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from brainpainter.color.rgb import ColorLike
+from brainpainter.color.scale import ColourScale
+from brainpainter.errors import BrainPainterError, choice_error
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.axes import Axes
+    from matplotlib.image import AxesImage
+
+    from brainpainter.atlas.model import Atlas
+    from brainpainter.rendering.painter import Painter
+
+ORIENTATIONS = ("vertical", "horizontal")
+
+
+@dataclass
+class PlotResult:
+    """What :func:`plot` drew.
+
+    Attributes
+    ----------
+    ax : matplotlib.axes.Axes
+        The Axes holding the render.
+    artist : matplotlib.image.AxesImage
+        The render, as drawn by ``ax.imshow``.
+    colorbar_ax : matplotlib.axes.Axes or None
+        The colour bar's Axes (an inset of `ax`), None without a colour bar.
+    image : ndarray of uint8, shape (h, w, 4)
+        The RGBA render as drawn (cropped to the brain when ``crop=True``).
+    scale : ColourScale
+    """
+
+    ax: Axes
+    artist: AxesImage
+    colorbar_ax: Axes | None
+    image: np.ndarray
+    scale: ColourScale
+
+
+def plot(
+    values: Any,
+    view: str = "lateral-left",
+    *,
+    ax: Axes | None = None,
+    row: str | int = 0,
+    atlas: Atlas | str | None = None,
+    colorbar: bool = True,
+    label: str | None = None,
+    ticks: Sequence[float] | str | None = None,
+    orientation: str = "vertical",
+    crop: bool = True,
+    gradient: Sequence[ColorLike] | str | None = None,
+    cmap: str | None = None,
+    vmin: float | None = None,
+    vmax: float | None = None,
+    center: float | None = None,
+    painter: Painter | None = None,
+    **render_options: Any,
+) -> PlotResult:
+    """Render one row of a table from one view into `ax`, with an optional colour bar beside it.
+
+    Parameters
+    ----------
+    values : path, DataFrame, dict, or a list of these
+        As for :func:`brainpainter.render`, e.g. ``{"Left-entorhinal": 3}``.
+    view : str
+        One view name (``"lateral-left"``, ``"medial-left"``, ``"subcortical"``,
+        ``"camera:AZ:EL[:ZOOM]"``, ...).
+    ax : matplotlib.axes.Axes, optional
+        Where to draw; default ``matplotlib.pyplot.gca()``. Its axis lines and
+        ticks are turned off, and its aspect ratio set to equal.
+    row : str or int
+        Image name (or 0-based position) of the row to draw; default the first.
+        The colour scale is computed over all rows, as for ``render``.
+    atlas : str or Atlas, optional
+        Inferred from the region names when not given.
+    colorbar : bool
+        Draw a colour bar in an inset Axes beside `ax` (right of it when
+        `orientation` is ``"vertical"``, under it when ``"horizontal"``), with
+        swatches for the NaN and missing colours when those are drawn.
+    label : str, optional
+        Colour-bar label, e.g. ``"z-score"``.
+    ticks : sequence of float or str, optional
+        Colour-bar ticks; default the gradient's colours.
+    orientation : {"vertical", "horizontal"}
+    crop : bool
+        Cut the background around the brain, so the brain fills `ax`.
+    gradient, cmap, vmin, vmax, center
+        Colour scale, see :func:`brainpainter.color.scale.make_scale`.
+    painter : Painter, optional
+        A loaded :class:`~brainpainter.rendering.painter.Painter` to reuse (no new scene).
+    **render_options
+        Any other keyword argument of :func:`brainpainter.render`
+        (``template``, ``surface``, ``hide``, ``width``, ``height``,
+        ``quality``, ``shading``, ``lighting``, ``nan_color``, ...).
+
+    Returns
+    -------
+    PlotResult
+    """
+    if orientation not in ORIENTATIONS:
+        raise choice_error("orientation", orientation, ORIENTATIONS)
+    for reserved in ("views", "out", "rows", "progress"):
+        if reserved in render_options:
+            raise BrainPainterError(f"plot() draws one view of one row into an Axes; {reserved}= is not "
+                                    "one of its options (use view=, row=, or brainpainter.render).")
+    from brainpainter.media.colorbar import draw_colorbar
+    from brainpainter.media.figure import common_crop, select_rows, swatches_needed
+    from brainpainter.rendering.painter import render
+    from brainpainter.rendering.views import parse_views
+
+    result = render(values, atlas, views=[view], rows=[row], gradient=gradient, cmap=cmap, vmin=vmin,
+                    vmax=vmax, center=center, painter=painter, progress=False, **render_options)
+    (_, view_name), image = next(iter(result.images.items()))
+    scale = result.scale
+    assert scale is not None
+    background = result.manifest["settings"]["background"]
+    if crop:
+        rows_, cols = common_crop([image], background)
+        image = image[rows_, cols]
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        ax = plt.gca()
+    artist = ax.imshow(image, interpolation="antialiased")
+    ax.set_axis_off()
+    ax.set_aspect("equal")
+    cax = None
+    if colorbar:
+        if orientation == "vertical":
+            cax = ax.inset_axes((1.03, 0.15, 0.045, 0.7))
+        else:
+            cax = ax.inset_axes((0.15, -0.09, 0.7, 0.05))
+        table = result.table
+        assert table is not None
+        nan, missing = swatches_needed(table, select_rows(table.images, [row]), parse_views([view_name]),
+                                       result.manifest["settings"]["hidden"])
+        draw_colorbar(cax, scale, label=label, ticks=ticks, orientation=orientation, nan=nan,
+                      missing=missing)
+    return PlotResult(ax, artist, cax, image, scale)

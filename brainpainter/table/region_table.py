@@ -1,0 +1,717 @@
+"""Read region-value tables as researchers have them, and resolve them against an atlas.
+
+Inputs: table files (CSV, TSV, ``;``-separated with decimal commas, .xlsx;
+see :mod:`brainpainter.io.readers`), bytes, pandas DataFrames and dicts, or a
+list of these (e.g. the ``lh`` and ``rh`` files of ``aparcstats2table``),
+merged by image name. Layouts: wide, long and transposed (see
+:mod:`brainpainter.table.shape`). Names: any spelling known to the atlas's
+alias table (see :mod:`brainpainter.table.names`); the atlas itself is
+inferred from the names when not given.
+
+:func:`inspect_table` reads everything it can and lists every problem (what
+``brainpainter check`` shows); :func:`read_table` is the same but raises the
+first problem as a one-line :class:`~brainpainter.errors.BrainPainterError`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from brainpainter.atlas.model import Atlas
+from brainpainter.errors import BrainPainterError
+from brainpainter.io.readers import MAX_BYTES, RawTable, has_control, read_raw
+from brainpainter.table.cells import is_empty, is_text, to_number
+from brainpainter.table.names import (
+    IGNORED,
+    REGION,
+    UNMATCHED,
+    AtlasGuess,
+    NameResolver,
+    Resolution,
+    infer_atlas,
+)
+from brainpainter.table.shape import IMAGE_COLUMN, SAMPLE_ROWS, TableShape, detect_shape
+
+__all__ = ["IMAGE_COLUMN", "MAX_BYTES", "CellProblem", "NameReport", "RegionTable", "inspect_table",
+           "read_table"]
+
+DEFAULT_ATLAS = "dk"
+MAX_IMAGE_NAME = 200
+MAX_PROBLEMS = 50
+
+
+#: How one input name was understood (with the input it came from): see
+#: :class:`brainpainter.table.names.Resolution`.
+NameReport = Resolution
+
+
+@dataclass(frozen=True)
+class CellProblem:
+    """A cell that stops the table from rendering: not a number, or infinite.
+
+    Attributes
+    ----------
+    message : str
+        The one-line error ``read_table`` raises for it.
+    """
+
+    source: str
+    where: str
+    column: str
+    value: str
+    problem: str
+    message: str
+
+
+@dataclass(frozen=True)
+class RegionTable:
+    """Values per image and region, resolved against one atlas.
+
+    Attributes
+    ----------
+    images : tuple of str
+        Image names, unique, in input order.
+    regions : tuple of str
+        Region keys of the atlas that have a value column, in input order.
+    values : ndarray of float, shape (n_images, n_regions)
+        NaN marks an empty cell.
+    atlas : Atlas
+    names : tuple of NameReport
+        Every region-like name of the input and how it was understood.
+    source : str
+        Where the table came from (paths joined with ", ", or "DataFrame").
+    shapes : tuple of TableShape
+        Layout of each input.
+    formats : tuple of str
+        File format of each input.
+    atlas_guess : AtlasGuess or None
+        How the atlas was inferred; None when it was given.
+    problems : tuple of CellProblem
+        Cells that are not numbers or not finite (their values are NaN here).
+    errors : tuple of str
+        Problems that stop rendering (first the cell problems, then others
+        such as unmatched names under ``strict``); empty when the table is fine.
+    notes : tuple of str
+        Other remarks for the report (decimal commas read, images missing from an input).
+    sources : tuple of str
+        Where each input came from.
+    """
+
+    images: tuple[str, ...]
+    regions: tuple[str, ...]
+    values: np.ndarray
+    atlas: Atlas
+    names: tuple[NameReport, ...] = ()
+    source: str = ""
+    shapes: tuple[TableShape, ...] = ()
+    formats: tuple[str, ...] = ()
+    atlas_guess: AtlasGuess | None = None
+    problems: tuple[CellProblem, ...] = ()
+    errors: tuple[str, ...] = ()
+    notes: tuple[str, ...] = field(default_factory=tuple)
+    sources: tuple[str, ...] = ()
+
+    @property
+    def columns(self) -> dict[str, tuple[str, ...]]:
+        """Every region-like input name and the region keys it set (empty tuple: not a region)."""
+        return {n.name: n.keys for n in self.names}
+
+    @property
+    def unmatched(self) -> list[str]:
+        """Names that match no region of the atlas and no known non-region name."""
+        return [n.name for n in self.names if n.status == UNMATCHED]
+
+    @property
+    def ignored(self) -> dict[str, str]:
+        """Names recognised as not regions (``eTIV``, ``lh_MeanThickness_thickness``) and why."""
+        return {n.name: n.reason for n in self.names if n.status == IGNORED}
+
+    @property
+    def absent(self) -> list[str]:
+        """Atlas regions with no value column in the input."""
+        have = set(self.regions)
+        return [k for k in self.atlas.keys if k not in have]
+
+    @property
+    def naming(self) -> dict[str, int]:
+        """Naming conventions recognised among the region names, with counts."""
+        return dict(Counter(n.naming for n in self.names if n.status == REGION).most_common())
+
+    def row(self, i: int) -> dict[str, float]:
+        """``{region key: value}`` of image `i` (NaN for empty cells)."""
+        return dict(zip(self.regions, self.values[i].tolist(), strict=True))
+
+    def raise_errors(self) -> RegionTable:
+        """Raise the first error as a BrainPainterError; return self when there is none."""
+        if self.errors:
+            raise BrainPainterError(self.errors[0])
+        return self
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready summary for reports and manifests."""
+        finite = self.values[np.isfinite(self.values)]
+        return {
+            "source": self.source,
+            "inputs": [{"source": s, "format": f, "shape": sh.to_dict()}
+                       for s, f, sh in zip(self.sources or (self.source,), self.formats, self.shapes,
+                                           strict=False)],
+            "atlas": self.atlas.name,
+            "atlas_inferred": self.atlas_guess is not None,
+            "atlas_reason": self.atlas_guess.reason if self.atlas_guess else "given",
+            "naming": self.naming,
+            "n_images": len(self.images),
+            "n_regions_matched": len(self.regions),
+            "n_regions_in_atlas": len(self.atlas),
+            "unmatched_columns": self.unmatched,
+            "ignored_columns": self.ignored,
+            "regions_without_value": self.absent,
+            "n_empty_cells": int(np.isnan(self.values).sum()),
+            "value_range": [float(finite.min()), float(finite.max())] if finite.size else None,
+            "notes": list(self.notes),
+        }
+
+    def summary_line(self) -> str:
+        """The summary in one line (printed by ``render``)."""
+        return summary_line(self.summary())
+
+
+def summary_line(s: dict[str, Any]) -> str:
+    """One line from :meth:`RegionTable.summary`'s dict."""
+    rng = s["value_range"]
+    rng_text = f"values {rng[0]:g}..{rng[1]:g}" if rng else "no values"
+    shapes = "; ".join(dict.fromkeys(
+        i["shape"]["kind"] + (f" ({i['shape']['flavour']})" if i["shape"]["flavour"] else "")
+        for i in s.get("inputs", [])))
+    atlas = f"atlas {s['atlas']}" + (" (inferred)" if s.get("atlas_inferred") else "")
+    return (
+        f"{shapes or 'table'}, {atlas}: {s['n_images']} image(s), {s['n_regions_matched']}/"
+        f"{s['n_regions_in_atlas']} regions with values, {len(s['unmatched_columns'])} unmatched, "
+        f"{len(s.get('ignored_columns', {}))} not regions, {s['n_empty_cells']} empty cell(s), {rng_text}"
+    )
+
+
+# -- one input ---------------------------------------------------------------------
+@dataclass
+class _Part:
+    source: str
+    format: str
+    shape: TableShape
+    images: list[str]
+    numbered: bool
+    columns: dict[str, tuple[np.ndarray, str]]  # key -> (values per image, input name)
+    names: list[NameReport]
+    problems: list[CellProblem]
+    notes: list[str]
+
+
+def _check_name(text: str, source: str, where: str, what: str) -> None:
+    if has_control(text):
+        raise BrainPainterError(
+            f"{source}: the {what} at {where} contains control characters ({text[:40]!r}); names may hold "
+            "letters, digits, spaces and punctuation only."
+        )
+
+
+def _image_names(raw: RawTable, shape: TableShape) -> tuple[list[str], bool]:
+    if shape.image_index is None:
+        return [str(i + 1) for i in range(len(raw.rows))], True
+    j = shape.image_index
+    out = []
+    for row in raw.rows:
+        cell = row[j]
+        if isinstance(cell, float) and cell.is_integer():
+            cell = int(cell)
+        out.append("" if cell is None else str(cell).strip())
+    _validate_images(out, raw.source, [raw.where(i) for i in range(len(out))], shape.image_column or "")
+    return out, False
+
+
+def _validate_images(images: list[str], source: str, where: list[str], column: str) -> None:
+    seen: dict[str, int] = {}
+    folded: dict[str, int] = {}
+    for i, name in enumerate(images):
+        if not name:
+            raise BrainPainterError(
+                f"{source}: {where[i]} has an empty image name in {column!r}; give every image a name."
+            )
+        _check_name(name, source, where[i], "image name")
+        if len(name) > MAX_IMAGE_NAME:
+            raise BrainPainterError(
+                f"{source}: the image name at {where[i]} is {len(name)} characters long; at most "
+                f"{MAX_IMAGE_NAME} are allowed (it becomes a file name). Shorten it."
+            )
+        if name in seen:
+            raise BrainPainterError(
+                f"{source}: image names must be unique; {name!r} appears at {where[seen[name]]} and "
+                f"{where[i]}."
+            )
+        if name.lower() in folded:
+            other = images[folded[name.lower()]]
+            raise BrainPainterError(
+                f"{source}: image names {other!r} and {name!r} differ only in case, so their files would "
+                "collide on macOS and Windows; make them differ in letters or digits."
+            )
+        seen[name] = i
+        folded[name.lower()] = i
+
+
+def _convert(cells: Sequence[Any], raw: RawTable, column: str, rows: Sequence[int],
+             problems: list[CellProblem], decimal: list[Any]) -> np.ndarray:
+    out = np.full(len(cells), np.nan)
+    decimal_at: dict[str, tuple[str, str, str]] = decimal[1]  # first cell with a decimal comma / point
+    for k, cell in enumerate(cells):
+        v = to_number(cell, raw.decimal_comma)
+        if v is None:
+            problem = "not a number"
+            hint = ("; the row repeats the header (two tables pasted together?)"
+                    if str(cell).strip() == column else "")
+            msg = (f"{raw.source}: column {column!r} {raw.where(rows[k])} holds {str(cell)[:60]!r}, which is "
+                   f"not a number{hint}; cells must be numbers or empty (empty = no data).")
+        elif math.isinf(v):
+            problem = "infinite"
+            msg = (f"{raw.source}: column {column!r} {raw.where(rows[k])} is infinite ({str(cell)[:30]!r}); "
+                   "cells must be finite numbers or empty (empty = no data).")
+        else:
+            if raw.decimal_comma and isinstance(cell, str):
+                if "," in cell:
+                    decimal[0] = True
+                    decimal_at.setdefault("comma", (str(cell).strip(), raw.where(rows[k]), column))
+                elif "." in cell:
+                    decimal_at.setdefault("point", (str(cell).strip(), raw.where(rows[k]), column))
+            out[k] = v
+            continue
+        if len(problems) < MAX_PROBLEMS:
+            problems.append(CellProblem(raw.source, raw.where(rows[k]), column, str(cell)[:60], problem, msg))
+        elif len(problems) == MAX_PROBLEMS:
+            problems.append(CellProblem(
+                raw.source, "", column, "", "more",
+                f"{raw.source}: more than {MAX_PROBLEMS} bad cells; fix the ones listed."))
+    return out
+
+
+class _Columns:
+    """Region key -> (values per image, input name), refusing a second value for one region."""
+
+    def __init__(self, source: str, what: str) -> None:
+        self.source, self.what = source, what
+        self.data: dict[str, tuple[np.ndarray, str]] = {}
+
+    def take(self, key: str, values: np.ndarray, name: str) -> None:
+        if key in self.data:
+            other = self.data[key][1]
+            raise BrainPainterError(
+                f"{self.source}: {self.what} {other!r} and {name!r} both name region {key!r}; keep one."
+            )
+        self.data[key] = (values, name)
+
+
+def _read_part(raw: RawTable, shape: TableShape, resolver: NameResolver) -> _Part:
+    source = raw.source
+    if not raw.rows:
+        raise BrainPainterError(
+            f"{source} has a header but no rows; add one row per image (or per region)."
+        )
+    for j, h in enumerate(raw.header):
+        _check_name(h, source, f"column {j + 1}", "column name")
+    problems: list[CellProblem] = []
+    decimal: list[Any] = [False, {}]
+    names: list[NameReport] = []
+    columns = _Columns(source, "columns" if shape.kind == "wide" else "names")
+    empty_columns: list[str] = []
+    if shape.kind == "wide":
+        images, numbered = _image_names(raw, shape)
+        seen_names: set[str] = set()
+        for j, h in enumerate(raw.header):
+            if j == shape.image_index:
+                continue
+            if h == "" and all(is_empty(row[j]) for row in raw.rows):
+                continue  # a blank column of a spreadsheet export
+            r = resolver.lookup(h)
+            if h in seen_names and r.status != REGION:
+                continue
+            seen_names.add(h)
+            names.append(replace(r, source=source))
+            if r.status != REGION:
+                continue
+            vals = _convert([row[j] for row in raw.rows], raw, h, range(len(raw.rows)), problems, decimal)
+            if not np.isfinite(vals).any() and not any(p.column == h for p in problems):
+                empty_columns.append(h)
+            for key in r.keys:
+                columns.take(key, vals, h)
+    elif shape.kind == "long":
+        names, images = _read_long(raw, shape, resolver, problems, decimal, columns)
+        numbered = False
+    else:
+        names, images = _read_transposed(raw, shape, resolver, problems, decimal, columns)
+        numbered = False
+    notes = []
+    if empty_columns:
+        notes.append(f"{source}: {len(empty_columns)} column(s) have no value in any row ({empty_columns[:3]}"
+                     f"{'...' if len(empty_columns) > 3 else ''}); their regions are drawn in the NaN colour")
+    at = decimal[1]
+    if "comma" in at and "point" in at:
+        (c_text, c_where, c_col), (p_text, p_where, p_col) = at["comma"], at["point"]
+        raise BrainPainterError(
+            f"{source}: decimal commas ({c_text!r}, column {c_col!r} {c_where}) and decimal points "
+            f"({p_text!r}, column {p_col!r} {p_where}) are mixed, so {p_text!r} could mean "
+            f"{p_text.replace('.', '')!r} (a thousands point); save the table with one decimal separator."
+        )
+    if decimal[0]:
+        notes.append(f"{source}: decimal commas read as decimal points")
+    return _Part(source, raw.format, shape, images, numbered, columns.data, names, problems, notes)
+
+
+def _read_long(raw: RawTable, shape: TableShape, resolver: NameResolver, problems: list[CellProblem],
+               decimal: list[bool], columns: _Columns) -> tuple[list[NameReport], list[str]]:
+    reg, val, img = shape.region_index, shape.value_index, shape.image_index
+    assert reg is not None and val is not None
+    value_name = shape.value_column or "value"
+    lookups: dict[str, Any] = {}
+    names: list[NameReport] = []
+    images: list[str] = []
+    image_where: list[str] = []
+    image_pos: dict[str, int] = {}
+    cells: dict[str, list[tuple[int, int]]] = {}  # key -> [(image index, row)]
+    first_name: dict[str, str] = {}
+    origin: dict[tuple[str, int], str] = {}
+    for i, row in enumerate(raw.rows):
+        cell = row[reg]
+        if is_empty(cell):
+            continue
+        name = str(cell).strip()
+        if name not in lookups:
+            _check_name(name, raw.source, raw.where(i), "region name")
+            r = resolver.lookup(name)
+            lookups[name] = r
+            names.append(replace(r, source=raw.source))
+        r = lookups[name]
+        if r.status != REGION:
+            continue
+        if img is None:
+            image = value_name
+        else:
+            c = row[img]
+            if isinstance(c, float) and c.is_integer():
+                c = int(c)
+            image = "" if c is None else str(c).strip()
+        if image not in image_pos:
+            image_pos[image] = len(images)
+            images.append(image)
+            image_where.append(raw.where(i))
+        k = image_pos[image]
+        for key in r.keys:
+            if (key, k) in origin:
+                hint = "" if img is not None else "; with several images per region give --image-column"
+                raise BrainPainterError(
+                    f"{raw.source}: region {key!r} appears twice for image {image!r} ({origin[(key, k)]} and "
+                    f"{raw.where(i)}){hint}."
+                )
+            origin[(key, k)] = raw.where(i)
+            cells.setdefault(key, []).append((k, i))
+            first_name.setdefault(key, name)
+    if img is not None:
+        _validate_images(images, raw.source, image_where, shape.image_column or "")
+    converted: dict[int, float] = {}
+    for key, pairs in cells.items():
+        todo = [i for _, i in pairs if i not in converted]
+        vals = _convert([raw.rows[i][val] for i in todo], raw, value_name, todo, problems, decimal)
+        converted.update(zip(todo, vals.tolist(), strict=True))
+        arr = np.full(len(images), np.nan)
+        for k, i in pairs:
+            arr[k] = converted[i]
+        columns.take(key, arr, first_name[key])
+    return names, images
+
+
+def _read_transposed(raw: RawTable, shape: TableShape, resolver: NameResolver, problems: list[CellProblem],
+                     decimal: list[bool], columns: _Columns) -> tuple[list[NameReport], list[str]]:
+    reg = shape.region_index
+    images = [h for j, h in enumerate(raw.header) if j != reg]
+    _validate_images(images, raw.source, [f"column {j + 1}" for j in range(len(raw.header)) if j != reg],
+                     "header")
+    names: list[NameReport] = []
+    for i, row in enumerate(raw.rows):
+        cell = row[reg]
+        if is_empty(cell):
+            continue
+        name = str(cell).strip()
+        _check_name(name, raw.source, raw.where(i), "region name")
+        r = resolver.lookup(name)
+        names.append(replace(r, source=raw.source))
+        if r.status != REGION:
+            continue
+        vals = _convert([c for j, c in enumerate(row) if j != reg], raw, name, [i] * (len(row) - 1),
+                        problems, decimal)
+        for key in r.keys:
+            columns.take(key, vals, name)
+    return names, images
+
+
+# -- atlas ---------------------------------------------------------------------------
+def installed_atlases() -> list[Atlas]:
+    """Installed atlases that load, ``dk`` first (the historical default)."""
+    from brainpainter.atlas import registry
+    out = []
+    names = registry.atlases.names()
+    for name in sorted(names, key=lambda n: (n != DEFAULT_ATLAS, n)):
+        try:
+            atlas = registry.atlases.get(name)
+        except BrainPainterError:
+            continue
+        if all(atlas is not a for a in out):
+            out.append(atlas)
+    return out
+
+
+def _candidate_names(raw: RawTable) -> list[str]:
+    names = dict.fromkeys(raw.header)
+    for j in range(len(raw.header)):
+        for row in raw.rows[:SAMPLE_ROWS]:
+            cell = row[j]
+            if is_text(cell):
+                names[str(cell).strip()] = None
+                if len(names) > 20_000:
+                    return list(names)
+    return list(names)
+
+
+# -- public ---------------------------------------------------------------------------
+def inspect_table(
+    data: Any,
+    atlas: Atlas | str | None = None,
+    *,
+    image_column: str | None = None,
+    value: str | None = None,
+    region_column: str | None = None,
+    strict: bool = False,
+) -> RegionTable:
+    """Read a table and resolve it, collecting every problem instead of stopping at the first.
+
+    Parameters and layout rules as in :func:`read_table`. Errors that leave
+    nothing to report (unreadable file, no region names, duplicate regions,
+    bad image names) are raised; cells that are not numbers or not finite,
+    columns without any value and (with `strict`) unmatched names are listed
+    in ``table.errors``.
+
+    Returns
+    -------
+    RegionTable
+    """
+    from brainpainter.atlas.model import get_atlas
+
+    inputs = list(data) if isinstance(data, list | tuple) else [data]
+    if not inputs:
+        raise BrainPainterError("no input was given; give at least one table.")
+    raws = [read_raw(d) for d in inputs]
+    guess: AtlasGuess | None = None
+    if atlas is None:
+        candidates = installed_atlases()
+        names = [n for raw in raws for n in _candidate_names(raw)]
+        guess = infer_atlas(names, candidates)
+        if guess is None:
+            shown = [h for raw in raws for h in raw.header][:4]
+            raise BrainPainterError(
+                f"{', '.join(r.source for r in raws)}: no column name or value names a region of any "
+                f"installed atlas ({', '.join(a.name for a in candidates)}); columns start {shown}. Use "
+                "names like 'Left-insula' or 'lh_insula_thickness' (see 'brainpainter atlas show dk')."
+            )
+        atlas = guess.atlas
+    elif isinstance(atlas, str):
+        atlas = get_atlas(atlas)
+    resolver = NameResolver.for_atlas(atlas)
+    parts = []
+    for raw in raws:
+        try:
+            shape = detect_shape(raw, resolver, image_column=image_column, region_column=region_column,
+                                 value_column=value)
+        except BrainPainterError as exc:
+            if guess is None and "names a" in str(exc):
+                other = infer_atlas(_candidate_names(raw), installed_atlases())
+                if other is not None and other.atlas.name != atlas.name:
+                    raise BrainPainterError(
+                        f"{exc} The names fit atlas {other.atlas.name!r}: give --atlas {other.atlas.name}."
+                    ) from None
+            raise
+        part = _read_part(raw, shape, resolver)
+        part.shape = _with_flavour(shape, part.names, raw)
+        parts.append(part)
+    table = _merge(parts, atlas, guess)
+    _check_file_names(table)
+    errors = [p.message for p in table.problems]
+    if not table.regions:
+        errors.append(_no_regions_error(table, resolver))
+    if strict and table.unmatched:
+        first = table.unmatched[0]
+        sugg = resolver.suggest(first)
+        errors.append(
+            f"{table.source}: {len(table.unmatched)} name(s) match no {atlas.name} region, e.g. {first!r}"
+            + (f" (did you mean {sugg[0]!r}?)" if sugg else "")
+            + "; rename them or drop --strict."
+        )
+    return _replace(table, errors=tuple(errors))
+
+
+def _check_file_names(table: RegionTable) -> None:
+    """Refuse image names that become the same file name (ignoring case, as macOS and Windows do)."""
+    from brainpainter.io.output import safe_name
+
+    seen: dict[str, str] = {}
+    for name in table.images:
+        other = seen.setdefault(safe_name(name).lower(), name)
+        if other != name:
+            raise BrainPainterError(
+                f"{table.source}: image names {other!r} and {name!r} become the same file name "
+                f"({safe_name(name)!r}, ignoring case as macOS and Windows do) after removing unsafe "
+                "characters; make the image names differ in letters or digits."
+            )
+
+
+def _no_regions_error(table: RegionTable, resolver: NameResolver) -> str:
+    sample = table.unmatched[:3]
+    hint = resolver.suggest(sample[0]) if sample else []
+    return (f"{table.source}: no name matches a {table.atlas.name} region (names start {sample}); use names "
+            f"like {table.atlas.keys[:2]}" + (f"; did you mean {hint[0]!r}?" if hint else "."))
+
+
+def _replace(table: RegionTable, **changes: Any) -> RegionTable:
+    import dataclasses
+
+    return dataclasses.replace(table, **changes)
+
+
+def _with_flavour(shape: TableShape, names: list[NameReport], raw: RawTable) -> TableShape:
+    import dataclasses
+
+    if shape.flavour:
+        return shape
+    first = raw.header[0].lower() if raw.header else ""
+    naming = Counter(n.naming for n in names if n.status == REGION).most_common(1)
+    top = naming[0][0] if naming else ""
+    if first.startswith("measure:"):
+        flavour = "FreeSurfer asegstats2table"
+    elif shape.kind == "wide" and top == "FreeSurfer stats table":
+        flavour = "FreeSurfer aparcstats2table"
+    elif top:
+        flavour = f"{top} names"
+    else:
+        flavour = ""
+    return dataclasses.replace(shape, flavour=flavour)
+
+
+def _merge(parts: list[_Part], atlas: Atlas, guess: AtlasGuess | None) -> RegionTable:
+    notes = [n for p in parts for n in p.notes]
+    if len(parts) == 1:
+        p = parts[0]
+        images = p.images
+        keys = list(p.columns)
+        values = np.column_stack([p.columns[k][0] for k in keys]) if keys else np.empty((len(images), 0))
+    else:
+        numbered = {p.numbered for p in parts}
+        if len(numbered) > 1:
+            named = next(p for p in parts if not p.numbered)
+            bare = next(p for p in parts if p.numbered)
+            raise BrainPainterError(
+                f"input {named.source!r} names its images (column {named.shape.image_column!r}) but "
+                f"{bare.source!r} has no image-name column; merging needs names in both (give "
+                "--image-column)."
+            )
+        if numbered == {True} and len({len(p.images) for p in parts}) > 1:
+            raise BrainPainterError(
+                "the inputs have no image-name column and different numbers of rows "
+                f"({[len(p.images) for p in parts]}); add an image-name column to merge them by name."
+            )
+        images = list(dict.fromkeys(i for p in parts for i in p.images))
+        folded: dict[str, str] = {}
+        for name in images:
+            other = folded.setdefault(name.lower(), name)
+            if other != name:
+                src = {n: p.source for p in parts for n in p.images}
+                raise BrainPainterError(
+                    f"image names {other!r} ({src[other]}) and {name!r} ({src[name]}) differ only in case, "
+                    "so they would be two half-empty images; spell the image names the same in every input."
+                )
+        pos = {name: k for k, name in enumerate(images)}
+        owner: dict[str, _Part] = {}
+        keys, cols = [], []
+        for p in parts:
+            index = np.array([pos[i] for i in p.images], dtype=int)
+            for key, (vals, name) in p.columns.items():
+                if key in owner:
+                    raise BrainPainterError(
+                        f"inputs {owner[key].source!r} ({owner[key].columns[key][1]!r}) and {p.source!r} "
+                        f"({name!r}) both give region {key!r}; give each region in one input only."
+                    )
+                owner[key] = p
+                col = np.full(len(images), np.nan)
+                col[index] = vals
+                keys.append(key)
+                cols.append(col)
+            missing = [i for i in images if i not in set(p.images)]
+            if missing:
+                notes.append(f"{len(missing)} image(s) not in {p.source} (e.g. {missing[0]!r}): its regions "
+                             "are empty for them")
+        values = np.column_stack(cols) if cols else np.empty((len(images), 0))
+    return RegionTable(
+        images=tuple(images),
+        regions=tuple(keys),
+        values=values.astype(float).reshape(len(images), len(keys)),
+        atlas=atlas,
+        names=tuple(n for p in parts for n in p.names),
+        source=", ".join(p.source for p in parts),
+        sources=tuple(p.source for p in parts),
+        shapes=tuple(p.shape for p in parts),
+        formats=tuple(p.format for p in parts),
+        atlas_guess=guess,
+        problems=tuple(pr for p in parts for pr in p.problems),
+        notes=tuple(notes),
+    )
+
+
+def read_table(
+    data: Any,
+    atlas: Atlas | str | None = None,
+    *,
+    image_column: str | None = None,
+    value: str | None = None,
+    region_column: str | None = None,
+    strict: bool = False,
+) -> RegionTable:
+    """Read a region-value table and resolve its names against an atlas.
+
+    Parameters
+    ----------
+    data : path-like, bytes, binary file, pandas.DataFrame, pandas.Series, dict, or a list of these
+        A table file (CSV, TSV, ``;``-separated with decimal commas, .xlsx),
+        a DataFrame, ``{region: value or [values]}``, ``{image: {region: value}}``;
+        a list is merged by image name (e.g. the ``lh`` and ``rh`` tables of
+        ``aparcstats2table``).
+    atlas : Atlas or str, optional
+        Inferred from the names when not given (``table.atlas_guess`` says how).
+    image_column : str, optional
+        Column with the image names. Default: ``Image-name-unique``, a
+        FreeSurfer first column, a DataFrame index or a ``subject``-like
+        column; otherwise rows are numbered ``1, 2, ...``.
+    value : str, optional
+        Long tables: the column with the values (needed when several columns are numeric).
+    region_column : str, optional
+        Long tables: the column with region names (auto-detected when unambiguous).
+    strict : bool
+        Names that match no region (and are not known non-region measures) are an error.
+
+    Returns
+    -------
+    RegionTable
+
+    Raises
+    ------
+    BrainPainterError
+        On the first problem, as one line saying what was given and what to do.
+    """
+    return inspect_table(data, atlas, image_column=image_column, value=value, region_column=region_column,
+                         strict=strict).raise_errors()
