@@ -223,15 +223,7 @@ class GpuDraw:
         import gpu
         from gpu_extras.batch import batch_for_shader
 
-        part_shader = gpu_shaders.part_shader()
-        for p in self.geometry.parts:
-            order, triangles = meshorder.cache_friendly(p.vertices, p.triangles)
-            self._batches[p.name] = batch_for_shader(
-                part_shader, "TRIS",
-                {"pos": p.vertices[order], "nrm": p.normals[order],
-                 "pal": p.palette_index[order].astype(np.float32), "sulc": p.sulc[order]},
-                indices=triangles,
-            )
+        gpu_shaders.part_shader()  # compiled now; the parts' batches on first use (_batch)
         s = self.settings
         self.factor = f = self._factor()
         self._resolve = gpu_shaders.resolve_shader(f)
@@ -241,6 +233,24 @@ class GpuDraw:
         # The resolve writes linear light; the sRGB target encodes it (cheaper than pow() per pixel).
         self._lo_tex = gpu.types.GPUTexture((s.width, s.height), format="SRGB8_A8")
         self._lo = gpu.types.GPUFrameBuffer(color_slots=self._lo_tex)
+
+    def _batch(self, part: PartGeometry) -> Any:
+        """The part's indexed batch, uploaded when a view first shows it (in a GPU context).
+
+        Views of one hemisphere never pay for the other's upload (~40 ms of start-up).
+        """
+        batch = self._batches.get(part.name)
+        if batch is None:
+            from gpu_extras.batch import batch_for_shader
+
+            order, triangles = meshorder.cache_friendly(part.vertices, part.triangles)
+            batch = self._batches[part.name] = batch_for_shader(
+                gpu_shaders.part_shader(), "TRIS",
+                {"pos": part.vertices[order], "nrm": part.normals[order],
+                 "pal": part.palette_index[order].astype(np.float32), "sulc": part.sulc[order]},
+                indices=triangles,
+            )
+        return batch
 
     def render(self, palette_rgb: np.ndarray, view: View) -> np.ndarray:
         """Draw one image; `palette_rgb` is sRGB 0-1, shape (n_slots, 3). Returns RGBA uint8 (h, w, 4)."""
@@ -353,7 +363,7 @@ class GpuDraw:
         for p in aim.visible:
             if p.kind != "glass":
                 shader.uniform_float("sulc_strength", light.sulc if p.kind == "cortex" else 0.0)
-                self._batches[p.name].draw(shader)
+                self._batch(p).draw(shader)
                 mark(f"draw {p.name}")
         glass = [p for p in aim.visible if p.kind == "glass"]
         if glass and s.glass_opacity > 0:
@@ -364,7 +374,7 @@ class GpuDraw:
             for cull in ("FRONT", "BACK"):  # far side first, then the near side over it
                 gpu.state.face_culling_set(cull)
                 for p in glass:
-                    self._batches[p.name].draw(shader)
+                    self._batch(p).draw(shader)
             mark("glass")
             gpu.state.blend_set("NONE")
             gpu.state.depth_mask_set(True)
