@@ -576,7 +576,7 @@ def write_label_set(folder: Path, label_set: LabelSet, template: Template, *,
     one per full-resolution vertex) instead of the labels of the base mesh's
     vertices: a little larger, but it fits the template after a rebuild.
     """
-    from brainpainter_builder.writer import save_npz
+    from brainpainter.atlas.writer import save_npz
 
     where = "full-resolution vertices (mapped to" if per_source_vertex else "vertices of"
     entry: dict = {"source": ", ".join(label_set.hemis[h].source for h in HEMIS),

@@ -2,8 +2,8 @@
 
 ``brainpainter atlas add NAME --volume LABELS.nii.gz --lut LUT --space SPACE``
 reads an integer label volume (any format nibabel reads) and a look-up table
-naming its labels, meshes every label with the subcortical builder's pipeline
-(:func:`brainpainter_builder.subcortical.build_structures`: marching cubes,
+naming its labels, meshes every label with the subcortical pipeline
+(:func:`brainpainter.atlas.meshing.build_structures`: marching cubes,
 Taubin smoothing, quadric decimation, volume matched to the voxel volume), and
 places the meshes in the template's coordinates. The atlas folder holds
 ``atlas.json``, ``regions.tsv`` (kind ``subcortical``) and ``subcortical.npz``
@@ -329,9 +329,9 @@ def build_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, space:
     dict
         The ``atlas.json`` written.
     """
+    from brainpainter.atlas.meshing import build_structures, merge_structures
     from brainpainter.atlas.template import load_template
-    from brainpainter_builder.subcortical import build_structures, merge_structures
-    from brainpainter_builder.writer import save_npz
+    from brainpainter.atlas.writer import save_npz
 
     if own_template:
         space, tpl_name, label_set, to_template = "template", name, "none", np.eye(4)

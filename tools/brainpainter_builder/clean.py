@@ -18,36 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from brainpainter.atlas.meshing import count_self_intersections, self_intersecting_faces  # noqa: F401
 from brainpainter.errors import BrainPainterError
-
-
-def self_intersecting_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Faces that intersect another face of the same mesh (MeshLab), shape (n_faces,) of bool.
-
-    Parameters
-    ----------
-    vertices : ndarray of float, shape (n, 3)
-    faces : ndarray of int, shape (m, 3)
-    """
-    from brainpainter_builder.meshlab import import_pymeshlab
-
-    pymeshlab = import_pymeshlab()
-    faces = np.asarray(faces)
-    if len(faces) == 0:
-        return np.zeros(0, dtype=bool)
-    ms = pymeshlab.MeshSet()
-    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.asarray(vertices, dtype=np.float64),
-                               face_matrix=faces.astype(np.int32)))
-    ms.compute_selection_by_self_intersections_per_face()
-    mesh = ms.current_mesh()
-    if mesh.face_number() != len(faces):  # MeshLab never removes faces here; checked anyway
-        raise BrainPainterError("self-intersection test changed the mesh")
-    return np.asarray(mesh.face_selection_array(), dtype=bool)
-
-
-def count_self_intersections(vertices: np.ndarray, faces: np.ndarray) -> int:
-    """Number of faces that intersect another face of the same mesh."""
-    return int(np.count_nonzero(self_intersecting_faces(vertices, faces)))
 
 
 @dataclass(frozen=True)

@@ -44,6 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from brainpainter.atlas.meshing import edge_use_counts
 from brainpainter.errors import BrainPainterError
 
 #: Added to the face quality of locked faces (a flag MeshLab's selection reads).
@@ -128,16 +129,6 @@ def boundary_vertex_mask(faces: np.ndarray, face_label: np.ndarray, n_vertices: 
     return (lo != hi) & (hi >= lo)
 
 
-def edge_use_counts(faces: np.ndarray) -> np.ndarray:
-    """How many faces use each undirected edge, shape (n_edges,)."""
-    faces = np.asarray(faces, dtype=np.int64)
-    if len(faces) == 0:
-        return np.zeros(0, dtype=np.int64)
-    edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    keys = edges[:, 0] * (int(faces.max()) + 1) + edges[:, 1]
-    return np.unique(keys, return_counts=True)[1]
-
-
 def open_edge_count(faces: np.ndarray) -> int:
     """Number of edges used by exactly one face (0 for a closed surface)."""
     return int(np.count_nonzero(edge_use_counts(faces) == 1))
@@ -170,7 +161,7 @@ def decimate(vertices: np.ndarray, faces: np.ndarray, face_label: np.ndarray,
     source_vertex : ndarray of int64, shape (k,)
         Increasing indices into `vertices` of the kept vertices.
     """
-    from brainpainter_builder.meshlab import import_pymeshlab
+    from brainpainter.atlas.meshing import import_pymeshlab
 
     pymeshlab = import_pymeshlab()
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from brainpainter_builder.subcortical import vertex_normals
+from brainpainter.atlas.meshing import vertex_normals
 
 
 def pial_hull(vertices: np.ndarray, faces: np.ndarray, *, voxel: float = 1.5,
@@ -45,7 +45,7 @@ def pial_hull(vertices: np.ndarray, faces: np.ndarray, *, voxel: float = 1.5,
     faces : ndarray of int64, shape (l, 3)
         Outward-facing.
     """
-    from brainpainter_builder.meshlab import import_pymeshlab
+    from brainpainter.atlas.meshing import import_pymeshlab
 
     pymeshlab = import_pymeshlab()
     import trimesh

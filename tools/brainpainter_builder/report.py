@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from brainpainter.atlas.meshing import count_self_intersections
 from brainpainter.atlas.template import SURFACES, Template, load_template
-from brainpainter_builder.clean import count_self_intersections
 
 #: Largest allowed |mesh volume / voxel volume - 1| of a subcortical structure.
 VOLUME_TOLERANCE = 0.05
