@@ -34,11 +34,14 @@ from __future__ import annotations
 
 import difflib
 import tomllib
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from brainpainter.atlas.model import HEMI_PREFIX, Atlas, Region
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.io.files import read_input
+from brainpainter.io.readers import has_control
 
 MAX_CONFIG_BYTES = 1024 * 1024  # a region-group config is a few KB
 _LOADING: set[str] = set()  # names of group atlases being built (to catch cycles)
@@ -47,7 +50,8 @@ UNGROUPED = ("keep", "drop")
 _SIDES = {"left-": "lh", "right-": "rh"}
 
 
-def load_atlas_config(path: str | Path, name: str | None = None) -> Atlas:
+def read_atlas_config(path: str | Path, name: str | None = None, *,
+                      get_base: Callable[[str], Atlas]) -> Atlas:
     """Read a region-group TOML file and build its atlas.
 
     Parameters
@@ -55,6 +59,10 @@ def load_atlas_config(path: str | Path, name: str | None = None) -> Atlas:
     path : path-like
     name : str, optional
         Atlas name (default: ``[atlas] name``, else the file name without suffix).
+    get_base : callable
+        ``get_base(name) -> Atlas`` looks up the base atlas
+        (:func:`brainpainter.atlas.registry.get_atlas`; :func:`brainpainter.atlas.registry.load_atlas_config`
+        passes it).
 
     Raises
     ------
@@ -62,8 +70,6 @@ def load_atlas_config(path: str | Path, name: str | None = None) -> Atlas:
         Unreadable TOML, unknown keys, unknown base atlas or region, a region
         in two groups; one line naming the file.
     """
-    from brainpainter.io.files import read_input
-
     path = Path(path).expanduser()
     raw = read_input(path, "atlas config", MAX_CONFIG_BYTES,
                      hint="give the path of a TOML file with [atlas] and [groups] (see docs/atlases.md)")
@@ -79,7 +85,8 @@ def load_atlas_config(path: str | Path, name: str | None = None) -> Atlas:
     given = meta.get("name")
     if given is not None and not isinstance(given, str):
         raise _fail(str(path), f"[atlas] name must be a text; {given!r} was given")
-    return atlas_from_config(config, source=str(path), name=name or given or path.name.split(".")[0])
+    return atlas_from_config(config, source=str(path), name=name or given or path.name.split(".")[0],
+                             get_base=get_base)
 
 
 def _cycle(base: str) -> str:
@@ -112,11 +119,10 @@ def _palette(n: int, avoid: list[tuple[int, int, int]] = ()) -> list[tuple[int, 
     return [ordered[i % len(ordered)] for i in range(n)]  # type: ignore[misc]
 
 
-def atlas_from_config(config: dict[str, Any], source: str, name: str) -> Atlas:
+def atlas_from_config(config: dict[str, Any], source: str, name: str, *,
+                      get_base: Callable[[str], Atlas]) -> Atlas:
     """Build a group atlas from a parsed config (see the module docstring for the schema)."""
     from brainpainter.color.rgb import to_rgb
-    from brainpainter.io.readers import has_control
-
     extra = sorted(set(config) - {"atlas", "groups"})
     if extra:
         raise _fail(source, f"unknown table {extra[0]!r}; a config has [atlas] and [groups]")
@@ -138,9 +144,7 @@ def atlas_from_config(config: dict[str, Any], source: str, name: str) -> Atlas:
         raise _fail(source, _cycle(meta["base"]))
     _LOADING.add(str(name).strip().lower())
     try:
-        from brainpainter.atlas.model import get_atlas
-
-        base: Atlas = get_atlas(str(meta["base"]))  # "schaefer400_7n+tian_s2" combines atlases
+        base: Atlas = get_base(str(meta["base"]))  # "schaefer400_7n+tian_s2" combines atlases
     except BrainPainterError as exc:
         raise _fail(source, f"[atlas] base: {str(exc)[:300]}") from None
     except RecursionError:

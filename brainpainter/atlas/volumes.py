@@ -59,7 +59,12 @@ from pathlib import Path
 
 import numpy as np
 
-from brainpainter.atlas.model import HEMI_PREFIX, Region, write_regions_tsv
+from brainpainter.atlas import registry
+from brainpainter.atlas.meshing import build_structures, merge_structures
+from brainpainter.atlas.model import HEMI_PREFIX, Region, load_atlas_dir, write_regions_tsv
+from brainpainter.atlas.template import FORMAT, FORMAT_VERSION, load_template
+from brainpainter.atlas.user import atlases_dir, check_name, check_syntax, staged_folder
+from brainpainter.atlas.writer import save_npz
 from brainpainter.errors import BrainPainterError, choice_error
 
 SPACES = ("MNI152NLin2009cAsym", "MNI152NLin6Asym", "fsaverage", "template")
@@ -277,8 +282,6 @@ def write_own_template(folder: Path, name: str, volume: str, structures: list) -
     the meshes): ``subcortical-dorsal``, ``subcortical-left``,
     ``subcortical-ventral``, ``subcortical``.
     """
-    from brainpainter.atlas.template import FORMAT, FORMAT_VERSION
-
     points = np.concatenate([s.vertices for s in structures])
     manifest = {
         "format": FORMAT, "format_version": FORMAT_VERSION, "name": name,
@@ -329,10 +332,6 @@ def build_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, space:
     dict
         The ``atlas.json`` written.
     """
-    from brainpainter.atlas.meshing import build_structures, merge_structures
-    from brainpainter.atlas.template import load_template
-    from brainpainter.atlas.writer import save_npz
-
     if own_template:
         space, tpl_name, label_set, to_template = "template", name, "none", np.eye(4)
     else:
@@ -398,10 +397,6 @@ def build_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, space:
 def add_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, replace: bool = False,
                      out: str | Path | None = None, **kwargs) -> Path:
     """``brainpainter atlas add NAME --volume ... --lut ...``: build and store (or write to `out`)."""
-    from brainpainter.atlas import registry
-    from brainpainter.atlas.model import load_atlas_dir
-    from brainpainter.atlas.user import atlases_dir, check_name, check_syntax, staged_folder
-
     if out is None:
         check_name(name, replace=replace)
     else:

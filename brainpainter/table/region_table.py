@@ -503,7 +503,7 @@ def inspect_table(
     -------
     RegionTable
     """
-    from brainpainter.atlas.model import get_atlas
+    from brainpainter.atlas.registry import get_atlas
 
     inputs = list(data) if isinstance(data, list | tuple) else [data]
     if not inputs:

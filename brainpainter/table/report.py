@@ -208,7 +208,7 @@ def input_warnings(summary: dict[str, Any], max_names: int = 8) -> list[str]:
         The notes (empty columns, decimal commas, images missing from an
         input) and the unmatched names, each with its closest region names.
     """
-    from brainpainter.atlas.model import get_atlas
+    from brainpainter.atlas.registry import get_atlas
     from brainpainter.errors import BrainPainterError
 
     lines = list(summary.get("notes", []))

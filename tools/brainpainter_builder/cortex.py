@@ -27,7 +27,7 @@ boundary runs through) are locked as well, so they reach the template
 unchanged, and the template stores every vertex's label (``vertex_label``)
 beside the whole-face labels. When the template is loaded, core splits
 those faces along a smoothed boundary
-(:func:`brainpainter.atlas.labelset.split_mesh`, the same code that splits
+(:func:`brainpainter.atlas.mesh.split_mesh`, the same code that splits
 custom label sets), so borders no longer step along triangles.
 
 Folds
@@ -74,7 +74,7 @@ class LabelledSurface:
         Index into `names` per vertex (the full-resolution vertex's label).
     boundary_t : ndarray of float32, shape (n_crossing_edges,)
         Where the border crosses each label-crossing edge
-        (:func:`brainpainter.atlas.labelset.smooth_crossings`), stored so that
+        (:func:`brainpainter.atlas.mesh.smooth_crossings`), stored so that
         loading the template only has to split.
     sulc : ndarray of float32, shape (n_vertices,), or None
         Sulcal depth per vertex, when given.
@@ -249,7 +249,7 @@ def build_labelled_surface(surfaces: dict[str, tuple[np.ndarray, np.ndarray]],
     clean : bool
         Remove self-intersections of every surface (:mod:`.clean`).
     """
-    from brainpainter.atlas.labelset import smooth_crossings
+    from brainpainter.atlas.mesh import smooth_crossings
     from brainpainter_builder.clean import remove_self_intersections
 
     pial_v, faces = surfaces["pial"]
