@@ -50,7 +50,7 @@ def set_default_mode(path: Path | str) -> None:
 
 def atomic_write_bytes(path: Path, data: bytes) -> None:
     """Write via a temporary file in the same folder, then rename."""
-    from brainpainter.io.transaction import os_error
+    from brainpainter.io.folders import os_error
 
     try:
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
