@@ -41,7 +41,7 @@ from typing import Any
 from brainpainter.atlas.model import HEMI_PREFIX, Atlas, Region
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.io.files import read_input
-from brainpainter.io.readers import has_control
+from brainpainter.io.rawtable import has_control
 
 MAX_CONFIG_BYTES = 1024 * 1024  # a region-group config is a few KB
 _LOADING: set[str] = set()  # names of group atlases being built (to catch cycles)

@@ -59,7 +59,7 @@ from brainpainter.atlas.template import (
 from brainpainter.atlas.writer import save_npz
 from brainpainter.errors import BrainPainterError
 from brainpainter.io.files import check_input
-from brainpainter.io.readers import has_control
+from brainpainter.io.rawtable import has_control
 
 #: Colour-table names that are not regions (compared in lower case), besides any "medial ... wall".
 NON_REGION_NAMES = frozenset({"", "unknown", "???", "corpuscallosum", "medial_wall", "medial.wall"})

@@ -21,7 +21,7 @@ from pathlib import Path
 
 from brainpainter.errors import BrainPainterError
 
-#: Size limits in bytes per kind of input (tables: :func:`brainpainter.io.readers.max_bytes`).
+#: Size limits in bytes per kind of input (tables: :func:`brainpainter.io.rawtable.max_bytes`).
 LIMITS = {
     "atlas config": 1 * 2**20,
     "label map": 256 * 2**20,

@@ -25,7 +25,8 @@ import numpy as np
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.errors import BrainPainterError
-from brainpainter.io.readers import MAX_BYTES, RawTable, has_control, read_raw
+from brainpainter.io.rawtable import MAX_BYTES, RawTable, has_control
+from brainpainter.io.readers import read_raw
 from brainpainter.table.cells import is_empty, is_text, to_number
 from brainpainter.table.names import (
     IGNORED,

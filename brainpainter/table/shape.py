@@ -20,7 +20,7 @@ import re
 from dataclasses import dataclass
 
 from brainpainter.errors import BrainPainterError, nearest
-from brainpainter.io.readers import RawTable
+from brainpainter.io.rawtable import RawTable
 from brainpainter.table.cells import is_empty, is_text, to_number
 from brainpainter.table.names import REGION, UNMATCHED, NameResolver
 
