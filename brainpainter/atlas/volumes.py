@@ -56,11 +56,12 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from brainpainter.atlas import registry
-from brainpainter.atlas.meshing import build_structures, merge_structures
+from brainpainter.atlas.meshing import Structure, build_structures, merge_structures
 from brainpainter.atlas.model import HEMI_PREFIX, Region, load_atlas_dir, write_regions_tsv
 from brainpainter.atlas.template import FORMAT, FORMAT_VERSION, load_template
 from brainpainter.atlas.user import atlases_dir, check_name, check_syntax, staged_folder
@@ -300,6 +301,42 @@ def write_own_template(folder: Path, name: str, volume: str, structures: list) -
     return manifest
 
 
+def _atlas_json(name: str, vol: LabelVolume, lut: str | Path, space: str, tpl_name: str, label_set: str,
+                to_template: np.ndarray, regions: list[Region], structures: list[Structure], *, title: str,
+                description: str, citation: str, own_template: bool) -> dict[str, Any]:
+    """The ``atlas.json`` of a volume atlas: where it came from, the transform, each structure's mesh."""
+    source_voxel = abs(float(np.linalg.det(vol.affine[:3, :3])))
+    return {
+        "name": name,
+        "title": title or name,
+        "kind": "volume",
+        "template_labels": label_set,
+        "template": tpl_name,
+        "description": description or (
+            f"Label volume {vol.source.name} ({space}), {len(regions)} structures meshed in template "
+            f"{tpl_name!r}" + (" (its own: no cortex)." if own_template else ".")),
+        "citation": citation,
+        "aliases": [],
+        "source": {
+            "volume": vol.source.name, "lut": Path(lut).name, "space": space,
+            "shape": list(vol.data.shape), "voxel_mm3": round(source_voxel, 6),
+            "to_template": to_template.round(6).tolist(),
+            "transform_note": {
+                "fsaverage": "MNI305 = fsaverage coordinates; used as they are",
+                "template": "volume already in the template's coordinates (or a template of its own)",
+                "MNI152NLin6Asym": "FreeSurfer's MNI152->MNI305 affine (wiki CoordinateSystems 8b)",
+                "MNI152NLin2009cAsym": "FreeSurfer's MNI152->MNI305 affine (wiki CoordinateSystems 8b), made "
+                                       "for MNI152NLin6Asym: approximate for 2009cAsym (nonlinear, few mm)",
+            }[space],
+        },
+        "structures": [{
+            "name": s.name, "index": s.index, "n_voxels": s.n_voxels, "n_faces": len(s.faces),
+            "volume_mm3": round(s.volume_mm3, 3), "voxel_volume_mm3": round(s.voxel_volume_mm3, 3),
+            "centroid": [round(float(c), 3) for c in s.vertices.mean(axis=0)], "watertight": s.watertight,
+        } for s in structures],
+    }
+
+
 def build_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, space: str = "MNI152NLin2009cAsym",
                        template: str = "fsaverage", title: str = "", description: str = "",
                        citation: str = "", target_fraction: float = 0.3, out: Path,
@@ -360,36 +397,8 @@ def build_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, space:
     write_regions_tsv(regions, out / "regions.tsv")
     if own_template:
         write_own_template(out, name, vol.source.name, structures)
-    source_voxel = abs(float(np.linalg.det(vol.affine[:3, :3])))
-    meta = {
-        "name": name,
-        "title": title or name,
-        "kind": "volume",
-        "template_labels": label_set,
-        "template": tpl_name,
-        "description": description or (
-            f"Label volume {vol.source.name} ({space}), {len(regions)} structures meshed in template "
-            f"{tpl_name!r}" + (" (its own: no cortex)." if own_template else ".")),
-        "citation": citation,
-        "aliases": [],
-        "source": {
-            "volume": vol.source.name, "lut": Path(lut).name, "space": space,
-            "shape": list(vol.data.shape), "voxel_mm3": round(source_voxel, 6),
-            "to_template": to_template.round(6).tolist(),
-            "transform_note": {
-                "fsaverage": "MNI305 = fsaverage coordinates; used as they are",
-                "template": "volume already in the template's coordinates (or a template of its own)",
-                "MNI152NLin6Asym": "FreeSurfer's MNI152->MNI305 affine (wiki CoordinateSystems 8b)",
-                "MNI152NLin2009cAsym": "FreeSurfer's MNI152->MNI305 affine (wiki CoordinateSystems 8b), made "
-                                       "for MNI152NLin6Asym: approximate for 2009cAsym (nonlinear, few mm)",
-            }[space],
-        },
-        "structures": [{
-            "name": s.name, "index": s.index, "n_voxels": s.n_voxels, "n_faces": len(s.faces),
-            "volume_mm3": round(s.volume_mm3, 3), "voxel_volume_mm3": round(s.voxel_volume_mm3, 3),
-            "centroid": [round(float(c), 3) for c in s.vertices.mean(axis=0)], "watertight": s.watertight,
-        } for s in structures],
-    }
+    meta = _atlas_json(name, vol, lut, space, tpl_name, label_set, to_template, regions, structures,
+                       title=title, description=description, citation=citation, own_template=own_template)
     (out / "atlas.json").write_text(json.dumps(meta, indent=1) + "\n", encoding="utf-8")
     return meta
 
