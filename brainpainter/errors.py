@@ -20,6 +20,17 @@ class PluginError(BrainPainterError):
     """A plugin could not be loaded or does not honour its contract."""
 
 
+# -- inputs: tables and atlases (brainpainter.io, .atlas, .table) ------------------------
+# Raised where the caller branches on the kind of error, so that it never matches message text.
+class NoRegionColumnError(BrainPainterError):
+    """No column of a table names a region of the atlas, nor holds region names."""
+
+
+class DuplicateColumnError(BrainPainterError):
+    """Several columns of a table have the name an option asked for."""
+# -- end of the input errors -------------------------------------------------------------
+
+
 def nearest(value: str, allowed: Iterable[str], n: int = 1) -> list[str]:
     """Closest matches to `value` among `allowed` (case-insensitive)."""
     allowed = list(allowed)

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from brainpainter.atlas.model import Atlas
-from brainpainter.errors import BrainPainterError
+from brainpainter.errors import BrainPainterError, NoRegionColumnError
 from brainpainter.io.rawtable import MAX_BYTES, RawTable
 from brainpainter.io.readers import read_raw
 from brainpainter.table.cells import is_text
@@ -253,11 +253,11 @@ def inspect_table(
         try:
             shape = detect_shape(raw, resolver, image_column=image_column, region_column=region_column,
                                  value_column=value)
-        except BrainPainterError as exc:
-            if guess is None and "names a" in str(exc):
+        except NoRegionColumnError as exc:
+            if guess is None:
                 other = infer_atlas(_candidate_names(raw), installed_atlases())
                 if other is not None and other.atlas.name != atlas.name:
-                    raise BrainPainterError(
+                    raise NoRegionColumnError(
                         f"{exc} The names fit atlas {other.atlas.name!r}: give --atlas {other.atlas.name}."
                     ) from None
             raise

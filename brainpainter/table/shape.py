@@ -19,7 +19,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from brainpainter.errors import BrainPainterError, nearest
+from brainpainter.errors import BrainPainterError, DuplicateColumnError, NoRegionColumnError, nearest
 from brainpainter.io.rawtable import RawTable
 from brainpainter.table.cells import is_empty, is_text, to_number
 from brainpainter.table.names import REGION, UNMATCHED, NameResolver
@@ -98,7 +98,7 @@ def find_column(raw: RawTable, name: str, option: str) -> int:
     if len(exact) == 1:
         return exact[0]
     if len(exact) > 1:
-        raise BrainPainterError(
+        raise DuplicateColumnError(
             f"{option} {name!r}: {raw.source} has {len(exact)} columns of that name; rename them apart."
         )
     folded = [i for i, h in enumerate(raw.header) if h.lower() == name.strip().lower()]
@@ -213,7 +213,7 @@ def _long(raw: RawTable, resolver: NameResolver, img: int | None, region_column:
             candidates = named if len(named) == 1 else candidates
         if not candidates:
             sample = list(header[:3])
-            raise BrainPainterError(
+            raise NoRegionColumnError(
                 f"{raw.source}: no column names a {resolver.atlas.name} region, nor does any column hold "
                 f"region names (columns start {sample}); use region names like {resolver.atlas.keys[:2]} as "
                 "column names, or give a long table's region column with --region-column."
