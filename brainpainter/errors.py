@@ -20,14 +20,11 @@ class PluginError(BrainPainterError):
     """A plugin could not be loaded or does not honour its contract."""
 
 
-# -- inputs: tables and atlases (brainpainter.io, .atlas, .table) ------------------------
+# -- error types of the inputs: tables and atlases (issue 13, structure helper) -----------
 # Raised where the caller branches on the kind of error, so that it never matches message text.
 class NoRegionColumnError(BrainPainterError):
     """No column of a table names a region of the atlas, nor holds region names."""
 
-
-class DuplicateColumnError(BrainPainterError):
-    """Several columns of a table have the name an option asked for."""
 # -- end of the input errors -------------------------------------------------------------
 
 

@@ -4,19 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from brainpainter.errors import BrainPainterError, DuplicateColumnError, NoRegionColumnError
-from brainpainter.io.readers import parse_text
+from brainpainter.errors import BrainPainterError, NoRegionColumnError
 from brainpainter.table.region_table import read_table
-from brainpainter.table.shape import find_column
-
-
-def test_duplicate_column_is_its_own_type():
-    raw = parse_text("Image-name-unique,years,years\nA,1,2\n", "in.csv", ".csv")
-    with pytest.raises(DuplicateColumnError, match="2 columns of that name"):
-        find_column(raw, "years", "--time-column")
-    with pytest.raises(BrainPainterError) as missing:
-        find_column(raw, "yeras", "--time-column")
-    assert not isinstance(missing.value, DuplicateColumnError)
 
 
 def test_no_region_column_names_the_atlas_that_fits(tmp_path):

@@ -38,7 +38,7 @@ import numpy as np
 
 from brainpainter.color.rgb import ColorLike, to_rgb
 from brainpainter.color.scale import DEFAULT_MISSING_COLOR, DEFAULT_NAN_COLOR, ColourScale
-from brainpainter.errors import BrainPainterError, DuplicateColumnError, choice_error, nearest
+from brainpainter.errors import BrainPainterError, choice_error, nearest
 
 if TYPE_CHECKING:  # pragma: no cover
     from brainpainter.atlas.model import Atlas
@@ -198,9 +198,9 @@ def read_times(data: Any, table: RegionTable, time_column: str) -> tuple[str, di
         sources.append(raw.source)
         try:
             j = find_column(raw, time_column, "--time-column")
-        except DuplicateColumnError:
-            raise
-        except BrainPainterError:
+        except BrainPainterError as exc:
+            if "columns of that name" in str(exc):
+                raise
             others.extend(h for h in raw.header if h and h not in regions and h not in others)
             continue
         shape = table.shapes[k] if k < len(table.shapes) else detect_shape(raw, table.atlas)

@@ -205,15 +205,9 @@ def _candidate_names(raw: RawTable) -> list[str]:
 
 
 # -- public ---------------------------------------------------------------------------
-def inspect_table(
-    data: Any,
-    atlas: Atlas | str | None = None,
-    *,
-    image_column: str | None = None,
-    value: str | None = None,
-    region_column: str | None = None,
-    strict: bool = False,
-) -> RegionTable:
+def inspect_table(data: Any, atlas: Atlas | str | None = None, *, image_column: str | None = None,
+                  value: str | None = None, region_column: str | None = None,
+                  strict: bool = False) -> RegionTable:
     """Read a table and resolve it, collecting every problem instead of stopping at the first.
 
     Parameters and layout rules as in :func:`read_table`. Errors that leave
@@ -392,15 +386,9 @@ def _merge(parts: list[Part], atlas: Atlas, guess: AtlasGuess | None) -> RegionT
     )
 
 
-def read_table(
-    data: Any,
-    atlas: Atlas | str | None = None,
-    *,
-    image_column: str | None = None,
-    value: str | None = None,
-    region_column: str | None = None,
-    strict: bool = False,
-) -> RegionTable:
+def read_table(data: Any, atlas: Atlas | str | None = None, *, image_column: str | None = None,
+               value: str | None = None, region_column: str | None = None, strict: bool = False,
+               ) -> RegionTable:
     """Read a region-value table and resolve its names against an atlas.
 
     Parameters

@@ -19,7 +19,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from brainpainter.errors import BrainPainterError, DuplicateColumnError, NoRegionColumnError, nearest
+from brainpainter.errors import BrainPainterError, NoRegionColumnError, nearest
 from brainpainter.io.rawtable import RawTable
 from brainpainter.table.cells import is_empty, is_text, to_number
 from brainpainter.table.names import REGION, UNMATCHED, NameResolver
@@ -98,7 +98,7 @@ def find_column(raw: RawTable, name: str, option: str) -> int:
     if len(exact) == 1:
         return exact[0]
     if len(exact) > 1:
-        raise DuplicateColumnError(
+        raise BrainPainterError(
             f"{option} {name!r}: {raw.source} has {len(exact)} columns of that name; rename them apart."
         )
     folded = [i for i, h in enumerate(raw.header) if h.lower() == name.strip().lower()]
@@ -152,14 +152,8 @@ def _image_column_wide(raw: RawTable, resolver: NameResolver) -> tuple[int | Non
     return None, "no image-name column, rows numbered"
 
 
-def detect_shape(
-    raw: RawTable,
-    resolver: NameResolver,
-    *,
-    image_column: str | None = None,
-    region_column: str | None = None,
-    value_column: str | None = None,
-) -> TableShape:
+def detect_shape(raw: RawTable, resolver: NameResolver, *, image_column: str | None = None,
+                 region_column: str | None = None, value_column: str | None = None) -> TableShape:
     """Recognise the layout of `raw`.
 
     Parameters

@@ -16,9 +16,11 @@ from __future__ import annotations
 
 import os
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -66,6 +68,16 @@ class Annotation:
 
 def _missing(path: Path, what: str) -> BrainPainterError:
     return BrainPainterError(f"missing {what} {path}; a FreeSurfer subject directory needs it")
+
+
+def _read_optional(path: Path, read: Callable[[str], Any], what: str, dtype: type) -> np.ndarray | None:
+    """`read(path)` as an array of `dtype`; None when the file does not exist."""
+    if not path.is_file():
+        return None
+    try:
+        return np.asarray(read(str(path)), dtype=dtype)
+    except Exception as exc:  # nibabel raises ValueError, struct.error, OSError...
+        raise _unreadable(path, what, exc) from None
 
 
 def _unreadable(path: Path, what: str, exc: Exception) -> BrainPainterError:
@@ -179,12 +191,9 @@ class Subject:
         from nibabel.freesurfer import read_morph_data
 
         path = self.path / "surf" / f"{hemi}.sulc"
-        if not path.is_file():
+        values = _read_optional(path, read_morph_data, "a FreeSurfer curvature (morph) file", np.float64)
+        if values is None:
             return None
-        try:
-            values = np.asarray(read_morph_data(str(path)), dtype=np.float64)
-        except Exception as exc:  # nibabel raises ValueError, struct.error, OSError...
-            raise _unreadable(path, "a FreeSurfer curvature (morph) file", exc) from None
         self._check_count(path, len(values), hemi, "values")
         if not np.isfinite(values).all():
             raise BrainPainterError(f"{path} has non-finite values; expected sulcal depths in mm")
@@ -209,12 +218,9 @@ class Subject:
         from nibabel.freesurfer import read_label
 
         path = self.path / "label" / f"{hemi}.cortex.label"
-        if not path.is_file():
+        index = _read_optional(path, read_label, "a FreeSurfer label", np.int64)
+        if index is None:
             return None
-        try:
-            index = np.asarray(read_label(str(path)), dtype=np.int64)
-        except Exception as exc:
-            raise _unreadable(path, "a FreeSurfer label", exc) from None
         n = self.n_vertices(hemi)
         if index.size and (index.min() < 0 or index.max() >= n):
             raise BrainPainterError(f"{path} lists vertices outside surf/{hemi}.pial's {n}; "

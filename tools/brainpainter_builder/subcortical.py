@@ -40,19 +40,7 @@ def aseg_regions() -> tuple[Region, ...]:
 
 def build_structures(aseg: np.ndarray, vox2ras: np.ndarray, voxel_volume: float,
                      regions: tuple[Region, ...] | None = None, **options: Any) -> list[Structure]:
-    """Mesh the aseg structures (:func:`brainpainter.atlas.meshing.build_structures`).
-
-    Parameters
-    ----------
-    aseg : ndarray of int, shape (ni, nj, nk)
-    vox2ras : ndarray, shape (4, 4)
-        ``vox2ras_tkr`` of the volume.
-    voxel_volume : float
-        mm^3 per voxel.
-    regions : tuple of Region, optional
-        Structures to mesh (default: the bundled ``aseg.tsv``).
-    **options
-        `min_island`, `target_fraction`, `progress`, `source` of the core function.
-    """
+    """Mesh the aseg structures: :func:`brainpainter.atlas.meshing.build_structures` with
+    `regions` defaulting to the bundled ``aseg.tsv`` and `options` passed on."""
     regions = aseg_regions() if regions is None else regions
     return meshing.build_structures(aseg, vox2ras, voxel_volume, regions, **options)
