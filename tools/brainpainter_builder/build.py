@@ -88,12 +88,9 @@ def _check_args(atlases, surfaces, target_faces) -> tuple[tuple[str, ...], tuple
 def build_template(subject_dir: str | Path, out_dir: str | Path, *,
                    atlases: tuple[str, ...] | list[str] = DEFAULT_ATLASES,
                    surfaces: tuple[str, ...] | list[str] = SURFACES,
-                   target_faces: int | None = DEFAULT_TARGET_FACES,
-                   name: str | None = None,
-                   gcs_dir: str | Path | None = None,
-                   progress: bool = True,
-                   freesurfer_version: str | None = None,
-                   max_size_mb: float | None = DEFAULT_MAX_SIZE_MB,
+                   target_faces: int | None = DEFAULT_TARGET_FACES, name: str | None = None,
+                   gcs_dir: str | Path | None = None, progress: bool = True,
+                   freesurfer_version: str | None = None, max_size_mb: float | None = DEFAULT_MAX_SIZE_MB,
                    license_file: str | Path | None = None,
                    expected_regions: dict[str, int] | None = None) -> Path:
     """Build a template directory from a FreeSurfer subject.
@@ -144,9 +141,7 @@ def build_template(subject_dir: str | Path, out_dir: str | Path, *,
     """
     atlases, surfaces = _check_args(atlases, surfaces, target_faces)
     writer.check_out_dir(out_dir)  # before minutes of work: never replace what brainpainter did not make
-    subject = sources.Subject(subject_dir, gcs_dir=gcs_dir)
-    for label_set in atlases:
-        subject.check_label_set(label_set)
+    subject = _subject(subject_dir, gcs_dir, atlases)
     version = freesurfer_version or sources.freesurfer_version(subject.path)
     name = name or subject.name
     step = _Steps(f"template {name}", 2 + 2 * len(atlases) + 1 + 2 + 2, progress)
@@ -169,6 +164,15 @@ def build_template(subject_dir: str | Path, out_dir: str | Path, *,
     finally:
         step.close()
     return Path(out_dir).expanduser().absolute()
+
+
+def _subject(subject_dir: str | Path, gcs_dir: str | Path | None,
+             atlases: tuple[str, ...]) -> sources.Subject:
+    """The FreeSurfer subject, refused before any work when it lacks a label set's sources."""
+    subject = sources.Subject(subject_dir, gcs_dir=gcs_dir)
+    for label_set in atlases:
+        subject.check_label_set(label_set)
+    return subject
 
 
 class _Steps:
