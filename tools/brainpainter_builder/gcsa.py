@@ -913,18 +913,10 @@ def _inputs_matrix(
     return np.column_stack(cols)
 
 
-def label_vertices(
-    gcsa: Gcsa,
-    sphere_reg: ArrayLike,
-    *,
-    curv: ArrayLike | None = None,
-    sulc: ArrayLike | None = None,
-    faces: ArrayLike | None = None,
-    cortex: ArrayLike | None = None,
-    method: str = "auto",
-    mode_filter: int = 10,
-    keep_unused: bool = False,
-) -> tuple[NDArray[np.int32], NDArray[np.int32], list[str]]:
+def label_vertices(gcsa: Gcsa, sphere_reg: ArrayLike, *, curv: ArrayLike | None = None,
+                   sulc: ArrayLike | None = None, faces: ArrayLike | None = None,
+                   cortex: ArrayLike | None = None, method: str = "auto", mode_filter: int = 10,
+                   keep_unused: bool = False) -> tuple[NDArray[np.int32], NDArray[np.int32], list[str]]:
     """Label surface vertices with a GCSA atlas.
 
     Each vertex is mapped to the nearest prior node (vertex of icosahedron
@@ -987,28 +979,46 @@ def label_vertices(
         raise choice_error("method", method, (*METHODS, "auto"))
     if method == "auto":
         method = "classifier" if curv is not None or sulc is not None else "prior"
+    sph, adj = _check_surface(sphere_reg, faces, method)
+    cortex_mask = _cortex_mask(cortex, len(sph))
+    lab, scored = _classify(gcsa, sph, method, curv, sulc, adj)
+    if adj is not None and mode_filter > 0:
+        lab = _mode_filter(gcsa, lab, adj, mode_filter)
+    if cortex_mask is not None:
+        _relabel_cortex(gcsa, lab, cortex_mask, scored, sph, adj)
+    return _to_annot(gcsa, lab, keep_unused)
+
+
+def _check_surface(sphere_reg: ArrayLike, faces: ArrayLike | None,
+                   method: str) -> tuple[NDArray[np.float64], sparse.csr_matrix | None]:
+    """The sphere as an (n, 3) array and the mesh adjacency (None without `faces`), checked."""
     sph = np.asarray(sphere_reg, dtype=np.float64)
     if sph.ndim != 2 or sph.shape[1] != 3 or len(sph) == 0:
         raise BrainPainterError(f"sphere_reg must have shape (n, 3); {sph.shape} was given.")
     n = len(sph)
-    adj = None
-    if faces is not None:
-        fa = np.asarray(faces)
-        if (
-            fa.ndim != 2
-            or fa.shape[1] != 3
-            or not np.issubdtype(fa.dtype, np.integer)
-            or (fa.size and (fa.min() < 0 or fa.max() >= n))
-        ):
-            raise BrainPainterError(
-                f"faces must be an (f, 3) integer array of vertex indices below {n}; "
-                f"shape {fa.shape} ({fa.dtype}) was given."
-            )
-        adj = _adjacency(fa.astype(np.int64), n)
-    elif method == "gibbs":
-        raise BrainPainterError("method='gibbs' needs faces= (the surface's triangles).")
-    cortex_mask = _cortex_mask(cortex, n)
+    if faces is None:
+        if method == "gibbs":
+            raise BrainPainterError("method='gibbs' needs faces= (the surface's triangles).")
+        return sph, None
+    fa = np.asarray(faces)
+    if (
+        fa.ndim != 2
+        or fa.shape[1] != 3
+        or not np.issubdtype(fa.dtype, np.integer)
+        or (fa.size and (fa.min() < 0 or fa.max() >= n))
+    ):
+        raise BrainPainterError(
+            f"faces must be an (f, 3) integer array of vertex indices below {n}; "
+            f"shape {fa.shape} ({fa.dtype}) was given."
+        )
+    return sph, _adjacency(fa.astype(np.int64), n)
 
+
+def _classify(gcsa: Gcsa, sph: NDArray[np.float64], method: str, curv: ArrayLike | None,
+              sulc: ArrayLike | None, adj: sparse.csr_matrix | None) -> tuple[
+        NDArray[np.int64], tuple[NDArray[np.int64], NDArray[np.float64]]]:
+    """Label per vertex by `method`, and each vertex's (candidate labels, scores), shape (n, k)."""
+    n = len(sph)
     nodes = _nearest_nodes(sph, _gcsa_icosahedron(gcsa.icno_priors, "priors", gcsa.source))
     class_nodes = gcsa.prior_to_classifier[nodes]
     entries, valid = _node_candidates(gcsa, nodes)
@@ -1027,24 +1037,26 @@ def label_vertices(
     rows = np.arange(n)
     best = np.argmax(score, axis=1)
     lab = np.where(np.isfinite(score[rows, best]), cand_labels[rows, best], -1)
-
     if method == "gibbs":
         assert adj is not None
         lab = _gibbs_icm(gcsa, lab, entries, valid, cand_labels, score, adj)
-    if adj is not None and mode_filter > 0:
-        lab = _mode_filter(gcsa, lab, adj, mode_filter)
-    if cortex_mask is not None:
-        lab[~cortex_mask] = -1
-        excluded = _non_cortical_annotations(gcsa)
-        redo = cortex_mask & ((lab < 0) | np.isin(lab, excluded))
-        if redo.any():
-            sc = np.where(np.isin(cand_labels[redo], excluded), -np.inf, score[redo])
-            b = np.argmax(sc, axis=1)
-            ok = np.isfinite(sc[np.arange(len(b)), b])
-            lab[redo] = np.where(ok, cand_labels[redo][np.arange(len(b)), b], -1)
-            _fill_from_neighbours(lab, cortex_mask, sph, adj)
+    return lab, (cand_labels, score)
 
-    return _to_annot(gcsa, lab, keep_unused)
+
+def _relabel_cortex(gcsa: Gcsa, lab: NDArray[np.int64], cortex_mask: NDArray[np.bool_],
+                    scored: tuple[NDArray[np.int64], NDArray[np.float64]], sph: NDArray[np.float64],
+                    adj: sparse.csr_matrix | None) -> None:
+    """-1 outside the cortex; inside, unlabelled or non-cortical vertices get their best cortical label."""
+    cand_labels, score = scored
+    lab[~cortex_mask] = -1
+    excluded = _non_cortical_annotations(gcsa)
+    redo = cortex_mask & ((lab < 0) | np.isin(lab, excluded))
+    if redo.any():
+        sc = np.where(np.isin(cand_labels[redo], excluded), -np.inf, score[redo])
+        b = np.argmax(sc, axis=1)
+        ok = np.isfinite(sc[np.arange(len(b)), b])
+        lab[redo] = np.where(ok, cand_labels[redo][np.arange(len(b)), b], -1)
+        _fill_from_neighbours(lab, cortex_mask, sph, adj)
 
 
 def _cortex_mask(cortex: ArrayLike | None, n: int) -> NDArray[np.bool_] | None:
