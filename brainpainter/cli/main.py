@@ -22,7 +22,6 @@ from brainpainter.cli.options import (
     parse_size,
     render_kwargs,
     render_options,
-    split_commas,
 )
 from brainpainter.errors import BrainPainterError
 
@@ -33,7 +32,42 @@ def _echo_json(obj: object) -> None:
     click.echo(json.dumps(obj, indent=2))
 
 
-@click.group(context_settings=CONTEXT)
+COMMANDS_GROUP = "brainpainter.commands"
+
+
+class CommandsFromPlugins(click.Group):
+    """The top-level group plus the commands that distributions add through ``brainpainter.commands``.
+
+    The template builder adds ``template`` this way, so core never imports it;
+    an entry point is imported only when its command runs (or ``--help`` lists it).
+    """
+
+    def _entry_points(self) -> dict[str, Any]:
+        from importlib.metadata import entry_points
+
+        return {ep.name: ep for ep in entry_points(group=COMMANDS_GROUP) if ep.name not in self.commands}
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted([*super().list_commands(ctx), *self._entry_points()])
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        command = super().get_command(ctx, cmd_name)
+        entry = None if command is not None else self._entry_points().get(cmd_name)
+        if entry is None:
+            return command
+        try:
+            loaded = entry.load()
+        except Exception as exc:  # a broken plugin: one line, not a traceback
+            raise BrainPainterError(f"the command {cmd_name!r} from {entry.value!r} could not be loaded "
+                                    f"({type(exc).__name__}: {exc}); reinstall the distribution that "
+                                    "provides it.") from exc
+        if not isinstance(loaded, click.Command):
+            raise BrainPainterError(f"the entry point {cmd_name!r} = {entry.value!r} is not a click "
+                                    "command; fix or uninstall the distribution that provides it.")
+        return loaded
+
+
+@click.group(cls=CommandsFromPlugins, context_settings=CONTEXT)
 @click.version_option(package_name="brainpainter", prog_name="brainpainter")
 def cli() -> None:
     """Paint numbers per brain region onto 3D brains.
@@ -332,60 +366,6 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
         where = "processes" if w["backend"] == "LocalRunner" else "Dask workers"
         click.echo(f"rendered by {w['workers']} {where} (painter start-up {max(w['startup_seconds']):.1f} s"
                    + (f"; {len(w['retried'])} task(s) retried" if w["retried"] else "") + ")")
-
-
-# -- template -----------------------------------------------------------------
-@cli.group(context_settings=CONTEXT)
-def template() -> None:
-    """Build and inspect templates (the meshes a renderer draws)."""
-
-
-@template.command("build", context_settings=CONTEXT)
-@click.argument("subject_dir", type=click.Path(path_type=Path, file_okay=False))
-@click.option("--out", "-o", required=True, type=click.Path(path_type=Path, file_okay=False))
-@click.option("--atlas", "atlases", multiple=True, callback=split_commas,
-              help="Label sets to build: dk, destrieux, dkt (default: all three).")
-@click.option("--surface", "surfaces", multiple=True, callback=split_commas,
-              help="Surfaces: pial, white, inflated (default: all three).")
-@click.option("--target-faces", type=int, default=None,
-              help="Faces per hemisphere and label set after decimation (default: builder's choice).")
-@click.option("--name", default=None, help="Template name (default: the subject folder's name).")
-@click.option("--gcs-dir", type=click.Path(path_type=Path, file_okay=False), default=None,
-              help="Folder with FreeSurfer's ?h.DKTaparc...gcs(.gz) classifier atlases, to derive DKT.")
-def template_build(subject_dir: Path, out: Path, atlases: list[str], surfaces: list[str],
-                   target_faces: int | None, name: str | None, gcs_dir: Path | None) -> None:
-    """Build a template from a FreeSurfer SUBJECT_DIR (surf/, label/, mri/aseg.mgz)."""
-    import importlib.util
-
-    missing = [pip for mod, pip in (("pymeshlab", "pymeshlab"), ("skimage", "scikit-image"))
-               if importlib.util.find_spec(mod) is None]
-    if missing:
-        raise BrainPainterError(f"template build needs {' and '.join(missing)}, which are not installed; "
-                                "install them with: pip install 'brainpainter[builder]'")
-    from brainpainter_builder.build import build_template
-
-    kwargs: dict = {"name": name, "gcs_dir": gcs_dir, "target_faces": target_faces}
-    if atlases:
-        kwargs["atlases"] = tuple(atlases)
-    if surfaces:
-        kwargs["surfaces"] = tuple(surfaces)
-    path = build_template(subject_dir, out, **{k: v for k, v in kwargs.items() if v is not None})
-    click.echo(f"template written to {path}")
-
-
-@template.command("info", context_settings=CONTEXT)
-@click.argument("name_or_path", default="fsaverage")
-@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
-def template_info(name_or_path: str, as_json: bool) -> None:
-    """Manifest and checks of a template (default: the bundled fsaverage)."""
-    from brainpainter.atlas.template import load_template
-    from brainpainter_builder.report import format_report, template_report
-
-    report = template_report(load_template(name_or_path).path)
-    if as_json:
-        _echo_json(report)
-    else:
-        click.echo(format_report(report))
 
 
 from brainpainter.cli.media import figure, movie  # noqa: E402
