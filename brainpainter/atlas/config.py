@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import difflib
 import tomllib
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -105,7 +105,7 @@ def _nearest(value: str, pool: list[str]) -> str:
     return f" Did you mean {', '.join(repr(lower[h]) for h in hits)}?" if hits else ""
 
 
-def _palette(n: int, avoid: list[tuple[int, int, int]] = ()) -> list[tuple[int, int, int]]:
+def _palette(n: int, avoid: Sequence[tuple[int, int, int]] = ()) -> list[tuple[int, int, int]]:
     """`n` group colours from matplotlib's tab10 (tab20 beyond 10), skipping ones close to `avoid`."""
     import matplotlib
 

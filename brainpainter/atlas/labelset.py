@@ -41,10 +41,13 @@ from __future__ import annotations
 
 import json
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas import registry
 from brainpainter.atlas.mesh import faces_digest, smooth_crossings, split_faces
@@ -90,9 +93,9 @@ class LabelMap:
 
     hemi: str
     source: Path
-    labels: np.ndarray
+    labels: NDArray[Any]
     names: tuple[str, ...]
-    colors: np.ndarray
+    colors: NDArray[Any]
 
 
 def hemi_of(path: str | Path) -> str | None:
@@ -131,9 +134,9 @@ def read_label_map(path: str | Path, hemi: str) -> LabelMap:
         raise _swapped(path, hemi, named, "its file name")
     try:
         if low.endswith(".annot"):
-            from nibabel.freesurfer import read_annot
+            from nibabel.freesurfer import read_annot  # type: ignore[attr-defined]
 
-            labels, ctab, raw_names = read_annot(str(path))
+            labels, ctab, raw_names = read_annot(str(path))  # type: ignore[no-untyped-call]
             names = [n.decode("utf-8", "replace") if isinstance(n, bytes) else str(n) for n in raw_names]
             colors = np.asarray(ctab, dtype=np.int64)[:, :3]
             labels = np.asarray(labels, dtype=np.int64)
@@ -168,10 +171,10 @@ def _swapped(path: Path, hemi: str, named: str, how: str) -> BrainPainterError:
         f"{side[named]}; swap the files (--annot {named}={path.name}), or rename the file if it is right")
 
 
-def _read_gifti_labels(path: Path, hemi: str | None = None) -> tuple[np.ndarray, list[str], np.ndarray]:
+def _read_gifti_labels(path: Path, hemi: str | None = None) -> tuple[NDArray[Any], list[str], NDArray[Any]]:
     import nibabel as nib
 
-    img = nib.load(str(path))
+    img: Any = nib.load(str(path))
     if not getattr(img, "darrays", None):
         raise BrainPainterError(f"{path} holds no data array; a GIFTI label file has one label per vertex")
     meta = {**dict(img.meta or {}), **dict(img.darrays[0].meta or {})}
@@ -266,12 +269,12 @@ class HemiLabels:
     """A new label set on one hemisphere: names, a label per base-mesh vertex, the faces it makes."""
 
     hemi: str
-    vertex_label: np.ndarray  # int16, shape (n_base_vertices,)
-    face_label: np.ndarray  # int16, shape (n_faces after splitting,)
+    vertex_label: NDArray[Any]  # int16, shape (n_base_vertices,)
+    face_label: NDArray[Any]  # int16, shape (n_faces after splitting,)
     names: tuple[str, ...]
-    colors: np.ndarray  # uint8, shape (n_names, 3)
+    colors: NDArray[Any]  # uint8, shape (n_names, 3)
     source: str
-    source_label: np.ndarray | None = None  # int16, shape (n_source_vertices,): the whole label map
+    source_label: NDArray[Any] | None = None  # int16, shape (n_source_vertices,): the whole label map
 
     def region_faces(self) -> dict[str, int]:
         counts = np.bincount(self.face_label.astype(np.int64), minlength=len(self.names))
@@ -280,8 +283,8 @@ class HemiLabels:
     def regions(self) -> list[tuple[int, str, tuple[int, int, int]]]:
         """(colour-table index, name, colour) of the regions with faces, in colour-table order."""
         used = set(np.unique(self.face_label).tolist())
-        return [(i, n, tuple(int(c) for c in self.colors[i])) for i, n in enumerate(self.names)
-                if i in used and not is_non_region(n)]
+        return [(i, n, (int(self.colors[i][0]), int(self.colors[i][1]), int(self.colors[i][2])))
+                for i, n in enumerate(self.names) if i in used and not is_non_region(n)]
 
 
 @dataclass(frozen=True)
@@ -350,12 +353,12 @@ def build_label_set(name: str, template: Template, maps: dict[str, LabelMap],
     return LabelSet(name, template.name, base, hemis, too_small)
 
 
-def _hex(rgb) -> str:
+def _hex(rgb: Sequence[int]) -> str:
     return "#{:02x}{:02x}{:02x}".format(*(int(c) for c in rgb[:3]))
 
 
 def write_label_set(folder: Path, label_set: LabelSet, template: Template, *,
-                    per_source_vertex: bool = False) -> dict:
+                    per_source_vertex: bool = False) -> dict[str, Any]:
     """Write ``labels.json`` and ``cortex-{hemi}-{name}.npz`` into `folder`; returns the JSON.
 
     With `per_source_vertex` the files hold the whole label map (``source_label``,
@@ -363,7 +366,7 @@ def write_label_set(folder: Path, label_set: LabelSet, template: Template, *,
     vertices: a little larger, but it fits the template after a rebuild.
     """
     where = "full-resolution vertices (mapped to" if per_source_vertex else "vertices of"
-    entry: dict = {"source": ", ".join(label_set.hemis[h].source for h in HEMIS),
+    entry: dict[str, Any] = {"source": ", ".join(label_set.hemis[h].source for h in HEMIS),
                    "method": f"label map at the {where} the template's {label_set.base!r} meshes"
                              f"{')' if per_source_vertex else ''}; faces with several labels split "
                              "through edge midpoints",
@@ -451,7 +454,7 @@ def write_license(folder: Path, template: Template, sources: list[str]) -> bool:
 def write_atlas_folder(folder: Path, label_set: LabelSet, template: Template, *, title: str = "",
                        description: str = "", citation: str = "", aliases: tuple[str, ...] = (),
                        region_aliases: dict[str, tuple[str, ...]] | None = None,
-                       subcortical: bool = True, extra: dict | None = None,
+                       subcortical: bool = True, extra: dict[str, Any] | None = None,
                        per_source_vertex: bool = False) -> None:
     """Write a complete atlas folder (``atlas.json``, ``regions.tsv``, overlay, licence) into `folder`.
 

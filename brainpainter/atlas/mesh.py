@@ -12,11 +12,13 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 
-def faces_digest(faces: np.ndarray) -> str:
+def faces_digest(faces: NDArray[Any]) -> str:
     """SHA-256 of a face array (as little-endian int32), to recognise a mesh."""
     return hashlib.sha256(np.ascontiguousarray(faces, dtype="<i4").tobytes()).hexdigest()
 
@@ -47,12 +49,12 @@ class CortexMesh:
 
     hemi: str
     labels: str
-    faces: np.ndarray
-    face_label: np.ndarray
+    faces: NDArray[Any]
+    face_label: NDArray[Any]
     label_names: tuple[str, ...]
-    vertices: dict[str, np.ndarray]
-    source_vertex: np.ndarray
-    sulc: np.ndarray | None = None
+    vertices: dict[str, NDArray[Any]]
+    source_vertex: NDArray[Any]
+    sulc: NDArray[Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -68,13 +70,13 @@ class LabelledMesh:
     label_names : tuple of str
     """
 
-    vertices: np.ndarray
-    faces: np.ndarray
-    face_label: np.ndarray
+    vertices: NDArray[Any]
+    faces: NDArray[Any]
+    face_label: NDArray[Any]
     label_names: tuple[str, ...]
 
 
-def labels_at_vertices(source_label: np.ndarray, base: CortexMesh) -> np.ndarray:
+def labels_at_vertices(source_label: NDArray[Any], base: CortexMesh) -> NDArray[Any]:
     """Labels of `base`'s vertices from one label per full-resolution source vertex.
 
     Parameters
@@ -103,9 +105,9 @@ def labels_at_vertices(source_label: np.ndarray, base: CortexMesh) -> np.ndarray
     return out.astype(np.int16)
 
 
-def split_faces(faces: np.ndarray, vertex_label: np.ndarray,
-                crossing: np.ndarray | None = None) -> tuple[
-        np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def split_faces(faces: NDArray[Any], vertex_label: NDArray[Any],
+                crossing: NDArray[Any] | None = None) -> tuple[
+        NDArray[Any], NDArray[Any], NDArray[Any], NDArray[Any]]:
     """Split faces whose vertices carry different labels ("marching triangles").
 
     Parameters
@@ -178,7 +180,7 @@ def split_faces(faces: np.ndarray, vertex_label: np.ndarray,
     return out_faces, out_label, parents, weights
 
 
-def crossing_edges(faces: np.ndarray, vertex_label: np.ndarray) -> np.ndarray:
+def crossing_edges(faces: NDArray[Any], vertex_label: NDArray[Any]) -> NDArray[Any]:
     """Edges whose two vertices carry different labels, shape (n_edges, 2), sorted, lower vertex first."""
     faces = np.asarray(faces, dtype=np.int64)
     vl = np.asarray(vertex_label, dtype=np.int64)
@@ -195,8 +197,8 @@ CROSSING_SMOOTHING = 3
 CROSSING_CLAMP = 0.05
 
 
-def smooth_crossings(faces: np.ndarray, vertex_label: np.ndarray,
-                     steps: int = CROSSING_SMOOTHING) -> np.ndarray:
+def smooth_crossings(faces: NDArray[Any], vertex_label: NDArray[Any],
+                     steps: int = CROSSING_SMOOTHING) -> NDArray[Any]:
     """Where a smooth label boundary crosses each label-crossing edge.
 
     For an edge ``(u, v)`` with labels ``A`` at ``u`` and ``B`` at ``v``, the
@@ -247,8 +249,9 @@ def smooth_crossings(faces: np.ndarray, vertex_label: np.ndarray,
     row = np.searchsorted(ends, edges)
     la, lb = compact[edges[:, 0]], compact[edges[:, 1]]
 
-    def diff(r):
-        return (np.asarray(smooth[r, la]).ravel() - np.asarray(smooth[r, lb]).ravel())
+    def diff(r: NDArray[Any]) -> NDArray[np.float64]:
+        d: NDArray[np.float64] = np.asarray(smooth[r, la]).ravel() - np.asarray(smooth[r, lb]).ravel()
+        return d
 
     du, dv = diff(row[:, 0]), diff(row[:, 1])  # A - B at u (expected > 0) and at v (< 0)
     ok = (du > 0) & (dv < 0)
@@ -259,8 +262,8 @@ def smooth_crossings(faces: np.ndarray, vertex_label: np.ndarray,
     return t.clip(CROSSING_CLAMP, 1.0 - CROSSING_CLAMP)
 
 
-def split_mesh(base: CortexMesh, vertex_label: np.ndarray, labels: str,
-               names: tuple[str, ...], crossing: np.ndarray | None = None) -> CortexMesh:
+def split_mesh(base: CortexMesh, vertex_label: NDArray[Any], labels: str,
+               names: tuple[str, ...], crossing: NDArray[Any] | None = None) -> CortexMesh:
     """`base` with faces labelled (and split where needed) by `vertex_label`, all surfaces.
 
     Boundary crossings are `crossing` (stored ``boundary_t``, one per edge of
@@ -276,10 +279,11 @@ def split_mesh(base: CortexMesh, vertex_label: np.ndarray, labels: str,
         t = smooth_crossings(base.faces, vertex_label)
     faces, face_label, parents, weights = split_faces(base.faces, vertex_label, t)
 
-    def extend(values: np.ndarray) -> np.ndarray:
+    def extend(values: NDArray[Any]) -> NDArray[Any]:
         v = np.asarray(values)
         added = np.einsum("kj,kj...->k...", weights, v[parents].astype(np.float64))
-        return np.concatenate([v, added]).astype(np.float32)
+        out: NDArray[np.float32] = np.concatenate([v, added]).astype(np.float32)
+        return out
 
     source = np.concatenate([base.source_vertex, np.full(len(parents), -1, dtype=np.int32)]).astype(np.int32)
     return CortexMesh(hemi=base.hemi, labels=labels, faces=faces.astype(np.int32),

@@ -30,8 +30,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Region
 from brainpainter.errors import BrainPainterError
@@ -75,10 +77,11 @@ def import_pymeshlab() -> ModuleType:
         import pymeshlab
     except ImportError as exc:
         raise BrainPainterError(f"meshing needs pymeshlab ({exc}); install it with {BUILDER_HINT}") from None
-    return pymeshlab
+    module: ModuleType = pymeshlab
+    return module
 
 
-def self_intersecting_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+def self_intersecting_faces(vertices: NDArray[Any], faces: NDArray[Any]) -> NDArray[Any]:
     """Faces that intersect another face of the same mesh (MeshLab), shape (n_faces,) of bool.
 
     Parameters
@@ -100,12 +103,12 @@ def self_intersecting_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarr
     return np.asarray(mesh.face_selection_array(), dtype=bool)
 
 
-def count_self_intersections(vertices: np.ndarray, faces: np.ndarray) -> int:
+def count_self_intersections(vertices: NDArray[Any], faces: NDArray[Any]) -> int:
     """Number of faces that intersect another face of the same mesh."""
     return int(np.count_nonzero(self_intersecting_faces(vertices, faces)))
 
 
-def edge_use_counts(faces: np.ndarray) -> np.ndarray:
+def edge_use_counts(faces: NDArray[Any]) -> NDArray[Any]:
     """How many faces use each undirected edge, shape (n_edges,).
 
     Parameters
@@ -117,7 +120,8 @@ def edge_use_counts(faces: np.ndarray) -> np.ndarray:
         return np.zeros(0, dtype=np.int64)
     edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
     keys = edges[:, 0] * (int(faces.max()) + 1) + edges[:, 1]
-    return np.unique(keys, return_counts=True)[1]
+    counts: NDArray[np.int64] = np.unique(keys, return_counts=True)[1]
+    return counts
 
 
 # -- one mask -> one mesh ---------------------------------------------------------------
@@ -151,8 +155,8 @@ class Structure:
 
     name: str
     index: int
-    vertices: np.ndarray
-    faces: np.ndarray
+    vertices: NDArray[Any]
+    faces: NDArray[Any]
     n_voxels: int
     volume_mm3: float
     voxel_volume_mm3: float
@@ -162,12 +166,12 @@ class Structure:
     self_intersections: tuple[int, int] = (0, 0)
 
 
-def _signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
+def _signed_volume(vertices: NDArray[Any], faces: NDArray[Any]) -> float:
     a, b, c = (vertices[faces[:, k]] for k in range(3))
     return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
 
 
-def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, float]:
+def vertex_normals(vertices: NDArray[Any], faces: NDArray[Any]) -> tuple[NDArray[Any], float]:
     """Area-weighted unit vertex normals, shape (n, 3), and the total area."""
     fn = np.cross(vertices[faces[:, 1]] - vertices[faces[:, 0]],
                   vertices[faces[:, 2]] - vertices[faces[:, 0]])
@@ -179,8 +183,8 @@ def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray,
     return vn / np.where(norm > 0, norm, 1.0), area
 
 
-def _match_volume(vertices: np.ndarray, faces: np.ndarray, target: float,
-                  steps: int = 3) -> np.ndarray:
+def _match_volume(vertices: NDArray[Any], faces: NDArray[Any], target: float,
+                  steps: int = 3) -> NDArray[Any]:
     """Offset vertices along their normals until the enclosed volume is `target`."""
     for _ in range(steps):
         volume = _signed_volume(vertices, faces)
@@ -191,9 +195,10 @@ def _match_volume(vertices: np.ndarray, faces: np.ndarray, target: float,
     return vertices
 
 
-def mesh_mask(mask: np.ndarray, vox2ras: np.ndarray, *, smooth_iterations: int = 30,
+def mesh_mask(mask: NDArray[Any], vox2ras: NDArray[Any], *, smooth_iterations: int = 30,
               target_fraction: float = 0.3, min_faces: int = 400,
-              voxel_volume: float | None = None, blur: float = 0.0) -> tuple[np.ndarray, np.ndarray, float]:
+              voxel_volume: float | None = None,
+              blur: float = 0.0) -> tuple[NDArray[Any], NDArray[Any], float]:
     """Closed, smooth surface of a binary voxel mask in world coordinates.
 
     Parameters
@@ -242,10 +247,12 @@ def mesh_mask(mask: np.ndarray, vox2ras: np.ndarray, *, smooth_iterations: int =
         from scipy import ndimage
 
         sub = ndimage.gaussian_filter(sub, blur)
-    verts, faces, _, _ = marching_cubes(sub, level=0.5, method="lewiner", allow_degenerate=False)
+    verts, faces, _, _ = marching_cubes(  # type: ignore[no-untyped-call]
+        sub, level=0.5, method="lewiner", allow_degenerate=False)
     verts = verts.astype(np.float64) + lo  # voxel indices (i, j, k) of the full volume
     tm = trimesh.Trimesh(verts, faces, process=True)
-    trimesh.smoothing.filter_taubin(tm, lamb=0.5, nu=0.53, iterations=smooth_iterations)
+    trimesh.smoothing.filter_taubin(  # type: ignore[no-untyped-call]
+        tm, lamb=0.5, nu=0.53, iterations=smooth_iterations)
     verts = np.asarray(tm.vertices, dtype=np.float64)
     faces = np.asarray(tm.faces, dtype=np.int64)
     target = max(min_faces, round(len(faces) * target_fraction))
@@ -274,7 +281,7 @@ def mesh_mask(mask: np.ndarray, vox2ras: np.ndarray, *, smooth_iterations: int =
 
 
 # -- every label of a volume ------------------------------------------------------------
-def build_structures(aseg: np.ndarray, vox2ras: np.ndarray, voxel_volume: float,
+def build_structures(aseg: NDArray[Any], vox2ras: NDArray[Any], voxel_volume: float,
                      regions: tuple[Region, ...], *, min_island: int = 8,
                      target_fraction: float = 0.3, progress: Callable[[str], None] | None = None,
                      source: str = "mri/aseg.mgz") -> list[Structure]:
@@ -324,7 +331,8 @@ def build_structures(aseg: np.ndarray, vox2ras: np.ndarray, voxel_volume: float,
         shift[:3, 3] = [s.start for s in pad]
         blur = blur_for(mask)
         # Decimation can fold a thin part through another; keep more faces until nothing crosses.
-        first = None
+        first: int | None = None
+        crossing = 0
         for fraction in (*(f for f in DECIMATION_FRACTIONS if f > target_fraction), 1.0):
             verts, faces, smoothed = mesh_mask(mask, vox2ras @ shift, target_fraction=min(
                 target_fraction if first is None else fraction, 1.0), voxel_volume=voxel_volume, blur=blur)
@@ -339,12 +347,12 @@ def build_structures(aseg: np.ndarray, vox2ras: np.ndarray, voxel_volume: float,
             voxel_volume_mm3=n_voxels * voxel_volume,
             smoothed_volume_mm3=smoothed,
             watertight=bool(len(counts) and np.all(counts == 2)),
-            blur=blur, self_intersections=(first, crossing),
+            blur=blur, self_intersections=(crossing if first is None else first, crossing),
         ))
     return out
 
 
-def blur_for(mask: np.ndarray, sigma: float = BLUR_VOXELS, keep: float = BLUR_KEEP) -> float:
+def blur_for(mask: NDArray[Any], sigma: float = BLUR_VOXELS, keep: float = BLUR_KEEP) -> float:
     """`sigma` if blurring `mask` keeps `keep` of its voxels in as many pieces, else 0.
 
     Thin structures (the inferior lateral ventricle) would shrink or break
@@ -360,7 +368,7 @@ def blur_for(mask: np.ndarray, sigma: float = BLUR_VOXELS, keep: float = BLUR_KE
     return float(sigma) if kept >= keep and n_after <= n_before else 0.0
 
 
-def merge_structures(structures: list[Structure]) -> dict[str, np.ndarray]:
+def merge_structures(structures: list[Structure]) -> dict[str, NDArray[Any]]:
     """Concatenate structures into the ``subcortical.npz`` arrays.
 
     Returns

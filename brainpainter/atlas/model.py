@@ -14,7 +14,7 @@ import json
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TypeVar
+from typing import Any, TypeVar
 
 from brainpainter.errors import BrainPainterError
 
@@ -151,7 +151,7 @@ class Atlas:
                 out.update(dict.fromkeys(members, mapping[key]))
         return out
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         """JSON-ready description (regions with key, hemi, colour, aliases)."""
         return {
             "name": self.name,

@@ -13,6 +13,7 @@ listed as an alias by the object itself is the canonical one.
 
 from __future__ import annotations
 
+import functools
 import importlib
 import importlib.metadata as md
 from collections.abc import Callable, Mapping
@@ -92,8 +93,8 @@ class Registry:
             seen[ep.name] = ep.value
             by_target.setdefault((ep.value, dist), []).append((ep.name, dist))
         entries: dict[str, Entry] = {}
-        for (target, dist), names in by_target.items():
-            names = sorted({n for n, _ in names})
+        for (target, dist), named in by_target.items():
+            names = sorted({n for n, _ in named})
             canonical, aliases = names[0], tuple(names[1:])
             # Prefer the shortest name that is not an English word alias like
             # "tourville": keep sorted order but let the target's attr win.
@@ -199,8 +200,8 @@ class Registry:
             self._errors[canonical] = str(exc)
             raise
         except Exception as exc:  # a broken plugin must not crash the caller
-            entry = self._discover().get(canonical)
-            where = f" from {entry.distribution} ({entry.target})" if entry else ""
+            found = self._discover().get(canonical)
+            where = f" from {found.distribution} ({found.target})" if found else ""
             msg = f"the {self.kind} plugin {canonical!r}{where} failed to load: {type(exc).__name__}: {exc}"
             self._errors[canonical] = msg
             raise PluginError(msg + "; reinstall or uninstall that plugin") from exc
@@ -271,7 +272,8 @@ def get_atlas(name: str) -> Atlas:
     """
     if "+" in str(name):
         return combine_atlases([atlases.get(part.strip()) for part in str(name).split("+")])
-    return atlases.get(name)
+    atlas: Atlas = atlases.get(name)
+    return atlas
 
 
 def list_atlases() -> list[str]:
@@ -318,7 +320,7 @@ def load_user_atlas(folder: Path) -> Atlas:
 
 def local_entries() -> Mapping[str, tuple[str, Callable[[], Any]]]:
     """``{name: (folder, factory)}`` of the user's atlases, for the registry."""
-    return {name: (str(p), lambda p=p: load_user_atlas(p)) for name, p in user_folders().items()}
+    return {name: (str(p), functools.partial(load_user_atlas, p)) for name, p in user_folders().items()}
 
 
 atlases = Registry("brainpainter.atlases", "atlas", _validate_atlas, local_source=local_entries)

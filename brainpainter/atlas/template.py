@@ -53,11 +53,14 @@ import json
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas import registry
 from brainpainter.atlas.mesh import CortexMesh, LabelledMesh, faces_digest, labels_at_vertices, split_mesh
+from brainpainter.atlas.model import Atlas
 from brainpainter.errors import BrainPainterError
 
 FORMAT = "brainpainter-template"
@@ -73,12 +76,12 @@ class Template:
     """A loaded template directory. Arrays are read on first use and cached."""
 
     path: Path
-    manifest: dict
-    _cache: dict = field(default_factory=dict, repr=False)
+    manifest: dict[str, Any]
+    _cache: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property
     def name(self) -> str:
-        return self.manifest["name"]
+        return str(self.manifest["name"])
 
     @property
     def label_sets(self) -> list[str]:
@@ -88,19 +91,21 @@ class Template:
     def surfaces(self) -> list[str]:
         return list(self.manifest["surfaces"])
 
-    def _npz(self, file: str) -> dict[str, np.ndarray]:
+    def _npz(self, file: str) -> dict[str, NDArray[Any]]:
         if file not in self._cache:
             with np.load(self.path / file, allow_pickle=False) as z:
                 self._cache[file] = {k: z[k] for k in z.files}
-        return self._cache[file]
+        arrays: dict[str, NDArray[Any]] = self._cache[file]
+        return arrays
 
-    def _entry(self, labels: str, hemi: str) -> dict:
+    def _entry(self, labels: str, hemi: str) -> dict[str, Any]:
         if labels not in self.manifest["labels"]:
             raise BrainPainterError(
                 f"template {self.name!r} has no label set {labels!r}; it has {self.label_sets}. "
                 "Build the template with that atlas (brainpainter template build --atlas ...)."
             )
-        return self.manifest["labels"][labels]["cortex"][hemi]
+        entry: dict[str, Any] = self.manifest["labels"][labels]["cortex"][hemi]
+        return entry
 
     def base_cortex(self, labels: str, hemi: str) -> CortexMesh:
         """The stored mesh of one of the template's own label sets, faces not split.
@@ -168,10 +173,11 @@ class Template:
         if key not in self._cache:
             self._cache[key] = split_mesh(base, z["vertex_label"], labels, tuple(entry["names"]),
                                           z.get("boundary_t"))
-        return self._cache[key]
+        mesh: CortexMesh = self._cache[key]
+        return mesh
 
-    def _source_labelled(self, base: CortexMesh, source_label: np.ndarray, labels: str,
-                         entry: dict) -> CortexMesh:
+    def _source_labelled(self, base: CortexMesh, source_label: NDArray[Any], labels: str,
+                         entry: dict[str, Any]) -> CortexMesh:
         """`base` labelled by `source_label` (one label per vertex of the full-resolution surface)."""
         n_source = int(entry.get("n_source_vertices", len(source_label)))
         if len(source_label) != n_source or int(base.source_vertex.max(initial=-1)) >= n_source:
@@ -184,7 +190,8 @@ class Template:
         if key not in self._cache:
             vertex_label = labels_at_vertices(source_label, base)
             self._cache[key] = split_mesh(base, vertex_label, labels, tuple(entry["names"]))
-        return self._cache[key]
+        mesh: CortexMesh = self._cache[key]
+        return mesh
 
     def with_label_sets(self, folder: str | Path) -> Template:
         """This template plus the label sets of an overlay folder (``labels.json``).
@@ -243,7 +250,8 @@ class Template:
         structures replace the template's own (aseg) ones, several folders are
         drawn together.
         """
-        structures, parts = [], []
+        structures: list[dict[str, Any]] = []
+        parts: list[str] = []
         for folder in folders:
             folder = Path(folder)
             try:
@@ -261,13 +269,13 @@ class Template:
         manifest["subcortical"] = {"file": parts[0], "parts": parts, "structures": structures}
         return Template(path=self.path, manifest=manifest, _cache=self._cache)
 
-    def glass(self, hemi: str) -> tuple[np.ndarray, np.ndarray]:
+    def glass(self, hemi: str) -> tuple[NDArray[Any], NDArray[Any]]:
         """Glass-brain hull of one hemisphere: ``(vertices (n, 3), faces (m, 3))``."""
         z = self._npz(self.manifest["glass"][hemi]["file"])
         return z["vertices"], z["faces"]
 
     @cached_property
-    def bounds(self) -> np.ndarray:
+    def bounds(self) -> NDArray[Any]:
         """Bounding box of the pial surfaces, shape (2, 3): min and max corner."""
         return np.asarray(self.manifest["bounds"]["pial"], dtype=float)
 
@@ -275,7 +283,7 @@ class Template:
         return sorted(p for p in self.path.iterdir() if p.is_file())
 
 
-def template_for(atlas, template: Template) -> Template:
+def template_for(atlas: Atlas, template: Template) -> Template:
     """`template` with what `atlas` brings: its cortex label set overlay and its volume meshes.
 
     Parameters

@@ -56,15 +56,17 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas import registry
 from brainpainter.atlas.meshing import Structure, build_structures, merge_structures
 from brainpainter.atlas.model import HEMI_PREFIX, Region, load_atlas_dir, write_regions_tsv
-from brainpainter.atlas.template import FORMAT, FORMAT_VERSION, load_template
-from brainpainter.atlas.user import atlases_dir, check_name, check_syntax, staged_folder
+from brainpainter.atlas.registry import atlases_dir
+from brainpainter.atlas.template import FORMAT, FORMAT_VERSION, Template, load_template
+from brainpainter.atlas.user import check_name, check_syntax, staged_folder
 from brainpainter.atlas.writer import save_npz
 from brainpainter.errors import BrainPainterError, choice_error
 
@@ -199,12 +201,14 @@ def lut_regions(entries: list[LutEntry]) -> list[Region]:
     """Regions (kind ``subcortical``) of LUT entries; hemisphere from the name; colours filled in."""
     import matplotlib
 
-    cycle = matplotlib.colormaps["tab20"].colors
-    out, keys = [], {}
+    cycle = matplotlib.colormaps["tab20"].colors  # type: ignore[attr-defined]
+    out: list[Region] = []
+    keys: dict[str, int] = {}
     for i, e in enumerate(entries):
         hemi, name = split_hemi(e.name)
-        color = e.color or tuple(round(255 * c) for c in cycle[i % len(cycle)][:3])
-        region = Region(e.index, name, hemi, "subcortical", color,  # type: ignore[arg-type]
+        rgb = tuple(round(255 * c) for c in cycle[i % len(cycle)][:3])
+        color = e.color or cast(tuple[int, int, int], rgb)
+        region = Region(e.index, name, hemi, "subcortical", color,
                         () if e.name == HEMI_PREFIX[hemi] + name else (e.name,))
         if region.key in keys:
             raise BrainPainterError(f"labels {keys[region.key]} and {e.index} both name region "
@@ -214,7 +218,7 @@ def lut_regions(entries: list[LutEntry]) -> list[Region]:
     return out
 
 
-def space_transform(space: str, template) -> np.ndarray:
+def space_transform(space: str, template: Template) -> NDArray[Any]:
     """4 x 4 affine from `space` RAS millimetres to the coordinates of `template`.
 
     Parameters
@@ -239,8 +243,8 @@ def space_transform(space: str, template) -> np.ndarray:
 class LabelVolume:
     """An integer label volume and its voxel-to-world affine."""
 
-    data: np.ndarray  # int, shape (ni, nj, nk)
-    affine: np.ndarray  # shape (4, 4)
+    data: NDArray[Any]  # int, shape (ni, nj, nk)
+    affine: NDArray[Any]  # shape (4, 4)
     source: Path
 
 
@@ -253,7 +257,7 @@ def read_volume(path: str | Path) -> LabelVolume:
         raise BrainPainterError(f"label volume {path} does not exist; give a NIfTI (.nii, .nii.gz) or MGH "
                                 "(.mgz) file of integer labels")
     try:
-        img = nib.load(str(path))
+        img: Any = nib.load(str(path))
         data = np.asanyarray(img.dataobj)
     except Exception as exc:  # nibabel raises ImageFileError, ValueError, OSError, ...
         reason = " ".join(str(exc).split()) or type(exc).__name__
@@ -275,7 +279,7 @@ def read_volume(path: str | Path) -> LabelVolume:
     return LabelVolume(data.astype(np.int64), np.asarray(img.affine, dtype=np.float64), path)
 
 
-def write_own_template(folder: Path, name: str, volume: str, structures: list) -> dict:
+def write_own_template(folder: Path, name: str, volume: str, structures: list[Structure]) -> dict[str, Any]:
     """Write ``folder/template/manifest.json``: a template made only of the volume's meshes (no cortex).
 
     Its subcortical part is the atlas's ``subcortical.npz``; it has no cortex
@@ -302,7 +306,7 @@ def write_own_template(folder: Path, name: str, volume: str, structures: list) -
 
 
 def _atlas_json(name: str, vol: LabelVolume, lut: str | Path, space: str, tpl_name: str, label_set: str,
-                to_template: np.ndarray, regions: list[Region], structures: list[Structure], *, title: str,
+                to_template: NDArray[Any], regions: list[Region], structures: list[Structure], *, title: str,
                 description: str, citation: str, own_template: bool) -> dict[str, Any]:
     """The ``atlas.json`` of a volume atlas: where it came from, the transform, each structure's mesh."""
     source_voxel = abs(float(np.linalg.det(vol.affine[:3, :3])))
@@ -340,7 +344,8 @@ def _atlas_json(name: str, vol: LabelVolume, lut: str | Path, space: str, tpl_na
 def build_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, space: str = "MNI152NLin2009cAsym",
                        template: str = "fsaverage", title: str = "", description: str = "",
                        citation: str = "", target_fraction: float = 0.3, out: Path,
-                       own_template: bool = False, progress: Callable[[str], None] | None = None) -> dict:
+                       own_template: bool = False,
+                       progress: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Mesh every label of `volume` named in `lut` and write an atlas folder into `out`.
 
     With `own_template` the volume is a brain of its own (any species, no
@@ -404,7 +409,7 @@ def build_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, space:
 
 
 def add_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, replace: bool = False,
-                     out: str | Path | None = None, **kwargs) -> Path:
+                     out: str | Path | None = None, **kwargs: Any) -> Path:
     """``brainpainter atlas add NAME --volume ... --lut ...``: build and store (or write to `out`)."""
     if out is None:
         check_name(name, replace=replace)

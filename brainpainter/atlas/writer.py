@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.template import FORMAT
 from brainpainter.io.transaction import check_replaceable, replace_folder
@@ -30,7 +31,7 @@ TEMPLATE_HINT = ("give a new or empty folder with --out (an existing folder is r
                  "template made by brainpainter)")
 
 
-def save_npz(path: str | Path, arrays: Mapping[str, np.ndarray]) -> None:
+def save_npz(path: str | Path, arrays: Mapping[str, NDArray[Any]]) -> None:
     """Save arrays as a compressed ``.npz`` that is identical for identical arrays.
 
     Readable with ``np.load(path, allow_pickle=False)``; members are written in
@@ -49,7 +50,7 @@ def save_npz(path: str | Path, arrays: Mapping[str, np.ndarray]) -> None:
             if array.dtype.hasobject:
                 raise TypeError(f"array {name!r} has dtype object; templates hold plain arrays")
             buf = io.BytesIO()
-            np.lib.format.write_array(buf, array, allow_pickle=False)
+            np.lib.format.write_array(buf, array, allow_pickle=False)  # type: ignore[no-untyped-call]
             info = zipfile.ZipInfo(f"{name}.npy", date_time=_EPOCH)
             info.compress_type = zipfile.ZIP_DEFLATED
             info.external_attr = 0o644 << 16

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError, nearest
 
-ColorLike = str | Sequence[float] | np.ndarray
+ColorLike = str | Sequence[float] | NDArray[Any]
 
 _HEX = re.compile(r"^#?([0-9a-fA-F]{6})([0-9a-fA-F]{2})?$")
 _HELP = (
@@ -18,10 +20,10 @@ _HELP = (
 )
 
 
-def _named_colors() -> dict[str, str]:
+def _named_colors() -> dict[str, Any]:
     from matplotlib import colors as mcolors
 
-    return mcolors.get_named_colors_mapping()
+    return {str(k): v for k, v in mcolors.get_named_colors_mapping().items()}
 
 
 def to_rgb(color: ColorLike) -> tuple[float, float, float]:

@@ -41,7 +41,7 @@ _ERRNO_HINTS = {
 }
 
 
-def os_error(exc: OSError, action: str, path: str | os.PathLike | None = None) -> BrainPainterError:
+def os_error(exc: OSError, action: str, path: str | os.PathLike[str] | None = None) -> BrainPainterError:
     """A one-line error for an OS error while doing `action` (e.g. ``"cannot write"``) on `path`."""
     target = exc.filename if path is None else path
     where = f" {str(target)[:160]!r}" if target is not None else ""

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import csv
 import os
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -195,6 +195,7 @@ def parse_text(text: str, source: str, suffix: str = "", encoding: str = "UTF-8"
     sep = _sniff_separator(lines[first], suffix)
     rows: list[list[Cell]] = []
     line_of_row: list[int] = []
+    parsed: Iterator[tuple[int, list[str]]]
     if sep == " ":
         parsed = ((i + 1, line.split()) for i, line in enumerate(lines))
         kind = "white-space separated"
@@ -244,7 +245,7 @@ def parse_text(text: str, source: str, suffix: str = "", encoding: str = "UTF-8"
     return RawTable(header, rows, source, fmt, decimal_comma=sep not in (",",), line_of_row=line_of_row)
 
 
-def _numbered(reader):  # yields (line number where the record starts, fields)
+def _numbered(reader: Any) -> Iterator[tuple[int, list[str]]]:  # (line where the record starts, fields)
     line = 1
     for fields in reader:
         yield line, fields

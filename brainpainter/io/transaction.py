@@ -98,7 +98,7 @@ class FolderTransaction(_Staged):
     nothing and leaves the folder as it was (apart from creating it).
     """
 
-    def __init__(self, out: str | os.PathLike, what: str = "output folder",
+    def __init__(self, out: str | os.PathLike[str], what: str = "output folder",
                  manifest: str = MANIFEST) -> None:
         self.out = Path(out)
         self.what = what
@@ -182,7 +182,7 @@ class FileTransaction(_Staged):
             tx.commit(size=(w, h), frames=n)
     """
 
-    def __init__(self, path: str | os.PathLike, what: str = "--out") -> None:
+    def __init__(self, path: str | os.PathLike[str], what: str = "--out") -> None:
         self.target = Path(path)
         self.what = what
         self._lock: Any = None
@@ -270,7 +270,7 @@ def _check_replaceable(target: Path, is_ours: Callable[[Path], bool], what: str,
 
 
 @contextmanager
-def replace_folder(target: str | os.PathLike, is_ours: Callable[[Path], bool], what: str,
+def replace_folder(target: str | os.PathLike[str], is_ours: Callable[[Path], bool], what: str,
                    hint: str) -> Iterator[Path]:
     """Yield a staging folder beside `target`; on success it atomically takes `target`'s place.
 

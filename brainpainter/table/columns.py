@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.io.rawtable import RawTable, has_control
@@ -57,7 +58,7 @@ class Part:
     shape: TableShape
     images: list[str]
     numbered: bool
-    columns: dict[str, tuple[np.ndarray, str]]  # key -> (values per image, input name)
+    columns: dict[str, tuple[NDArray[Any], str]]  # key -> (values per image, input name)
     names: list[NameReport]
     problems: list[CellProblem]
     notes: list[str]
@@ -115,7 +116,7 @@ def validate_images(images: list[str], source: str, where: list[str], column: st
 
 
 def _convert(cells: Sequence[Any], raw: RawTable, column: str, rows: Sequence[int],
-             problems: list[CellProblem], decimal: list[Any]) -> np.ndarray:
+             problems: list[CellProblem], decimal: list[Any]) -> NDArray[Any]:
     out = np.full(len(cells), np.nan)
     decimal_at: dict[str, tuple[str, str, str]] = decimal[1]  # first cell with a decimal comma / point
     for k, cell in enumerate(cells):
@@ -153,9 +154,9 @@ class _Columns:
 
     def __init__(self, source: str, what: str) -> None:
         self.source, self.what = source, what
-        self.data: dict[str, tuple[np.ndarray, str]] = {}
+        self.data: dict[str, tuple[NDArray[Any], str]] = {}
 
-    def take(self, key: str, values: np.ndarray, name: str) -> None:
+    def take(self, key: str, values: NDArray[Any], name: str) -> None:
         if key in self.data:
             other = self.data[key][1]
             raise BrainPainterError(
@@ -285,6 +286,7 @@ def _read_long(raw: RawTable, shape: TableShape, resolver: NameResolver, problem
 def _read_transposed(raw: RawTable, shape: TableShape, resolver: NameResolver, problems: list[CellProblem],
                      decimal: list[bool], columns: _Columns) -> tuple[list[NameReport], list[str]]:
     reg = shape.region_index
+    assert reg is not None  # a transposed table has its regions in one column
     images = [h for j, h in enumerate(raw.header) if j != reg]
     validate_images(images, raw.source, [f"column {j + 1}" for j in range(len(raw.header)) if j != reg],
                      "header")

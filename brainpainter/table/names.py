@@ -37,6 +37,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
+from typing import Any
 
 from brainpainter.atlas.model import Atlas, Region
 
@@ -332,7 +333,7 @@ def infer_atlas(names: Sequence[object], atlases: Sequence[Atlas]) -> AtlasGuess
     resolves in DK, but only DKT is complete); otherwise the first in
     `atlases` (the default order puts ``dk`` first).
     """
-    best: tuple | None = None
+    best: tuple[Any, ...] | None = None
     scores: dict[str, int] = {}
     for order, atlas in enumerate(atlases):
         keys: set[str] = set()

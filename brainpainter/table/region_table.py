@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.errors import BrainPainterError, NoRegionColumnError
@@ -85,7 +86,7 @@ class RegionTable:
 
     images: tuple[str, ...]
     regions: tuple[str, ...]
-    values: np.ndarray
+    values: NDArray[Any]
     atlas: Atlas
     names: tuple[NameReport, ...] = ()
     source: str = ""
@@ -180,7 +181,7 @@ def summary_line(s: dict[str, Any]) -> str:
 def installed_atlases() -> list[Atlas]:
     """Installed atlases that load, ``dk`` first (the historical default)."""
     from brainpainter.atlas import registry
-    out = []
+    out: list[Atlas] = []
     names = registry.atlases.names()
     for name in sorted(names, key=lambda n: (n != DEFAULT_ATLAS, n)):
         try:

@@ -18,9 +18,10 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from typing import Any
 
 from brainpainter.errors import BrainPainterError, NoRegionColumnError, nearest
-from brainpainter.io.rawtable import RawTable
+from brainpainter.io.rawtable import Cell, RawTable
 from brainpainter.table.cells import is_empty, is_text, to_number
 from brainpainter.table.names import REGION, UNMATCHED, NameResolver
 
@@ -86,7 +87,7 @@ class TableShape:
             text = f"transposed (regions in rows from {self.region_column!r}, one column per image)"
         return text + (f", {self.flavour}" if self.flavour else "")
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         return {"kind": self.kind, "image_column": self.image_column, "region_column": self.region_column,
                 "value_column": self.value_column, "flavour": self.flavour, "why": self.why,
                 "description": self.describe()}
@@ -112,7 +113,7 @@ def find_column(raw: RawTable, name: str, option: str) -> int:
     )
 
 
-def _sample(raw: RawTable, j: int) -> list:
+def _sample(raw: RawTable, j: int) -> list[Cell]:
     return [row[j] for row in raw.rows[:SAMPLE_ROWS]]
 
 

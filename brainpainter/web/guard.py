@@ -12,10 +12,10 @@ import logging
 import secrets
 import threading
 import time
-from collections.abc import Awaitable, Callable
 from typing import Any
 
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.types import Message, Receive, Scope, Send
 
 from brainpainter.web.config import ServerConfig
 
@@ -77,7 +77,7 @@ class Guard:
         self.config = config
         self.limiter = RateLimiter(config.rate_per_minute)
 
-    async def __call__(self, scope: dict, receive: Callable, send: Callable) -> None:
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
@@ -90,7 +90,7 @@ class Guard:
         what = "upload" if is_upload else "request body"
         state = {"status": 0, "bytes": 0, "started": False}
 
-        async def send_wrapper(message: dict) -> None:
+        async def send_wrapper(message: Message) -> None:
             if message["type"] == "http.response.start":
                 state["status"], state["started"] = message["status"], True
                 headers = [h for h in message.get("headers", []) if h[0].lower() != b"server"]
@@ -104,7 +104,7 @@ class Guard:
 
         received = 0
 
-        async def receive_wrapper() -> dict:
+        async def receive_wrapper() -> Message:
             nonlocal received
             message = await receive()
             if message["type"] == "http.request":
@@ -136,7 +136,7 @@ class Guard:
                 "bytes_in": received, "bytes_out": state["bytes"]}))
 
 
-async def _send_json(send: Callable[[dict], Awaitable[None]], status: int, body: dict,
+async def _send_json(send: Send, status: int, body: dict[str, Any],
                      headers: dict[str, str] | None = None) -> None:
     raw = json.dumps(body).encode()
     hdrs = [(b"content-type", b"application/json"), (b"content-length", str(len(raw)).encode())]

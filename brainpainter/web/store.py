@@ -313,7 +313,7 @@ class Store:
         with self.transaction() as db:
             sql = ("UPDATE jobs SET status = 'failed', finished = ?, expires = ?, error = ?, "
                    "attempt = attempt + 1 WHERE id = ? AND status = 'running'")
-            args: tuple = (now, now + ttl_s, error[:500], job_id)
+            args: tuple[Any, ...] = (now, now + ttl_s, error[:500], job_id)
             if attempt is not None:
                 sql += " AND attempt = ?"
                 args += (attempt,)
@@ -330,7 +330,8 @@ class Store:
         """
         now = time.time()
         with self.transaction() as db:
-            sql, args = "SELECT id, attempt FROM jobs WHERE status = 'running'", ()
+            sql = "SELECT id, attempt FROM jobs WHERE status = 'running'"
+            args: tuple[str, ...] = ()
             if worker is not None:
                 sql, args = sql + " AND worker = ?", (worker,)
             rows = db.execute(sql, args).fetchall()
