@@ -25,6 +25,7 @@ logged as one JSON line on the ``brainpainter.web.access`` logger (both by
 from __future__ import annotations
 
 import logging
+from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from importlib import resources
 from typing import Any, Literal
@@ -110,7 +111,7 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
     pool = Pool(config, store)
 
     @asynccontextmanager
-    async def lifespan(app: FastAPI):
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         pool.start()
         try:
             yield
