@@ -22,10 +22,12 @@ The output is byte-identical for identical inputs.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.meshing import Structure
 from brainpainter.atlas.template import FORMAT, FORMAT_VERSION, HEMIS, SURFACES
@@ -43,11 +45,11 @@ INFLATED_GAP_MM = 10.0
 DEFAULT_ATLASES = ("dk", "destrieux", "dkt")
 
 
-def _hex(rgb) -> str:
+def _hex(rgb: Sequence[int]) -> str:
     return "#{:02x}{:02x}{:02x}".format(*(int(c) for c in rgb[:3]))
 
 
-def _bounds(arrays: list[np.ndarray]) -> list[list[float]]:
+def _bounds(arrays: list[NDArray[Any]]) -> list[list[float]]:
     stacked = np.concatenate([a.reshape(-1, 3) for a in arrays])
     return [stacked.min(axis=0).astype(float).tolist(), stacked.max(axis=0).astype(float).tolist()]
 
@@ -66,7 +68,8 @@ def _region_names(per_hemi: dict[str, cortex.LabelledSurface]) -> list[str]:
     return sorted(out, key=lambda n: (order.get(n, len(order)), n))
 
 
-def _check_args(atlases, surfaces, target_faces) -> tuple[tuple[str, ...], tuple[str, ...]]:
+def _check_args(atlases: Sequence[str], surfaces: Sequence[str],
+                target_faces: int | None) -> tuple[tuple[str, ...], tuple[str, ...]]:
     atlases = tuple(dict.fromkeys(atlases))
     surfaces = tuple(dict.fromkeys(surfaces))
     if not atlases:
@@ -124,7 +127,7 @@ def build_template(subject_dir: str | Path, out_dir: str | Path, *,
     license_file : path-like, optional
         FreeSurfer's licence text (default: found beside the subjects folder
         or in ``$FREESURFER_HOME``); its Part B goes into the template.
-    expected_regions : dict of str to int, optional
+    expected_regions : dict[str, Any] of str to int, optional
         Regions per hemisphere each label set must have (e.g. ``{"dk": 34}``);
         checked in the validation step.
 
@@ -194,11 +197,11 @@ class _Steps:
         self.bar.close()
 
 
-Surfaces = dict[str, dict[str, tuple[np.ndarray, np.ndarray]]]
+Surfaces = dict[str, dict[str, tuple[NDArray[Any], NDArray[Any]]]]
 
 
 def _read_surfaces(subject: sources.Subject, surfaces: tuple[str, ...], step: _Steps) -> tuple[
-        Surfaces, dict[str, Any], dict[str, dict[str, np.ndarray]]]:
+        Surfaces, dict[str, Any], dict[str, dict[str, NDArray[Any]]]]:
     """Surfaces (vertices, faces) per hemisphere, sulcal depth, and the inflated hemispheres' offsets."""
     surf: Surfaces = {}
     for hemi in HEMIS:
@@ -211,7 +214,7 @@ def _read_surfaces(subject: sources.Subject, surfaces: tuple[str, ...], step: _S
                     f"of {hemi}.pial; all surfaces of a hemisphere must come from one recon-all run")
         step.done()
     sulc = {h: subject.sulc(h) for h in HEMIS}
-    offsets: dict[str, dict[str, np.ndarray]] = {h: {} for h in HEMIS}
+    offsets: dict[str, dict[str, NDArray[Any]]] = {h: {} for h in HEMIS}
     if "inflated" in surfaces:
         off = cortex.inflated_offsets(surf["lh"]["inflated"][0], surf["rh"]["inflated"][0],
                                       gap=INFLATED_GAP_MM)
@@ -220,7 +223,7 @@ def _read_surfaces(subject: sources.Subject, surfaces: tuple[str, ...], step: _S
 
 
 def _cortex(subject: sources.Subject, atlases: tuple[str, ...], surf: Surfaces, sulc: dict[str, Any],
-            offsets: dict[str, dict[str, np.ndarray]], target_faces: int | None, step: _Steps) -> tuple[
+            offsets: dict[str, dict[str, NDArray[Any]]], target_faces: int | None, step: _Steps) -> tuple[
         dict[str, dict[str, cortex.LabelledSurface]], dict[str, list[str]]]:
     """One labelled, decimated mesh per label set and hemisphere, and the annotations they came from."""
     meshes: dict[str, dict[str, cortex.LabelledSurface]] = {}
@@ -250,7 +253,7 @@ def _subcortical(subject: sources.Subject, step: _Steps) -> list[Structure]:
     return structures
 
 
-def _glass(surf: Surfaces, step: _Steps) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+def _glass(surf: Surfaces, step: _Steps) -> dict[str, tuple[NDArray[Any], NDArray[Any]]]:
     """The glass-brain hull of each pial surface."""
     hulls = {}
     for hemi in HEMIS:
@@ -275,11 +278,11 @@ def _validate(stage: Path, manifest: dict[str, Any], name: str, subject: sources
 
 def _write(stage: Path, *, name: str, subject: sources.Subject, version: str, surfaces: tuple[str, ...],
            target_faces: int | None, meshes: dict[str, dict[str, cortex.LabelledSurface]],
-           label_sources: dict[str, list[str]], offsets: dict[str, dict[str, np.ndarray]],
-           structures: list[Structure], hulls: dict[str, tuple[np.ndarray, np.ndarray]],
+           label_sources: dict[str, list[str]], offsets: dict[str, dict[str, NDArray[Any]]],
+           structures: list[Structure], hulls: dict[str, tuple[NDArray[Any], NDArray[Any]]],
            license_file: str | Path | None) -> dict[str, Any]:
     """Write the template's files into `stage`; returns its manifest."""
-    all_vertices: dict[str, list[np.ndarray]] = {s: [] for s in surfaces}
+    all_vertices: dict[str, list[NDArray[Any]]] = {s: [] for s in surfaces}
     totals = {"cortex": 0, "subcortical": 0, "glass": 0}
     labels_entry = {label_set: _write_cortex(stage, label_set, per_hemi, label_sources[label_set], surfaces,
                                              all_vertices, totals)
@@ -327,7 +330,7 @@ def _write(stage: Path, *, name: str, subject: sources.Subject, version: str, su
 
 def _write_cortex(stage: Path, label_set: str, per_hemi: dict[str, cortex.LabelledSurface],
                   label_sources: list[str], surfaces: tuple[str, ...],
-                  all_vertices: dict[str, list[np.ndarray]], totals: dict[str, int]) -> dict[str, Any]:
+                  all_vertices: dict[str, list[NDArray[Any]]], totals: dict[str, int]) -> dict[str, Any]:
     """Write ``cortex-{hemi}-{label_set}.npz``; returns the label set's manifest entry."""
     entry: dict[str, Any] = {"source": ", ".join(label_sources), "regions": _region_names(per_hemi),
                              "cortex": {}}

@@ -15,11 +15,15 @@ intersects another. Only positions change: faces, labels and
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
-from brainpainter.atlas.meshing import count_self_intersections, self_intersecting_faces  # noqa: F401
+from brainpainter.atlas.meshing import count_self_intersections, self_intersecting_faces
 from brainpainter.errors import BrainPainterError
+
+__all__ = ["Cleaned", "count_self_intersections", "remove_self_intersections"]
 
 
 @dataclass(frozen=True)
@@ -35,13 +39,13 @@ class Cleaned:
         Vertices that moved.
     """
 
-    vertices: np.ndarray
+    vertices: NDArray[Any]
     before: int
     after: int
     moved: int
 
 
-def _neighbours(faces: np.ndarray, n: int):
+def _neighbours(faces: NDArray[Any], n: int) -> Any:
     from scipy import sparse
 
     ij = np.asarray(faces, dtype=np.int64)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
@@ -51,7 +55,7 @@ def _neighbours(faces: np.ndarray, n: int):
     return adj
 
 
-def remove_self_intersections(vertices: np.ndarray, faces: np.ndarray, *, rings: int = 2,
+def remove_self_intersections(vertices: NDArray[Any], faces: NDArray[Any], *, rings: int = 2,
                               steps: int = 4, max_rounds: int = 40) -> Cleaned:
     """Smooth the surface around its self-intersections until there are none.
 
@@ -104,3 +108,4 @@ def remove_self_intersections(vertices: np.ndarray, faces: np.ndarray, *, rings:
             return Cleaned(v, before, 0, int(np.count_nonzero(moved)))
     raise BrainPainterError(f"{int(np.count_nonzero(bad))} self-intersecting faces remain after "
                             f"{max_rounds} smoothing rounds (of {before})")
+

@@ -41,8 +41,10 @@ few hundred vertices by up to a few millimetres and changes no face.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.meshing import edge_use_counts
 from brainpainter.errors import BrainPainterError
@@ -64,7 +66,7 @@ class LabelledSurface:
         Colour-table names (regions and non-regions such as ``"unknown"``).
     colors : ndarray of uint8, shape (n_names, 3)
         Colour-table colours.
-    vertices : dict of str to ndarray of float32, shape (n_vertices, 3)
+    vertices : dict[str, Any] of str to ndarray of float32, shape (n_vertices, 3)
         Positions per surface (``"pial"``, ``"white"``, ``"inflated"``).
     source_vertex : ndarray of int32, shape (n_vertices,)
         Index of each vertex in the full-resolution surface.
@@ -78,24 +80,24 @@ class LabelledSurface:
         loading the template only has to split.
     sulc : ndarray of float32, shape (n_vertices,), or None
         Sulcal depth per vertex, when given.
-    self_intersections : dict of str to (int, int)
+    self_intersections : dict[str, Any] of str to (int, int)
         Per surface: self-intersecting faces before and after cleaning.
     """
 
-    faces: np.ndarray
-    face_label: np.ndarray
+    faces: NDArray[Any]
+    face_label: NDArray[Any]
     names: tuple[str, ...]
-    colors: np.ndarray
-    vertices: dict[str, np.ndarray]
-    source_vertex: np.ndarray
+    colors: NDArray[Any]
+    vertices: dict[str, NDArray[Any]]
+    source_vertex: NDArray[Any]
     n_source_faces: int
-    vertex_label: np.ndarray
-    boundary_t: np.ndarray
-    sulc: np.ndarray | None = None
+    vertex_label: NDArray[Any]
+    boundary_t: NDArray[Any]
+    sulc: NDArray[Any] | None = None
     self_intersections: dict[str, tuple[int, int]] | None = None
 
 
-def assign_face_labels(faces: np.ndarray, vertex_labels: np.ndarray) -> np.ndarray:
+def assign_face_labels(faces: NDArray[Any], vertex_labels: NDArray[Any]) -> NDArray[Any]:
     """Give every triangle one label: the majority of its vertex labels.
 
     Parameters
@@ -117,7 +119,7 @@ def assign_face_labels(faces: np.ndarray, vertex_labels: np.ndarray) -> np.ndarr
     return np.where((a == b) | (a == c), a, np.where(b == c, b, lowest))
 
 
-def boundary_vertex_mask(faces: np.ndarray, face_label: np.ndarray, n_vertices: int) -> np.ndarray:
+def boundary_vertex_mask(faces: NDArray[Any], face_label: NDArray[Any], n_vertices: int) -> NDArray[Any]:
     """Vertices whose incident faces carry more than one label, shape (n_vertices,)."""
     faces = np.asarray(faces, dtype=np.int64)
     face_label = np.asarray(face_label, dtype=np.int64)
@@ -126,17 +128,18 @@ def boundary_vertex_mask(faces: np.ndarray, face_label: np.ndarray, n_vertices: 
     for k in range(3):
         np.minimum.at(lo, faces[:, k], face_label)
         np.maximum.at(hi, faces[:, k], face_label)
-    return (lo != hi) & (hi >= lo)
+    boundary: NDArray[np.bool_] = (lo != hi) & (hi >= lo)
+    return boundary
 
 
-def open_edge_count(faces: np.ndarray) -> int:
+def open_edge_count(faces: NDArray[Any]) -> int:
     """Number of edges used by exactly one face (0 for a closed surface)."""
     return int(np.count_nonzero(edge_use_counts(faces) == 1))
 
 
-def decimate(vertices: np.ndarray, faces: np.ndarray, face_label: np.ndarray,
-             target_faces: int, vertex_labels: np.ndarray | None = None) -> tuple[
-                 np.ndarray, np.ndarray, np.ndarray]:
+def decimate(vertices: NDArray[Any], faces: NDArray[Any], face_label: NDArray[Any],
+             target_faces: int, vertex_labels: NDArray[Any] | None = None) -> tuple[
+                 NDArray[Any], NDArray[Any], NDArray[Any]]:
     """Quadric decimation that keeps every region boundary vertex in place.
 
     Parameters
@@ -209,7 +212,7 @@ def decimate(vertices: np.ndarray, faces: np.ndarray, face_label: np.ndarray,
     return rank[out_faces], np.rint(out_label).astype(np.int64), source[order]
 
 
-def canonical_faces(faces: np.ndarray, face_label: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def canonical_faces(faces: NDArray[Any], face_label: NDArray[Any]) -> tuple[NDArray[Any], NDArray[Any]]:
     """Sort faces by label, then by vertex, each rotated to start at its lowest vertex.
 
     Rotation keeps the winding; the order makes each region a contiguous run
@@ -223,17 +226,17 @@ def canonical_faces(faces: np.ndarray, face_label: np.ndarray) -> tuple[np.ndarr
     return faces[order], np.asarray(face_label)[order]
 
 
-def build_labelled_surface(surfaces: dict[str, tuple[np.ndarray, np.ndarray]],
-                           vertex_labels: np.ndarray, names: tuple[str, ...], ctab: np.ndarray,
+def build_labelled_surface(surfaces: dict[str, tuple[NDArray[Any], NDArray[Any]]],
+                           vertex_labels: NDArray[Any], names: tuple[str, ...], ctab: NDArray[Any],
                            target_faces: int | None,
-                           offsets: dict[str, np.ndarray] | None = None,
-                           sulc: np.ndarray | None = None,
+                           offsets: dict[str, NDArray[Any]] | None = None,
+                           sulc: NDArray[Any] | None = None,
                            clean: bool = True) -> LabelledSurface:
     """Split one hemisphere by one label set and decimate it on the pial surface.
 
     Parameters
     ----------
-    surfaces : dict of str to (vertices (n, 3), faces (m, 3))
+    surfaces : dict[str, Any] of str to (vertices (n, 3), faces (m, 3))
         Full-resolution surfaces of one hemisphere; must include ``"pial"``
         and all must share the pial faces.
     vertex_labels : ndarray of int, shape (n,)
@@ -242,7 +245,7 @@ def build_labelled_surface(surfaces: dict[str, tuple[np.ndarray, np.ndarray]],
     ctab : ndarray of int, shape (len(names), >=3)
     target_faces : int or None
         Faces wanted per hemisphere; None keeps full resolution.
-    offsets : dict of str to ndarray, shape (3,), optional
+    offsets : dict[str, Any] of str to ndarray, shape (3,), optional
         Translation added to a surface (the inflated hemisphere offset).
     sulc : ndarray of float, shape (n,), optional
         Sulcal depth per full-resolution vertex (``surf/?h.sulc``).
@@ -284,8 +287,8 @@ def build_labelled_surface(surfaces: dict[str, tuple[np.ndarray, np.ndarray]],
     )
 
 
-def inflated_offsets(lh_inflated: np.ndarray, rh_inflated: np.ndarray,
-                     gap: float = 10.0) -> dict[str, np.ndarray]:
+def inflated_offsets(lh_inflated: NDArray[Any], rh_inflated: NDArray[Any],
+                     gap: float = 10.0) -> dict[str, NDArray[Any]]:
     """x translations that put the inflated hemispheres side by side.
 
     The left hemisphere ends at ``x = -gap / 2`` and the right one starts at

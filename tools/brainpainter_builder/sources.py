@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.io.files import check_input
@@ -60,8 +61,8 @@ class Annotation:
         Where the labels came from, for the manifest.
     """
 
-    labels: np.ndarray
-    ctab: np.ndarray
+    labels: NDArray[Any]
+    ctab: NDArray[Any]
     names: tuple[str, ...]
     source: str
 
@@ -70,7 +71,7 @@ def _missing(path: Path, what: str) -> BrainPainterError:
     return BrainPainterError(f"missing {what} {path}; a FreeSurfer subject directory needs it")
 
 
-def _read_optional(path: Path, read: Callable[[str], Any], what: str, dtype: type) -> np.ndarray | None:
+def _read_optional(path: Path, read: Callable[[str], Any], what: str, dtype: type) -> NDArray[Any] | None:
     """`read(path)` as an array of `dtype`; None when the file does not exist."""
     if not path.is_file():
         return None
@@ -85,8 +86,8 @@ def _unreadable(path: Path, what: str, exc: Exception) -> BrainPainterError:
     return BrainPainterError(f"cannot read {path} as {what}: {reason}")
 
 
-def normalise_labels(labels: np.ndarray, ctab: np.ndarray, names: list[str]) -> tuple[
-        np.ndarray, np.ndarray, tuple[str, ...]]:
+def normalise_labels(labels: NDArray[Any], ctab: NDArray[Any], names: list[str]) -> tuple[
+        np.ndarray, NDArray[Any], tuple[str, ...]]:
     """Map unlabelled vertices (-1) to a non-region name.
 
     ``nibabel.freesurfer.read_annot`` gives -1 where a vertex's annotation
@@ -150,7 +151,7 @@ class Subject:
         return self.path.absolute().name
 
     # -- surfaces -----------------------------------------------------------------
-    def surface(self, hemi: str, surf: str) -> tuple[np.ndarray, np.ndarray]:
+    def surface(self, hemi: str, surf: str) -> tuple[NDArray[Any], NDArray[Any]]:
         """Read ``surf/{hemi}.{surf}``.
 
         Returns
@@ -186,7 +187,7 @@ class Subject:
             )
         return vertices, faces
 
-    def sulc(self, hemi: str) -> np.ndarray | None:
+    def sulc(self, hemi: str) -> NDArray[Any] | None:
         """Sulcal depth ``surf/{hemi}.sulc`` (mm, positive in sulci), shape (n,); None if absent."""
         from nibabel.freesurfer import read_morph_data
 
@@ -213,7 +214,7 @@ class Subject:
                 "use the file made for this subject"
             )
 
-    def cortex_mask(self, hemi: str) -> np.ndarray | None:
+    def cortex_mask(self, hemi: str) -> NDArray[Any] | None:
         """Vertices of ``label/{hemi}.cortex.label`` as a mask, shape (n,); None if absent."""
         from nibabel.freesurfer import read_label
 
@@ -334,7 +335,7 @@ class Subject:
         return Annotation(labels, ctab, names, f"{gcs.name} (classified on surf/{hemi}.sphere.reg)")
 
     # -- volumes ------------------------------------------------------------------
-    def aseg(self) -> tuple[np.ndarray, np.ndarray, float]:
+    def aseg(self) -> tuple[NDArray[Any], NDArray[Any], float]:
         """Read ``mri/aseg.mgz``.
 
         Returns

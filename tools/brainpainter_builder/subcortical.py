@@ -12,10 +12,10 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas import meshing
-from brainpainter.atlas.meshing import (  # noqa: F401  (the builder's subcortical API)
+from brainpainter.atlas.meshing import (
     BLUR_KEEP,
     BLUR_VOXELS,
     DECIMATION_FRACTIONS,
@@ -26,6 +26,10 @@ from brainpainter.atlas.meshing import (  # noqa: F401  (the builder's subcortic
     vertex_normals,
 )
 from brainpainter.atlas.model import Region, read_regions_tsv
+
+# The builder's subcortical API: its own functions and the core's meshing they use.
+__all__ = ["BLUR_KEEP", "BLUR_VOXELS", "DECIMATION_FRACTIONS", "Structure", "aseg_regions", "aseg_table_path",
+           "blur_for", "build_structures", "merge_structures", "mesh_mask", "vertex_normals"]
 
 
 def aseg_table_path() -> Path:
@@ -38,9 +42,10 @@ def aseg_regions() -> tuple[Region, ...]:
     return read_regions_tsv(aseg_table_path())
 
 
-def build_structures(aseg: np.ndarray, vox2ras: np.ndarray, voxel_volume: float,
+def build_structures(aseg: NDArray[Any], vox2ras: NDArray[Any], voxel_volume: float,
                      regions: tuple[Region, ...] | None = None, **options: Any) -> list[Structure]:
     """Mesh the aseg structures: :func:`brainpainter.atlas.meshing.build_structures` with
     `regions` defaulting to the bundled ``aseg.tsv`` and `options` passed on."""
     regions = aseg_regions() if regions is None else regions
     return meshing.build_structures(aseg, vox2ras, voxel_volume, regions, **options)
+

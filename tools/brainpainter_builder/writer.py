@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from brainpainter.atlas.writer import (  # noqa: F401  (the builder's writing API)
+from brainpainter.atlas.writer import (
     TEMPLATE_HINT,
     check_out_dir,
     is_template_dir,
@@ -19,6 +19,10 @@ from brainpainter.atlas.writer import (  # noqa: F401  (the builder's writing AP
     write_json,
 )
 from brainpainter.errors import BrainPainterError
+
+# The builder's writing API: the licence here, the rest from the core.
+__all__ = ["TEMPLATE_HINT", "check_out_dir", "find_license", "is_template_dir", "save_npz", "staged_dir",
+           "write_json", "write_license"]
 
 
 def write_license(path: str | Path, license_file: str | Path, subject: str, version: str) -> None:
@@ -78,3 +82,4 @@ def find_license(subject_dir: str | Path) -> Path | None:
         if c.is_file():
             return c
     return None
+
