@@ -37,7 +37,7 @@ import json, sys, time
 args = json.loads(sys.argv[1])
 if __name__ == "__main__":
     import pandas as pd
-    from brainpainter.rendering.painter import render
+    from brainpainter.rendering.run import render
     frame = pd.read_csv(args["example"])
     rows = [frame.iloc[i % len(frame)].copy() for i in range(args["rows"])]
     big = pd.DataFrame(rows).reset_index(drop=True)

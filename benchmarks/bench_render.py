@@ -10,6 +10,13 @@ a real render forced before every read-back), and their ratio.
     python benchmarks/bench_render.py                 # 50 rows x 3 default views, 1200x900
     python benchmarks/bench_render.py --rows 10 --quality fast
     python benchmarks/bench_render.py --no-peer       # without PyVista (pip install -e .[bench])
+    python benchmarks/bench_render.py --profile       # also: where one image's time goes
+
+``--profile`` adds, from a separate process: the start-up steps up to the
+first image, and per view the triangles drawn and the median seconds of each
+step of one image (palette, clear, each part, glass, resolve, read-back, each
+waited for, so they add up to more than an ordinary image, whose steps
+overlap), the whole image, its CPU seconds, and the PNG encoding.
 
 Record results in docs/benchmarks.md with the machine they ran on.
 """
@@ -19,6 +26,7 @@ from __future__ import annotations
 import argparse
 import itertools
 import json
+import os
 import statistics
 import subprocess
 import sys
@@ -34,7 +42,7 @@ import json, sys, time
 t0 = time.perf_counter()
 import pandas as pd
 import brainpainter
-from brainpainter.rendering.painter import render
+from brainpainter.rendering.run import render
 args = json.loads(sys.argv[1])
 frame = pd.read_csv(args["example"])
 rows = [frame.iloc[i % len(frame)].copy() for i in range(args["rows"])]
@@ -111,6 +119,67 @@ print(json.dumps({"times": times[2:], "cpu": cpu[2:]}))
 """
 
 
+# Where the time goes: start-up steps, then each view's steps (GpuDraw.profile) and the PNG.
+PROFILE = r"""
+import json, statistics, sys, time
+t0 = time.perf_counter()
+steps = {}
+def mark(name):
+    steps[name] = round(time.perf_counter() - t0, 3)
+import numpy as np
+import pandas
+mark("import numpy, pandas")
+from brainpainter.rendering.painter import Painter
+from brainpainter.io.output import png_bytes
+from brainpainter.rendering.scene import RenderSettings
+from brainpainter.rendering.views import get_view
+mark("import brainpainter")
+args = json.loads(sys.argv[1])
+painter = Painter("dk", settings=RenderSettings(args["width"], args["height"], quality=args["quality"]))
+mark("load atlas and template")
+from brainpainter_blender import _bpy
+_bpy.import_bpy()
+mark("import bpy")
+geometry = painter.scene.geometry
+mark("scene geometry")
+gpu = painter.load()._gpu
+mark("renderer: upload batches, compile shaders")
+views = [get_view(v) for v in args["views"]]
+painter.paint_colors({}, views[0])
+mark("first image")
+rng = np.random.default_rng(0)
+out = {"startup_s": steps, "views": {}}
+for view in views:
+    rows, whole, cpu, png = [], [], [], []
+    for i in range(args["n"] + 2):
+        rgb = rng.random((geometry.n_slots, 3))
+        rows.append(gpu.profile(rgb, view))
+        t, c = time.perf_counter(), time.process_time()
+        img = gpu.render(rng.random((geometry.n_slots, 3)), view)
+        whole.append(time.perf_counter() - t)
+        cpu.append(time.process_time() - c)
+        t = time.perf_counter()
+        png_bytes(img)
+        png.append(time.perf_counter() - t)
+    med = {k: round(statistics.median(r[k] for r in rows[2:]), 4) for k in rows[2]}
+    med["image (steps overlapping)"] = round(statistics.median(whole[2:]), 4)
+    med["image CPU s (all threads)"] = round(statistics.median(cpu[2:]), 4)
+    med["png (fpng)"] = round(statistics.median(png[2:]), 4)
+    triangles = {p.name: len(p.triangles) for p in geometry.visible(view)}
+    out["views"][view.name] = {"triangles": triangles, "median_s": med}
+print(json.dumps(out))
+"""
+
+
+def run_profile(args: argparse.Namespace, n: int = 10) -> dict:
+    """Start-up steps and per-view step medians, from a fresh process."""
+    cfg = {"width": args.width, "height": args.height, "quality": args.quality, "n": n,
+           "views": args.views.split(",")}
+    proc = subprocess.run([sys.executable, "-c", PROFILE, json.dumps(cfg)], capture_output=True, text=True,
+                          check=True)
+    return _last_json(proc.stdout)
+
+
 def run_peer(engine: str, args: argparse.Namespace, n: int = 20) -> tuple[float, float]:
     """Median wall and CPU seconds of one render + read-back."""
     cfg = {"engine": engine, "width": args.width, "height": args.height, "n": n}
@@ -148,9 +217,12 @@ def main() -> None:
     parser.add_argument("--size", default="1200x900")
     parser.add_argument("--quality", default="default")
     parser.add_argument("--no-peer", action="store_true", help="skip the PyVista/VTK comparison")
+    parser.add_argument("--profile", action="store_true",
+                        help="also time the steps of start-up and of one image")
     args = parser.parse_args()
     args.width, args.height = (int(x) for x in args.size.split("x"))
 
+    load_before = [round(x, 2) for x in os.getloadavg()]
     small = run_child(args.small_rows, args)
     big = run_child(args.rows, args)
     stamps = big["stamps"]
@@ -158,6 +230,7 @@ def main() -> None:
     n = big["n_images"]
     amortised = (big["t_total"]) / n
     report = {
+        "load_average_before": load_before,
         "images": n,
         "size": args.size,
         "quality": args.quality,
@@ -184,6 +257,9 @@ def main() -> None:
                                                       "pyvista_vtk_ssaa": round(theirs[1], 4)}
             report["pyvista_over_brainpainter"] = round(theirs[0] / ours[0], 2)
             report["pyvista_over_brainpainter_cpu"] = round(theirs[1] / ours[1], 2)
+    if args.profile:
+        report["profile"] = run_profile(args)
+    report["load_average_after"] = [round(x, 2) for x in os.getloadavg()]
     print(json.dumps(report, indent=2))
 
 

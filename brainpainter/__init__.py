@@ -45,8 +45,9 @@ if TYPE_CHECKING:
     from brainpainter.media.figure import make_figure as figure
     from brainpainter.media.movie import make_movie as movie
     from brainpainter.media.plot import plot
-    from brainpainter.rendering.painter import Painter, RenderResult, render
-    from brainpainter.rendering.scene import RenderSettings
+    from brainpainter.rendering.painter import Painter, RenderResult
+    from brainpainter.rendering.run import render
+    from brainpainter.rendering.settings import RenderSettings
     from brainpainter.table.region_table import read_table
 
 # public name -> (module, attribute), imported on first use
@@ -54,7 +55,7 @@ _LAZY = {
     "BrainPainterError": ("brainpainter.errors", "BrainPainterError"),
     "Painter": ("brainpainter.rendering.painter", "Painter"),
     "RenderResult": ("brainpainter.rendering.painter", "RenderResult"),
-    "RenderSettings": ("brainpainter.rendering.scene", "RenderSettings"),
+    "RenderSettings": ("brainpainter.rendering.settings", "RenderSettings"),
     "export": ("brainpainter.media.export", "export"),
     "figure": ("brainpainter.media.figure", "make_figure"),
     "get_atlas": ("brainpainter.atlas.registry", "get_atlas"),
@@ -64,7 +65,7 @@ _LAZY = {
     "movie": ("brainpainter.media.movie", "make_movie"),
     "plot": ("brainpainter.media.plot", "plot"),
     "read_table": ("brainpainter.table.region_table", "read_table"),
-    "render": ("brainpainter.rendering.painter", "render"),
+    "render": ("brainpainter.rendering.run", "render"),
 }
 
 

@@ -47,3 +47,12 @@ def choice_error(what: str, value: object, allowed: Iterable[str], hint: str = "
     if hint:
         msg += f" {hint}"
     return BrainPainterError(msg)
+
+
+# -- error types of the run options and media (issue 13, options helper) ---------------------------
+class ColumnNotFoundError(BrainPainterError):
+    """A column named by an option (``--time-column``, ``--image-column``...) is not in a table."""
+
+
+class AmbiguousColumnError(BrainPainterError):
+    """A column named by an option appears more than once in a table."""

@@ -275,7 +275,7 @@ def check_atlas(atlas: Any, template: str | Path = "fsaverage") -> dict[str, Any
     from brainpainter.atlas import registry
     from brainpainter.atlas.model import Atlas
     from brainpainter.atlas.template import load_template, template_for
-    from brainpainter.rendering.painter import render
+    from brainpainter.rendering.run import render
 
     a: Atlas = registry.atlases.get(atlas) if isinstance(atlas, str) else atlas
     problems: list[str] = []

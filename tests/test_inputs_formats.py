@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from brainpainter.atlas.registry import get_atlas
-from brainpainter.rendering.painter import render
+from brainpainter.rendering.run import render
 from brainpainter.table.region_table import read_table
 from brainpainter.testing import registered_renderer, write_tiny_template
 

@@ -22,8 +22,8 @@ from PIL import Image
 
 from brainpainter.cli.main import cli
 from brainpainter.errors import BrainPainterError
-from brainpainter.rendering.painter import render
 from brainpainter.rendering.parallel import chunk_size, chunked, drive, resolve_jobs
+from brainpainter.rendering.run import render
 from brainpainter.testing import StandInRenderer, registered_renderer, stand_in, write_tiny_template
 
 sys.path.insert(0, str(Path(__file__).parent))  # so that this process and its workers import the module
@@ -247,7 +247,7 @@ def test_ctrl_c_stops_every_worker_process(tmp_path, tiny, table):
     script = (
         "import sys; sys.path.insert(0, sys.argv[1])\n"
         "from _parallel_renderers import SlowStandIn\n"
-        "from brainpainter.rendering.painter import render\n"
+        "from brainpainter.rendering.run import render\n"
         "from brainpainter.testing import registered_renderer\n"
         "if __name__ == '__main__':\n"
         "    with registered_renderer('slow', SlowStandIn):\n"

@@ -14,7 +14,8 @@ import pytest
 from PIL import Image
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.rendering.painter import Painter, render, resolve_hidden
+from brainpainter.rendering.painter import Painter, resolve_hidden
+from brainpainter.rendering.run import render
 from brainpainter.testing import registered_renderer, write_tiny_template
 
 
@@ -98,7 +99,7 @@ def test_absent_and_nan_regions_get_their_colours(solid, tiny):
     from brainpainter.rendering.scene import RenderSettings
     from brainpainter.rendering.views import get_view
 
-    painter = Painter("dk", str(tiny), renderer=solid, settings=RenderSettings(width=4, height=4))
+    painter = Painter("dk", str(tiny), renderer=solid, settings=RenderSettings(width=16, height=16))
     scale = make_scale(nan_color="#000080", missing_color="#008000")
     nan_img = painter.paint({"Left-insula": float("nan")}, get_view("lateral-left"), scale)
     absent_img = painter.paint({}, get_view("lateral-left"), scale)

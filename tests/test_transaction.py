@@ -353,7 +353,7 @@ def test_real_render_writes_nothing_outside_the_output_folder(tmp_path):
 def test_library_api_refuses_non_finite_numbers(tmp_path, function, kwargs, message):
     from brainpainter.media.figure import make_figure
     from brainpainter.media.movie import make_movie
-    from brainpainter.rendering.painter import render
+    from brainpainter.rendering.run import render
     from brainpainter.testing import stand_in, write_tiny_template
 
     tiny = write_tiny_template(tmp_path / "tiny")

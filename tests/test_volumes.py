@@ -24,7 +24,7 @@ from brainpainter.atlas.volumes import (
 )
 from brainpainter.cli.main import cli
 from brainpainter.errors import BrainPainterError
-from brainpainter.rendering.painter import render
+from brainpainter.rendering.run import render
 from brainpainter.testing import StandInRenderer, stand_in
 
 REPO = Path(__file__).resolve().parents[1]

@@ -195,6 +195,19 @@ def _match_volume(vertices: NDArray[Any], faces: NDArray[Any], target: float,
     return vertices
 
 
+def _meshing_libraries() -> tuple[ModuleType, ModuleType, Callable[..., Any]]:
+    """pymeshlab, trimesh and scikit-image's ``marching_cubes`` (the ``builder`` extra)."""
+    pymeshlab = import_pymeshlab()
+    import trimesh
+
+    try:
+        from skimage.measure import marching_cubes
+    except ImportError as exc:
+        raise BrainPainterError(
+            f"meshing needs scikit-image ({exc}); install it with {BUILDER_HINT}") from None
+    return pymeshlab, trimesh, marching_cubes
+
+
 def mesh_mask(mask: NDArray[Any], vox2ras: NDArray[Any], *, smooth_iterations: int = 30,
               target_fraction: float = 0.3, min_faces: int = 400,
               voxel_volume: float | None = None,
@@ -225,14 +238,7 @@ def mesh_mask(mask: NDArray[Any], vox2ras: NDArray[Any], *, smooth_iterations: i
     smoothed_volume : float
         Volume after smoothing and decimation, before the final volume match.
     """
-    pymeshlab = import_pymeshlab()
-    import trimesh
-
-    try:
-        from skimage.measure import marching_cubes
-    except ImportError as exc:
-        raise BrainPainterError(
-            f"meshing needs scikit-image ({exc}); install it with {BUILDER_HINT}") from None
+    pymeshlab, trimesh, marching_cubes = _meshing_libraries()
 
     mask = np.asarray(mask, dtype=bool)
     idx = np.argwhere(mask)
@@ -247,12 +253,10 @@ def mesh_mask(mask: NDArray[Any], vox2ras: NDArray[Any], *, smooth_iterations: i
         from scipy import ndimage
 
         sub = ndimage.gaussian_filter(sub, blur)
-    verts, faces, _, _ = marching_cubes(  # type: ignore[no-untyped-call]
-        sub, level=0.5, method="lewiner", allow_degenerate=False)
+    verts, faces, _, _ = marching_cubes(sub, level=0.5, method="lewiner", allow_degenerate=False)
     verts = verts.astype(np.float64) + lo  # voxel indices (i, j, k) of the full volume
     tm = trimesh.Trimesh(verts, faces, process=True)
-    trimesh.smoothing.filter_taubin(  # type: ignore[no-untyped-call]
-        tm, lamb=0.5, nu=0.53, iterations=smooth_iterations)
+    trimesh.smoothing.filter_taubin(tm, lamb=0.5, nu=0.53, iterations=smooth_iterations)
     verts = np.asarray(tm.vertices, dtype=np.float64)
     faces = np.asarray(tm.faces, dtype=np.int64)
     target = max(min_faces, round(len(faces) * target_fraction))

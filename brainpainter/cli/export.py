@@ -12,10 +12,9 @@ from typing import Any
 import click
 
 from brainpainter.cli.options import input_options, make_render_options, render_kwargs
+from brainpainter.media.export import EXPORT_OPTIONS
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
-EXPORT_OPTIONS = ("atlas", "template", "surface", "gradient", "cmap", "vmin", "vmax", "center", "nan_color",
-                  "missing_color", "hide", "background", "atlas_config")
 
 
 @click.command(context_settings=CONTEXT)
@@ -29,7 +28,7 @@ EXPORT_OPTIONS = ("atlas", "template", "surface", "gradient", "cmap", "vmin", "v
 @click.option("--row", default=None, help="Image name of the row to export (needed when there are several).")
 @click.option("--title", default=None, help="Heading of the HTML page (default: the image name).")
 @click.option("--label", default=None, help="Colour-bar label of the HTML page, e.g. 'z-score'.")
-@make_render_options(only=EXPORT_OPTIONS)
+@make_render_options(only=("atlas", *EXPORT_OPTIONS))
 @input_options
 def export(inputs: tuple[Path, ...], fmt: str | None, out: Path | None, row: str | None, title: str | None,
            label: str | None, **options: Any) -> None:

@@ -16,14 +16,17 @@ from typing import Any
 import click
 
 from brainpainter.cli.options import (
-    FINITE,
     input_options,
+    option_group,
     parallel_options,
     parse_size,
     render_kwargs,
     render_options,
 )
+from brainpainter.color.scale import ScaleOptions
 from brainpainter.errors import BrainPainterError
+from brainpainter.rendering.options import SceneOptions
+from brainpainter.rendering.settings import RenderSettings
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 
@@ -94,7 +97,7 @@ def atlas_list(as_json: bool) -> None:
     rows = []
     for name in registry.atlases.names():
         entry = next((e for e in registry.atlases.entries() if e.name == name), None)
-        row = {"name": name, "aliases": list(entry.aliases) if entry else [],
+        row: dict[str, Any] = {"name": name, "aliases": list(entry.aliases) if entry else [],
                "distribution": entry.distribution if entry else "(session)"}
         try:
             a = registry.atlases.get(name)
@@ -124,12 +127,9 @@ def atlas_list(as_json: bool) -> None:
               help="Views of the reference image [default: lateral-left,medial-left,subcortical; "
                    "subcortical,subcortical-dorsal for an atlas without cortical regions].")
 @click.option("--size", default="800x600", show_default=True, help="Size of each view, WIDTHxHEIGHT.")
-@click.option("--template", default="fsaverage", show_default=True, help="Template name or folder.")
-@click.option("--surface", default="pial", show_default=True,
-              type=click.Choice(["pial", "white", "inflated"]))
-@click.option("--quality", default="default", show_default=True,
-              type=click.Choice(["fast", "default", "high"]))
-@click.option("--renderer", default="blender", show_default=True)
+@option_group(SceneOptions, ("template", "surface"))
+@option_group(RenderSettings, ("quality",))
+@option_group(SceneOptions, ("renderer",))
 def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, size: str, template: str,
                surface: str, quality: str, renderer: str) -> None:
     """Regions of atlas NAME, with hemisphere, colour and aliases; --image draws them."""
@@ -218,7 +218,7 @@ def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: P
     if (volume is None) != (lut is None):
         raise BrainPainterError("--volume and --lut go together: the look-up table names the volume's labels")
     t0 = time.perf_counter()
-    if volume is not None:
+    if volume is not None and lut is not None:
         from brainpainter.atlas.volumes import add_volume_atlas
 
         folder = add_volume_atlas(name, volume, lut, space=space, template=template, title=title,
@@ -297,11 +297,9 @@ def _one_or_many(inputs: tuple[Path, ...]) -> Path | list[Path]:
               help="Atlas: dk, destrieux, dkt (alias tourville) or a plugin atlas. "
                    "Default: inferred from the region names.")
 @input_options
-@click.option("--gradient", default=None, help="Colour scale to compare the values with (as for render).")
-@click.option("--cmap", default=None, help="Colour map to compare the values with (as for render).")
-@click.option("--vmin", type=FINITE, default=None)
-@click.option("--vmax", type=FINITE, default=None)
-@click.option("--center", type=FINITE, default=None)
+@option_group(ScaleOptions, ("gradient", "cmap", "vmin", "vmax", "center"),
+              gradient={"help": "Colour scale to compare the values with (as for render)."},
+              cmap={"help": "Colour map to compare the values with (as for render)."})
 @click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
 def check(inputs: tuple[Path, ...], atlas: str | None, image_column: str | None, value: str | None,
           region_column: str | None, strict: bool, gradient: str | None, cmap: str | None,
@@ -346,7 +344,7 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
 
     Several INPUTs (e.g. lh and rh aparcstats2table files) are merged by image name.
     """
-    from brainpainter.rendering.painter import render as run
+    from brainpainter.rendering.run import render as run
 
     result = run(_one_or_many(inputs), out=out, progress=not quiet, rows=rows, **render_kwargs(options))
     from brainpainter.table.region_table import summary_line

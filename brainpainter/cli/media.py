@@ -12,13 +12,15 @@ from typing import Any
 import click
 
 from brainpainter.cli.options import (
-    FINITE,
     input_options,
     make_render_options,
+    option_group,
     parallel_options,
     render_kwargs,
     render_options,
 )
+from brainpainter.media.layout import FigureOptions
+from brainpainter.media.movie import MovieOptions
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 
@@ -37,21 +39,10 @@ def _rows(value: str | None) -> list[str] | None:
                 type=click.Path(path_type=Path, dir_okay=False))
 @click.option("--out", "-o", required=True, type=click.Path(path_type=Path),
               help="Figure file: .png or .tif (at --dpi), .pdf or .svg (renders embedded, text as text).")
-@click.option("--grid", is_flag=True,
-              help="Rows of the input as columns (e.g. stages) and views as rows, headed by image names.")
+@option_group(FigureOptions, ("grid",))
 @click.option("--rows", default=None,
               help="Image names to show, comma-separated, in this order (default: all rows).")
-@click.option("--title", default=None, help="A title above the figure.")
-@click.option("--label", default=None,
-              help="Colour-bar label, e.g. 'z-score' or 'atrophy (SD from controls)'.")
-@click.option("--ticks", default=None,
-              help="Colour-bar ticks, e.g. 0,1.5,3 (default: the gradient's colours).")
-@click.option("--dpi", type=FINITE, default=300.0, show_default=True, help="Resolution of PNG/TIFF output.")
-@click.option("--fig-width", type=FINITE, default=None,
-              help="Figure width in inches (default 7.2, two journal columns; 3.5 for 1-2 image columns).")
-@click.option("--font-size", type=FINITE, default=8.0, show_default=True, help="Text size in points.")
-@click.option("--view-labels", is_flag=True,
-              help="Name the views (row labels in a grid, headings otherwise).")
+@option_group(FigureOptions, ("title", "label", "ticks", "dpi", "fig_width", "font_size", "view_labels"))
 @render_options
 @input_options
 @parallel_options
@@ -94,23 +85,10 @@ def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, ti
                 type=click.Path(path_type=Path, dir_okay=False))
 @click.option("--out", "-o", required=True, type=click.Path(path_type=Path),
               help="Movie file: .mp4 (H.264) or .gif.")
-@click.option("--frames-per-step", type=int, default=24, show_default=True,
-              help="Frames from one key frame (row) to the next.")
-@click.option("--easing", type=click.Choice(["linear", "smooth"]), default="linear", show_default=True,
-              help="smooth: slow into and out of each key frame.")
-@click.option("--time-column", default=None,
-              help="Numeric column with each row's time (e.g. years): rows are sorted by it, steps get "
-                   "frames in proportion to their gaps, and the caption shows the time.")
-@click.option("--hold", type=int, default=0, show_default=True,
-              help="Extra frames showing each key frame still.")
-@click.option("--fps", type=FINITE, default=24.0, show_default=True, help="Frames per second.")
-@click.option("--orbit", type=FINITE, default=0.0, show_default=True,
-              help="Degrees the camera turns around the brain over the movie (360: one full turn).")
+@option_group(MovieOptions, ("frames_per_step", "easing", "time_column", "hold", "fps", "orbit"))
 @click.option("--rows", default=None,
               help="Image names to use as key frames, comma-separated (default: all).")
-@click.option("--title", default=None, help="A title above the views.")
-@click.option("--label", default=None, help="Colour-bar label, e.g. 'z-score'.")
-@click.option("--ticks", default=None, help="Colour-bar ticks, e.g. 0,1.5,3.")
+@option_group(MovieOptions, ("title", "label", "ticks"))
 @make_render_options(size="800x600")
 @input_options
 @parallel_options

@@ -1,26 +1,35 @@
 """Click options shared by the commands that render: atlas, views, colours, image settings.
 
-``@render_options`` adds the options of ``brainpainter render`` with the same
-names and defaults; :func:`render_kwargs` turns the values click passes into
-keyword arguments of :func:`brainpainter.render`,
-:func:`brainpainter.media.figure.make_figure` and :func:`brainpainter.media.movie.make_movie`.
-``@input_options`` adds how tables are read (``--image-column``, ``--value``,
-``--region-column``, ``--strict``). Only click is imported here.
+The options are generated from their one definition, the option dataclasses
+(:mod:`brainpainter.rendering.options`): flag names, defaults, choices and help
+come from their fields. ``@render_options`` adds the options of ``brainpainter
+render``; :func:`render_kwargs` turns the values click passes into keyword
+arguments of :func:`brainpainter.render`, :func:`brainpainter.media.figure.make_figure`
+and :func:`brainpainter.media.movie.make_movie`. ``@input_options`` adds how tables
+are read (``--image-column``, ``--value``, ``--region-column``, ``--strict``).
+No heavy package (bpy, matplotlib, pandas) is imported here.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from dataclasses import fields
 from typing import Any, TypeVar
 
 import click
 
-from brainpainter.errors import BrainPainterError
+from brainpainter.color.scale import ScaleOptions
+from brainpainter.rendering.options import DEFAULT_VIEWS, RunnerOptions, SceneOptions
+from brainpainter.rendering.settings import RenderSettings, parse_size
+from brainpainter.table.options import TableOptions
+
+__all__ = ["DEFAULT_SIZE", "DEFAULT_VIEWS", "FINITE", "field_option", "input_options", "make_render_options",
+           "option_group", "parallel_options", "parse_size", "render_kwargs", "render_options",
+           "split_commas"]
 
 F = TypeVar("F", bound=Callable[..., Any])
 
-DEFAULT_VIEWS = "lateral-left,medial-left,subcortical"
-DEFAULT_SIZE = "1200x900"
+DEFAULT_SIZE = RenderSettings().size
 
 #: Names of the parameters added by ``render_options`` (click's Python names).
 RENDER_OPTION_NAMES = (
@@ -32,7 +41,7 @@ INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
 
 
-class FiniteFloat(click.ParamType):
+class FiniteFloat(click.ParamType):  # type: ignore[type-arg]
     """A float option that refuses NaN and infinities (``--vmin nan``) before anything runs."""
 
     name = "number"
@@ -58,56 +67,42 @@ def split_commas(ctx: click.Context, param: click.Parameter, value: tuple[str, .
     return [v.strip() for item in value for v in item.split(",") if v.strip()]
 
 
-def make_render_options(views: str = DEFAULT_VIEWS, size: str = DEFAULT_SIZE,
-                        only: tuple[str, ...] | None = None) -> Callable[[F], F]:
-    """A decorator adding the render options, with the given defaults for ``--views`` and ``--size``.
+def field_option(cls: type, name: str, *decls: str, **overrides: Any) -> Callable[[F], F]:
+    """A click option made from field `name` of the options dataclass `cls`.
 
-    `only` keeps just the options of those Python names (see :data:`RENDER_OPTION_NAMES`).
+    The flag (``--nan-color``), default, choices, help and type (finite
+    numbers for floats, a flag for booleans) come from the field; `overrides`
+    are click keywords that the field cannot say (``multiple``, ``envvar``...).
     """
+    f = next(f for f in fields(cls) if f.name == name)
+    meta = f.metadata
+    default = meta.get("cli_default", f.default)
+    kwargs: dict[str, Any] = {"default": default, "help": meta.get("help") or None}
+    kind = str(f.type)
+    if "choices" in meta:
+        kwargs["type"] = click.Choice(list(meta["choices"]))
+    elif kind == "bool":
+        kwargs["is_flag"] = True
+    elif kind in ("int", "int | None"):
+        kwargs["type"] = int
+    elif kind in ("float", "float | None"):
+        kwargs["type"] = FINITE
+    if default is not None and default is not False and default != ():
+        kwargs["show_default"] = True
+    kwargs.update(overrides)
+    return click.option(*decls or ("--" + name.replace("_", "-"),), **kwargs)
 
-    options = [
-        click.option("--atlas", "-a", default=None,
-                     help="Atlas: dk, destrieux, dkt (alias tourville) or a plugin atlas. "
-                          "Default: inferred from the region names."),
-        click.option("--views", default=views, show_default=True,
-                     help="Comma-separated views, 'all', or camera:AZ:EL[:ZOOM]."),
-        click.option("--template", default="fsaverage", show_default=True, help="Template name or folder."),
-        click.option("--surface", default="pial", show_default=True,
-                     type=click.Choice(["pial", "white", "inflated"])),
-        click.option("--gradient", default=None,
-                     help="Control colours, e.g. white,yellow,orange,red (the default). Values 0..N-1."),
-        click.option("--cmap", default=None,
-                     help="A matplotlib colour map instead of a gradient, e.g. viridis."),
-        click.option("--vmin", type=FINITE, default=None, help="Value at the first colour."),
-        click.option("--vmax", type=FINITE, default=None, help="Value at the last colour."),
-        click.option("--center", type=FINITE, default=None, help="Diverging: value at the middle colour."),
-        click.option("--nan-color", default="#8c8c8c", show_default=True, help="Colour of empty cells."),
-        click.option("--missing-color", default="#d0d0d0", show_default=True,
-                     help="Colour of regions with no column."),
-        click.option("--hide", multiple=True, callback=split_commas,
-                     help="Regions or groups not drawn (cerebellum, ventricles, brainstem, ventraldc). "
-                          "Repeatable."),
-        click.option("--background", default="white", show_default=True, help="Background colour."),
-        click.option("--transparent", is_flag=True, help="Transparent background."),
-        click.option("--size", default=size, show_default=True,
-                     help="Size of each rendered view, WIDTHxHEIGHT pixels."),
-        click.option("--quality", default="default", show_default=True,
-                     type=click.Choice(["fast", "default", "high"])),
-        click.option("--shading", default="default", show_default=True,
-                     type=click.Choice(["default", "flat"])),
-        click.option("--lighting", default="studio", show_default=True,
-                     type=click.Choice(["studio", "soft", "flat-studio", "sulc"]),
-                     help="sulc: studio light with sulci darkened slightly (sulcal depth)."),
-        click.option("--glass-opacity", type=FINITE, default=0.12, show_default=True),
-        click.option("--renderer", default="blender", show_default=True),
-        click.option("--atlas-config", type=click.Path(dir_okay=False), default=None,
-                     help="Region-group TOML file defining the atlas (instead of --atlas); "
-                          "see docs/atlases.md."),
-    ]
 
-    if only is not None:
-        options = [opt for opt, name in zip(options, RENDER_OPTION_NAMES, strict=True) if name in only]
+def option_group(cls: type, names: Sequence[str] | None = None,
+                 **overrides: dict[str, Any]) -> Callable[[F], F]:
+    """A decorator adding the options of `cls` (those of `names`, in that order) as click options."""
+    chosen = list(names) if names is not None else [f.name for f in fields(cls)
+                                                     if f.init and f.metadata.get("cli", True)]
+    return stack([field_option(cls, name, **overrides.get(name, {})) for name in chosen])
 
+
+def stack(options: Sequence[Callable[[F], F]]) -> Callable[[F], F]:
+    """One decorator applying `options` so that they show in this order in ``--help``."""
     def decorate(f: F) -> F:
         for opt in reversed(options):
             f = opt(f)
@@ -116,47 +111,52 @@ def make_render_options(views: str = DEFAULT_VIEWS, size: str = DEFAULT_SIZE,
     return decorate
 
 
+def render_option_list(views: str | None = DEFAULT_VIEWS, size: str = DEFAULT_SIZE) -> dict[str, Any]:
+    """The render options by Python name (see :data:`RENDER_OPTION_NAMES`), as click options."""
+    scene, scale, settings = SceneOptions, ScaleOptions, RenderSettings
+    return {
+        "atlas": click.option("--atlas", "-a", default=None,
+                              help="Atlas: dk, destrieux, dkt (alias tourville) or a plugin atlas. "
+                                   "Default: inferred from the region names."),
+        "views": field_option(scene, "views", default=views),
+        "template": field_option(scene, "template"),
+        "surface": field_option(scene, "surface"),
+        **{name: field_option(scale, name) for name in ("gradient", "cmap", "vmin", "vmax", "center",
+                                                         "nan_color", "missing_color")},
+        "hide": field_option(scene, "hide", multiple=True, callback=split_commas, default=(),
+                             show_default=False),
+        "background": field_option(settings, "background"),
+        "transparent": click.option("--transparent", is_flag=True, help="Transparent background."),
+        "size": click.option("--size", default=size, show_default=True,
+                             help="Size of each rendered view, WIDTHxHEIGHT pixels."),
+        **{name: field_option(settings, name)
+           for name in ("quality", "shading", "lighting", "glass_opacity")},
+        "renderer": field_option(scene, "renderer"),
+        "atlas_config": field_option(scene, "atlas_config", type=click.Path(dir_okay=False)),
+    }
+
+
+def make_render_options(views: str = DEFAULT_VIEWS, size: str = DEFAULT_SIZE,
+                        only: Sequence[str] | None = None) -> Callable[[F], F]:
+    """A decorator adding the render options, with the given defaults for ``--views`` and ``--size``.
+
+    `only` keeps just the options of those Python names (see :data:`RENDER_OPTION_NAMES`).
+    """
+    options = render_option_list(views, size)
+    return stack([options[name] for name in RENDER_OPTION_NAMES if only is None or name in only])
+
+
 #: ``@render_options``: the render options with ``brainpainter render``'s defaults.
 render_options = make_render_options()
 
+#: ``@input_options``: how INPUT tables are read (as for ``render`` and ``check``).
+input_options = option_group(TableOptions)
 
-def input_options(f: F) -> F:
-    """Options that say how INPUT tables are read (as for ``render`` and ``check``)."""
-    for opt in reversed([
-        click.option("--image-column", default=None,
-                     help="Column with image names (default Image-name-unique, a FreeSurfer first column, "
-                          "subject...; otherwise rows are numbered)."),
-        click.option("--value", default=None,
-                     help="Long tables: the column with the values, e.g. d_icv."),
-        click.option("--region-column", default=None,
-                     help="Long tables: the column with region names (auto-detected when unambiguous)."),
-        click.option("--strict", is_flag=True, help="Names that match no region are an error."),
-    ]):
-        f = opt(f)
-    return f
-
-
-def parallel_options(f: F) -> F:
-    """``--jobs`` and ``--scheduler``: where the images are rendered (see brainpainter.rendering.parallel)."""
-    for opt in reversed([
-        click.option("--jobs", "-j", default="1", show_default=True, metavar="N|auto",
-                     help="Render in N processes on this machine ('auto': one per core); output identical "
-                          "to one process."),
-        click.option("--scheduler", default=None, envvar="BRAINPAINTER_SCHEDULER", metavar="ADDRESS",
-                     help="Render on a Dask cluster, e.g. tcp://host:8786 (default: "
-                          "$BRAINPAINTER_SCHEDULER); needs pip install 'brainpainter[cluster]'."),
-    ]):
-        f = opt(f)
-    return f
-
-
-def parse_size(size: str) -> tuple[int, int]:
-    """``"1200x900"`` -> ``(1200, 900)``."""
-    try:
-        w, h = (int(x) for x in str(size).lower().replace("×", "x").split("x"))
-    except ValueError:
-        raise BrainPainterError(f"--size must be WIDTHxHEIGHT, e.g. 1200x900; {size!r} was given.") from None
-    return w, h
+#: ``@parallel_options``: ``--jobs`` and ``--scheduler``, where the images are rendered.
+parallel_options = stack([
+    field_option(RunnerOptions, "jobs", "--jobs", "-j", default="1", type=str, metavar="N|auto"),
+    field_option(RunnerOptions, "scheduler", envvar="BRAINPAINTER_SCHEDULER", metavar="ADDRESS"),
+])
 
 
 def render_kwargs(options: dict[str, Any]) -> dict[str, Any]:

@@ -10,8 +10,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any, TypedDict, Unpack
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.color.rgb import ColorLike, to_hex, to_rgb
 from brainpainter.errors import BrainPainterError, nearest
@@ -40,7 +42,7 @@ class ColourScale:
         The gradient (``"white,yellow,orange,red"``) or colour-map name.
     """
 
-    colors: np.ndarray
+    colors: NDArray[Any]
     vmin: float
     vmax: float
     center: float | None = None
@@ -68,7 +70,7 @@ class ColourScale:
     def n_colors(self) -> int:
         return len(self.colors)
 
-    def position(self, values: np.ndarray) -> np.ndarray:
+    def position(self, values: NDArray[Any]) -> NDArray[Any]:
         """Fractional position along the control colours, in [0, N-1].
 
         Parameters
@@ -89,7 +91,7 @@ class ColourScale:
                          0.5 + 0.5 * (v - c) / (self.vmax - c))
         return np.clip(t, 0.0, 1.0) * top
 
-    def __call__(self, values: np.ndarray | Sequence[float] | float) -> np.ndarray:
+    def __call__(self, values: NDArray[Any] | Sequence[float] | float) -> NDArray[Any]:
         """Colours for values.
 
         Parameters
@@ -116,7 +118,7 @@ class ColourScale:
         out[nan] = self.nan_color
         return out[0] if scalar else out
 
-    def ticks(self) -> np.ndarray:
+    def ticks(self) -> NDArray[Any]:
         """Values at the control colours of a gradient (or 5 ticks for a colour map)."""
         n = self.n_colors if self.n_colors <= 12 else 5
         pos = np.linspace(0.0, 1.0, n)
@@ -125,7 +127,7 @@ class ColourScale:
         c = self.center
         return np.where(pos < 0.5, self.vmin + 2 * pos * (c - self.vmin), c + (2 * pos - 1) * (self.vmax - c))
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         """JSON-ready settings (for manifests and PNG metadata)."""
         return {
             "name": self.name,
@@ -138,7 +140,7 @@ class ColourScale:
         }
 
 
-def gradient_colors(gradient: Sequence[ColorLike] | str) -> np.ndarray:
+def gradient_colors(gradient: Sequence[ColorLike] | str) -> NDArray[Any]:
     """Parse a gradient: a list of colours or a comma/space separated string.
 
     Returns
@@ -158,7 +160,7 @@ def gradient_colors(gradient: Sequence[ColorLike] | str) -> np.ndarray:
     return np.array([to_rgb(c) for c in items], dtype=float)
 
 
-def cmap_colors(name: str, n: int = 256) -> np.ndarray:
+def cmap_colors(name: str, n: int = 256) -> NDArray[Any]:
     """Sample a matplotlib colour map by name.
 
     Returns
@@ -180,69 +182,112 @@ def cmap_colors(name: str, n: int = 256) -> np.ndarray:
     return np.asarray(cmap(np.linspace(0.0, 1.0, n)))[:, :3]
 
 
-def make_scale(
-    gradient: Sequence[ColorLike] | str | None = None,
-    cmap: str | None = None,
-    vmin: float | None = None,
-    vmax: float | None = None,
-    center: float | None = None,
-    nan_color: ColorLike = DEFAULT_NAN_COLOR,
-    missing_color: ColorLike = DEFAULT_MISSING_COLOR,
-    data: np.ndarray | None = None,
-) -> ColourScale:
-    """Build the colour scale for a run.
+class ScaleKwargs(TypedDict, total=False):
+    """The keyword arguments of :class:`ScaleOptions` (``render(cmap=...)``, :func:`make_scale`)."""
+
+    gradient: Sequence[ColorLike] | str | None
+    cmap: str | None
+    vmin: float | None
+    vmax: float | None
+    center: float | None
+    nan_color: ColorLike
+    missing_color: ColorLike
+
+
+@dataclass(frozen=True)
+class ScaleOptions:
+    """The colour-scale options of a run, checked once when made; :meth:`scale` builds the scale.
 
     With a gradient of N colours and no vmin/vmax the original convention
     holds: values 0 .. N-1. With a colour map, vmin/vmax default to the
-    finite range of `data` (symmetric about `center` in diverging mode).
+    finite range of the data (symmetric about `center` in diverging mode).
 
-    Parameters
+    Attributes
     ----------
     gradient : list of colours or str, optional
         Control colours; the default is BrainPainter's white, yellow, orange, red.
     cmap : str, optional
         A matplotlib colour map name (exclusive with `gradient`).
     vmin, vmax, center : float, optional
+        Values at the first, last and (diverging) middle colour.
     nan_color, missing_color : colour
-    data : ndarray, optional
-        All values of the run, for default limits.
+        Colour of empty cells, and of regions with no column.
     """
-    if gradient is not None and cmap is not None:
-        raise BrainPainterError(
-            "give either a gradient or a colour map, not both; "
-            f"gradient={gradient!r} and cmap={cmap!r} were given."
-        )
-    if cmap is not None:
-        colors, name = cmap_colors(cmap), cmap
-    else:
-        colors = gradient_colors(gradient if gradient is not None else DEFAULT_GRADIENT)
-        if gradient is None:
-            gradient = DEFAULT_GRADIENT
-        name = gradient if isinstance(gradient, str) else ",".join(str(g) for g in gradient)
-    values = np.asarray(data if data is not None else [], dtype=float).ravel()
-    finite = values[np.isfinite(values)]
-    if cmap is None and vmin is None and vmax is None:
-        lo, hi = (0.0, float(len(colors) - 1)) if center is None else (None, None)
-    else:
-        lo, hi = vmin, vmax
-    if lo is None or hi is None:
-        if center is not None and (lo is None and hi is None):
+
+    gradient: Sequence[ColorLike] | str | None = field(default=None, metadata={
+        "help": "Control colours, e.g. white,yellow,orange,red (the default). Values 0..N-1."})
+    cmap: str | None = field(default=None, metadata={
+        "help": "A matplotlib colour map instead of a gradient, e.g. viridis."})
+    vmin: float | None = field(default=None, metadata={"help": "Value at the first colour."})
+    vmax: float | None = field(default=None, metadata={"help": "Value at the last colour."})
+    center: float | None = field(default=None, metadata={"help": "Diverging: value at the middle colour."})
+    nan_color: ColorLike = field(default=DEFAULT_NAN_COLOR, metadata={"help": "Colour of empty cells."})
+    missing_color: ColorLike = field(default=DEFAULT_MISSING_COLOR, metadata={
+        "help": "Colour of regions with no column."})
+    _colors: NDArray[Any] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        gradient, cmap = self.gradient, self.cmap
+        if gradient is not None and cmap is not None:
+            raise BrainPainterError(
+                "give either a gradient or a colour map, not both; "
+                f"gradient={gradient!r} and cmap={cmap!r} were given."
+            )
+        colors = cmap_colors(cmap) if cmap is not None else gradient_colors(
+            gradient if gradient is not None else DEFAULT_GRADIENT)
+        object.__setattr__(self, "_colors", colors)
+        self.scale()  # limits and colours: every error now, before any data is read
+
+    @property
+    def name(self) -> str:
+        """The colour map's name, or the gradient as text (``"white,yellow,orange,red"``)."""
+        if self.cmap is not None:
+            return self.cmap
+        gradient = self.gradient if self.gradient is not None else DEFAULT_GRADIENT
+        return gradient if isinstance(gradient, str) else ",".join(str(g) for g in gradient)
+
+    def limits(self, data: NDArray[Any] | Sequence[float] | None = None) -> tuple[float, float]:
+        """``(vmin, vmax)``: as given, else from the finite values of `data` (shape any)."""
+        values = np.asarray(data if data is not None else [], dtype=float).ravel()
+        finite = values[np.isfinite(values)]
+        center = self.center
+        if self.cmap is None and self.vmin is None and self.vmax is None and center is None:
+            return 0.0, float(len(self._colors) - 1)
+        lo, hi = self.vmin, self.vmax
+        if center is not None and lo is None and hi is None:
             half = float(np.max(np.abs(finite - center))) if finite.size else 1.0
             half = half or 1.0
-            lo, hi = center - half, center + half
-        else:
-            dlo = float(finite.min()) if finite.size else 0.0
-            dhi = float(finite.max()) if finite.size else 1.0
-            lo = dlo if lo is None else lo
-            hi = dhi if hi is None else hi
-            if hi <= lo:
-                hi = lo + 1.0
-    return ColourScale(
-        colors=colors,
-        vmin=float(lo),
-        vmax=float(hi),
-        center=None if center is None else float(center),
-        nan_color=to_rgb(nan_color),
-        missing_color=to_rgb(missing_color),
-        name=name,
-    )
+            return center - half, center + half
+        lo = (float(finite.min()) if finite.size else 0.0) if lo is None else lo
+        hi = (float(finite.max()) if finite.size else 1.0) if hi is None else hi
+        if (self.vmin is None or self.vmax is None) and hi <= lo:
+            hi = lo + 1.0
+        return lo, hi
+
+    def scale(self, data: NDArray[Any] | Sequence[float] | None = None) -> ColourScale:
+        """The colour scale for a run whose values (all rows) are `data`, shape any."""
+        lo, hi = self.limits(data)
+        return ColourScale(
+            colors=self._colors,
+            vmin=float(lo),
+            vmax=float(hi),
+            center=None if self.center is None else float(self.center),
+            nan_color=to_rgb(self.nan_color),
+            missing_color=to_rgb(self.missing_color),
+            name=self.name,
+        )
+
+
+def make_scale(data: NDArray[Any] | Sequence[float] | None = None,
+               **options: Unpack[ScaleKwargs]) -> ColourScale:
+    """Build the colour scale for a run: ``ScaleOptions(**options).scale(data)``.
+
+    Parameters
+    ----------
+    data : ndarray, optional
+        All values of the run, for default limits.
+    **options
+        gradient, cmap, vmin, vmax, center, nan_color, missing_color: see
+        :class:`ScaleOptions`.
+    """
+    return ScaleOptions(**options).scale(data)

@@ -9,8 +9,10 @@ and colours below them, so users can see which region is which.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.errors import BrainPainterError
@@ -21,7 +23,7 @@ def atlas_colors(atlas: Atlas) -> dict[str, tuple[float, float, float]]:
     return {r.key: (r.color[0] / 255, r.color[1] / 255, r.color[2] / 255) for r in atlas.regions}
 
 
-def _legend(entries: list[tuple[str, tuple[int, int, int]]], width: int) -> np.ndarray:
+def _legend(entries: list[tuple[str, tuple[int, int, int]]], width: int) -> NDArray[Any]:
     """RGBA legend, shape (h, width, 4): a swatch and a name per entry, in columns."""
     from PIL import Image, ImageDraw, ImageFont
 
@@ -49,7 +51,7 @@ MAX_LEGEND = 120
 
 def reference_image(atlas: Atlas, path: str | Path, *, views: str = "lateral-left,medial-left,subcortical",
                     size: tuple[int, int] = (800, 600), template: str = "fsaverage", surface: str = "pial",
-                    quality: str = "default", renderer: str = "blender", legend: bool = True) -> np.ndarray:
+                    quality: str = "default", renderer: str = "blender", legend: bool = True) -> NDArray[Any]:
     """Draw `atlas` in its own colours from `views` and write a PNG to `path`.
 
     Returns
@@ -59,8 +61,10 @@ def reference_image(atlas: Atlas, path: str | Path, *, views: str = "lateral-lef
     """
     from brainpainter import __version__
     from brainpainter.io.output import write_png
+    from brainpainter.rendering.options import Options
     from brainpainter.rendering.painter import Painter
-    from brainpainter.rendering.scene import RenderSettings
+    from brainpainter.rendering.parallel import Item, paint_all
+    from brainpainter.rendering.run import make_runner
     from brainpainter.rendering.views import parse_views
 
     path = Path(path)
@@ -68,14 +72,16 @@ def reference_image(atlas: Atlas, path: str | Path, *, views: str = "lateral-lef
         raise BrainPainterError(f"folder {path.parent} of --image {path} does not exist; create it first")
     if path.suffix.lower() != ".png":
         raise BrainPainterError(f"--image must be a .png file; {path.name!r} was given")
+    # the options of a run, checked as for every command (a reference image has no table to read)
+    options = Options.of({"views": views, "width": size[0], "height": size[1], "template": template,
+                          "surface": surface, "quality": quality, "renderer": renderer}, "reference_image")
+    scene = options.scene
     view_list = parse_views(views)
-    w, h = size
-    if not (16 <= w <= 8192 and 16 <= h <= 8192):
-        raise BrainPainterError(f"image size must be between 16 and 8192 pixels; {w}x{h} was given.")
-    settings = RenderSettings(width=w, height=h, background=(1.0, 1.0, 1.0), quality=quality)
-    with Painter(atlas, template, surface, (), settings, renderer) as painter:
-        panels = [painter.paint_colors(atlas_colors(atlas), v) for v in view_list]
-    image = np.concatenate(panels, axis=1)
+    painter = Painter(atlas, scene.template, scene.surface, (), options.settings, scene.renderer)
+    colors = atlas_colors(atlas)
+    with make_runner(painter, scene.template) as runner:  # serial: one painter in this process
+        panels = paint_all(runner, [Item(colors, v, label=atlas.name) for v in view_list])
+    image: NDArray[Any] = np.concatenate(panels, axis=1)
     if legend:
         kinds = {"cortical" if v.content == "cortex" else "subcortical" for v in view_list}
         first: dict[str, tuple[int, int, int]] = {}

@@ -17,12 +17,14 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.color.scale import ColourScale
 from brainpainter.errors import BrainPainterError
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
+    from matplotlib.axis import Axis
     from matplotlib.figure import Figure
 
 #: Samples along the bar; enough for a smooth ramp at print resolution.
@@ -39,7 +41,7 @@ def format_tick(value: float) -> str:
     return f"{value:.3g}"
 
 
-def resolve_ticks(scale: ColourScale, ticks: Sequence[float] | str | None) -> np.ndarray:
+def resolve_ticks(scale: ColourScale, ticks: Sequence[float] | str | None) -> NDArray[Any]:
     """Tick values: the scale's control points by default, or `ticks` checked against the scale.
 
     Parameters
@@ -81,10 +83,11 @@ def resolve_ticks(scale: ColourScale, ticks: Sequence[float] | str | None) -> np
             f"tick {outside[0]:g} lies outside the colour scale {scale.vmin:g}..{scale.vmax:g}; "
             "give ticks inside it, or widen the scale with --vmin/--vmax."
         )
-    return np.unique(np.asarray(values, dtype=float))
+    unique: NDArray[Any] = np.unique(np.asarray(values, dtype=float))
+    return unique
 
 
-def bar_colors(scale: ColourScale, n: int = N_SAMPLES) -> tuple[np.ndarray, np.ndarray]:
+def bar_colors(scale: ColourScale, n: int = N_SAMPLES) -> tuple[NDArray[Any], NDArray[Any]]:
     """Values from vmin to vmax and their colours.
 
     Returns
@@ -141,8 +144,6 @@ def draw_colorbar(
         from brainpainter.errors import choice_error
 
         raise choice_error("orientation", orientation, ORIENTATIONS)
-    from matplotlib.patches import Patch
-
     tick_values = resolve_ticks(scale, ticks)
     _, colors = bar_colors(scale)
     horizontal = orientation == "horizontal"
@@ -153,7 +154,7 @@ def draw_colorbar(
         ax.set_xlim(scale.vmin, scale.vmax)
         ax.set_yticks([])
         ax.set_xticks(tick_values, [format_tick(t) for t in tick_values])
-        axis = ax.xaxis
+        axis: Axis = ax.xaxis
     else:
         ax.set_ylim(scale.vmin, scale.vmax)
         ax.set_xticks([])
@@ -168,6 +169,15 @@ def draw_colorbar(
         axis.set_label_text(label, fontsize=fontsize, color=color)
         if not horizontal:
             ax.yaxis.set_label_position("right")
+    _swatches(ax, scale, nan, missing, nan_label, missing_label, fontsize, color, horizontal)
+    return ax
+
+
+def _swatches(ax: Axes, scale: ColourScale, nan: bool, missing: bool, nan_label: str, missing_label: str,
+              fontsize: float, color: Any, horizontal: bool) -> None:
+    """Swatches of the NaN and missing colours beside a horizontal bar, or below a vertical one."""
+    from matplotlib.patches import Patch
+
     handles = []
     if nan:
         handles.append(Patch(facecolor=scale.nan_color, edgecolor=color, linewidth=0.6, label=nan_label))
@@ -175,13 +185,13 @@ def draw_colorbar(
         handles.append(Patch(facecolor=scale.missing_color, edgecolor=color, linewidth=0.6,
                              label=missing_label))
     if handles:
-        where = ({"loc": "center left", "bbox_to_anchor": (1.0, 0.5), "ncol": len(handles)} if horizontal
-                 else {"loc": "upper center", "bbox_to_anchor": (0.5, -0.02), "ncol": 1})
-        legend = ax.legend(handles=handles, frameon=False, fontsize=fontsize - 1, handlelength=1.0,
-                           handleheight=1.0, handletextpad=0.4, columnspacing=0.9, borderaxespad=0.6,
-                           labelcolor=color, **where)
+        loc, anchor, ncol = (("center left", (1.0, 0.5), len(handles)) if horizontal
+                             else ("upper center", (0.5, -0.02), 1))
+        legend = ax.legend(  # type: ignore[call-overload]
+            handles=handles, frameon=False, fontsize=fontsize - 1, handlelength=1.0, handleheight=1.0,
+            handletextpad=0.4, columnspacing=0.9, borderaxespad=0.6, labelcolor=color, loc=loc,
+            bbox_to_anchor=anchor, ncol=ncol)
         legend.set_in_layout(False)
-    return ax
 
 
 def colorbar_figure(
@@ -238,7 +248,7 @@ def decorations_bbox(ax: Axes, *, label: bool = True) -> Any:
     """
     from matplotlib.transforms import Bbox
 
-    renderer = agg_canvas(ax.figure).get_renderer()
+    renderer = agg_canvas(figure_of(ax)).get_renderer()
     boxes = [ax.get_window_extent(renderer)]
     for axis in (ax.xaxis, ax.yaxis):
         boxes.extend(t.get_window_extent(renderer) for t in axis.get_ticklabels() if t.get_visible()
@@ -273,7 +283,7 @@ def fit_axes(ax: Axes, box: tuple[float, float, float, float], *, grow: str = "x
         Longest the axes may grow along x, as a figure fraction; the whole is
         then centred in `box`.
     """
-    fig = ax.figure
+    fig = figure_of(ax)
     fw, fh = fig.bbox.width, fig.bbox.height
     bl, bb, bw, bh = box[0] * fw, box[1] * fh, box[2] * fw, box[3] * fh
     legend = ax.get_legend()
@@ -306,9 +316,11 @@ def fit_axes(ax: Axes, box: tuple[float, float, float, float], *, grow: str = "x
 
 def _legend_below(ax: Axes) -> None:
     """Move a colour bar's swatch legend from beside the bar to under its label."""
-    fig = ax.figure
+    fig = figure_of(ax)
     renderer = agg_canvas(fig).get_renderer()
     legend = ax.get_legend()
+    if legend is None:
+        return
     inner = ax.get_window_extent()
     boxes = [inner]
     boxes.extend(t.get_window_extent(renderer) for t in ax.xaxis.get_ticklabels() if t.get_text())
@@ -328,12 +340,12 @@ def _keep_label_inside(ax: Axes, lo: float, hi: float) -> None:
     label = ax.xaxis.label
     if not label.get_text():
         return
-    fig = ax.figure
+    fig = figure_of(ax)
     fig.draw_without_rendering()
     renderer = agg_canvas(fig).get_renderer()
     box = label.get_window_extent(renderer)
     if box.width > hi - lo:  # wider than the room: smaller type, down to 5 pt
-        label.set_fontsize(max(5.0, label.get_fontsize() * (hi - lo) / box.width))
+        label.set_fontsize(max(5.0, float(label.get_fontsize()) * (hi - lo) / box.width))
         box = label.get_window_extent(renderer)
     shift = max(0.0, lo - box.x0) - max(0.0, box.x1 - hi)
     if shift:
@@ -344,12 +356,12 @@ def _keep_label_inside(ax: Axes, lo: float, hi: float) -> None:
 
 def _label_y(ax: Axes) -> float:
     """Axes-fraction y just below the tick labels (for a moved x label)."""
-    fig = ax.figure
+    fig = figure_of(ax)
     renderer = agg_canvas(fig).get_renderer()
     inner = ax.get_window_extent()
     ticks = [t.get_window_extent(renderer) for t in ax.xaxis.get_ticklabels() if t.get_text()]
     bottom = min((b.y0 for b in ticks), default=inner.y0)
-    return (bottom - 2.0 - inner.y0) / inner.height
+    return float((bottom - 2.0 - inner.y0) / inner.height)
 
 
 def colorbar_height(scale: ColourScale, width: float, *, dpi: float = 100.0, **kwargs: Any) -> float:
@@ -361,7 +373,7 @@ def colorbar_height(scale: ColourScale, width: float, *, dpi: float = 100.0, **k
     tall = 3.0
     fig = colorbar_figure(scale, width, tall, dpi=dpi, **kwargs)
     outer = decorations_bbox(fig.axes[0])
-    return outer.height / dpi + 2 * 0.04 + 0.02
+    return float(outer.height) / dpi + 2 * 0.04 + 0.02
 
 
 def colorbar_image(
@@ -370,7 +382,7 @@ def colorbar_image(
     *,
     background: Any = "white",
     **kwargs: Any,
-) -> np.ndarray:
+) -> NDArray[Any]:
     """A horizontal colour bar as pixels of an exact size (for movie frames).
 
     Parameters
@@ -411,6 +423,13 @@ def new_figure(size: tuple[float, float], dpi: float, background: Any = "white")
 
     fig = Figure(figsize=size, dpi=dpi, facecolor="none" if background is None else background)
     agg_canvas(fig)
+    return fig
+
+
+def figure_of(ax: Axes) -> Figure:
+    """The (root) figure of `ax`."""
+    fig = ax.get_figure(root=True)
+    assert fig is not None
     return fig
 
 

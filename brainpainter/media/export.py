@@ -18,20 +18,21 @@ from __future__ import annotations
 import base64
 import html
 import json
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, Unpack
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.model import HEMI_PREFIX, Atlas
 from brainpainter.atlas.template import Template
-from brainpainter.color.rgb import ColorLike
-from brainpainter.color.scale import DEFAULT_MISSING_COLOR, DEFAULT_NAN_COLOR
 from brainpainter.errors import BrainPainterError, choice_error
-from brainpainter.rendering.scene import RGB, Scene
+from brainpainter.rendering.options import RenderKwargs
+from brainpainter.rendering.scene import Scene
+from brainpainter.rendering.settings import RGB
 
 FORMATS = ("glb", "html")
 #: Colour of subcortical structures the atlas does not colour (as the Blender renderer draws them).
@@ -62,20 +63,21 @@ class RegionMesh:
 
     name: str
     part: str
-    vertices: np.ndarray
-    faces: np.ndarray
-    normals: np.ndarray
+    vertices: NDArray[Any]
+    faces: NDArray[Any]
+    normals: NDArray[Any]
     color: RGB
 
 
-def _vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+def _vertex_normals(vertices: NDArray[Any], faces: NDArray[Any]) -> NDArray[Any]:
     import trimesh
 
     mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
     return np.asarray(mesh.vertex_normals, dtype=np.float32)
 
 
-def _submesh(vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, ...]:
+def _submesh(vertices: NDArray[Any], normals: NDArray[Any],
+             faces: NDArray[Any]) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any]]:
     """``(vertices, faces, normals)`` of the part of a mesh that `faces` use, renumbered."""
     used, inverse = np.unique(faces, return_inverse=True)
     return (vertices[used].astype(np.float32), inverse.reshape(faces.shape).astype(np.int32),
@@ -106,7 +108,7 @@ def region_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
         cm = template.cortex(scene.labels, hemi)
         verts = cm.vertices[scene.surface]
         normals = _vertex_normals(verts, cm.faces)
-        wall: list[np.ndarray] = []
+        wall: list[NDArray[Any]] = []
         for i, label in enumerate(cm.label_names):
             key = HEMI_PREFIX[hemi] + label
             faces = cm.faces[cm.face_label == i]
@@ -130,7 +132,7 @@ def region_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
     return out
 
 
-def srgb_to_linear(c: np.ndarray) -> np.ndarray:
+def srgb_to_linear(c: NDArray[Any]) -> NDArray[Any]:
     """sRGB 0-1 -> linear 0-1 (glTF material colours are linear)."""
     c = np.asarray(c, dtype=float)
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
@@ -149,15 +151,18 @@ def glb_bytes(meshes: Sequence[RegionMesh]) -> bytes:
     scene = trimesh.Scene()
     for m in meshes:
         linear = srgb_to_linear(np.asarray(m.color))
-        material = PBRMaterial(name=m.name, baseColorFactor=[*linear, 1.0], metallicFactor=0.0,
-                               roughnessFactor=0.75, doubleSided=True)
+        material = PBRMaterial(  # type: ignore[no-untyped-call]
+            name=m.name, baseColorFactor=[*linear, 1.0], metallicFactor=0.0, roughnessFactor=0.75,
+            doubleSided=True)
         mesh = trimesh.Trimesh(vertices=m.vertices @ RAS_TO_GLTF.T, faces=m.faces,
                                vertex_normals=m.normals @ RAS_TO_GLTF.T, process=False,
-                               visual=trimesh.visual.TextureVisuals(material=material))
+                               visual=trimesh.visual.TextureVisuals(  # type: ignore[no-untyped-call]
+                                   material=material))
         hex_color = "#{:02x}{:02x}{:02x}".format(*(round(float(v) * 255) for v in m.color))
         scene.add_geometry(mesh, node_name=m.name, geom_name=m.name,
                            metadata={"part": m.part, "color": hex_color})
-    return scene.export(file_type="glb", include_normals=True)
+    glb: bytes = scene.export(file_type="glb", include_normals=True)  # type: ignore[no-untyped-call]
+    return glb
 
 
 def _viewer_script() -> str:
@@ -327,32 +332,15 @@ _VIEWER_JS = r"""
 """
 
 
-def export(
-    data: Any,
-    out: str | Path,
-    *,
-    format: str | None = None,
-    row: str | int | None = None,
-    atlas: Atlas | str | None = None,
-    atlas_config: str | Path | None = None,
-    template: Template | str = "fsaverage",
-    surface: str = "pial",
-    hide: Iterable[str] = (),
-    gradient: Sequence[ColorLike] | str | None = None,
-    cmap: str | None = None,
-    vmin: float | None = None,
-    vmax: float | None = None,
-    center: float | None = None,
-    nan_color: ColorLike = DEFAULT_NAN_COLOR,
-    missing_color: ColorLike = DEFAULT_MISSING_COLOR,
-    background: ColorLike | None = "white",
-    title: str | None = None,
-    label: str | None = None,
-    image_column: str | None = None,
-    value: str | None = None,
-    region_column: str | None = None,
-    strict: bool = False,
-) -> Path:
+#: The options of a run that an export uses (it renders no image: no size, views, quality or workers).
+EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cmap", "vmin", "vmax", "center",
+                  "nan_color", "missing_color", "background", "image_column", "value", "region_column",
+                  "strict")
+
+
+def export(data: Any, out: str | Path, *, format: str | None = None, row: str | int | None = None,
+           atlas: Atlas | str | None = None, title: str | None = None, label: str | None = None,
+           **options: Unpack[RenderKwargs]) -> Path:
     """Write one row of a table as an interactive 3D brain: ``.glb`` or self-contained ``.html``.
 
     Parameters
@@ -366,18 +354,16 @@ def export(
     row : str or int, optional
         Image name (or 0-based position) of the row; needed when the table has
         several rows.
-    atlas, atlas_config, template, surface, hide
+    atlas : str or Atlas, optional
         As for :func:`brainpainter.render`.
-    gradient, cmap, vmin, vmax, center, nan_color, missing_color
-        Colour scale, see :func:`brainpainter.color.scale.make_scale` (over all rows).
-    background : colour or None
-        HTML page background.
     title : str, optional
         HTML heading; default the row's image name.
     label : str, optional
         Colour-bar label in the HTML page.
-    image_column, value, region_column, strict
-        How the table is read, see :func:`brainpainter.table.region_table.read_table`.
+    **options
+        The options of :data:`EXPORT_OPTIONS`, as for :func:`brainpainter.render`
+        (:class:`brainpainter.rendering.options.Options`); the colour scale spans
+        all rows; `background` is the HTML page's.
 
     Returns
     -------
@@ -385,25 +371,30 @@ def export(
         The file written.
     """
     from brainpainter.io.output import atomic_write_bytes
-    from brainpainter.media.figure import select_rows
-    from brainpainter.rendering.painter import load_scene, prepare_run, region_colors
+    from brainpainter.rendering.options import Options
+    from brainpainter.rendering.painter import load_scene, region_colors
+    from brainpainter.rendering.run import prepare_run
+    from brainpainter.table.rows import select_rows
 
     out = Path(out)
     fmt = (format or out.suffix.lstrip(".")).lower()
     if fmt not in FORMATS:
         raise choice_error("format", format or out.suffix or str(out), FORMATS,
                            "Give --format, or an --out file ending in .glb or .html.")
-    run = prepare_run(data, atlas, atlas_config=atlas_config, gradient=gradient, cmap=cmap, vmin=vmin,
-                      vmax=vmax, center=center, nan_color=nan_color, missing_color=missing_color,
-                      background=background, image_column=image_column, value=value,
-                      region_column=region_column, strict=strict)
+    extra = sorted(set(options) - set(EXPORT_OPTIONS))
+    if extra:
+        raise TypeError(f"export() got an unexpected keyword argument {extra[0]!r}")
+    checked = Options.of(options, "export")
+    run = prepare_run(data, atlas, options=checked)
     table = run.table
     if row is None and len(table.images) > 1:
         shown = list(table.images[:8]) + (["..."] if len(table.images) > 8 else [])
         raise BrainPainterError(f"the table has {len(table.images)} rows {shown}; export draws one: "
                                 f"choose it with --row (row= in Python), e.g. --row {table.images[-1]}")
     i = select_rows(table.images, [0 if row is None else row], what="--row")[0]
-    atlas_obj, scene = load_scene(table.atlas, template, surface, hide)
+    scene_options = checked.scene
+    atlas_obj, scene = load_scene(table.atlas, scene_options.template, scene_options.surface,
+                                  scene_options.hide)
     meshes = region_meshes(scene, region_colors(table.row(i), atlas_obj, run.scale))
     if not meshes:
         raise BrainPainterError("every region is hidden (--hide); nothing is left to export.")
@@ -413,7 +404,7 @@ def export(
     else:
         from brainpainter.io.output import png_bytes
         from brainpainter.media.colorbar import colorbar_image
-        from brainpainter.media.figure import swatches_needed
+        from brainpainter.media.drawn import swatches_needed
         from brainpainter.rendering.views import parse_views
 
         nan, missing = swatches_needed(table, [i], parse_views("lateral-left,medial-right,subcortical"),

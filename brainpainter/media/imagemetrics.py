@@ -10,16 +10,19 @@ grid (about 1.05-1.08 for anti-aliased images).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+from numpy.typing import NDArray
 
 
-def _contour_length(field: np.ndarray, valid: np.ndarray) -> float:
+def _contour_length(field: NDArray[Any], valid: NDArray[Any]) -> float:
     """Length (pixels) of the 0.5 iso-line of `field`, counting segments inside `valid` only."""
     from skimage.measure import find_contours
 
     total = 0.0
     h, w = field.shape
-    for c in find_contours(field, 0.5):
+    for c in find_contours(field, 0.5):  # type: ignore[no-untyped-call]
         seg = np.diff(c, axis=0)
         mid = np.rint(0.5 * (c[1:] + c[:-1])).astype(np.int64)
         inside = valid[mid[:, 0].clip(0, h - 1), mid[:, 1].clip(0, w - 1)]
@@ -27,18 +30,18 @@ def _contour_length(field: np.ndarray, valid: np.ndarray) -> float:
     return total
 
 
-def _srgb_to_linear(c: np.ndarray) -> np.ndarray:
+def _srgb_to_linear(c: NDArray[Any]) -> NDArray[Any]:
     c = np.asarray(c, dtype=np.float64) / 255.0
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
-def _linear_to_srgb(c: np.ndarray) -> np.ndarray:
+def _linear_to_srgb(c: NDArray[Any]) -> NDArray[Any]:
     c = np.clip(c, 0.0, 1.0)
     return 255.0 * np.where(c <= 0.0031308, c * 12.92, 1.055 * c ** (1 / 2.4) - 0.055)
 
 
-def _blend(rgb: np.ndarray, a: np.ndarray, b: np.ndarray, linear: bool = False) -> tuple[
-        np.ndarray, np.ndarray]:
+def _blend(rgb: NDArray[Any], a: NDArray[Any], b: NDArray[Any], linear: bool = False) -> tuple[
+        NDArray[Any], NDArray[Any]]:
     """Per pixel: the fraction `t` of `a` in a blend of `a` and `b`, and the distance (0-255) to that blend.
 
     Blends are mixed in sRGB values, or in linear light when `linear`.
@@ -53,7 +56,7 @@ def _blend(rgb: np.ndarray, a: np.ndarray, b: np.ndarray, linear: bool = False) 
     return t, np.linalg.norm(rgb - (_linear_to_srgb(blend) if linear else blend), axis=-1)
 
 
-def border_ratio(image: np.ndarray, a: tuple[int, int, int], b: tuple[int, int, int], *,
+def border_ratio(image: NDArray[Any], a: tuple[int, int, int], b: tuple[int, int, int], *,
                  sigma: float = 1.5, tol: float = 12.0, margin: int = 3) -> tuple[float, float]:
     """Border length between two colours over the same after Gaussian smoothing.
 

@@ -19,11 +19,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Unpack
 
-import numpy as np
+from numpy.typing import NDArray
 
-from brainpainter.color.rgb import ColorLike
 from brainpainter.color.scale import ColourScale
 from brainpainter.errors import BrainPainterError, choice_error
 
@@ -32,7 +31,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.image import AxesImage
 
     from brainpainter.atlas.model import Atlas
-    from brainpainter.rendering.painter import Painter
+    from brainpainter.rendering.options import RenderKwargs
+    from brainpainter.rendering.painter import Painter, RenderResult
 
 ORIENTATIONS = ("vertical", "horizontal")
 
@@ -57,30 +57,14 @@ class PlotResult:
     ax: Axes
     artist: AxesImage
     colorbar_ax: Axes | None
-    image: np.ndarray
+    image: NDArray[Any]
     scale: ColourScale
 
 
-def plot(
-    values: Any,
-    view: str = "lateral-left",
-    *,
-    ax: Axes | None = None,
-    row: str | int = 0,
-    atlas: Atlas | str | None = None,
-    colorbar: bool = True,
-    label: str | None = None,
-    ticks: Sequence[float] | str | None = None,
-    orientation: str = "vertical",
-    crop: bool = True,
-    gradient: Sequence[ColorLike] | str | None = None,
-    cmap: str | None = None,
-    vmin: float | None = None,
-    vmax: float | None = None,
-    center: float | None = None,
-    painter: Painter | None = None,
-    **render_options: Any,
-) -> PlotResult:
+def plot(values: Any, view: str = "lateral-left", *, ax: Axes | None = None, row: str | int = 0,
+         atlas: Atlas | str | None = None, colorbar: bool = True, label: str | None = None,
+         ticks: Sequence[float] | str | None = None, orientation: str = "vertical", crop: bool = True,
+         painter: Painter | None = None, **render_options: Unpack[RenderKwargs]) -> PlotResult:
     """Render one row of a table from one view into `ax`, with an optional colour bar beside it.
 
     Parameters
@@ -109,14 +93,13 @@ def plot(
     orientation : {"vertical", "horizontal"}
     crop : bool
         Cut the background around the brain, so the brain fills `ax`.
-    gradient, cmap, vmin, vmax, center
-        Colour scale, see :func:`brainpainter.color.scale.make_scale`.
     painter : Painter, optional
         A loaded :class:`~brainpainter.rendering.painter.Painter` to reuse (no new scene).
     **render_options
-        Any other keyword argument of :func:`brainpainter.render`
-        (``template``, ``surface``, ``hide``, ``width``, ``height``,
-        ``quality``, ``shading``, ``lighting``, ``nan_color``, ...).
+        The options of a run, as for :func:`brainpainter.render`
+        (:class:`brainpainter.rendering.options.Options`: ``gradient``, ``cmap``,
+        ``vmin``, ``vmax``, ``center``, ``template``, ``surface``, ``hide``,
+        ``width``, ``height``, ``quality``, ``shading``, ``lighting``, ...).
 
     Returns
     -------
@@ -128,13 +111,11 @@ def plot(
         if reserved in render_options:
             raise BrainPainterError(f"plot() draws one view of one row into an Axes; {reserved}= is not "
                                     "one of its options (use view=, row=, or brainpainter.render).")
-    from brainpainter.media.colorbar import draw_colorbar
-    from brainpainter.media.figure import common_crop, select_rows, swatches_needed
-    from brainpainter.rendering.painter import render
-    from brainpainter.rendering.views import parse_views
+    from brainpainter.media.drawn import common_crop
+    from brainpainter.rendering.run import render
 
-    result = render(values, atlas, views=[view], rows=[row], gradient=gradient, cmap=cmap, vmin=vmin,
-                    vmax=vmax, center=center, painter=painter, progress=False, **render_options)
+    options: dict[str, Any] = {**render_options, "views": [view]}
+    result = render(values, atlas, rows=[row], painter=painter, progress=False, **options)
     (_, view_name), image = next(iter(result.images.items()))
     scale = result.scale
     assert scale is not None
@@ -149,16 +130,25 @@ def plot(
     artist = ax.imshow(image, interpolation="antialiased")
     ax.set_axis_off()
     ax.set_aspect("equal")
-    cax = None
-    if colorbar:
-        if orientation == "vertical":
-            cax = ax.inset_axes((1.03, 0.15, 0.045, 0.7))
-        else:
-            cax = ax.inset_axes((0.15, -0.09, 0.7, 0.05))
-        table = result.table
-        assert table is not None
-        nan, missing = swatches_needed(table, select_rows(table.images, [row]), parse_views([view_name]),
-                                       result.manifest["settings"]["hidden"])
-        draw_colorbar(cax, scale, label=label, ticks=ticks, orientation=orientation, nan=nan,
-                      missing=missing)
+    cax = _colorbar(ax, result, row, view_name, label, ticks, orientation) if colorbar else None
     return PlotResult(ax, artist, cax, image, scale)
+
+
+def _colorbar(ax: Axes, result: RenderResult, row: str | int, view_name: str, label: str | None,
+              ticks: Sequence[float] | str | None, orientation: str) -> Axes:
+    """The colour bar of a plot in an inset of `ax`, with the swatches of the colours it draws."""
+    from brainpainter.media.colorbar import draw_colorbar
+    from brainpainter.media.drawn import swatches_needed
+    from brainpainter.rendering.views import parse_views
+    from brainpainter.table.rows import select_rows
+
+    if orientation == "vertical":
+        cax = ax.inset_axes((1.03, 0.15, 0.045, 0.7))
+    else:
+        cax = ax.inset_axes((0.15, -0.09, 0.7, 0.05))
+    table, scale = result.table, result.scale
+    assert table is not None and scale is not None
+    nan, missing = swatches_needed(table, select_rows(table.images, [row]), parse_views([view_name]),
+                                   result.manifest["settings"]["hidden"])
+    draw_colorbar(cax, scale, label=label, ticks=ticks, orientation=orientation, nan=nan, missing=missing)
+    return cax

@@ -22,6 +22,7 @@ from distributed import get_worker, wait
 from distributed.diagnostics.plugin import WorkerPlugin
 
 from brainpainter.errors import BrainPainterError
+from brainpainter.rendering.options import import_distributed
 from brainpainter.rendering.parallel import (
     RETRIES,
     WORKER_WAIT_S,
@@ -33,7 +34,6 @@ from brainpainter.rendering.parallel import (
     chunk_size,
     decode_png,
     drive,
-    import_distributed,
     paint_items,
     prepare_worker,
 )
@@ -81,7 +81,7 @@ class PainterPlugin(WorkerPlugin):
 
 def _dask_plugin(name: str) -> PainterPlugin:
     plugin = get_worker().plugins.get(name)
-    if plugin is None:
+    if not isinstance(plugin, PainterPlugin):
         raise RuntimeError(f"worker plugin {name!r} is not registered on this worker")
     return plugin
 
@@ -198,7 +198,9 @@ class DaskRunner(Runner):
 
         def wait_any(futures: list[Any]) -> Iterable[Any]:
             with self.client.as_current():  # wait() uses the current client; ours need not be the default
-                return wait(futures, return_when="FIRST_COMPLETED").done
+                done: Iterable[Any] = wait(  # type: ignore[no-untyped-call]
+                    futures, return_when="FIRST_COMPLETED").done
+                return done
 
         asked = [time.monotonic()]
 

@@ -14,8 +14,10 @@ turns the pose into the 4x4 matrix that maps RAS millimetres to clip space
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.rendering.views import View
 
@@ -62,26 +64,26 @@ class CameraPose:
         Distances along the viewing direction that bound the drawn depth.
     """
 
-    location: np.ndarray
-    rotation: np.ndarray
+    location: NDArray[Any]
+    rotation: NDArray[Any]
     ortho_scale: float
     clip_start: float
     clip_end: float
 
     @property
-    def right(self) -> np.ndarray:
+    def right(self) -> NDArray[Any]:
         return self.rotation[:, 0]
 
     @property
-    def up(self) -> np.ndarray:
+    def up(self) -> NDArray[Any]:
         return self.rotation[:, 1]
 
     @property
-    def back(self) -> np.ndarray:
+    def back(self) -> NDArray[Any]:
         return self.rotation[:, 2]
 
 
-def view_axes(azimuth: float, elevation: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def view_axes(azimuth: float, elevation: float) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any]]:
     """Camera axes for a viewing direction.
 
     Parameters
@@ -109,7 +111,7 @@ def view_axes(azimuth: float, elevation: float) -> tuple[np.ndarray, np.ndarray,
     return right, up, back
 
 
-def extent(points: np.ndarray, azimuth: float, elevation: float, aspect: float) -> float:
+def extent(points: NDArray[Any], azimuth: float, elevation: float, aspect: float) -> float:
     """Width the camera must see to hold `points` from this direction (before margin and zoom).
 
     Parameters
@@ -126,7 +128,7 @@ def extent(points: np.ndarray, azimuth: float, elevation: float, aspect: float) 
     return max(float(np.ptp(u)), 1e-6, float(np.ptp(v)) * aspect)
 
 
-def frame(points: np.ndarray, azimuth: float, elevation: float, zoom: float,
+def frame(points: NDArray[Any], azimuth: float, elevation: float, zoom: float,
           aspect: float, margin: float = MARGIN) -> CameraPose:
     """Frame `points` tightly in an orthographic view.
 
@@ -167,7 +169,7 @@ def frame(points: np.ndarray, azimuth: float, elevation: float, zoom: float,
     )
 
 
-def view_projection(pose: CameraPose, aspect: float) -> np.ndarray:
+def view_projection(pose: CameraPose, aspect: float) -> NDArray[Any]:
     """The 4x4 matrix from RAS millimetres to OpenGL clip space for `pose`.
 
     x_clip = -1 is the image's left edge, y_clip = +1 its top edge, and depth
@@ -195,7 +197,7 @@ def view_projection(pose: CameraPose, aspect: float) -> np.ndarray:
     return proj @ view
 
 
-def to_pixels(points: np.ndarray, pose: CameraPose, width: int, height: int) -> np.ndarray:
+def to_pixels(points: NDArray[Any], pose: CameraPose, width: int, height: int) -> NDArray[Any]:
     """Pixel coordinates ``(column, row)`` of RAS points, row 0 at the top.
 
     Parameters

@@ -20,18 +20,41 @@ colour) and the glass colour; slots from 3 on are region keys
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.rendering import framing
+from brainpainter.rendering.settings import RGB, SULC_LIGHTINGS, RenderSettings
 from brainpainter.rendering.views import View
 
 if TYPE_CHECKING:
-    from brainpainter.rendering.scene import RGB, Scene
+    from brainpainter.atlas.template import Template
+
+
+class SceneParts(Protocol):
+    """What :class:`SceneGeometry` reads of a :class:`~brainpainter.rendering.scene.Scene`.
+
+    (A protocol, so that scene.py, whose ``Scene.geometry`` builds a
+    :class:`SceneGeometry`, and this module do not import each other.)
+    """
+
+    @property
+    def template(self) -> Template: ...
+    @property
+    def labels(self) -> str: ...
+    @property
+    def surface(self) -> str: ...
+    @property
+    def hidden(self) -> frozenset[str]: ...
+    @property
+    def settings(self) -> RenderSettings: ...
+    @property
+    def medial_wall_color(self) -> RGB: ...
 
 #: Colour of subcortical structures that have no colour in the mapping (sRGB).
 NEUTRAL_GREY = (0.8, 0.8, 0.8)
@@ -44,6 +67,8 @@ N_FIXED_SLOTS = 3
 @dataclass(frozen=True)
 class PartGeometry:
     """One drawable part of a scene, indexed, ready for a vertex buffer.
+
+    Renderers upload it once, when the scene loads.
 
     Attributes
     ----------
@@ -72,15 +97,15 @@ class PartGeometry:
     name: str
     kind: str
     hemi: str | None
-    vertices: np.ndarray
-    normals: np.ndarray
-    triangles: np.ndarray
-    palette_index: np.ndarray
-    sulc: np.ndarray
-    hull: np.ndarray
+    vertices: NDArray[Any]
+    normals: NDArray[Any]
+    triangles: NDArray[Any]
+    palette_index: NDArray[Any]
+    sulc: NDArray[Any]
+    hull: NDArray[Any]
 
 
-def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+def vertex_normals(vertices: NDArray[Any], faces: NDArray[Any]) -> NDArray[Any]:
     """Area-weighted unit vertex normals, shape (n_vertices, 3), float32."""
     v = np.asarray(vertices, dtype=np.float64)
     f = np.asarray(faces, dtype=np.int64)
@@ -91,10 +116,11 @@ def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
         for c in range(3):
             n[:, c] = np.bincount(idx, weights=np.repeat(fn[:, c], 3), minlength=len(v))
     length = np.linalg.norm(n, axis=1, keepdims=True)
-    return (n / np.where(length > 0, length, 1.0)).astype(np.float32)
+    unit: NDArray[Any] = (n / np.where(length > 0, length, 1.0)).astype(np.float32)
+    return unit
 
 
-def convexity(vertices: np.ndarray, faces: np.ndarray, iterations: int = 60) -> np.ndarray:
+def convexity(vertices: NDArray[Any], faces: NDArray[Any], iterations: int = 60) -> NDArray[Any]:
     """Sulcal depth from the mesh alone: how far each vertex lies inside a smoothed copy.
 
     The surface is smoothed by `iterations` steps of uniform Laplacian
@@ -134,15 +160,16 @@ def convexity(vertices: np.ndarray, faces: np.ndarray, iterations: int = 60) -> 
     return _depth_0_1(-d)
 
 
-def _depth_0_1(depth: np.ndarray) -> np.ndarray:
+def _depth_0_1(depth: NDArray[Any]) -> NDArray[Any]:
     """Map a sulcal-depth measure (larger = deeper) to 0-1 by its 30th and 97th percentiles."""
     lo, hi = np.percentile(depth, [30, 97])
-    return np.clip((depth - lo) / max(hi - lo, 1e-9), 0.0, 1.0).astype(np.float32)
+    out: NDArray[Any] = np.clip((depth - lo) / max(hi - lo, 1e-9), 0.0, 1.0).astype(np.float32)
+    return out
 
 
-def split_by_label(vertices: np.ndarray, faces: np.ndarray, face_slot: np.ndarray,
-                   extra: tuple[np.ndarray, ...] = ()) -> tuple[np.ndarray, np.ndarray, np.ndarray,
-                                                              tuple[np.ndarray, ...]]:
+def split_by_label(vertices: NDArray[Any], faces: NDArray[Any], face_slot: NDArray[Any],
+                   extra: tuple[NDArray[Any], ...] = ()) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any],
+                                                              tuple[NDArray[Any], ...]]:
     """One vertex per (vertex, slot) pair used by `faces`: the indexed mesh a renderer draws.
 
     Parameters
@@ -171,7 +198,7 @@ def split_by_label(vertices: np.ndarray, faces: np.ndarray, face_slot: np.ndarra
             pal.astype(np.int32), tuple(np.asarray(e)[src] for e in extra))
 
 
-def _template_sulc(template, labels: str, hemi: str, cm) -> np.ndarray | None:
+def _template_sulc(template: Template, labels: str, hemi: str, cm: Any) -> NDArray[Any] | None:
     """A per-vertex ``sulc`` (or ``curv``) array the template ships, if any (normalised to 0-1 depth)."""
     raw = getattr(cm, "sulc", None)
     if raw is None:
@@ -183,7 +210,7 @@ def _template_sulc(template, labels: str, hemi: str, cm) -> np.ndarray | None:
     return _depth_0_1(np.asarray(raw, dtype=np.float64))  # FreeSurfer's sulc: sulci positive
 
 
-class Palette(Mapping):
+class Palette(Mapping[str, RGB]):
     """The colours of one image: a mapping region key -> sRGB, and the slot array renderers draw.
 
     Behaves as the read-only mapping of the colours that were given (what a
@@ -197,10 +224,11 @@ class Palette(Mapping):
     geometry : SceneGeometry, or a callable returning it
     """
 
-    def __init__(self, colors: Mapping[str, RGB], geometry) -> None:
+    def __init__(self, colors: Mapping[str, RGB],
+                 geometry: SceneGeometry | Callable[[], SceneGeometry]) -> None:
         self._colors = {k: tuple(float(c) for c in v[:3]) for k, v in colors.items()}
         self._geometry = geometry
-        self._rgb: np.ndarray | None = None
+        self._rgb: NDArray[Any] | None = None
 
     def __getitem__(self, key: str) -> RGB:
         return self._colors[key]  # type: ignore[return-value]
@@ -218,7 +246,7 @@ class Palette(Mapping):
         return self._geometry
 
     @property
-    def rgb(self) -> np.ndarray:
+    def rgb(self) -> NDArray[Any]:
         """sRGB 0-1 per palette slot, float32, shape (n_slots, 3)."""
         if self._rgb is None:
             g = self.geometry
@@ -248,11 +276,10 @@ class SceneGeometry:
         Colour of each slot when the palette gives none.
     """
 
-    def __init__(self, scene: Scene) -> None:
+    def __init__(self, scene: SceneParts) -> None:
         from brainpainter.atlas.model import HEMI_PREFIX
         from brainpainter.atlas.template import HEMIS
         from brainpainter.errors import choice_error
-        from brainpainter.rendering.scene import SULC_LIGHTINGS
 
         template, hidden = scene.template, frozenset(scene.hidden)
         settings = scene.settings
@@ -262,7 +289,7 @@ class SceneGeometry:
         slot_of: dict[str, int] = {}
         parts: list[PartGeometry] = []
 
-        def slots_for(names: list[str], default: int, drop: frozenset[str]) -> np.ndarray:
+        def slots_for(names: list[str], default: int, drop: frozenset[str]) -> NDArray[Any]:
             out = np.full(len(names), -1, dtype=np.int64)
             for i, key in enumerate(names):
                 if key in drop:
@@ -274,7 +301,8 @@ class SceneGeometry:
                 out[i] = slot_of[key]
             return out
 
-        def add(name, kind, hemi, verts, faces, face_slot, sulc) -> None:
+        def add(name: str, kind: str, hemi: str | None, verts: NDArray[Any], faces: NDArray[Any],
+                face_slot: NDArray[Any], sulc: NDArray[Any]) -> None:
             keep = face_slot >= 0
             faces, face_slot = np.asarray(faces)[keep], face_slot[keep]
             if not len(faces):

@@ -39,55 +39,27 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
+from brainpainter.rendering.options import cpu_count, resolve_jobs
+from brainpainter.rendering.painter import Painter
+
+__all__ = ["Item", "LocalRunner", "PainterSpec", "Runner", "SerialRunner", "chunk_size", "chunked", "drive",
+           "paint_all", "paint_items", "resolve_jobs"]
 
 if TYPE_CHECKING:  # pragma: no cover
-    from brainpainter.rendering.painter import Painter
-    from brainpainter.rendering.scene import RGB, RenderSettings
+    from brainpainter.rendering.settings import RGB, RenderSettings
     from brainpainter.rendering.views import View
 
-AUTO = "auto"
 SCHEDULER_ENV = "BRAINPAINTER_SCHEDULER"
-PIP_HINT = "pip install 'brainpainter[cluster]'"
 #: Times a Dask task that raised (not a user error) is sent again before the run fails.
 RETRIES = 2
 #: How long to wait for the first Dask worker of a cluster that has none yet.
 WORKER_WAIT_S = 300.0
 
 
-# -- options -------------------------------------------------------------------------
-def cpu_count() -> int:
-    """Cores this process may use (its CPU affinity where the system tells it)."""
-    if hasattr(os, "sched_getaffinity"):
-        return max(1, len(os.sched_getaffinity(0)))
-    return max(1, os.cpu_count() or 1)
-
-
-def resolve_jobs(jobs: int | str | None) -> int:
-    """The number of local worker processes for ``--jobs`` (``"auto"``: one per core).
-
-    Raises
-    ------
-    BrainPainterError
-        Not a positive whole number or ``"auto"``.
-    """
-    if jobs is None:
-        return 1
-    if isinstance(jobs, str):
-        text = jobs.strip().lower()
-        if text == AUTO:
-            return cpu_count()
-        if text.isdigit() and int(text) > 0:
-            return int(text)
-    elif isinstance(jobs, int | np.integer) and not isinstance(jobs, bool) and int(jobs) > 0:
-        return int(jobs)
-    raise BrainPainterError(
-        f"--jobs must be a positive whole number of processes or 'auto' (one per core, {cpu_count()} "
-        f"here); {jobs!r} was given."
-    )
-
-
+# -- sizes ------------------------------------------------------------------------------
 def render_threads(jobs: int) -> int:
     """Renderer threads per worker so that `jobs` workers share this machine's cores."""
     return max(1, cpu_count() // max(1, jobs))
@@ -162,7 +134,6 @@ class PainterSpec:
     def build(self) -> Painter:
         """Build the painter (not loaded), registering the renderer class if this process lacks it."""
         from brainpainter.atlas import registry
-        from brainpainter.rendering.painter import Painter
 
         if self.renderer_target is not None:
             module, _, attr = self.renderer_target.partition(":")
@@ -214,7 +185,7 @@ def paint_items(painter: Painter, items: Iterable[Item], encode: bool) -> list[A
     return out
 
 
-def decode_png(data: bytes) -> np.ndarray:
+def decode_png(data: bytes) -> NDArray[Any]:
     """PNG bytes -> RGBA uint8 array of shape (h, w, 4) (lossless: the array that was encoded)."""
     from PIL import Image
 
@@ -369,7 +340,7 @@ class SerialRunner(Runner):
         self.painter.close()
 
 
-def paint_all(runner: Runner, items: Sequence[Item], bar: Any = None) -> list[np.ndarray]:
+def paint_all(runner: Runner, items: Sequence[Item], bar: Any = None) -> list[NDArray[Any]]:
     """Paint `items` with `runner`: RGBA uint8 arrays of shape (h, w, 4), in the order of `items`.
 
     `bar` (a tqdm progress bar) advances by each finished chunk's images.
@@ -447,8 +418,10 @@ class LocalRunner(Runner):
 
         threads = self.threads or render_threads(self.n_workers)
         # spawn: a fresh interpreter per worker; forking a process with Blender loaded is unsafe.
-        self._pool = ProcessPoolExecutor(self.n_workers, mp_context=multiprocessing.get_context("spawn"),
-                                         initializer=_init_process, initargs=(self.spec, threads))
+        self._pool = ProcessPoolExecutor(
+            self.n_workers, mp_context=multiprocessing.get_context("spawn"),
+            initializer=_init_process,  # type: ignore[arg-type]
+            initargs=(self.spec, threads))  # type: ignore[arg-type]
         try:
             warm = [self._pool.submit(_process_warm) for _ in range(self.n_workers)]
             loads = {pid: seconds for pid, seconds in (f.result() for f in warm)}
@@ -497,64 +470,3 @@ class LocalRunner(Runner):
             p.terminate()
         for p in processes:
             p.join(10)
-
-
-def import_distributed() -> Any:
-    """``dask.distributed``, or a one-line error with the pip command."""
-    try:
-        import distributed
-    except ImportError:
-        raise BrainPainterError(
-            f"--scheduler (a Dask cluster) needs dask.distributed, which is not installed; {PIP_HINT}"
-        ) from None
-    return distributed
-
-
-# -- choosing ------------------------------------------------------------------------------
-def check_options(jobs: int | str | None = 1, client: Any = None, scheduler: str | None = None) -> int:
-    """Check where a run is to render (cheaply, before its input is read); returns the local job count.
-
-    Raises
-    ------
-    BrainPainterError
-        A bad ``--jobs``, both ``--jobs`` and a cluster, or a cluster without
-        ``dask.distributed`` installed.
-    """
-    n = resolve_jobs(jobs)
-    if client is not None or scheduler:
-        if n > 1:
-            raise BrainPainterError("give --jobs (processes on this machine) or --scheduler / client (a Dask "
-                                    f"cluster), not both; --jobs {jobs} and a scheduler were given.")
-        import_distributed()
-    return n
-
-
-def make_runner(painter: Painter, template: Any = None, *, jobs: int | str | None = 1, client: Any = None,
-                scheduler: str | None = None, n_items: int | None = None) -> Runner:
-    """The runner for a run's options: serial, local processes, or Dask.
-
-    Parameters
-    ----------
-    painter : Painter
-        The run's painter (not loaded; a serial runner loads it).
-    template : str or Template, optional
-        What the caller gave as the template (a name travels as a name).
-    jobs : int or "auto"
-        Local worker processes.
-    client : distributed.Client, optional
-    scheduler : str, optional
-        Dask scheduler address; default ``$BRAINPAINTER_SCHEDULER`` only where
-        the caller (the CLI) passes it.
-    n_items : int, optional
-        Images (or frames) to paint: no more local workers than that are started.
-    """
-    n = check_options(jobs, client, scheduler)
-    if n_items is not None:
-        n = min(n, max(1, n_items))
-    if client is not None or scheduler:
-        from brainpainter.rendering.cluster import DaskRunner
-
-        return DaskRunner(spec=PainterSpec.of(painter, template), client=client, address=scheduler)
-    if n > 1:
-        return LocalRunner(n_workers=n, spec=PainterSpec.of(painter, template))
-    return SerialRunner(painter=painter)

@@ -16,77 +16,34 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
-import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.template import SURFACES, Template
 from brainpainter.errors import choice_error
+from brainpainter.rendering.settings import (
+    LIGHTINGS,
+    QUALITIES,
+    RGB,
+    SHADINGS,
+    SULC_LIGHTINGS,
+    RenderSettings,
+)
 from brainpainter.rendering.views import View
+
+# RenderSettings and its choices live in brainpainter.rendering.settings; named here for renderers.
+__all__ = ["LIGHTINGS", "QUALITIES", "RGB", "SHADINGS", "SULC_LIGHTINGS", "RenderSettings", "Renderer",
+           "Scene"]
 
 if TYPE_CHECKING:
     from brainpainter.rendering.geometry import Palette, SceneGeometry
 
-RGB = tuple[float, float, float]
-QUALITIES = ("fast", "default", "high")
-SHADINGS = ("default", "flat")
-LIGHTINGS = ("studio", "soft", "flat-studio", "sulc")
-#: Lighting presets that darken sulci (they need the cortex's sulcal depth).
-SULC_LIGHTINGS = ("flat-studio", "sulc")
-
-
-@dataclass(frozen=True)
-class RenderSettings:
-    """Image settings shared by every image of a run.
-
-    Attributes
-    ----------
-    width, height : int
-        Pixels; default 1200 x 900 as the original BrainPainter.
-    background : tuple of float, shape (3,), or None
-        sRGB 0-1; ``None`` renders a transparent background.
-    quality : {"fast", "default", "high"}
-        ``fast``: no anti-aliasing; ``default``: 2x2 supersampling; ``high``:
-        path tracing (Cycles), or 3x3 supersampling for flat shading.
-    shading : {"default", "flat"}
-        ``flat`` draws exact, unlit colours.
-    lighting : {"studio", "soft", "flat-studio", "sulc"}
-        Lighting preset for default shading: ``studio`` key + fill + ambient
-        light that follow the camera; ``soft`` more ambient, flatter; ``sulc``
-        studio plus a slight darkening of sulci (sulcal depth);
-        ``flat-studio`` unlit colours darkened in sulci.
-    glass_opacity : float
-        Opacity of the glass brain, 0-1.
-    """
-
-    width: int = 1200
-    height: int = 900
-    background: RGB | None = (1.0, 1.0, 1.0)
-    quality: str = "default"
-    shading: str = "default"
-    lighting: str = "studio"
-    glass_opacity: float = 0.12
-
-    def __post_init__(self) -> None:
-        if self.quality not in QUALITIES:
-            raise choice_error("quality", self.quality, QUALITIES)
-        if self.shading not in SHADINGS:
-            raise choice_error("shading", self.shading, SHADINGS)
-        if self.lighting not in LIGHTINGS:
-            raise choice_error("lighting", self.lighting, LIGHTINGS)
-
-    def to_dict(self) -> dict:
-        return {
-            "width": self.width, "height": self.height,
-            "background": None if self.background is None else list(self.background),
-            "quality": self.quality, "shading": self.shading,
-            "lighting": self.lighting, "glass_opacity": self.glass_opacity,
-        }
-
-
 @dataclass(frozen=True)
 class Scene:
     """Everything loaded once per run.
+
+    What a renderer draws is ``scene.geometry``, built from these on first use.
 
     Attributes
     ----------
@@ -132,7 +89,7 @@ class Renderer(Protocol):
 
     def __init__(self, scene: Scene) -> None: ...
 
-    def render(self, palette: Palette, view: View) -> np.ndarray:
+    def render(self, palette: Palette, view: View) -> NDArray[Any]:
         """Render one image.
 
         Parameters

@@ -11,6 +11,7 @@ up is superior, except straight from above or below where it is anterior.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Any
 
 from brainpainter.errors import BrainPainterError, nearest
 
@@ -43,7 +44,7 @@ class View:
     zoom: float = 1.0
     glass: tuple[str, ...] = ()
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         return {
             "name": self.name, "content": self.content, "hemis": list(self.hemis),
             "glass": list(self.glass), "azimuth": self.azimuth,
@@ -149,7 +150,7 @@ def parse_views(spec: str | list[str] | tuple[str, ...] | None) -> list[View]:
                     f"free camera {item!r} must be camera:AZIMUTH:ELEVATION[:ZOOM] in degrees, "
                     "e.g. camera:135:30:1.2"
                 ) from None
-            out.append(camera_view(*nums))
+            out.append(camera_view(nums[0], nums[1], nums[2] if len(nums) > 2 else 1.0))
         else:
             out.append(get_view(item))
     if not out:

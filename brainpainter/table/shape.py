@@ -20,7 +20,13 @@ import re
 from dataclasses import dataclass
 from typing import Any
 
-from brainpainter.errors import BrainPainterError, NoRegionColumnError, nearest
+from brainpainter.errors import (
+    AmbiguousColumnError,
+    BrainPainterError,
+    ColumnNotFoundError,
+    NoRegionColumnError,
+    nearest,
+)
 from brainpainter.io.rawtable import Cell, RawTable
 from brainpainter.table.cells import is_empty, is_text, to_number
 from brainpainter.table.names import REGION, UNMATCHED, NameResolver
@@ -99,7 +105,7 @@ def find_column(raw: RawTable, name: str, option: str) -> int:
     if len(exact) == 1:
         return exact[0]
     if len(exact) > 1:
-        raise BrainPainterError(
+        raise AmbiguousColumnError(
             f"{option} {name!r}: {raw.source} has {len(exact)} columns of that name; rename them apart."
         )
     folded = [i for i, h in enumerate(raw.header) if h.lower() == name.strip().lower()]
@@ -107,7 +113,7 @@ def find_column(raw: RawTable, name: str, option: str) -> int:
         return folded[0]
     close = nearest(name, raw.header)
     shown = raw.header[:8] + (["..."] if len(raw.header) > 8 else [])
-    raise BrainPainterError(
+    raise ColumnNotFoundError(
         f"{option} {name!r} is not a column of {raw.source}; its columns are {shown}"
         + (f". Did you mean {close[0]!r}?" if close else ".")
     )

@@ -6,7 +6,7 @@ config
     :class:`ServerConfig`: data folder, worker count and every limit.
 options
     The render options as a pydantic model with the CLI's names and defaults,
-    checked by the same :func:`brainpainter.rendering.painter.prepare_run` as the CLI.
+    checked by the same :func:`brainpainter.rendering.run.prepare_run` as the CLI.
 store
     Uploads and jobs in SQLite (WAL) under the data folder.
 worker

@@ -1,79 +1,107 @@
-"""Render options of the web API: the CLI's names and defaults, checked by the CLI's own code.
+"""Render options of the web API: the core option classes' names, defaults and help, checked by them.
 
-:class:`RenderOptions` mirrors ``brainpainter render``'s options (Python
-names: ``nan_color``, ``glass_opacity``...; ``size`` is ``WIDTHxHEIGHT``;
-``transparent`` replaces the background). :func:`prepare` turns an uploaded
-table and options into a :class:`~brainpainter.rendering.painter.Run` through
-:func:`brainpainter.rendering.painter.prepare_run`, exactly as the CLI does, plus the
+:class:`RenderOptions` has ``brainpainter render``'s options (Python names:
+``nan_color``, ``glass_opacity``...; ``size`` is ``WIDTHxHEIGHT``;
+``transparent`` replaces the background), with the defaults, choices and help
+of :class:`brainpainter.rendering.options.Options`. :func:`prepare` turns an uploaded
+table and options into a :class:`~brainpainter.rendering.run.Run` through
+:func:`brainpainter.rendering.run.prepare_run`, exactly as the CLI does, plus the
 checks a server adds (no paths, size limits). Nothing here imports bpy.
 """
 
 from __future__ import annotations
 
 import io
-from dataclasses import dataclass
-from typing import Any, Literal
+from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING, Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
-from brainpainter.cli.options import DEFAULT_SIZE, DEFAULT_VIEWS, parse_size
+from brainpainter.color.scale import ScaleOptions
 from brainpainter.errors import BrainPainterError
+from brainpainter.rendering.options import SceneOptions, option_names
+from brainpainter.rendering.settings import RenderSettings, parse_size
+from brainpainter.table.options import TableOptions as ReadOptions
+
+if TYPE_CHECKING:
+    from brainpainter.rendering.run import Run
 
 #: Suffixes an uploaded file name may have (only used to sniff the format; never a path).
 UPLOAD_SUFFIXES = (".csv", ".tsv", ".tab", ".txt", ".dat", ".xlsx", ".xlsm", ".xls")
 
 
+def core(cls: type, name: str) -> Any:
+    """A pydantic field with the default and help of field `name` of the core options class `cls`."""
+    f = next(f for f in fields(cls) if f.name == name)
+    default = f.metadata.get("cli_default", f.default)
+    if isinstance(default, tuple):
+        return Field(default_factory=lambda: list(default), description=f.metadata.get("help") or None)
+    return Field(default, description=f.metadata.get("help") or None)
+
+
+def one_of(cls: type, name: str) -> AfterValidator:
+    """A validator: the value must be one of the choices of field `name` of `cls`."""
+    choices = next(f for f in fields(cls) if f.name == name).metadata["choices"]
+
+    def check(value: str) -> str:
+        if value not in choices:
+            raise ValueError(f"must be one of {list(choices)}; {value!r} was given")
+        return value
+
+    return AfterValidator(check)
+
+
 class TableOptions(BaseModel):
-    """How the table is read (``brainpainter check``'s input options)."""
+    """How the table is read: ``brainpainter check``'s input options.
+
+    See :class:`brainpainter.table.options.TableOptions`.
+    """
 
     model_config = ConfigDict(extra="forbid")
 
     atlas: str | None = Field(None, description="dk, destrieux, dkt (alias tourville) or a plugin atlas; "
                                                 "inferred from the region names when not given.")
-    image_column: str | None = Field(None, description="Column with image names.")
-    value: str | None = Field(None, description="Long tables: the column with the values.")
-    region_column: str | None = Field(None, description="Long tables: the column with region names.")
-    strict: bool = Field(False, description="Names that match no region are an error.")
+    image_column: str | None = core(ReadOptions, "image_column")
+    value: str | None = core(ReadOptions, "value")
+    region_column: str | None = core(ReadOptions, "region_column")
+    strict: bool = core(ReadOptions, "strict")
 
 
 class RenderOptions(TableOptions):
-    """The options of ``brainpainter render`` with the same names and defaults."""
+    """The options of ``brainpainter render``, with the defaults and help of the core option classes.
 
-    views: str = Field(DEFAULT_VIEWS, description="Comma-separated views, 'all', or camera:AZ:EL[:ZOOM].")
-    surface: Literal["pial", "white", "inflated"] = "pial"
-    gradient: str | None = Field(None, description="Control colours, e.g. white,yellow,orange,red "
-                                                   "(the default). Values 0..N-1.")
-    cmap: str | None = Field(None, description="A matplotlib colour map instead of a gradient.")
-    vmin: float | None = Field(None, description="Value at the first colour.")
-    vmax: float | None = Field(None, description="Value at the last colour.")
-    center: float | None = Field(None, description="Diverging: value at the middle colour.")
-    nan_color: str = Field("#8c8c8c", description="Colour of empty cells.")
-    missing_color: str = Field("#d0d0d0", description="Colour of regions with no column.")
-    hide: list[str] = Field(default_factory=list, description="Regions or groups not drawn (cerebellum, "
-                                                               "ventricles, brainstem, ventraldc).")
-    background: str = Field("white", description="Background colour.")
+    See :class:`brainpainter.rendering.options.Options`; ``size`` is
+    ``WIDTHxHEIGHT`` and ``transparent`` replaces the background, as in the CLI.
+    """
+
+    views: str = core(SceneOptions, "views")
+    surface: Annotated[str, one_of(SceneOptions, "surface")] = core(SceneOptions, "surface")
+    gradient: str | None = core(ScaleOptions, "gradient")
+    cmap: str | None = core(ScaleOptions, "cmap")
+    vmin: float | None = core(ScaleOptions, "vmin")
+    vmax: float | None = core(ScaleOptions, "vmax")
+    center: float | None = core(ScaleOptions, "center")
+    nan_color: str = core(ScaleOptions, "nan_color")
+    missing_color: str = core(ScaleOptions, "missing_color")
+    hide: list[str] = core(SceneOptions, "hide")
+    background: str = core(RenderSettings, "background")
     transparent: bool = Field(False, description="Transparent background.")
-    size: str = Field(DEFAULT_SIZE, description="Size of each rendered view, WIDTHxHEIGHT pixels.")
-    quality: Literal["fast", "default", "high"] = "default"
-    shading: Literal["default", "flat"] = "default"
-    lighting: Literal["studio", "soft", "flat-studio"] = "studio"
-    glass_opacity: float = 0.12
+    size: str = Field(RenderSettings().size, description="Size of each rendered view, WIDTHxHEIGHT pixels.")
+    quality: Annotated[str, one_of(RenderSettings, "quality")] = core(RenderSettings, "quality")
+    shading: Annotated[str, one_of(RenderSettings, "shading")] = core(RenderSettings, "shading")
+    lighting: Annotated[str, one_of(RenderSettings, "lighting")] = core(RenderSettings, "lighting")
+    glass_opacity: float = core(RenderSettings, "glass_opacity")
 
     def table_kwargs(self) -> dict[str, Any]:
-        return {"image_column": self.image_column, "value": self.value,
-                "region_column": self.region_column, "strict": self.strict}
+        return {name: getattr(self, name) for name in option_names(ReadOptions)}
 
     def run_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of ``prepare_run`` (without `data` and `atlas`)."""
-        width, height = parse_size(self.size)
-        return {
-            "views": self.views, "gradient": self.gradient, "cmap": self.cmap, "vmin": self.vmin,
-            "vmax": self.vmax, "center": self.center, "nan_color": self.nan_color,
-            "missing_color": self.missing_color,
-            "background": None if self.transparent else self.background,
-            "width": width, "height": height, "quality": self.quality, "shading": self.shading,
-            "lighting": self.lighting, "glass_opacity": self.glass_opacity, **self.table_kwargs(),
-        }
+        """Keyword arguments of ``prepare_run`` (without `data`, `atlas` and `hide`)."""
+        values = self.model_dump(exclude={"atlas", "size", "transparent", "hide"})
+        values["width"], values["height"] = parse_size(self.size)
+        if self.transparent:
+            values["background"] = None
+        return values
 
     def hide_tokens(self) -> list[str]:
         return [h.strip() for item in self.hide for h in item.split(",") if h.strip()]
@@ -82,7 +110,7 @@ class RenderOptions(TableOptions):
 def table_stream(data: bytes, name: str) -> io.BytesIO:
     """The uploaded bytes as a named stream for the readers: `name` is only a label, never opened."""
     stream = io.BytesIO(data)
-    stream.name = name  # type: ignore[attr-defined]
+    stream.name = name
     return stream
 
 
@@ -103,7 +131,7 @@ def upload_name(name: str | None) -> str:
 class Prepared:
     """A checked run plus what the server needs to render it."""
 
-    run: Any  # brainpainter.rendering.painter.Run
+    run: Run
     options: RenderOptions
     hidden: list[str]
     file_names: list[str]
@@ -131,7 +159,8 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
         The CLI's one-line message for the first problem.
     """
     from brainpainter.io.output import safe_name
-    from brainpainter.rendering.painter import prepare_run, resolve_hidden
+    from brainpainter.rendering.painter import resolve_hidden
+    from brainpainter.rendering.run import prepare_run
 
     kwargs = options.run_kwargs()
     if max_pixels is not None and kwargs["width"] * kwargs["height"] > max_pixels:

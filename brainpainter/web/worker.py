@@ -15,7 +15,6 @@ last, then the job is marked done (at most once: see the store).
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 import time
@@ -38,7 +37,7 @@ class PainterCache:
     def __init__(self, renderer: str, size: int = 2) -> None:
         self.renderer = renderer
         self.size = size
-        self._painters: OrderedDict[tuple, Any] = OrderedDict()
+        self._painters: OrderedDict[tuple[Any, ...], Any] = OrderedDict()
 
     def get(self, atlas: Any, surface: str, hidden: list[str], settings: Any) -> Any:
         from brainpainter.rendering.painter import Painter
@@ -57,7 +56,7 @@ class PainterCache:
     def warm(self, width: int, height: int) -> None:
         """Load the renderer and the default scene (dk, pial, default settings at this size)."""
         from brainpainter.atlas.registry import get_atlas
-        from brainpainter.rendering.scene import RenderSettings
+        from brainpainter.rendering.settings import RenderSettings
         from brainpainter.rendering.views import get_view
 
         painter = self.get(get_atlas("dk"), "pial", [], RenderSettings(width=width, height=height))
@@ -154,30 +153,29 @@ def _prepared(folder: Path, job: dict[str, Any]) -> Any:
 def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
     from brainpainter import __version__
     from brainpainter.io.output import PngWriter, write_json
+    from brainpainter.rendering.parallel import SerialRunner
+    from brainpainter.rendering.run import paint, png_metadata, run_settings
 
     _, prep = _prepared(folder, job)
     run = prep.run
     table = run.table
     painter = painters.get(table.atlas, prep.options.surface, prep.hidden, run.settings)
     out = folder / "out"
-    settings = {"atlas": table.atlas.name, "template": "fsaverage", "surface": prep.options.surface,
-                "views": [v.to_dict() for v in run.views], "scale": run.scale.to_dict(),
-                "hidden": sorted(painter.scene.hidden), "renderer": painters.renderer,
-                **run.settings.to_dict()}
-    entries, done = [], 0
+    settings = run_settings(run, painter)
+    plan = run.items(range(len(table.images)))
+    files = [out / f"{prep.file_names[i]}_{view.name}.png" for i, view in plan]
+    # written atomically: a file present is complete (a resumed job)
+    todo = [(k, item) for k, (item, path) in enumerate(zip(plan, files, strict=True)) if not path.exists()]
+    done = len(plan) - len(todo)
     with PngWriter() as writer:
-        for i, image in enumerate(table.images):
-            values = table.row(i)
-            for view in run.views:
-                path = out / f"{prep.file_names[i]}_{view.name}.png"
-                if not path.exists():  # written atomically: present means complete (a resumed job)
-                    meta = {"Software": f"brainpainter {__version__}", "brainpainter:image": image,
-                            "brainpainter:view": view.name,
-                            "brainpainter:settings": json.dumps(settings, sort_keys=True)}
-                    writer.submit(path, painter.paint(values, view, run.scale), meta)
-                entries.append({"file": path.name, "image": image, "row": i, "view": view.name})
-                done += 1
-                tick(done)
+        # the painter stays in the cache: the runner is not closed
+        painted = paint(run, SerialRunner(painter=painter), [item for _, item in todo])
+        for (k, _), ((i, view), pixels) in zip(todo, painted, strict=True):
+            writer.submit(files[k], pixels, png_metadata(table.images[i], view, settings))
+            done += 1
+            tick(done)
+    entries = [{"file": path.name, "image": table.images[i], "row": i, "view": view.name}
+               for path, (i, view) in zip(files, plan, strict=True)]
     manifest = {"software": {"brainpainter": __version__}, "input": table.summary(), "settings": settings,
                 "files": entries}
     write_json(out / "manifest.json", manifest)
@@ -196,7 +194,7 @@ def _write_zip(out: Path, names: list[str], zip_name: str) -> None:
 
 
 def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
-    kwargs = prep.options.run_kwargs()
+    kwargs: dict[str, Any] = prep.options.run_kwargs()
     kwargs.update(atlas=prep.run.table.atlas, hide=prep.hidden, surface=prep.options.surface,
                   renderer=renderer, progress=False)
     return kwargs

@@ -15,6 +15,7 @@ import tempfile
 import threading
 from collections.abc import Iterator
 from types import ModuleType
+from typing import IO
 
 from brainpainter.errors import BrainPainterError
 
@@ -76,6 +77,18 @@ def release_memory() -> None:
         _malloc_trim(0)
 
 
+def _sink() -> IO[bytes]:
+    """An anonymous file for captured output: in memory where Linux offers it.
+
+    A temporary file on disk costs milliseconds to create on a busy disk,
+    once per image (every GPU draw runs inside :func:`quiet`).
+    """
+    if hasattr(os, "memfd_create"):
+        with contextlib.suppress(OSError):
+            return os.fdopen(os.memfd_create("brainpainter-quiet", os.MFD_CLOEXEC), "w+b")
+    return tempfile.TemporaryFile(mode="w+b")
+
+
 @contextlib.contextmanager
 def quiet() -> Iterator[list[str]]:
     """Silence Blender's C-level prints (``Saved: ...``, EGL notices) on fd 1 and 2.
@@ -88,7 +101,7 @@ def quiet() -> Iterator[list[str]]:
         with contextlib.suppress(Exception):
             stream.flush()
     fds = (1, 2)  # Blender's C code writes to the process's descriptors, whatever sys.stdout is
-    with tempfile.TemporaryFile(mode="w+b") as sink:
+    with _sink() as sink:
         try:
             saved = [os.dup(fd) for fd in fds]
         except OSError:

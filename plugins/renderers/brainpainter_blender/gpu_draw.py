@@ -9,13 +9,18 @@ call runs one Python function with a GPU context current. Shaders, batches
 and offscreen buffers survive between calls.
 
 Per renderer, every part of ``scene.geometry`` becomes one indexed batch
-(uploaded once); an image uploads only the palette (a 1-D float texture of
-linear colours), draws the visible parts into a supersampled float buffer
-(opaque parts with depth, then the glass: back faces, then front faces,
-blended, no depth writes) and averages each SxS block in a second pass that
-also converts linear light to sRGB, un-premultiplies alpha and flips rows,
-so the read-back (into a flat ``gpu.types.Buffer``; ``np.array`` of a
-multi-dimensional Buffer gives wrong strides) is already the image.
+(uploaded once, in an order that suits a software rasteriser's vertex
+cache: :mod:`brainpainter_blender.meshorder`); an image uploads only the
+palette (a 1-D float texture of linear colours), draws the visible parts
+into a supersampled buffer of 16-bit linear light (opaque parts with depth,
+then the glass: back faces, then front faces, blended, no depth writes) and
+averages each SxS block in a second pass (S a compile-time constant) that
+also un-premultiplies alpha and flips rows into an sRGB target, which encodes
+linear light to sRGB as it is written. So the read-back (into a flat
+``gpu.types.Buffer``; ``np.array`` of a multi-dimensional Buffer gives wrong
+strides) is already the image. The GLSL sources are in
+:mod:`brainpainter_blender.gpu_shaders`; :meth:`GpuDraw.profile` times the
+steps of one image.
 
 Lighting is per vertex, in linear light, from lights fixed to the camera:
 a key light from the upper left, a fill light from the right and an
@@ -24,7 +29,8 @@ ambient term (:data:`LIGHTING`).
 
 from __future__ import annotations
 
-import atexit
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,7 +41,7 @@ from brainpainter.rendering.framing import view_projection
 from brainpainter.rendering.geometry import PartGeometry, SceneGeometry
 from brainpainter.rendering.scene import RenderSettings
 from brainpainter.rendering.views import View
-from brainpainter_blender import _bpy
+from brainpainter_blender import _bpy, gpu_shaders, meshorder
 
 
 @dataclass(frozen=True)
@@ -78,72 +84,14 @@ FLAT = Lighting(ambient=1.0, key=0.0, fill=0.0, lit=False)
 SUPERSAMPLING = {"fast": 1, "default": 2, "high": 3}
 #: Face culling of opaque parts ("BACK": half the triangles are never rasterised; "NONE": draw all).
 CULL_OPAQUE = "BACK"
-#: Largest supersampled buffer (pixels; 8 bytes each as RGBA16F): huge images get less supersampling.
+#: Format of the supersampled buffer (linear light, premultiplied alpha; 8 bytes a pixel).
+HI_FORMAT = "RGBA16"
+#: Largest supersampled buffer (pixels; 8 bytes each): huge images get less supersampling.
 MAX_SUPERSAMPLED_PIXELS = 64_000_000
+#: Views whose framing a renderer keeps (a movie's orbit has one per frame).
+MAX_CACHED_VIEWS = 64
 #: Glass: opacity at grazing angles, as a multiple of the opacity facing the camera.
 GLASS_EDGE = 2.5
-
-_MODE_LIT, _MODE_GLASS = 0, 1
-
-_VERTEX = """
-void main()
-{
-  vec3 base = texelFetch(palette, int(pal + 0.5), 0).rgb;
-  vec3 n = normalize(nrm);
-  if (dot(n, back) < 0.0) {
-    n = -n;  /* seen from inside (a hole, the cut medial wall): light the side we see */
-  }
-  float shade = ambient + key * max(dot(n, key_dir), 0.0) + fill * max(dot(n, fill_dir), 0.0);
-  shade *= 1.0 - sulc_strength * sulc;
-  vec3 c = base * shade;
-  if (mode == 1) {
-    float facing = clamp(abs(dot(normalize(nrm), back)), 0.0, 1.0);
-    float a = clamp(mix(glass_alpha * glass_edge, glass_alpha, facing), 0.0, 1.0);
-    color = vec4(base * a, a);
-  } else {
-    color = vec4(c, 1.0);
-  }
-  gl_Position = mvp * vec4(pos, 1.0);
-}
-"""
-
-_FRAGMENT = """
-void main()
-{
-  fragColor = color;
-}
-"""
-
-_RESOLVE_VERTEX = """
-void main()
-{
-  gl_Position = vec4(pos, 0.0, 1.0);
-}
-"""
-
-_RESOLVE_FRAGMENT = """
-float to_srgb(float c)
-{
-  c = clamp(c, 0.0, 1.0);
-  return c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1.0 / 2.4) - 0.055;
-}
-
-void main()
-{
-  ivec2 p = ivec2(gl_FragCoord.xy);
-  int src_y = out_height - 1 - p.y;  /* flipped: row 0 of the read-back is the image's top row */
-  vec4 sum = vec4(0.0);
-  for (int j = 0; j < factor; j++) {
-    for (int i = 0; i < factor; i++) {
-      sum += texelFetch(image, ivec2(p.x * factor + i, src_y * factor + j), 0);
-    }
-  }
-  sum /= float(factor * factor);
-  vec3 rgb = sum.a > 0.0 ? sum.rgb / sum.a : vec3(0.0);
-  fragColor = vec4(to_srgb(rgb.r), to_srgb(rgb.g), to_srgb(rgb.b), sum.a);
-}
-"""
-
 
 def srgb_to_linear(rgb: np.ndarray) -> np.ndarray:
     """The IEC 61966-2-1 sRGB transfer function inverted, for an array of sRGB 0-1 values."""
@@ -211,54 +159,31 @@ def in_gpu_context(job):
     return _engine.pop("result", None)
 
 
-_shaders: dict[str, Any] = {}
+@dataclass(frozen=True)
+class _Aim:
+    """A view's parts and camera uniforms (``mathutils`` values, world space)."""
+
+    visible: list[PartGeometry]
+    mvp: Any
+    back: Any
+    key_dir: Any
+    fill_dir: Any
 
 
-def _shaders_get() -> tuple[Any, Any]:
-    """The part and resolve shaders (compiled once per process, in a GPU context)."""
-    if "part" in _shaders:
-        return _shaders["part"], _shaders["resolve"]
-    import gpu
+def _aim_for(geometry: SceneGeometry, view: View, settings: RenderSettings, light: Lighting) -> _Aim:
+    """The parts `view` shows, its view-projection matrix and the camera-fixed light directions."""
+    from mathutils import Matrix, Vector
 
-    iface = gpu.types.GPUStageInterfaceInfo("brainpainter_part")
-    iface.smooth("VEC4", "color")
-    info = gpu.types.GPUShaderCreateInfo()
-    info.push_constant("MAT4", "mvp")
-    info.push_constant("VEC3", "back")
-    info.push_constant("VEC3", "key_dir")
-    info.push_constant("VEC3", "fill_dir")
-    info.push_constant("FLOAT", "ambient")
-    info.push_constant("FLOAT", "key")
-    info.push_constant("FLOAT", "fill")
-    info.push_constant("FLOAT", "sulc_strength")
-    info.push_constant("FLOAT", "glass_alpha")
-    info.push_constant("FLOAT", "glass_edge")
-    info.push_constant("INT", "mode")
-    info.sampler(0, "FLOAT_1D", "palette")
-    info.vertex_in(0, "VEC3", "pos")
-    info.vertex_in(1, "VEC3", "nrm")
-    info.vertex_in(2, "FLOAT", "pal")
-    info.vertex_in(3, "FLOAT", "sulc")
-    info.vertex_out(iface)
-    info.fragment_out(0, "VEC4", "fragColor")
-    info.vertex_source(_VERTEX)
-    info.fragment_source(_FRAGMENT)
-    part = gpu.shader.create_from_info(info)
+    aspect = settings.width / settings.height
+    pose = geometry.camera(view, aspect)
+    cam = pose.rotation  # columns: right, up, back (camera space -> world)
 
-    info = gpu.types.GPUShaderCreateInfo()
-    info.push_constant("INT", "factor")
-    info.push_constant("INT", "out_height")
-    info.sampler(0, "FLOAT_2D", "image")
-    info.vertex_in(0, "VEC2", "pos")
-    info.fragment_out(0, "VEC4", "fragColor")
-    info.vertex_source(_RESOLVE_VERTEX)
-    info.fragment_source(_RESOLVE_FRAGMENT)
-    resolve = gpu.shader.create_from_info(info)
-    if not _shaders:
-        # Drop them before Blender's own exit handler, which reports GPU blocks still held.
-        atexit.register(_shaders.clear)
-    _shaders.update(part=part, resolve=resolve, iface=iface)
-    return part, resolve
+    def world(d: tuple[float, float, float]) -> Vector:
+        v = cam @ np.asarray(d, float)
+        return Vector((v / np.linalg.norm(v)).tolist())
+
+    return _Aim(geometry.visible(view), Matrix(view_projection(pose, aspect).tolist()),
+                world((0.0, 0.0, 1.0)), world(light.key_dir), world(light.fill_dir))
 
 
 class GpuDraw:
@@ -275,10 +200,13 @@ class GpuDraw:
         self.settings = settings
         self.lighting = FLAT if settings.shading == "flat" else LIGHTING[settings.lighting]
         self._batches: dict[str, Any] = {}
+        self._aims: dict[View, _Aim] = {}
         self._palette_key: bytes | None = None
         self._palette_tex: Any = None
         self._hi: Any = None
         self._lo: Any = None
+        self._lo_tex: Any = None
+        self._resolve: Any = None
         self._quad: Any = None
         in_gpu_context(self._upload)
 
@@ -295,26 +223,54 @@ class GpuDraw:
         import gpu
         from gpu_extras.batch import batch_for_shader
 
-        part_shader, resolve = _shaders_get()
-        for p in self.geometry.parts:
-            self._batches[p.name] = batch_for_shader(
-                part_shader, "TRIS",
-                {"pos": p.vertices, "nrm": p.normals,
-                 "pal": p.palette_index.astype(np.float32), "sulc": p.sulc},
-                indices=p.triangles.astype(np.int32),
-            )
-        self._quad = batch_for_shader(resolve, "TRIS", {"pos": [(-1, -1), (3, -1), (-1, 3)]})
+        gpu_shaders.part_shader()  # compiled now; the parts' batches on first use (_batch)
         s = self.settings
         self.factor = f = self._factor()
-        self._hi = gpu.types.GPUOffScreen(s.width * f, s.height * f, format="RGBA16F")
-        self._lo = gpu.types.GPUOffScreen(s.width, s.height, format="RGBA8")
+        self._resolve = gpu_shaders.resolve_shader(f)
+        self._quad = batch_for_shader(self._resolve, "TRIS", {"pos": [(-1, -1), (3, -1), (-1, 3)]})
+        # Linear light in 16-bit integers: as exact as half floats for 0-1 and cheaper to write.
+        self._hi = gpu.types.GPUOffScreen(s.width * f, s.height * f, format=HI_FORMAT)
+        # The resolve writes linear light; the sRGB target encodes it (cheaper than pow() per pixel).
+        self._lo_tex = gpu.types.GPUTexture((s.width, s.height), format="SRGB8_A8")
+        self._lo = gpu.types.GPUFrameBuffer(color_slots=self._lo_tex)
+
+    def _batch(self, part: PartGeometry) -> Any:
+        """The part's indexed batch, uploaded when a view first shows it (in a GPU context).
+
+        Views of one hemisphere never pay for the other's upload (~40 ms of start-up).
+        """
+        batch = self._batches.get(part.name)
+        if batch is None:
+            from gpu_extras.batch import batch_for_shader
+
+            order, triangles = meshorder.cache_friendly(part.vertices, part.triangles)
+            batch = self._batches[part.name] = batch_for_shader(
+                gpu_shaders.part_shader(), "TRIS",
+                {"pos": part.vertices[order], "nrm": part.normals[order],
+                 "pal": part.palette_index[order].astype(np.float32), "sulc": part.sulc[order]},
+                indices=triangles,
+            )
+        return batch
 
     def render(self, palette_rgb: np.ndarray, view: View) -> np.ndarray:
         """Draw one image; `palette_rgb` is sRGB 0-1, shape (n_slots, 3). Returns RGBA uint8 (h, w, 4)."""
-        s = self.settings
-        visible = self.geometry.visible(view)
-        pose = self.geometry.camera(view, s.width / s.height)
-        return in_gpu_context(lambda: self._draw(np.asarray(palette_rgb, np.float32), visible, pose))
+        aim = self._aim(view)
+        return in_gpu_context(lambda: self._draw(np.asarray(palette_rgb, np.float32), aim))
+
+    def _aim(self, view: View) -> _Aim:
+        """What `view` draws and its camera uniforms, computed once per view.
+
+        Besides sparing the work, the cache keeps numpy's threaded BLAS out of
+        the per-image path: a camera's framing multiplies thousands of hull
+        points, which wakes OpenBLAS's worker thread, and that thread then
+        spins (``sched_yield``) on a core the rasteriser needs.
+        """
+        aim = self._aims.get(view)
+        if aim is None:
+            if len(self._aims) >= MAX_CACHED_VIEWS:  # a movie's orbit: many views, each used once
+                self._aims.clear()
+            aim = self._aims[view] = _aim_for(self.geometry, view, self.settings, self.lighting)
+        return aim
 
     def _palette(self, rgb: np.ndarray) -> Any:
         import gpu
@@ -328,72 +284,102 @@ class GpuDraw:
             self._palette_key = key
         return self._palette_tex
 
-    def _draw(self, rgb: np.ndarray, visible: list[PartGeometry], pose) -> np.ndarray:
+    def profile(self, palette_rgb: np.ndarray, view: View) -> dict[str, float]:
+        """Seconds each step of one image takes, each waited for (``benchmarks/bench_render.py --profile``).
+
+        Returns
+        -------
+        dict of str to float
+            ``palette``, ``clear``, ``draw <part>`` per opaque part, ``glass``,
+            ``resolve`` and ``read-back``; waiting for each step to finish
+            (a 1-pixel read) removes the overlap of an ordinary image.
+        """
         import gpu
-        from mathutils import Matrix, Vector
 
-        s, light = self.settings, self.lighting
-        part_shader, resolve = _shaders_get()
-        mvp = Matrix(view_projection(pose, s.width / s.height).tolist())
-        cam = pose.rotation  # columns: right, up, back (camera space -> world)
+        times: dict[str, float] = {}
+        aim = self._aim(view)
 
-        def world(d) -> Vector:
-            v = cam @ np.asarray(d, float)
-            return Vector((v / np.linalg.norm(v)).tolist())
+        def mark(step: str) -> None:
+            fb = gpu.state.active_framebuffer_get()
+            fb.read_color(0, 0, 1, 1, 4, 0, "UBYTE", data=gpu.types.Buffer("UBYTE", 4))
+            now = time.perf_counter()
+            times[step] = now - times.pop("_t")
+            times["_t"] = now
 
+        def job() -> None:
+            times["_t"] = time.perf_counter()
+            self._draw(np.asarray(palette_rgb, np.float32), aim, mark)
+
+        in_gpu_context(job)
+        times.pop("_t")
+        return times
+
+    def _draw(self, rgb: np.ndarray, aim: _Aim, mark: Callable[[str], None] | None = None) -> np.ndarray:
+        import gpu
+
+        mark = mark or (lambda step: None)
         tex = self._palette(rgb)
-        bg = s.background
-        clear = (0.0, 0.0, 0.0, 0.0) if bg is None else (*srgb_to_linear(np.asarray(bg)).tolist(), 1.0)
+        mark("palette")
         with self._hi.bind():
-            fb = gpu.state.active_framebuffer_get()
-            fb.clear(color=clear, depth=1.0)
-            part_shader.bind()
-            part_shader.uniform_float("mvp", mvp)
-            part_shader.uniform_float("back", world((0.0, 0.0, 1.0)))
-            part_shader.uniform_float("key_dir", world(light.key_dir))
-            part_shader.uniform_float("fill_dir", world(light.fill_dir))
-            part_shader.uniform_float("ambient", light.ambient)
-            part_shader.uniform_float("key", light.key if light.lit else 0.0)
-            part_shader.uniform_float("fill", light.fill if light.lit else 0.0)
-            part_shader.uniform_float("glass_alpha", float(s.glass_opacity))
-            part_shader.uniform_float("glass_edge", GLASS_EDGE)
-            part_shader.uniform_sampler("palette", tex)
-            gpu.state.depth_test_set("LESS_EQUAL")
-            gpu.state.depth_mask_set(True)
-            gpu.state.blend_set("NONE")
-            # Parts are closed surfaces: faces turned away are always hidden behind others.
-            gpu.state.face_culling_set(CULL_OPAQUE)
-            part_shader.uniform_int("mode", _MODE_LIT)
-            for p in visible:
-                if p.kind == "glass":
-                    continue
-                part_shader.uniform_float("sulc_strength", light.sulc if p.kind == "cortex" else 0.0)
-                self._batches[p.name].draw(part_shader)
-            glass = [p for p in visible if p.kind == "glass"]
-            if glass and s.glass_opacity > 0:
-                gpu.state.depth_mask_set(False)
-                gpu.state.blend_set("ALPHA_PREMULT")
-                part_shader.uniform_int("mode", _MODE_GLASS)
-                part_shader.uniform_float("sulc_strength", 0.0)
-                for cull in ("FRONT", "BACK"):  # far side first, then the near side over it
-                    gpu.state.face_culling_set(cull)
-                    for p in glass:
-                        self._batches[p.name].draw(part_shader)
-                gpu.state.face_culling_set("NONE")
-                gpu.state.blend_set("NONE")
-                gpu.state.depth_mask_set(True)
-            gpu.state.depth_test_set("NONE")
+            self._draw_parts(aim, tex, mark)
         with self._lo.bind():
-            fb = gpu.state.active_framebuffer_get()
-            fb.clear(color=(0.0, 0.0, 0.0, 0.0))
+            # the resolve writes every pixel: no clear
+            resolve, s = self._resolve, self.settings
             resolve.bind()
-            resolve.uniform_int("factor", self.factor)
             resolve.uniform_int("out_height", s.height)
             resolve.uniform_sampler("image", self._hi.texture_color)
             self._quad.draw(resolve)
+            mark("resolve")
             buf = gpu.types.Buffer("UBYTE", s.width * s.height * 4)
-            fb.read_color(0, 0, s.width, s.height, 4, 0, "UBYTE", data=buf)
-        return np.frombuffer(buf, dtype=np.uint8).reshape(s.height, s.width, 4).copy()
+            self._lo.read_color(0, 0, s.width, s.height, 4, 0, "UBYTE", data=buf)
+            mark("read-back")
+        # a view of the Buffer's memory (kept alive by the array), no copy
+        return np.frombuffer(buf, dtype=np.uint8).reshape(s.height, s.width, 4)
+
+    def _draw_parts(self, aim: _Aim, tex: Any, mark: Callable[[str], None]) -> None:
+        """Clear the supersampled buffer and draw the opaque parts, then the glass."""
+        import gpu
+
+        s, light = self.settings, self.lighting
+        bg = s.background
+        clear = (0.0, 0.0, 0.0, 0.0) if bg is None else (*srgb_to_linear(np.asarray(bg)).tolist(), 1.0)
+        gpu.state.active_framebuffer_get().clear(color=clear, depth=1.0)
+        mark("clear")
+        shader = gpu_shaders.part_shader()
+        shader.bind()
+        for name, value in (("mvp", aim.mvp), ("back", aim.back), ("key_dir", aim.key_dir),
+                            ("fill_dir", aim.fill_dir), ("ambient", light.ambient),
+                            ("key", light.key if light.lit else 0.0),
+                            ("fill", light.fill if light.lit else 0.0),
+                            ("glass_alpha", float(s.glass_opacity)), ("glass_edge", GLASS_EDGE)):
+            shader.uniform_float(name, value)
+        shader.uniform_sampler("palette", tex)
+        gpu.state.depth_test_set("LESS_EQUAL")
+        gpu.state.depth_mask_set(True)
+        gpu.state.blend_set("NONE")
+        # Parts are closed surfaces: faces turned away are always hidden behind others.
+        gpu.state.face_culling_set(CULL_OPAQUE)
+        shader.uniform_int("mode", gpu_shaders.MODE_LIT)
+        for p in aim.visible:
+            if p.kind != "glass":
+                shader.uniform_float("sulc_strength", light.sulc if p.kind == "cortex" else 0.0)
+                self._batch(p).draw(shader)
+                mark(f"draw {p.name}")
+        glass = [p for p in aim.visible if p.kind == "glass"]
+        if glass and s.glass_opacity > 0:
+            gpu.state.depth_mask_set(False)
+            gpu.state.blend_set("ALPHA_PREMULT")
+            shader.uniform_int("mode", gpu_shaders.MODE_GLASS)
+            shader.uniform_float("sulc_strength", 0.0)
+            for cull in ("FRONT", "BACK"):  # far side first, then the near side over it
+                gpu.state.face_culling_set(cull)
+                for p in glass:
+                    self._batch(p).draw(shader)
+            mark("glass")
+            gpu.state.blend_set("NONE")
+            gpu.state.depth_mask_set(True)
+        gpu.state.face_culling_set("NONE")
+        gpu.state.depth_test_set("NONE")
 
     def close(self) -> None:
         """Free the batches, textures and offscreen buffers (in a GPU context)."""
@@ -401,10 +387,9 @@ class GpuDraw:
             return
 
         def drop() -> None:
-            for off in (self._hi, self._lo):
-                if off is not None:
-                    off.free()
-            self._hi = self._lo = self._quad = self._palette_tex = None
+            if self._hi is not None:
+                self._hi.free()
+            self._hi = self._lo = self._lo_tex = self._quad = self._palette_tex = None
             self._batches.clear()
 
         in_gpu_context(drop)

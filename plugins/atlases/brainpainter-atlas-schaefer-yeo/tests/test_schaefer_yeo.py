@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from brainpainter.atlas import registry
-from brainpainter.rendering.painter import render
+from brainpainter.rendering.run import render
 from brainpainter.testing import check_atlas
 
 NAMES = [f"schaefer{s}_{n}n" for s in range(100, 1001, 100) for n in (7, 17)] + ["yeo17"]

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from brainpainter.atlas import registry
-from brainpainter.rendering.painter import render
+from brainpainter.rendering.run import render
 from brainpainter.testing import check_atlas
 
 

@@ -1,0 +1,78 @@
+"""What the renders show: the regions a view draws, and where the brain is in an image."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from brainpainter.atlas.model import Atlas
+from brainpainter.color.rgb import ColorLike, to_rgb
+from brainpainter.rendering.views import View
+from brainpainter.table.region_table import RegionTable
+
+
+def drawn_keys(atlas: Atlas, views: Sequence[View], hidden: Iterable[str] = ()) -> list[str]:
+    """Region keys that some view draws: its hemispheres' cortex, or the subcortical structures."""
+    from brainpainter.rendering.framing import shows
+
+    hidden = set(hidden)
+    return [r.key for r in atlas.regions if r.key not in hidden and any(
+        shows(v, "cortex", r.hemi) if r.kind == "cortical" else shows(v, "subcortical", None)
+        for v in views)]
+
+
+def swatches_needed(table: RegionTable, rows: Sequence[int], views: Sequence[View],
+                    hidden: Iterable[str] = ()) -> tuple[bool, bool]:
+    """Whether the NaN colour and the missing colour appear in the drawn regions of `rows`.
+
+    Returns
+    -------
+    nan, missing : bool
+    """
+    keys = set(drawn_keys(table.atlas, views, hidden))
+    cols = [j for j, k in enumerate(table.regions) if k in keys]
+    values = table.values[np.ix_(list(rows), cols)] if cols else np.zeros((0, 0))
+    nan = bool(np.isnan(values).any())
+    missing = bool(keys - set(table.regions))
+    return nan, missing
+
+
+def content_box(image: NDArray[Any], background: ColorLike | None, tol: int = 6) -> tuple[int, int, int, int]:
+    """Rows and columns holding the brain: ``(top, bottom, left, right)``, end-exclusive.
+
+    ``(0, 0, 0, 0)`` when the image is background only.
+
+    Parameters
+    ----------
+    image : ndarray of uint8, shape (h, w, 4)
+    background : colour or None
+        The render's background; None: transparent (alpha decides).
+    """
+    alpha = image[..., 3] > 0
+    if background is None:
+        mask = alpha
+    else:
+        bg = np.round(np.array(to_rgb(background)) * 255).astype(int)
+        mask = alpha & (np.abs(image[..., :3].astype(int) - bg).max(axis=-1) > tol)
+    rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
+    if rows.size == 0:
+        return 0, 0, 0, 0
+    return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
+
+
+def common_crop(images: Sequence[NDArray[Any]], background: ColorLike | None,
+                pad: float = 0.02) -> tuple[slice, slice]:
+    """One crop holding the brain in all `images` (same shape), with `pad` of the size around it.
+
+    Images with nothing but background are ignored; when all are, nothing is cropped.
+    """
+    h, w = images[0].shape[:2]
+    boxes = np.array([b for b in (content_box(im, background) for im in images) if b[1] > b[0]]
+                     or [(0, h, 0, w)])
+    p = round(pad * max(h, w))
+    top, bottom = max(0, boxes[:, 0].min() - p), min(h, boxes[:, 1].max() + p)
+    left, right = max(0, boxes[:, 2].min() - p), min(w, boxes[:, 3].max() + p)
+    return slice(int(top), int(bottom)), slice(int(left), int(right))

@@ -1,0 +1,297 @@
+"""Figure layout: renders, headings and one colour bar placed at the figure's printed size.
+
+:class:`FigureOptions` is the one definition of the figure options (``--grid``,
+``--title``, ``--label``, ``--ticks``, ``--dpi``, ``--fig-width``,
+``--font-size``, ``--view-labels``), checked when made; :func:`compose_figure`
+lays out the renders with them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, TypedDict
+
+from numpy.typing import NDArray
+
+from brainpainter.color.rgb import ColorLike
+from brainpainter.color.scale import ColourScale
+from brainpainter.errors import BrainPainterError
+from brainpainter.media.drawn import common_crop
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+ONE_COLUMN_IN = 3.5  # inches; journals: 85-90 mm single column, 170-183 mm double
+TWO_COLUMN_IN = 7.2
+GAP_IN, PAD_IN = 0.04, 0.05  # between images, around the figure
+
+
+class FigureKwargs(TypedDict, total=False):
+    """The keyword arguments of :class:`FigureOptions` (``figure(grid=True, ...)``)."""
+
+    grid: bool
+    title: str | None
+    label: str | None
+    ticks: Sequence[float] | str | None
+    dpi: float
+    fig_width: float | None
+    font_size: float
+    view_labels: bool
+
+
+def check_figure_text(font_size: float, fig_width: float | None) -> None:
+    """Font size in 1..72 points, figure width in 1..40 inches (or None); finite numbers only."""
+    try:
+        ok = 1.0 <= float(font_size) <= 72.0 and (fig_width is None or 1.0 <= float(fig_width) <= 40.0)
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise BrainPainterError(
+            f"font size must be 1..72 points and figure width 1..40 inches; font_size={font_size}, "
+            f"fig_width={fig_width} were given."
+        )
+
+
+@dataclass(frozen=True)
+class FigureOptions:
+    """How a figure is laid out; checked when made.
+
+    Attributes
+    ----------
+    grid : bool
+        False: one line of views per image. True: images as columns (headed by
+        their names), views as rows, as in BrainPainter's progression figures.
+    title : str, optional
+        Above everything.
+    label : str, optional
+        Under the colour bar, e.g. ``"z-score"``.
+    ticks : sequence of float or str, optional
+        Colour-bar ticks (default: the gradient's control points).
+    dpi : float
+        Resolution of PNG/TIFF output (50 to 1200).
+    fig_width : float, optional
+        Inches; default 7.2 (two journal columns), or 3.5 for one or two image columns.
+    font_size : float
+        Points, for column headings and the colour-bar label (ticks one point less,
+        title two more).
+    view_labels : bool
+        Name the views (row labels in a grid, column headings otherwise).
+    """
+
+    grid: bool = field(default=False, metadata={
+        "help": "Rows of the input as columns (e.g. stages) and views as rows, headed by image names."})
+    title: str | None = field(default=None, metadata={"help": "A title above the figure."})
+    label: str | None = field(default=None, metadata={
+        "help": "Colour-bar label, e.g. 'z-score' or 'atrophy (SD from controls)'."})
+    ticks: Sequence[float] | str | None = field(default=None, metadata={
+        "help": "Colour-bar ticks, e.g. 0,1.5,3 (default: the gradient's colours)."})
+    dpi: float = field(default=300.0, metadata={"help": "Resolution of PNG/TIFF output."})
+    fig_width: float | None = field(default=None, metadata={
+        "help": "Figure width in inches (default 7.2, two journal columns; 3.5 for 1-2 image columns)."})
+    font_size: float = field(default=8.0, metadata={"help": "Text size in points."})
+    view_labels: bool = field(default=False, metadata={
+        "help": "Name the views (row labels in a grid, headings otherwise)."})
+
+    def __post_init__(self) -> None:
+        try:
+            ok = 50 <= float(self.dpi) <= 1200
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise BrainPainterError(f"dpi must be between 50 and 1200; {self.dpi} was given.")
+        check_figure_text(self.font_size, self.fig_width)
+
+
+def pretty_view(name: str) -> str:
+    """``lateral-left`` -> ``lateral left``."""
+    return name.replace("-", " ")
+
+
+@dataclass
+class FigureLayout:
+    """The composed figure and where its parts are (for callers and tests).
+
+    Attributes
+    ----------
+    figure : matplotlib.figure.Figure
+    colorbar_ax : matplotlib.axes.Axes
+    image_axes : dict of (str, str) to Axes
+        ``(image name, view name) -> Axes``.
+    """
+
+    figure: Figure
+    colorbar_ax: Axes | None = None
+    image_axes: dict[tuple[str, str], Axes] = field(default_factory=dict)
+
+
+@dataclass
+class Grid:
+    """Sizes of a figure, inches: the image cells, the margins and the headings.
+
+    Attributes
+    ----------
+    width, height : float
+    left, top, usable : float
+        Left margin, top margin (title and headings), width of the image area.
+    col_w : list of float, shape (n_cols,)
+    row_h : list of float, shape (n_rows,)
+    row_heads, col_heads : list of str
+    """
+
+    width: float
+    height: float
+    left: float
+    top: float
+    usable: float
+    col_w: list[float]
+    row_h: list[float]
+    row_heads: list[str]
+    col_heads: list[str]
+
+    def box(self, x: float, y_top: float, w: float, h: float) -> tuple[float, float, float, float]:
+        """An axes rectangle in figure fractions from inches (`y_top` measured from the top)."""
+        return x / self.width, (self.height - y_top - h) / self.height, w / self.width, h / self.height
+
+    @property
+    def col_x(self) -> list[float]:
+        """Left edge of each image column, inches."""
+        return [self.left + sum(self.col_w[:c]) + GAP_IN * c for c in range(len(self.col_w))]
+
+    @property
+    def images_bottom(self) -> float:
+        """Where the last row of images ends, inches from the top."""
+        return self.top + sum(self.row_h) + GAP_IN * (len(self.row_h) - 1)
+
+
+def plan_grid(aspect: Mapping[str, float], image_names: Sequence[str], view_names: Sequence[str],
+              opts: FigureOptions, colorbar_h: Callable[[float], float]) -> Grid:
+    """Sizes of the figure: `aspect` is each view's height / width after cropping.
+
+    `colorbar_h` gives the colour bar's height (with its label) for the width
+    of the image area, inches.
+    """
+    grid = opts.grid
+    n_cols = len(image_names) if grid else len(view_names)
+    width = opts.fig_width or (TWO_COLUMN_IN if n_cols >= 3 else ONE_COLUMN_IN)
+    pt = opts.font_size / 72.0
+    views = [pretty_view(v) for v in view_names] if opts.view_labels else []
+    col_heads = list(image_names) if grid else views
+    row_heads = views if grid else (list(image_names) if len(image_names) > 1 else [])
+    left = PAD_IN + (1.5 * pt if row_heads else 0.0)
+    top = (PAD_IN + (1.6 * (opts.font_size + 2) / 72.0 if opts.title else 0.0)
+           + (1.5 * pt if col_heads else 0.0))
+    usable = width - left - PAD_IN
+    if grid:
+        cw = (usable - GAP_IN * (n_cols - 1)) / n_cols
+        col_w, row_h = [cw] * n_cols, [cw * aspect[v] for v in view_names]
+    else:
+        inv = [1.0 / aspect[v] for v in view_names]
+        rh = (usable - GAP_IN * (n_cols - 1)) / sum(inv)
+        col_w, row_h = [rh * a for a in inv], [rh] * len(image_names)
+    if min(col_w) <= 0.05:
+        raise BrainPainterError(
+            f"the figure is too narrow for {n_cols} image columns at {width:g} in; give a larger "
+            "figure width (--fig-width) or fewer rows/views."
+        )
+    bottom = 0.08 + colorbar_h(usable)
+    height = top + sum(row_h) + GAP_IN * (len(row_h) - 1) + bottom
+    return Grid(width, height, left, top, usable, col_w, row_h, row_heads, col_heads)
+
+
+def compose_figure(images: Mapping[tuple[str, str], NDArray[Any]], image_names: Sequence[str],
+                   view_names: Sequence[str], scale: ColourScale, opts: FigureOptions | None = None, *,
+                   nan: bool = False, missing: bool = False,
+                   background: ColorLike | None = "white") -> FigureLayout:
+    """Lay out renders, titles and a colour bar in a matplotlib figure.
+
+    Parameters
+    ----------
+    images : mapping of (image name, view name) to ndarray of uint8, shape (h, w, 4)
+        One render per image and view (all of one view the same shape).
+    image_names, view_names : sequence of str
+        Order of the rows (input) and views.
+    scale : ColourScale
+    opts : FigureOptions, optional
+        Layout, title, colour-bar label and ticks, size and fonts.
+    nan, missing : bool
+        Show swatches for the NaN and missing colours.
+    background : colour or None
+        Figure background (and the renders'); None: transparent.
+
+    Returns
+    -------
+    FigureLayout
+    """
+    from brainpainter.media.colorbar import colorbar_height, new_figure, text_color
+
+    opts = opts or FigureOptions()
+    crops = {v: common_crop([images[(i, v)] for i in image_names], background) for v in view_names}
+    aspect = {v: (crops[v][0].stop - crops[v][0].start) / max(1, crops[v][1].stop - crops[v][1].start)
+              for v in view_names}
+
+    def bar_h(usable: float) -> float:
+        return colorbar_height(scale, usable, dpi=opts.dpi, label=opts.label, ticks=opts.ticks, nan=nan,
+                               missing=missing, fontsize=opts.font_size)
+
+    grid = plan_grid(aspect, image_names, view_names, opts, bar_h)
+    fig = new_figure((grid.width, grid.height), opts.dpi, background)
+    layout = FigureLayout(fig)
+    color = text_color(background)
+    draw_images(layout, grid, images, crops, image_names, view_names, opts.grid)
+    draw_headings(fig, grid, opts, color)
+    layout.colorbar_ax = draw_bar(fig, grid, scale, opts, nan, missing, color)
+    return layout
+
+
+def draw_images(layout: FigureLayout, grid: Grid, images: Mapping[tuple[str, str], NDArray[Any]],
+                crops: Mapping[str, tuple[slice, slice]], image_names: Sequence[str],
+                view_names: Sequence[str], by_column: bool) -> None:
+    """One axes per render, cropped; images as columns when `by_column` (a grid figure)."""
+    y = grid.top
+    col_x = grid.col_x
+    for r, rh in enumerate(grid.row_h):
+        for c, cw in enumerate(grid.col_w):
+            image, view = (image_names[c], view_names[r]) if by_column else (image_names[r], view_names[c])
+            ax = layout.figure.add_axes(grid.box(col_x[c], y, cw, rh))
+            rows, cols = crops[view]
+            ax.imshow(images[(image, view)][rows, cols], interpolation="antialiased")
+            ax.set_axis_off()
+            layout.image_axes[(image, view)] = ax
+        y += rh + GAP_IN
+
+
+def draw_headings(fig: Figure, grid: Grid, opts: FigureOptions, color: str) -> None:
+    """Row labels, column headings and the title."""
+    pt, size = opts.font_size / 72.0, opts.font_size
+    y = grid.top
+    for head, rh in zip(grid.row_heads, grid.row_h, strict=False):
+        fig.text((grid.left - 0.4 * pt) / grid.width, 1 - (y + rh / 2) / grid.height, head, rotation=90,
+                 ha="right", va="center", fontsize=size, color=color)
+        y += rh + GAP_IN
+    for x, w, head in zip(grid.col_x, grid.col_w, grid.col_heads, strict=False):
+        fig.text((x + w / 2) / grid.width, 1 - (grid.top - 0.35 * pt) / grid.height, head,
+                 ha="center", va="bottom", fontsize=size, color=color)
+    if opts.title:
+        fig.text(0.5, 1 - PAD_IN / grid.height, opts.title, ha="center", va="top", fontsize=size + 2,
+                 color=color, fontweight="bold")
+
+
+def draw_bar(fig: Figure, grid: Grid, scale: ColourScale, opts: FigureOptions, nan: bool, missing: bool,
+             color: str) -> Axes:
+    """The colour bar, centred right under the images; returns its axes."""
+    from brainpainter.media.colorbar import draw_colorbar, fit_axes
+
+    bar_h = 1.1 * opts.font_size / 72.0  # as colorbar_figure draws it
+    cb_top = grid.images_bottom + 0.08 + 0.04
+    cb_ax = fig.add_axes(grid.box(grid.left, cb_top, grid.usable, bar_h))
+    draw_colorbar(cb_ax, scale, label=opts.label, ticks=opts.ticks, nan=nan, missing=missing,
+                  fontsize=opts.font_size, color=color)
+    avail = grid.box(grid.left, cb_top, grid.usable, grid.height - cb_top)
+    fit_axes(cb_ax, avail, grow="x", max_width=min(0.55 * grid.width, 3.2) / grid.width)
+    # fit_axes centres vertically; keep the bar right under the images instead.
+    pos = cb_ax.get_position()
+    cb_ax.set_position((pos.x0, 1 - (cb_top + bar_h) / grid.height, pos.width, bar_h / grid.height))
+    return cb_ax
+

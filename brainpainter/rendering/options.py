@@ -1,0 +1,274 @@
+"""The options of a run, defined once: what is drawn, the colour scale, the image, the table, the workers.
+
+Each group is a frozen dataclass, checked when it is made, in the lowest layer
+that owns it:
+
+========================  ==========================================================  ============
+group                     options                                                     defined in
+========================  ==========================================================  ============
+:class:`SceneOptions`     views, template, surface, hide, renderer, atlas_config      here
+:class:`ScaleOptions`     gradient, cmap, vmin, vmax, center, nan_color,              color.scale
+                          missing_color
+:class:`RenderSettings`   width, height, background, quality, shading, lighting,     rendering.settings
+                          glass_opacity
+:class:`TableOptions`     image_column, value, region_column, strict                  table.options
+:class:`RunnerOptions`    jobs, client, scheduler                                     here
+========================  ==========================================================  ============
+
+The public functions (``brainpainter.render``, ``figure``, ``movie``,
+``plot``, ``export``) take these options as flat keywords
+(``render(table, cmap="viridis", width=800)``), typed by :class:`RenderKwargs`;
+:meth:`Options.of` sorts them into the groups. The CLI's click options and the
+web API's fields are generated from the same fields (defaults, choices, help).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, TypedDict
+
+import numpy as np
+
+from brainpainter.atlas.template import SURFACES
+from brainpainter.color.rgb import to_rgb
+from brainpainter.color.scale import ScaleKwargs, ScaleOptions
+from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.rendering.settings import RenderSettings, SettingsKwargs
+from brainpainter.rendering.views import parse_views
+from brainpainter.table.options import TableKwargs, TableOptions
+
+if TYPE_CHECKING:
+    from brainpainter.atlas.template import Template
+
+AUTO = "auto"
+PIP_HINT = "pip install 'brainpainter[cluster]'"
+#: The default views, as the CLI shows them.
+DEFAULT_VIEWS = "lateral-left,medial-left,subcortical"
+
+
+class SceneKwargs(TypedDict, total=False):
+    """The keyword arguments of :class:`SceneOptions`."""
+
+    views: str | Sequence[str] | None
+    template: Template | str
+    surface: str
+    hide: Iterable[str]
+    renderer: str
+    atlas_config: str | Path | None
+
+
+class RunnerKwargs(TypedDict, total=False):
+    """The keyword arguments of :class:`RunnerOptions`."""
+
+    jobs: int | str
+    client: Any
+    scheduler: str | None
+
+
+class RenderKwargs(SceneKwargs, ScaleKwargs, SettingsKwargs, TableKwargs, RunnerKwargs, total=False):
+    """Every option of a run as a flat keyword (see :class:`Options` for what each means)."""
+
+
+@dataclass(frozen=True)
+class SceneOptions:
+    """What is drawn, and from where.
+
+    Attributes
+    ----------
+    views : str or list of str, optional
+        Default: BrainPainter's ``lateral-left, medial-left, subcortical`` (for an
+        atlas without cortical regions ``subcortical, subcortical-dorsal``).
+    template : str or Template
+        Template name or folder.
+    surface : {"pial", "white", "inflated"}
+    hide : tuple of str
+        Regions, hemisphere-free names or groups (``cerebellum``) not to draw.
+    renderer : str
+        Name in the ``brainpainter.renderers`` registry.
+    atlas_config : path, optional
+        Region-group TOML file (:mod:`brainpainter.atlas.config`) defining the
+        atlas; given instead of an atlas.
+    """
+
+    views: str | Sequence[str] | None = field(default=None, metadata={
+        "help": "Comma-separated views, 'all', or camera:AZ:EL[:ZOOM].", "cli_default": DEFAULT_VIEWS})
+    template: Template | str = field(default="fsaverage", metadata={"help": "Template name or folder."})
+    surface: str = field(default="pial", metadata={"choices": SURFACES, "help": ""})
+    hide: tuple[str, ...] = field(default=(), metadata={
+        "help": "Regions or groups not drawn (cerebellum, ventricles, brainstem, ventraldc). Repeatable."})
+    renderer: str = field(default="blender", metadata={"help": ""})
+    atlas_config: str | Path | None = field(default=None, metadata={
+        "help": "Region-group TOML file defining the atlas (instead of --atlas); see docs/atlases.md."})
+
+    def __post_init__(self) -> None:
+        if self.surface not in SURFACES:
+            raise choice_error("surface", self.surface, SURFACES)
+        hide = [self.hide] if isinstance(self.hide, str) else list(self.hide)
+        object.__setattr__(self, "hide", tuple(str(h) for h in hide))
+        if self.views is not None:
+            parse_views(self.views if isinstance(self.views, str) else list(self.views))
+
+
+# -- where a run renders ------------------------------------------------------------------
+def cpu_count() -> int:
+    """Cores this process may use (its CPU affinity where the system tells it)."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return max(1, os.cpu_count() or 1)
+
+
+def resolve_jobs(jobs: int | str | None) -> int:
+    """The number of local worker processes for ``--jobs`` (``"auto"``: one per core).
+
+    Raises
+    ------
+    BrainPainterError
+        Not a positive whole number or ``"auto"``.
+    """
+    if jobs is None:
+        return 1
+    if isinstance(jobs, str):
+        text = jobs.strip().lower()
+        if text == AUTO:
+            return cpu_count()
+        if text.isdigit() and int(text) > 0:
+            return int(text)
+    elif isinstance(jobs, int | np.integer) and not isinstance(jobs, bool) and int(jobs) > 0:
+        return int(jobs)
+    raise BrainPainterError(
+        f"--jobs must be a positive whole number of processes or 'auto' (one per core, {cpu_count()} "
+        f"here); {jobs!r} was given."
+    )
+
+
+def import_distributed() -> Any:
+    """``dask.distributed``, or a one-line error with the pip command."""
+    try:
+        import distributed
+    except ImportError:
+        raise BrainPainterError(
+            f"--scheduler (a Dask cluster) needs dask.distributed, which is not installed; {PIP_HINT}"
+        ) from None
+    return distributed
+
+
+@dataclass(frozen=True)
+class RunnerOptions:
+    """Where the images are rendered (see :mod:`brainpainter.rendering.parallel`).
+
+    Attributes
+    ----------
+    jobs : int or "auto"
+        Worker processes on this machine (``"auto"``: one per core), each with
+        a warm renderer; the output is byte-identical to ``jobs=1``.
+    client : distributed.Client, optional
+        Render on this Dask cluster instead.
+    scheduler : str, optional
+        A Dask scheduler address (``tcp://host:8786``) to connect to instead of `client`.
+    """
+
+    jobs: int | str = field(default=1, metadata={
+        "help": "Render in N processes on this machine ('auto': one per core); output identical to one "
+                "process."})
+    client: Any = field(default=None, metadata={"cli": False})
+    scheduler: str | None = field(default=None, metadata={
+        "help": "Render on a Dask cluster, e.g. tcp://host:8786 (default: $BRAINPAINTER_SCHEDULER); needs "
+                f"{PIP_HINT}."})
+
+    def __post_init__(self) -> None:
+        n = resolve_jobs(self.jobs)
+        if self.client is not None or self.scheduler:
+            if n > 1:
+                raise BrainPainterError("give --jobs (processes on this machine) or --scheduler / client (a "
+                                        f"Dask cluster), not both; --jobs {self.jobs} and a scheduler were "
+                                        "given.")
+            import_distributed()
+
+    @property
+    def n_jobs(self) -> int:
+        """Local worker processes."""
+        return resolve_jobs(self.jobs)
+
+    @property
+    def cluster(self) -> bool:
+        """Whether a Dask cluster renders."""
+        return self.client is not None or bool(self.scheduler)
+
+
+# -- all of them ----------------------------------------------------------------------------
+#: Option group -> its class, in the order they are checked (cheap checks first).
+GROUPS: dict[str, type] = {"runner": RunnerOptions, "scale": ScaleOptions, "scene": SceneOptions,
+                           "settings": RenderSettings, "table": TableOptions}
+
+
+def option_names(cls: type) -> list[str]:
+    """The public keyword names of an option group (its dataclass fields)."""
+    return [f.name for f in fields(cls) if f.init and not f.name.startswith("_")]
+
+
+def take(options: dict[str, Any], cls: type) -> dict[str, Any]:
+    """Remove the keywords of option group `cls` from `options` and return them."""
+    return {name: options.pop(name) for name in option_names(cls) if name in options}
+
+
+@dataclass(frozen=True)
+class Options:
+    """Every option of a run, by group; checked when made.
+
+    Attributes
+    ----------
+    runner : RunnerOptions
+        jobs, client, scheduler.
+    scale : ScaleOptions
+        gradient, cmap, vmin, vmax, center, nan_color, missing_color.
+    scene : SceneOptions
+        views, template, surface, hide, renderer, atlas_config.
+    settings : RenderSettings
+        width, height, background, quality, shading, lighting, glass_opacity.
+    table : TableOptions
+        image_column, value, region_column, strict.
+    """
+
+    runner: RunnerOptions = field(default_factory=RunnerOptions)
+    scale: ScaleOptions = field(default_factory=ScaleOptions)
+    scene: SceneOptions = field(default_factory=SceneOptions)
+    settings: RenderSettings = field(default_factory=RenderSettings)
+    table: TableOptions = field(default_factory=TableOptions)
+
+    @classmethod
+    def of(cls, options: Mapping[str, Any], caller: str = "render", **defaults: Any) -> Options:
+        """Sort flat keywords (:class:`RenderKwargs`) into the groups and check them.
+
+        Parameters
+        ----------
+        options : mapping of str to object
+            The keywords the user gave.
+        caller : str
+            The public function, for the message about an unknown keyword.
+        **defaults
+            The caller's own defaults where they differ from the groups'
+            (a movie's ``width=800``).
+
+        Raises
+        ------
+        TypeError
+            A keyword that is no option (as Python says for any function).
+        """
+        given = {**defaults, **options}
+        known = {name for group in GROUPS.values() for name in option_names(group)}
+        unknown = sorted(set(given) - known)
+        if unknown:
+            raise TypeError(f"{caller}() got an unexpected keyword argument {unknown[0]!r}")
+        if given.get("background") is not None:
+            given["background"] = to_rgb(given["background"])
+        made = {key: group(**{n: given[n] for n in option_names(group) if n in given})
+                for key, group in GROUPS.items()}
+        return cls(**made)
+
+    def flat(self) -> dict[str, Any]:
+        """The options as flat keywords again (``Options.of(o.flat()) == o``)."""
+        return {name: getattr(getattr(self, key), name)
+                for key, group in GROUPS.items() for name in option_names(group)}

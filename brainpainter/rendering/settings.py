@@ -1,0 +1,123 @@
+"""Image settings shared by every image of a run: size, background, quality, shading, lighting.
+
+:class:`RenderSettings` is the one definition of these options: its fields
+carry the defaults and the help text that the CLI (``brainpainter.cli.options``)
+and the web API (``brainpainter.web.options``) show, and it checks them once,
+when it is made.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, TypedDict
+
+from brainpainter.color.rgb import ColorLike, to_rgb
+from brainpainter.errors import BrainPainterError, choice_error
+
+RGB = tuple[float, float, float]
+QUALITIES = ("fast", "default", "high")
+SHADINGS = ("default", "flat")
+LIGHTINGS = ("studio", "soft", "flat-studio", "sulc")
+#: Lighting presets that darken sulci (they need the cortex's sulcal depth).
+SULC_LIGHTINGS = ("flat-studio", "sulc")
+#: Smallest and largest width or height of one image, pixels.
+MIN_PIXELS, MAX_PIXELS = 16, 8192
+
+
+def parse_size(size: str) -> tuple[int, int]:
+    """``"1200x900"`` -> ``(1200, 900)`` (the CLI's and the web API's ``size``)."""
+    try:
+        w, h = (int(x) for x in str(size).lower().replace("\u00d7", "x").split("x"))
+    except ValueError:
+        raise BrainPainterError(f"--size must be WIDTHxHEIGHT, e.g. 1200x900; {size!r} was given.") from None
+    return w, h
+
+
+class SettingsKwargs(TypedDict, total=False):
+    """The keyword arguments of :class:`RenderSettings` (``render(width=...)``, ...)."""
+
+    width: int
+    height: int
+    background: ColorLike | None
+    quality: str
+    shading: str
+    lighting: str
+    glass_opacity: float
+
+
+def check_pixels(what: str, n: Any) -> int:
+    """`n` as a whole number of pixels in 16..8192, or a one-line error naming `what`."""
+    try:
+        ok = float(n) == int(n) and MIN_PIXELS <= int(n) <= MAX_PIXELS
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise BrainPainterError(f"{what} must be between {MIN_PIXELS} and {MAX_PIXELS} pixels (a whole "
+                                f"number); {n!r} was given.")
+    return int(n)
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    """Image settings shared by every image of a run; checked when made.
+
+    Attributes
+    ----------
+    width, height : int
+        Pixels, 16 to 8192; default 1200 x 900 as the original BrainPainter.
+    background : colour or None
+        Stored as sRGB 0-1, tuple of float, shape (3,); ``None`` renders a
+        transparent background.
+    quality : {"fast", "default", "high"}
+        ``fast``: no anti-aliasing; ``default``: 2x2 supersampling; ``high``:
+        path tracing (Cycles), or 3x3 supersampling for flat shading.
+    shading : {"default", "flat"}
+        ``flat`` draws exact, unlit colours.
+    lighting : {"studio", "soft", "flat-studio", "sulc"}
+        Lighting preset for default shading: ``studio`` key + fill + ambient
+        light that follow the camera; ``soft`` more ambient, flatter; ``sulc``
+        studio plus a slight darkening of sulci (sulcal depth);
+        ``flat-studio`` unlit colours darkened in sulci.
+    glass_opacity : float
+        Opacity of the glass brain, 0-1.
+    """
+
+    width: int = field(default=1200, metadata={"help": "Image width, pixels."})
+    height: int = field(default=900, metadata={"help": "Image height, pixels."})
+    background: RGB | None = field(default=(1.0, 1.0, 1.0), metadata={
+        "help": "Background colour.", "cli_default": "white"})
+    quality: str = field(default="default", metadata={"choices": QUALITIES, "help": ""})
+    shading: str = field(default="default", metadata={"choices": SHADINGS, "help": ""})
+    lighting: str = field(default="studio", metadata={
+        "choices": LIGHTINGS, "help": "sulc: studio light with sulci darkened slightly (sulcal depth)."})
+    glass_opacity: float = field(default=0.12, metadata={"help": ""})
+
+    def __post_init__(self) -> None:
+        for name, allowed in (("quality", QUALITIES), ("shading", SHADINGS), ("lighting", LIGHTINGS)):
+            if getattr(self, name) not in allowed:
+                raise choice_error(name, getattr(self, name), allowed)
+        object.__setattr__(self, "width", check_pixels("width", self.width))
+        object.__setattr__(self, "height", check_pixels("height", self.height))
+        try:
+            opacity = float(self.glass_opacity)
+        except (TypeError, ValueError):
+            opacity = float("nan")
+        if not 0.0 <= opacity <= 1.0:
+            raise BrainPainterError(f"glass opacity must be in [0, 1]; {self.glass_opacity} was given.")
+        object.__setattr__(self, "glass_opacity", opacity)
+        if self.background is not None:
+            object.__setattr__(self, "background", to_rgb(self.background))
+
+    @property
+    def size(self) -> str:
+        """``"WIDTHxHEIGHT"``."""
+        return f"{self.width}x{self.height}"
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready settings (for manifests and PNG metadata)."""
+        return {
+            "width": self.width, "height": self.height,
+            "background": None if self.background is None else list(self.background),
+            "quality": self.quality, "shading": self.shading,
+            "lighting": self.lighting, "glass_opacity": self.glass_opacity,
+        }
