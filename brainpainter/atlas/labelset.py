@@ -77,7 +77,8 @@ def is_non_region(name: str) -> bool:
 
 @dataclass(frozen=True)
 class LabelMap:
-    """Labels of one hemisphere's full-resolution vertices.
+    """Labels of one hemisphere's full-resolution vertices, as read from a label map
+    (FreeSurfer ``.annot`` or GIFTI ``.label.gii``) by :func:`read_label_map`.
 
     Attributes
     ----------
