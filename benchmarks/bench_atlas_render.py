@@ -25,7 +25,7 @@ import numpy as np
 
 
 def bench(atlas_name: str, view: str, width: int, height: int, repeats: int) -> dict:
-    from brainpainter.atlas.model import get_atlas
+    from brainpainter.atlas.registry import get_atlas
     from brainpainter.color.scale import make_scale
     from brainpainter.rendering.painter import Painter
     from brainpainter.rendering.settings import RenderSettings

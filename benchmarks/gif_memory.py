@@ -30,7 +30,7 @@ def peak_mb() -> float:
 def main() -> None:
     import importlib.util
 
-    from brainpainter.io.transaction import gif_info
+    from brainpainter.io.verify import gif_info
 
     args = sys.argv[1:]
     old = None

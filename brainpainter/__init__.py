@@ -37,7 +37,7 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
-    from brainpainter.atlas.model import get_atlas, list_atlases
+    from brainpainter.atlas.registry import get_atlas, list_atlases
     from brainpainter.atlas.template import load_template
     from brainpainter.color.scale import make_scale
     from brainpainter.errors import BrainPainterError
@@ -58,8 +58,8 @@ _LAZY = {
     "RenderSettings": ("brainpainter.rendering.settings", "RenderSettings"),
     "export": ("brainpainter.media.export", "export"),
     "figure": ("brainpainter.media.figure", "make_figure"),
-    "get_atlas": ("brainpainter.atlas.model", "get_atlas"),
-    "list_atlases": ("brainpainter.atlas.model", "list_atlases"),
+    "get_atlas": ("brainpainter.atlas.registry", "get_atlas"),
+    "list_atlases": ("brainpainter.atlas.registry", "list_atlases"),
     "load_template": ("brainpainter.atlas.template", "load_template"),
     "make_scale": ("brainpainter.color.scale", "make_scale"),
     "movie": ("brainpainter.media.movie", "make_movie"),

@@ -20,6 +20,14 @@ class PluginError(BrainPainterError):
     """A plugin could not be loaded or does not honour its contract."""
 
 
+# -- error types of the inputs: tables and atlases (issue 13, structure helper) -----------
+# Raised where the caller branches on the kind of error, so that it never matches message text.
+class NoRegionColumnError(BrainPainterError):
+    """No column of a table names a region of the atlas, nor holds region names."""
+
+# -- end of the input errors -------------------------------------------------------------
+
+
 def nearest(value: str, allowed: Iterable[str], n: int = 1) -> list[str]:
     """Closest matches to `value` among `allowed` (case-insensitive)."""
     allowed = list(allowed)

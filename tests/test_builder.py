@@ -496,7 +496,7 @@ def test_bpy_still_imports_after_the_builder_used_pymeshlab():
     import subprocess
     import sys
 
-    code = ("from brainpainter_builder.meshlab import import_pymeshlab\n"
+    code = ("from brainpainter.atlas.meshing import import_pymeshlab\n"
             "ms = import_pymeshlab().MeshSet()\nimport bpy\nprint('ok')")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert proc.stdout.strip() == "ok", proc.stderr[-500:]

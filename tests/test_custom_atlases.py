@@ -15,7 +15,7 @@ from click.testing import CliRunner
 
 from brainpainter.atlas import registry
 from brainpainter.atlas import user as user_atlases
-from brainpainter.atlas.config import load_atlas_config
+from brainpainter.atlas.registry import load_atlas_config
 from brainpainter.atlas.template import load_template
 from brainpainter.cli.main import cli, main
 from brainpainter.errors import BrainPainterError
@@ -228,7 +228,7 @@ def test_annot_option_parsing(tmp_path):
 def test_plugin_of_the_same_name_wins_over_a_user_atlas(tmp_path, tiny, tiny_annots):
     user_atlases.add_label_map("toy", tiny_annots, template=str(tiny))
     root = fake_distribution(tmp_path / "site", "toy-plugin", {"brainpainter.atlases": {"toy": "toy_p:toy"}},
-                             {"toy_p/__init__.py": "from brainpainter.atlas.model import get_atlas\n"
+                             {"toy_p/__init__.py": "from brainpainter.atlas.registry import get_atlas\n"
                                                    "def toy():\n    return get_atlas('dk')\n"})
     with installed(root):
         assert next(e for e in registry.atlases.entries() if e.name == "toy").distribution == "toy-plugin"

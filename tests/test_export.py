@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import brainpainter
-from brainpainter.atlas.model import get_atlas
+from brainpainter.atlas.registry import get_atlas
 from brainpainter.cli.main import main
 from brainpainter.errors import BrainPainterError
 

@@ -154,7 +154,7 @@ def test_swatches_only_when_their_colours_are_drawn(tmp_path, stripes, tiny):
 
 
 def _lh_names():
-    from brainpainter.atlas.model import get_atlas
+    from brainpainter.atlas.registry import get_atlas
 
     return [r.name for r in get_atlas("dk").cortical("lh")]
 

@@ -113,7 +113,7 @@ def test_binary_and_missing_files(tmp_path):
     ],
 )
 def test_alias_table(atlas, name, keys):
-    from brainpainter.atlas.model import get_atlas
+    from brainpainter.atlas.registry import get_atlas
     from brainpainter.table.names import NameResolver
 
     r = NameResolver.for_atlas(get_atlas(atlas)).lookup(name)
@@ -125,14 +125,14 @@ def test_alias_table(atlas, name, keys):
     "EstimatedTotalIntraCranialVol", "ICV", "LThickness", "Left-vessel", "CC_Anterior", "unknown",
     "Right-unknown", "ctx_lh_Medial_wall"])
 def test_non_region_names_are_recognised(name):
-    from brainpainter.atlas.model import get_atlas
+    from brainpainter.atlas.registry import get_atlas
     from brainpainter.table.names import NameResolver
 
     assert NameResolver.for_atlas(get_atlas("dk")).lookup(name).status == "ignored"
 
 
 def test_atlas_inference():
-    from brainpainter.atlas.model import get_atlas
+    from brainpainter.atlas.registry import get_atlas
 
     dkt = get_atlas("dkt")
     full_dkt = {r.key: [1.0] for r in dkt.regions}

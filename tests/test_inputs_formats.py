@@ -18,7 +18,7 @@ import json
 import numpy as np
 import pytest
 
-from brainpainter.atlas.model import get_atlas
+from brainpainter.atlas.registry import get_atlas
 from brainpainter.rendering.run import render
 from brainpainter.table.region_table import read_table
 from brainpainter.testing import StandInRenderer, stand_in, write_tiny_template

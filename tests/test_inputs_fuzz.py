@@ -25,7 +25,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from brainpainter.atlas.model import get_atlas
+from brainpainter.atlas.registry import get_atlas
 from brainpainter.errors import BrainPainterError
 from brainpainter.table.region_table import inspect_table, read_table
 from brainpainter.table.report import check_report, format_report

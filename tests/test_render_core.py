@@ -86,7 +86,7 @@ def test_absent_and_nan_regions_get_their_colours(solid, tiny):
 
 
 def test_hide_groups_and_names():
-    from brainpainter.atlas.model import get_atlas
+    from brainpainter.atlas.registry import get_atlas
 
     dk = get_atlas("dk")
     assert resolve_hidden(["cerebellum"], dk) == {

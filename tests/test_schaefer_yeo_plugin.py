@@ -15,7 +15,7 @@ import pytest
 from click.testing import CliRunner
 
 from brainpainter.atlas import registry
-from brainpainter.atlas.labelset import labels_at_vertices
+from brainpainter.atlas.mesh import labels_at_vertices
 from brainpainter.atlas.template import CortexMesh, load_template
 from brainpainter.cli.main import cli
 from brainpainter.table.region_table import inspect_table

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from brainpainter.atlas.labelset import crossing_edges, smooth_crossings, split_faces
+from brainpainter.atlas.mesh import crossing_edges, smooth_crossings, split_faces
 from brainpainter.atlas.template import HEMIS, load_template
 from brainpainter.media.imagemetrics import border_ratio
 from brainpainter.testing.templates import save_arrays, write_tiny_template

@@ -13,7 +13,8 @@ from click.testing import CliRunner
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.io.output import png_bytes
-from brainpainter.io.transaction import FileTransaction, FolderTransaction, gif_info, mp4_boxes, verify_file
+from brainpainter.io.transaction import FileTransaction, FolderTransaction
+from brainpainter.io.verify import gif_info, mp4_boxes, verify_file
 
 
 def _png(w: int = 8, h: int = 6) -> bytes:

@@ -297,7 +297,7 @@ def balls(tmp_path) -> str:
 
 
 def test_cortical_and_volumetric_atlases_combine_into_one(balls, tmp_path, capsys):
-    from brainpainter.atlas.model import get_atlas
+    from brainpainter.atlas.registry import get_atlas
     from brainpainter.cli.main import main
 
     combo = get_atlas("dk+balls")
@@ -330,7 +330,7 @@ def test_cortical_and_volumetric_atlases_combine_into_one(balls, tmp_path, capsy
     ("dk+nothere", "'atlas' must be one of"),
 ])
 def test_bad_combinations_are_one_line_errors(balls, name, message):
-    from brainpainter.atlas.model import get_atlas
+    from brainpainter.atlas.registry import get_atlas
 
     with pytest.raises(BrainPainterError, match=message) as err:
         get_atlas(name)
@@ -338,7 +338,7 @@ def test_bad_combinations_are_one_line_errors(balls, name, message):
 
 
 def test_the_same_region_in_two_volumes_is_refused(balls):
-    from brainpainter.atlas.model import get_atlas
+    from brainpainter.atlas.registry import get_atlas
 
     with pytest.raises(BrainPainterError, match="region 'Left-ball' is in both 'balls' and 'balls'"):
         get_atlas("balls+balls")
@@ -363,7 +363,7 @@ def test_volume_atlas_renders_in_place_inside_the_glass_brain(balls):
 
 
 def test_a_toml_config_combines_atlases(balls, tmp_path):
-    from brainpainter.atlas.config import load_atlas_config
+    from brainpainter.atlas.registry import load_atlas_config
 
     config = tmp_path / "combo.toml"
     config.write_text('[atlas]\nbase = "dk+balls"\ntitle = "DK with balls"\n')

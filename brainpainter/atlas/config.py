@@ -34,11 +34,15 @@ from __future__ import annotations
 
 import difflib
 import tomllib
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 from brainpainter.atlas.model import HEMI_PREFIX, Atlas, Region
+from brainpainter.color.rgb import to_rgb
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.io.files import read_input
+from brainpainter.io.rawtable import has_control
 
 MAX_CONFIG_BYTES = 1024 * 1024  # a region-group config is a few KB
 _LOADING: set[str] = set()  # names of group atlases being built (to catch cycles)
@@ -47,7 +51,8 @@ UNGROUPED = ("keep", "drop")
 _SIDES = {"left-": "lh", "right-": "rh"}
 
 
-def load_atlas_config(path: str | Path, name: str | None = None) -> Atlas:
+def read_atlas_config(path: str | Path, name: str | None = None, *,
+                      get_base: Callable[[str], Atlas]) -> Atlas:
     """Read a region-group TOML file and build its atlas.
 
     Parameters
@@ -55,6 +60,10 @@ def load_atlas_config(path: str | Path, name: str | None = None) -> Atlas:
     path : path-like
     name : str, optional
         Atlas name (default: ``[atlas] name``, else the file name without suffix).
+    get_base : callable
+        ``get_base(name) -> Atlas`` looks up the base atlas
+        (:func:`brainpainter.atlas.registry.get_atlas`; :func:`brainpainter.atlas.registry.load_atlas_config`
+        passes it).
 
     Raises
     ------
@@ -62,8 +71,6 @@ def load_atlas_config(path: str | Path, name: str | None = None) -> Atlas:
         Unreadable TOML, unknown keys, unknown base atlas or region, a region
         in two groups; one line naming the file.
     """
-    from brainpainter.io.files import read_input
-
     path = Path(path).expanduser()
     raw = read_input(path, "atlas config", MAX_CONFIG_BYTES,
                      hint="give the path of a TOML file with [atlas] and [groups] (see docs/atlases.md)")
@@ -79,7 +86,8 @@ def load_atlas_config(path: str | Path, name: str | None = None) -> Atlas:
     given = meta.get("name")
     if given is not None and not isinstance(given, str):
         raise _fail(str(path), f"[atlas] name must be a text; {given!r} was given")
-    return atlas_from_config(config, source=str(path), name=name or given or path.name.split(".")[0])
+    return atlas_from_config(config, source=str(path), name=name or given or path.name.split(".")[0],
+                             get_base=get_base)
 
 
 def _cycle(base: str) -> str:
@@ -97,7 +105,7 @@ def _nearest(value: str, pool: list[str]) -> str:
     return f" Did you mean {', '.join(repr(lower[h]) for h in hits)}?" if hits else ""
 
 
-def _palette(n: int, avoid: list[tuple[int, int, int]] = ()) -> list[tuple[int, int, int]]:
+def _palette(n: int, avoid: Sequence[tuple[int, int, int]] = ()) -> list[tuple[int, int, int]]:
     """`n` group colours from matplotlib's tab10 (tab20 beyond 10), skipping ones close to `avoid`."""
     import matplotlib
 
@@ -112,11 +120,42 @@ def _palette(n: int, avoid: list[tuple[int, int, int]] = ()) -> list[tuple[int, 
     return [ordered[i % len(ordered)] for i in range(n)]  # type: ignore[misc]
 
 
-def atlas_from_config(config: dict[str, Any], source: str, name: str) -> Atlas:
-    """Build a group atlas from a parsed config (see the module docstring for the schema)."""
-    from brainpainter.color.rgb import to_rgb
-    from brainpainter.io.readers import has_control
+Group = tuple[str, str, str, tuple[int, int, int] | None, list[Region]]
+"""A parsed group: (region key, hemi, core name, colour or None, member regions of the base atlas)."""
 
+
+def atlas_from_config(config: dict[str, Any], source: str, name: str, *,
+                      get_base: Callable[[str], Atlas]) -> Atlas:
+    """Build a group atlas from a parsed config (see the module docstring for the schema).
+
+    Parameters
+    ----------
+    config : dict
+        The parsed TOML (``[atlas]`` and ``[groups]`` tables).
+    source : str
+        Where it came from, for messages.
+    name : str
+        Name of the atlas being defined.
+    get_base : callable
+        ``get_base(name) -> Atlas`` looks up the base atlas.
+    """
+    meta, groups = _check_tables(config, source, name)
+    base = _load_base(str(meta["base"]), source, name, get_base)
+    ungrouped = meta.get("ungrouped", "keep")
+    if ungrouped not in UNGROUPED:
+        raise _fail(source, str(choice_error("[atlas] ungrouped", ungrouped, UNGROUPED)))
+    if not groups and "+" not in str(meta["base"]):
+        raise _fail(source, "[groups] is empty; add e.g. frontal = [\"superiorfrontal\", ...]")
+    lookup = _Lookup(base, source)
+    parsed: list[Group] = []
+    for gname, value in groups.items():
+        parsed.extend(_parse_group(gname, value, lookup))
+    kept = _check_owners(parsed, base, ungrouped, source)
+    return _group_atlas(parsed, kept, base, meta, source, name, ungrouped)
+
+
+def _check_tables(config: dict[str, Any], source: str, name: str) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The ``[atlas]`` and ``[groups]`` tables, checked up to (not including) loading the base."""
     extra = sorted(set(config) - {"atlas", "groups"})
     if extra:
         raise _fail(source, f"unknown table {extra[0]!r}; a config has [atlas] and [groups]")
@@ -134,104 +173,122 @@ def atlas_from_config(config: dict[str, Any], source: str, name: str) -> Atlas:
     if meta["base"].strip().lower() == str(name).strip().lower():
         raise _fail(source, f"[atlas] base {meta['base']!r} is the atlas being defined; a region-group atlas "
                             "groups the regions of another atlas (e.g. base = \"dk\")")
-    if meta["base"].strip().lower() in _LOADING:
-        raise _fail(source, _cycle(meta["base"]))
+    return meta, groups
+
+
+def _load_base(base_name: str, source: str, name: str, get_base: Callable[[str], Atlas]) -> Atlas:
+    """The base atlas, refusing a cycle of group atlases."""
+    if base_name.strip().lower() in _LOADING:
+        raise _fail(source, _cycle(base_name))
     _LOADING.add(str(name).strip().lower())
     try:
-        from brainpainter.atlas.model import get_atlas
-
-        base: Atlas = get_atlas(str(meta["base"]))  # "schaefer400_7n+tian_s2" combines atlases
+        return get_base(base_name)  # "schaefer400_7n+tian_s2" combines atlases
     except BrainPainterError as exc:
         raise _fail(source, f"[atlas] base: {str(exc)[:300]}") from None
     except RecursionError:
-        raise _fail(source, _cycle(meta["base"])) from None
+        raise _fail(source, _cycle(base_name)) from None
     finally:
         _LOADING.discard(str(name).strip().lower())
-    ungrouped = meta.get("ungrouped", "keep")
-    if ungrouped not in UNGROUPED:
-        raise _fail(source, str(choice_error("[atlas] ungrouped", ungrouped, UNGROUPED)))
-    if not groups and "+" not in str(meta["base"]):
-        raise _fail(source, "[groups] is empty; add e.g. frontal = [\"superiorfrontal\", ...]")
 
-    by_key = {r.key.lower(): r for r in base.regions}
-    by_name: dict[str, list[Region]] = {}
-    for r in base.regions:
-        by_name.setdefault(r.name.lower(), []).append(r)
-        for a in r.aliases:
-            if a.lower() in by_key:
-                continue
-            if a.lower().startswith(("ctx-lh-", "ctx-rh-", "left-", "right-")):
-                by_key.setdefault(a.lower(), r)
-            else:
-                by_name.setdefault(a.lower(), []).append(r)
-    names_pool = sorted({r.name for r in base.regions})
 
-    def unknown(group: str, member: str, pool: list[str]) -> BrainPainterError:
-        return _fail(source, f"group {group!r} names {member!r}, which is not a region of atlas "
-                             f"{base.name!r}.{_nearest(member, pool)} "
-                             f"See 'brainpainter atlas show {base.name}'.")
+class _Lookup:
+    """The base atlas's regions by key (``Left-insula``) and by hemisphere-free name (``insula``)."""
 
-    # 1. parse groups into (key, hemi, core name, colour or None, member regions)
-    parsed: list[tuple[str, str, str, tuple[int, int, int] | None, list[Region]]] = []
-    for gname, value in groups.items():
-        color = None
-        if isinstance(value, dict):
-            bad = sorted(set(value) - {"regions", "color"})
-            if bad or "regions" not in value:
-                raise _fail(source, f"group {gname!r} must be a list of regions or a table with 'regions' "
-                                    f"(and optionally 'color'); {bad[0] if bad else 'regions'!r} is wrong")
-            if "color" in value:
-                try:
-                    color = tuple(round(255 * c) for c in to_rgb(value["color"]))
-                except BrainPainterError as exc:
-                    raise _fail(source, f"group {gname!r}: {exc}") from None
-            value = value["regions"]
-        if not isinstance(value, list) or not value or not all(isinstance(m, str) for m in value):
-            raise _fail(source, f"group {gname!r} must list region names, e.g. {gname} = [\"insula\"]")
-        if not gname.strip() or any(c in gname for c in "\t\n\r,|") or has_control(gname):
-            raise _fail(source, f"group name {gname[:40]!r} must be non-empty without tabs, commas, '|' or "
-                                "control characters")
-        side = next((h for p, h in _SIDES.items() if gname.lower().startswith(p) and len(gname) > len(p)),
-                    None)
-        core = gname.split("-", 1)[1] if side else gname
-        members: dict[str, list[Region]] = {"lh": [], "rh": [], "bilateral": []}
-        for m in dict.fromkeys(value):
-            low = m.strip().lower()
-            if side is None:
-                if low in by_key and by_key[low].hemi != "bilateral" and low not in by_name:
-                    raise _fail(source, f"group {gname!r} lists {m!r}, a region of one hemisphere; a "
-                                        f"two-sided group takes hemisphere-free names "
-                                        f"({by_key[low].name!r}), or name the group 'Left-{gname}' / "
-                                        f"'Right-{gname}'")
-                hits = by_name.get(low) or ([by_key[low]] if low in by_key else [])
-                if not hits:
-                    raise unknown(gname, m, names_pool)
-            else:
-                if low in by_key:
-                    hits = [by_key[low]]
-                    if hits[0].hemi != side:
-                        raise _fail(source, f"group {gname!r} lists {m!r}, which is not in the "
-                                            f"{'left' if side == 'lh' else 'right'} hemisphere")
-                elif low in by_name:
-                    hits = [r for r in by_name[low] if r.hemi == side]
-                    if not hits:
-                        raise _fail(source, f"group {gname!r} lists {m!r}, which has no "
-                                            f"{'left' if side == 'lh' else 'right'}-hemisphere region in "
-                                            f"atlas {base.name!r}")
+    def __init__(self, base: Atlas, source: str) -> None:
+        self.base, self.source = base, source
+        self.by_key = {r.key.lower(): r for r in base.regions}
+        self.by_name: dict[str, list[Region]] = {}
+        for r in base.regions:
+            self.by_name.setdefault(r.name.lower(), []).append(r)
+            for a in r.aliases:
+                if a.lower() in self.by_key:
+                    continue
+                if a.lower().startswith(("ctx-lh-", "ctx-rh-", "left-", "right-")):
+                    self.by_key.setdefault(a.lower(), r)
                 else:
-                    raise unknown(gname, m, [r.key for r in base.regions if r.hemi == side] + names_pool)
-            for r in hits:
-                if r not in members[r.hemi]:
-                    members[r.hemi].append(r)
-        if members["bilateral"] and (members["lh"] or members["rh"]):
-            raise _fail(source, f"group {gname!r} mixes structures without a side "
-                                f"({members['bilateral'][0].key!r}) with one-hemisphere regions; put them "
-                                "in separate groups")
-        for hemi in ("lh", "rh", "bilateral"):
-            if members[hemi]:
-                parsed.append((HEMI_PREFIX[hemi] + core, hemi, core, color, members[hemi]))
+                    self.by_name.setdefault(a.lower(), []).append(r)
+        self.names = sorted({r.name for r in base.regions})
 
-    # 2. a region in one group only; group keys unique and not shadowing kept regions
+    def unknown(self, group: str, member: str, pool: list[str]) -> BrainPainterError:
+        return _fail(self.source, f"group {group!r} names {member!r}, which is not a region of atlas "
+                                  f"{self.base.name!r}.{_nearest(member, pool)} "
+                                  f"See 'brainpainter atlas show {self.base.name}'.")
+
+    def two_sided(self, gname: str, m: str) -> list[Region]:
+        """Regions a member of a group without a side names."""
+        low = m.strip().lower()
+        if low in self.by_key and self.by_key[low].hemi != "bilateral" and low not in self.by_name:
+            raise _fail(self.source, f"group {gname!r} lists {m!r}, a region of one hemisphere; a "
+                                     f"two-sided group takes hemisphere-free names "
+                                     f"({self.by_key[low].name!r}), or name the group 'Left-{gname}' / "
+                                     f"'Right-{gname}'")
+        hits = self.by_name.get(low) or ([self.by_key[low]] if low in self.by_key else [])
+        if not hits:
+            raise self.unknown(gname, m, self.names)
+        return hits
+
+    def one_sided(self, gname: str, m: str, side: str) -> list[Region]:
+        """Regions a member of a ``Left-``/``Right-`` group names."""
+        low = m.strip().lower()
+        where = "left" if side == "lh" else "right"
+        if low in self.by_key:
+            if self.by_key[low].hemi != side:
+                raise _fail(self.source,
+                            f"group {gname!r} lists {m!r}, which is not in the {where} hemisphere")
+            return [self.by_key[low]]
+        if low in self.by_name:
+            hits = [r for r in self.by_name[low] if r.hemi == side]
+            if not hits:
+                raise _fail(self.source, f"group {gname!r} lists {m!r}, which has no {where}-hemisphere "
+                                         f"region in atlas {self.base.name!r}")
+            return hits
+        raise self.unknown(gname, m, [r.key for r in self.base.regions if r.hemi == side] + self.names)
+
+
+def _group_value(gname: str, value: Any, source: str) -> tuple[list[str], tuple[int, int, int] | None]:
+    """A group's member names and colour (a list, or a table with ``regions`` and ``color``)."""
+    color = None
+    if isinstance(value, dict):
+        bad = sorted(set(value) - {"regions", "color"})
+        if bad or "regions" not in value:
+            raise _fail(source, f"group {gname!r} must be a list of regions or a table with 'regions' "
+                                f"(and optionally 'color'); {bad[0] if bad else 'regions'!r} is wrong")
+        if "color" in value:
+            try:
+                color = tuple(round(255 * c) for c in to_rgb(value["color"]))
+            except BrainPainterError as exc:
+                raise _fail(source, f"group {gname!r}: {exc}") from None
+        value = value["regions"]
+    if not isinstance(value, list) or not value or not all(isinstance(m, str) for m in value):
+        raise _fail(source, f"group {gname!r} must list region names, e.g. {gname} = [\"insula\"]")
+    if not gname.strip() or any(c in gname for c in "\t\n\r,|") or has_control(gname):
+        raise _fail(source, f"group name {gname[:40]!r} must be non-empty without tabs, commas, '|' or "
+                            "control characters")
+    return value, color  # type: ignore[return-value]
+
+
+def _parse_group(gname: str, value: Any, lookup: _Lookup) -> list[Group]:
+    """One ``[groups]`` entry as one group per hemisphere it has members in."""
+    source = lookup.source
+    names, color = _group_value(gname, value, source)
+    side = next((h for p, h in _SIDES.items() if gname.lower().startswith(p) and len(gname) > len(p)), None)
+    core = gname.split("-", 1)[1] if side else gname
+    members: dict[str, list[Region]] = {"lh": [], "rh": [], "bilateral": []}
+    for m in dict.fromkeys(names):
+        hits = lookup.two_sided(gname, m) if side is None else lookup.one_sided(gname, m, side)
+        for r in hits:
+            if r not in members[r.hemi]:
+                members[r.hemi].append(r)
+    if members["bilateral"] and (members["lh"] or members["rh"]):
+        raise _fail(source, f"group {gname!r} mixes structures without a side "
+                            f"({members['bilateral'][0].key!r}) with one-hemisphere regions; put them "
+                            "in separate groups")
+    return [(HEMI_PREFIX[hemi] + core, hemi, core, color, members[hemi])
+            for hemi in ("lh", "rh", "bilateral") if members[hemi]]
+
+
+def _check_owners(parsed: list[Group], base: Atlas, ungrouped: str, source: str) -> list[Region]:
+    """A region in one group only; group keys unique and not shadowing kept regions. Returns the kept."""
     owner: dict[str, str] = {}
     for key, _, _, _, regs in parsed:
         for r in regs:
@@ -248,8 +305,12 @@ def atlas_from_config(config: dict[str, Any], source: str, name: str) -> Atlas:
     if clash:
         raise _fail(source, f"group {clash!r} has the name of the region {clash!r} of {base.name!r}, which "
                             "is in no group; add that region to the group or rename the group")
+    return kept
 
-    # 3. the atlas
+
+def _group_atlas(parsed: list[Group], kept: list[Region], base: Atlas, meta: dict[str, Any], source: str,
+                 name: str, ungrouped: str) -> Atlas:
+    """The atlas of the groups (coloured from a palette where no colour was given) and the kept regions."""
     cores = list(dict.fromkeys(p[2] for p in parsed if p[3] is None))
     avoid = [r.color for r in kept if r.kind == "cortical"]
     palette = dict(zip(cores, _palette(len(cores), avoid), strict=True)) if cores else {}

@@ -41,22 +41,28 @@ from __future__ import annotations
 
 import json
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
+from brainpainter.atlas import registry
+from brainpainter.atlas.mesh import faces_digest, smooth_crossings, split_faces
 from brainpainter.atlas.model import HEMI_PREFIX, Region, write_regions_tsv
 from brainpainter.atlas.template import (
     FORMAT_VERSION,
     HEMIS,
     LABELS_FILE,
     LABELS_FORMAT,
-    CortexMesh,
     Template,
-    faces_digest,
 )
+from brainpainter.atlas.writer import save_npz
 from brainpainter.errors import BrainPainterError
+from brainpainter.io.files import check_input
+from brainpainter.io.rawtable import has_control
 
 #: Colour-table names that are not regions (compared in lower case), besides any "medial ... wall".
 NON_REGION_NAMES = frozenset({"", "unknown", "???", "corpuscallosum", "medial_wall", "medial.wall"})
@@ -71,7 +77,8 @@ def is_non_region(name: str) -> bool:
 
 @dataclass(frozen=True)
 class LabelMap:
-    """Labels of one hemisphere's full-resolution vertices.
+    """Labels of one hemisphere's full-resolution vertices, as read from a label map
+    (FreeSurfer ``.annot`` or GIFTI ``.label.gii``) by :func:`read_label_map`.
 
     Attributes
     ----------
@@ -87,9 +94,9 @@ class LabelMap:
 
     hemi: str
     source: Path
-    labels: np.ndarray
+    labels: NDArray[Any]
     names: tuple[str, ...]
-    colors: np.ndarray
+    colors: NDArray[Any]
 
 
 def hemi_of(path: str | Path) -> str | None:
@@ -116,9 +123,6 @@ def read_label_map(path: str | Path, hemi: str) -> LabelMap:
     BrainPainterError
         Missing or unreadable file, or no colour table.
     """
-    from brainpainter.io.files import check_input
-    from brainpainter.io.readers import has_control
-
     path = Path(path).expanduser()
     check_input(path, "label map", hint="give a FreeSurfer .annot or a GIFTI .label.gii file made for the "
                                         "template's surface")
@@ -131,9 +135,9 @@ def read_label_map(path: str | Path, hemi: str) -> LabelMap:
         raise _swapped(path, hemi, named, "its file name")
     try:
         if low.endswith(".annot"):
-            from nibabel.freesurfer import read_annot
+            from nibabel.freesurfer import read_annot  # type: ignore[attr-defined]
 
-            labels, ctab, raw_names = read_annot(str(path))
+            labels, ctab, raw_names = read_annot(str(path))  # type: ignore[no-untyped-call]
             names = [n.decode("utf-8", "replace") if isinstance(n, bytes) else str(n) for n in raw_names]
             colors = np.asarray(ctab, dtype=np.int64)[:, :3]
             labels = np.asarray(labels, dtype=np.int64)
@@ -168,10 +172,10 @@ def _swapped(path: Path, hemi: str, named: str, how: str) -> BrainPainterError:
         f"{side[named]}; swap the files (--annot {named}={path.name}), or rename the file if it is right")
 
 
-def _read_gifti_labels(path: Path, hemi: str | None = None) -> tuple[np.ndarray, list[str], np.ndarray]:
+def _read_gifti_labels(path: Path, hemi: str | None = None) -> tuple[NDArray[Any], list[str], NDArray[Any]]:
     import nibabel as nib
 
-    img = nib.load(str(path))
+    img: Any = nib.load(str(path))
     if not getattr(img, "darrays", None):
         raise BrainPainterError(f"{path} holds no data array; a GIFTI label file has one label per vertex")
     meta = {**dict(img.meta or {}), **dict(img.darrays[0].meta or {})}
@@ -233,220 +237,6 @@ def check_vertex_count(template: Template, label_map: LabelMap) -> None:
         )
 
 
-def labels_at_vertices(source_label: np.ndarray, base: CortexMesh) -> np.ndarray:
-    """Labels of `base`'s vertices from one label per full-resolution source vertex.
-
-    Parameters
-    ----------
-    source_label : ndarray of int, shape (n_source_vertices,)
-    base : CortexMesh
-        Its ``source_vertex`` (shape (n,)) indexes `source_label`; a vertex
-        with no source vertex (-1, added on an edge by a mesh builder) takes
-        the label of a neighbour that has one.
-
-    Returns
-    -------
-    ndarray of int16, shape (n,)
-    """
-    sv = np.asarray(base.source_vertex, dtype=np.int64)
-    out = np.where(sv >= 0, np.asarray(source_label)[np.maximum(sv, 0)], -1).astype(np.int64)
-    edges = np.concatenate([base.faces[:, [0, 1]], base.faces[:, [1, 2]], base.faces[:, [2, 0]]])
-    edges = np.concatenate([edges, edges[:, ::-1]]).astype(np.int64)
-    while (out < 0).any():
-        known = out[edges[:, 1]] >= 0
-        todo = known & (out[edges[:, 0]] < 0)
-        if not todo.any():
-            out[out < 0] = 0
-            break
-        out[edges[todo, 0]] = out[edges[todo, 1]]
-    return out.astype(np.int16)
-
-
-def split_faces(faces: np.ndarray, vertex_label: np.ndarray,
-                crossing: np.ndarray | None = None) -> tuple[
-        np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Split faces whose vertices carry different labels ("marching triangles").
-
-    Parameters
-    ----------
-    faces : ndarray of int, shape (m, 3)
-    vertex_label : ndarray of int, shape (n,)
-    crossing : ndarray of float, shape (n_edges,), optional
-        Where the boundary crosses each label-crossing edge, as a fraction of
-        the way from its lower-numbered to its higher-numbered vertex, for the
-        edges in the order of :func:`crossing_edges`. Default 0.5 (midpoints).
-
-    Returns
-    -------
-    faces : ndarray of int64, shape (m2, 3)
-        Faces with one label each; indices ``>= n`` are new vertices. Winding kept.
-    face_label : ndarray of int64, shape (m2,)
-    parents : ndarray of int64, shape (k, 3)
-        For new vertex ``n + i``: the vertices it lies between (an edge
-        crossing repeats its second vertex).
-    weights : ndarray of float64, shape (k, 3)
-        Interpolation weights over `parents` (``1 - t, t, 0`` on an edge,
-        ``1/3`` each at a centroid).
-
-    Notes
-    -----
-    A face with two labels, rotated to ``(o, a, b)`` with ``o`` the odd one,
-    becomes ``(o, m_oa, m_ob)`` and the quad ``(m_oa, a, b, m_ob)``; a face
-    with three labels becomes three quads around its centroid. Only
-    label-crossing edges get a new vertex, and both faces on such an edge
-    are split, so no T-junction appears.
-    """
-    faces = np.asarray(faces, dtype=np.int64)
-    vl = np.asarray(vertex_label, dtype=np.int64)
-    n = len(vl)
-    lab = vl[faces]
-    e01, e12, e20 = lab[:, 0] == lab[:, 1], lab[:, 1] == lab[:, 2], lab[:, 2] == lab[:, 0]
-    pure = e01 & e12
-    three = ~(e01 | e12 | e20)
-    two = ~pure & ~three
-    f2 = faces[two]
-    odd = np.where(e12[two], 0, np.where(e20[two], 1, 2))
-    idx = np.arange(len(f2))
-    o, a, b = f2[idx, odd], f2[idx, (odd + 1) % 3], f2[idx, (odd + 2) % 3]
-    f3 = faces[three]
-    edges = np.concatenate([np.stack([o, a], 1), np.stack([o, b], 1),
-                            f3[:, [0, 1]], f3[:, [1, 2]], f3[:, [2, 0]]]).reshape(-1, 2)
-    key = np.sort(edges, axis=1)
-    uniq, inv = np.unique(key[:, 0] * n + key[:, 1], return_inverse=True)
-    mid = n + inv.ravel()
-    k2, k3 = len(f2), len(f3)
-    m_oa, m_ob = mid[:k2], mid[k2:2 * k2]
-    m_ab, m_bc, m_ca = (mid[2 * k2 + i * k3: 2 * k2 + (i + 1) * k3] for i in range(3))
-    g = n + len(uniq) + np.arange(k3)
-    p, q, r = f3[:, 0], f3[:, 1], f3[:, 2]
-    out_faces = np.concatenate([
-        faces[pure],
-        np.stack([o, m_oa, m_ob], 1), np.stack([m_oa, a, b], 1), np.stack([m_oa, b, m_ob], 1),
-        np.stack([p, m_ab, g], 1), np.stack([p, g, m_ca], 1),
-        np.stack([q, m_bc, g], 1), np.stack([q, g, m_ab], 1),
-        np.stack([r, m_ca, g], 1), np.stack([r, g, m_bc], 1),
-    ]).reshape(-1, 3)
-    out_label = np.concatenate([lab[pure, 0], vl[o], vl[a], vl[a], vl[p], vl[p], vl[q], vl[q], vl[r], vl[r]])
-    t = np.full(len(uniq), 0.5) if crossing is None else np.asarray(crossing, dtype=np.float64)
-    if t.shape != (len(uniq),):
-        raise ValueError(f"crossing has shape {t.shape}; expected ({len(uniq)},), one per crossing edge")
-    parents = np.concatenate([np.stack([uniq // n, uniq % n, uniq % n], 1),
-                              np.stack([p, q, r], 1)]).reshape(-1, 3)
-    weights = np.concatenate([np.stack([1.0 - t, t, np.zeros_like(t)], 1),
-                              np.full((k3, 3), 1.0 / 3.0)]).reshape(-1, 3)
-    return out_faces, out_label, parents, weights
-
-
-def crossing_edges(faces: np.ndarray, vertex_label: np.ndarray) -> np.ndarray:
-    """Edges whose two vertices carry different labels, shape (n_edges, 2), sorted, lower vertex first."""
-    faces = np.asarray(faces, dtype=np.int64)
-    vl = np.asarray(vertex_label, dtype=np.int64)
-    n = len(vl)
-    e = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    e = e[vl[e[:, 0]] != vl[e[:, 1]]]
-    uniq = np.unique(e[:, 0] * n + e[:, 1])
-    return np.stack([uniq // n, uniq % n], 1)
-
-
-#: Smoothing steps of the label indicators that place boundary crossings (:func:`smooth_crossings`).
-CROSSING_SMOOTHING = 3
-#: Crossings stay this far (fraction of the edge) from either end, so no face degenerates.
-CROSSING_CLAMP = 0.05
-
-
-def smooth_crossings(faces: np.ndarray, vertex_label: np.ndarray,
-                     steps: int = CROSSING_SMOOTHING) -> np.ndarray:
-    """Where a smooth label boundary crosses each label-crossing edge.
-
-    For an edge ``(u, v)`` with labels ``A`` at ``u`` and ``B`` at ``v``, the
-    indicator functions of ``A`` and ``B`` (1 on the label's vertices, 0
-    elsewhere) are smoothed by `steps` steps of neighbour averaging over the
-    mesh; the boundary crosses the edge where their difference, linear along
-    the edge, is zero. This is the iso-line of a blurred label map: it keeps
-    the label of every vertex but no longer zigzags from edge midpoint to
-    edge midpoint. Where both ends fall on one side (a vertex whose label
-    its neighbourhood outvotes: a spike of a noisy label map), the crossing
-    goes as close to the outvoted vertex as allowed.
-
-    Parameters
-    ----------
-    faces : ndarray of int, shape (m, 3)
-    vertex_label : ndarray of int, shape (n,)
-    steps : int
-        Smoothing steps (each reaches one ring of neighbours further); 0 gives midpoints.
-
-    Returns
-    -------
-    t : ndarray of float64, shape (n_edges,)
-        For the edges of :func:`crossing_edges`: fraction of the way from the
-        lower- to the higher-numbered vertex, within
-        ``[CROSSING_CLAMP, 1 - CROSSING_CLAMP]``.
-    """
-    from scipy import sparse
-
-    edges = crossing_edges(faces, vertex_label)
-    if steps <= 0 or len(edges) == 0:
-        return np.full(len(edges), 0.5)
-    faces = np.asarray(faces, dtype=np.int64)
-    vl = np.asarray(vertex_label, dtype=np.int64)
-    n = len(vl)
-    ij = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-    rows = np.concatenate([ij[:, 0], ij[:, 1], np.arange(n)])
-    cols = np.concatenate([ij[:, 1], ij[:, 0], np.arange(n)])
-    adj = sparse.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
-    adj.data[:] = 1.0  # duplicate edges summed: back to 0/1
-    step = sparse.diags(1.0 / np.asarray(adj.sum(axis=1)).ravel()) @ adj
-    ends = np.unique(edges)
-    reach = step[ends]
-    for _ in range(steps - 1):
-        reach = reach @ step
-    names, compact = np.unique(vl, return_inverse=True)
-    onehot = sparse.csr_matrix((np.ones(n), (np.arange(n), compact)), shape=(n, len(names)))
-    smooth = (reach @ onehot).tocsr()  # smoothed indicators at the edge ends, shape (len(ends), n_labels)
-    row = np.searchsorted(ends, edges)
-    la, lb = compact[edges[:, 0]], compact[edges[:, 1]]
-
-    def diff(r):
-        return (np.asarray(smooth[r, la]).ravel() - np.asarray(smooth[r, lb]).ravel())
-
-    du, dv = diff(row[:, 0]), diff(row[:, 1])  # A - B at u (expected > 0) and at v (< 0)
-    ok = (du > 0) & (dv < 0)
-    t = np.where(ok, du / np.where(ok, du - dv, 1.0), 0.5)
-    # Both ends look like B after smoothing: u is a lone spike of A, so the border hugs u
-    # (and hugs v in the mirror case); the spike shrinks instead of showing as a tooth.
-    t = np.where(~ok & (du <= 0) & (dv < 0), 0.0, np.where(~ok & (du > 0) & (dv >= 0), 1.0, t))
-    return t.clip(CROSSING_CLAMP, 1.0 - CROSSING_CLAMP)
-
-
-def split_mesh(base: CortexMesh, vertex_label: np.ndarray, labels: str,
-               names: tuple[str, ...], crossing: np.ndarray | None = None) -> CortexMesh:
-    """`base` with faces labelled (and split where needed) by `vertex_label`, all surfaces.
-
-    Boundary crossings are `crossing` (stored ``boundary_t``, one per edge of
-    :func:`crossing_edges`, as :func:`smooth_crossings` computed them when
-    the file was written) or, when not given or not matching, computed now
-    with :func:`smooth_crossings`. Per-vertex arrays (positions of every
-    surface, `sulc`) are interpolated at the new vertices.
-    """
-    n_edges = len(crossing_edges(base.faces, vertex_label)) if crossing is not None else -1
-    if crossing is not None and np.shape(crossing) == (n_edges,):
-        t = np.asarray(crossing, dtype=np.float64)
-    else:
-        t = smooth_crossings(base.faces, vertex_label)
-    faces, face_label, parents, weights = split_faces(base.faces, vertex_label, t)
-
-    def extend(values: np.ndarray) -> np.ndarray:
-        v = np.asarray(values)
-        added = np.einsum("kj,kj...->k...", weights, v[parents].astype(np.float64))
-        return np.concatenate([v, added]).astype(np.float32)
-
-    source = np.concatenate([base.source_vertex, np.full(len(parents), -1, dtype=np.int32)]).astype(np.int32)
-    return CortexMesh(hemi=base.hemi, labels=labels, faces=faces.astype(np.int32),
-                      face_label=face_label.astype(np.int16), label_names=names,
-                      vertices={s: extend(v) for s, v in base.vertices.items()},
-                      source_vertex=source, sulc=None if base.sulc is None else extend(base.sulc))
-
-
 def _straddle_area(template: Template, base: str, maps: dict[str, LabelMap]) -> float:
     """Pial area of `base` faces whose three vertices do not share one label."""
     total = 0.0
@@ -480,12 +270,12 @@ class HemiLabels:
     """A new label set on one hemisphere: names, a label per base-mesh vertex, the faces it makes."""
 
     hemi: str
-    vertex_label: np.ndarray  # int16, shape (n_base_vertices,)
-    face_label: np.ndarray  # int16, shape (n_faces after splitting,)
+    vertex_label: NDArray[Any]  # int16, shape (n_base_vertices,)
+    face_label: NDArray[Any]  # int16, shape (n_faces after splitting,)
     names: tuple[str, ...]
-    colors: np.ndarray  # uint8, shape (n_names, 3)
+    colors: NDArray[Any]  # uint8, shape (n_names, 3)
     source: str
-    source_label: np.ndarray | None = None  # int16, shape (n_source_vertices,): the whole label map
+    source_label: NDArray[Any] | None = None  # int16, shape (n_source_vertices,): the whole label map
 
     def region_faces(self) -> dict[str, int]:
         counts = np.bincount(self.face_label.astype(np.int64), minlength=len(self.names))
@@ -494,8 +284,8 @@ class HemiLabels:
     def regions(self) -> list[tuple[int, str, tuple[int, int, int]]]:
         """(colour-table index, name, colour) of the regions with faces, in colour-table order."""
         used = set(np.unique(self.face_label).tolist())
-        return [(i, n, tuple(int(c) for c in self.colors[i])) for i, n in enumerate(self.names)
-                if i in used and not is_non_region(n)]
+        return [(i, n, (int(self.colors[i][0]), int(self.colors[i][1]), int(self.colors[i][2])))
+                for i, n in enumerate(self.names) if i in used and not is_non_region(n)]
 
 
 @dataclass(frozen=True)
@@ -564,22 +354,20 @@ def build_label_set(name: str, template: Template, maps: dict[str, LabelMap],
     return LabelSet(name, template.name, base, hemis, too_small)
 
 
-def _hex(rgb) -> str:
+def _hex(rgb: Sequence[int]) -> str:
     return "#{:02x}{:02x}{:02x}".format(*(int(c) for c in rgb[:3]))
 
 
 def write_label_set(folder: Path, label_set: LabelSet, template: Template, *,
-                    per_source_vertex: bool = False) -> dict:
+                    per_source_vertex: bool = False) -> dict[str, Any]:
     """Write ``labels.json`` and ``cortex-{hemi}-{name}.npz`` into `folder`; returns the JSON.
 
     With `per_source_vertex` the files hold the whole label map (``source_label``,
     one per full-resolution vertex) instead of the labels of the base mesh's
     vertices: a little larger, but it fits the template after a rebuild.
     """
-    from brainpainter_builder.writer import save_npz
-
     where = "full-resolution vertices (mapped to" if per_source_vertex else "vertices of"
-    entry: dict = {"source": ", ".join(label_set.hemis[h].source for h in HEMIS),
+    entry: dict[str, Any] = {"source": ", ".join(label_set.hemis[h].source for h in HEMIS),
                    "method": f"label map at the {where} the template's {label_set.base!r} meshes"
                              f"{')' if per_source_vertex else ''}; faces with several labels split "
                              "through edge midpoints",
@@ -631,7 +419,6 @@ def atlas_regions(label_set: LabelSet, region_aliases: dict[str, tuple[str, ...]
 
 def template_subcortical(template: Template) -> tuple[Region, ...]:
     """Subcortical regions of the built-in look-up table that `template` has meshes for."""
-    from brainpainter.atlas import registry
     names = {s["name"] for s in template.manifest.get("subcortical", {}).get("structures", [])}
     try:
         rows = registry.atlases.get("dk").subcortical()
@@ -668,7 +455,7 @@ def write_license(folder: Path, template: Template, sources: list[str]) -> bool:
 def write_atlas_folder(folder: Path, label_set: LabelSet, template: Template, *, title: str = "",
                        description: str = "", citation: str = "", aliases: tuple[str, ...] = (),
                        region_aliases: dict[str, tuple[str, ...]] | None = None,
-                       subcortical: bool = True, extra: dict | None = None,
+                       subcortical: bool = True, extra: dict[str, Any] | None = None,
                        per_source_vertex: bool = False) -> None:
     """Write a complete atlas folder (``atlas.json``, ``regions.tsv``, overlay, licence) into `folder`.
 

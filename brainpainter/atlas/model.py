@@ -14,7 +14,7 @@ import json
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TypeVar
+from typing import Any, TypeVar
 
 from brainpainter.errors import BrainPainterError
 
@@ -151,7 +151,7 @@ class Atlas:
                 out.update(dict.fromkeys(members, mapping[key]))
         return out
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         """JSON-ready description (regions with key, hemi, colour, aliases)."""
         return {
             "name": self.name,
@@ -260,18 +260,6 @@ def load_atlas_dir(path: str | Path) -> Atlas:
     )
 
 
-def get_atlas(name: str) -> Atlas:
-    """The registered atlas called `name` (or one of its aliases).
-
-    ``"A+B+..."`` combines a cortical atlas with volumetric ones (:func:`combine_atlases`),
-    e.g. ``"schaefer400_7n+tian_s2"``.
-    """
-    from brainpainter.atlas import registry
-    if "+" in str(name):
-        return combine_atlases([registry.atlases.get(part.strip()) for part in str(name).split("+")])
-    return registry.atlases.get(name)
-
-
 def combine_atlases(atlases: list[Atlas] | tuple[Atlas, ...]) -> Atlas:
     """One atlas from a cortical atlas and one or more volumetric atlases (or volumetric atlases only).
 
@@ -317,9 +305,3 @@ def combine_atlases(atlases: list[Atlas] | tuple[Atlas, ...]) -> Atlas:
         members=base.members if cortical else (),
         volume_dirs=tuple(d for v in volumes for d in v.volume_dirs), sources=tuple(sources.items()),
     )
-
-
-def list_atlases() -> list[str]:
-    """Names of installed atlases (no plugin is imported)."""
-    from brainpainter.atlas import registry
-    return registry.atlases.names()

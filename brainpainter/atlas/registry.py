@@ -13,15 +13,20 @@ listed as an alias by the object itself is the canonical one.
 
 from __future__ import annotations
 
+import functools
 import importlib
 import importlib.metadata as md
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
+from brainpainter.atlas.config import read_atlas_config
+from brainpainter.atlas.model import Atlas, combine_atlases, load_atlas_dir
 from brainpainter.errors import BrainPainterError, PluginError, choice_error
 
+CONFIG_FILE = "atlas.toml"
 GROUPS = ("brainpainter.atlases", "brainpainter.renderers", "brainpainter.templates")
 
 # Names a user may know that live in optional distributions: name -> pip hint.
@@ -88,8 +93,8 @@ class Registry:
             seen[ep.name] = ep.value
             by_target.setdefault((ep.value, dist), []).append((ep.name, dist))
         entries: dict[str, Entry] = {}
-        for (target, dist), names in by_target.items():
-            names = sorted({n for n, _ in names})
+        for (target, dist), named in by_target.items():
+            names = sorted({n for n, _ in named})
             canonical, aliases = names[0], tuple(names[1:])
             # Prefer the shortest name that is not an English word alias like
             # "tourville": keep sorted order but let the target's attr win.
@@ -195,8 +200,8 @@ class Registry:
             self._errors[canonical] = str(exc)
             raise
         except Exception as exc:  # a broken plugin must not crash the caller
-            entry = self._discover().get(canonical)
-            where = f" from {entry.distribution} ({entry.target})" if entry else ""
+            found = self._discover().get(canonical)
+            where = f" from {found.distribution} ({found.target})" if found else ""
             msg = f"the {self.kind} plugin {canonical!r}{where} failed to load: {type(exc).__name__}: {exc}"
             self._errors[canonical] = msg
             raise PluginError(msg + "; reinstall or uninstall that plugin") from exc
@@ -231,8 +236,6 @@ def load_target(target: str) -> Any:
 
 
 def _validate_atlas(name: str, obj: Any) -> Any:
-    from brainpainter.atlas.model import Atlas
-
     if callable(obj) and not isinstance(obj, Atlas):
         obj = obj()
     if not isinstance(obj, Atlas):
@@ -244,12 +247,6 @@ def _validate_atlas(name: str, obj: Any) -> Any:
     return obj
 
 
-def _user_atlases() -> Mapping[str, tuple[str, Callable[[], Any]]]:
-    from brainpainter.atlas.user import local_entries
-
-    return local_entries()
-
-
 def _validate_renderer(name: str, obj: Any) -> Any:
     for method in ("render",):
         if not callable(getattr(obj, method, None)):
@@ -258,8 +255,6 @@ def _validate_renderer(name: str, obj: Any) -> Any:
 
 
 def _validate_template(name: str, obj: Any) -> Any:
-    from pathlib import Path
-
     if callable(obj):
         obj = obj()
     path = Path(obj)
@@ -268,7 +263,67 @@ def _validate_template(name: str, obj: Any) -> Any:
     return path
 
 
-atlases = Registry("brainpainter.atlases", "atlas", _validate_atlas, local_source=_user_atlases)
+# -- looking atlases up --------------------------------------------------------------------
+def get_atlas(name: str) -> Atlas:
+    """The registered atlas called `name` (or one of its aliases).
+
+    ``"A+B+..."`` combines a cortical atlas with volumetric ones
+    (:func:`brainpainter.atlas.model.combine_atlases`), e.g. ``"schaefer400_7n+tian_s2"``.
+    """
+    if "+" in str(name):
+        return combine_atlases([atlases.get(part.strip()) for part in str(name).split("+")])
+    atlas: Atlas = atlases.get(name)
+    return atlas
+
+
+def list_atlases() -> list[str]:
+    """Names of installed atlases (no plugin is imported)."""
+    return atlases.names()
+
+
+def load_atlas_config(path: str | Path, name: str | None = None) -> Atlas:
+    """The atlas a region-group TOML file defines, its base atlas looked up in :data:`atlases`.
+
+    See :func:`brainpainter.atlas.config.read_atlas_config`.
+    """
+    return read_atlas_config(path, name, get_base=get_atlas)
+
+
+# -- user atlases: folders in the user's data folder (brainpainter atlas add) --------------
+def atlases_dir() -> Path:
+    """Folder of the user's atlases (it may not exist yet)."""
+    import platformdirs
+
+    return Path(platformdirs.user_data_dir("brainpainter", appauthor=False)) / "atlases"
+
+
+def user_folders() -> dict[str, Path]:
+    """``{name: folder}`` of the atlases in :func:`atlases_dir`."""
+    root = atlases_dir()
+    if not root.is_dir():
+        return {}
+    out = {}
+    for p in sorted(root.iterdir()):
+        if p.is_dir() and not p.name.startswith(".") and (
+                (p / "atlas.json").is_file() or (p / CONFIG_FILE).is_file()):
+            out[p.name] = p
+    return out
+
+
+def load_user_atlas(folder: Path) -> Atlas:
+    """Load one user-atlas folder (label-map or group atlas)."""
+    if (folder / CONFIG_FILE).is_file():
+        return load_atlas_config(folder / CONFIG_FILE, name=folder.name)
+    atlas = load_atlas_dir(folder)
+    return atlas if atlas.name == folder.name else replace(atlas, name=folder.name)
+
+
+def local_entries() -> Mapping[str, tuple[str, Callable[[], Any]]]:
+    """``{name: (folder, factory)}`` of the user's atlases, for the registry."""
+    return {name: (str(p), functools.partial(load_user_atlas, p)) for name, p in user_folders().items()}
+
+
+atlases = Registry("brainpainter.atlases", "atlas", _validate_atlas, local_source=local_entries)
 renderers = Registry("brainpainter.renderers", "renderer", _validate_renderer)
 templates = Registry("brainpainter.templates", "template", _validate_template)
 

@@ -20,11 +20,11 @@ Optional cortex arrays (a reader that does not know them ignores them):
 ``vertex_label`` (int16, one per vertex: the label of the full-resolution
 vertex, index into the names) makes :meth:`Template.cortex` split the faces
 that straddle a region boundary when loading, so borders follow the label
-boundary instead of the triangles (:func:`brainpainter.atlas.labelset.split_mesh`,
+boundary instead of the triangles (:func:`brainpainter.atlas.mesh.split_mesh`,
 the same code as for label-set overlays); ``face_label`` stays the
 whole-triangle labelling for older readers; ``boundary_t`` (float32, one
 per label-crossing edge) caches where the border crosses each edge
-(:func:`brainpainter.atlas.labelset.smooth_crossings`), so loading only splits.
+(:func:`brainpainter.atlas.mesh.smooth_crossings`), so loading only splits.
 ``sulc`` (float32, one per
 vertex) is FreeSurfer's sulcal depth (``surf/?h.sulc``, mm, positive in
 sulci) for shading.
@@ -38,7 +38,7 @@ A custom or plugin atlas brings its own label set in a folder beside its
 the template's own label-set meshes (entry key ``base``; ``base_faces_sha256``
 guards against a rebuilt template): ``vertex_label`` (one per vertex; faces
 whose vertices differ are split through edge midpoints when loaded, see
-:func:`brainpainter.atlas.labelset.split_mesh`) or ``face_label`` (one per face).
+:func:`brainpainter.atlas.mesh.split_mesh`) or ``face_label`` (one per face).
 An overlay file may instead hold ``source_label``: one label per vertex of the
 full-resolution surface the template was built from (e.g. all 163842 of
 fsaverage); it is mapped through the base mesh's ``source_vertex`` when
@@ -49,14 +49,18 @@ loaded, so it survives a rebuild of the template (no digest needed).
 from __future__ import annotations
 
 import copy
-import hashlib
 import json
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
+from brainpainter.atlas import registry
+from brainpainter.atlas.mesh import CortexMesh, LabelledMesh, faces_digest, labels_at_vertices, split_mesh
+from brainpainter.atlas.model import Atlas
 from brainpainter.errors import BrainPainterError
 
 FORMAT = "brainpainter-template"
@@ -67,75 +71,17 @@ LABELS_FORMAT = "brainpainter-labels"
 LABELS_FILE = "labels.json"
 
 
-def faces_digest(faces: np.ndarray) -> str:
-    """SHA-256 of a face array (as little-endian int32), to recognise a mesh."""
-    return hashlib.sha256(np.ascontiguousarray(faces, dtype="<i4").tobytes()).hexdigest()
-
-
-@dataclass(frozen=True)
-class CortexMesh:
-    """One hemisphere, split into regions by one label set.
-
-    Attributes
-    ----------
-    hemi : {"lh", "rh"}
-    labels : str
-        Label-set name (``"dk"``, ``"destrieux"``, ``"dkt"``).
-    faces : ndarray of int32, shape (n_faces, 3)
-    face_label : ndarray of int16, shape (n_faces,)
-        Index into `label_names` for every face.
-    label_names : tuple of str
-        Names from the annotation colour table (``"insula"``, ``"unknown"``).
-    vertices : dict of str to ndarray of float32, shape (n_vertices, 3)
-        One entry per surface (``"pial"``, ``"white"``, ``"inflated"``).
-    source_vertex : ndarray of int32, shape (n_vertices,)
-        Index of each vertex in the full-resolution FreeSurfer surface; -1 for
-        a vertex added on an edge or face where a region boundary was split.
-    sulc : ndarray of float32, shape (n_vertices,), or None
-        Sulcal depth (FreeSurfer ``?h.sulc``, mm; positive in sulci, negative
-        on gyral crowns), when the template has it.
-    """
-
-    hemi: str
-    labels: str
-    faces: np.ndarray
-    face_label: np.ndarray
-    label_names: tuple[str, ...]
-    vertices: dict[str, np.ndarray]
-    source_vertex: np.ndarray
-    sulc: np.ndarray | None = None
-
-
-@dataclass(frozen=True)
-class LabelledMesh:
-    """Meshes of several structures in one array set.
-
-    Attributes
-    ----------
-    vertices : ndarray of float32, shape (n_vertices, 3)
-    faces : ndarray of int32, shape (n_faces, 3)
-    face_label : ndarray of int16, shape (n_faces,)
-        Index into `label_names`.
-    label_names : tuple of str
-    """
-
-    vertices: np.ndarray
-    faces: np.ndarray
-    face_label: np.ndarray
-    label_names: tuple[str, ...]
-
-
 @dataclass
 class Template:
     """A loaded template directory. Arrays are read on first use and cached."""
 
     path: Path
-    manifest: dict
-    _cache: dict = field(default_factory=dict, repr=False)
+    manifest: dict[str, Any]
+    _cache: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property
     def name(self) -> str:
-        return self.manifest["name"]
+        return str(self.manifest["name"])
 
     @property
     def label_sets(self) -> list[str]:
@@ -145,19 +91,21 @@ class Template:
     def surfaces(self) -> list[str]:
         return list(self.manifest["surfaces"])
 
-    def _npz(self, file: str) -> dict[str, np.ndarray]:
+    def _npz(self, file: str) -> dict[str, NDArray[Any]]:
         if file not in self._cache:
             with np.load(self.path / file, allow_pickle=False) as z:
                 self._cache[file] = {k: z[k] for k in z.files}
-        return self._cache[file]
+        arrays: dict[str, NDArray[Any]] = self._cache[file]
+        return arrays
 
-    def _entry(self, labels: str, hemi: str) -> dict:
+    def _entry(self, labels: str, hemi: str) -> dict[str, Any]:
         if labels not in self.manifest["labels"]:
             raise BrainPainterError(
                 f"template {self.name!r} has no label set {labels!r}; it has {self.label_sets}. "
                 "Build the template with that atlas (brainpainter template build --atlas ...)."
             )
-        return self.manifest["labels"][labels]["cortex"][hemi]
+        entry: dict[str, Any] = self.manifest["labels"][labels]["cortex"][hemi]
+        return entry
 
     def base_cortex(self, labels: str, hemi: str) -> CortexMesh:
         """The stored mesh of one of the template's own label sets, faces not split.
@@ -221,19 +169,16 @@ class Template:
             base = self.base_cortex(labels, hemi)
             if "vertex_label" not in z:
                 return base
-        from brainpainter.atlas.labelset import split_mesh
-
         key = f"{entry['file']}#{labels}"  # computed once per template object
         if key not in self._cache:
             self._cache[key] = split_mesh(base, z["vertex_label"], labels, tuple(entry["names"]),
                                           z.get("boundary_t"))
-        return self._cache[key]
+        mesh: CortexMesh = self._cache[key]
+        return mesh
 
-    def _source_labelled(self, base: CortexMesh, source_label: np.ndarray, labels: str,
-                         entry: dict) -> CortexMesh:
+    def _source_labelled(self, base: CortexMesh, source_label: NDArray[Any], labels: str,
+                         entry: dict[str, Any]) -> CortexMesh:
         """`base` labelled by `source_label` (one label per vertex of the full-resolution surface)."""
-        from brainpainter.atlas.labelset import labels_at_vertices, split_mesh
-
         n_source = int(entry.get("n_source_vertices", len(source_label)))
         if len(source_label) != n_source or int(base.source_vertex.max(initial=-1)) >= n_source:
             raise BrainPainterError(
@@ -245,7 +190,8 @@ class Template:
         if key not in self._cache:
             vertex_label = labels_at_vertices(source_label, base)
             self._cache[key] = split_mesh(base, vertex_label, labels, tuple(entry["names"]))
-        return self._cache[key]
+        mesh: CortexMesh = self._cache[key]
+        return mesh
 
     def with_label_sets(self, folder: str | Path) -> Template:
         """This template plus the label sets of an overlay folder (``labels.json``).
@@ -304,7 +250,8 @@ class Template:
         structures replace the template's own (aseg) ones, several folders are
         drawn together.
         """
-        structures, parts = [], []
+        structures: list[dict[str, Any]] = []
+        parts: list[str] = []
         for folder in folders:
             folder = Path(folder)
             try:
@@ -322,13 +269,13 @@ class Template:
         manifest["subcortical"] = {"file": parts[0], "parts": parts, "structures": structures}
         return Template(path=self.path, manifest=manifest, _cache=self._cache)
 
-    def glass(self, hemi: str) -> tuple[np.ndarray, np.ndarray]:
+    def glass(self, hemi: str) -> tuple[NDArray[Any], NDArray[Any]]:
         """Glass-brain hull of one hemisphere: ``(vertices (n, 3), faces (m, 3))``."""
         z = self._npz(self.manifest["glass"][hemi]["file"])
         return z["vertices"], z["faces"]
 
     @cached_property
-    def bounds(self) -> np.ndarray:
+    def bounds(self) -> NDArray[Any]:
         """Bounding box of the pial surfaces, shape (2, 3): min and max corner."""
         return np.asarray(self.manifest["bounds"]["pial"], dtype=float)
 
@@ -336,7 +283,7 @@ class Template:
         return sorted(p for p in self.path.iterdir() if p.is_file())
 
 
-def template_for(atlas, template: Template) -> Template:
+def template_for(atlas: Atlas, template: Template) -> Template:
     """`template` with what `atlas` brings: its cortex label set overlay and its volume meshes.
 
     Parameters
@@ -363,7 +310,6 @@ def load_template(name_or_path: str | Path = "fsaverage") -> Template:
     path = Path(name_or_path)
     if not (path / "manifest.json").is_file():
         if isinstance(name_or_path, str) and "/" not in name_or_path and "\\" not in name_or_path:
-            from brainpainter.atlas import registry
             path = registry.templates.get(name_or_path)
         else:
             raise BrainPainterError(

@@ -21,58 +21,23 @@ from __future__ import annotations
 import re
 import shutil
 import tempfile
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
 
-from brainpainter.errors import BrainPainterError
+from brainpainter.atlas import labelset, registry
+from brainpainter.atlas.model import load_atlas_dir
+from brainpainter.atlas.registry import CONFIG_FILE, atlases_dir, load_atlas_config, user_folders
+from brainpainter.atlas.template import load_template
+from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.io.files import read_input
+from brainpainter.io.transaction import check_replaceable, replace_folder
 
 NAME_RE = re.compile(r"^[A-Za-z][A-Za-z0-9_.-]{0,63}$")
-CONFIG_FILE = "atlas.toml"
-
-
-def atlases_dir() -> Path:
-    """Folder of the user's atlases (it may not exist yet)."""
-    import platformdirs
-
-    return Path(platformdirs.user_data_dir("brainpainter", appauthor=False)) / "atlases"
-
-
-def _folders() -> dict[str, Path]:
-    root = atlases_dir()
-    if not root.is_dir():
-        return {}
-    out = {}
-    for p in sorted(root.iterdir()):
-        if p.is_dir() and not p.name.startswith(".") and (
-                (p / "atlas.json").is_file() or (p / CONFIG_FILE).is_file()):
-            out[p.name] = p
-    return out
-
-
-def load_user_atlas(folder: Path) -> Any:
-    """Load one user-atlas folder (label-map or group atlas)."""
-    from dataclasses import replace
-
-    if (folder / CONFIG_FILE).is_file():
-        from brainpainter.atlas.config import load_atlas_config
-
-        return load_atlas_config(folder / CONFIG_FILE, name=folder.name)
-    from brainpainter.atlas.model import load_atlas_dir
-
-    atlas = load_atlas_dir(folder)
-    return atlas if atlas.name == folder.name else replace(atlas, name=folder.name)
-
-
-def local_entries() -> Mapping[str, tuple[str, Callable[[], Any]]]:
-    """``{name: (folder, factory)}`` of the user's atlases, for the registry."""
-    return {name: (str(p), lambda p=p: load_user_atlas(p)) for name, p in _folders().items()}
 
 
 def check_name(name: str, *, replace: bool = False) -> str:
     """Validate a new atlas name: allowed characters, no clash with an installed atlas."""
-    from brainpainter.atlas import registry
     check_syntax(name)
     registry.atlases.reset()
     for entry in registry.atlases.entries():
@@ -113,8 +78,6 @@ def staged_folder(name: str, out: Path | None = None) -> Iterator[Path]:
     `out` must be new or empty; in the user's atlas folder only an atlas
     folder is replaced (``--replace``). The parent folder is locked meanwhile.
     """
-    from brainpainter.io.transaction import replace_folder
-
     if out is not None:
         with replace_folder(out, lambda p: False, "output folder", "Give a new or empty folder.") as stage:
             yield stage
@@ -126,13 +89,11 @@ def staged_folder(name: str, out: Path | None = None) -> Iterator[Path]:
 
 def parse_annot_options(values: list[str] | tuple[str, ...]) -> dict[str, Path]:
     """``["lh=FILE", "rh=FILE"]`` (or two files named ``lh.*``/``rh.*``) -> ``{"lh": FILE, "rh": FILE}``."""
-    from brainpainter.atlas.labelset import hemi_of
-
     out: dict[str, Path] = {}
     for v in values:
         hemi, sep, file = str(v).partition("=")
         if not sep:
-            hemi, file = hemi_of(v) or "", str(v)
+            hemi, file = labelset.hemi_of(v) or "", str(v)
             if not hemi:
                 raise BrainPainterError(
                     f"cannot tell the hemisphere of {v!r}; write --annot lh={v} or --annot rh={v}")
@@ -177,26 +138,18 @@ def add_label_map(name: str, annots: Mapping[str, str | Path], *, template: str 
     Path
         The atlas folder.
     """
-    from brainpainter.atlas import registry
-    from brainpainter.atlas.labelset import build_label_set, read_label_map, write_atlas_folder
-    from brainpainter.atlas.template import load_template
-
     if out is None:
         check_name(name, replace=replace)
     else:
-        from brainpainter.io.transaction import check_replaceable
-
         check_syntax(name)
         check_replaceable(Path(out).expanduser(), lambda p: False, "output folder",
                           "Give a new or empty folder.")
     tpl = load_template(template)
-    maps = {h: read_label_map(annots[h], h) for h in ("lh", "rh") if h in annots}
-    label_set = build_label_set(name, tpl, maps)
+    maps = {h: labelset.read_label_map(annots[h], h) for h in ("lh", "rh") if h in annots}
+    label_set = labelset.build_label_set(name, tpl, maps)
     with staged_folder(name, Path(out) if out is not None else None) as stage:
-        write_atlas_folder(stage, label_set, tpl, title=title, description=description, citation=citation,
-                           region_aliases=dict(region_aliases or {}))
-        from brainpainter.atlas.model import load_atlas_dir
-
+        labelset.write_atlas_folder(stage, label_set, tpl, title=title, description=description,
+                                    citation=citation, region_aliases=dict(region_aliases or {}))
         load_atlas_dir(stage)  # validates what was written
     registry.atlases.reset()
     return Path(out) if out is not None else atlases_dir() / name
@@ -204,14 +157,9 @@ def add_label_map(name: str, annots: Mapping[str, str | Path], *, template: str 
 
 def add_config(name: str, config: str | Path, *, replace: bool = False) -> Path:
     """Add a region-group atlas from a TOML config (validated first); returns its folder."""
-    from brainpainter.atlas import registry
-    from brainpainter.atlas.config import load_atlas_config
-
     check_name(name, replace=replace)
     config = Path(config).expanduser()
     load_atlas_config(config, name=name)  # every error before anything is written
-    from brainpainter.io.files import read_input
-
     text = read_input(config, "atlas config")
     with staged_folder(name) as stage:
         (stage / CONFIG_FILE).write_bytes(text)
@@ -222,10 +170,7 @@ def add_config(name: str, config: str | Path, *, replace: bool = False) -> Path:
 
 def remove(name: str) -> Path:
     """Remove the user atlas `name`; returns the folder that was deleted."""
-    from brainpainter.atlas import registry
-    from brainpainter.errors import choice_error
-
-    folders = _folders()
+    folders = user_folders()
     hit = next((n for n in folders if n.lower() == str(name).lower()), None)
     if hit is None:
         registry.atlases.reset()

@@ -2,8 +2,8 @@
 
 ``brainpainter atlas add NAME --volume LABELS.nii.gz --lut LUT --space SPACE``
 reads an integer label volume (any format nibabel reads) and a look-up table
-naming its labels, meshes every label with the subcortical builder's pipeline
-(:func:`brainpainter_builder.subcortical.build_structures`: marching cubes,
+naming its labels, meshes every label with the subcortical pipeline
+(:func:`brainpainter.atlas.meshing.build_structures`: marching cubes,
 Taubin smoothing, quadric decimation, volume matched to the voxel volume), and
 places the meshes in the template's coordinates. The atlas folder holds
 ``atlas.json``, ``regions.tsv`` (kind ``subcortical``) and ``subcortical.npz``
@@ -56,10 +56,18 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, cast
 
 import numpy as np
+from numpy.typing import NDArray
 
-from brainpainter.atlas.model import HEMI_PREFIX, Region, write_regions_tsv
+from brainpainter.atlas import registry
+from brainpainter.atlas.meshing import Structure, build_structures, merge_structures
+from brainpainter.atlas.model import HEMI_PREFIX, Region, load_atlas_dir, write_regions_tsv
+from brainpainter.atlas.registry import atlases_dir
+from brainpainter.atlas.template import FORMAT, FORMAT_VERSION, Template, load_template
+from brainpainter.atlas.user import check_name, check_syntax, staged_folder
+from brainpainter.atlas.writer import save_npz
 from brainpainter.errors import BrainPainterError, choice_error
 
 SPACES = ("MNI152NLin2009cAsym", "MNI152NLin6Asym", "fsaverage", "template")
@@ -193,12 +201,14 @@ def lut_regions(entries: list[LutEntry]) -> list[Region]:
     """Regions (kind ``subcortical``) of LUT entries; hemisphere from the name; colours filled in."""
     import matplotlib
 
-    cycle = matplotlib.colormaps["tab20"].colors
-    out, keys = [], {}
+    cycle = matplotlib.colormaps["tab20"].colors  # type: ignore[attr-defined]
+    out: list[Region] = []
+    keys: dict[str, int] = {}
     for i, e in enumerate(entries):
         hemi, name = split_hemi(e.name)
-        color = e.color or tuple(round(255 * c) for c in cycle[i % len(cycle)][:3])
-        region = Region(e.index, name, hemi, "subcortical", color,  # type: ignore[arg-type]
+        rgb = tuple(round(255 * c) for c in cycle[i % len(cycle)][:3])
+        color = e.color or cast(tuple[int, int, int], rgb)
+        region = Region(e.index, name, hemi, "subcortical", color,
                         () if e.name == HEMI_PREFIX[hemi] + name else (e.name,))
         if region.key in keys:
             raise BrainPainterError(f"labels {keys[region.key]} and {e.index} both name region "
@@ -208,7 +218,7 @@ def lut_regions(entries: list[LutEntry]) -> list[Region]:
     return out
 
 
-def space_transform(space: str, template) -> np.ndarray:
+def space_transform(space: str, template: Template) -> NDArray[Any]:
     """4 x 4 affine from `space` RAS millimetres to the coordinates of `template`.
 
     Parameters
@@ -233,8 +243,8 @@ def space_transform(space: str, template) -> np.ndarray:
 class LabelVolume:
     """An integer label volume and its voxel-to-world affine."""
 
-    data: np.ndarray  # int, shape (ni, nj, nk)
-    affine: np.ndarray  # shape (4, 4)
+    data: NDArray[Any]  # int, shape (ni, nj, nk)
+    affine: NDArray[Any]  # shape (4, 4)
     source: Path
 
 
@@ -247,7 +257,7 @@ def read_volume(path: str | Path) -> LabelVolume:
         raise BrainPainterError(f"label volume {path} does not exist; give a NIfTI (.nii, .nii.gz) or MGH "
                                 "(.mgz) file of integer labels")
     try:
-        img = nib.load(str(path))
+        img: Any = nib.load(str(path))
         data = np.asanyarray(img.dataobj)
     except Exception as exc:  # nibabel raises ImageFileError, ValueError, OSError, ...
         reason = " ".join(str(exc).split()) or type(exc).__name__
@@ -269,7 +279,7 @@ def read_volume(path: str | Path) -> LabelVolume:
     return LabelVolume(data.astype(np.int64), np.asarray(img.affine, dtype=np.float64), path)
 
 
-def write_own_template(folder: Path, name: str, volume: str, structures: list) -> dict:
+def write_own_template(folder: Path, name: str, volume: str, structures: list[Structure]) -> dict[str, Any]:
     """Write ``folder/template/manifest.json``: a template made only of the volume's meshes (no cortex).
 
     Its subcortical part is the atlas's ``subcortical.npz``; it has no cortex
@@ -277,8 +287,6 @@ def write_own_template(folder: Path, name: str, volume: str, structures: list) -
     the meshes): ``subcortical-dorsal``, ``subcortical-left``,
     ``subcortical-ventral``, ``subcortical``.
     """
-    from brainpainter.atlas.template import FORMAT, FORMAT_VERSION
-
     points = np.concatenate([s.vertices for s in structures])
     manifest = {
         "format": FORMAT, "format_version": FORMAT_VERSION, "name": name,
@@ -297,72 +305,12 @@ def write_own_template(folder: Path, name: str, volume: str, structures: list) -
     return manifest
 
 
-def build_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, space: str = "MNI152NLin2009cAsym",
-                       template: str = "fsaverage", title: str = "", description: str = "",
-                       citation: str = "", target_fraction: float = 0.3, out: Path,
-                       own_template: bool = False, progress: Callable[[str], None] | None = None) -> dict:
-    """Mesh every label of `volume` named in `lut` and write an atlas folder into `out`.
-
-    With `own_template` the volume is a brain of its own (any species, no
-    cortical surfaces): the meshes stay in the volume's world coordinates and
-    the folder gets a template made of them (:func:`write_own_template`);
-    `space` and `template` are then not used.
-
-    Parameters
-    ----------
-    name : str
-    volume, lut : path-like
-    space : str
-        One of :data:`SPACES`.
-    template : str
-        Template the meshes are placed in.
-    title, description, citation : str
-    target_fraction : float
-        Faces kept by decimation.
-    out : Path
-        Existing empty folder.
-    progress : callable, optional
-        Called with each region key before it is meshed.
-
-    Returns
-    -------
-    dict
-        The ``atlas.json`` written.
-    """
-    from brainpainter.atlas.template import load_template
-    from brainpainter_builder.subcortical import build_structures, merge_structures
-    from brainpainter_builder.writer import save_npz
-
-    if own_template:
-        space, tpl_name, label_set, to_template = "template", name, "none", np.eye(4)
-    else:
-        tpl = load_template(template)
-        to_template = space_transform(space, tpl)
-        tpl_name, label_set = tpl.name, ("dk" if "dk" in tpl.label_sets else tpl.label_sets[0])
-    vol = read_volume(volume)
-    entries = read_lut(lut)
-    present = set(np.unique(vol.data).tolist()) - {0}
-    named = {e.index for e in entries}
-    unnamed = sorted(present - named)
-    if unnamed:
-        raise BrainPainterError(
-            f"{vol.source.name} has labels {unnamed[:8]}{' ...' if len(unnamed) > 8 else ''} that "
-            f"{Path(lut).name} does not name; give a look-up table with a row for every label")
-    regions = lut_regions([e for e in entries if e.index in present])
-    if not regions:
-        raise BrainPainterError(f"{vol.source.name} has no label named in {Path(lut).name} (only 0, "
-                                "background); give the volume its look-up table")
-    vox2world = to_template @ vol.affine
-    voxel_volume = abs(float(np.linalg.det(vox2world[:3, :3])))
-    structures = build_structures(vol.data, vox2world, voxel_volume, tuple(regions),
-                                  target_fraction=target_fraction, progress=progress,
-                                  source=vol.source.name)
-    save_npz(out / VOLUME_FILE, merge_structures(structures))
-    write_regions_tsv(regions, out / "regions.tsv")
-    if own_template:
-        write_own_template(out, name, vol.source.name, structures)
+def _atlas_json(name: str, vol: LabelVolume, lut: str | Path, space: str, tpl_name: str, label_set: str,
+                to_template: NDArray[Any], regions: list[Region], structures: list[Structure], *, title: str,
+                description: str, citation: str, own_template: bool) -> dict[str, Any]:
+    """The ``atlas.json`` of a volume atlas: where it came from, the transform, each structure's mesh."""
     source_voxel = abs(float(np.linalg.det(vol.affine[:3, :3])))
-    meta = {
+    return {
         "name": name,
         "title": title or name,
         "kind": "volume",
@@ -391,17 +339,78 @@ def build_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, space:
             "centroid": [round(float(c), 3) for c in s.vertices.mean(axis=0)], "watertight": s.watertight,
         } for s in structures],
     }
+
+
+def build_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, space: str = "MNI152NLin2009cAsym",
+                       template: str = "fsaverage", title: str = "", description: str = "",
+                       citation: str = "", target_fraction: float = 0.3, out: Path,
+                       own_template: bool = False,
+                       progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """Mesh every label of `volume` named in `lut` and write an atlas folder into `out`.
+
+    With `own_template` the volume is a brain of its own (any species, no
+    cortical surfaces): the meshes stay in the volume's world coordinates and
+    the folder gets a template made of them (:func:`write_own_template`);
+    `space` and `template` are then not used.
+
+    Parameters
+    ----------
+    name : str
+    volume, lut : path-like
+    space : str
+        One of :data:`SPACES`.
+    template : str
+        Template the meshes are placed in.
+    title, description, citation : str
+    target_fraction : float
+        Faces kept by decimation.
+    out : Path
+        Existing empty folder.
+    progress : callable, optional
+        Called with each region key before it is meshed.
+
+    Returns
+    -------
+    dict
+        The ``atlas.json`` written.
+    """
+    if own_template:
+        space, tpl_name, label_set, to_template = "template", name, "none", np.eye(4)
+    else:
+        tpl = load_template(template)
+        to_template = space_transform(space, tpl)
+        tpl_name, label_set = tpl.name, ("dk" if "dk" in tpl.label_sets else tpl.label_sets[0])
+    vol = read_volume(volume)
+    entries = read_lut(lut)
+    present = set(np.unique(vol.data).tolist()) - {0}
+    named = {e.index for e in entries}
+    unnamed = sorted(present - named)
+    if unnamed:
+        raise BrainPainterError(
+            f"{vol.source.name} has labels {unnamed[:8]}{' ...' if len(unnamed) > 8 else ''} that "
+            f"{Path(lut).name} does not name; give a look-up table with a row for every label")
+    regions = lut_regions([e for e in entries if e.index in present])
+    if not regions:
+        raise BrainPainterError(f"{vol.source.name} has no label named in {Path(lut).name} (only 0, "
+                                "background); give the volume its look-up table")
+    vox2world = to_template @ vol.affine
+    voxel_volume = abs(float(np.linalg.det(vox2world[:3, :3])))
+    structures = build_structures(vol.data, vox2world, voxel_volume, tuple(regions),
+                                  target_fraction=target_fraction, progress=progress,
+                                  source=vol.source.name)
+    save_npz(out / VOLUME_FILE, merge_structures(structures))
+    write_regions_tsv(regions, out / "regions.tsv")
+    if own_template:
+        write_own_template(out, name, vol.source.name, structures)
+    meta = _atlas_json(name, vol, lut, space, tpl_name, label_set, to_template, regions, structures,
+                       title=title, description=description, citation=citation, own_template=own_template)
     (out / "atlas.json").write_text(json.dumps(meta, indent=1) + "\n", encoding="utf-8")
     return meta
 
 
 def add_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, replace: bool = False,
-                     out: str | Path | None = None, **kwargs) -> Path:
+                     out: str | Path | None = None, **kwargs: Any) -> Path:
     """``brainpainter atlas add NAME --volume ... --lut ...``: build and store (or write to `out`)."""
-    from brainpainter.atlas import registry
-    from brainpainter.atlas.model import load_atlas_dir
-    from brainpainter.atlas.user import atlases_dir, check_name, check_syntax, staged_folder
-
     if out is None:
         check_name(name, replace=replace)
     else:

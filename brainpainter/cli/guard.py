@@ -172,7 +172,7 @@ def run(group: click.Group, argv: Sequence[str] | None = None, prog_name: str = 
             _say(f"error: {_one_line(str(exc).splitlines()[0] if str(exc) else type(exc).__name__)}")
             return exc.exit_code
         except OSError as exc:
-            from brainpainter.io.transaction import os_error
+            from brainpainter.io.folders import os_error
 
             if exc.errno in (errno.EPIPE, errno.ENOSPC, errno.EIO) and exc.filename is None:
                 _silence_stdout()

@@ -133,7 +133,7 @@ def atlas_list(as_json: bool) -> None:
 def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, size: str, template: str,
                surface: str, quality: str, renderer: str) -> None:
     """Regions of atlas NAME, with hemisphere, colour and aliases; --image draws them."""
-    from brainpainter.atlas.model import get_atlas
+    from brainpainter.atlas.registry import get_atlas
 
     a = get_atlas(name)
     if image is not None:

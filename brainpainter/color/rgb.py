@@ -20,11 +20,10 @@ _HELP = (
 )
 
 
-def _named_colors() -> dict[str, str]:
+def _named_colors() -> dict[str, Any]:
     from matplotlib import colors as mcolors
 
-    named: dict[str, str] = mcolors.get_named_colors_mapping()  # type: ignore[assignment]
-    return named
+    return {str(k): v for k, v in mcolors.get_named_colors_mapping().items()}
 
 
 def to_rgb(color: ColorLike) -> tuple[float, float, float]:

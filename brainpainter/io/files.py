@@ -21,7 +21,7 @@ from pathlib import Path
 
 from brainpainter.errors import BrainPainterError
 
-#: Size limits in bytes per kind of input (tables: :func:`brainpainter.io.readers.max_bytes`).
+#: Size limits in bytes per kind of input (tables: :func:`brainpainter.io.rawtable.max_bytes`).
 LIMITS = {
     "atlas config": 1 * 2**20,
     "label map": 256 * 2**20,
@@ -69,7 +69,7 @@ def too_big(what: str, name: str, size: int, limit: int, env: str = "") -> Brain
     )
 
 
-def read_input(path: str | os.PathLike, what: str = "input", limit: int | None = None,
+def read_input(path: str | os.PathLike[str], what: str = "input", limit: int | None = None,
                hint: str = "", env: str = "") -> bytes:
     """The bytes of a regular file of at most `limit` bytes.
 
@@ -113,7 +113,7 @@ def read_input(path: str | os.PathLike, what: str = "input", limit: int | None =
     return b"".join(chunks)
 
 
-def check_input(path: str | os.PathLike, what: str = "input", limit: int | None = None,
+def check_input(path: str | os.PathLike[str], what: str = "input", limit: int | None = None,
                 hint: str = "") -> Path:
     """Check that `path` is a regular file within `limit` bytes, for a library that reads it by path."""
     path = Path(path)
@@ -126,7 +126,7 @@ def check_input(path: str | os.PathLike, what: str = "input", limit: int | None 
     return path
 
 
-def check_input_dir(path: str | os.PathLike, what: str = "folder", hint: str = "") -> Path:
+def check_input_dir(path: str | os.PathLike[str], what: str = "folder", hint: str = "") -> Path:
     """Check that `path` is an existing folder."""
     path = Path(path)
     name = str(path)

@@ -50,7 +50,7 @@ class _Mp4Writer:
             raise self._failed(exc) from None
 
     def _failed(self, exc: BaseException) -> BrainPainterError:
-        from brainpainter.io.transaction import _broken
+        from brainpainter.io.verify import _broken
 
         return _broken(self.path, f"the video encoder (ffmpeg) stopped: {type(exc).__name__}")
 

@@ -37,27 +37,29 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
+from typing import Any
 
 from brainpainter.atlas.model import Atlas, Region
 
 # Hemisphere affixes: (text, "prefix" or "suffix", naming convention). Matched case-insensitively.
+# The right hemisphere's are the left's mirrored (Left -> Right, lh -> rh, L -> R).
+_LEFT_AFFIXES: tuple[tuple[str, str, str], ...] = (
+    ("Left-", "prefix", "BrainPainter"), ("Left_", "prefix", "other"), ("Left ", "prefix", "other"),
+    ("ctx-lh-", "prefix", "FreeSurfer look-up table"), ("ctx_lh_", "prefix", "FreeSurfer look-up table"),
+    ("lh_", "prefix", "ggseg"), ("lh.", "prefix", "other"), ("lh-", "prefix", "other"),
+    ("L_", "prefix", "ENIGMA"), ("L-", "prefix", "other"), ("L.", "prefix", "other"),
+    ("_lh", "suffix", "other"), ("-lh", "suffix", "other"), (".lh", "suffix", "other"),
+    ("_L", "suffix", "other"), ("-L", "suffix", "other"), ("_left", "suffix", "other"),
+)
+
+
+def _mirrored(text: str) -> str:
+    return text.replace("Left", "Right").replace("left", "right").replace("lh", "rh").replace("L", "R")
+
+
 _AFFIXES: dict[str, tuple[tuple[str, str, str], ...]] = {
-    "lh": (
-        ("Left-", "prefix", "BrainPainter"), ("Left_", "prefix", "other"), ("Left ", "prefix", "other"),
-        ("ctx-lh-", "prefix", "FreeSurfer look-up table"), ("ctx_lh_", "prefix", "FreeSurfer look-up table"),
-        ("lh_", "prefix", "ggseg"), ("lh.", "prefix", "other"), ("lh-", "prefix", "other"),
-        ("L_", "prefix", "ENIGMA"), ("L-", "prefix", "other"), ("L.", "prefix", "other"),
-        ("_lh", "suffix", "other"), ("-lh", "suffix", "other"), (".lh", "suffix", "other"),
-        ("_L", "suffix", "other"), ("-L", "suffix", "other"), ("_left", "suffix", "other"),
-    ),
-    "rh": (
-        ("Right-", "prefix", "BrainPainter"), ("Right_", "prefix", "other"), ("Right ", "prefix", "other"),
-        ("ctx-rh-", "prefix", "FreeSurfer look-up table"), ("ctx_rh_", "prefix", "FreeSurfer look-up table"),
-        ("rh_", "prefix", "ggseg"), ("rh.", "prefix", "other"), ("rh-", "prefix", "other"),
-        ("R_", "prefix", "ENIGMA"), ("R-", "prefix", "other"), ("R.", "prefix", "other"),
-        ("_rh", "suffix", "other"), ("-rh", "suffix", "other"), (".rh", "suffix", "other"),
-        ("_R", "suffix", "other"), ("-R", "suffix", "other"), ("_right", "suffix", "other"),
-    ),
+    "lh": _LEFT_AFFIXES,
+    "rh": tuple((_mirrored(text), where, naming) for text, where, naming in _LEFT_AFFIXES),
 }
 # A hemisphere inside a name, between underscores: Schaefer 2018's 7Networks_LH_Vis_1.
 _HEMI_TOKEN = re.compile(r"_([LR]H)_", re.IGNORECASE)
@@ -331,7 +333,7 @@ def infer_atlas(names: Sequence[object], atlases: Sequence[Atlas]) -> AtlasGuess
     resolves in DK, but only DKT is complete); otherwise the first in
     `atlases` (the default order puts ``dk`` first).
     """
-    best: tuple | None = None
+    best: tuple[Any, ...] | None = None
     scores: dict[str, int] = {}
     for order, atlas in enumerate(atlases):
         keys: set[str] = set()

@@ -15,25 +15,31 @@ first problem as a one-line :class:`~brainpainter.errors.BrainPainterError`.
 
 from __future__ import annotations
 
-import math
+import dataclasses
 from collections import Counter
-from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
-from brainpainter.errors import BrainPainterError
-from brainpainter.io.readers import MAX_BYTES, RawTable, has_control, read_raw
-from brainpainter.table.cells import is_empty, is_text, to_number
+from brainpainter.errors import BrainPainterError, NoRegionColumnError
+from brainpainter.io.rawtable import MAX_BYTES, RawTable
+from brainpainter.io.readers import read_raw
+from brainpainter.table.cells import is_text
+from brainpainter.table.columns import (
+    CellProblem,
+    NameReport,
+    Part,
+    read_part,
+)
 from brainpainter.table.names import (
     IGNORED,
     REGION,
     UNMATCHED,
     AtlasGuess,
     NameResolver,
-    Resolution,
     infer_atlas,
 )
 from brainpainter.table.shape import IMAGE_COLUMN, SAMPLE_ROWS, TableShape, detect_shape
@@ -42,31 +48,6 @@ __all__ = ["IMAGE_COLUMN", "MAX_BYTES", "CellProblem", "NameReport", "RegionTabl
            "read_table"]
 
 DEFAULT_ATLAS = "dk"
-MAX_IMAGE_NAME = 200
-MAX_PROBLEMS = 50
-
-
-#: How one input name was understood (with the input it came from): see
-#: :class:`brainpainter.table.names.Resolution`.
-NameReport = Resolution
-
-
-@dataclass(frozen=True)
-class CellProblem:
-    """A cell that stops the table from rendering: not a number, or infinite.
-
-    Attributes
-    ----------
-    message : str
-        The one-line error ``read_table`` raises for it.
-    """
-
-    source: str
-    where: str
-    column: str
-    value: str
-    problem: str
-    message: str
 
 
 @dataclass(frozen=True)
@@ -105,7 +86,7 @@ class RegionTable:
 
     images: tuple[str, ...]
     regions: tuple[str, ...]
-    values: np.ndarray
+    values: NDArray[Any]
     atlas: Atlas
     names: tuple[NameReport, ...] = ()
     source: str = ""
@@ -196,268 +177,11 @@ def summary_line(s: dict[str, Any]) -> str:
     )
 
 
-# -- one input ---------------------------------------------------------------------
-@dataclass
-class _Part:
-    source: str
-    format: str
-    shape: TableShape
-    images: list[str]
-    numbered: bool
-    columns: dict[str, tuple[np.ndarray, str]]  # key -> (values per image, input name)
-    names: list[NameReport]
-    problems: list[CellProblem]
-    notes: list[str]
-
-
-def _check_name(text: str, source: str, where: str, what: str) -> None:
-    if has_control(text):
-        raise BrainPainterError(
-            f"{source}: the {what} at {where} contains control characters ({text[:40]!r}); names may hold "
-            "letters, digits, spaces and punctuation only."
-        )
-
-
-def _image_names(raw: RawTable, shape: TableShape) -> tuple[list[str], bool]:
-    if shape.image_index is None:
-        return [str(i + 1) for i in range(len(raw.rows))], True
-    j = shape.image_index
-    out = []
-    for row in raw.rows:
-        cell = row[j]
-        if isinstance(cell, float) and cell.is_integer():
-            cell = int(cell)
-        out.append("" if cell is None else str(cell).strip())
-    _validate_images(out, raw.source, [raw.where(i) for i in range(len(out))], shape.image_column or "")
-    return out, False
-
-
-def _validate_images(images: list[str], source: str, where: list[str], column: str) -> None:
-    seen: dict[str, int] = {}
-    folded: dict[str, int] = {}
-    for i, name in enumerate(images):
-        if not name:
-            raise BrainPainterError(
-                f"{source}: {where[i]} has an empty image name in {column!r}; give every image a name."
-            )
-        _check_name(name, source, where[i], "image name")
-        if len(name) > MAX_IMAGE_NAME:
-            raise BrainPainterError(
-                f"{source}: the image name at {where[i]} is {len(name)} characters long; at most "
-                f"{MAX_IMAGE_NAME} are allowed (it becomes a file name). Shorten it."
-            )
-        if name in seen:
-            raise BrainPainterError(
-                f"{source}: image names must be unique; {name!r} appears at {where[seen[name]]} and "
-                f"{where[i]}."
-            )
-        if name.lower() in folded:
-            other = images[folded[name.lower()]]
-            raise BrainPainterError(
-                f"{source}: image names {other!r} and {name!r} differ only in case, so their files would "
-                "collide on macOS and Windows; make them differ in letters or digits."
-            )
-        seen[name] = i
-        folded[name.lower()] = i
-
-
-def _convert(cells: Sequence[Any], raw: RawTable, column: str, rows: Sequence[int],
-             problems: list[CellProblem], decimal: list[Any]) -> np.ndarray:
-    out = np.full(len(cells), np.nan)
-    decimal_at: dict[str, tuple[str, str, str]] = decimal[1]  # first cell with a decimal comma / point
-    for k, cell in enumerate(cells):
-        v = to_number(cell, raw.decimal_comma)
-        if v is None:
-            problem = "not a number"
-            hint = ("; the row repeats the header (two tables pasted together?)"
-                    if str(cell).strip() == column else "")
-            msg = (f"{raw.source}: column {column!r} {raw.where(rows[k])} holds {str(cell)[:60]!r}, which is "
-                   f"not a number{hint}; cells must be numbers or empty (empty = no data).")
-        elif math.isinf(v):
-            problem = "infinite"
-            msg = (f"{raw.source}: column {column!r} {raw.where(rows[k])} is infinite ({str(cell)[:30]!r}); "
-                   "cells must be finite numbers or empty (empty = no data).")
-        else:
-            if raw.decimal_comma and isinstance(cell, str):
-                if "," in cell:
-                    decimal[0] = True
-                    decimal_at.setdefault("comma", (str(cell).strip(), raw.where(rows[k]), column))
-                elif "." in cell:
-                    decimal_at.setdefault("point", (str(cell).strip(), raw.where(rows[k]), column))
-            out[k] = v
-            continue
-        if len(problems) < MAX_PROBLEMS:
-            problems.append(CellProblem(raw.source, raw.where(rows[k]), column, str(cell)[:60], problem, msg))
-        elif len(problems) == MAX_PROBLEMS:
-            problems.append(CellProblem(
-                raw.source, "", column, "", "more",
-                f"{raw.source}: more than {MAX_PROBLEMS} bad cells; fix the ones listed."))
-    return out
-
-
-class _Columns:
-    """Region key -> (values per image, input name), refusing a second value for one region."""
-
-    def __init__(self, source: str, what: str) -> None:
-        self.source, self.what = source, what
-        self.data: dict[str, tuple[np.ndarray, str]] = {}
-
-    def take(self, key: str, values: np.ndarray, name: str) -> None:
-        if key in self.data:
-            other = self.data[key][1]
-            raise BrainPainterError(
-                f"{self.source}: {self.what} {other!r} and {name!r} both name region {key!r}; keep one."
-            )
-        self.data[key] = (values, name)
-
-
-def _read_part(raw: RawTable, shape: TableShape, resolver: NameResolver) -> _Part:
-    source = raw.source
-    if not raw.rows:
-        raise BrainPainterError(
-            f"{source} has a header but no rows; add one row per image (or per region)."
-        )
-    for j, h in enumerate(raw.header):
-        _check_name(h, source, f"column {j + 1}", "column name")
-    problems: list[CellProblem] = []
-    decimal: list[Any] = [False, {}]
-    names: list[NameReport] = []
-    columns = _Columns(source, "columns" if shape.kind == "wide" else "names")
-    empty_columns: list[str] = []
-    if shape.kind == "wide":
-        images, numbered = _image_names(raw, shape)
-        seen_names: set[str] = set()
-        for j, h in enumerate(raw.header):
-            if j == shape.image_index:
-                continue
-            if h == "" and all(is_empty(row[j]) for row in raw.rows):
-                continue  # a blank column of a spreadsheet export
-            r = resolver.lookup(h)
-            if h in seen_names and r.status != REGION:
-                continue
-            seen_names.add(h)
-            names.append(replace(r, source=source))
-            if r.status != REGION:
-                continue
-            vals = _convert([row[j] for row in raw.rows], raw, h, range(len(raw.rows)), problems, decimal)
-            if not np.isfinite(vals).any() and not any(p.column == h for p in problems):
-                empty_columns.append(h)
-            for key in r.keys:
-                columns.take(key, vals, h)
-    elif shape.kind == "long":
-        names, images = _read_long(raw, shape, resolver, problems, decimal, columns)
-        numbered = False
-    else:
-        names, images = _read_transposed(raw, shape, resolver, problems, decimal, columns)
-        numbered = False
-    notes = []
-    if empty_columns:
-        notes.append(f"{source}: {len(empty_columns)} column(s) have no value in any row ({empty_columns[:3]}"
-                     f"{'...' if len(empty_columns) > 3 else ''}); their regions are drawn in the NaN colour")
-    at = decimal[1]
-    if "comma" in at and "point" in at:
-        (c_text, c_where, c_col), (p_text, p_where, p_col) = at["comma"], at["point"]
-        raise BrainPainterError(
-            f"{source}: decimal commas ({c_text!r}, column {c_col!r} {c_where}) and decimal points "
-            f"({p_text!r}, column {p_col!r} {p_where}) are mixed, so {p_text!r} could mean "
-            f"{p_text.replace('.', '')!r} (a thousands point); save the table with one decimal separator."
-        )
-    if decimal[0]:
-        notes.append(f"{source}: decimal commas read as decimal points")
-    return _Part(source, raw.format, shape, images, numbered, columns.data, names, problems, notes)
-
-
-def _read_long(raw: RawTable, shape: TableShape, resolver: NameResolver, problems: list[CellProblem],
-               decimal: list[bool], columns: _Columns) -> tuple[list[NameReport], list[str]]:
-    reg, val, img = shape.region_index, shape.value_index, shape.image_index
-    assert reg is not None and val is not None
-    value_name = shape.value_column or "value"
-    lookups: dict[str, Any] = {}
-    names: list[NameReport] = []
-    images: list[str] = []
-    image_where: list[str] = []
-    image_pos: dict[str, int] = {}
-    cells: dict[str, list[tuple[int, int]]] = {}  # key -> [(image index, row)]
-    first_name: dict[str, str] = {}
-    origin: dict[tuple[str, int], str] = {}
-    for i, row in enumerate(raw.rows):
-        cell = row[reg]
-        if is_empty(cell):
-            continue
-        name = str(cell).strip()
-        if name not in lookups:
-            _check_name(name, raw.source, raw.where(i), "region name")
-            r = resolver.lookup(name)
-            lookups[name] = r
-            names.append(replace(r, source=raw.source))
-        r = lookups[name]
-        if r.status != REGION:
-            continue
-        if img is None:
-            image = value_name
-        else:
-            c = row[img]
-            if isinstance(c, float) and c.is_integer():
-                c = int(c)
-            image = "" if c is None else str(c).strip()
-        if image not in image_pos:
-            image_pos[image] = len(images)
-            images.append(image)
-            image_where.append(raw.where(i))
-        k = image_pos[image]
-        for key in r.keys:
-            if (key, k) in origin:
-                hint = "" if img is not None else "; with several images per region give --image-column"
-                raise BrainPainterError(
-                    f"{raw.source}: region {key!r} appears twice for image {image!r} ({origin[(key, k)]} and "
-                    f"{raw.where(i)}){hint}."
-                )
-            origin[(key, k)] = raw.where(i)
-            cells.setdefault(key, []).append((k, i))
-            first_name.setdefault(key, name)
-    if img is not None:
-        _validate_images(images, raw.source, image_where, shape.image_column or "")
-    converted: dict[int, float] = {}
-    for key, pairs in cells.items():
-        todo = [i for _, i in pairs if i not in converted]
-        vals = _convert([raw.rows[i][val] for i in todo], raw, value_name, todo, problems, decimal)
-        converted.update(zip(todo, vals.tolist(), strict=True))
-        arr = np.full(len(images), np.nan)
-        for k, i in pairs:
-            arr[k] = converted[i]
-        columns.take(key, arr, first_name[key])
-    return names, images
-
-
-def _read_transposed(raw: RawTable, shape: TableShape, resolver: NameResolver, problems: list[CellProblem],
-                     decimal: list[bool], columns: _Columns) -> tuple[list[NameReport], list[str]]:
-    reg = shape.region_index
-    images = [h for j, h in enumerate(raw.header) if j != reg]
-    _validate_images(images, raw.source, [f"column {j + 1}" for j in range(len(raw.header)) if j != reg],
-                     "header")
-    names: list[NameReport] = []
-    for i, row in enumerate(raw.rows):
-        cell = row[reg]
-        if is_empty(cell):
-            continue
-        name = str(cell).strip()
-        _check_name(name, raw.source, raw.where(i), "region name")
-        r = resolver.lookup(name)
-        names.append(replace(r, source=raw.source))
-        if r.status != REGION:
-            continue
-        vals = _convert([c for j, c in enumerate(row) if j != reg], raw, name, [i] * (len(row) - 1),
-                        problems, decimal)
-        for key in r.keys:
-            columns.take(key, vals, name)
-    return names, images
-
-
 # -- atlas ---------------------------------------------------------------------------
 def installed_atlases() -> list[Atlas]:
     """Installed atlases that load, ``dk`` first (the historical default)."""
     from brainpainter.atlas import registry
-    out = []
+    out: list[Atlas] = []
     names = registry.atlases.names()
     for name in sorted(names, key=lambda n: (n != DEFAULT_ATLAS, n)):
         try:
@@ -482,15 +206,9 @@ def _candidate_names(raw: RawTable) -> list[str]:
 
 
 # -- public ---------------------------------------------------------------------------
-def inspect_table(
-    data: Any,
-    atlas: Atlas | str | None = None,
-    *,
-    image_column: str | None = None,
-    value: str | None = None,
-    region_column: str | None = None,
-    strict: bool = False,
-) -> RegionTable:
+def inspect_table(data: Any, atlas: Atlas | str | None = None, *, image_column: str | None = None,
+                  value: str | None = None, region_column: str | None = None,
+                  strict: bool = False) -> RegionTable:
     """Read a table and resolve it, collecting every problem instead of stopping at the first.
 
     Parameters and layout rules as in :func:`read_table`. Errors that leave
@@ -503,7 +221,7 @@ def inspect_table(
     -------
     RegionTable
     """
-    from brainpainter.atlas.model import get_atlas
+    from brainpainter.atlas.registry import get_atlas
 
     inputs = list(data) if isinstance(data, list | tuple) else [data]
     if not inputs:
@@ -530,15 +248,15 @@ def inspect_table(
         try:
             shape = detect_shape(raw, resolver, image_column=image_column, region_column=region_column,
                                  value_column=value)
-        except BrainPainterError as exc:
-            if guess is None and "names a" in str(exc):
+        except NoRegionColumnError as exc:
+            if guess is None:
                 other = infer_atlas(_candidate_names(raw), installed_atlases())
                 if other is not None and other.atlas.name != atlas.name:
-                    raise BrainPainterError(
+                    raise NoRegionColumnError(
                         f"{exc} The names fit atlas {other.atlas.name!r}: give --atlas {other.atlas.name}."
                     ) from None
             raise
-        part = _read_part(raw, shape, resolver)
+        part = read_part(raw, shape, resolver)
         part.shape = _with_flavour(shape, part.names, raw)
         parts.append(part)
     table = _merge(parts, atlas, guess)
@@ -580,14 +298,10 @@ def _no_regions_error(table: RegionTable, resolver: NameResolver) -> str:
 
 
 def _replace(table: RegionTable, **changes: Any) -> RegionTable:
-    import dataclasses
-
     return dataclasses.replace(table, **changes)
 
 
 def _with_flavour(shape: TableShape, names: list[NameReport], raw: RawTable) -> TableShape:
-    import dataclasses
-
     if shape.flavour:
         return shape
     first = raw.header[0].lower() if raw.header else ""
@@ -604,7 +318,7 @@ def _with_flavour(shape: TableShape, names: list[NameReport], raw: RawTable) -> 
     return dataclasses.replace(shape, flavour=flavour)
 
 
-def _merge(parts: list[_Part], atlas: Atlas, guess: AtlasGuess | None) -> RegionTable:
+def _merge(parts: list[Part], atlas: Atlas, guess: AtlasGuess | None) -> RegionTable:
     notes = [n for p in parts for n in p.notes]
     if len(parts) == 1:
         p = parts[0]
@@ -637,7 +351,7 @@ def _merge(parts: list[_Part], atlas: Atlas, guess: AtlasGuess | None) -> Region
                     "so they would be two half-empty images; spell the image names the same in every input."
                 )
         pos = {name: k for k, name in enumerate(images)}
-        owner: dict[str, _Part] = {}
+        owner: dict[str, Part] = {}
         keys, cols = [], []
         for p in parts:
             index = np.array([pos[i] for i in p.images], dtype=int)
@@ -673,15 +387,9 @@ def _merge(parts: list[_Part], atlas: Atlas, guess: AtlasGuess | None) -> Region
     )
 
 
-def read_table(
-    data: Any,
-    atlas: Atlas | str | None = None,
-    *,
-    image_column: str | None = None,
-    value: str | None = None,
-    region_column: str | None = None,
-    strict: bool = False,
-) -> RegionTable:
+def read_table(data: Any, atlas: Atlas | str | None = None, *, image_column: str | None = None,
+               value: str | None = None, region_column: str | None = None, strict: bool = False,
+               ) -> RegionTable:
     """Read a region-value table and resolve its names against an atlas.
 
     Parameters

@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.table.names import REGION, UNMATCHED, NameResolver
 from brainpainter.table.region_table import RegionTable, installed_atlases
@@ -34,7 +35,7 @@ def _closest(name: str, table: RegionTable) -> dict[str, Any]:
     return {"closest": resolver.suggest(name), "region_of_atlas": elsewhere}
 
 
-def _scale_check(values: np.ndarray, scale_options: dict[str, Any]) -> dict[str, Any]:
+def _scale_check(values: NDArray[Any], scale_options: dict[str, Any]) -> dict[str, Any]:
     from brainpainter.color.scale import make_scale
 
     scale = make_scale(data=values, **scale_options)
@@ -208,7 +209,7 @@ def input_warnings(summary: dict[str, Any], max_names: int = 8) -> list[str]:
         The notes (empty columns, decimal commas, images missing from an
         input) and the unmatched names, each with its closest region names.
     """
-    from brainpainter.atlas.model import get_atlas
+    from brainpainter.atlas.registry import get_atlas
     from brainpainter.errors import BrainPainterError
 
     lines = list(summary.get("notes", []))

@@ -18,9 +18,16 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from typing import Any
 
-from brainpainter.errors import AmbiguousColumnError, BrainPainterError, ColumnNotFoundError, nearest
-from brainpainter.io.readers import RawTable
+from brainpainter.errors import (
+    AmbiguousColumnError,
+    BrainPainterError,
+    ColumnNotFoundError,
+    NoRegionColumnError,
+    nearest,
+)
+from brainpainter.io.rawtable import Cell, RawTable
 from brainpainter.table.cells import is_empty, is_text, to_number
 from brainpainter.table.names import REGION, UNMATCHED, NameResolver
 
@@ -86,7 +93,7 @@ class TableShape:
             text = f"transposed (regions in rows from {self.region_column!r}, one column per image)"
         return text + (f", {self.flavour}" if self.flavour else "")
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         return {"kind": self.kind, "image_column": self.image_column, "region_column": self.region_column,
                 "value_column": self.value_column, "flavour": self.flavour, "why": self.why,
                 "description": self.describe()}
@@ -112,7 +119,7 @@ def find_column(raw: RawTable, name: str, option: str) -> int:
     )
 
 
-def _sample(raw: RawTable, j: int) -> list:
+def _sample(raw: RawTable, j: int) -> list[Cell]:
     return [row[j] for row in raw.rows[:SAMPLE_ROWS]]
 
 
@@ -152,14 +159,8 @@ def _image_column_wide(raw: RawTable, resolver: NameResolver) -> tuple[int | Non
     return None, "no image-name column, rows numbered"
 
 
-def detect_shape(
-    raw: RawTable,
-    resolver: NameResolver,
-    *,
-    image_column: str | None = None,
-    region_column: str | None = None,
-    value_column: str | None = None,
-) -> TableShape:
+def detect_shape(raw: RawTable, resolver: NameResolver, *, image_column: str | None = None,
+                 region_column: str | None = None, value_column: str | None = None) -> TableShape:
     """Recognise the layout of `raw`.
 
     Parameters
@@ -213,7 +214,7 @@ def _long(raw: RawTable, resolver: NameResolver, img: int | None, region_column:
             candidates = named if len(named) == 1 else candidates
         if not candidates:
             sample = list(header[:3])
-            raise BrainPainterError(
+            raise NoRegionColumnError(
                 f"{raw.source}: no column names a {resolver.atlas.name} region, nor does any column hold "
                 f"region names (columns start {sample}); use region names like {resolver.atlas.keys[:2]} as "
                 "column names, or give a long table's region column with --region-column."

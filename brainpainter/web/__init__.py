@@ -16,7 +16,9 @@ pool
     Starts, watches and restarts those processes; re-queues jobs of dead
     workers; removes expired results.
 app
-    The ASGI application (:func:`create_app`).
+    The ASGI application (:func:`create_app`): routes and error answers.
+guard
+    Its middleware: security headers, body size limits, rate limit, access log.
 
 Only the command's module is imported by ``brainpainter --help``; FastAPI,
 uvicorn and bpy load when the server starts.

@@ -18,17 +18,14 @@ API (all JSON unless said; errors are ``{"error": "one line"}`` with the CLI's m
     GET  /api/jobs/{id}/files/{name}   one of the job's own files (?download=1: as attachment)
 
 Every response carries a strict Content-Security-Policy; every request is
-logged as one JSON line on the ``brainpainter.web.access`` logger.
+logged as one JSON line on the ``brainpainter.web.access`` logger (both by
+:class:`brainpainter.web.guard.Guard`).
 """
 
 from __future__ import annotations
 
-import json
 import logging
-import secrets
-import threading
-import time
-from collections.abc import Awaitable, Callable
+from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from importlib import resources
 from typing import Any, Literal
@@ -43,26 +40,14 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.web.config import ServerConfig
+from brainpainter.web.guard import Guard
 from brainpainter.web.options import RenderOptions, TableOptions, prepare, table_stream, upload_name
 from brainpainter.web.pool import Pool, PreviewBusy, PreviewUnavailable, preview_settings
 from brainpainter.web.store import LimitError, Store, valid_id
 
-access_log = logging.getLogger("brainpainter.web.access")
 log = logging.getLogger("brainpainter.web")
 
-CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' blob: data:; "
-       "connect-src 'self'; font-src 'self'; form-action 'none'; base-uri 'none'; frame-ancestors 'none'")
-SECURITY_HEADERS = [
-    (b"content-security-policy", CSP.encode()),
-    (b"x-content-type-options", b"nosniff"),
-    (b"x-frame-options", b"DENY"),
-    (b"referrer-policy", b"no-referrer"),
-    (b"cross-origin-opener-policy", b"same-origin"),
-    (b"cross-origin-resource-policy", b"same-origin"),
-]
-JSON_BODY_LIMIT = 64 * 1024
 MAX_LISTED_IMAGES = 5000  # image names sent to the page for its row chooser
-STATE_CHANGING = ("POST", "PUT", "DELETE", "PATCH")
 
 
 class ApiError(Exception):
@@ -114,117 +99,6 @@ class JobRequest(CheckRequest):
     movie: MovieParams = Field(default_factory=MovieParams)
 
 
-# -- middleware ---------------------------------------------------------------------------
-class _TooLarge(StarletteHTTPException):
-    """A request body over its limit (raised while it is read: the app answers 413 with the message)."""
-
-    def __init__(self, what: str, limit: int) -> None:
-        super().__init__(413, f"the {what} is larger than this server's limit; at most "
-                              f"{limit / 2**20:.3g} MB is read, to keep memory bounded. Split the table or "
-                              "remove unneeded columns.")
-
-
-class RateLimiter:
-    """Token bucket per client: `per_minute` state-changing requests a minute, bursts up to a quarter."""
-
-    def __init__(self, per_minute: int) -> None:
-        self.rate = per_minute / 60.0
-        self.burst = max(5.0, per_minute / 4)
-        self._buckets: dict[str, tuple[float, float]] = {}
-        self._lock = threading.Lock()
-
-    def allow(self, client: str) -> float:
-        """0 when allowed; else the seconds to wait."""
-        now = time.monotonic()
-        with self._lock:
-            if len(self._buckets) > 10_000:  # keep memory bounded: forget full buckets
-                self._buckets = {k: v for k, v in self._buckets.items()
-                                 if (now - v[1]) * self.rate + v[0] < self.burst}
-            tokens, last = self._buckets.get(client, (self.burst, now))
-            tokens = min(self.burst, tokens + (now - last) * self.rate)
-            if tokens < 1.0:
-                self._buckets[client] = (tokens, now)
-                return (1.0 - tokens) / self.rate
-            self._buckets[client] = (tokens - 1.0, now)
-            return 0.0
-
-
-class Guard:
-    """Pure ASGI middleware: security headers, body size limits, rate limit, access log."""
-
-    def __init__(self, app: Any, config: ServerConfig) -> None:
-        self.app = app
-        self.config = config
-        self.limiter = RateLimiter(config.rate_per_minute)
-
-    async def __call__(self, scope: dict, receive: Callable, send: Callable) -> None:
-        if scope["type"] != "http":
-            await self.app(scope, receive, send)
-            return
-        t0 = time.perf_counter()
-        rid = secrets.token_hex(6)
-        client = (scope.get("client") or ("-", 0))[0]
-        method, path = scope["method"], scope["path"]
-        is_upload = path == "/api/uploads"
-        limit = self.config.max_upload_bytes if is_upload else JSON_BODY_LIMIT
-        what = "upload" if is_upload else "request body"
-        state = {"status": 0, "bytes": 0, "started": False}
-
-        async def send_wrapper(message: dict) -> None:
-            if message["type"] == "http.response.start":
-                state["status"], state["started"] = message["status"], True
-                headers = [h for h in message.get("headers", []) if h[0].lower() != b"server"]
-                headers += [*SECURITY_HEADERS, (b"x-request-id", rid.encode())]
-                if path.startswith("/api/"):
-                    headers.append((b"cache-control", b"no-store"))
-                message = {**message, "headers": headers}
-            elif message["type"] == "http.response.body":
-                state["bytes"] += len(message.get("body", b""))
-            await send(message)
-
-        received = 0
-
-        async def receive_wrapper() -> dict:
-            nonlocal received
-            message = await receive()
-            if message["type"] == "http.request":
-                received += len(message.get("body", b""))
-                if received > limit:
-                    raise _TooLarge(what, limit)
-            return message
-
-        try:
-            length = dict(scope.get("headers", [])).get(b"content-length")
-            if length is not None and length.isdigit() and int(length) > limit:
-                raise _TooLarge(what, limit)
-            if method in STATE_CHANGING and path.startswith("/api/"):
-                wait = self.limiter.allow(client)
-                if wait:
-                    await _send_json(send_wrapper, 429, {"error": f"too many requests from {client}; at most "
-                                                         f"{self.config.rate_per_minute} a minute. Retry in "
-                                                         f"{wait:.0f} s."},
-                                     {"retry-after": str(max(1, round(wait)))})
-                    return
-            await self.app(scope, receive_wrapper, send_wrapper)
-        except _TooLarge as exc:
-            if not state["started"]:
-                await _send_json(send_wrapper, 413, {"error": exc.detail})
-        finally:
-            access_log.info(json.dumps({
-                "t": round(time.time(), 3), "id": rid, "client": client, "method": method, "path": path,
-                "status": state["status"], "ms": round((time.perf_counter() - t0) * 1000, 1),
-                "bytes_in": received, "bytes_out": state["bytes"]}))
-
-
-async def _send_json(send: Callable[[dict], Awaitable[None]], status: int, body: dict,
-                     headers: dict[str, str] | None = None) -> None:
-    raw = json.dumps(body).encode()
-    hdrs = [(b"content-type", b"application/json"), (b"content-length", str(len(raw)).encode())]
-    hdrs += [(k.encode(), v.encode()) for k, v in (headers or {}).items()]
-    await send({"type": "http.response.start", "status": status, "headers": hdrs})
-    await send({"type": "http.response.body", "body": raw})
-
-
 # -- the app ------------------------------------------------------------------------------
 def _static_dir() -> Any:
     return resources.files("brainpainter.web") / "static"
@@ -237,7 +111,7 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
     pool = Pool(config, store)
 
     @asynccontextmanager
-    async def lifespan(app: FastAPI):
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         pool.start()
         try:
             yield
@@ -249,6 +123,15 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
     app.state.config, app.state.store, app.state.pool = config, store, pool
     app.add_middleware(Guard, config=config)
 
+    _add_error_handlers(app)
+    _add_page_and_probes(app, config, store, pool)
+    _add_table_routes(app, config, store, pool)
+    _add_job_routes(app, config, store)
+    return app
+
+
+def _add_error_handlers(app: FastAPI) -> None:
+    """Every error becomes ``{"error": "one line"}`` with its status."""
     @app.exception_handler(BrainPainterError)
     async def _bp_error(request: Request, exc: BrainPainterError) -> JSONResponse:
         return JSONResponse({"error": _one_line(exc)}, status_code=400)
@@ -272,7 +155,9 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
         return JSONResponse({"error": f"internal error: {type(exc).__name__} (logged on the server)"},
                             status_code=500)
 
-    # -- page and probes --------------------------------------------------------------------
+
+def _add_page_and_probes(app: FastAPI, config: ServerConfig, store: Store, pool: Pool) -> None:
+    """``/``, ``/static``, ``/healthz``, ``/readyz`` and ``/api/meta``."""
     @app.get("/", include_in_schema=False)
     async def index() -> Response:
         html = (_static_dir() / "index.html").read_bytes()
@@ -307,7 +192,9 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
         """What the page needs to draw its form: choices, defaults and limits."""
         return await run_in_threadpool(_meta, config)
 
-    # -- uploads and checks -------------------------------------------------------------------
+
+def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Pool) -> None:
+    """Uploads, checks and previews of a table."""
     @app.post("/api/uploads", tags=["api"], openapi_extra={"requestBody": {
         "required": True, "content": {"application/octet-stream": {"schema": {"type": "string",
                                                                               "format": "binary"}}}}})
@@ -355,7 +242,9 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
             raise ApiError(503, str(exc), {"retry-after": "5"}) from None
         return Response(png, media_type="image/png", headers={"x-render-ms": str(ms)})
 
-    # -- jobs ----------------------------------------------------------------------------------
+
+def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
+    """Jobs: submit, status, cancel, files."""
     @app.post("/api/jobs", tags=["api"], status_code=202)
     async def submit(body: JobRequest, request: Request) -> dict[str, Any]:
         """Queue a job: ``images`` (every row from every view, as PNGs plus a zip), ``figure`` (PDF/PNG)
@@ -401,8 +290,6 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
             raise ApiError(410, "the job's files have expired or were removed; render again.")
         return FileResponse(path, filename=file_name if download else None,
                             content_disposition_type="attachment" if download else "inline")
-
-    return app
 
 
 # -- helpers ------------------------------------------------------------------------------------

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -36,7 +37,7 @@ CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 @click.option("--log-level", default="info", show_default=True,
               type=click.Choice(["debug", "info", "warning", "error"]))
 def serve(host: str, port: int, data_dir: Path | None, workers: int, no_preview: bool, renderer: str,
-          log_level: str, **limits: float) -> None:
+          log_level: str, **limits: Any) -> None:
     """Serve the web page and JSON API: upload a table, check it, preview it, render it.
 
     \b

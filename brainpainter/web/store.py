@@ -201,10 +201,7 @@ class Store:
 
     def get_upload(self, upload_id: str) -> tuple[str, bytes] | None:
         """``(name, bytes)`` of a live upload, or None."""
-        if not valid_id(upload_id):
-            return None
-        with self.connect() as db:
-            row = db.execute("SELECT name, expires FROM uploads WHERE id = ?", (upload_id,)).fetchone()
+        row = self._row("SELECT name, expires FROM uploads WHERE id = ?", upload_id)
         if row is None or row["expires"] < time.time():
             return None
         try:
@@ -243,11 +240,17 @@ class Store:
         return job_id
 
     def get(self, job_id: str) -> dict[str, Any] | None:
-        if not valid_id(job_id):
+        """The job `job_id` (status, progress, files...), or None."""
+        row = self._row("SELECT * FROM jobs WHERE id = ?", job_id)
+        return None if row is None else _job(row)
+
+    def _row(self, sql: str, row_id: str) -> sqlite3.Row | None:
+        """The row that `sql` (``... WHERE id = ?``) selects, or None (also for a malformed id)."""
+        if not valid_id(row_id):
             return None
         with self.connect() as db:
-            row = db.execute("SELECT * FROM jobs WHERE id = ?", (job_id,)).fetchone()
-        return None if row is None else _job(row)
+            row: sqlite3.Row | None = db.execute(sql, (row_id,)).fetchone()
+        return row
 
     def cancel(self, job_id: str) -> bool:
         """Cancel a queued or running job (its worker stops at the next image)."""
@@ -310,7 +313,7 @@ class Store:
         with self.transaction() as db:
             sql = ("UPDATE jobs SET status = 'failed', finished = ?, expires = ?, error = ?, "
                    "attempt = attempt + 1 WHERE id = ? AND status = 'running'")
-            args: tuple = (now, now + ttl_s, error[:500], job_id)
+            args: tuple[Any, ...] = (now, now + ttl_s, error[:500], job_id)
             if attempt is not None:
                 sql += " AND attempt = ?"
                 args += (attempt,)
@@ -327,7 +330,8 @@ class Store:
         """
         now = time.time()
         with self.transaction() as db:
-            sql, args = "SELECT id, attempt FROM jobs WHERE status = 'running'", ()
+            sql = "SELECT id, attempt FROM jobs WHERE status = 'running'"
+            args: tuple[str, ...] = ()
             if worker is not None:
                 sql, args = sql + " AND worker = ?", (worker,)
             rows = db.execute(sql, args).fetchall()

@@ -55,7 +55,7 @@ class PainterCache:
 
     def warm(self, width: int, height: int) -> None:
         """Load the renderer and the default scene (dk, pial, default settings at this size)."""
-        from brainpainter.atlas.model import get_atlas
+        from brainpainter.atlas.registry import get_atlas
         from brainpainter.rendering.settings import RenderSettings
         from brainpainter.rendering.views import get_view
 
@@ -240,7 +240,7 @@ def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int
     ``("ok", png_bytes, milliseconds)`` or ``("error", one_line_message, 0)``.
     """
     _set_threads(lp_threads)
-    from brainpainter.atlas.model import get_atlas
+    from brainpainter.atlas.registry import get_atlas
     from brainpainter.errors import BrainPainterError
     from brainpainter.io.output import png_bytes
 

@@ -22,10 +22,14 @@ The output is byte-identical for identical inputs.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
+from brainpainter.atlas.meshing import Structure
 from brainpainter.atlas.template import FORMAT, FORMAT_VERSION, HEMIS, SURFACES
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter_builder import cortex, glass, report, sources, subcortical, writer
@@ -41,11 +45,11 @@ INFLATED_GAP_MM = 10.0
 DEFAULT_ATLASES = ("dk", "destrieux", "dkt")
 
 
-def _hex(rgb) -> str:
+def _hex(rgb: Sequence[int]) -> str:
     return "#{:02x}{:02x}{:02x}".format(*(int(c) for c in rgb[:3]))
 
 
-def _bounds(arrays: list[np.ndarray]) -> list[list[float]]:
+def _bounds(arrays: list[NDArray[Any]]) -> list[list[float]]:
     stacked = np.concatenate([a.reshape(-1, 3) for a in arrays])
     return [stacked.min(axis=0).astype(float).tolist(), stacked.max(axis=0).astype(float).tolist()]
 
@@ -64,7 +68,8 @@ def _region_names(per_hemi: dict[str, cortex.LabelledSurface]) -> list[str]:
     return sorted(out, key=lambda n: (order.get(n, len(order)), n))
 
 
-def _check_args(atlases, surfaces, target_faces) -> tuple[tuple[str, ...], tuple[str, ...]]:
+def _check_args(atlases: Sequence[str], surfaces: Sequence[str],
+                target_faces: int | None) -> tuple[tuple[str, ...], tuple[str, ...]]:
     atlases = tuple(dict.fromkeys(atlases))
     surfaces = tuple(dict.fromkeys(surfaces))
     if not atlases:
@@ -86,12 +91,9 @@ def _check_args(atlases, surfaces, target_faces) -> tuple[tuple[str, ...], tuple
 def build_template(subject_dir: str | Path, out_dir: str | Path, *,
                    atlases: tuple[str, ...] | list[str] = DEFAULT_ATLASES,
                    surfaces: tuple[str, ...] | list[str] = SURFACES,
-                   target_faces: int | None = DEFAULT_TARGET_FACES,
-                   name: str | None = None,
-                   gcs_dir: str | Path | None = None,
-                   progress: bool = True,
-                   freesurfer_version: str | None = None,
-                   max_size_mb: float | None = DEFAULT_MAX_SIZE_MB,
+                   target_faces: int | None = DEFAULT_TARGET_FACES, name: str | None = None,
+                   gcs_dir: str | Path | None = None, progress: bool = True,
+                   freesurfer_version: str | None = None, max_size_mb: float | None = DEFAULT_MAX_SIZE_MB,
                    license_file: str | Path | None = None,
                    expected_regions: dict[str, int] | None = None) -> Path:
     """Build a template directory from a FreeSurfer subject.
@@ -125,7 +127,7 @@ def build_template(subject_dir: str | Path, out_dir: str | Path, *,
     license_file : path-like, optional
         FreeSurfer's licence text (default: found beside the subjects folder
         or in ``$FREESURFER_HOME``); its Part B goes into the template.
-    expected_regions : dict of str to int, optional
+    expected_regions : dict[str, Any] of str to int, optional
         Regions per hemisphere each label set must have (e.g. ``{"dk": 34}``);
         checked in the validation step.
 
@@ -140,134 +142,151 @@ def build_template(subject_dir: str | Path, out_dir: str | Path, *,
         Bad or missing input, or a template that fails validation; nothing
         is left at `out_dir` (or its previous content is untouched).
     """
-    from tqdm import tqdm
-
     atlases, surfaces = _check_args(atlases, surfaces, target_faces)
     writer.check_out_dir(out_dir)  # before minutes of work: never replace what brainpainter did not make
-    subject = sources.Subject(subject_dir, gcs_dir=gcs_dir)
-    for label_set in atlases:
-        subject.check_label_set(label_set)
+    subject = _subject(subject_dir, gcs_dir, atlases)
     version = freesurfer_version or sources.freesurfer_version(subject.path)
     name = name or subject.name
-    n_steps = 2 + 2 * len(atlases) + 1 + 2 + 2
-    bar = tqdm(total=n_steps, desc=f"template {name}", unit="step", disable=not progress,
-               leave=False, dynamic_ncols=True)
-
-    def step(what: str) -> None:
-        bar.set_postfix_str(what, refresh=True)
-
+    step = _Steps(f"template {name}", 2 + 2 * len(atlases) + 1 + 2 + 2, progress)
     try:
-        # 1. read ---------------------------------------------------------------
-        surf: dict[str, dict[str, tuple[np.ndarray, np.ndarray]]] = {}
-        for hemi in HEMIS:
-            step(f"read {hemi} surfaces")
-            surf[hemi] = {s: subject.surface(hemi, s) for s in surfaces}
-            for s in surfaces:
-                if not np.array_equal(surf[hemi][s][1], surf[hemi]["pial"][1]):
-                    raise BrainPainterError(
-                        f"{subject.path / 'surf' / f'{hemi}.{s}'} does not share the triangles "
-                        f"of {hemi}.pial; all surfaces of a hemisphere must come from one recon-all run")
-            bar.update()
-        sulc = {h: subject.sulc(h) for h in HEMIS}
-        offsets = {h: {} for h in HEMIS}
-        if "inflated" in surfaces:
-            off = cortex.inflated_offsets(surf["lh"]["inflated"][0], surf["rh"]["inflated"][0],
-                                          gap=INFLATED_GAP_MM)
-            offsets = {h: {"inflated": off[h]} for h in HEMIS}
-
-        # 2. cortex ---------------------------------------------------------------
-        meshes: dict[str, dict[str, cortex.LabelledSurface]] = {}
-        label_sources: dict[str, list[str]] = {}
-        for label_set in atlases:
-            meshes[label_set] = {}
-            label_sources[label_set] = []
-            for hemi in HEMIS:
-                step(f"{label_set} {hemi}: labels")
-                annot = subject.annotation(hemi, label_set)
-                label_sources[label_set].append(annot.source)
-                step(f"{label_set} {hemi}: split and decimate")
-                meshes[label_set][hemi] = cortex.build_labelled_surface(
-                    surf[hemi], annot.labels, annot.names, annot.ctab, target_faces,
-                    offsets=offsets[hemi], sulc=sulc[hemi])
-                bar.update()
-
-        # 3. subcortical ----------------------------------------------------------
-        step("read aseg")
-        aseg, vox2ras, voxel_volume = subject.aseg()
-        structures = subcortical.build_structures(
-            aseg, vox2ras, voxel_volume, progress=lambda s: step(f"subcortical {s}"))
-        del aseg
-        bar.update()
-
-        # 4. glass ----------------------------------------------------------------
-        hulls = {}
-        for hemi in HEMIS:
-            step(f"glass {hemi}")
-            hulls[hemi] = glass.pial_hull(*surf[hemi]["pial"], target_faces=GLASS_FACES)
-            bar.update()
-
-        # 5. write + 6. validate ----------------------------------------------------
+        surf, sulc, offsets = _read_surfaces(subject, surfaces, step)
+        meshes, label_sources = _cortex(subject, atlases, surf, sulc, offsets, target_faces, step)
+        structures = _subcortical(subject, step)
+        hulls = _glass(surf, step)
         with writer.staged_dir(out_dir) as stage:
             step("write")
             manifest = _write(stage, name=name, subject=subject, version=version,
                               surfaces=surfaces, target_faces=target_faces, meshes=meshes,
                               label_sources=label_sources, offsets=offsets,
                               structures=structures, hulls=hulls, license_file=license_file)
-            bar.update()
+            step.done()
             step("validate")
-            problems = report.template_problems(stage, max_size_mb=max_size_mb)
-            for label_set, n in (expected_regions or {}).items():
-                got = len(manifest["labels"].get(label_set, {}).get("regions", []))
-                if label_set in manifest["labels"] and got != n:
-                    problems.append(f"label set {label_set!r} has {got} regions per hemisphere, "
-                                    f"expected {n}")
-            if problems:
-                raise BrainPainterError(
-                    f"template {name!r} from {subject.path} failed validation: " + "; ".join(problems))
+            _validate(stage, manifest, name, subject, max_size_mb, expected_regions)
             del manifest
-            bar.update()
+            step.done()
     finally:
-        bar.close()
+        step.close()
     return Path(out_dir).expanduser().absolute()
 
 
-def _write(stage: Path, *, name, subject, version, surfaces, target_faces, meshes, label_sources,
-           offsets, structures, hulls, license_file) -> dict:
-    labels_entry: dict = {}
-    all_vertices: dict[str, list[np.ndarray]] = {s: [] for s in surfaces}
-    totals = {"cortex": 0, "subcortical": 0, "glass": 0}
-    for label_set, per_hemi in meshes.items():
-        regions = _region_names(per_hemi)
-        entry = {"source": ", ".join(label_sources[label_set]), "regions": regions, "cortex": {}}
-        for hemi in HEMIS:
-            m = per_hemi[hemi]
-            file = f"cortex-{hemi}-{label_set}.npz"
-            arrays = {"faces": m.faces, "face_label": m.face_label}
-            arrays.update({s: m.vertices[s] for s in surfaces})
-            arrays["source_vertex"] = m.source_vertex
-            arrays["vertex_label"] = m.vertex_label
-            arrays["boundary_t"] = m.boundary_t
-            if m.sulc is not None:
-                arrays["sulc"] = m.sulc
-            writer.save_npz(stage / file, arrays)
-            for s in surfaces:
-                all_vertices[s].append(m.vertices[s])
-            counts = np.bincount(m.face_label.astype(np.int64), minlength=len(m.names))
-            entry["cortex"][hemi] = {
-                "file": file,
-                "names": list(m.names),
-                "colors": [_hex(c) for c in m.colors],
-                "n_vertices": len(m.source_vertex),
-                "n_faces": len(m.faces),
-                "n_source_faces": m.n_source_faces,
-                "open_edges": cortex.open_edge_count(m.faces),
-                "self_intersecting_faces": {s: {"decimated": b, "template": a}
-                                            for s, (b, a) in (m.self_intersections or {}).items()},
-                "region_faces": {n: int(counts[i]) for i, n in enumerate(m.names) if counts[i]},
-            }
-            totals["cortex"] += len(m.faces)
-        labels_entry[label_set] = entry
+def _subject(subject_dir: str | Path, gcs_dir: str | Path | None,
+             atlases: tuple[str, ...]) -> sources.Subject:
+    """The FreeSurfer subject, refused before any work when it lacks a label set's sources."""
+    subject = sources.Subject(subject_dir, gcs_dir=gcs_dir)
+    for label_set in atlases:
+        subject.check_label_set(label_set)
+    return subject
 
+
+class _Steps:
+    """The progress bar: one tick per finished step, the current step's name beside it."""
+
+    def __init__(self, desc: str, total: int, show: bool) -> None:
+        from tqdm import tqdm
+
+        self.bar = tqdm(total=total, desc=desc, unit="step", disable=not show, leave=False,
+                        dynamic_ncols=True)
+
+    def __call__(self, what: str) -> None:
+        self.bar.set_postfix_str(what, refresh=True)
+
+    def done(self) -> None:
+        self.bar.update()
+
+    def close(self) -> None:
+        self.bar.close()
+
+
+Surfaces = dict[str, dict[str, tuple[NDArray[Any], NDArray[Any]]]]
+
+
+def _read_surfaces(subject: sources.Subject, surfaces: tuple[str, ...], step: _Steps) -> tuple[
+        Surfaces, dict[str, Any], dict[str, dict[str, NDArray[Any]]]]:
+    """Surfaces (vertices, faces) per hemisphere, sulcal depth, and the inflated hemispheres' offsets."""
+    surf: Surfaces = {}
+    for hemi in HEMIS:
+        step(f"read {hemi} surfaces")
+        surf[hemi] = {s: subject.surface(hemi, s) for s in surfaces}
+        for s in surfaces:
+            if not np.array_equal(surf[hemi][s][1], surf[hemi]["pial"][1]):
+                raise BrainPainterError(
+                    f"{subject.path / 'surf' / f'{hemi}.{s}'} does not share the triangles "
+                    f"of {hemi}.pial; all surfaces of a hemisphere must come from one recon-all run")
+        step.done()
+    sulc = {h: subject.sulc(h) for h in HEMIS}
+    offsets: dict[str, dict[str, NDArray[Any]]] = {h: {} for h in HEMIS}
+    if "inflated" in surfaces:
+        off = cortex.inflated_offsets(surf["lh"]["inflated"][0], surf["rh"]["inflated"][0],
+                                      gap=INFLATED_GAP_MM)
+        offsets = {h: {"inflated": off[h]} for h in HEMIS}
+    return surf, sulc, offsets
+
+
+def _cortex(subject: sources.Subject, atlases: tuple[str, ...], surf: Surfaces, sulc: dict[str, Any],
+            offsets: dict[str, dict[str, NDArray[Any]]], target_faces: int | None, step: _Steps) -> tuple[
+        dict[str, dict[str, cortex.LabelledSurface]], dict[str, list[str]]]:
+    """One labelled, decimated mesh per label set and hemisphere, and the annotations they came from."""
+    meshes: dict[str, dict[str, cortex.LabelledSurface]] = {}
+    label_sources: dict[str, list[str]] = {}
+    for label_set in atlases:
+        meshes[label_set] = {}
+        label_sources[label_set] = []
+        for hemi in HEMIS:
+            step(f"{label_set} {hemi}: labels")
+            annot = subject.annotation(hemi, label_set)
+            label_sources[label_set].append(annot.source)
+            step(f"{label_set} {hemi}: split and decimate")
+            meshes[label_set][hemi] = cortex.build_labelled_surface(
+                surf[hemi], annot.labels, annot.names, annot.ctab, target_faces,
+                offsets=offsets[hemi], sulc=sulc[hemi])
+            step.done()
+    return meshes, label_sources
+
+
+def _subcortical(subject: sources.Subject, step: _Steps) -> list[Structure]:
+    """Meshes of the aseg structures."""
+    step("read aseg")
+    aseg, vox2ras, voxel_volume = subject.aseg()
+    structures = subcortical.build_structures(
+        aseg, vox2ras, voxel_volume, progress=lambda s: step(f"subcortical {s}"))
+    step.done()
+    return structures
+
+
+def _glass(surf: Surfaces, step: _Steps) -> dict[str, tuple[NDArray[Any], NDArray[Any]]]:
+    """The glass-brain hull of each pial surface."""
+    hulls = {}
+    for hemi in HEMIS:
+        step(f"glass {hemi}")
+        hulls[hemi] = glass.pial_hull(*surf[hemi]["pial"], target_faces=GLASS_FACES)
+        step.done()
+    return hulls
+
+
+def _validate(stage: Path, manifest: dict[str, Any], name: str, subject: sources.Subject,
+              max_size_mb: float | None, expected_regions: dict[str, int] | None) -> None:
+    """Refuse a template with problems (:func:`.report.template_problems`, region counts)."""
+    problems = report.template_problems(stage, max_size_mb=max_size_mb)
+    for label_set, n in (expected_regions or {}).items():
+        got = len(manifest["labels"].get(label_set, {}).get("regions", []))
+        if label_set in manifest["labels"] and got != n:
+            problems.append(f"label set {label_set!r} has {got} regions per hemisphere, expected {n}")
+    if problems:
+        raise BrainPainterError(
+            f"template {name!r} from {subject.path} failed validation: " + "; ".join(problems))
+
+
+def _write(stage: Path, *, name: str, subject: sources.Subject, version: str, surfaces: tuple[str, ...],
+           target_faces: int | None, meshes: dict[str, dict[str, cortex.LabelledSurface]],
+           label_sources: dict[str, list[str]], offsets: dict[str, dict[str, NDArray[Any]]],
+           structures: list[Structure], hulls: dict[str, tuple[NDArray[Any], NDArray[Any]]],
+           license_file: str | Path | None) -> dict[str, Any]:
+    """Write the template's files into `stage`; returns its manifest."""
+    all_vertices: dict[str, list[NDArray[Any]]] = {s: [] for s in surfaces}
+    totals = {"cortex": 0, "subcortical": 0, "glass": 0}
+    labels_entry = {label_set: _write_cortex(stage, label_set, per_hemi, label_sources[label_set], surfaces,
+                                             all_vertices, totals)
+                    for label_set, per_hemi in meshes.items()}
     merged = subcortical.merge_structures(structures)
     writer.save_npz(stage / "subcortical.npz", merged)
     totals["subcortical"] = len(merged["faces"])
@@ -278,7 +297,6 @@ def _write(stage: Path, *, name, subject, version, surfaces, target_faces, meshe
         writer.save_npz(stage / file, {"vertices": v.astype(np.float32), "faces": f.astype(np.int32)})
         glass_entry[hemi] = {"file": file, "n_vertices": len(v), "n_faces": len(f)}
         totals["glass"] += len(f)
-
     vname = version.removeprefix("freesurfer-")
     manifest = {
         "format": FORMAT,
@@ -293,27 +311,8 @@ def _write(stage: Path, *, name, subject, version, surfaces, target_faces, meshe
         "surfaces": list(surfaces),
         "target_faces": target_faces,
         "labels": labels_entry,
-        "subcortical": {
-            "file": "subcortical.npz",
-            "source": "mri/aseg.mgz",
-            "structures": [
-                {
-                    "name": s.name,
-                    "index": s.index,
-                    "n_vertices": len(s.vertices),
-                    "n_faces": len(s.faces),
-                    "volume_mm3": s.volume_mm3,
-                    "voxel_volume_mm3": s.voxel_volume_mm3,
-                    "volume_error": s.volume_mm3 / s.voxel_volume_mm3 - 1.0,
-                    "smoothed_volume_error": s.smoothed_volume_mm3 / s.voxel_volume_mm3 - 1.0,
-                    "watertight": s.watertight,
-                    "blur_voxels": s.blur,
-                    "self_intersecting_faces": {"decimated": s.self_intersections[0],
-                                                "template": s.self_intersections[1]},
-                }
-                for s in structures
-            ],
-        },
+        "subcortical": {"file": "subcortical.npz", "source": "mri/aseg.mgz",
+                        "structures": [_structure_entry(s) for s in structures]},
         "glass": glass_entry,
         "inflated_offset": {h: offsets[h]["inflated"].tolist() for h in HEMIS
                             if "inflated" in offsets[h]},
@@ -325,13 +324,74 @@ def _write(stage: Path, *, name, subject, version, surfaces, target_faces, meshe
                        "The General Hospital Corporation (MGH); not endorsed by MGH.",
     }
     writer.write_json(stage / "manifest.json", manifest)
+    _write_license(stage, license_file, subject, version)
+    return manifest
+
+
+def _write_cortex(stage: Path, label_set: str, per_hemi: dict[str, cortex.LabelledSurface],
+                  label_sources: list[str], surfaces: tuple[str, ...],
+                  all_vertices: dict[str, list[NDArray[Any]]], totals: dict[str, int]) -> dict[str, Any]:
+    """Write ``cortex-{hemi}-{label_set}.npz``; returns the label set's manifest entry."""
+    entry: dict[str, Any] = {"source": ", ".join(label_sources), "regions": _region_names(per_hemi),
+                             "cortex": {}}
+    for hemi in HEMIS:
+        m = per_hemi[hemi]
+        file = f"cortex-{hemi}-{label_set}.npz"
+        arrays = {"faces": m.faces, "face_label": m.face_label}
+        arrays.update({s: m.vertices[s] for s in surfaces})
+        arrays["source_vertex"] = m.source_vertex
+        arrays["vertex_label"] = m.vertex_label
+        arrays["boundary_t"] = m.boundary_t
+        if m.sulc is not None:
+            arrays["sulc"] = m.sulc
+        writer.save_npz(stage / file, arrays)
+        for s in surfaces:
+            all_vertices[s].append(m.vertices[s])
+        counts = np.bincount(m.face_label.astype(np.int64), minlength=len(m.names))
+        entry["cortex"][hemi] = {
+            "file": file,
+            "names": list(m.names),
+            "colors": [_hex(c) for c in m.colors],
+            "n_vertices": len(m.source_vertex),
+            "n_faces": len(m.faces),
+            "n_source_faces": m.n_source_faces,
+            "open_edges": cortex.open_edge_count(m.faces),
+            "self_intersecting_faces": {s: {"decimated": b, "template": a}
+                                        for s, (b, a) in (m.self_intersections or {}).items()},
+            "region_faces": {n: int(counts[i]) for i, n in enumerate(m.names) if counts[i]},
+        }
+        totals["cortex"] += len(m.faces)
+    return entry
+
+
+def _structure_entry(s: Structure) -> dict[str, Any]:
+    """Manifest entry of one subcortical structure."""
+    return {
+        "name": s.name,
+        "index": s.index,
+        "n_vertices": len(s.vertices),
+        "n_faces": len(s.faces),
+        "volume_mm3": s.volume_mm3,
+        "voxel_volume_mm3": s.voxel_volume_mm3,
+        "volume_error": s.volume_mm3 / s.voxel_volume_mm3 - 1.0,
+        "smoothed_volume_error": s.smoothed_volume_mm3 / s.voxel_volume_mm3 - 1.0,
+        "watertight": s.watertight,
+        "blur_voxels": s.blur,
+        "self_intersecting_faces": {"decimated": s.self_intersections[0],
+                                    "template": s.self_intersections[1]},
+    }
+
+
+def _write_license(stage: Path, license_file: str | Path | None, subject: sources.Subject,
+                   version: str) -> None:
+    """``LICENSE.FreeSurfer.txt``: FreeSurfer's Part B when its licence is found, else a pointer to it."""
     lic = Path(license_file) if license_file is not None else writer.find_license(subject.path)
     if lic is not None:
         writer.write_license(stage / "LICENSE.FreeSurfer.txt", lic, subject.name, version)
-    else:
-        (stage / "LICENSE.FreeSurfer.txt").write_text(
-            f"The files in this directory are data derived (modified) from FreeSurfer {vname}'s\n"
-            f"output for {subject.name}. FreeSurfer's Software License Agreement applies; see\n"
-            "https://surfer.nmr.mgh.harvard.edu/fswiki/FreeSurferSoftwareLicense\n",
-            encoding="utf-8")
-    return manifest
+        return
+    vname = version.removeprefix("freesurfer-")
+    (stage / "LICENSE.FreeSurfer.txt").write_text(
+        f"The files in this directory are data derived (modified) from FreeSurfer {vname}'s\n"
+        f"output for {subject.name}. FreeSurfer's Software License Agreement applies; see\n"
+        "https://surfer.nmr.mgh.harvard.edu/fswiki/FreeSurferSoftwareLicense\n",
+        encoding="utf-8")

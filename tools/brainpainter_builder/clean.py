@@ -15,39 +15,15 @@ intersects another. Only positions change: faces, labels and
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
+from brainpainter.atlas.meshing import count_self_intersections, self_intersecting_faces
 from brainpainter.errors import BrainPainterError
 
-
-def self_intersecting_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Faces that intersect another face of the same mesh (MeshLab), shape (n_faces,) of bool.
-
-    Parameters
-    ----------
-    vertices : ndarray of float, shape (n, 3)
-    faces : ndarray of int, shape (m, 3)
-    """
-    from brainpainter_builder.meshlab import import_pymeshlab
-
-    pymeshlab = import_pymeshlab()
-    faces = np.asarray(faces)
-    if len(faces) == 0:
-        return np.zeros(0, dtype=bool)
-    ms = pymeshlab.MeshSet()
-    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.asarray(vertices, dtype=np.float64),
-                               face_matrix=faces.astype(np.int32)))
-    ms.compute_selection_by_self_intersections_per_face()
-    mesh = ms.current_mesh()
-    if mesh.face_number() != len(faces):  # MeshLab never removes faces here; checked anyway
-        raise BrainPainterError("self-intersection test changed the mesh")
-    return np.asarray(mesh.face_selection_array(), dtype=bool)
-
-
-def count_self_intersections(vertices: np.ndarray, faces: np.ndarray) -> int:
-    """Number of faces that intersect another face of the same mesh."""
-    return int(np.count_nonzero(self_intersecting_faces(vertices, faces)))
+__all__ = ["Cleaned", "count_self_intersections", "remove_self_intersections"]
 
 
 @dataclass(frozen=True)
@@ -63,13 +39,13 @@ class Cleaned:
         Vertices that moved.
     """
 
-    vertices: np.ndarray
+    vertices: NDArray[Any]
     before: int
     after: int
     moved: int
 
 
-def _neighbours(faces: np.ndarray, n: int):
+def _neighbours(faces: NDArray[Any], n: int) -> Any:
     from scipy import sparse
 
     ij = np.asarray(faces, dtype=np.int64)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
@@ -79,7 +55,7 @@ def _neighbours(faces: np.ndarray, n: int):
     return adj
 
 
-def remove_self_intersections(vertices: np.ndarray, faces: np.ndarray, *, rings: int = 2,
+def remove_self_intersections(vertices: NDArray[Any], faces: NDArray[Any], *, rings: int = 2,
                               steps: int = 4, max_rounds: int = 40) -> Cleaned:
     """Smooth the surface around its self-intersections until there are none.
 
@@ -132,3 +108,4 @@ def remove_self_intersections(vertices: np.ndarray, faces: np.ndarray, *, rings:
             return Cleaned(v, before, 0, int(np.count_nonzero(moved)))
     raise BrainPainterError(f"{int(np.count_nonzero(bad))} self-intersecting faces remain after "
                             f"{max_rounds} smoothing rounds (of {before})")
+

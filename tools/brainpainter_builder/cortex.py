@@ -27,7 +27,7 @@ boundary runs through) are locked as well, so they reach the template
 unchanged, and the template stores every vertex's label (``vertex_label``)
 beside the whole-face labels. When the template is loaded, core splits
 those faces along a smoothed boundary
-(:func:`brainpainter.atlas.labelset.split_mesh`, the same code that splits
+(:func:`brainpainter.atlas.mesh.split_mesh`, the same code that splits
 custom label sets), so borders no longer step along triangles.
 
 Folds
@@ -41,9 +41,12 @@ few hundred vertices by up to a few millimetres and changes no face.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
+from brainpainter.atlas.meshing import edge_use_counts
 from brainpainter.errors import BrainPainterError
 
 #: Added to the face quality of locked faces (a flag MeshLab's selection reads).
@@ -63,7 +66,7 @@ class LabelledSurface:
         Colour-table names (regions and non-regions such as ``"unknown"``).
     colors : ndarray of uint8, shape (n_names, 3)
         Colour-table colours.
-    vertices : dict of str to ndarray of float32, shape (n_vertices, 3)
+    vertices : dict[str, Any] of str to ndarray of float32, shape (n_vertices, 3)
         Positions per surface (``"pial"``, ``"white"``, ``"inflated"``).
     source_vertex : ndarray of int32, shape (n_vertices,)
         Index of each vertex in the full-resolution surface.
@@ -73,28 +76,28 @@ class LabelledSurface:
         Index into `names` per vertex (the full-resolution vertex's label).
     boundary_t : ndarray of float32, shape (n_crossing_edges,)
         Where the border crosses each label-crossing edge
-        (:func:`brainpainter.atlas.labelset.smooth_crossings`), stored so that
+        (:func:`brainpainter.atlas.mesh.smooth_crossings`), stored so that
         loading the template only has to split.
     sulc : ndarray of float32, shape (n_vertices,), or None
         Sulcal depth per vertex, when given.
-    self_intersections : dict of str to (int, int)
+    self_intersections : dict[str, Any] of str to (int, int)
         Per surface: self-intersecting faces before and after cleaning.
     """
 
-    faces: np.ndarray
-    face_label: np.ndarray
+    faces: NDArray[Any]
+    face_label: NDArray[Any]
     names: tuple[str, ...]
-    colors: np.ndarray
-    vertices: dict[str, np.ndarray]
-    source_vertex: np.ndarray
+    colors: NDArray[Any]
+    vertices: dict[str, NDArray[Any]]
+    source_vertex: NDArray[Any]
     n_source_faces: int
-    vertex_label: np.ndarray
-    boundary_t: np.ndarray
-    sulc: np.ndarray | None = None
+    vertex_label: NDArray[Any]
+    boundary_t: NDArray[Any]
+    sulc: NDArray[Any] | None = None
     self_intersections: dict[str, tuple[int, int]] | None = None
 
 
-def assign_face_labels(faces: np.ndarray, vertex_labels: np.ndarray) -> np.ndarray:
+def assign_face_labels(faces: NDArray[Any], vertex_labels: NDArray[Any]) -> NDArray[Any]:
     """Give every triangle one label: the majority of its vertex labels.
 
     Parameters
@@ -116,7 +119,7 @@ def assign_face_labels(faces: np.ndarray, vertex_labels: np.ndarray) -> np.ndarr
     return np.where((a == b) | (a == c), a, np.where(b == c, b, lowest))
 
 
-def boundary_vertex_mask(faces: np.ndarray, face_label: np.ndarray, n_vertices: int) -> np.ndarray:
+def boundary_vertex_mask(faces: NDArray[Any], face_label: NDArray[Any], n_vertices: int) -> NDArray[Any]:
     """Vertices whose incident faces carry more than one label, shape (n_vertices,)."""
     faces = np.asarray(faces, dtype=np.int64)
     face_label = np.asarray(face_label, dtype=np.int64)
@@ -125,27 +128,18 @@ def boundary_vertex_mask(faces: np.ndarray, face_label: np.ndarray, n_vertices: 
     for k in range(3):
         np.minimum.at(lo, faces[:, k], face_label)
         np.maximum.at(hi, faces[:, k], face_label)
-    return (lo != hi) & (hi >= lo)
+    boundary: NDArray[np.bool_] = (lo != hi) & (hi >= lo)
+    return boundary
 
 
-def edge_use_counts(faces: np.ndarray) -> np.ndarray:
-    """How many faces use each undirected edge, shape (n_edges,)."""
-    faces = np.asarray(faces, dtype=np.int64)
-    if len(faces) == 0:
-        return np.zeros(0, dtype=np.int64)
-    edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    keys = edges[:, 0] * (int(faces.max()) + 1) + edges[:, 1]
-    return np.unique(keys, return_counts=True)[1]
-
-
-def open_edge_count(faces: np.ndarray) -> int:
+def open_edge_count(faces: NDArray[Any]) -> int:
     """Number of edges used by exactly one face (0 for a closed surface)."""
     return int(np.count_nonzero(edge_use_counts(faces) == 1))
 
 
-def decimate(vertices: np.ndarray, faces: np.ndarray, face_label: np.ndarray,
-             target_faces: int, vertex_labels: np.ndarray | None = None) -> tuple[
-                 np.ndarray, np.ndarray, np.ndarray]:
+def decimate(vertices: NDArray[Any], faces: NDArray[Any], face_label: NDArray[Any],
+             target_faces: int, vertex_labels: NDArray[Any] | None = None) -> tuple[
+                 NDArray[Any], NDArray[Any], NDArray[Any]]:
     """Quadric decimation that keeps every region boundary vertex in place.
 
     Parameters
@@ -170,7 +164,7 @@ def decimate(vertices: np.ndarray, faces: np.ndarray, face_label: np.ndarray,
     source_vertex : ndarray of int64, shape (k,)
         Increasing indices into `vertices` of the kept vertices.
     """
-    from brainpainter_builder.meshlab import import_pymeshlab
+    from brainpainter.atlas.meshing import import_pymeshlab
 
     pymeshlab = import_pymeshlab()
 
@@ -218,7 +212,7 @@ def decimate(vertices: np.ndarray, faces: np.ndarray, face_label: np.ndarray,
     return rank[out_faces], np.rint(out_label).astype(np.int64), source[order]
 
 
-def canonical_faces(faces: np.ndarray, face_label: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def canonical_faces(faces: NDArray[Any], face_label: NDArray[Any]) -> tuple[NDArray[Any], NDArray[Any]]:
     """Sort faces by label, then by vertex, each rotated to start at its lowest vertex.
 
     Rotation keeps the winding; the order makes each region a contiguous run
@@ -232,17 +226,17 @@ def canonical_faces(faces: np.ndarray, face_label: np.ndarray) -> tuple[np.ndarr
     return faces[order], np.asarray(face_label)[order]
 
 
-def build_labelled_surface(surfaces: dict[str, tuple[np.ndarray, np.ndarray]],
-                           vertex_labels: np.ndarray, names: tuple[str, ...], ctab: np.ndarray,
+def build_labelled_surface(surfaces: dict[str, tuple[NDArray[Any], NDArray[Any]]],
+                           vertex_labels: NDArray[Any], names: tuple[str, ...], ctab: NDArray[Any],
                            target_faces: int | None,
-                           offsets: dict[str, np.ndarray] | None = None,
-                           sulc: np.ndarray | None = None,
+                           offsets: dict[str, NDArray[Any]] | None = None,
+                           sulc: NDArray[Any] | None = None,
                            clean: bool = True) -> LabelledSurface:
     """Split one hemisphere by one label set and decimate it on the pial surface.
 
     Parameters
     ----------
-    surfaces : dict of str to (vertices (n, 3), faces (m, 3))
+    surfaces : dict[str, Any] of str to (vertices (n, 3), faces (m, 3))
         Full-resolution surfaces of one hemisphere; must include ``"pial"``
         and all must share the pial faces.
     vertex_labels : ndarray of int, shape (n,)
@@ -251,14 +245,14 @@ def build_labelled_surface(surfaces: dict[str, tuple[np.ndarray, np.ndarray]],
     ctab : ndarray of int, shape (len(names), >=3)
     target_faces : int or None
         Faces wanted per hemisphere; None keeps full resolution.
-    offsets : dict of str to ndarray, shape (3,), optional
+    offsets : dict[str, Any] of str to ndarray, shape (3,), optional
         Translation added to a surface (the inflated hemisphere offset).
     sulc : ndarray of float, shape (n,), optional
         Sulcal depth per full-resolution vertex (``surf/?h.sulc``).
     clean : bool
         Remove self-intersections of every surface (:mod:`.clean`).
     """
-    from brainpainter.atlas.labelset import smooth_crossings
+    from brainpainter.atlas.mesh import smooth_crossings
     from brainpainter_builder.clean import remove_self_intersections
 
     pial_v, faces = surfaces["pial"]
@@ -293,8 +287,8 @@ def build_labelled_surface(surfaces: dict[str, tuple[np.ndarray, np.ndarray]],
     )
 
 
-def inflated_offsets(lh_inflated: np.ndarray, rh_inflated: np.ndarray,
-                     gap: float = 10.0) -> dict[str, np.ndarray]:
+def inflated_offsets(lh_inflated: NDArray[Any], rh_inflated: NDArray[Any],
+                     gap: float = 10.0) -> dict[str, NDArray[Any]]:
     """x translations that put the inflated hemispheres side by side.
 
     The left hemisphere ends at ``x = -gap / 2`` and the right one starts at

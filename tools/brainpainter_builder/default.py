@@ -23,6 +23,7 @@ import argparse
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 from brainpainter.errors import BrainPainterError
 
@@ -36,7 +37,7 @@ EXPECTED_REGIONS = {"dk": 34, "destrieux": 74, "dkt": 31}
 
 def build_default(data: Path = DATA, out: Path = ATLAS_PACKAGE / "templates" / "fsaverage",
                   atlas_data: Path | None = ATLAS_PACKAGE / "data", *,
-                  target_faces: int | None = None, progress: bool = True) -> dict:
+                  target_faces: int | None = None, progress: bool = True) -> dict[str, Any]:
     """Build the fsaverage template (and the atlas tables); return its report."""
     from brainpainter_builder.build import DEFAULT_TARGET_FACES, build_template
     from brainpainter_builder.report import template_report

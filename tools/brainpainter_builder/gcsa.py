@@ -76,6 +76,7 @@ import zlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -507,6 +508,25 @@ def read_gcsa(path: str | Path) -> Gcsa:
 
 def _parse(buf: bytes, source: str) -> Gcsa:
     r = _Reader(buf)
+    ninputs, icno_classifiers, icno_priors, inputs = _read_header(r)
+    classes = _read_classifiers(r, ico_nvertices(icno_classifiers), ninputs)
+    priors = _read_priors(buf, r, ico_nvertices(icno_priors))
+    ctab = _read_tags(r, priors["prior_labels"])
+    prior_to_classifier = _map_priors_to_classifiers(
+        icno_priors,
+        icno_classifiers,
+        priors["prior_offsets"],
+        priors["prior_labels"],
+        classes["class_offsets"],
+        classes["class_labels"],
+        source,
+    )
+    return Gcsa(source=source, ninputs=ninputs, icno_classifiers=icno_classifiers, icno_priors=icno_priors,
+                inputs=tuple(inputs), **priors, **classes, prior_to_classifier=prior_to_classifier, **ctab)
+
+
+def _read_header(r: _Reader) -> tuple[int, int, int, list[GcsaInput]]:
+    """Input count, classifier and prior icosahedron orders, and the inputs (curvature, sulc...)."""
     r.int("magic")
     ninputs = r.int("header")
     icno_classifiers = r.int("header")
@@ -524,9 +544,11 @@ def _parse(buf: bytes, source: str) -> Gcsa:
         navgs = r.int(f"input {i}")
         flags = r.int(f"input {i}")
         inputs.append(GcsaInput(itype, name, navgs, flags))
+    return ninputs, icno_classifiers, icno_priors, inputs
 
-    # Classifiers: few nodes (ico4: 2562), ASCII matrices -> plain loop.
-    n_class = ico_nvertices(icno_classifiers)
+
+def _read_classifiers(r: _Reader, n_class: int, ninputs: int) -> dict[str, NDArray[Any]]:
+    """The ``class_*`` arrays of :class:`Gcsa` (few nodes, ico4: 2562; ASCII matrices: a plain loop)."""
     class_counts = np.zeros(n_class, dtype=np.int64)
     c_labels: list[int] = []
     c_train: list[int] = []
@@ -543,12 +565,18 @@ def _parse(buf: bytes, source: str) -> Gcsa:
             c_train.append(r.int(f"classifier node {vno}"))
             c_means.append(r.ascii_matrix(ninputs, 1, f"classifier node {vno} means")[:, 0])
             c_covs.append(r.ascii_matrix(ninputs, ninputs, f"classifier node {vno} covariance"))
+    class_train = np.asarray(c_train, dtype=np.int32)
+    covs = np.asarray(c_covs, dtype=np.float64).reshape(-1, ninputs, ninputs)
+    return {"class_offsets": _offsets(class_counts), "class_labels": np.asarray(c_labels, dtype=np.int32),
+            "class_total_training": class_train,
+            "class_means": np.asarray(c_means, dtype=np.float64).reshape(-1, ninputs),
+            "class_covs": _fix_singular_covariances(covs, class_train)}
 
-    # Priors: 4-byte fields only, so walk an int32 view with a Python cursor.
-    n_prior = ico_nvertices(icno_priors)
+
+def _read_priors(buf: bytes, r: _Reader, n_prior: int) -> dict[str, NDArray[Any]]:
+    """The ``prior_*`` and ``gibbs_*`` arrays of :class:`Gcsa` (4-byte fields: an int32 view and a cursor)."""
     start = r.pos
-    nwords = (len(buf) - start) // 4
-    words = np.frombuffer(buf, dtype=">i4", count=nwords, offset=start)
+    words = np.frombuffer(buf, dtype=">i4", count=(len(buf) - start) // 4, offset=start)
     w = words.tolist()
     p = 0
     prior_counts = np.zeros(n_prior, dtype=np.int64)
@@ -579,20 +607,24 @@ def _parse(buf: bytes, source: str) -> Gcsa:
                     p += 2 * n
     except IndexError:
         raise ValueError(f"file ends inside the priors (prior node {vno})") from None
+    r.pos = start + 4 * p
     floats = words.view(">f4")
     lp = np.asarray(p_label_pos, dtype=np.int64)
     gp = np.asarray(g_pos, dtype=np.int64)
-    prior_labels = words[lp].astype(np.int32)
-    prior_probs = floats[lp + 1].astype(np.float32)
-    gibbs_labels = words[gp].astype(np.int32) if len(gp) else np.zeros(0, np.int32)
-    gibbs_probs = floats[gp + 1].astype(np.float32) if len(gp) else np.zeros(0, np.float32)
     gibbs_offsets = np.zeros(len(g_counts) + 1, dtype=np.int64)
     np.cumsum(g_counts, out=gibbs_offsets[1:])
-    r.pos = start + 4 * p
+    return {"prior_offsets": _offsets(prior_counts), "prior_labels": words[lp].astype(np.int32),
+            "prior_probs": floats[lp + 1].astype(np.float32), "prior_total_training": prior_train,
+            "gibbs_offsets": gibbs_offsets,
+            "gibbs_labels": words[gp].astype(np.int32) if len(gp) else np.zeros(0, np.int32),
+            "gibbs_probs": floats[gp + 1].astype(np.float32) if len(gp) else np.zeros(0, np.float32),
+            "gibbs_total_nbrs": np.asarray(g_total, dtype=np.int32).reshape(-1, GIBBS_SURFACE_NEIGHBORS)}
 
-    # Trailing tags: the colour table (FreeSurfer ignores unknown tags).
+
+def _read_tags(r: _Reader, prior_labels: NDArray[np.int32]) -> dict[str, Any]:
+    """The ``ctab_*`` fields of :class:`Gcsa` from the trailing tags (FreeSurfer ignores unknown tags)."""
     ctab = None
-    while len(buf) - r.pos >= 4:
+    while len(r.buf) - r.pos >= 4:
         tag = r.int("tag")
         if tag == TAG_OLD_COLORTABLE:
             ctab = _read_ctab(r)
@@ -601,50 +633,9 @@ def _parse(buf: bytes, source: str) -> Gcsa:
         values = np.unique(prior_labels).tolist()
         rgbt = [[v & 255, (v >> 8) & 255, (v >> 16) & 255, 0] for v in values]
         ctab = ("", list(range(len(values))), [f"label{v}" for v in values], rgbt)
-    ctab_filename, ctab_index, ctab_names, ctab_rgbt = ctab
-
-    prior_offsets = _offsets(prior_counts)
-    class_offsets = _offsets(class_counts)
-    class_labels = np.asarray(c_labels, dtype=np.int32)
-    prior_to_classifier = _map_priors_to_classifiers(
-        icno_priors,
-        icno_classifiers,
-        prior_offsets,
-        prior_labels,
-        class_offsets,
-        class_labels,
-        source,
-    )
-    means = np.asarray(c_means, dtype=np.float64).reshape(-1, ninputs)
-    covs = np.asarray(c_covs, dtype=np.float64).reshape(-1, ninputs, ninputs)
-    class_train = np.asarray(c_train, dtype=np.int32)
-    covs = _fix_singular_covariances(covs, class_train)
-
-    return Gcsa(
-        source=source,
-        ninputs=ninputs,
-        icno_classifiers=icno_classifiers,
-        icno_priors=icno_priors,
-        inputs=tuple(inputs),
-        prior_offsets=prior_offsets,
-        prior_labels=prior_labels,
-        prior_probs=prior_probs,
-        prior_total_training=prior_train,
-        gibbs_offsets=gibbs_offsets,
-        gibbs_labels=gibbs_labels,
-        gibbs_probs=gibbs_probs,
-        gibbs_total_nbrs=np.asarray(g_total, dtype=np.int32).reshape(-1, GIBBS_SURFACE_NEIGHBORS),
-        class_offsets=class_offsets,
-        class_labels=class_labels,
-        class_total_training=class_train,
-        class_means=means,
-        class_covs=covs,
-        prior_to_classifier=prior_to_classifier,
-        ctab_filename=ctab_filename,
-        ctab_index=np.asarray(ctab_index, dtype=np.int32),
-        ctab_names=tuple(ctab_names),
-        ctab_rgbt=np.asarray(ctab_rgbt, dtype=np.int32).reshape(-1, 4),
-    )
+    filename, index, names, rgbt_rows = ctab
+    return {"ctab_filename": filename, "ctab_index": np.asarray(index, dtype=np.int32),
+            "ctab_names": tuple(names), "ctab_rgbt": np.asarray(rgbt_rows, dtype=np.int32).reshape(-1, 4)}
 
 
 def _offsets(counts: NDArray[np.int64]) -> NDArray[np.int64]:
@@ -922,18 +913,10 @@ def _inputs_matrix(
     return np.column_stack(cols)
 
 
-def label_vertices(
-    gcsa: Gcsa,
-    sphere_reg: ArrayLike,
-    *,
-    curv: ArrayLike | None = None,
-    sulc: ArrayLike | None = None,
-    faces: ArrayLike | None = None,
-    cortex: ArrayLike | None = None,
-    method: str = "auto",
-    mode_filter: int = 10,
-    keep_unused: bool = False,
-) -> tuple[NDArray[np.int32], NDArray[np.int32], list[str]]:
+def label_vertices(gcsa: Gcsa, sphere_reg: ArrayLike, *, curv: ArrayLike | None = None,
+                   sulc: ArrayLike | None = None, faces: ArrayLike | None = None,
+                   cortex: ArrayLike | None = None, method: str = "auto", mode_filter: int = 10,
+                   keep_unused: bool = False) -> tuple[NDArray[np.int32], NDArray[np.int32], list[str]]:
     """Label surface vertices with a GCSA atlas.
 
     Each vertex is mapped to the nearest prior node (vertex of icosahedron
@@ -996,28 +979,46 @@ def label_vertices(
         raise choice_error("method", method, (*METHODS, "auto"))
     if method == "auto":
         method = "classifier" if curv is not None or sulc is not None else "prior"
+    sph, adj = _check_surface(sphere_reg, faces, method)
+    cortex_mask = _cortex_mask(cortex, len(sph))
+    lab, scored = _classify(gcsa, sph, method, curv, sulc, adj)
+    if adj is not None and mode_filter > 0:
+        lab = _mode_filter(gcsa, lab, adj, mode_filter)
+    if cortex_mask is not None:
+        _relabel_cortex(gcsa, lab, cortex_mask, scored, sph, adj)
+    return _to_annot(gcsa, lab, keep_unused)
+
+
+def _check_surface(sphere_reg: ArrayLike, faces: ArrayLike | None,
+                   method: str) -> tuple[NDArray[np.float64], sparse.csr_matrix | None]:
+    """The sphere as an (n, 3) array and the mesh adjacency (None without `faces`), checked."""
     sph = np.asarray(sphere_reg, dtype=np.float64)
     if sph.ndim != 2 or sph.shape[1] != 3 or len(sph) == 0:
         raise BrainPainterError(f"sphere_reg must have shape (n, 3); {sph.shape} was given.")
     n = len(sph)
-    adj = None
-    if faces is not None:
-        fa = np.asarray(faces)
-        if (
-            fa.ndim != 2
-            or fa.shape[1] != 3
-            or not np.issubdtype(fa.dtype, np.integer)
-            or (fa.size and (fa.min() < 0 or fa.max() >= n))
-        ):
-            raise BrainPainterError(
-                f"faces must be an (f, 3) integer array of vertex indices below {n}; "
-                f"shape {fa.shape} ({fa.dtype}) was given."
-            )
-        adj = _adjacency(fa.astype(np.int64), n)
-    elif method == "gibbs":
-        raise BrainPainterError("method='gibbs' needs faces= (the surface's triangles).")
-    cortex_mask = _cortex_mask(cortex, n)
+    if faces is None:
+        if method == "gibbs":
+            raise BrainPainterError("method='gibbs' needs faces= (the surface's triangles).")
+        return sph, None
+    fa = np.asarray(faces)
+    if (
+        fa.ndim != 2
+        or fa.shape[1] != 3
+        or not np.issubdtype(fa.dtype, np.integer)
+        or (fa.size and (fa.min() < 0 or fa.max() >= n))
+    ):
+        raise BrainPainterError(
+            f"faces must be an (f, 3) integer array of vertex indices below {n}; "
+            f"shape {fa.shape} ({fa.dtype}) was given."
+        )
+    return sph, _adjacency(fa.astype(np.int64), n)
 
+
+def _classify(gcsa: Gcsa, sph: NDArray[np.float64], method: str, curv: ArrayLike | None,
+              sulc: ArrayLike | None, adj: sparse.csr_matrix | None) -> tuple[
+        NDArray[np.int64], tuple[NDArray[np.int64], NDArray[np.float64]]]:
+    """Label per vertex by `method`, and each vertex's (candidate labels, scores), shape (n, k)."""
+    n = len(sph)
     nodes = _nearest_nodes(sph, _gcsa_icosahedron(gcsa.icno_priors, "priors", gcsa.source))
     class_nodes = gcsa.prior_to_classifier[nodes]
     entries, valid = _node_candidates(gcsa, nodes)
@@ -1036,24 +1037,26 @@ def label_vertices(
     rows = np.arange(n)
     best = np.argmax(score, axis=1)
     lab = np.where(np.isfinite(score[rows, best]), cand_labels[rows, best], -1)
-
     if method == "gibbs":
         assert adj is not None
         lab = _gibbs_icm(gcsa, lab, entries, valid, cand_labels, score, adj)
-    if adj is not None and mode_filter > 0:
-        lab = _mode_filter(gcsa, lab, adj, mode_filter)
-    if cortex_mask is not None:
-        lab[~cortex_mask] = -1
-        excluded = _non_cortical_annotations(gcsa)
-        redo = cortex_mask & ((lab < 0) | np.isin(lab, excluded))
-        if redo.any():
-            sc = np.where(np.isin(cand_labels[redo], excluded), -np.inf, score[redo])
-            b = np.argmax(sc, axis=1)
-            ok = np.isfinite(sc[np.arange(len(b)), b])
-            lab[redo] = np.where(ok, cand_labels[redo][np.arange(len(b)), b], -1)
-            _fill_from_neighbours(lab, cortex_mask, sph, adj)
+    return lab, (cand_labels, score)
 
-    return _to_annot(gcsa, lab, keep_unused)
+
+def _relabel_cortex(gcsa: Gcsa, lab: NDArray[np.int64], cortex_mask: NDArray[np.bool_],
+                    scored: tuple[NDArray[np.int64], NDArray[np.float64]], sph: NDArray[np.float64],
+                    adj: sparse.csr_matrix | None) -> None:
+    """-1 outside the cortex; inside, unlabelled or non-cortical vertices get their best cortical label."""
+    cand_labels, score = scored
+    lab[~cortex_mask] = -1
+    excluded = _non_cortical_annotations(gcsa)
+    redo = cortex_mask & ((lab < 0) | np.isin(lab, excluded))
+    if redo.any():
+        sc = np.where(np.isin(cand_labels[redo], excluded), -np.inf, score[redo])
+        b = np.argmax(sc, axis=1)
+        ok = np.isfinite(sc[np.arange(len(b)), b])
+        lab[redo] = np.where(ok, cand_labels[redo][np.arange(len(b)), b], -1)
+        _fill_from_neighbours(lab, cortex_mask, sph, adj)
 
 
 def _cortex_mask(cortex: ArrayLike | None, n: int) -> NDArray[np.bool_] | None:

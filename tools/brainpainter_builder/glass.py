@@ -10,14 +10,17 @@ so it can be drawn as a transparent shell around the cortex.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+from numpy.typing import NDArray
 
-from brainpainter_builder.subcortical import vertex_normals
+from brainpainter.atlas.meshing import vertex_normals
 
 
-def pial_hull(vertices: np.ndarray, faces: np.ndarray, *, voxel: float = 1.5,
+def pial_hull(vertices: NDArray[Any], faces: NDArray[Any], *, voxel: float = 1.5,
               closing_radius: float = 8.0, blur: float = 2.5, target_faces: int = 6000,
-              smooth_iterations: int = 20, offset: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+              smooth_iterations: int = 20, offset: float = 1.0) -> tuple[NDArray[Any], NDArray[Any]]:
     """Smooth closed hull of a closed surface.
 
     Parameters
@@ -45,7 +48,7 @@ def pial_hull(vertices: np.ndarray, faces: np.ndarray, *, voxel: float = 1.5,
     faces : ndarray of int64, shape (l, 3)
         Outward-facing.
     """
-    from brainpainter_builder.meshlab import import_pymeshlab
+    from brainpainter.atlas.meshing import import_pymeshlab
 
     pymeshlab = import_pymeshlab()
     import trimesh
@@ -68,9 +71,11 @@ def pial_hull(vertices: np.ndarray, faces: np.ndarray, *, voxel: float = 1.5,
     closed = ndimage.distance_transform_edt(grown) > r
     closed = ndimage.binary_fill_holes(closed | solid)
     field = ndimage.gaussian_filter(closed.astype(np.float32), sigma=blur / voxel)
-    verts, tri, _, _ = marching_cubes(field, level=0.5, method="lewiner", allow_degenerate=False)
+    verts, tri, _, _ = marching_cubes(  # type: ignore[no-untyped-call]
+        field, level=0.5, method="lewiner", allow_degenerate=False)
     tm = trimesh.Trimesh(verts, tri, process=True)
-    trimesh.smoothing.filter_taubin(tm, lamb=0.5, nu=0.53, iterations=smooth_iterations)
+    trimesh.smoothing.filter_taubin(  # type: ignore[no-untyped-call]
+        tm, lamb=0.5, nu=0.53, iterations=smooth_iterations)
     ms = pymeshlab.MeshSet()
     ms.add_mesh(pymeshlab.Mesh(vertex_matrix=np.asarray(tm.vertices, dtype=np.float64),
                                face_matrix=np.asarray(tm.faces, dtype=np.int32)))
@@ -90,7 +95,7 @@ def pial_hull(vertices: np.ndarray, faces: np.ndarray, *, voxel: float = 1.5,
     return out_v, np.ascontiguousarray(out_f)
 
 
-def surface_points(vertices: np.ndarray, faces: np.ndarray, spacing: float) -> np.ndarray:
+def surface_points(vertices: NDArray[Any], faces: NDArray[Any], spacing: float) -> NDArray[Any]:
     """Points covering every triangle, no two neighbours further apart than `spacing`.
 
     Each face gets a regular barycentric grid with ``n`` steps per edge,

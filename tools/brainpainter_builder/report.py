@@ -11,17 +11,19 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
+from brainpainter.atlas.meshing import count_self_intersections
 from brainpainter.atlas.template import SURFACES, Template, load_template
-from brainpainter_builder.clean import count_self_intersections
 
 #: Largest allowed |mesh volume / voxel volume - 1| of a subcortical structure.
 VOLUME_TOLERANCE = 0.05
 
 
-def _open_edges(faces: np.ndarray) -> int:
+def _open_edges(faces: NDArray[Any]) -> int:
     from brainpainter_builder.cortex import open_edge_count
 
     return open_edge_count(faces)
@@ -40,8 +42,8 @@ def _load_all(path: Path) -> tuple[Template, float]:
     return tpl, time.perf_counter() - t0
 
 
-def _cortex_checks(tpl: Template) -> tuple[dict, list[str]]:
-    out: dict = {}
+def _cortex_checks(tpl: Template) -> tuple[dict[str, Any], list[str]]:
+    out: dict[str, Any] = {}
     problems: list[str] = []
     for labels in tpl.label_sets:
         entry = tpl.manifest["labels"][labels]
@@ -93,7 +95,7 @@ def _non_regions() -> frozenset[str]:
     return NON_REGIONS
 
 
-def _subcortical_checks(tpl: Template) -> tuple[dict, list[str]]:
+def _subcortical_checks(tpl: Template) -> tuple[dict[str, Any], list[str]]:
     problems: list[str] = []
     sub = tpl.subcortical()
     counts = np.bincount(sub.face_label.astype(np.int64), minlength=len(sub.label_names))
@@ -129,7 +131,7 @@ def template_problems(path: str | Path, max_size_mb: float | None = None) -> lis
     return _check(Path(path), max_size_mb)[1]
 
 
-def _check(path: Path, max_size_mb: float | None) -> tuple[dict, list[str]]:
+def _check(path: Path, max_size_mb: float | None) -> tuple[dict[str, Any], list[str]]:
     tpl, load_s = _load_all(path)
     problems: list[str] = []
     cortex, p = _cortex_checks(tpl)
@@ -164,7 +166,7 @@ def _check(path: Path, max_size_mb: float | None) -> tuple[dict, list[str]]:
     return info, problems
 
 
-def template_report(path: str | Path) -> dict:
+def template_report(path: str | Path) -> dict[str, Any]:
     """Manifest plus checks of a template directory.
 
     Returns
@@ -181,7 +183,7 @@ def template_report(path: str | Path) -> dict:
     return _check(Path(path), None)[0]
 
 
-def format_report(report: dict) -> str:
+def format_report(report: dict[str, Any]) -> str:
     """Human-readable summary of :func:`template_report`'s result (several lines)."""
     m = report["manifest"]
     src = m.get("source", {})

@@ -16,11 +16,14 @@ from __future__ import annotations
 
 import os
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.io.files import check_input
@@ -58,8 +61,8 @@ class Annotation:
         Where the labels came from, for the manifest.
     """
 
-    labels: np.ndarray
-    ctab: np.ndarray
+    labels: NDArray[Any]
+    ctab: NDArray[Any]
     names: tuple[str, ...]
     source: str
 
@@ -68,13 +71,23 @@ def _missing(path: Path, what: str) -> BrainPainterError:
     return BrainPainterError(f"missing {what} {path}; a FreeSurfer subject directory needs it")
 
 
+def _read_optional(path: Path, read: Callable[[str], Any], what: str, dtype: type) -> NDArray[Any] | None:
+    """`read(path)` as an array of `dtype`; None when the file does not exist."""
+    if not path.is_file():
+        return None
+    try:
+        return np.asarray(read(str(path)), dtype=dtype)
+    except Exception as exc:  # nibabel raises ValueError, struct.error, OSError...
+        raise _unreadable(path, what, exc) from None
+
+
 def _unreadable(path: Path, what: str, exc: Exception) -> BrainPainterError:
     reason = " ".join(str(exc).split()) or type(exc).__name__
     return BrainPainterError(f"cannot read {path} as {what}: {reason}")
 
 
-def normalise_labels(labels: np.ndarray, ctab: np.ndarray, names: list[str]) -> tuple[
-        np.ndarray, np.ndarray, tuple[str, ...]]:
+def normalise_labels(labels: NDArray[Any], ctab: NDArray[Any], names: list[str]) -> tuple[
+        np.ndarray, NDArray[Any], tuple[str, ...]]:
     """Map unlabelled vertices (-1) to a non-region name.
 
     ``nibabel.freesurfer.read_annot`` gives -1 where a vertex's annotation
@@ -138,7 +151,7 @@ class Subject:
         return self.path.absolute().name
 
     # -- surfaces -----------------------------------------------------------------
-    def surface(self, hemi: str, surf: str) -> tuple[np.ndarray, np.ndarray]:
+    def surface(self, hemi: str, surf: str) -> tuple[NDArray[Any], NDArray[Any]]:
         """Read ``surf/{hemi}.{surf}``.
 
         Returns
@@ -174,17 +187,14 @@ class Subject:
             )
         return vertices, faces
 
-    def sulc(self, hemi: str) -> np.ndarray | None:
+    def sulc(self, hemi: str) -> NDArray[Any] | None:
         """Sulcal depth ``surf/{hemi}.sulc`` (mm, positive in sulci), shape (n,); None if absent."""
         from nibabel.freesurfer import read_morph_data
 
         path = self.path / "surf" / f"{hemi}.sulc"
-        if not path.is_file():
+        values = _read_optional(path, read_morph_data, "a FreeSurfer curvature (morph) file", np.float64)
+        if values is None:
             return None
-        try:
-            values = np.asarray(read_morph_data(str(path)), dtype=np.float64)
-        except Exception as exc:  # nibabel raises ValueError, struct.error, OSError...
-            raise _unreadable(path, "a FreeSurfer curvature (morph) file", exc) from None
         self._check_count(path, len(values), hemi, "values")
         if not np.isfinite(values).all():
             raise BrainPainterError(f"{path} has non-finite values; expected sulcal depths in mm")
@@ -204,17 +214,14 @@ class Subject:
                 "use the file made for this subject"
             )
 
-    def cortex_mask(self, hemi: str) -> np.ndarray | None:
+    def cortex_mask(self, hemi: str) -> NDArray[Any] | None:
         """Vertices of ``label/{hemi}.cortex.label`` as a mask, shape (n,); None if absent."""
         from nibabel.freesurfer import read_label
 
         path = self.path / "label" / f"{hemi}.cortex.label"
-        if not path.is_file():
+        index = _read_optional(path, read_label, "a FreeSurfer label", np.int64)
+        if index is None:
             return None
-        try:
-            index = np.asarray(read_label(str(path)), dtype=np.int64)
-        except Exception as exc:
-            raise _unreadable(path, "a FreeSurfer label", exc) from None
         n = self.n_vertices(hemi)
         if index.size and (index.min() < 0 or index.max() >= n):
             raise BrainPainterError(f"{path} lists vertices outside surf/{hemi}.pial's {n}; "
@@ -328,7 +335,7 @@ class Subject:
         return Annotation(labels, ctab, names, f"{gcs.name} (classified on surf/{hemi}.sphere.reg)")
 
     # -- volumes ------------------------------------------------------------------
-    def aseg(self) -> tuple[np.ndarray, np.ndarray, float]:
+    def aseg(self) -> tuple[NDArray[Any], NDArray[Any], float]:
         """Read ``mri/aseg.mgz``.
 
         Returns

@@ -23,6 +23,7 @@ from __future__ import annotations
 import json
 import shutil
 from pathlib import Path
+from typing import Any
 
 from brainpainter.atlas.model import Region, write_regions_tsv
 from brainpainter.errors import BrainPainterError
@@ -41,7 +42,7 @@ def _rgb(hex_colour: str) -> tuple[int, int, int]:
     return int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16)
 
 
-def cortical_regions(manifest: dict, label_set: str) -> list[Region]:
+def cortical_regions(manifest: dict[str, Any], label_set: str) -> list[Region]:
     """Cortical rows of `label_set` (lh rows, then rh rows, in colour-table order)."""
     if label_set not in LUT_NUMBERING:
         raise BrainPainterError(f"no FreeSurferColorLUT numbering known for label set {label_set!r}; "

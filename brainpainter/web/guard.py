@@ -1,0 +1,145 @@
+"""The server's guard: security headers, body size limits, a rate limit and the access log.
+
+:class:`Guard` is pure ASGI middleware around the app (:mod:`brainpainter.web.app`);
+every response carries a strict Content-Security-Policy and every request is
+logged as one JSON line on the ``brainpainter.web.access`` logger.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import secrets
+import threading
+import time
+from typing import Any
+
+from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.types import Message, Receive, Scope, Send
+
+from brainpainter.web.config import ServerConfig
+
+access_log = logging.getLogger("brainpainter.web.access")
+
+CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' blob: data:; "
+       "connect-src 'self'; font-src 'self'; form-action 'none'; base-uri 'none'; frame-ancestors 'none'")
+SECURITY_HEADERS = [
+    (b"content-security-policy", CSP.encode()),
+    (b"x-content-type-options", b"nosniff"),
+    (b"x-frame-options", b"DENY"),
+    (b"referrer-policy", b"no-referrer"),
+    (b"cross-origin-opener-policy", b"same-origin"),
+    (b"cross-origin-resource-policy", b"same-origin"),
+]
+JSON_BODY_LIMIT = 64 * 1024
+STATE_CHANGING = ("POST", "PUT", "DELETE", "PATCH")
+
+
+class _TooLarge(StarletteHTTPException):
+    """A request body over its limit (raised while it is read: the app answers 413 with the message)."""
+
+    def __init__(self, what: str, limit: int) -> None:
+        super().__init__(413, f"the {what} is larger than this server's limit; at most "
+                              f"{limit / 2**20:.3g} MB is read, to keep memory bounded. Split the table or "
+                              "remove unneeded columns.")
+
+
+class RateLimiter:
+    """Token bucket per client: `per_minute` state-changing requests a minute, bursts up to a quarter."""
+
+    def __init__(self, per_minute: int) -> None:
+        self.rate = per_minute / 60.0
+        self.burst = max(5.0, per_minute / 4)
+        self._buckets: dict[str, tuple[float, float]] = {}
+        self._lock = threading.Lock()
+
+    def allow(self, client: str) -> float:
+        """0 when allowed; else the seconds to wait."""
+        now = time.monotonic()
+        with self._lock:
+            if len(self._buckets) > 10_000:  # keep memory bounded: forget full buckets
+                self._buckets = {k: v for k, v in self._buckets.items()
+                                 if (now - v[1]) * self.rate + v[0] < self.burst}
+            tokens, last = self._buckets.get(client, (self.burst, now))
+            tokens = min(self.burst, tokens + (now - last) * self.rate)
+            if tokens < 1.0:
+                self._buckets[client] = (tokens, now)
+                return (1.0 - tokens) / self.rate
+            self._buckets[client] = (tokens - 1.0, now)
+            return 0.0
+
+
+class Guard:
+    """Pure ASGI middleware: security headers, body size limits, rate limit, access log."""
+
+    def __init__(self, app: Any, config: ServerConfig) -> None:
+        self.app = app
+        self.config = config
+        self.limiter = RateLimiter(config.rate_per_minute)
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        t0 = time.perf_counter()
+        rid = secrets.token_hex(6)
+        client = (scope.get("client") or ("-", 0))[0]
+        method, path = scope["method"], scope["path"]
+        is_upload = path == "/api/uploads"
+        limit = self.config.max_upload_bytes if is_upload else JSON_BODY_LIMIT
+        what = "upload" if is_upload else "request body"
+        state = {"status": 0, "bytes": 0, "started": False}
+
+        async def send_wrapper(message: Message) -> None:
+            if message["type"] == "http.response.start":
+                state["status"], state["started"] = message["status"], True
+                headers = [h for h in message.get("headers", []) if h[0].lower() != b"server"]
+                headers += [*SECURITY_HEADERS, (b"x-request-id", rid.encode())]
+                if path.startswith("/api/"):
+                    headers.append((b"cache-control", b"no-store"))
+                message = {**message, "headers": headers}
+            elif message["type"] == "http.response.body":
+                state["bytes"] += len(message.get("body", b""))
+            await send(message)
+
+        received = 0
+
+        async def receive_wrapper() -> Message:
+            nonlocal received
+            message = await receive()
+            if message["type"] == "http.request":
+                received += len(message.get("body", b""))
+                if received > limit:
+                    raise _TooLarge(what, limit)
+            return message
+
+        try:
+            length = dict(scope.get("headers", [])).get(b"content-length")
+            if length is not None and length.isdigit() and int(length) > limit:
+                raise _TooLarge(what, limit)
+            if method in STATE_CHANGING and path.startswith("/api/"):
+                wait = self.limiter.allow(client)
+                if wait:
+                    await _send_json(send_wrapper, 429, {"error": f"too many requests from {client}; at most "
+                                                         f"{self.config.rate_per_minute} a minute. Retry in "
+                                                         f"{wait:.0f} s."},
+                                     {"retry-after": str(max(1, round(wait)))})
+                    return
+            await self.app(scope, receive_wrapper, send_wrapper)
+        except _TooLarge as exc:
+            if not state["started"]:
+                await _send_json(send_wrapper, 413, {"error": exc.detail})
+        finally:
+            access_log.info(json.dumps({
+                "t": round(time.time(), 3), "id": rid, "client": client, "method": method, "path": path,
+                "status": state["status"], "ms": round((time.perf_counter() - t0) * 1000, 1),
+                "bytes_in": received, "bytes_out": state["bytes"]}))
+
+
+async def _send_json(send: Send, status: int, body: dict[str, Any],
+                     headers: dict[str, str] | None = None) -> None:
+    raw = json.dumps(body).encode()
+    hdrs = [(b"content-type", b"application/json"), (b"content-length", str(len(raw)).encode())]
+    hdrs += [(k.encode(), v.encode()) for k, v in (headers or {}).items()]
+    await send({"type": "http.response.start", "status": status, "headers": hdrs})
+    await send({"type": "http.response.body", "body": raw})

@@ -1,0 +1,23 @@
+"""Errors that callers branch on are types (brainpainter.errors), not message text."""
+
+from __future__ import annotations
+
+import pytest
+
+from brainpainter.errors import BrainPainterError, NoRegionColumnError
+from brainpainter.table.region_table import read_table
+
+
+def test_no_region_column_names_the_atlas_that_fits(tmp_path):
+    """A table naming no region raises NoRegionColumnError; one naming another atlas's regions says which."""
+    path = tmp_path / "in.csv"
+    path.write_text("Image-name-unique,foo,bar\na,1,2\n")
+    with pytest.raises(NoRegionColumnError, match="no column names a dk region"):
+        read_table(path, "dk")
+    destrieux = tmp_path / "destrieux.csv"
+    destrieux.write_text("Image-name-unique,Left-G_and_S_frontomargin,Right-G_and_S_frontomargin\na,1,2\n")
+    with pytest.raises(NoRegionColumnError, match="The names fit atlas 'destrieux': give --atlas destrieux"):
+        read_table(destrieux, "dk")
+    with pytest.raises(BrainPainterError) as other:
+        read_table(path, "dk", image_column="nope")
+    assert not isinstance(other.value, NoRegionColumnError)
