@@ -71,19 +71,16 @@ def test_every_core_module_sits_in_a_layer(graph):
     assert all(layer(m) is not None for m in graph if m != "brainpainter"), sorted(graph)
 
 
-@pytest.mark.xfail(reason='issue 13 in progress (remove when merged)', strict=False)
 def test_imports_go_down_the_layers_only(graph):
     upward = [f"{m} -> {t}" for m, targets in graph.items() if layer(m) is not None
               for t in targets if t.startswith("brainpainter.") and layer(t) > layer(m)]
     assert upward == []
 
 
-@pytest.mark.xfail(reason='issue 13 in progress (remove when merged)', strict=False)
 def test_core_never_imports_the_builder_or_a_plugin(graph):
     assert [f"{m} -> {t}" for m, targets in graph.items() for t in targets if t in NOT_CORE] == []
 
 
-@pytest.mark.xfail(reason='issue 13 in progress (remove when merged)', strict=False)
 def test_no_import_cycles(graph):
     cycles: list[list[str]] = []
     state: dict[str, int] = {}
@@ -111,7 +108,6 @@ def python_files() -> list[Path]:
                   if ".venv" not in p.parts and "tests" not in p.parts)
 
 
-@pytest.mark.xfail(reason='issue 13 in progress (remove when merged)', strict=False)
 def test_no_function_over_80_lines():
     long = []
     for path in python_files():
@@ -123,7 +119,6 @@ def test_no_function_over_80_lines():
     assert long == []
 
 
-@pytest.mark.xfail(reason='issue 13 in progress (remove when merged)', strict=False)
 def test_no_module_over_500_lines():
     long = [f"{p.relative_to(REPO)} ({n} lines)" for p in python_files()
             if (n := len(p.read_text().splitlines())) > MAX_MODULE_LINES

@@ -17,7 +17,7 @@ def brainpainter_home(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterat
     Returns the (not yet created) user-atlas folder.
     """
     from brainpainter.atlas import registry
-    from brainpainter.atlas.user import atlases_dir
+    from brainpainter.atlas.registry import atlases_dir
 
     home = tmp_path / "home"
     monkeypatch.setenv("HOME", str(home))

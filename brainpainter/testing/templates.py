@@ -19,6 +19,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from brainpainter.atlas.writer import save_npz
+
 HEMIS = ("lh", "rh")
 DEFAULT_LABELS = {"dk": ("insula", "precuneus", "superiorfrontal", "unknown")}
 
@@ -59,8 +61,8 @@ class Structure:
 
 
 def save_arrays(path: Path, arrays: Mapping[str, NDArray[Any]]) -> None:
-    """Write `arrays` as one ``.npz`` file (the only place test templates write arrays)."""
-    np.savez_compressed(path, **arrays)  # -> brainpainter.atlas.writer.save_npz once it is in core
+    """Write `arrays` as one ``.npz`` file as the builder does (the one place test templates write arrays)."""
+    save_npz(path, arrays)
 
 
 def _cortex_entries(path: Path, cortex: Mapping[str, Mapping[str, CortexMesh]]) -> dict[str, Any]:
