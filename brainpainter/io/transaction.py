@@ -119,7 +119,7 @@ class FolderTransaction(_Staged):
             raise
         try:
             remove_stale_stages(self.out)
-            self.stage = new_stage(self.out, f"{self.what} {str(self.out)!r}")
+            self.stage = new_stage(self.out, self.what)
         except BaseException:
             self._lock.__exit__(None, None, None)
             remove_empty(self._created)
@@ -201,7 +201,7 @@ class FileTransaction(_Staged):
             raise
         try:
             remove_stale_stages(folder)
-            self.stage = new_stage(folder, f"output folder {str(folder)!r}")
+            self.stage = new_stage(folder, "output folder")
             self.tmp = self.stage / ("output" + self.target.suffix.lower())
         except BaseException:
             self._lock.__exit__(None, None, None)
@@ -283,7 +283,7 @@ def replace_folder(target: str | os.PathLike[str], is_ours: Callable[[Path], boo
     parent = make_folder(target.parent, f"parent folder of the {what}")
     with folder_lock(parent, f"folder {str(parent)!r}"):
         remove_stale_stages(parent)
-        stage = new_stage(parent, f"folder {str(parent)!r}")
+        stage = new_stage(parent, "folder")
         try:
             yield stage
             check_replaceable(target, is_ours, what, hint)
