@@ -16,13 +16,15 @@ from numpy.typing import NDArray
 from brainpainter.errors import BrainPainterError
 
 _UNSAFE = re.compile(r"[^A-Za-z0-9._+-]+")
-MAX_NAME = 100
+#: The longest image name (characters); it becomes part of a file name. The table check refuses
+#: longer names, so a file name is never cut.
+MAX_IMAGE_NAME = 100
 
 
 def safe_name(name: str) -> str:
-    """A file-name-safe version of an image name (no path parts, <= 100 chars)."""
+    """A file-name-safe version of an image name (no path parts, <= ``MAX_IMAGE_NAME`` characters)."""
     text = _UNSAFE.sub("_", str(name)).strip("._") or "image"
-    return text[:MAX_NAME]
+    return text[:MAX_IMAGE_NAME]
 
 
 def prepare_out_dir(out: str | Path) -> Path:

@@ -19,12 +19,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
+from brainpainter.io.output import MAX_IMAGE_NAME
 from brainpainter.io.rawtable import RawTable, has_control
 from brainpainter.table.cells import is_empty, to_number
 from brainpainter.table.names import REGION, NameResolver, Resolution
 from brainpainter.table.shape import TableShape
 
-MAX_IMAGE_NAME = 200
 MAX_PROBLEMS = 50
 
 #: How one input name was understood (with the input it came from): see

@@ -205,7 +205,7 @@ CASES: list[Case] = [
     Case("image-name-with-escape", {"in.csv": csv(HEADER.strip(), "\x1b[31mred,1,2")}, ["in.csv"],
          "contains control characters"),
     Case("image-name-300-chars", {"in.csv": csv(HEADER.strip(), "x" * 300 + ",1,2")}, ["in.csv"],
-         "is 300 characters long; at most 200"),
+         "is 300 characters long; at most 100"),
     Case("duplicate-image-names", {"in.csv": csv(HEADER.strip(), "A,1,2", "A,2,3")}, ["in.csv"],
          "'A' appears at line 2 and line 3"),
     Case("image-names-differ-in-case", {"in.csv": csv(HEADER.strip(), "sub-A,1,2", "sub-a,2,3")}, ["in.csv"],
