@@ -96,10 +96,11 @@ class SceneOptions:
     views: str | Sequence[str] | None = field(default=None, metadata={
         "help": "Comma-separated views, 'all', or camera:AZ:EL[:ZOOM].", "cli_default": DEFAULT_VIEWS})
     template: Template | str = field(default="fsaverage", metadata={"help": "Template name or folder."})
-    surface: str = field(default="pial", metadata={"choices": SURFACES, "help": ""})
+    surface: str = field(default="pial", metadata={"choices": SURFACES, "help": "Cortical surface to draw."})
     hide: tuple[str, ...] = field(default=(), metadata={
         "help": "Regions or groups not drawn (cerebellum, ventricles, brainstem, ventraldc). Repeatable."})
-    renderer: str = field(default="blender", metadata={"help": ""})
+    renderer: str = field(default="blender", metadata={
+        "help": "Renderer plugin ('brainpainter plugins' lists them)."})
     atlas_config: str | Path | None = field(default=None, metadata={
         "help": "Region-group TOML file defining the atlas (instead of --atlas); see docs/atlases.md."})
 

@@ -86,11 +86,13 @@ class RenderSettings:
     height: int = field(default=900, metadata={"help": "Image height, pixels."})
     background: RGB | None = field(default=(1.0, 1.0, 1.0), metadata={
         "help": "Background colour.", "cli_default": "white"})
-    quality: str = field(default="default", metadata={"choices": QUALITIES, "help": ""})
-    shading: str = field(default="default", metadata={"choices": SHADINGS, "help": ""})
+    quality: str = field(default="default", metadata={"choices": QUALITIES, "help": (
+        "fast: no anti-aliasing; default: 2x2 supersampling; high: path tracing (Cycles), slow.")})
+    shading: str = field(default="default", metadata={"choices": SHADINGS, "help": (
+        "flat: exact, unlit colours (for measuring colours in the image).")})
     lighting: str = field(default="studio", metadata={
         "choices": LIGHTINGS, "help": "sulc: studio light with sulci darkened slightly (sulcal depth)."})
-    glass_opacity: float = field(default=0.12, metadata={"help": ""})
+    glass_opacity: float = field(default=0.12, metadata={"help": "Opacity of the glass brain, 0-1."})
 
     def __post_init__(self) -> None:
         for name, allowed in (("quality", QUALITIES), ("shading", SHADINGS), ("lighting", LIGHTINGS)):
