@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import json
+
 import pytest
+from click.testing import CliRunner
 
 from brainpainter.cli.main import cli, main
 from brainpainter.testing import fake_distribution, installed
@@ -42,3 +45,17 @@ def test_a_broken_command_is_one_line_exit_2(tmp_path, capsys, module, expected)
     err = capsys.readouterr().err
     assert exit_info.value.code == 2
     assert expected in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+def test_plugins_lists_commands_and_the_broken_ones(tmp_path):
+    root = fake_distribution(tmp_path / "site", "bad-cmd",
+                             {"brainpainter.commands": {"hello": "bad_cmd:hello"}},
+                             {"bad_cmd/__init__.py": "hello = 42\n"})
+    with installed(root):
+        result = CliRunner().invoke(cli, ["plugins", "--json"])
+    assert result.exit_code == 0
+    rows = {(r["group"], r["name"]): r for r in json.loads(result.output)}
+    assert rows[("brainpainter.commands", "template")]["status"] == "ok"
+    broken = rows[("brainpainter.commands", "hello")]
+    assert broken["status"] == "failed" and "not a click command" in broken["error"]
+    assert broken["distribution"] == "bad-cmd"

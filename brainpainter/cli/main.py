@@ -277,12 +277,31 @@ def plugins(as_json: bool) -> None:
             if not any(r["group"] == reg.group and r["name"] == name for r in report):
                 report.append({"group": reg.group, "name": name, "aliases": [], "target": None,
                                "distribution": None, "status": "failed", "error": error})
+    report.extend(_command_plugins())
     if as_json:
         _echo_json(report)
         return
     for r in report:
         line = f"{r['group']:<24} {r['name']:<12} {r['status']:<7} {r['distribution'] or ''}"
         click.echo(line + (f"\n    {r['error']}" if r["error"] else ""))
+
+
+def _command_plugins() -> list[dict[str, Any]]:
+    """Rows of ``brainpainter plugins`` for the commands added through ``brainpainter.commands``."""
+    from importlib.metadata import entry_points
+
+    rows: list[dict[str, Any]] = []
+    ctx = click.Context(cli)
+    for entry in entry_points(group=COMMANDS_GROUP):
+        status, error = "ok", None
+        try:
+            cli.get_command(ctx, entry.name)
+        except BrainPainterError as exc:
+            status, error = "failed", str(exc)
+        dist = entry.dist.name if entry.dist is not None else None
+        rows.append({"group": COMMANDS_GROUP, "name": entry.name, "aliases": [], "target": entry.value,
+                     "distribution": dist, "status": status, "error": error})
+    return rows
 
 
 def _one_or_many(inputs: tuple[Path, ...]) -> Path | list[Path]:
