@@ -499,4 +499,5 @@ def test_bpy_still_imports_after_the_builder_used_pymeshlab():
     code = ("from brainpainter.atlas.meshing import import_pymeshlab\n"
             "ms = import_pymeshlab().MeshSet()\nimport bpy\nprint('ok')")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
-    assert proc.stdout.strip() == "ok", proc.stderr[-500:]
+    # bpy 5.2 may log a colour-management line to stdout first; the import must simply succeed
+    assert proc.returncode == 0 and proc.stdout.strip().splitlines()[-1:] == ["ok"], proc.stderr[-500:]
