@@ -13,6 +13,7 @@ import click
 
 from brainpainter.cli.options import input_options, make_render_options, render_kwargs
 from brainpainter.media.export import EXPORT_OPTIONS
+from brainpainter.media.export import export as run
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 
@@ -42,7 +43,6 @@ def export(inputs: tuple[Path, ...], fmt: str | None, out: Path | None, row: str
       brainpainter export examples/brainpainter_dk.csv --row stage-4 --format html --out out/stage-4.html
     """
     from brainpainter.io.output import safe_name
-    from brainpainter.media.export import export as run
 
     data = inputs[0] if len(inputs) == 1 else list(inputs)
     if fmt is None:

@@ -20,7 +20,7 @@ from brainpainter.cli.options import (
     render_options,
 )
 from brainpainter.media.layout import FigureOptions
-from brainpainter.media.movie import MovieOptions
+from brainpainter.media.movie import MovieOptions, make_movie
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 
@@ -109,8 +109,6 @@ def movie(inputs: tuple[Path, ...], out: Path, frames_per_step: int, easing: str
       brainpainter movie examples/brainpainter_dk.csv --atlas dk --views lateral-left,medial-left \\
           --frames-per-step 24 --easing smooth --hold 12 --out progression.mp4
     """
-    from brainpainter.media.movie import make_movie
-
     kwargs = render_kwargs(options)
     result = make_movie(
         _one_or_many(inputs), out=out, rows=_rows(rows), frames_per_step=frames_per_step, easing=easing,

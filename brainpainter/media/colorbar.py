@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.color.scale import ColourScale
-from brainpainter.errors import BrainPainterError
+from brainpainter.errors import BrainPainterError, choice_error
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -141,8 +141,6 @@ def draw_colorbar(
         `ax`.
     """
     if orientation not in ORIENTATIONS:
-        from brainpainter.errors import choice_error
-
         raise choice_error("orientation", orientation, ORIENTATIONS)
     tick_values = resolve_ticks(scale, ticks)
     _, colors = bar_colors(scale)

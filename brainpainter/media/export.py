@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from brainpainter.atlas.model import HEMI_PREFIX, Atlas
 from brainpainter.atlas.template import Template
 from brainpainter.errors import BrainPainterError, choice_error
-from brainpainter.rendering.options import RenderKwargs
+from brainpainter.rendering.options import Options, RenderKwargs
 from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.settings import RGB
 
@@ -371,7 +371,6 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
         The file written.
     """
     from brainpainter.io.output import atomic_write_bytes
-    from brainpainter.rendering.options import Options
     from brainpainter.rendering.painter import load_scene, region_colors
     from brainpainter.rendering.run import prepare_run
     from brainpainter.table.rows import select_rows

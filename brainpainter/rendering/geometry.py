@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from brainpainter.errors import BrainPainterError
+from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.rendering import framing
 from brainpainter.rendering.settings import RGB, SULC_LIGHTINGS, RenderSettings
 from brainpainter.rendering.views import View
@@ -279,7 +279,6 @@ class SceneGeometry:
     def __init__(self, scene: SceneParts) -> None:
         from brainpainter.atlas.model import HEMI_PREFIX
         from brainpainter.atlas.template import HEMIS
-        from brainpainter.errors import choice_error
 
         template, hidden = scene.template, frozenset(scene.hidden)
         settings = scene.settings

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
-from brainpainter.atlas.registry import get_atlas
+from brainpainter.atlas.registry import get_atlas, load_atlas_config
 from brainpainter.atlas.template import Template, load_template, template_for
 from brainpainter.color.rgb import ColorLike, to_rgb
 from brainpainter.color.scale import ColourScale
@@ -105,8 +105,6 @@ def load_scene(
     scene : Scene
     """
     if atlas_config is not None:
-        from brainpainter.atlas.registry import load_atlas_config
-
         atlas = load_atlas_config(atlas_config)
     if isinstance(atlas, str):
         atlas = get_atlas(atlas)

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, Unpack
 from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
-from brainpainter.atlas.registry import get_atlas
+from brainpainter.atlas.registry import get_atlas, load_atlas_config
 from brainpainter.color.scale import ColourScale
 from brainpainter.errors import BrainPainterError
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
@@ -66,8 +66,6 @@ def resolve_atlas(atlas: Atlas | str | None, atlas_config: str | Path | None) ->
         if atlas is not None:
             raise BrainPainterError("give an atlas or an atlas config (--atlas-config), not both; the "
                                     "config's [atlas] base names the atlas it groups.")
-        from brainpainter.atlas.registry import load_atlas_config
-
         return load_atlas_config(atlas_config)
     return get_atlas(atlas) if isinstance(atlas, str) else atlas
 

@@ -27,7 +27,7 @@ from dataclasses import replace
 from typing import Any
 
 from brainpainter.web.config import ServerConfig
-from brainpainter.web.store import Store
+from brainpainter.web.store import Store, lock_data_dir, unlock_data_dir
 
 log = logging.getLogger("brainpainter.web")
 
@@ -74,8 +74,6 @@ class Pool:
 
     # -- life ------------------------------------------------------------------------------
     def start(self) -> None:
-        from brainpainter.web.store import lock_data_dir
-
         c = self.config
         lock_data_dir(self.store.root)
         again = self.store.requeue(max_attempts=c.max_attempts, ttl_s=c.result_ttl_s)
@@ -104,8 +102,6 @@ class Pool:
                 p.join(timeout=5)
         # jobs the stopped workers held go back to the queue now (a restart would do it too)
         self.store.requeue(max_attempts=self.config.max_attempts + 1, ttl_s=self.config.result_ttl_s)
-        from brainpainter.web.store import unlock_data_dir
-
         unlock_data_dir(self.store.root)
 
     def _spawn_worker(self, slot: int) -> None:
