@@ -148,3 +148,26 @@ def test_missing_bpy_is_one_line_and_writes_nothing(tmp_path):
     assert proc.returncode == 2, proc.stderr
     assert "pip install bpy" in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists()
+
+
+def test_a_bpy_that_draws_nothing_is_one_line_and_writes_nothing(tmp_path):
+    """A bpy release whose draw calls silently draw nothing (bpy 5.3 before the fix) is an error, not PNGs."""
+    fake = tmp_path / "fake"
+    fake.mkdir()
+    (fake / "sitecustomize.py").write_text(
+        "import numpy as np\n"
+        "import brainpainter_blender.gpu_draw as g\n"
+        "g.GpuDraw._draw = lambda self, rgb, aim, mark=None: np.zeros(\n"
+        "    (self.settings.height, self.settings.width, 4), np.uint8)\n")
+    csv = tmp_path / "in.csv"
+    csv.write_text("Image-name-unique,Left-insula\na,1\n")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(fake), os.environ.get("PYTHONPATH", "")])}
+    out = tmp_path / "out"
+    proc = run("render", str(csv), "--out", str(out), "--views", "lateral-left", "--size", "160x120",
+               "--transparent", env=env)
+    assert proc.returncode == 2, proc.stderr
+    assert "Traceback" not in proc.stderr
+    line = proc.stderr.strip().splitlines()[-1]  # after the progress bar
+    assert line.startswith("error: ") and proc.stderr.count("error:") == 1, proc.stderr
+    assert "drew nothing" in line and "Blender " in line and "pip install 'bpy" in line
+    assert not out.exists() or not any(out.iterdir())

@@ -119,6 +119,38 @@ def _centroid(img: np.ndarray, rgbs, tol: float = 2) -> np.ndarray:
 # -- no Blender needed ----------------------------------------------------------
 
 
+def test_tested_bpy_pins_match_pyproject():
+    """The versions the blank-render message recommends are the ones pip installs."""
+    import tomllib
+
+    from brainpainter_blender._bpy import TESTED_BPY
+
+    deps = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["dependencies"]
+    pins = {}
+    for dep in deps:
+        if dep.startswith("bpy"):
+            spec, marker = (part.strip() for part in dep.split(";"))
+            pins[tuple(int(x) for x in marker.split("'")[1].split("."))] = spec.removeprefix("bpy")
+    assert pins == TESTED_BPY
+    assert all("<" in spec for spec in pins.values()), "an untested future bpy must not be installed"
+
+
+@pytest.mark.parametrize("background", [None, (1.0, 1.0, 1.0), (0.2, 0.4, 0.6)])
+def test_nothing_drawn_sees_one_drawn_pixel(background):
+    from brainpainter.rendering.scene import nothing_drawn
+
+    img = np.zeros((90, 120, 4), np.uint8)
+    if background is not None:
+        img[..., :3] = np.round(np.asarray(background) * 255)
+        img[..., 3] = 255
+    assert nothing_drawn(img, background)
+    img[45, 60] = (200, 10, 10, 255)
+    assert not nothing_drawn(img, background)
+    if background is None:  # colour under zero alpha is not a drawn pixel
+        img[45, 60, 3] = 0
+        assert nothing_drawn(img, background)
+
+
 def test_import_does_not_import_bpy():
     code = "import sys, brainpainter, brainpainter_blender; print('bpy' in sys.modules)"
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
@@ -560,3 +592,17 @@ def test_flat_shading_is_exact_on_the_bundled_template():
     interior = ndimage.binary_erosion(~_mask(img, BACKGROUND, 0), iterations=2)
     # anti-aliased borders blend two colours; everything else is exact to 1/255
     assert exact[interior].mean() > 0.85
+
+
+def test_a_draw_that_leaves_only_background_is_an_error(flat, monkeypatch):
+    from brainpainter.rendering.scene import BlankRenderError
+
+    s = flat.scene.settings
+    blank = np.zeros((s.height, s.width, 4), np.uint8)
+    blank[..., :3] = np.round(np.asarray(BACKGROUND) * 255)
+    blank[..., 3] = 255
+    monkeypatch.setattr(flat._gpu, "_draw", lambda rgb, aim, mark=None: blank)
+    with pytest.raises(BlankRenderError, match=r"Blender \d+\.\d+.* drew nothing in view 'lateral-left'"):
+        flat.render(_quadrant_colors(), get_view("lateral-left"))
+    monkeypatch.undo()
+    assert flat.render(_quadrant_colors(), get_view("lateral-left"))[..., 3].any()

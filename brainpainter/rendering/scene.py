@@ -18,10 +18,11 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING, Any, Protocol
 
+import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.atlas.template import SURFACES, Template
-from brainpainter.errors import choice_error
+from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.rendering.settings import (
     LIGHTINGS,
     QUALITIES,
@@ -33,8 +34,8 @@ from brainpainter.rendering.settings import (
 from brainpainter.rendering.views import View
 
 # RenderSettings and its choices live in brainpainter.rendering.settings; named here for renderers.
-__all__ = ["LIGHTINGS", "QUALITIES", "RGB", "SHADINGS", "SULC_LIGHTINGS", "RenderSettings", "Renderer",
-           "Scene"]
+__all__ = ["LIGHTINGS", "QUALITIES", "RGB", "SHADINGS", "SULC_LIGHTINGS", "BlankRenderError",
+           "RenderSettings", "Renderer", "Scene", "nothing_drawn"]
 
 if TYPE_CHECKING:
     from brainpainter.rendering.geometry import Palette, SceneGeometry
@@ -110,3 +111,41 @@ class Renderer(Protocol):
         ...
 
     def close(self) -> None: ...
+
+
+class BlankRenderError(BrainPainterError):
+    """A renderer returned an image in which nothing was drawn although the view shows geometry."""
+
+    @classmethod
+    def of(cls, view: View, renderer: str,
+           hint: str = "report the version at the project's issue tracker") -> BlankRenderError:
+        """The error for `view`, naming `renderer` and its library's version, ending with `hint`."""
+        return cls(f"{renderer} drew nothing in view {view.name!r} although the view shows geometry "
+                   f"(every pixel is background): {hint}.")
+
+
+def nothing_drawn(pixels: NDArray[Any], background: RGB | None) -> bool:
+    """Whether every pixel of an image is the background (or transparent): nothing was drawn.
+
+    A view always shows geometry (:meth:`SceneGeometry.visible` refuses one that
+    does not, and the camera frames what it shows), so such an image means the
+    renderer failed silently (an untested version of its library): a renderer
+    raises :class:`BlankRenderError` then, never returns the image. About half a
+    millisecond for a 1200x900 image.
+
+    Parameters
+    ----------
+    pixels : ndarray of uint8, shape (height, width, 4)
+        RGBA, as :meth:`Renderer.render` returns it.
+    background : (r, g, b) in 0-1, or None
+        The render's background (``RenderSettings.background``); None: transparent.
+    """
+    rgba = np.ascontiguousarray(pixels, dtype=np.uint8)
+    if rgba.ndim != 3 or rgba.shape[-1] != 4 or not rgba.size:
+        return False
+    packed = rgba.view(np.uint32)
+    if background is None:
+        alpha = np.frombuffer(bytes((0, 0, 0, 255)), np.uint32)[0]
+        return not bool((packed & alpha).any())
+    empty = bytes((*(round(float(c) * 255) for c in background), 255))
+    return not bool((packed != np.frombuffer(empty, np.uint32)[0]).any())

@@ -19,6 +19,10 @@ from typing import IO
 
 from brainpainter.errors import BrainPainterError
 
+#: The bpy releases brainpainter is tested with, per Python (the same pins as pyproject.toml's
+#: dependencies; tests/test_renderer_blender.py checks they agree).
+TESTED_BPY = {(3, 11): ">=4.2,<5.1", (3, 13): ">=5.1,<5.4"}
+
 #: Serialises every use of bpy in this process (Blender is not thread-safe).
 LOCK = threading.RLock()
 _state: dict[str, object] = {}
@@ -45,7 +49,8 @@ def import_bpy() -> ModuleType:
             reason = " ".join(str(exc).split())
             raise BrainPainterError(
                 f"the Blender renderer needs Blender's Python module, which failed to import "
-                f"({reason}); install it with 'pip install bpy' (bpy 4.2-5.0 needs Python 3.11)."
+                f"({reason}); install it with 'pip install bpy' (bpy 4.2-5.0 needs Python 3.11, "
+                f"bpy 5.1-5.3 Python 3.13)."
             ) from None
         if bpy.app.background:  # never wipe a user's scene inside the Blender application
             with quiet():
@@ -117,3 +122,15 @@ def quiet() -> Iterator[list[str]]:
                 os.close(old)
             sink.seek(0)
             captured.append(sink.read().decode("utf-8", "replace"))
+
+
+def version_hint() -> tuple[str, str]:
+    """The running Blender, and what to do when it misbehaves: ``("Blender 5.3.0 (bpy)", "install ...")``."""
+    bpy = import_bpy()
+    tested = TESTED_BPY.get(sys.version_info[:2])
+    name = f"Blender {bpy.app.version_string} (bpy)"
+    if tested is None:
+        return name, "bpy is tested on Python 3.11 and 3.13 only"
+    py = "{}.{}".format(*sys.version_info[:2])
+    return name, (f"brainpainter is tested with bpy{tested} on Python {py}; "
+                  f"install one with: pip install 'bpy{tested}'")

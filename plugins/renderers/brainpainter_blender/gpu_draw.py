@@ -326,8 +326,8 @@ class GpuDraw:
             # the resolve writes every pixel: no clear
             resolve, s = self._resolve, self.settings
             resolve.bind()
+            resolve.uniform_sampler("image", self._hi.texture_color)  # samplers first: see _draw_parts
             resolve.uniform_int("out_height", s.height)
-            resolve.uniform_sampler("image", self._hi.texture_color)
             self._quad.draw(resolve)
             mark("resolve")
             buf = gpu.types.Buffer("UBYTE", s.width * s.height * 4)
@@ -347,13 +347,15 @@ class GpuDraw:
         mark("clear")
         shader = gpu_shaders.part_shader()
         shader.bind()
+        # Samplers before push constants: bpy 5.3 drops an integer push constant set before a
+        # sampler of the same shader (the resolve's row count read 0 and every image came out empty).
+        shader.uniform_sampler("palette", tex)
         for name, value in (("mvp", aim.mvp), ("back", aim.back), ("key_dir", aim.key_dir),
                             ("fill_dir", aim.fill_dir), ("ambient", light.ambient),
                             ("key", light.key if light.lit else 0.0),
                             ("fill", light.fill if light.lit else 0.0),
                             ("glass_alpha", float(s.glass_opacity)), ("glass_edge", GLASS_EDGE)):
             shader.uniform_float(name, value)
-        shader.uniform_sampler("palette", tex)
         gpu.state.depth_test_set("LESS_EQUAL")
         gpu.state.depth_mask_set(True)
         gpu.state.blend_set("NONE")

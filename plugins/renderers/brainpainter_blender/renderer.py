@@ -26,7 +26,7 @@ from PIL import Image
 from brainpainter.errors import BrainPainterError
 from brainpainter.rendering import framing
 from brainpainter.rendering.geometry import Palette
-from brainpainter.rendering.scene import RGB, Scene
+from brainpainter.rendering.scene import RGB, BlankRenderError, Scene, nothing_drawn
 from brainpainter.rendering.views import View
 from brainpainter_blender import _bpy, lighting, materials, scene_builder
 
@@ -127,6 +127,9 @@ class BlenderRenderer:
                 self._aim(view)
                 pixels = self._render_pixels()
         _bpy.release_memory()
+        # never an empty image with exit 0: a new bpy release once drew nothing, silently
+        if nothing_drawn(pixels, self.scene.settings.background):
+            raise BlankRenderError.of(view, *_bpy.version_hint())
         return pixels
 
     def _show(self, view: View) -> None:
