@@ -21,7 +21,7 @@ from brainpainter.errors import BrainPainterError
 
 #: The bpy releases brainpainter is tested with, per Python (the same pins as pyproject.toml's
 #: dependencies; tests/test_renderer_blender.py checks they agree).
-TESTED_BPY = {(3, 11): ">=4.2,<5.1", (3, 13): ">=5.1,<5.4"}
+TESTED_BPY = {(3, 11): ">=4.2,<5.1", (3, 13): ">=5.2,<5.4"}
 
 #: Serialises every use of bpy in this process (Blender is not thread-safe).
 LOCK = threading.RLock()
@@ -50,7 +50,7 @@ def import_bpy() -> ModuleType:
             raise BrainPainterError(
                 f"the Blender renderer needs Blender's Python module, which failed to import "
                 f"({reason}); install it with 'pip install bpy' (bpy 4.2-5.0 needs Python 3.11, "
-                f"bpy 5.1-5.3 Python 3.13)."
+                f"bpy 5.2-5.3 Python 3.13)."
             ) from None
         if bpy.app.background:  # never wipe a user's scene inside the Blender application
             with quiet():
