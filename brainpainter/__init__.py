@@ -32,6 +32,7 @@ __all__ = [
     "make_scale",
     "movie",
     "plot",
+    "project_volume",
     "read_table",
     "render",
 ]
@@ -44,6 +45,7 @@ if TYPE_CHECKING:
     from brainpainter.media.export import export
     from brainpainter.media.figure import make_figure as figure
     from brainpainter.media.movie import make_movie as movie
+    from brainpainter.maps.volume import project_volume
     from brainpainter.media.plot import plot
     from brainpainter.rendering.painter import Painter, RenderResult
     from brainpainter.rendering.run import render
@@ -64,6 +66,7 @@ _LAZY = {
     "make_scale": ("brainpainter.color.scale", "make_scale"),
     "movie": ("brainpainter.media.movie", "make_movie"),
     "plot": ("brainpainter.media.plot", "plot"),
+    "project_volume": ("brainpainter.maps.volume", "project_volume"),
     "read_table": ("brainpainter.table.region_table", "read_table"),
     "render": ("brainpainter.rendering.run", "render"),
 }
