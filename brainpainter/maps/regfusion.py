@@ -6,7 +6,7 @@ licence beside it:
 ``regfusion-fsaverage-mni152.npz``
     The MNI152 position of every fsaverage vertex by registration fusion (RF-ANTs; Wu et al.
     2018, Hum Brain Mapp 39:3793), from the ``regfusion`` 0.1.0 wheel (MIT): int16 arrays ``lh``
-    and ``rh`` of shape (163842, 3) in units of ``1 / scale`` mm (scale 200: 0.005 mm steps).
+    and ``rh`` of shape (163842, 3) in units of ``1 / scale`` mm (``scale``, shape (1,): 200, 0.005 mm steps).
     fsaverage's surfaces are in MNI305, not MNI152: sampling an MNI152 volume at fsaverage's own
     coordinates is off by ~2 mm (up to 4-5 mm); these positions are not.
 ``fsaverage-aseg-mni152.npz``
@@ -56,7 +56,7 @@ def fsaverage_mni152() -> dict[str, NDArray[np.float64]]:
         (fsaverage4's, fsaverage3's, fsaverage6's) vertices. Read once and cached: do not modify.
     """
     z = _load(REGFUSION_FILE)
-    scale = float(z["scale"])
+    scale = float(z["scale"].reshape(-1)[0])
     out = {hemi: z[hemi].astype(np.float64) / scale for hemi in HEMIS}
     for xyz in out.values():
         xyz.flags.writeable = False
