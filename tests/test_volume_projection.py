@@ -122,6 +122,16 @@ def test_refusals_are_one_line(tmp_path, data, affine, words):
     assert words in one_line(exc)
 
 
+def test_a_freesurfer_subject_volume_without_surfaces_is_refused(tmp_path):
+    aseg = nib.MGHImage(np.ones((256, 256, 256), np.float32),
+                        np.array([[-1.0, 0, 0, 128], [0, 0, 1, -128], [0, -1, 0, 128], [0, 0, 0, 1]]))
+    nib.save(aseg, tmp_path / "orig.mgz")
+    for call in (project_volume, subcortical_means):
+        with pytest.raises(BrainPainterError) as exc:
+            call(tmp_path / "orig.mgz")
+        assert "FreeSurfer conformed volume" in one_line(exc)
+
+
 def test_refusals_of_arguments(tmp_path):
     path = save(tmp_path, blob(np.zeros(3)))
     img = nib.Nifti1Image(blob(np.zeros(3)), MNI_2MM)

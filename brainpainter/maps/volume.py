@@ -162,7 +162,22 @@ def _voxel_coordinates(volume: Volume, points: NDArray[np.float64]) -> tuple[NDA
     return ijk, inside
 
 
+def _check_not_conformed(volume: Volume) -> None:
+    """Refuse a FreeSurfer conformed volume (256^3, 1 mm, LIA): a recon-all subject's space, not MNI152."""
+    import nibabel as nib
+
+    sizes = np.linalg.norm(volume.affine[:3, :3], axis=0)
+    if volume.shape[:3] == (256, 256, 256) and np.allclose(sizes, 1.0) \
+            and nib.aff2axcodes(volume.affine) == ("L", "I", "A"):  # type: ignore[no-untyped-call]
+        raise BrainPainterError(
+            f"{volume.name} is a FreeSurfer conformed volume (256^3, 1 mm, LIA), in the space of a "
+            "recon-all subject (or fsaverage's MNI305), not MNI152; give that subject's surfaces "
+            "(white={'lh': 'surf/lh.white', ...}, pial={...}) or register the volume to MNI152.")
+
+
 def _check_coverage(volume: Volume, inside: NDArray[np.bool_], subject: bool) -> None:
+    if not subject:
+        _check_not_conformed(volume)
     share = float(inside.mean()) if inside.size else 0.0
     if share >= MIN_COVERAGE:
         return
@@ -250,7 +265,8 @@ def project_volume(img: ImageLike, *, method: Method = "linear",
     ------
     BrainPainterError
         A 2-D image, no spatial transform, absurd voxel sizes, an extent that covers less than half
-        of the cortex (not MNI152, or surfaces of another subject), every voxel 0 or NaN.
+        of the cortex (not MNI152, or surfaces of another subject), a FreeSurfer conformed volume
+        (a subject's space) without surfaces, every voxel 0 or NaN.
 
     Examples
     --------
