@@ -14,7 +14,7 @@ import pytest
 import brainpainter
 from brainpainter.errors import BrainPainterError
 from brainpainter.maps.regfusion import ASEG_FILE, REGFUSION_FILE, aseg_mni152, fsaverage_mni152
-from brainpainter.maps.volume import project_volume, subcortical_means, volume_images
+from brainpainter.maps.volume import project_volume, subcortical_means, subcortical_table, volume_images
 
 REPO = Path(__file__).resolve().parents[1]
 # MNI152 2 mm grid (FSL's MNI152_T1_2mm: 91 x 109 x 91)
@@ -235,6 +235,17 @@ def test_subcortical_means_keyed_as_region_tables(tmp_path):
     series = subcortical_means(save(tmp_path, np.stack([np.full(SHAPE_2MM, 2.0, np.float32)] * 3, -1),
                                     name="series.nii.gz"))
     np.testing.assert_allclose(series["Brain-Stem"], [2.0, 2.0, 2.0])
+
+
+def test_subcortical_table_reads_as_a_region_table(tmp_path):
+    data = np.stack([np.full(SHAPE_2MM, v, np.float32) for v in (1.0, 2.0)], -1)
+    data[:45] = np.nan                                 # x > 0 mm: no value
+    table = subcortical_table(save(tmp_path, data, name="series.nii.gz"))
+    assert list(table) == ["series_0", "series_1"] and table["series_1"]["Left-Putamen"] == 2.0
+    assert "Right-Putamen" not in table["series_0"]                # no value: left out
+    read = brainpainter.read_table(table, "dk")
+    assert list(read.images) == ["series_0", "series_1"]
+    assert "Left-Putamen" in read.regions
 
 
 # -- shipped data ---------------------------------------------------------------------------------

@@ -374,3 +374,33 @@ def volume_images(path: ImageLike, *, method: Method = "linear"
     width = len(str(volume.n_volumes - 1))
     return [(f"{volume.name}_{i:0{width}d}", {hemi: m[i] for hemi, m in maps.items()})
             for i in range(volume.n_volumes)]
+
+
+def subcortical_table(img: ImageLike, *, method: Method = "linear") -> dict[str, dict[str, float]]:
+    """:func:`subcortical_means` as a region table: ``{image: {structure: mean}}``.
+
+    The images are named as in :func:`volume_images` (the file's name; ``"{file}_{index}"`` for
+    each volume of a 4-D file), so ``brainpainter.read_table(subcortical_table(path), "dk")``
+    colours the subcortical structures of the same images the cortex maps show. Structures the
+    volume does not reach (NaN) are left out.
+
+    Parameters
+    ----------
+    img : path or nibabel image
+        An MNI152 volume, 3-D or 4-D.
+    method : {"linear", "nearest"}
+        As in :func:`subcortical_means`.
+
+    Returns
+    -------
+    dict
+        ``{"zstat1": {"Left-Hippocampus": 2.1, ...}}``, one entry per image.
+    """
+    volume = load_volume(img)
+    means = subcortical_means(img, method=method)
+    if len(volume.shape) == 3:
+        return {volume.name: {k: float(v) for k, v in means.items() if np.isfinite(v)}}
+    width = len(str(volume.n_volumes - 1))
+    return {f"{volume.name}_{i:0{width}d}": {k: float(np.asarray(v)[i]) for k, v in means.items()
+                                              if np.isfinite(np.asarray(v)[i])}
+            for i in range(volume.n_volumes)}
