@@ -97,6 +97,17 @@ def test_nearest_keeps_labels_and_outside_is_nan(tmp_path):
     assert np.isnan(maps["lh"][z > 32]).all() and (maps["lh"][z < 28] == 1).all()
 
 
+def test_nan_voxels_are_skipped_not_spread(tmp_path):
+    data = np.full(SHAPE_2MM, 2.0, np.float32)
+    data[np.indices(SHAPE_2MM).sum(axis=0) % 2 == 1] = np.nan          # a NaN checkerboard
+    data[0, 0, 0] = np.inf
+    maps = project_volume(save(tmp_path, data))
+    values = np.concatenate([maps["lh"], maps["rh"]])
+    finite = values[np.isfinite(values)]
+    assert 0.3 < finite.size / values.size < 0.9                      # half the weight is finite
+    np.testing.assert_allclose(finite, 2.0, rtol=1e-5)
+
+
 # -- refusals -------------------------------------------------------------------------------------
 
 def one_line(exc: pytest.ExceptionInfo[BrainPainterError]) -> str:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from functools import cache
 from pathlib import Path
 from typing import Any, Literal
 
@@ -31,6 +32,7 @@ Method = Literal["linear", "nearest"]
 ORDERS = {"nearest": 0, "linear": 1}
 VOXEL_MM = (0.1, 10.0)          # voxel sizes outside this range cannot be a brain volume
 MIN_COVERAGE = 0.5              # share of the cortex the volume's extent must reach
+MIN_FINITE_WEIGHT = 0.5         # linear: a point takes a value when finite voxels carry this much weight
 ImageLike = str | os.PathLike[str] | Any   # a path, or a nibabel spatial image
 
 
@@ -149,6 +151,14 @@ def _is_nifti(header: Any) -> bool:
     return isinstance(header, nib.nifti1.Nifti1Header)
 
 
+@cache
+def _fsaverage_points() -> NDArray[np.float64]:
+    """``fsaverage_mni152()`` of both hemispheres stacked, lh first: shape (327684, 3)."""
+    points = np.concatenate(list(fsaverage_mni152().values()))
+    points.flags.writeable = False
+    return points
+
+
 def _voxel_coordinates(volume: Volume, points: NDArray[np.float64]) -> tuple[NDArray[np.float64],
                                                                              NDArray[np.bool_]]:
     """Voxel coordinates of world points, shape (3, n), and which points lie inside the grid."""
@@ -209,12 +219,22 @@ def _sample(volume: Volume, ijk: NDArray[np.float64], inside: NDArray[np.bool_],
     series = Volume(volume.name, data, volume.affine)
     for i in range(volume.n_volumes):
         vol = series.volume(i)
-        nonzero = nonzero or bool(np.any(np.isfinite(vol) & (vol != 0)))
-        map_coordinates(vol, ijk, output=out[i], order=order, mode="nearest", prefilter=False)
+        finite = np.isfinite(vol)
+        nonzero = nonzero or bool(np.any(finite & (vol != 0)))
+        if order == 0 or finite.all():
+            map_coordinates(vol, ijk, output=out[i], order=order, mode="nearest", prefilter=False)
+        else:   # NaN-aware trilinear: the finite voxels around a point, weighted, renormalised
+            weight = map_coordinates(finite.astype(np.float32), ijk, order=1, mode="nearest", prefilter=False)
+            map_coordinates(np.where(finite, vol, np.float32(0)), ijk, output=out[i], order=1, mode="nearest",
+                            prefilter=False)
+            enough = weight >= MIN_FINITE_WEIGHT
+            out[i][enough] /= weight[enough]
+            out[i][~enough] = np.nan
     if not nonzero:
         raise BrainPainterError(f"every voxel of {volume.name} is 0 or NaN; there is nothing to draw. "
                                 "Check that the right file (or volume of a series) was given.")
     out[:, ~inside] = np.nan
+    out[~np.isfinite(out)] = np.nan     # infinite voxels (nearest) are no value either
     return out
 
 
@@ -259,7 +279,9 @@ def project_volume(img: ImageLike, *, method: Method = "linear",
         ``{"lh": ndarray (163842,), "rh": ndarray (163842,)}`` of float32: fsaverage's vertices
         (the first 10242 are fsaverage5's, and so on). For a 4-D image each is
         ``(n_volumes, 163842)``. With `white`/`pial`, the hemispheres given, shape (n_vertices,)
-        or (n_volumes, n_vertices). NaN where a vertex falls outside the volume or on NaN voxels.
+        or (n_volumes, n_vertices). NaN where a vertex falls outside the volume or among NaN voxels
+        (linear interpolation uses the finite voxels around a vertex when they carry at least half
+        of its weight, so a NaN-masked statistical map keeps its values up to the mask's edge).
 
     Raises
     ------
@@ -291,7 +313,8 @@ def project_volume(img: ImageLike, *, method: Method = "linear",
                   for hemi, (w, p) in pairs.items()}
         counts = {hemi: (len(w), n_depths) for hemi, (w, _) in pairs.items()}
         method = "nearest" if depth == "nearest" else method
-    ijk, inside = _voxel_coordinates(volume, np.concatenate(list(points.values())))
+    stacked = _fsaverage_points() if white is None else np.concatenate(list(points.values()))
+    ijk, inside = _voxel_coordinates(volume, stacked)
     _check_coverage(volume, inside, subject=white is not None)
     samples = _sample(volume, ijk, inside, ORDERS[method])
     out: dict[str, NDArray[np.float32]] = {}
@@ -332,7 +355,7 @@ def subcortical_means(img: ImageLike, *, method: Method = "linear") -> dict[str,
     volume = load_volume(img)
     points, structure, names = aseg_mni152()
     ijk, inside = _voxel_coordinates(volume, points)
-    cortex = np.concatenate([xyz[:10242] for xyz in fsaverage_mni152().values()])   # fsaverage5 is enough
+    cortex = _fsaverage_points()[::16]                  # a sample of the cortex is enough here
     _, cortex_inside = _voxel_coordinates(volume, cortex)
     _check_coverage(volume, cortex_inside, subject=False)
     samples = _sample(volume, ijk, inside, ORDERS[method])
