@@ -80,6 +80,8 @@ def test_4d_gives_one_row_per_volume(tmp_path):
     images = volume_images(path)
     assert [name for name, _ in images] == ["stat_0", "stat_1"]
     np.testing.assert_array_equal(images[1][1]["lh"], maps["lh"][1])
+    one = volume_images(save(tmp_path, blob(centres[0]), name="one.nii"))      # uncompressed, 3-D
+    assert [name for name, _ in one] == ["one"] and one[0][1]["lh"].shape == (163842,)
 
 
 def test_nearest_keeps_labels_and_outside_is_nan(tmp_path):
@@ -213,6 +215,23 @@ def test_freesurfer_surface_files_are_moved_by_their_cras(tmp_path):
     maps = project_volume(ramp_volume(tmp_path), white={"lh": tmp_path / "lh.white"},
                           pial={"lh": str(tmp_path / "lh.pial")})
     np.testing.assert_allclose(maps["lh"], white[:, 2] + 1.5, atol=1e-3)
+
+
+def test_gifti_surfaces_and_combining_nan_depths(tmp_path):
+    from brainpainter.maps.depth import combine
+
+    white, pial = tiny_surfaces()
+    for name, xyz in (("white.surf.gii", white), ("pial.surf.gii", pial)):
+        array = nib.gifti.GiftiDataArray(xyz.astype(np.float32), intent="NIFTI_INTENT_POINTSET")
+        nib.save(nib.gifti.GiftiImage(darrays=[array]), tmp_path / name)
+    maps = project_volume(ramp_volume(tmp_path), white={"rh": tmp_path / "white.surf.gii"},
+                          pial={"right": tmp_path / "pial.surf.gii"})
+    assert set(maps) == {"rh"}
+    np.testing.assert_allclose(maps["rh"], white[:, 2] + 1.5, atol=1e-3)
+    samples = np.array([[1.0, np.nan, 4.0], [3.0, np.nan, 4.0], [np.nan, np.nan, 7.0]], np.float32)
+    np.testing.assert_allclose(combine(samples, "mean"), [2.0, np.nan, 5.0])
+    np.testing.assert_allclose(combine(samples, "max"), [3.0, np.nan, 7.0])
+    np.testing.assert_allclose(combine(samples, "nearest"), [1.0, np.nan, 4.0])
 
 
 def test_depth_refusals(tmp_path):
