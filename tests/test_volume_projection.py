@@ -80,6 +80,8 @@ def test_4d_gives_one_row_per_volume(tmp_path):
     images = volume_images(path)
     assert [name for name, _ in images] == ["stat_0", "stat_1"]
     np.testing.assert_array_equal(images[1][1]["lh"], maps["lh"][1])
+    plain = project_volume(save(tmp_path, np.stack([blob(c) for c in centres], axis=-1), name="s.nii"))
+    np.testing.assert_array_equal(plain["rh"], maps["rh"])                   # read volume by volume
     one = volume_images(save(tmp_path, blob(centres[0]), name="one.nii"))      # uncompressed, 3-D
     assert [name for name, _ in one] == ["one"] and one[0][1]["lh"].shape == (163842,)
 
