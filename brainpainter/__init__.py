@@ -42,10 +42,10 @@ if TYPE_CHECKING:
     from brainpainter.atlas.template import load_template
     from brainpainter.color.scale import make_scale
     from brainpainter.errors import BrainPainterError
+    from brainpainter.maps.volume import project_volume
     from brainpainter.media.export import export
     from brainpainter.media.figure import make_figure as figure
     from brainpainter.media.movie import make_movie as movie
-    from brainpainter.maps.volume import project_volume
     from brainpainter.media.plot import plot
     from brainpainter.rendering.painter import Painter, RenderResult
     from brainpainter.rendering.run import render
