@@ -295,6 +295,19 @@ def test_shipped_data_is_package_data_with_licences():
     assert (xyz["lh"][:, 0] < 5).mean() > 0.99 and (xyz["rh"][:, 0] > -5).mean() > 0.99
 
 
+@pytest.mark.integration
+def test_shipped_positions_follow_fsaverage5_moved_to_mni152(fsaverage5):
+    """RF positions lie near fsaverage's midthickness carried to MNI152 by FreeSurfer's affine."""
+    with np.load(REPO / "brainpainter" / "data" / ASEG_FILE) as z:
+        mni305_to_mni152 = z["mni305_to_mni152"]
+    for hemi in ("lh", "rh"):
+        white = nib.freesurfer.read_geometry(fsaverage5 / "surf" / f"{hemi}.white")[0]
+        pial = nib.freesurfer.read_geometry(fsaverage5 / "surf" / f"{hemi}.pial")[0]
+        mid = (white + pial) / 2 @ mni305_to_mni152[:3, :3].T + mni305_to_mni152[:3, 3]
+        distance = np.linalg.norm(fsaverage_mni152()[hemi][:10242] - mid, axis=1)
+        assert np.median(distance) < 2.5 and np.percentile(distance, 99) < 8, (hemi, np.median(distance))
+
+
 # -- the bar: registration fusion against nilearn.surface.vol_to_surf -----------------------------
 
 @pytest.mark.integration
