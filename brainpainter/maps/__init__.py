@@ -1,0 +1,1 @@
+"""Maps: values per vertex of the cortex, and volumes brought onto it."""
