@@ -38,6 +38,7 @@ __all__ = ["LIGHTINGS", "QUALITIES", "RGB", "SHADINGS", "SULC_LIGHTINGS", "Rende
 
 if TYPE_CHECKING:
     from brainpainter.rendering.geometry import Palette, SceneGeometry
+    from brainpainter.tracts.model import Tracts
 
 @dataclass(frozen=True)
 class Scene:
@@ -56,6 +57,13 @@ class Scene:
         Region keys not drawn at all.
     settings : RenderSettings
     medial_wall_color : tuple of float, shape (3,)
+    tracts : Tracts, optional
+        White-matter bundles drawn as tubes (:mod:`brainpainter.tracts`).
+    tract_nodes : tuple of (str, int)
+        How each bundle is coloured: ``(name, 1)`` one colour (palette key
+        ``tract:NAME``), ``(name, n)`` an along-tract profile of `n` nodes (keys
+        ``tract:NAME:0`` ... ``tract:NAME:n-1``); bundles not listed are
+        coloured by local direction (fixed palette slots).
     """
 
     template: Template
@@ -64,6 +72,8 @@ class Scene:
     hidden: frozenset[str] = field(default_factory=frozenset)
     settings: RenderSettings = field(default_factory=RenderSettings)
     medial_wall_color: RGB = (0.72, 0.72, 0.72)
+    tracts: Tracts | None = None
+    tract_nodes: tuple[tuple[str, int], ...] = ()
 
     def __post_init__(self) -> None:
         if self.surface not in SURFACES:
