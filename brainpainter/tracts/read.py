@@ -30,10 +30,18 @@ TRX_HINT = "pip install 'brainpainter[tracts]' (trx-python)"
 
 
 def _resampled(chunk: Any, n_points: int) -> NDArray[Any]:
-    """Resample an ``ArraySequence`` chunk (its packed data, offsets and lengths)."""
-    lengths = np.asarray(chunk._lengths)
+    """Resample an ``ArraySequence`` chunk (its packed data, offsets and lengths).
+
+    An indexed ``ArraySequence`` (``seq[indices]``) shares its parent's data with
+    offsets in any order: the chosen points are gathered (copied) first.
+    """
+    lengths = np.asarray(chunk._lengths, dtype=np.int64)
+    offsets = np.asarray(chunk._offsets, dtype=np.int64)
     keep = lengths > 0
-    return resample(chunk._data, np.asarray(chunk._offsets)[keep], lengths[keep], n_points)
+    lengths, offsets = lengths[keep], offsets[keep]
+    packed = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64) if len(lengths) else offsets
+    gather = np.repeat(offsets - packed, lengths) + np.arange(int(lengths.sum()))
+    return resample(np.asarray(chunk._data)[gather], packed, lengths, n_points)
 
 
 def _stream(streamlines: Iterable[NDArray[Any]], chosen: NDArray[Any] | None,
@@ -97,7 +105,7 @@ def _trx_bundles(path: Path, budget: int, n_points: int, seed: int) -> list[tupl
         seq = trx.streamlines
         groups = dict(trx.groups) or {_stem(path): np.arange(len(seq))}
         out = []
-        for name, members in groups.items():
+        for name, members in sorted(groups.items()):
             members = np.asarray(members, dtype=np.int64)
             chosen = pick(len(members), budget, seed)
             idx = members if chosen is None else members[chosen]
