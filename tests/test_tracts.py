@@ -60,7 +60,8 @@ def test_bundle_names_of_tractseg_pyafq_and_buan_are_one_name(given, name):
 
 
 def test_hemisphere_of_a_bundle():
-    assert (hemisphere("AF_left"), hemisphere("CST_right"), hemisphere("CC_ForcepsMajor")) == ("lh", "rh", None)
+    names = ("AF_left", "CST_right", "CC_ForcepsMajor")
+    assert [hemisphere(n) for n in names] == ["lh", "rh", None]
 
 
 # -- streamlines ----------------------------------------------------------------------------
@@ -204,7 +205,8 @@ def test_tubes_have_outward_faces_and_radial_normals():
 
 # -- values ---------------------------------------------------------------------------------
 def test_bundle_columns_give_one_value_per_bundle():
-    tv = read_tract_values(pd.DataFrame({"subject": ["a", "b"], "AF_L": [1.0, 2.0], "Left Corticospinal": [3, 4]}))
+    df = pd.DataFrame({"subject": ["a", "b"], "AF_L": [1.0, 2.0], "Left Corticospinal": [3, 4]})
+    tv = read_tract_values(df)
     assert tv.images == ("a", "b") and tv.nodes == (("AF_left", 1), ("CST_left", 1))
     assert tv.row("b") == {"tract:AF_left": 2.0, "tract:CST_left": 4.0}
     assert all(np.isnan(v) for v in tv.row("zz").values())
@@ -265,10 +267,12 @@ def test_tracts_are_parts_of_the_scene_geometry(tiny, bundles):
 
 def test_valued_bundles_get_a_slot_or_a_slot_per_node(tiny, bundles):
     g = _scene(tiny, bundles, [("AF_left", 1), ("CST_right", 5)]).geometry
-    assert "tract:AF_left" in g.slot_of and [f"tract:CST_right:{k}" in g.slot_of for k in range(5)] == [True] * 5
+    assert "tract:AF_left" in g.slot_of
+    assert all(f"tract:CST_right:{k}" in g.slot_of for k in range(5))
     cst = next(p for p in g.parts if p.name == "tracts-rh")
     ring = cst.palette_index.reshape(20, 32, 6)
-    assert ring[0, 0, 0] == g.slot_of["tract:CST_right:0"] and ring[0, -1, 0] == g.slot_of["tract:CST_right:4"]
+    assert ring[0, 0, 0] == g.slot_of["tract:CST_right:0"]
+    assert ring[0, -1, 0] == g.slot_of["tract:CST_right:4"]
 
 
 def test_too_many_slots_are_refused(tiny, bundles):
