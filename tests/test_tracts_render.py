@@ -126,9 +126,9 @@ def test_dipy_bundles_in_the_default_template(minimal_bundles, tmp_path):
 
 def test_render_command_with_a_bundle_table(tmp_path, bundles, tiny):
     from click.testing import CliRunner
+    from PIL import Image
 
     from brainpainter.cli.main import cli
-    from PIL import Image
 
     (tmp_path / "fa.csv").write_text("Image-name-unique,AF_L,CST_R\nctrl,3,0\n")
     out = tmp_path / "out"
