@@ -297,3 +297,16 @@ def test_tract_values_without_tracts_are_refused(tmp_path):
 
     with pytest.raises(BrainPainterError, match="no --tracts"):
         prepare_run({"Left-Hippocampus": 1.0}, "dk", tract_values=str(tmp_path / "x.csv"))
+
+
+def test_the_stand_in_renderer_paints_value_coloured_bundles(tiny, bundles):
+    from brainpainter.rendering.geometry import Palette
+    from brainpainter.testing.stand_in import StandInRenderer
+
+    scene = _scene(tiny, bundles, [("AF_left", 1)])
+    r = StandInRenderer(scene)
+    colors = {"tract:AF_left": (1.0, 0.0, 0.0)}
+    img = r.render(Palette(colors, scene.geometry), get_view("subcortical"))
+    assert (img[..., 0] == 255).any() and (img[..., 1] == 0).any()
+    lateral = r.render(Palette(colors, scene.geometry), get_view("lateral-right"))
+    assert not ((lateral[..., 0] == 255) & (lateral[..., 1] == 0)).any()

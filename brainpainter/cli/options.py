@@ -36,7 +36,7 @@ RENDER_OPTION_NAMES = (
     "atlas", "views", "template", "surface", "gradient", "cmap", "vmin", "vmax", "center", "nan_color",
     "missing_color", "hide", "background", "transparent", "size", "quality", "shading", "lighting",
     "glass_opacity", "renderer", "atlas_config", "tracts", "tracts_space", "tracts_affine", "max_streamlines",
-    "tract_values", "tract_value",
+    "tract_values", "tract_value", "tract_radius",
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
@@ -141,6 +141,7 @@ def render_option_list(views: str | None = DEFAULT_VIEWS, size: str = DEFAULT_SI
         "max_streamlines": field_option(scene, "max_streamlines", type=click.IntRange(min=1)),
         "tract_values": field_option(scene, "tract_values", type=click.Path(dir_okay=False)),
         "tract_value": field_option(scene, "tract_value"),
+        "tract_radius": field_option(scene, "tract_radius"),
     }
 
 

@@ -67,6 +67,8 @@ class SceneParts(Protocol):
     def tracts(self) -> Tracts | None: ...
     @property
     def tract_nodes(self) -> tuple[tuple[str, int], ...]: ...
+    @property
+    def tract_radius(self) -> float: ...
 
 #: Colour of subcortical structures that have no colour in the mapping (sRGB).
 NEUTRAL_GREY = (0.8, 0.8, 0.8)
@@ -237,7 +239,8 @@ def _rgb(c: NDArray[Any]) -> RGB:
 SlotsFor = Callable[[list[str], "int | RGB", frozenset[str]], NDArray[Any]]
 
 
-def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor) -> list[PartGeometry]:
+def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
+                radius: float = 0.3) -> list[PartGeometry]:
     """The tubes of `tracts`, one part per hemisphere (``tracts-lh``, ``tracts-rh``; ``tracts`` for the rest).
 
     Parameters
@@ -248,6 +251,8 @@ def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor) -
         bundles absent are coloured by direction.
     slots_for : callable
         ``slots_for(keys, default_colour, hidden)``: the palette slot of each key, made on first use.
+    radius : float
+        Of the tubes, millimetres.
 
     Returns
     -------
@@ -286,7 +291,7 @@ def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor) -
         pick = hemis == hemi
         if not np.any(pick):
             continue
-        verts, normals, tris = tube_mesh(lines[pick])
+        verts, normals, tris = tube_mesh(lines[pick], radius)
         pal = np.repeat(point_slot[pick].ravel(), SIDES).astype(np.int32)
         out.append(PartGeometry(part, "tract", hemi or None, verts, normals, tris, pal,
                                 np.zeros(len(verts), np.float32), lines[pick].reshape(-1, 3)))
@@ -414,7 +419,7 @@ class SceneGeometry:
             add("subcortical", "subcortical", None, sub.vertices, sub.faces, face_slot,
                 np.zeros(len(sub.vertices), np.float32))
         if scene.tracts is not None:
-            parts += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for)
+            parts += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for, scene.tract_radius)
         for hemi in HEMIS:
             if hemi not in template.manifest.get("glass", {}):
                 continue

@@ -65,6 +65,7 @@ class SceneKwargs(TypedDict, total=False):
     max_streamlines: int
     tract_values: Any
     tract_value: str | None
+    tract_radius: float
 
 
 class RunnerKwargs(TypedDict, total=False):
@@ -112,6 +113,8 @@ class SceneOptions:
         (``bundle,node,value``); default: the main table's bundle columns, else direction colours.
     tract_value : str, optional
         The value column of a long profile table with several.
+    tract_radius : float
+        Radius of the streamlines' tubes, millimetres.
     """
 
     views: str | Sequence[str] | None = field(default=None, metadata={
@@ -141,6 +144,8 @@ class SceneOptions:
                 "colours."})
     tract_value: str | None = field(default=None, metadata={
         "help": "Value column of a long profile table with several (pyAFQ: dti_fa)."})
+    tract_radius: float = field(default=0.3, metadata={
+        "help": "Radius of the streamline tubes in millimetres (thicker for a few streamlines)."})
 
     def __post_init__(self) -> None:
         if self.surface not in SURFACES:
@@ -153,7 +158,10 @@ class SceneOptions:
         object.__setattr__(self, "tracts", tuple(str(t) for t in tracts))
         if self.tracts:
             self.tract_spec()  # fail now on a missing file or a bad affine
-        elif self.tract_values is not None:
+        if not 0.01 <= float(self.tract_radius) <= 10:
+            raise BrainPainterError(f"--tract-radius must be 0.01 to 10 millimetres; {self.tract_radius} was "
+                                    "given.")
+        if not self.tracts and self.tract_values is not None:
             raise BrainPainterError("--tract-values colours bundles, but no --tracts were given; give the "
                                     "tractograms to draw with --tracts FILE_OR_FOLDER.")
 

@@ -96,6 +96,7 @@ def load_scene(
     atlas_config: str | Path | None = None,
     tracts: TractSpec | None = None,
     tract_nodes: Iterable[tuple[str, int]] = (),
+    tract_radius: float = 0.3,
 ) -> tuple[Atlas, Scene]:
     """The atlas and the scene a renderer (or an exporter) draws; nothing is rendered.
 
@@ -131,6 +132,7 @@ def load_scene(
         medial_wall_color=to_rgb(medial_wall_color),
         tracts=None if tracts is None else tracts.load(template),
         tract_nodes=tuple((str(n), int(k)) for n, k in tract_nodes),
+        tract_radius=float(tract_radius),
     )
     return atlas, scene
 
@@ -156,6 +158,8 @@ class Painter:
     tract_nodes : iterable of (str, int)
         Bundles coloured by value: ``(name, 1)`` one colour, ``(name, n)`` a profile of
         `n` nodes; the others are coloured by direction.
+    tract_radius : float
+        Radius of the tubes, millimetres.
     """
 
     atlas: Atlas | str = "dk"
@@ -168,13 +172,14 @@ class Painter:
     atlas_config: str | Path | None = None
     tracts: TractSpec | None = None
     tract_nodes: Iterable[tuple[str, int]] = ()
+    tract_radius: float = 0.3
     _renderer: Any = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         self.tract_nodes = tuple(self.tract_nodes)
         self.atlas, self.scene = load_scene(self.atlas, self.template, self.surface, self.hidden,
                                             self.settings, self.medial_wall_color, self.atlas_config,
-                                            self.tracts, self.tract_nodes)
+                                            self.tracts, self.tract_nodes, self.tract_radius)
         self.template = self.scene.template
         from brainpainter.atlas import registry
         from brainpainter.rendering.pythons import require_bpy

@@ -113,6 +113,7 @@ class PainterSpec:
     medial_wall_color: RGB
     tracts: Any = None
     tract_nodes: tuple[tuple[str, int], ...] = ()
+    tract_radius: float = 0.3
 
     @classmethod
     def of(cls, painter: Painter, template: Any = None) -> PainterSpec:
@@ -130,7 +131,7 @@ class PainterSpec:
             surface=painter.surface, hidden=tuple(str(h) for h in painter.hidden),
             settings=painter.settings, renderer=painter.renderer, renderer_target=target,
             medial_wall_color=tuple(float(c) for c in painter.scene.medial_wall_color),  # type: ignore[arg-type]
-            tracts=painter.tracts, tract_nodes=tuple(painter.tract_nodes),
+            tracts=painter.tracts, tract_nodes=tuple(painter.tract_nodes), tract_radius=painter.tract_radius,
         )
 
     @property
@@ -158,7 +159,7 @@ class PainterSpec:
                 registry.renderers.register(self.renderer, lambda: obj, replace=True)
         return Painter(self.atlas, self.template, self.surface, self.hidden, self.settings,
                        self.renderer, self.medial_wall_color, tracts=self.tracts,
-                       tract_nodes=self.tract_nodes)
+                       tract_nodes=self.tract_nodes, tract_radius=self.tract_radius)
 
 
 @dataclass(frozen=True)

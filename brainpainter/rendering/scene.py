@@ -64,6 +64,8 @@ class Scene:
         ``tract:NAME``), ``(name, n)`` an along-tract profile of `n` nodes (keys
         ``tract:NAME:0`` ... ``tract:NAME:n-1``); bundles not listed are
         coloured by local direction (fixed palette slots).
+    tract_radius : float
+        Radius of the streamlines' tubes in millimetres.
     """
 
     template: Template
@@ -74,6 +76,7 @@ class Scene:
     medial_wall_color: RGB = (0.72, 0.72, 0.72)
     tracts: Tracts | None = None
     tract_nodes: tuple[tuple[str, int], ...] = ()
+    tract_radius: float = 0.3
 
     def __post_init__(self) -> None:
         if self.surface not in SURFACES:

@@ -15,6 +15,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
+from brainpainter.tracts.bundles import Tracts
+
+__all__ = ["DEFAULT_SPACE", "MAX_STREAMLINES", "N_POINTS", "SUFFIXES", "TractSpec", "Tracts", "bundle_files",
+           "read_affine"]
 
 if TYPE_CHECKING:
     from brainpainter.atlas.template import Template
@@ -27,45 +31,6 @@ N_POINTS = 32
 MAX_STREAMLINES = 20_000
 #: Default coordinate space of tractogram files (population bundles are in MNI152).
 DEFAULT_SPACE = "MNI152NLin2009cAsym"
-
-
-@dataclass(frozen=True)
-class Tracts:
-    """Bundles of streamlines in template coordinates.
-
-    Attributes
-    ----------
-    names : tuple of str
-        Canonical bundle names (:func:`brainpainter.tracts.names.canonical`), unique.
-    lines : ndarray of float32, shape (n_streamlines, n_points, 3)
-        Resampled, oriented consistently within each bundle, RAS millimetres of the template.
-    bundle : ndarray of int32, shape (n_streamlines,)
-        Index into `names` of each streamline.
-    counts : tuple of int
-        Streamlines of each bundle in its file(s) (before subsampling).
-    notes : tuple of str
-        What was drawn where it differs from what was given (subsampling).
-    """
-
-    names: tuple[str, ...]
-    lines: NDArray[Any]
-    bundle: NDArray[Any]
-    counts: tuple[int, ...]
-    notes: tuple[str, ...] = ()
-
-    @property
-    def n_points(self) -> int:
-        return int(self.lines.shape[1])
-
-    def drawn(self, i: int) -> int:
-        """Streamlines of bundle `i` that are drawn."""
-        return int(np.count_nonzero(self.bundle == i))
-
-    def summary(self) -> dict[str, Any]:
-        """JSON-ready: bundles, streamlines in the files and drawn, notes."""
-        return {"bundles": [{"name": n, "streamlines": c, "drawn": self.drawn(i)}
-                            for i, (n, c) in enumerate(zip(self.names, self.counts, strict=True))],
-                "notes": list(self.notes)}
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.tracts.model import Tracts
+from brainpainter.tracts.bundles import Tracts
 from brainpainter.tracts.names import canonical
 from brainpainter.tracts.streamlines import orient, pick, resample
 
