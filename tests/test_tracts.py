@@ -16,7 +16,7 @@ from brainpainter.tracts.model import TractSpec, bundle_files, read_affine
 from brainpainter.tracts.names import canonical, hemisphere
 from brainpainter.tracts.read import read_bundles
 from brainpainter.tracts.streamlines import direction_bins, orient, resample
-from brainpainter.tracts.tubes import tube_mesh
+from brainpainter.tracts.tubes import SIDES, TRIANGLE_BUDGET, points_for, tube_mesh
 from brainpainter.tracts.values import read_tract_values
 
 
@@ -203,6 +203,14 @@ def test_tubes_have_outward_faces_and_radial_normals():
     np.testing.assert_allclose(np.linalg.norm(verts - centre, axis=1), 1.0, atol=1e-5)
 
 
+def test_many_streamlines_get_fewer_points_to_stay_near_the_triangle_budget():
+    assert points_for(2_000, 32) == 32
+    assert points_for(10_000, 32) == 7
+    assert points_for(1_000_000, 32) == 6  # never fewer than MIN_POINTS
+    m = points_for(10_000, 32)
+    assert 10_000 * (m - 1) * SIDES * 2 <= TRIANGLE_BUDGET
+
+
 # -- values ---------------------------------------------------------------------------------
 def test_bundle_columns_give_one_value_per_bundle():
     df = pd.DataFrame({"subject": ["a", "b"], "AF_L": [1.0, 2.0], "Left Corticospinal": [3, 4]})
@@ -236,12 +244,11 @@ def test_wide_profiles_have_a_node_column():
 
 
 # -- the scene ------------------------------------------------------------------------------
-def test_views_show_tracts_of_their_hemispheres():
-    assert shows(get_view("subcortical"), "tract", None) and shows(get_view("subcortical"), "tract", "rh")
-    assert shows(get_view("lateral-left"), "tract", "lh")
-    assert not shows(get_view("lateral-left"), "tract", "rh")
-    assert not shows(get_view("medial-left"), "tract", None)  # commissural: not in front of the medial wall
-    assert shows(get_view("dorsal"), "tract", None)
+def test_subcortical_views_show_the_tracts_cortex_views_hide_them():
+    for name in ("subcortical", "subcortical-left", "subcortical-dorsal", "subcortical-ventral"):
+        assert shows(get_view(name), "tract", None) and shows(get_view(name), "tract", "rh")
+    for name in ("lateral-left", "medial-left", "dorsal"):
+        assert not shows(get_view(name), "tract", "lh") and not shows(get_view(name), "tract", None)
 
 
 def _scene(tiny, bundles, nodes=()):
@@ -258,7 +265,7 @@ def test_tracts_are_parts_of_the_scene_geometry(tiny, bundles):
     parts = {p.name: p for p in g.parts if p.kind == "tract"}
     assert set(parts) == {"tracts-lh", "tracts-rh"} and parts["tracts-lh"].hemi == "lh"
     af = parts["tracts-lh"]
-    assert af.vertices.shape == (20 * 32 * 6, 3) and af.triangles.max() < len(af.vertices)
+    assert af.vertices.shape == (20 * 32 * SIDES, 3) and af.triangles.max() < len(af.vertices)
     # direction colours: fixed slots with their colours as defaults, mostly green (anterior-posterior)
     rgb = g.default_rgb[af.palette_index]
     assert np.median(rgb[:, 1]) > 0.9 and np.median(rgb[:, 0]) < 0.3
@@ -270,7 +277,7 @@ def test_valued_bundles_get_a_slot_or_a_slot_per_node(tiny, bundles):
     assert "tract:AF_left" in g.slot_of
     assert all(f"tract:CST_right:{k}" in g.slot_of for k in range(5))
     cst = next(p for p in g.parts if p.name == "tracts-rh")
-    ring = cst.palette_index.reshape(20, 32, 6)
+    ring = cst.palette_index.reshape(20, 32, SIDES)
     assert ring[0, 0, 0] == g.slot_of["tract:CST_right:0"]
     assert ring[0, -1, 0] == g.slot_of["tract:CST_right:4"]
 

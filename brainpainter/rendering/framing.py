@@ -35,9 +35,8 @@ def shows(view: View, kind: str, hemi: str | None) -> bool:
     ``cortex`` views draw the cortex of ``view.hemis``; ``subcortical`` views
     draw every subcortical structure; both draw the glass hulls of ``view.glass``.
     Tracts: ``subcortical`` views draw all of them (inside the glass brain);
-    ``cortex`` views the tracts of the hemispheres they show (mostly hidden by
-    the opaque cortex), and commissural ones (hemi None) only when they show both
-    hemispheres (a medial view would put them in front of the medial wall).
+    ``cortex`` views none (the opaque cortex hides them, and a medial view would
+    put the other hemisphere's and the commissural ones in front of the medial wall).
 
     Parameters
     ----------
@@ -49,9 +48,7 @@ def shows(view: View, kind: str, hemi: str | None) -> bool:
     if kind == "glass":
         return hemi in view.glass
     if kind == "tract":
-        if view.content == "subcortical":
-            return True
-        return hemi in view.hemis if hemi is not None else {"lh", "rh"} <= set(view.hemis)
+        return view.content == "subcortical"
     if view.content == "subcortical":
         return kind == "subcortical"
     return kind == "cortex" and hemi in view.hemis

@@ -259,11 +259,15 @@ def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
     list of PartGeometry
     """
     from brainpainter.tracts.names import bundle_key, hemisphere
-    from brainpainter.tracts.streamlines import direction_bins
-    from brainpainter.tracts.tubes import SIDES, tube_mesh
+    from brainpainter.tracts.streamlines import direction_bins, resample
+    from brainpainter.tracts.tubes import SIDES, points_for, tube_mesh
 
     lines = tracts.lines
     n_lines, n_points = lines.shape[:2]
+    m = points_for(n_lines, n_points, SIDES)
+    if m < n_points:  # level of detail: fewer points per streamline for many streamlines
+        lines = resample(lines.reshape(-1, 3), np.arange(n_lines) * n_points, np.full(n_lines, n_points), m)
+        n_points = m
     point_slot = np.zeros((n_lines, n_points), np.int64)
     direction = [i for i, name in enumerate(tracts.names) if nodes.get(name, 0) < 1]
     if direction:
@@ -291,7 +295,7 @@ def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
         pick = hemis == hemi
         if not np.any(pick):
             continue
-        verts, normals, tris = tube_mesh(lines[pick], radius)
+        verts, normals, tris = tube_mesh(lines[pick], radius, SIDES)
         pal = np.repeat(point_slot[pick].ravel(), SIDES).astype(np.int32)
         out.append(PartGeometry(part, "tract", hemi or None, verts, normals, tris, pal,
                                 np.zeros(len(verts), np.float32), lines[pick].reshape(-1, 3)))
