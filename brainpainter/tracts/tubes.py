@@ -19,9 +19,9 @@ from numpy.typing import NDArray
 SIDES = 3
 #: Triangles of all tubes together, roughly: beyond it streamlines get fewer points (level of detail;
 #: a software rasteriser's time per image grows with the triangles).
-TRIANGLE_BUDGET = 400_000
+TRIANGLE_BUDGET = 250_000
 #: Fewest points per streamline the level of detail leaves.
-MIN_POINTS = 6
+MIN_POINTS = 5
 #: Tube radius in millimetres.
 RADIUS = 0.3
 
@@ -30,8 +30,9 @@ def points_for(n_streamlines: int, n_points: int, sides: int = SIDES,
                budget: int = TRIANGLE_BUDGET) -> int:
     """Points per streamline so that all tubes stay near `budget` triangles (``MIN_POINTS`` to `n_points`).
 
-    A tube of ``m`` points has ``(m - 1) * sides * 2`` triangles: 2,000 streamlines keep 32
-    points, 10,000 get 7 (a point every 10-15 mm of a long association bundle).
+    A tube of ``m`` points has ``(m - 1) * sides * 2`` triangles: with 3 sides, 1,000
+    streamlines keep 32 points, 3,000 get 14, 10,000 get 5 (a point every 20-25 mm of
+    a long association bundle: visibly polygonal up close, the price of the speed bar).
     """
     m = int(budget // max(1, n_streamlines * sides * 2)) + 1
     return max(min(MIN_POINTS, n_points), min(n_points, m))
