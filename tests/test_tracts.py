@@ -330,8 +330,8 @@ def test_glb_export_carries_the_tubes_with_vertex_colours(tmp_path, bundles, tin
     scene = trimesh.load(out)
     tubes = [g for name, g in scene.geometry.items() if name.startswith("tracts")]
     assert {name for name in scene.geometry if name.startswith("tracts")} == {"tracts-lh", "tracts-rh"}
-    colors = {name: np.asarray(g.visual.vertex_colors)[:, :3].mean(axis=0) for name, g in scene.geometry.items()
-              if name.startswith("tracts")}
+    colors = {name: np.asarray(g.visual.vertex_colors)[:, :3].mean(axis=0)
+              for name, g in scene.geometry.items() if name.startswith("tracts")}
     assert colors["tracts-lh"][0] > 200 and colors["tracts-lh"][2] < 50  # AF_left = 3: red
     assert colors["tracts-rh"][2] > 200 and colors["tracts-rh"][0] < 50  # CST_right = 0: blue
     assert all(len(g.faces) for g in tubes)
