@@ -335,3 +335,17 @@ def test_glb_export_carries_the_tubes_with_vertex_colours(tmp_path, bundles, tin
     assert colors["tracts-lh"][0] > 200 and colors["tracts-lh"][2] < 50  # AF_left = 3: red
     assert colors["tracts-rh"][2] > 200 and colors["tracts-rh"][0] < 50  # CST_right = 0: blue
     assert all(len(g.faces) for g in tubes)
+
+
+def test_a_movie_interpolates_bundle_values_between_key_frames(tmp_path, bundles, tiny):
+    from brainpainter.media.movie import make_movie
+    from brainpainter.testing.stand_in import StandInRenderer, stand_in
+
+    (tmp_path / "fa.csv").write_text("Image-name-unique,AF_L\nA,0\nB,3\n")
+    with stand_in() as name:
+        make_movie(str(tmp_path / "fa.csv"), out=tmp_path / "m.gif", views="subcortical", frames_per_step=4,
+                   tracts=[str(bundles)], tracts_space="template", template=str(tiny), renderer=name,
+                   width=64, height=48, vmin=0, vmax=3, gradient=["blue", "red"], progress=False)
+        reds = [colors["tract:AF_left"][0] for colors, _ in StandInRenderer.calls]
+    assert reds[0] == pytest.approx(0.0) and reds[-1] == pytest.approx(1.0)
+    assert np.all(np.diff(reds) > 0)
