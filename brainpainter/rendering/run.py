@@ -337,6 +337,8 @@ def write_images(run: Run, painter: Painter, runner: Runner, chosen: Sequence[in
             "files": [{"file": path.name, "image": table.images[i], "row": i, "view": view.name}
                       for path, (i, view) in zip(files, plan, strict=False)],
         }
+        if painter.scene.tracts is not None:  # what was drawn of the tractograms (subsampling notes)
+            manifest["tracts"] = painter.scene.tracts.summary()
         if tx is not None:
             tx.commit(manifest)  # verify every PNG, then publish them and the manifest last
     return files, images, manifest

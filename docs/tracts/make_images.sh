@@ -46,10 +46,9 @@ brainpainter figure "$work/thickness.csv" "${common[@]}" --tract-values "$work/f
 # 3. along-tract profiles: 100 nodes per bundle
 brainpainter figure "$work/thickness.csv" "${common[@]}" --tract-values "$work/profiles.csv" --vmin 0.3 --vmax 0.6 \
     --cmap plasma --views subcortical,subcortical-left --label "FA along the bundle" --out profiles.png
-# smaller files: a 256-colour palette
+# a smaller file: a 256-colour palette (not for the figures: their colour bars would show bands)
 python - <<'PY'
-from pathlib import Path
 from PIL import Image
-for p in ("direction.png", "bundles.png", "profiles.png"):
+for p in ("direction.png",):
     Image.open(p).convert("RGB").quantize(256, method=Image.Quantize.MEDIANCUT).save(p, optimize=True)
 PY
