@@ -349,3 +349,41 @@ def test_a_movie_interpolates_bundle_values_between_key_frames(tmp_path, bundles
         reds = [colors["tract:AF_left"][0] for colors, _ in StandInRenderer.calls]
     assert reds[0] == pytest.approx(0.0) and reds[-1] == pytest.approx(1.0)
     assert np.all(np.diff(reds) > 0)
+
+
+def test_a_worker_builds_the_same_scene_from_the_pickled_spec(tiny, bundles):
+    import pickle
+
+    from brainpainter.rendering.painter import Painter
+    from brainpainter.rendering.parallel import PainterSpec
+
+    painter = Painter("dk", str(tiny), tracts=TractSpec((str(bundles),), space="template", max_streamlines=30),
+                      tract_nodes=(("AF_left", 1),), tract_radius=0.5)
+    spec = pickle.loads(pickle.dumps(PainterSpec.of(painter, str(tiny))))
+    worker = spec.build()
+    assert worker.scene.tract_nodes == (("AF_left", 1),) and worker.scene.tract_radius == 0.5
+    np.testing.assert_array_equal(worker.scene.tracts.lines, painter.scene.tracts.lines)
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--tracts", "nowhere"], "--tracts 'nowhere' does not exist"),
+    (["--tract-values", "fa.csv"], "no --tracts were given"),
+    (["--tracts", "b", "--tracts-affine", "bad.txt"], "--tracts-affine"),
+    (["--tracts", "b", "--tract-radius", "50"], "--tract-radius must be"),
+])
+def test_bad_tract_options_are_one_line_errors_with_exit_code_2(tmp_path, monkeypatch, capsys, bundles, args,
+                                                                 message):
+    from brainpainter.cli.main import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "t.csv").write_text("Left-Hippocampus\n1\n")
+    (tmp_path / "fa.csv").write_text("AF_L\n1\n")
+    (tmp_path / "bad.txt").write_text("1 2\n")
+    (tmp_path / "b").symlink_to(bundles)
+    with pytest.raises(SystemExit) as exit_:
+        main(["render", "t.csv", "--out", "o", *args])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2, err
+    assert message in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
