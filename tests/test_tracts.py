@@ -357,8 +357,8 @@ def test_a_worker_builds_the_same_scene_from_the_pickled_spec(tiny, bundles):
     from brainpainter.rendering.painter import Painter
     from brainpainter.rendering.parallel import PainterSpec
 
-    painter = Painter("dk", str(tiny), tracts=TractSpec((str(bundles),), space="template", max_streamlines=30),
-                      tract_nodes=(("AF_left", 1),), tract_radius=0.5)
+    spec = TractSpec((str(bundles),), space="template", max_streamlines=30)
+    painter = Painter("dk", str(tiny), tracts=spec, tract_nodes=(("AF_left", 1),), tract_radius=0.5)
     spec = pickle.loads(pickle.dumps(PainterSpec.of(painter, str(tiny))))
     worker = spec.build()
     assert worker.scene.tract_nodes == (("AF_left", 1),) and worker.scene.tract_radius == 0.5

@@ -22,7 +22,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any, Unpack
+from typing import TYPE_CHECKING, Any, Unpack
 
 import numpy as np
 from numpy.typing import NDArray
@@ -33,6 +33,9 @@ from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.rendering.options import Options, RenderKwargs
 from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.settings import RGB
+
+if TYPE_CHECKING:
+    from brainpainter.rendering.run import Run
 
 FORMATS = ("glb", "html")
 #: Colour of subcortical structures the atlas does not colour (as the Blender renderer draws them).
@@ -379,6 +382,20 @@ EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cm
                   "tract_value", "tract_radius")
 
 
+def _row_meshes(run: Run, i: int) -> tuple[Scene, list[RegionMesh]]:
+    """The scene of a run and the meshes of its row `i`: regions, then the tracts' tubes."""
+    from brainpainter.rendering.painter import load_scene, region_colors
+    from brainpainter.rendering.run import tract_colors
+
+    table, opts, tv = run.table, run.options.scene, run.tract_values
+    atlas_obj, scene = load_scene(table.atlas, opts.template, opts.surface, opts.hide,
+                                  tracts=opts.tract_spec(), tract_nodes=tv.nodes if tv is not None else (),
+                                  tract_radius=opts.tract_radius)
+    meshes = region_meshes(scene, region_colors(table.row(i), atlas_obj, run.scale))
+    return scene, meshes + tract_meshes(
+        scene, tract_colors(tv.row(table.images[i]), run.scale) if tv is not None else {})
+
+
 def export(data: Any, out: str | Path, *, format: str | None = None, row: str | int | None = None,
            atlas: Atlas | str | None = None, title: str | None = None, label: str | None = None,
            **options: Unpack[RenderKwargs]) -> Path:
@@ -412,8 +429,7 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
         The file written.
     """
     from brainpainter.io.output import atomic_write_bytes
-    from brainpainter.rendering.painter import load_scene, region_colors
-    from brainpainter.rendering.run import prepare_run, tract_colors
+    from brainpainter.rendering.run import prepare_run
     from brainpainter.table.rows import select_rows
 
     out = Path(out)
@@ -432,15 +448,7 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
         raise BrainPainterError(f"the table has {len(table.images)} rows {shown}; export draws one: "
                                 f"choose it with --row (row= in Python), e.g. --row {table.images[-1]}")
     i = select_rows(table.images, [0 if row is None else row], what="--row")[0]
-    scene_options = checked.scene
-    atlas_obj, scene = load_scene(table.atlas, scene_options.template, scene_options.surface,
-                                  scene_options.hide, tracts=scene_options.tract_spec(),
-                                  tract_nodes=run.tract_values.nodes if run.tract_values is not None else (),
-                                  tract_radius=float(scene_options.tract_radius))
-    meshes = region_meshes(scene, region_colors(table.row(i), atlas_obj, run.scale))
-    if run.tract_values is not None:
-        tract_values = tract_colors(run.tract_values.row(table.images[i]), run.scale)
-    meshes += tract_meshes(scene, tract_values if run.tract_values is not None else {})
+    scene, meshes = _row_meshes(run, i)
     if not meshes:
         raise BrainPainterError("every region is hidden (--hide); nothing is left to export.")
     glb = glb_bytes(meshes)

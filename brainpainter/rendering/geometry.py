@@ -68,7 +68,7 @@ class SceneParts(Protocol):
     @property
     def tract_nodes(self) -> tuple[tuple[str, int], ...]: ...
     @property
-    def tract_radius(self) -> float: ...
+    def tract_radius(self) -> float | None: ...
 
 #: Colour of subcortical structures that have no colour in the mapping (sRGB).
 NEUTRAL_GREY = (0.8, 0.8, 0.8)
@@ -240,7 +240,7 @@ SlotsFor = Callable[[list[str], "int | RGB", frozenset[str]], NDArray[Any]]
 
 
 def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
-                radius: float = 0.3) -> list[PartGeometry]:
+                radius: float | None = None) -> list[PartGeometry]:
     """The tubes of `tracts`, one part per hemisphere (``tracts-lh``, ``tracts-rh``; ``tracts`` for the rest).
 
     Parameters
@@ -251,8 +251,8 @@ def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
         bundles absent are coloured by direction.
     slots_for : callable
         ``slots_for(keys, default_colour, hidden)``: the palette slot of each key, made on first use.
-    radius : float
-        Of the tubes, millimetres.
+    radius : float, optional
+        Of the tubes, millimetres; default :func:`brainpainter.tracts.tubes.auto_radius`.
 
     Returns
     -------
@@ -260,10 +260,11 @@ def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
     """
     from brainpainter.tracts.names import bundle_key, hemisphere
     from brainpainter.tracts.streamlines import direction_bins, resample
-    from brainpainter.tracts.tubes import SIDES, points_for, tube_mesh
+    from brainpainter.tracts.tubes import SIDES, auto_radius, points_for, tube_mesh
 
     lines = tracts.lines
     n_lines, n_points = lines.shape[:2]
+    radius = auto_radius(n_lines) if radius is None else radius
     m = points_for(n_lines, n_points, SIDES)
     if m < n_points:  # level of detail: fewer points per streamline for many streamlines
         lines = resample(lines.reshape(-1, 3), np.arange(n_lines) * n_points, np.full(n_lines, n_points), m)

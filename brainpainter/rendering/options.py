@@ -65,7 +65,7 @@ class SceneKwargs(TypedDict, total=False):
     max_streamlines: int
     tract_values: Any
     tract_value: str | None
-    tract_radius: float
+    tract_radius: float | None
 
 
 class RunnerKwargs(TypedDict, total=False):
@@ -113,8 +113,9 @@ class SceneOptions:
         (``bundle,node,value``); default: the main table's bundle columns, else direction colours.
     tract_value : str, optional
         The value column of a long profile table with several.
-    tract_radius : float
-        Radius of the streamlines' tubes, millimetres.
+    tract_radius : float, optional
+        Radius of the streamlines' tubes, millimetres; default by their number
+        (0.3 mm up to 2,000 streamlines, thinner beyond, 0.13 mm at 10,000).
     """
 
     views: str | Sequence[str] | None = field(default=None, metadata={
@@ -144,8 +145,9 @@ class SceneOptions:
                 "colours."})
     tract_value: str | None = field(default=None, metadata={
         "help": "Value column of a long profile table with several (pyAFQ: dti_fa)."})
-    tract_radius: float = field(default=0.3, metadata={
-        "help": "Radius of the streamline tubes in millimetres (thicker for a few streamlines)."})
+    tract_radius: float | None = field(default=None, metadata={
+        "help": "Radius of the streamline tubes in millimetres (default: 0.3 up to 2,000 streamlines, "
+                "thinner beyond)."})
 
     def __post_init__(self) -> None:
         if self.surface not in SURFACES:
@@ -158,7 +160,7 @@ class SceneOptions:
         object.__setattr__(self, "tracts", tuple(str(t) for t in tracts))
         if self.tracts:
             self.tract_spec()  # fail now on a missing file or a bad affine
-        if not 0.01 <= float(self.tract_radius) <= 10:
+        if self.tract_radius is not None and not 0.01 <= float(self.tract_radius) <= 10:
             raise BrainPainterError(f"--tract-radius must be 0.01 to 10 millimetres; {self.tract_radius} was "
                                     "given.")
         if not self.tracts and self.tract_values is not None:

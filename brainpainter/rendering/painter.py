@@ -96,7 +96,7 @@ def load_scene(
     atlas_config: str | Path | None = None,
     tracts: TractSpec | None = None,
     tract_nodes: Iterable[tuple[str, int]] = (),
-    tract_radius: float = 0.3,
+    tract_radius: float | None = None,
 ) -> tuple[Atlas, Scene]:
     """The atlas and the scene a renderer (or an exporter) draws; nothing is rendered.
 
@@ -132,7 +132,7 @@ def load_scene(
         medial_wall_color=to_rgb(medial_wall_color),
         tracts=None if tracts is None else tracts.load(template),
         tract_nodes=tuple((str(n), int(k)) for n, k in tract_nodes),
-        tract_radius=float(tract_radius),
+        tract_radius=None if tract_radius is None else float(tract_radius),
     )
     return atlas, scene
 
@@ -158,8 +158,9 @@ class Painter:
     tract_nodes : iterable of (str, int)
         Bundles coloured by value: ``(name, 1)`` one colour, ``(name, n)`` a profile of
         `n` nodes; the others are coloured by direction.
-    tract_radius : float
-        Radius of the tubes, millimetres.
+    tract_radius : float, optional
+        Radius of the tubes, millimetres (default: by the number of streamlines,
+        :func:`brainpainter.tracts.tubes.auto_radius`).
     """
 
     atlas: Atlas | str = "dk"
@@ -172,7 +173,7 @@ class Painter:
     atlas_config: str | Path | None = None
     tracts: TractSpec | None = None
     tract_nodes: Iterable[tuple[str, int]] = ()
-    tract_radius: float = 0.3
+    tract_radius: float | None = None
     _renderer: Any = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:

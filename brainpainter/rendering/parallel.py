@@ -113,7 +113,7 @@ class PainterSpec:
     medial_wall_color: RGB
     tracts: Any = None
     tract_nodes: tuple[tuple[str, int], ...] = ()
-    tract_radius: float = 0.3
+    tract_radius: float | None = None
 
     @classmethod
     def of(cls, painter: Painter, template: Any = None) -> PainterSpec:

@@ -53,7 +53,7 @@ class Run:
         nodes = self.tract_values.nodes if self.tract_values is not None else ()
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
                        scene.renderer, tracts=scene.tract_spec(), tract_nodes=nodes,
-                       tract_radius=float(scene.tract_radius))
+                       tract_radius=scene.tract_radius)
 
     def items(self, rows: Sequence[int]) -> list[tuple[int, View]]:
         """The images of `rows`: ``(row, view)`` for every row and view, row by row."""

@@ -64,8 +64,9 @@ class Scene:
         ``tract:NAME``), ``(name, n)`` an along-tract profile of `n` nodes (keys
         ``tract:NAME:0`` ... ``tract:NAME:n-1``); bundles not listed are
         coloured by local direction (fixed palette slots).
-    tract_radius : float
-        Radius of the streamlines' tubes in millimetres.
+    tract_radius : float, optional
+        Radius of the streamlines' tubes in millimetres; None: by their number
+        (:func:`brainpainter.tracts.tubes.auto_radius`).
     """
 
     template: Template
@@ -76,7 +77,7 @@ class Scene:
     medial_wall_color: RGB = (0.72, 0.72, 0.72)
     tracts: Tracts | None = None
     tract_nodes: tuple[tuple[str, int], ...] = ()
-    tract_radius: float = 0.3
+    tract_radius: float | None = None
 
     def __post_init__(self) -> None:
         if self.surface not in SURFACES:

@@ -28,7 +28,8 @@ SUFFIXES = (".trk", ".tck", ".trx")
 #: Points per streamline after resampling (the tube's rings; node colours are interpolated onto them).
 N_POINTS = 32
 #: Streamlines drawn at most, over all bundles; more are subsampled at random (with a note).
-MAX_STREAMLINES = 20_000
+#: 5,000 keep a figure legible and an image within a few region renders on a CPU rasteriser.
+MAX_STREAMLINES = 5_000
 #: Default coordinate space of tractogram files (population bundles are in MNI152).
 DEFAULT_SPACE = "MNI152NLin2009cAsym"
 

@@ -26,6 +26,22 @@ MIN_POINTS = 5
 RADIUS = 0.3
 
 
+#: Up to this many streamlines keep the full radius; beyond, the radius shrinks as 1/sqrt(n).
+FULL_RADIUS_STREAMLINES = 2_000
+#: Thinnest automatic radius (mm): still 1-2 pixels wide at 1200 pixels across the brain.
+MIN_RADIUS = 0.12
+
+
+def auto_radius(n_streamlines: int) -> float:
+    """Tube radius (mm) for `n_streamlines`: :data:`RADIUS` up to 2,000, then ``RADIUS * sqrt(2000 / n)``.
+
+    Many tubes overlap: the pixels drawn (a software rasteriser's cost) grow with
+    their total width, and thinner tubes keep a dense tractogram readable.
+    """
+    r = RADIUS * (FULL_RADIUS_STREAMLINES / max(n_streamlines, 1)) ** 0.5
+    return float(min(RADIUS, max(MIN_RADIUS, r)))
+
+
 def points_for(n_streamlines: int, n_points: int, sides: int = SIDES,
                budget: int = TRIANGLE_BUDGET) -> int:
     """Points per streamline so that all tubes stay near `budget` triangles (``MIN_POINTS`` to `n_points`).
