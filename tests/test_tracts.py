@@ -387,3 +387,12 @@ def test_bad_tract_options_are_one_line_errors_with_exit_code_2(tmp_path, monkey
     assert message in err and "Traceback" not in err
     assert len(err.strip().splitlines()) == 1
     assert not (tmp_path / "o").exists()
+
+
+def test_direction_colours_are_within_one_32nd_of_exact():
+    d = np.random.default_rng(0).normal(size=(5000, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    bins, colors = direction_bins(np.stack([np.zeros_like(d), d], 1))
+    exact = np.abs(d) / np.abs(d).max(axis=1, keepdims=True)
+    assert np.abs(colors[bins[:, 0]] - exact).max() <= 1 / 32 + 1e-6
+    assert len(np.unique(bins)) <= 817

@@ -131,8 +131,9 @@ def direction_rgb(lines: NDArray[Any]) -> NDArray[Any]:
     return rgb
 
 
-#: Levels per axis of the direction colours' slots (9**3 = 729 slots; a channel is off by <= 1/16).
-DIRECTION_LEVELS = 9
+#: Levels per channel of the direction colours' slots: a channel is off by at most 1/32 (8 of 255);
+#: at most 3 * 17**2 - 3 * 17 + 1 = 817 slots are used (colours whose largest channel is 1).
+DIRECTION_LEVELS = 17
 
 
 def direction_bins(lines: NDArray[Any], levels: int = DIRECTION_LEVELS) -> tuple[NDArray[Any], NDArray[Any]]:
@@ -149,10 +150,13 @@ def direction_bins(lines: NDArray[Any], levels: int = DIRECTION_LEVELS) -> tuple
     bins : ndarray of int64, shape (n_streamlines, n_points)
         Slot of each point's direction colour, ``0 .. levels**3 - 1``.
     colors : ndarray of float32, shape (levels**3, 3)
-        sRGB 0-1 of each slot: the bin's direction, scaled so its largest channel is 1
-        (a left-right streamline is pure red, a diagonal one yellow).
+        sRGB 0-1 of each slot. The direction colour (|dx|, |dy|, |dz|) is scaled so its
+        largest channel is 1 (a left-right streamline is pure red, a diagonal one yellow)
+        and then quantised, each channel to within ``1 / (2 * (levels - 1))``.
     """
-    rgb = direction_rgb(lines)
+    rgb = direction_rgb(lines).astype(np.float64)
+    top = rgb.max(axis=-1, keepdims=True)
+    rgb = np.where(top > 0, rgb / np.where(top > 0, top, 1.0), 1.0)
     q = np.clip(np.rint(rgb * (levels - 1)), 0, levels - 1).astype(np.int64)
     bins = (q[..., 0] * levels + q[..., 1]) * levels + q[..., 2]
     grid = np.stack(np.meshgrid(*[np.arange(levels)] * 3, indexing="ij"), -1).reshape(-1, 3) / (levels - 1)
