@@ -295,6 +295,7 @@ def test_a_bundle_table_alone_prepares_a_run(tmp_path, bundles):
     (tmp_path / "t.csv").write_text("Image-name-unique,AF_L,CST_R\nctrl,1,2\npat,2,3\n")
     run = prepare_run(str(tmp_path / "t.csv"), tracts=[str(bundles)], tracts_space="template", vmin=0, vmax=3)
     assert run.table.images == ("ctrl", "pat") and run.tract_values is not None
+    assert [v.name for v in run.views] == ["subcortical", "subcortical-dorsal"]  # views that show tracts
     colors = run.item(1, get_view("subcortical")).colors
     assert colors["tract:AF_left"] == pytest.approx(run.scale(np.array([2.0]))[0][:3])
 

@@ -152,8 +152,10 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     views = options.scene.views
     if views is None and atlas_obj is not None and not atlas_obj.cortical():
         views = VOLUME_VIEWS  # a volumetric atlas alone: its structures, not a grey cortex
-    view_list = parse_views(views if views is None or isinstance(views, str) else list(views))
     tract_values, only_tracts = run_tract_values(data, options)
+    if views is None and only_tracts:
+        views = VOLUME_VIEWS  # bundle values alone: the views that show tracts
+    view_list = parse_views(views if views is None or isinstance(views, str) else list(views))
     if only_tracts and tract_values is not None:
         table = tracts_only_table(tract_values, atlas_obj, data)
     else:
