@@ -136,12 +136,17 @@ def test_render_command_with_a_bundle_table(tmp_path, bundles, tiny):
         "render", str(tmp_path / "fa.csv"), "--tracts", str(bundles), "--tracts-space", "template",
         "--template", str(tiny), "--views", "subcortical-dorsal", "--size", "320x240", "--shading", "flat",
         "--glass-opacity", "0", "--vmin", "0", "--vmax", "3", "--gradient", "blue,red",
-        "--max-streamlines", "60", "--out", str(out)])
+        "--max-streamlines", "60", "--quality", "fast", "--tract-radius", "1", "--out", str(out)])
     assert result.exit_code == 0, result.output
     img = np.asarray(Image.open(out / "ctrl_subcortical-dorsal.png").convert("RGB"))
     red, blue = _mask(img, RED, 20), _mask(img, BLUE, 20)
     assert red.sum() > 200 and blue.sum() > 200
     assert np.nonzero(red)[1].mean() < np.nonzero(blue)[1].mean()
+    # each bundle's median pixel colour is its colour on the scale (3 -> red, 0 -> blue), flat shading
+    left = np.arange(img.shape[1]) < img.shape[1] // 2
+    for side, rgb in ((left, RED), (~left, BLUE)):
+        drawn = (np.ptp(img.astype(int), axis=-1) > 60) & side[None, :]
+        assert np.abs(np.median(img[drawn], axis=0) - np.asarray(rgb) * 255).max() <= 12
     assert os.path.exists(out / "manifest.json")
     assert "tracts: 2 bundle(s) (AF_left, CST_right), 60 streamlines drawn" in result.output
     assert "note: AF_left: 30 of 40 streamlines drawn" in result.output
