@@ -39,3 +39,12 @@ def test_suite_catches_a_mirrored_renderer():
     pytest.importorskip("bpy")
     with pytest.raises(AssertionError, match="orientation: lateral-left"):
         check_renderer(_Mirrored, checks=("orientation",))
+
+
+@pytest.mark.render
+def test_tracts_check_passes_and_catches_a_mirrored_renderer():
+    pytest.importorskip("bpy")
+    report = check_renderer("blender", checks=("tracts",))
+    assert report["tracts_worst_px"] < 0.05 * 160
+    with pytest.raises(AssertionError, match="tracts: subcortical-dorsal: bundle tract:AF_left is centred"):
+        check_renderer(_Mirrored, checks=("tracts",))

@@ -378,6 +378,13 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
         f"({s['n_images']} row(s); {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
         f"{len(s['unmatched_columns'])} unmatched column(s))"
     )
+    tracts = result.manifest.get("tracts")
+    if tracts:
+        drawn = sum(b["drawn"] for b in tracts["bundles"])
+        click.echo(f"tracts: {len(tracts['bundles'])} bundle(s) "
+                   f"({', '.join(b['name'] for b in tracts['bundles'])}), {drawn:,} streamlines drawn")
+        for note in tracts["notes"]:
+            click.echo(f"note: {note}")
     w = result.workers
     if w.get("backend") in ("LocalRunner", "DaskRunner"):
         where = "processes" if w["backend"] == "LocalRunner" else "Dask workers"

@@ -35,7 +35,8 @@ DEFAULT_SIZE = RenderSettings().size
 RENDER_OPTION_NAMES = (
     "atlas", "views", "template", "surface", "gradient", "cmap", "vmin", "vmax", "center", "nan_color",
     "missing_color", "hide", "background", "transparent", "size", "quality", "shading", "lighting",
-    "glass_opacity", "renderer", "atlas_config",
+    "glass_opacity", "renderer", "atlas_config", "tracts", "tracts_space", "tracts_affine", "max_streamlines",
+    "tract_values", "tract_value", "tract_radius",
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
@@ -133,6 +134,14 @@ def render_option_list(views: str | None = DEFAULT_VIEWS, size: str = DEFAULT_SI
            for name in ("quality", "shading", "lighting", "glass_opacity")},
         "renderer": field_option(scene, "renderer"),
         "atlas_config": field_option(scene, "atlas_config", type=click.Path(dir_okay=False)),
+        "tracts": field_option(scene, "tracts", multiple=True, default=(), show_default=False,
+                               type=click.Path()),
+        "tracts_space": field_option(scene, "tracts_space"),
+        "tracts_affine": field_option(scene, "tracts_affine", type=click.Path(dir_okay=False)),
+        "max_streamlines": field_option(scene, "max_streamlines", type=click.IntRange(min=1)),
+        "tract_values": field_option(scene, "tract_values", type=click.Path(dir_okay=False)),
+        "tract_value": field_option(scene, "tract_value"),
+        "tract_radius": field_option(scene, "tract_radius"),
     }
 
 
@@ -173,4 +182,6 @@ def render_kwargs(options: dict[str, Any]) -> dict[str, Any]:
         out["background"] = None
     if "hide" in out:
         out["hide"] = list(out["hide"])
+    if "tracts" in out:
+        out["tracts"] = list(out["tracts"])
     return out

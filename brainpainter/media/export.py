@@ -22,7 +22,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any, Unpack
+from typing import TYPE_CHECKING, Any, Unpack
 
 import numpy as np
 from numpy.typing import NDArray
@@ -33,6 +33,9 @@ from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.rendering.options import Options, RenderKwargs
 from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.settings import RGB
+
+if TYPE_CHECKING:
+    from brainpainter.rendering.run import Run
 
 FORMATS = ("glb", "html")
 #: Colour of subcortical structures the atlas does not colour (as the Blender renderer draws them).
@@ -59,6 +62,8 @@ class RegionMesh:
         seams at region borders).
     color : tuple of float, shape (3,)
         sRGB 0-1.
+    vertex_colors : ndarray of float32, shape (n_vertices, 3), optional
+        sRGB 0-1 per vertex (white-matter tracts coloured along their length); `color` is then their mean.
     """
 
     name: str
@@ -67,6 +72,7 @@ class RegionMesh:
     faces: NDArray[Any]
     normals: NDArray[Any]
     color: RGB
+    vertex_colors: NDArray[Any] | None = None
 
 
 def _vertex_normals(vertices: NDArray[Any], faces: NDArray[Any]) -> NDArray[Any]:
@@ -132,6 +138,39 @@ def region_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
     return out
 
 
+def tract_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
+    """The scene's white-matter tubes (its parts of kind ``tract``), coloured per vertex by `colors`.
+
+    Parameters
+    ----------
+    scene : Scene
+        With ``scene.tracts`` (none: an empty list).
+    colors : dict of str to (r, g, b)
+        sRGB 0-1 by palette key (``tract:AF_left``, ``tract:AF_left:17``); direction
+        colours need none.
+
+    Returns
+    -------
+    list of RegionMesh
+        One per tract part (``tracts-lh``, ``tracts-rh``, ``tracts``), part ``tracts``.
+    """
+    if scene.tracts is None:
+        return []
+    from brainpainter.rendering.geometry import Palette
+
+    geometry = scene.geometry
+    rgb = Palette(colors, geometry).rgb
+    out = []
+    for p in geometry.parts:
+        if p.kind != "tract":
+            continue
+        per_vertex = rgb[p.palette_index]
+        mean = per_vertex.mean(axis=0)
+        out.append(RegionMesh(p.name, "tracts", p.vertices, p.triangles.astype(np.int32), p.normals,
+                              (float(mean[0]), float(mean[1]), float(mean[2])), per_vertex))
+    return out
+
+
 def srgb_to_linear(c: NDArray[Any]) -> NDArray[Any]:
     """sRGB 0-1 -> linear 0-1 (glTF material colours are linear)."""
     c = np.asarray(c, dtype=float)
@@ -150,14 +189,18 @@ def glb_bytes(meshes: Sequence[RegionMesh]) -> bytes:
 
     scene = trimesh.Scene()
     for m in meshes:
-        linear = srgb_to_linear(np.asarray(m.color))
-        material = PBRMaterial(  # type: ignore[no-untyped-call]
-            name=m.name, baseColorFactor=[*linear, 1.0], metallicFactor=0.0, roughnessFactor=0.75,
-            doubleSided=True)
+        if m.vertex_colors is not None:  # COLOR_0 (glTF vertex colours are linear)
+            linear_v = np.round(srgb_to_linear(m.vertex_colors) * 255).astype(np.uint8)
+            rgba = np.column_stack([linear_v, np.full(len(linear_v), 255, np.uint8)])
+            visual: Any = trimesh.visual.ColorVisuals(vertex_colors=rgba)
+        else:
+            linear = srgb_to_linear(np.asarray(m.color))
+            material = PBRMaterial(  # type: ignore[no-untyped-call]
+                name=m.name, baseColorFactor=[*linear, 1.0], metallicFactor=0.0, roughnessFactor=0.75,
+                doubleSided=True)
+            visual = trimesh.visual.TextureVisuals(material=material)  # type: ignore[no-untyped-call]
         mesh = trimesh.Trimesh(vertices=m.vertices @ RAS_TO_GLTF.T, faces=m.faces,
-                               vertex_normals=m.normals @ RAS_TO_GLTF.T, process=False,
-                               visual=trimesh.visual.TextureVisuals(  # type: ignore[no-untyped-call]
-                                   material=material))
+                               vertex_normals=m.normals @ RAS_TO_GLTF.T, process=False, visual=visual)
         hex_color = "#{:02x}{:02x}{:02x}".format(*(round(float(v) * 255) for v in m.color))
         scene.add_geometry(mesh, node_name=m.name, geom_name=m.name,
                            metadata={"part": m.part, "color": hex_color})
@@ -195,11 +238,11 @@ def html_page(glb: bytes, *, title: str, meshes: Sequence[RegionMesh], backgroun
     """
     bg = "#{:02x}{:02x}{:02x}".format(*(round(v * 255) for v in (background or (1.0, 1.0, 1.0))))
     dark = background is not None and sum(background) < 1.5
-    parts = [p for p in ("lh", "rh", "subcortical") if any(m.part == p for m in meshes)]
+    parts = [p for p in ("lh", "rh", "subcortical", "tracts") if any(m.part == p for m in meshes)]
     config = {"azimuth": azimuth, "parts": parts, "background": bg}
     bar = (f'<img id="colorbar" alt="colour bar" src="data:image/png;base64,'
            f'{base64.b64encode(colorbar_png).decode()}">' if colorbar_png else "")
-    names = {"lh": "left cortex", "rh": "right cortex", "subcortical": "subcortical"}
+    names = {"lh": "left cortex", "rh": "right cortex", "subcortical": "subcortical", "tracts": "tracts"}
     toggles = "".join(f'<label><input type="checkbox" data-part="{p}" checked> {names[p]}</label>'
                       for p in parts)
     return _PAGE.format(
@@ -292,7 +335,7 @@ _VIEWER_JS = r"""
       meshes.push(o);
       lit.set(o, o.material);
       const m = o.material.clone();
-      flat.set(o, new T.MeshBasicMaterial({ color: m.color, side: m.side }));
+      flat.set(o, new T.MeshBasicMaterial({ color: m.color, side: m.side, vertexColors: m.vertexColors }));
     });
     scene.add(gltf.scene);
     const box = new T.Box3().setFromObject(gltf.scene);
@@ -335,7 +378,22 @@ _VIEWER_JS = r"""
 #: The options of a run that an export uses (it renders no image: no size, views, quality or workers).
 EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cmap", "vmin", "vmax", "center",
                   "nan_color", "missing_color", "background", "image_column", "value", "region_column",
-                  "strict")
+                  "strict", "tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_values",
+                  "tract_value", "tract_radius")
+
+
+def _row_meshes(run: Run, i: int) -> tuple[Scene, list[RegionMesh]]:
+    """The scene of a run and the meshes of its row `i`: regions, then the tracts' tubes."""
+    from brainpainter.rendering.painter import load_scene, region_colors
+    from brainpainter.rendering.run import tract_colors
+
+    table, opts, tv = run.table, run.options.scene, run.tract_values
+    atlas_obj, scene = load_scene(table.atlas, opts.template, opts.surface, opts.hide,
+                                  tracts=opts.tract_spec(), tract_nodes=tv.nodes if tv is not None else (),
+                                  tract_radius=opts.tract_radius)
+    meshes = region_meshes(scene, region_colors(table.row(i), atlas_obj, run.scale))
+    return scene, meshes + tract_meshes(
+        scene, tract_colors(tv.row(table.images[i]), run.scale) if tv is not None else {})
 
 
 def export(data: Any, out: str | Path, *, format: str | None = None, row: str | int | None = None,
@@ -371,7 +429,6 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
         The file written.
     """
     from brainpainter.io.output import atomic_write_bytes
-    from brainpainter.rendering.painter import load_scene, region_colors
     from brainpainter.rendering.run import prepare_run
     from brainpainter.table.rows import select_rows
 
@@ -391,10 +448,7 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
         raise BrainPainterError(f"the table has {len(table.images)} rows {shown}; export draws one: "
                                 f"choose it with --row (row= in Python), e.g. --row {table.images[-1]}")
     i = select_rows(table.images, [0 if row is None else row], what="--row")[0]
-    scene_options = checked.scene
-    atlas_obj, scene = load_scene(table.atlas, scene_options.template, scene_options.surface,
-                                  scene_options.hide)
-    meshes = region_meshes(scene, region_colors(table.row(i), atlas_obj, run.scale))
+    scene, meshes = _row_meshes(run, i)
     if not meshes:
         raise BrainPainterError("every region is hidden (--hide); nothing is left to export.")
     glb = glb_bytes(meshes)

@@ -56,7 +56,7 @@ from brainpainter.media.timeline import (
 from brainpainter.rendering.options import Options, RenderKwargs, take
 from brainpainter.rendering.painter import region_colors
 from brainpainter.rendering.parallel import Item, Runner
-from brainpainter.rendering.run import Run, make_runner, prepare_run
+from brainpainter.rendering.run import Run, make_runner, prepare_run, tract_colors
 from brainpainter.rendering.views import View
 from brainpainter.table.rows import select_rows
 
@@ -343,6 +343,11 @@ class MovieFrames:
             values = interpolate(key_values[a], key_values[b], weight)
             colors = region_colors(dict(zip(table.regions, values.tolist(), strict=True)), table.atlas,
                                    self.run.scale)
+            tv = self.run.tract_values
+            if tv is not None:  # bundle values (and profiles) change between key frames like regions
+                ra, rb = (tv.row(table.images[self.keys.rows[k]]) for k in (a, b))
+                tvals = interpolate(np.array(list(ra.values())), np.array(list(rb.values())), weight)
+                colors.update(tract_colors(dict(zip(ra, tvals.tolist(), strict=True)), self.run.scale))
             label = names[a] if a == b else f"{names[a]} {ARROW} {names[b]} ({weight:.3f})"
             yield [Item(colors, view, label=label) for view in state_views]
 

@@ -24,8 +24,9 @@ from brainpainter.rendering.views import View
 #: Free space around the framed objects, as a fraction of their extent.
 MARGIN = 0.04
 _POLE_TOLERANCE = 1e-6
-#: Kinds of scene part: cortex of one hemisphere, all subcortical structures, one glass hull.
-PART_KINDS = ("cortex", "subcortical", "glass")
+#: Kinds of scene part: cortex of one hemisphere, all subcortical structures, one glass hull, the
+#: white-matter tracts of one hemisphere (or the commissural and midline ones: hemi None).
+PART_KINDS = ("cortex", "subcortical", "glass", "tract")
 
 
 def shows(view: View, kind: str, hemi: str | None) -> bool:
@@ -33,16 +34,21 @@ def shows(view: View, kind: str, hemi: str | None) -> bool:
 
     ``cortex`` views draw the cortex of ``view.hemis``; ``subcortical`` views
     draw every subcortical structure; both draw the glass hulls of ``view.glass``.
+    Tracts: ``subcortical`` views draw all of them (inside the glass brain);
+    ``cortex`` views none (the opaque cortex hides them, and a medial view would
+    put the other hemisphere's and the commissural ones in front of the medial wall).
 
     Parameters
     ----------
     view : View
-    kind : {"cortex", "subcortical", "glass"}
+    kind : {"cortex", "subcortical", "glass", "tract"}
     hemi : {"lh", "rh"} or None
-        None for the subcortical part.
+        None for the subcortical part and for commissural tracts.
     """
     if kind == "glass":
         return hemi in view.glass
+    if kind == "tract":
+        return view.content == "subcortical"
     if view.content == "subcortical":
         return kind == "subcortical"
     return kind == "cortex" and hemi in view.hemis

@@ -15,7 +15,14 @@ smooth across region borders).
 Palette slots ``0, 1, 2`` are fixed: the medial-wall colour (cortex labels
 without a colour), the neutral grey (subcortical structures without a
 colour) and the glass colour; slots from 3 on are region keys
-(:attr:`SceneGeometry.keys`).
+(:attr:`SceneGeometry.keys`), then the tracts' keys (``tract:AF_left`` for a
+bundle's one colour, ``tract:AF_left:17`` for node 17 of an along-tract
+profile, ``tract-direction:i`` for the fixed direction colours).
+
+White-matter tracts are parts of kind ``tract`` (``tracts-lh``, ``tracts-rh``
+and ``tracts`` for commissural bundles): triangle tubes built here
+(:func:`brainpainter.tracts.tubes.tube_mesh`), so a renderer draws them as it
+draws any opaque part.
 """
 
 from __future__ import annotations
@@ -34,6 +41,7 @@ from brainpainter.rendering.views import View
 
 if TYPE_CHECKING:
     from brainpainter.atlas.template import Template
+    from brainpainter.tracts.model import Tracts
 
 
 class SceneParts(Protocol):
@@ -55,6 +63,12 @@ class SceneParts(Protocol):
     def settings(self) -> RenderSettings: ...
     @property
     def medial_wall_color(self) -> RGB: ...
+    @property
+    def tracts(self) -> Tracts | None: ...
+    @property
+    def tract_nodes(self) -> tuple[tuple[str, int], ...]: ...
+    @property
+    def tract_radius(self) -> float | None: ...
 
 #: Colour of subcortical structures that have no colour in the mapping (sRGB).
 NEUTRAL_GREY = (0.8, 0.8, 0.8)
@@ -73,8 +87,9 @@ class PartGeometry:
     Attributes
     ----------
     name : str
-        ``cortex-lh``, ``cortex-rh``, ``subcortical``, ``glass-lh``, ``glass-rh``.
-    kind : {"cortex", "subcortical", "glass"}
+        ``cortex-lh``, ``cortex-rh``, ``subcortical``, ``glass-lh``, ``glass-rh``,
+        ``tracts-lh``, ``tracts-rh``, ``tracts``.
+    kind : {"cortex", "subcortical", "glass", "tract"}
     hemi : {"lh", "rh"} or None
     vertices : ndarray of float32, shape (n_vertices, 3)
         RAS millimetres.
@@ -210,6 +225,84 @@ def _template_sulc(template: Template, labels: str, hemi: str, cm: Any) -> NDArr
     return _depth_0_1(np.asarray(raw, dtype=np.float64))  # FreeSurfer's sulc: sulci positive
 
 
+#: Palette slots at most: the palette is a 1-D texture, whose width GPUs limit (16384 on most,
+#: llvmpipe included); a scene needing more is refused with advice.
+MAX_SLOTS = 16_384
+#: Palette key prefix of the direction colours' slots.
+DIRECTION_KEY = "tract-direction:"
+
+
+def _rgb(c: NDArray[Any]) -> RGB:
+    return (float(c[0]), float(c[1]), float(c[2]))
+
+
+SlotsFor = Callable[[list[str], "int | RGB", frozenset[str]], NDArray[Any]]
+
+
+def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
+                radius: float | None = None) -> list[PartGeometry]:
+    """The tubes of `tracts`, one part per hemisphere (``tracts-lh``, ``tracts-rh``; ``tracts`` for the rest).
+
+    Parameters
+    ----------
+    tracts : Tracts
+    nodes : mapping of str to int
+        Bundle name -> 1 (one colour) or the number of nodes of its profile;
+        bundles absent are coloured by direction.
+    slots_for : callable
+        ``slots_for(keys, default_colour, hidden)``: the palette slot of each key, made on first use.
+    radius : float, optional
+        Of the tubes, millimetres; default :func:`brainpainter.tracts.tubes.auto_radius`.
+
+    Returns
+    -------
+    list of PartGeometry
+    """
+    from brainpainter.tracts.names import bundle_key, hemisphere
+    from brainpainter.tracts.streamlines import direction_bins, resample
+    from brainpainter.tracts.tubes import SIDES, auto_radius, points_for, tube_mesh
+
+    lines = tracts.lines
+    n_lines, n_points = lines.shape[:2]
+    radius = auto_radius(n_lines) if radius is None else radius
+    m = points_for(n_lines, n_points, SIDES)
+    if m < n_points:  # level of detail: fewer points per streamline for many streamlines
+        lines = resample(lines.reshape(-1, 3), np.arange(n_lines) * n_points, np.full(n_lines, n_points), m)
+        n_points = m
+    point_slot = np.zeros((n_lines, n_points), np.int64)
+    direction = [i for i, name in enumerate(tracts.names) if nodes.get(name, 0) < 1]
+    if direction:
+        pick = np.isin(tracts.bundle, direction)
+        bins, colors = direction_bins(lines[pick])
+        used = np.unique(bins)
+        slot = np.zeros(len(colors), np.int64)
+        for b in used:
+            slot[b] = slots_for([f"{DIRECTION_KEY}{b}"], _rgb(colors[b]), frozenset())[0]
+        point_slot[pick] = slot[bins]
+    for i, name in enumerate(tracts.names):
+        n = nodes.get(name, 0)
+        if n < 1:
+            continue
+        if n == 1:
+            node_slot = slots_for([bundle_key(name)], NEUTRAL_SLOT, frozenset())
+        else:
+            node_slot = slots_for([bundle_key(name, k) for k in range(n)], NEUTRAL_SLOT, frozenset())
+        # point j of n_points takes the node at the same fraction of the streamline's length
+        node_of_point = np.rint(np.arange(n_points) * (n - 1) / max(n_points - 1, 1)).astype(np.int64)
+        point_slot[tracts.bundle == i] = node_slot[node_of_point]
+    hemis = np.array([hemisphere(n) or "" for n in tracts.names])[tracts.bundle]
+    out = []
+    for hemi, part in (("lh", "tracts-lh"), ("rh", "tracts-rh"), ("", "tracts")):
+        pick = hemis == hemi
+        if not np.any(pick):
+            continue
+        verts, normals, tris = tube_mesh(lines[pick], radius, SIDES)
+        pal = np.repeat(point_slot[pick].ravel(), SIDES).astype(np.int32)
+        out.append(PartGeometry(part, "tract", hemi or None, verts, normals, tris, pal,
+                                np.zeros(len(verts), np.float32), lines[pick].reshape(-1, 3)))
+    return out
+
+
 class Palette(Mapping[str, RGB]):
     """The colours of one image: a mapping region key -> sRGB, and the slot array renderers draw.
 
@@ -288,7 +381,7 @@ class SceneGeometry:
         slot_of: dict[str, int] = {}
         parts: list[PartGeometry] = []
 
-        def slots_for(names: list[str], default: int, drop: frozenset[str]) -> NDArray[Any]:
+        def slots_for(names: list[str], default: int | RGB, drop: frozenset[str]) -> NDArray[Any]:
             out = np.full(len(names), -1, dtype=np.int64)
             for i, key in enumerate(names):
                 if key in drop:
@@ -296,7 +389,7 @@ class SceneGeometry:
                 if key not in slot_of:
                     slot_of[key] = N_FIXED_SLOTS + len(keys)
                     keys.append(key)
-                    defaults.append(defaults[default])
+                    defaults.append(defaults[default] if isinstance(default, int) else default)
                 out[i] = slot_of[key]
             return out
 
@@ -330,12 +423,19 @@ class SceneGeometry:
                 np.asarray(sub.face_label, np.int64)]
             add("subcortical", "subcortical", None, sub.vertices, sub.faces, face_slot,
                 np.zeros(len(sub.vertices), np.float32))
+        if scene.tracts is not None:
+            parts += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for, scene.tract_radius)
         for hemi in HEMIS:
             if hemi not in template.manifest.get("glass", {}):
                 continue
             verts, faces = template.glass(hemi)
             add(f"glass-{hemi}", "glass", hemi, verts, faces, np.full(len(faces), GLASS_SLOT),
                 np.zeros(len(verts), np.float32))
+        if N_FIXED_SLOTS + len(keys) > MAX_SLOTS:
+            raise BrainPainterError(
+                f"the scene needs {N_FIXED_SLOTS + len(keys):,} palette slots (regions, bundles and "
+                f"along-tract nodes); at most {MAX_SLOTS:,} fit a palette texture; give profiles with fewer "
+                "nodes or fewer bundles.")
         self.parts: tuple[PartGeometry, ...] = tuple(parts)
         self.keys: tuple[str, ...] = tuple(keys)
         self.slot_of = slot_of

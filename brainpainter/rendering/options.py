@@ -39,6 +39,7 @@ from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.rendering.settings import RenderSettings, SettingsKwargs
 from brainpainter.rendering.views import parse_views
 from brainpainter.table.options import TableKwargs, TableOptions
+from brainpainter.tracts.model import DEFAULT_SPACE, MAX_STREAMLINES, TractSpec
 
 if TYPE_CHECKING:
     from brainpainter.atlas.template import Template
@@ -58,6 +59,13 @@ class SceneKwargs(TypedDict, total=False):
     hide: Iterable[str]
     renderer: str
     atlas_config: str | Path | None
+    tracts: str | Sequence[str]
+    tracts_space: str
+    tracts_affine: str | Path | None
+    max_streamlines: int
+    tract_values: Any
+    tract_value: str | None
+    tract_radius: float | None
 
 
 class RunnerKwargs(TypedDict, total=False):
@@ -91,6 +99,23 @@ class SceneOptions:
     atlas_config : path, optional
         Region-group TOML file (:mod:`brainpainter.atlas.config`) defining the
         atlas; given instead of an atlas.
+    tracts : tuple of str
+        Tractogram files (.trk, .tck, .trx) or folders of them, one file per
+        bundle, drawn as tubes (:mod:`brainpainter.tracts`).
+    tracts_space : str
+        Space of the tractograms' coordinates (MNI152 is mapped onto the fsaverage template).
+    tracts_affine : path, optional
+        4x4 matrix (text file) applied to the tractograms' coordinates first.
+    max_streamlines : int
+        Streamlines drawn at most (a random subsample beyond; the run says so).
+    tract_values : path or DataFrame, optional
+        Values per bundle (columns named after bundles) or along-tract profiles
+        (``bundle,node,value``); default: the main table's bundle columns, else direction colours.
+    tract_value : str, optional
+        The value column of a long profile table with several.
+    tract_radius : float, optional
+        Radius of the streamlines' tubes, millimetres; default by their number
+        (0.3 mm up to 2,000 streamlines, thinner beyond, 0.13 mm at 10,000).
     """
 
     views: str | Sequence[str] | None = field(default=None, metadata={
@@ -103,6 +128,26 @@ class SceneOptions:
         "help": "Renderer plugin ('brainpainter plugins' lists them)."})
     atlas_config: str | Path | None = field(default=None, metadata={
         "help": "Region-group TOML file defining the atlas (instead of --atlas); see docs/atlases.md."})
+    tracts: tuple[str, ...] = field(default=(), metadata={
+        "help": "Tractograms (.trk, .tck, .trx) or folders of them, one file per bundle, drawn as tubes in "
+                "the views; see docs/tracts.md. Repeatable."})
+    tracts_space: str = field(default=DEFAULT_SPACE, metadata={
+        "choices": ("MNI152NLin2009cAsym", "MNI152NLin6Asym", "fsaverage", "template"),
+        "help": "Space of the tractograms' coordinates (MNI152 is mapped to the fsaverage template, "
+                "MNI305)."})
+    tracts_affine: str | Path | None = field(default=None, metadata={
+        "help": "A 4x4 matrix (text file, numpy or FSL) applied to the tractograms' coordinates first."})
+    max_streamlines: int = field(default=MAX_STREAMLINES, metadata={
+        "help": "Streamlines drawn at most, over all bundles (a random subsample beyond; the run says so)."})
+    tract_values: Any = field(default=None, metadata={
+        "help": "Table of values per bundle (columns AF_left, CST_right, ...) or along-tract profiles "
+                "(bundle,node,value). Default: the bundle columns of the main table, else direction "
+                "colours."})
+    tract_value: str | None = field(default=None, metadata={
+        "help": "Value column of a long profile table with several (pyAFQ: dti_fa)."})
+    tract_radius: float | None = field(default=None, metadata={
+        "help": "Radius of the streamline tubes in millimetres (default: 0.3 up to 2,000 streamlines, "
+                "thinner beyond)."})
 
     def __post_init__(self) -> None:
         if self.surface not in SURFACES:
@@ -111,6 +156,24 @@ class SceneOptions:
         object.__setattr__(self, "hide", tuple(str(h) for h in hide))
         if self.views is not None:
             parse_views(self.views if isinstance(self.views, str) else list(self.views))
+        tracts = [self.tracts] if isinstance(self.tracts, str | Path) else list(self.tracts)
+        object.__setattr__(self, "tracts", tuple(str(t) for t in tracts))
+        if self.tracts:
+            self.tract_spec()  # fail now on a missing file or a bad affine
+        if self.tract_radius is not None and not 0.01 <= float(self.tract_radius) <= 10:
+            raise BrainPainterError(f"--tract-radius must be 0.01 to 10 millimetres; {self.tract_radius} was "
+                                    "given.")
+        if not self.tracts and self.tract_values is not None:
+            raise BrainPainterError("--tract-values colours bundles, but no --tracts were given; give the "
+                                    "tractograms to draw with --tracts FILE_OR_FOLDER.")
+
+    def tract_spec(self) -> TractSpec | None:
+        """What tractograms to load (None without ``tracts``)."""
+        if not self.tracts:
+            return None
+        return TractSpec(tuple(self.tracts), self.tracts_space,
+                         None if self.tracts_affine is None else str(self.tracts_affine),
+                         int(self.max_streamlines))
 
 
 # -- where a run renders ------------------------------------------------------------------

@@ -27,6 +27,7 @@ from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.settings import RGB, RenderSettings
 from brainpainter.rendering.views import View
 from brainpainter.table.region_table import RegionTable
+from brainpainter.tracts.model import TractSpec
 
 # Named groups for --hide: structure names (hemisphere-free) they cover.
 HIDE_GROUPS: dict[str, tuple[str, ...]] = {
@@ -93,6 +94,9 @@ def load_scene(
     settings: RenderSettings | None = None,
     medial_wall_color: ColorLike = (0.72, 0.72, 0.72),
     atlas_config: str | Path | None = None,
+    tracts: TractSpec | None = None,
+    tract_nodes: Iterable[tuple[str, int]] = (),
+    tract_radius: float | None = None,
 ) -> tuple[Atlas, Scene]:
     """The atlas and the scene a renderer (or an exporter) draws; nothing is rendered.
 
@@ -126,6 +130,9 @@ def load_scene(
         hidden=frozenset(atlas.expand(dict.fromkeys(resolve_hidden(hidden, atlas)))),
         settings=settings or RenderSettings(),
         medial_wall_color=to_rgb(medial_wall_color),
+        tracts=None if tracts is None else tracts.load(template),
+        tract_nodes=tuple((str(n), int(k)) for n, k in tract_nodes),
+        tract_radius=None if tract_radius is None else float(tract_radius),
     )
     return atlas, scene
 
@@ -146,6 +153,14 @@ class Painter:
         Name in the ``brainpainter.renderers`` registry.
     atlas_config : path, optional
         Region-group TOML file (:mod:`brainpainter.atlas.config`); replaces `atlas`.
+    tracts : TractSpec, optional
+        White-matter bundles to draw (:mod:`brainpainter.tracts`).
+    tract_nodes : iterable of (str, int)
+        Bundles coloured by value: ``(name, 1)`` one colour, ``(name, n)`` a profile of
+        `n` nodes; the others are coloured by direction.
+    tract_radius : float, optional
+        Radius of the tubes, millimetres (default: by the number of streamlines,
+        :func:`brainpainter.tracts.tubes.auto_radius`).
     """
 
     atlas: Atlas | str = "dk"
@@ -156,11 +171,16 @@ class Painter:
     renderer: str = "blender"
     medial_wall_color: ColorLike = (0.72, 0.72, 0.72)
     atlas_config: str | Path | None = None
+    tracts: TractSpec | None = None
+    tract_nodes: Iterable[tuple[str, int]] = ()
+    tract_radius: float | None = None
     _renderer: Any = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
+        self.tract_nodes = tuple(self.tract_nodes)
         self.atlas, self.scene = load_scene(self.atlas, self.template, self.surface, self.hidden,
-                                            self.settings, self.medial_wall_color, self.atlas_config)
+                                            self.settings, self.medial_wall_color, self.atlas_config,
+                                            self.tracts, self.tract_nodes, self.tract_radius)
         self.template = self.scene.template
         from brainpainter.atlas import registry
         from brainpainter.rendering.pythons import require_bpy

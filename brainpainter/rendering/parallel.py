@@ -97,6 +97,10 @@ class PainterSpec:
         ``"module:Class"`` of the renderer, registered under `renderer` in a
         worker that does not know that name (a renderer registered at run time).
     medial_wall_color : (float, float, float)
+    tracts : TractSpec or None
+        The tractograms (paths and options: each worker reads them and draws the same subsample).
+    tract_nodes : tuple of (str, int)
+        How each bundle is coloured (:class:`~brainpainter.rendering.scene.Scene`).
     """
 
     atlas: Any
@@ -107,6 +111,9 @@ class PainterSpec:
     renderer: str
     renderer_target: str | None
     medial_wall_color: RGB
+    tracts: Any = None
+    tract_nodes: tuple[tuple[str, int], ...] = ()
+    tract_radius: float | None = None
 
     @classmethod
     def of(cls, painter: Painter, template: Any = None) -> PainterSpec:
@@ -124,6 +131,7 @@ class PainterSpec:
             surface=painter.surface, hidden=tuple(str(h) for h in painter.hidden),
             settings=painter.settings, renderer=painter.renderer, renderer_target=target,
             medial_wall_color=tuple(float(c) for c in painter.scene.medial_wall_color),  # type: ignore[arg-type]
+            tracts=painter.tracts, tract_nodes=tuple(painter.tract_nodes), tract_radius=painter.tract_radius,
         )
 
     @property
@@ -150,7 +158,8 @@ class PainterSpec:
             if obj is not None and current is not obj:
                 registry.renderers.register(self.renderer, lambda: obj, replace=True)
         return Painter(self.atlas, self.template, self.surface, self.hidden, self.settings,
-                       self.renderer, self.medial_wall_color)
+                       self.renderer, self.medial_wall_color, tracts=self.tracts,
+                       tract_nodes=self.tract_nodes, tract_radius=self.tract_radius)
 
 
 @dataclass(frozen=True)

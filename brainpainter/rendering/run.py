@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Unpack
 
+import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
@@ -25,10 +26,11 @@ from brainpainter.errors import BrainPainterError
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
 from brainpainter.rendering.painter import VOLUME_VIEWS, Painter, RenderResult, region_colors, resolve_hidden
 from brainpainter.rendering.parallel import Item, LocalRunner, PainterSpec, Runner, SerialRunner, chunked
-from brainpainter.rendering.settings import RenderSettings
+from brainpainter.rendering.settings import RGB, RenderSettings
 from brainpainter.rendering.views import View, parse_views
 from brainpainter.table.region_table import RegionTable, read_table
 from brainpainter.table.rows import select_rows
+from brainpainter.tracts.values import TractValues, read_tract_values
 
 if TYPE_CHECKING:
     from brainpainter.io.transaction import FolderTransaction
@@ -43,12 +45,15 @@ class Run:
     views: list[View]
     settings: RenderSettings
     options: Options
+    tract_values: TractValues | None = None
 
     def painter(self) -> Painter:
         """A new (not loaded) painter for this run's atlas, scene options and image settings."""
         scene = self.options.scene
+        nodes = self.tract_values.nodes if self.tract_values is not None else ()
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
-                       scene.renderer)
+                       scene.renderer, tracts=scene.tract_spec(), tract_nodes=nodes,
+                       tract_radius=scene.tract_radius)
 
     def items(self, rows: Sequence[int]) -> list[tuple[int, View]]:
         """The images of `rows`: ``(row, view)`` for every row and view, row by row."""
@@ -56,8 +61,61 @@ class Run:
 
     def item(self, i: int, view: View, metadata: Mapping[str, str] | None = None) -> Item:
         """The image of row `i` from `view`, as a painter task."""
-        return Item(region_colors(self.table.row(i), self.table.atlas, self.scale), view, metadata,
-                    self.table.images[i])
+        colors = region_colors(self.table.row(i), self.table.atlas, self.scale)
+        if self.tract_values is not None:
+            colors.update(tract_colors(self.tract_values.row(self.table.images[i]), self.scale))
+        return Item(colors, view, metadata, self.table.images[i])
+
+
+def tracts_only_table(tract_values: TractValues, atlas: Atlas | None, data: Any) -> RegionTable:
+    """An empty region table for a run whose table holds bundle values only (one row per image)."""
+    images = tract_values.images or ("1",)
+    source = str(data) if isinstance(data, str | Path) else "table"
+    return RegionTable(images=tuple(images), regions=(), values=np.zeros((len(images), 0)),
+                       atlas=atlas or get_atlas("dk"), source=source)
+
+
+def tract_colors(values: Mapping[str, float], scale: ColourScale) -> dict[str, RGB]:
+    """Colour of each bundle (or bundle node) key for one image; NaN: the scale's NaN colour."""
+    keys = list(values)
+    if not keys:
+        return {}
+    rgb = scale(np.array([values[k] for k in keys], dtype=float))
+    return {k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(keys, rgb, strict=True)}
+
+
+def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, bool]:
+    """The tract values of a run: ``tract_values`` if given, else the main table's bundle columns, if any.
+
+    Columns of the main table count as bundles when their canonical name is a bundle of ``tracts``
+    (a file's name); without any, bundles are coloured by direction.
+
+    Returns
+    -------
+    values : TractValues or None
+    only_tracts : bool
+        Every value column of the main table is a bundle (it holds no region values).
+    """
+    scene = options.scene
+    if scene.tract_values is not None:
+        return read_tract_values(scene.tract_values, scene.tract_value), False
+    spec = scene.tract_spec()
+    if spec is None or isinstance(data, list):
+        return None, False
+    from brainpainter.tracts.names import canonical
+
+    known = {canonical(f.name[: -len(f.suffix)]) for f in spec.files}
+    try:
+        tv = read_tract_values(data)
+    except BrainPainterError:
+        return None, False
+    keep = [j for j, (name, _) in enumerate(tv.nodes) if name in known]
+    if not keep:
+        return None, False
+    names = {tv.nodes[j][0] for j in keep}
+    cols = [j for j, key in enumerate(tv.keys) if key.split(":")[1] in names]
+    return (TractValues(tv.images, tuple(tv.keys[j] for j in cols), tv.values[:, cols],
+                        tuple(tv.nodes[j] for j in keep)), len(keep) == len(tv.nodes))
 
 
 def resolve_atlas(atlas: Atlas | str | None, atlas_config: str | Path | None) -> Atlas | None:
@@ -94,9 +152,17 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     views = options.scene.views
     if views is None and atlas_obj is not None and not atlas_obj.cortical():
         views = VOLUME_VIEWS  # a volumetric atlas alone: its structures, not a grey cortex
+    tract_values, only_tracts = run_tract_values(data, options)
+    if views is None and only_tracts:
+        views = VOLUME_VIEWS  # bundle values alone: the views that show tracts
     view_list = parse_views(views if views is None or isinstance(views, str) else list(views))
-    table = read_table(data, atlas_obj, **options.table.kwargs())
-    return Run(table, options.scale.scale(table.values), view_list, options.settings, options)
+    if only_tracts and tract_values is not None:
+        table = tracts_only_table(tract_values, atlas_obj, data)
+    else:
+        table = read_table(data, atlas_obj, **options.table.kwargs())
+    values = table.values if tract_values is None else np.concatenate(
+        [np.ravel(table.values), np.ravel(tract_values.values)])
+    return Run(table, options.scale.scale(values), view_list, options.settings, options, tract_values)
 
 
 def make_runner(painter: Painter, template: Any = None, options: RunnerOptions | None = None,
@@ -273,6 +339,8 @@ def write_images(run: Run, painter: Painter, runner: Runner, chosen: Sequence[in
             "files": [{"file": path.name, "image": table.images[i], "row": i, "view": view.name}
                       for path, (i, view) in zip(files, plan, strict=False)],
         }
+        if painter.scene.tracts is not None:  # what was drawn of the tractograms (subsampling notes)
+            manifest["tracts"] = painter.scene.tracts.summary()
         if tx is not None:
             tx.commit(manifest)  # verify every PNG, then publish them and the manifest last
     return files, images, manifest

@@ -39,6 +39,7 @@ __all__ = ["LIGHTINGS", "QUALITIES", "RGB", "SHADINGS", "SULC_LIGHTINGS", "Blank
 
 if TYPE_CHECKING:
     from brainpainter.rendering.geometry import Palette, SceneGeometry
+    from brainpainter.tracts.model import Tracts
 
 @dataclass(frozen=True)
 class Scene:
@@ -57,6 +58,16 @@ class Scene:
         Region keys not drawn at all.
     settings : RenderSettings
     medial_wall_color : tuple of float, shape (3,)
+    tracts : Tracts, optional
+        White-matter bundles drawn as tubes (:mod:`brainpainter.tracts`).
+    tract_nodes : tuple of (str, int)
+        How each bundle is coloured: ``(name, 1)`` one colour (palette key
+        ``tract:NAME``), ``(name, n)`` an along-tract profile of `n` nodes (keys
+        ``tract:NAME:0`` ... ``tract:NAME:n-1``); bundles not listed are
+        coloured by local direction (fixed palette slots).
+    tract_radius : float, optional
+        Radius of the streamlines' tubes in millimetres; None: by their number
+        (:func:`brainpainter.tracts.tubes.auto_radius`).
     """
 
     template: Template
@@ -65,6 +76,9 @@ class Scene:
     hidden: frozenset[str] = field(default_factory=frozenset)
     settings: RenderSettings = field(default_factory=RenderSettings)
     medial_wall_color: RGB = (0.72, 0.72, 0.72)
+    tracts: Tracts | None = None
+    tract_nodes: tuple[tuple[str, int], ...] = ()
+    tract_radius: float | None = None
 
     def __post_init__(self) -> None:
         if self.surface not in SURFACES:

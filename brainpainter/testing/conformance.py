@@ -21,6 +21,10 @@ the renderer needs none:
     no background pixel inside a silhouette;
 ``repeatable``
     the same palette and view give the same pixels after other images;
+``tracts``
+    white-matter tracts (parts of kind ``tract``: tubes of two bundles, one per
+    hemisphere, one colour each) are drawn in their exact flat colour where the
+    camera projects them, in the subcortical views, with the glass brain;
 ``memory``
     resident memory does not grow per image (:func:`~brainpainter.testing.memory.growth_per_image`).
 """
@@ -48,7 +52,9 @@ COLORS: dict[str, RGB] = {
     "Left-Hippocampus": (0.60, 0.05, 0.05), "Right-Hippocampus": (0.05, 0.35, 0.60),
 }
 CONFORMANCE_CHECKS = ("orientation", "flat_colors", "nan_missing", "transparent", "glass", "no_holes",
-                      "repeatable", "memory")
+                      "repeatable", "tracts", "memory")
+#: Colours of the tracts check's two bundles (not among :data:`COLORS`).
+TRACT_COLORS: dict[str, RGB] = {"tract:AF_left": (1.0, 0.0, 0.5), "tract:CST_right": (0.0, 0.5, 1.0)}
 WHITE: RGB = (1.0, 1.0, 1.0)
 #: Largest resident-memory growth per image a renderer may show (MB).
 MAX_MB_PER_IMAGE = 0.1
@@ -253,6 +259,66 @@ def _glass(run: _Run) -> None:
                             "their hue)")
 
 
+def tiny_tracts() -> Any:
+    """Two synthetic bundles for the tiny template: ``AF_left`` along y at x = -35, ``CST_right`` along z.
+
+    Returns
+    -------
+    brainpainter.tracts.model.Tracts
+        20 streamlines of 16 points each per bundle.
+    """
+    from brainpainter.tracts.model import Tracts
+
+    rng = np.random.default_rng(0)
+    t = np.linspace(-1.0, 1.0, 16)
+    lines = []
+    for i in range(40):
+        jitter = rng.normal(0.0, 1.5, 3)
+        if i < 20:
+            pts = np.column_stack([np.full(16, -35.0), 30 * t, 20 + 5 * np.cos(t * 1.5)]) + jitter
+        else:
+            pts = np.column_stack([np.full(16, 35.0) + 3 * np.sin(t * 2), np.zeros(16), 30 * t]) + jitter
+        lines.append(pts)
+    bundle = np.repeat(np.arange(2, dtype=np.int32), 20)
+    return Tracts(("AF_left", "CST_right"), np.asarray(lines, np.float32), bundle, (20, 20))
+
+
+def _tracts(run: _Run) -> None:
+    """Tubes of two value-coloured bundles: exact flat colour, where the camera projects them."""
+    from brainpainter.rendering import framing
+    from brainpainter.rendering.scene import RenderSettings, Scene
+    from brainpainter.rendering.views import get_view
+
+    settings = RenderSettings(width=run.width, height=run.height, quality="fast", shading="flat",
+                              glass_opacity=0.0, background=WHITE)
+    scene = Scene(run.template, "dk", settings=settings, tracts=tiny_tracts(),
+                  tract_nodes=(("AF_left", 1), ("CST_right", 1)), tract_radius=1.5)
+    renderer = run.cls(scene)
+    worst = 0.0
+    try:
+        for name in ("subcortical-dorsal", "subcortical"):
+            view = get_view(name)
+            img = run.paint(scene, renderer, {**COLORS, **TRACT_COLORS}, view)
+            pose = scene.geometry.camera(view, run.width / run.height)
+            for key, rgb in TRACT_COLORS.items():
+                mask = near(img, rgb, 1)
+                if mask.sum() < 30:
+                    run.problems.append(f"tracts: {name}: bundle {key} is not drawn in its flat colour {rgb}")
+                    continue
+                part = next(p for p in scene.geometry.parts if p.kind == "tract"
+                            and p.palette_index[0] == scene.geometry.slot_of[key])
+                expected = framing.to_pixels(part.hull, pose, run.width, run.height).mean(axis=0)
+                ys, xs = np.nonzero(mask)
+                err = float(np.hypot(xs.mean() + 0.5 - expected[0], ys.mean() + 0.5 - expected[1]))
+                worst = max(worst, err)
+                if err > 0.05 * run.width:
+                    run.problems.append(f"tracts: {name}: bundle {key} is centred {err:.1f} px from where "
+                                        "the camera puts it")
+    finally:
+        renderer.close()
+    run.report["tracts_worst_px"] = round(worst, 2)
+
+
 def _memory(run: _Run, n_memory: int) -> None:
     """Resident memory does not grow per image over `n_memory` renders (after 20 to warm up)."""
     from brainpainter.rendering.views import get_view
@@ -311,7 +377,7 @@ def check_renderer(renderer: str | type, size: tuple[int, int] = (160, 120),
         if {"orientation", "no_holes", "repeatable", "flat_colors"} & set(checks):
             _views(run)
         for check, step in (("flat_colors", _antialiased), ("nan_missing", _nan_missing),
-                            ("transparent", _transparent), ("glass", _glass)):
+                            ("transparent", _transparent), ("glass", _glass), ("tracts", _tracts)):
             if check in checks:
                 step(run)
         if "memory" in checks and can_measure():

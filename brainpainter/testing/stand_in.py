@@ -41,7 +41,8 @@ class StandInRenderer:
     layout : {"faces", "band", "solid", "keys"}
         ``faces`` (default): full-height stripes, one per face of the view's
         structures sampled evenly (grouped by label), each in its colour
-        (medial wall / neutral grey where the key has no colour).
+        (medial wall / neutral grey where the key has no colour), then one per
+        value-coloured bundle (or node) of the view's tracts.
         ``band``: the background (transparent when ``background`` is None)
         with a "brain" in the middle half of the rows and the middle 3/4 of the
         columns, one stripe per key of `regions` (a smaller band in
@@ -109,6 +110,15 @@ class StandInRenderer:
         if scene.template.manifest.get("subcortical"):
             sub = scene.template.subcortical()
             self.parts["subcortical"] = (list(sub.label_names), np.sort(sub.face_label))
+        # value-coloured tracts: (hemisphere, palette key) per bundle or node (direction colours: none)
+        self.tract_keys: list[tuple[str | None, str]] = []
+        if getattr(scene, "tracts", None) is not None:
+            from brainpainter.tracts.names import bundle_key, hemisphere
+
+            for name, n in scene.tract_nodes:
+                if name in scene.tracts.names:
+                    keys = [bundle_key(name)] if n == 1 else [bundle_key(name, k) for k in range(n)]
+                    self.tract_keys += [(hemisphere(name), k) for k in keys]
         type(self).scenes += 1
 
     def painted(self, colors: Mapping[str, Any], part: str) -> dict[str, Any]:
@@ -151,6 +161,8 @@ class StandInRenderer:
             keys, labels = self.parts.get(part, ([], np.zeros(0, int)))
             stripes += [colors.get(keys[i]) or default.get(part, self.scene.medial_wall_color)
                         for i in labels if keys[i] not in self.scene.hidden]
+        stripes += [colors.get(key) or default["subcortical"] for hemi, key in self.tract_keys
+                    if shows(view, "tract", hemi)]
         img = np.zeros((height, width, 4), np.uint8)
         if stripes:
             cols = np.asarray(stripes, dtype=float)[np.linspace(0, len(stripes) - 1, width).astype(int)]

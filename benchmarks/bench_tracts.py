@@ -1,0 +1,117 @@
+"""Benchmark: streamlines as tubes against a DK region render, per image, in the same process.
+
+Writes a synthetic whole-brain-like tractogram (``--streamlines`` smooth arcs
+inside the fsaverage brain, 40 points each, as .tck with nibabel), loads it as
+bundles (read, subsample, resample, orient, tubes), then times per image at
+``--size``:
+
+* the DK table's first row from ``lateral-left`` and ``subcortical`` without tracts (the references);
+* the same row from ``subcortical`` (tracts are drawn in subcortical views) with
+  each tractogram, in direction colours and in one colour per bundle;
+
+and prints the median seconds per image, the ratios (the issue's bar: 10,000
+streamlines <= 2x a DK region render), the tube triangles and the scene load time.
+
+    python benchmarks/bench_tracts.py                          # 3,000 and 10,000 streamlines, 1200x900
+    python benchmarks/bench_tracts.py --streamlines 2000 --size 800x600 --repeats 3
+
+Timings depend on the machine (llvmpipe without a GPU); say which one in docs/benchmarks.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+EXAMPLE = REPO / "examples" / "brainpainter_dk.csv"
+BUNDLES = ("AF_left", "CST_right", "CC_ForcepsMajor", "UF_left", "ILF_right")
+
+
+def write_tractogram(folder: Path, n: int, seed: int = 0) -> Path:
+    """`n` smooth streamlines split over a few bundle files, inside the brain (RAS mm, MNI-like)."""
+    import nibabel as nib
+
+    rng = np.random.default_rng(seed)
+    folder.mkdir(parents=True, exist_ok=True)
+    per = np.array_split(np.arange(n), len(BUNDLES))
+    t = np.linspace(0.0, 1.0, 40)[:, None]
+    for name, idx in zip(BUNDLES, per, strict=True):
+        centre = rng.uniform([-35, -60, -10], [35, 30, 40])
+        direction = rng.normal(size=3)
+        direction /= np.linalg.norm(direction)
+        lines = []
+        for _ in idx:
+            start = centre + rng.normal(0, 6, 3) - direction * 35
+            bend = rng.normal(0, 10, 3)
+            pts = start + t * direction * 70 + np.sin(np.pi * t) * bend
+            lines.append(pts.astype(np.float32))
+        tg = nib.streamlines.Tractogram(lines, affine_to_rasmm=np.eye(4))
+        nib.streamlines.save(tg, str(folder / f"{name}.tck"))
+    return folder
+
+
+def _time(painter, colors, view, repeats: int) -> float:
+    painter.paint_colors(colors, view)  # the first image of a view uploads its parts
+    per = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        painter.paint_colors(colors, view)
+        per.append(time.perf_counter() - t)
+    return statistics.median(per)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--streamlines", default="3000,10000", help="Comma-separated counts.")
+    p.add_argument("--size", default="1200x900")
+    p.add_argument("--repeats", type=int, default=5)
+    args = p.parse_args()
+    width, height = (int(v) for v in args.size.split("x"))
+
+    import pandas as pd
+
+    from brainpainter.color.scale import make_scale
+    from brainpainter.rendering.painter import Painter, region_colors
+    from brainpainter.rendering.settings import RenderSettings
+    from brainpainter.rendering.views import get_view
+    from brainpainter.table.region_table import read_table
+    from brainpainter.tracts.model import TractSpec
+
+    table = read_table(pd.read_csv(EXAMPLE).iloc[:1], "dk")
+    scale = make_scale(table.values)
+    settings = RenderSettings(width=width, height=height)
+    lateral, sub = get_view("lateral-left"), get_view("subcortical")
+    with Painter("dk", settings=settings) as painter:
+        colors = region_colors(table.row(0), painter.atlas, scale)
+        ref = {"lateral-left": _time(painter, colors, lateral, args.repeats),
+               "subcortical": _time(painter, colors, sub, args.repeats)}
+    print(f"DK regions, no tracts: lateral-left {ref['lateral-left'] * 1000:.0f} ms/image, subcortical "
+          f"{ref['subcortical'] * 1000:.0f} ms/image")
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in (int(v) for v in args.streamlines.split(",")):
+            folder = write_tractogram(Path(tmp) / f"bundles{n}", n)
+            spec = TractSpec((str(folder),), max_streamlines=n)
+            for label, nodes in (("direction colours", ()), ("one colour per bundle",
+                                                             tuple((b, 1) for b in BUNDLES))):
+                t0 = time.perf_counter()
+                with Painter("dk", settings=settings, tracts=spec, tract_nodes=nodes) as painter:
+                    colors = region_colors(table.row(0), painter.atlas, scale)
+                    colors.update({f"tract:{b}": (0.9, 0.2, 0.1) for b in BUNDLES})
+                    painter.load()
+                    load = time.perf_counter() - t0
+                    per = _time(painter, colors, sub, args.repeats)
+                    tris = sum(len(q.triangles) for q in painter.scene.geometry.parts if q.kind == "tract")
+                print(f"{n:6d} streamlines, {label:22s}: subcortical {per * 1000:6.0f} ms/image = "
+                      f"{per / ref['lateral-left']:.2f} x a DK lateral-left render, "
+                      f"{per / ref['subcortical']:.2f} x the subcortical view without tracts; "
+                      f"{tris:,} tube triangles; scene load {load:.1f} s")
+
+
+if __name__ == "__main__":
+    main()

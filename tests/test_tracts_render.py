@@ -1,0 +1,152 @@
+"""Tracts drawn by the Blender renderer: colours at the right place in the right view (pixels)."""
+
+from __future__ import annotations
+
+import os
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_tracts import bundle, write
+
+from brainpainter.rendering.settings import RenderSettings
+from brainpainter.rendering.views import get_view
+from brainpainter.tracts.model import TractSpec
+
+pytestmark = pytest.mark.render
+
+RED, BLUE = (1.0, 0.0, 0.0), (0.0, 0.0, 1.0)
+
+
+def _mask(img: np.ndarray, rgb, tol: float = 12) -> np.ndarray:
+    return np.abs(img[..., :3].astype(float) - np.round(np.asarray(rgb) * 255)).max(axis=-1) <= tol
+
+
+@pytest.fixture(scope="module")
+def bundles(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("bundles")
+    write(folder / "AF_L.trk", bundle(-30.0, n=40, z=30.0, length=60.0))
+    write(folder / "CST_R.tck", bundle(30.0, n=40, seed=1, z=30.0, length=60.0))
+    return folder
+
+
+def _painter(tiny, bundles, nodes=(), **settings):
+    from brainpainter.rendering.painter import Painter
+
+    s = {"width": 320, "height": 240, "shading": "flat", "quality": "fast", "glass_opacity": 0.0,
+         "background": (1.0, 1.0, 1.0), **settings}
+    return Painter("dk", str(tiny), settings=RenderSettings(**s),
+                   tracts=TractSpec((str(bundles),), space="template"), tract_nodes=nodes)
+
+
+def test_a_red_bundle_is_drawn_red_on_its_side_seen_from_above(tiny, bundles):
+    with _painter(tiny, bundles, (("AF_left", 1), ("CST_right", 1))) as p:
+        img = p.paint_colors({"tract:AF_left": RED, "tract:CST_right": BLUE}, get_view("subcortical-dorsal"))
+    red, blue = _mask(img, RED), _mask(img, BLUE)
+    assert red.sum() > 300 and blue.sum() > 300
+    # from above: the image's right is the subject's right
+    assert np.nonzero(red)[1].mean() < img.shape[1] / 2 < np.nonzero(blue)[1].mean()
+    # flat shading: the median colour of the bundle's pixels is its colour
+    near_red = img[np.abs(img[..., :3].astype(float) - [255, 0, 0]).max(-1) < 80][:, :3]
+    assert np.abs(np.median(near_red, axis=0) - [255, 0, 0]).max() <= 12
+
+
+def test_an_along_tract_profile_runs_from_the_first_colour_to_the_last(tiny, bundles, tmp_path):
+    from PIL import Image
+
+    from brainpainter.color.scale import make_scale
+    from brainpainter.rendering.run import tract_colors
+
+    scale = make_scale(vmin=0, vmax=3, cmap="viridis")
+    values = {f"tract:AF_left:{k}": 3.0 * k / 9 for k in range(10)}
+    with _painter(tiny, bundles, (("AF_left", 10),)) as p:
+        img = p.paint_colors(tract_colors(values, scale), get_view("subcortical-dorsal"))
+    first, last = (np.asarray(scale(np.array([v]))[0][:3]) * 255 for v in (0.0, 3.0))
+    Image.fromarray(img).save(tmp_path / "profile.png")
+    rgb = img[..., :3].astype(float)
+    tract = (np.ptp(rgb, axis=-1) > 40) & (np.arange(img.shape[1]) < img.shape[1] / 2)[None, :]
+    rows = np.nonzero(tract)[0]
+    assert len(rows) > 300
+    # the bundle runs posterior -> anterior (oriented; node 0 first); from above, anterior is up
+    bottom = np.median(rgb[tract & (np.arange(img.shape[0]) >= np.percentile(rows, 97))[:, None]], axis=0)
+    top = np.median(rgb[tract & (np.arange(img.shape[0]) <= np.percentile(rows, 3))[:, None]], axis=0)
+    assert np.abs(bottom - first).max() <= 25 and np.abs(top - last).max() <= 25, (bottom, top, first, last)
+
+
+def test_direction_colours_without_values(tiny, bundles):
+    with _painter(tiny, bundles) as p:
+        img = p.paint_colors({}, get_view("subcortical-dorsal"))
+    # streamlines along y: green (anterior-posterior)
+    green = (img[..., 1] > 200) & (img[..., 0] < 120) & (img[..., 2] < 120)
+    assert green.sum() > 300
+
+
+def test_lit_tubes_are_shaded_and_glass_covers_them(tiny, bundles):
+    with _painter(tiny, bundles, (("AF_left", 1),), shading="default", quality="default",
+                  glass_opacity=0.3) as p:
+        img = p.paint_colors({"tract:AF_left": RED}, get_view("subcortical"))
+    reddish = (img[..., 0] > img[..., 1] + 40) & (img[..., 0] > img[..., 2] + 40)
+    assert reddish.sum() > 200
+    assert np.ptp(img[reddish][:, 0].astype(int)) > 30  # lit: not one flat colour
+
+
+@pytest.fixture(scope="module")
+def minimal_bundles(tmp_path_factory) -> Path:
+    """dipy's minimal bundles (AF_L, CST_R, CC_ForcepsMajor; BSD-3), read from dipy's wheel."""
+    dipy = pytest.importorskip("dipy")
+    zip_path = Path(dipy.__file__).parent / "data" / "files" / "minimal_bundles.zip"
+    if not zip_path.is_file():
+        pytest.skip("dipy without minimal_bundles.zip")
+    folder = tmp_path_factory.mktemp("dipy")
+    with zipfile.ZipFile(zip_path) as z:
+        z.extractall(folder)
+    return folder / "sub_1"
+
+
+@pytest.mark.integration
+def test_dipy_bundles_in_the_default_template(minimal_bundles, tmp_path):
+    from brainpainter.rendering.painter import Painter
+
+    np.savetxt(tmp_path / "place.txt", [[1, 0, 0, 0], [0, 1, 0, -10], [0, 0, 1, 25], [0, 0, 0, 1]])
+    spec = TractSpec((str(minimal_bundles),), space="fsaverage", affine=str(tmp_path / "place.txt"))
+    settings = RenderSettings(width=400, height=300, shading="flat", quality="fast", glass_opacity=0.0)
+    colors = {"tract:AF_left": RED, "tract:CST_right": BLUE, "tract:CC_ForcepsMajor": (0.0, 1.0, 0.0)}
+    nodes = (("AF_left", 1), ("CST_right", 1), ("CC_ForcepsMajor", 1))
+    hidden = ("ventricles", "cerebellum", "brainstem")  # else they hide bundles behind them
+    with Painter("dk", settings=settings, tracts=spec, tract_nodes=nodes, hidden=hidden) as p:
+        top = p.paint_colors(colors, get_view("subcortical-dorsal"))
+        side = p.paint_colors(colors, get_view("subcortical-left"))
+    af, cst = _mask(top, RED, 2), _mask(top, BLUE, 2)
+    assert af.sum() > 100 and cst.sum() > 100
+    assert np.nonzero(af)[1].mean() < np.nonzero(cst)[1].mean()  # from above: AF_L left of CST_R
+    rows, cols = np.nonzero(_mask(side, BLUE, 2))
+    assert np.ptp(rows) > np.ptp(cols)  # from the side: CST_R taller than long
+
+
+def test_render_command_with_a_bundle_table(tmp_path, bundles, tiny):
+    from click.testing import CliRunner
+    from PIL import Image
+
+    from brainpainter.cli.main import cli
+
+    (tmp_path / "fa.csv").write_text("Image-name-unique,AF_L,CST_R\nctrl,3,0\n")
+    out = tmp_path / "out"
+    result = CliRunner().invoke(cli, [
+        "render", str(tmp_path / "fa.csv"), "--tracts", str(bundles), "--tracts-space", "template",
+        "--template", str(tiny), "--views", "subcortical-dorsal", "--size", "320x240", "--shading", "flat",
+        "--glass-opacity", "0", "--vmin", "0", "--vmax", "3", "--gradient", "blue,red",
+        "--max-streamlines", "60", "--quality", "fast", "--tract-radius", "1", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    img = np.asarray(Image.open(out / "ctrl_subcortical-dorsal.png").convert("RGB"))
+    red, blue = _mask(img, RED, 20), _mask(img, BLUE, 20)
+    assert red.sum() > 200 and blue.sum() > 200
+    assert np.nonzero(red)[1].mean() < np.nonzero(blue)[1].mean()
+    # each bundle's median pixel colour is its colour on the scale (3 -> red, 0 -> blue), flat shading
+    left = np.arange(img.shape[1]) < img.shape[1] // 2
+    for side, rgb in ((left, RED), (~left, BLUE)):
+        drawn = (np.ptp(img.astype(int), axis=-1) > 60) & side[None, :]
+        assert np.abs(np.median(img[drawn], axis=0) - np.asarray(rgb) * 255).max() <= 12
+    assert os.path.exists(out / "manifest.json")
+    assert "tracts: 2 bundle(s) (AF_left, CST_right), 60 streamlines drawn" in result.output
+    assert "note: AF_left: 30 of 40 streamlines drawn" in result.output
