@@ -270,9 +270,14 @@ class Template:
         return Template(path=self.path, manifest=manifest, _cache=self._cache)
 
     def glass(self, hemi: str) -> tuple[NDArray[Any], NDArray[Any]]:
-        """Glass-brain hull of one hemisphere: ``(vertices (n, 3), faces (m, 3))``."""
-        z = self._npz(self.manifest["glass"][hemi]["file"])
-        return z["vertices"], z["faces"]
+        """Glass-brain hull of one hemisphere: ``(vertices (n, 3), faces (m, 3))``.
+
+        The manifest entry names the file and, optionally, its vertex array
+        (``"vertices": "pial"``: a mesh template's glass is its cortex file).
+        """
+        entry = self.manifest["glass"][hemi]
+        z = self._npz(entry["file"])
+        return z[entry.get("vertices", "vertices")], z["faces"]
 
     @cached_property
     def bounds(self) -> NDArray[Any]:

@@ -185,6 +185,22 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, 
 @click.option("--own-template", is_flag=True,
               help="With --volume: the volume is a brain of its own (e.g. a mouse atlas): make a template of "
                    "its labels only (no cortex) in the volume's coordinates; --space is not used.")
+@click.option("--meshes", "meshes", multiple=True, type=click.Path(path_type=Path, file_okay=False),
+              help="Folder of region meshes, one region per file (OBJ, PLY, STL, OFF, GLB/glTF, GIfTI): "
+                   "hemisphere-named ones (lh./Left-/_L) form the outer surface, the others are structures.")
+@click.option("--subcortical-meshes", "sub_meshes", multiple=True,
+              type=click.Path(path_type=Path, file_okay=False),
+              help="With --meshes (or alone): folder of structures drawn in the subcortical views.")
+@click.option("--also-surface", "also_surface", multiple=True, metavar="KEY",
+              help="With --subcortical-meshes: a structure also drawn in the surface views (e.g. "
+                   "Left-Cerebellum). Repeatable.")
+@click.option("--names", "names", type=click.Path(path_type=Path, dir_okay=False), default=None,
+              help="With --meshes: CSV of file,name[,aliases] naming the regions (also accepted as --lut).")
+@click.option("--units", type=click.Choice(["mm", "um", "cm", "m"]), default=None,
+              help="With --meshes: units of the mesh coordinates (scaled to mm); not given: kept, reported.")
+@click.option("--orientation", default=None, metavar="XYZ",
+              help="With --meshes: where each axis increases, e.g. RAS, LPS, PIL (BrainGlobe's 'asr'); not "
+                   "given: taken as RAS and reported.")
 @click.option("--template", default="fsaverage", show_default=True,
               help="Template the label maps were made for.")
 @click.option("--title", default="", help="Human title (default: NAME).")
@@ -194,8 +210,10 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, 
 @click.option("--out", "out", type=click.Path(path_type=Path, file_okay=False), default=None,
               help="Write the atlas folder to OUT (e.g. into an atlas plugin) instead of adding it.")
 def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: Path | None, lut: Path | None,
-              space: str, own_template: bool, template: str, title: str, description: str, citation: str,
-              replace: bool, out: Path | None) -> None:
+              space: str, own_template: bool, meshes: tuple[Path, ...], sub_meshes: tuple[Path, ...],
+              also_surface: tuple[str, ...], names: Path | None, units: str | None, orientation: str | None,
+              template: str, title: str,
+              description: str, citation: str, replace: bool, out: Path | None) -> None:
     """Add atlas NAME from label maps (--annot), a label volume (--volume) or region groups (--config).
 
     \b
@@ -204,14 +222,44 @@ def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: P
                                   --annot rh=rh.Yeo2011_7Networks_N1000.annot
       brainpainter atlas add lobes --config lobes.toml
       brainpainter atlas add tian_s2 --volume Tian_S2.nii.gz --lut Tian_S2.csv --space MNI152NLin6Asym
+      brainpainter atlas add mymouse --meshes cortex_ply/ --subcortical-meshes deep_ply/ --units um
     """
     import time
 
     from brainpainter.atlas import registry
     from brainpainter.atlas import user as user_atlases
-    if sum([bool(annots), config is not None, volume is not None]) != 1:
-        raise BrainPainterError("give either --annot lh=FILE --annot rh=FILE, --volume FILE --lut FILE or "
-                                "--config FILE.toml (one of them)")
+    mesh_input = bool(meshes or sub_meshes)
+    if sum([bool(annots), config is not None, volume is not None, mesh_input]) != 1:
+        raise BrainPainterError("give either --annot lh=FILE --annot rh=FILE, --volume FILE --lut FILE, "
+                                "--meshes DIR or --config FILE.toml (one of them)")
+    if not mesh_input and (names is not None or units is not None or orientation is not None):
+        raise BrainPainterError("--names, --units and --orientation go with --meshes DIR (a folder of region "
+                                "meshes)")
+    if mesh_input:
+        from brainpainter.atlas.meshfolder import add_mesh_atlas
+
+        t0 = time.perf_counter()
+        if names is not None and lut is not None:
+            raise BrainPainterError("give the region names once: --names FILE (or --lut FILE), not both")
+        folder, meta = add_mesh_atlas(name, list(meshes), subcortical=list(sub_meshes), names=names or lut,
+                                      units=units, orientation=orientation, surface_also=also_surface,
+                                      title=title,
+                                      description=description, citation=citation, replace=replace, out=out)
+        for line in meta["report"]:
+            click.echo(line)
+        for r in meta["regions"]:
+            if r["notes"] and not all(n.startswith("welded") for n in r["notes"]):
+                click.echo(f"note: {r['file']}: {'; '.join(r['notes'])}")
+        n_weld = sum(1 for r in meta["regions"] if r["n_read_vertices"] > r["n_vertices"])
+        n_surface = sum(1 for r in meta["regions"] if r["part"] == "surface")
+        where = "written to" if out is not None else "added in"
+        click.echo(f"atlas {name!r} {where} {folder} ({n_surface} surface regions, "
+                   f"{len(meta['regions']) - n_surface} structures; {n_weld} meshes welded; "
+                   f"{time.perf_counter() - t0:.1f} s)")
+        if out is None:
+            click.echo(f"render with: brainpainter render TABLE --atlas {name} --views dorsal,lateral-left,"
+                       "subcortical --out DIR")
+        return
     if own_template and volume is None:
         raise BrainPainterError("--own-template goes with --volume FILE --lut FILE (a brain made of volume "
                                 "labels)")

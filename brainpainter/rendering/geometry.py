@@ -348,12 +348,24 @@ class SceneGeometry:
     def visible(self, view: View) -> list[PartGeometry]:
         """The parts `view` draws (:func:`brainpainter.rendering.framing.shows`), opaque parts first.
 
+        A template that lacks the part a view is about (a brain of region
+        meshes with structures only, or with an outer surface only) draws its
+        other part instead, so every view shows it. Renderers draw exactly
+        these parts.
+
         Raises
         ------
         BrainPainterError
             If the view draws nothing (its parts are absent from the template or all hidden).
         """
         parts = [p for p in self.parts if framing.shows(view, p.kind, p.hemi)]
+        kinds = {p.kind for p in self.parts}
+        if view.content == "cortex" and "cortex" not in kinds:
+            # a brain of region meshes without an outer surface: its structures stand for it
+            parts = [p for p in self.parts if p.kind == "subcortical" or framing.shows(view, p.kind, p.hemi)]
+        elif view.content == "subcortical" and "subcortical" not in kinds:
+            # ... and one without structures shows its surface (both hemispheres, no glass over it)
+            parts = [p for p in self.parts if p.kind == "cortex"]
         if not parts:
             raise BrainPainterError(
                 f"view {view.name!r} shows nothing: content={view.content!r}, hemis={list(view.hemis)}, "
