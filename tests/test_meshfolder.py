@@ -260,3 +260,36 @@ def test_welded_soup_renders_without_cracks(tmp_path):
     yy, xx = np.mgrid[: img.shape[0], : img.shape[1]]
     disc = (yy - cy) ** 2 + (xx - cx) ** 2 < (0.9 * r) ** 2
     assert disc.sum() > 200 and not white[disc].any()
+
+
+def test_views_follow_the_template_axes_not_its_coordinates(tmp_path):
+    """A template whose anterior is -z and superior +y (coordinates turned) is framed as the RAS one."""
+    import shutil
+
+    from brainpainter.atlas.writer import save_npz
+    from brainpainter.rendering.framing import to_pixels
+    from brainpainter.rendering.scene import Scene
+    from brainpainter.rendering.settings import RenderSettings
+    from brainpainter.rendering.views import PRESETS
+
+    folder = soup_folder(tmp_path / "meshes")
+    build_mesh_atlas("x", [folder], out=_mk(tmp_path / "ras"))
+    turned = tmp_path / "turned"
+    shutil.copytree(tmp_path / "ras" / "template", turned)
+    m = np.array([[1.0, 0, 0], [0, 0, 1], [0, -1, 0]])  # RAS -> (x, superior, posterior): a rotation
+    for f in turned.glob("cortex-*.npz"):
+        z = dict(np.load(f))
+        z["pial"] = (z["pial"] @ m.T).astype(np.float32)
+        save_npz(f, z)
+    manifest = json.loads((turned / "manifest.json").read_text())
+    manifest["axes"] = {"anterior": "-z", "superior": "+y"}
+    (turned / "manifest.json").write_text(json.dumps(manifest))
+    ras, rot = load_template(tmp_path / "ras" / "template"), load_template(turned)
+    np.testing.assert_allclose(rot.to_ras, m.T)
+    point = ras.cortex("x", "lh").vertices["pial"][:50].astype(float)
+    for name in ("dorsal", "lateral-left", "anterior", "subcortical"):
+        px = [to_pixels(p, Scene(template=t, labels="x", surface="pial", hidden=frozenset(),
+                                 settings=RenderSettings(), medial_wall_color=(0.7, 0.7, 0.7)
+                                 ).geometry.camera(PRESETS[name], 4 / 3), 400, 300)
+              for t, p in ((ras, point), (rot, point @ m.T))]
+        np.testing.assert_allclose(px[0], px[1], atol=1e-6, err_msg=name)

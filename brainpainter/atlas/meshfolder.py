@@ -526,6 +526,7 @@ def write_mesh_template(folder: Path, name: str, regions: list[RegionMesh], *, s
         "format": FORMAT, "format_version": FORMAT_VERSION, "name": name,
         "source": {"subject": name, "builder": "brainpainter.atlas.meshfolder", **source},
         "space": "the meshes' coordinates turned into RAS (x right, y anterior, z superior)",
+        "axes": {"anterior": "+y", "superior": "+z"},
         "surfaces": ["pial"],
         "labels": {name: {"source": "region meshes", "regions": [], "cortex": cortex}},
         "glass": glass,

@@ -336,6 +336,8 @@ class SceneGeometry:
             verts, faces = template.glass(hemi)
             add(f"glass-{hemi}", "glass", hemi, verts, faces, np.full(len(faces), GLASS_SLOT),
                 np.zeros(len(verts), np.float32))
+        #: rotation from the template's coordinates to RAS (its anterior and superior axes)
+        self.to_ras: NDArray[Any] = np.asarray(template.to_ras, dtype=float)
         self.parts: tuple[PartGeometry, ...] = tuple(parts)
         self.keys: tuple[str, ...] = tuple(keys)
         self.slot_of = slot_of
@@ -373,7 +375,26 @@ class SceneGeometry:
             )
         return sorted(parts, key=lambda p: p.kind == "glass")
 
-    def camera(self, view: View, aspect: float) -> framing.CameraPose:
-        """The orthographic camera of `view` framing its visible parts (image width / height = `aspect`)."""
+    def view_points(self, view: View) -> NDArray[Any]:
+        """Hull points of the parts `view` draws, in RAS (what the camera frames), shape (n, 3)."""
         points = np.vstack([p.hull for p in self.visible(view)])
-        return framing.frame(points, view.azimuth, view.elevation, view.zoom, aspect)
+        if np.array_equal(self.to_ras, np.eye(3)):
+            return points
+        rotated: NDArray[Any] = points @ self.to_ras.T
+        return rotated
+
+    def camera(self, view: View, aspect: float) -> framing.CameraPose:
+        """The orthographic camera of `view` framing its visible parts (image width / height = `aspect`).
+
+        Views are anatomical (:mod:`brainpainter.rendering.views`): the camera
+        is placed in RAS and turned back into the template's coordinates
+        (:attr:`brainpainter.atlas.template.Template.to_ras`), so a template
+        whose anterior axis is not +y is still drawn the right way up.
+        """
+        pose = framing.frame(self.view_points(view), view.azimuth, view.elevation, view.zoom, aspect)
+        if np.array_equal(self.to_ras, np.eye(3)):
+            return pose
+        m = self.to_ras
+        return framing.CameraPose(location=m.T @ pose.location, rotation=m.T @ pose.rotation,
+                                  ortho_scale=pose.ortho_scale, clip_start=pose.clip_start,
+                                  clip_end=pose.clip_end)
