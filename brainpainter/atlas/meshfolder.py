@@ -502,16 +502,23 @@ def _concat(meshes: list[RegionMesh]) -> tuple[NDArray[Any], NDArray[Any], NDArr
 
 
 def write_mesh_template(folder: Path, name: str, regions: list[RegionMesh], *, source: dict[str, Any],
-                        surface_also: tuple[str, ...] = ()) -> dict[str, Any]:
+                        surface_also: tuple[str, ...] = (),
+                        glass: tuple[NDArray[Any], NDArray[Any]] | None = None) -> dict[str, Any]:
     """Write ``folder/template/``: cortex per hemisphere, structures, glass (each hemisphere's surface).
 
     Structures whose keys are in `surface_also` are drawn in the surface
     views too (a mouse's cerebellum, seen from above), in the same colour.
+    `glass` (vertices, faces), a whole-brain mesh (BrainGlobe's root), is the
+    glass brain of a brain without surface regions (stored once, as ``rh``).
     """
     tdir = folder / "template"
     tdir.mkdir()
     cortex: dict[str, Any] = {}
-    glass: dict[str, Any] = {}
+    glass_entries: dict[str, Any] = {}
+    if glass is not None:
+        save_npz(tdir / "glass.npz", {"vertices": np.asarray(glass[0], np.float32),
+                                      "faces": np.asarray(glass[1], np.int32)})
+        glass_entries["rh"] = {"file": "glass.npz"}
     for hemi in ("lh", "rh"):
         part = [r for r in regions if r.hemi == hemi and (r.part == "surface" or r.key in surface_also)]
         if not part:
@@ -520,7 +527,7 @@ def write_mesh_template(folder: Path, name: str, regions: list[RegionMesh], *, s
         save_npz(tdir / f"cortex-{hemi}.npz", {"faces": f, "face_label": lab, "pial": v,
                                                "source_vertex": np.arange(len(v), dtype=np.int32)})
         cortex[hemi] = {"file": f"cortex-{hemi}.npz", "names": [r.name for r in part]}
-        glass[hemi] = {"file": f"cortex-{hemi}.npz", "vertices": "pial"}  # the surface, drawn as glass
+        glass_entries[hemi] = {"file": f"cortex-{hemi}.npz", "vertices": "pial"}  # the surface, as glass
     structures = [r for r in regions if r.part == "structure"]
     manifest: dict[str, Any] = {
         "format": FORMAT, "format_version": FORMAT_VERSION, "name": name,
@@ -529,7 +536,7 @@ def write_mesh_template(folder: Path, name: str, regions: list[RegionMesh], *, s
         "axes": {"anterior": "+y", "superior": "+z"},
         "surfaces": ["pial"],
         "labels": {name: {"source": "region meshes", "regions": [], "cortex": cortex}},
-        "glass": glass,
+        "glass": glass_entries,
     }
     if structures:
         v, f, lab = _concat(structures)
@@ -576,11 +583,31 @@ def build_mesh_atlas(name: str, meshes: list[Path], *, subcortical: list[Path] |
     dict
         The ``atlas.json`` written (with ``report``: the lines of :func:`describe_frame`).
     """
-    import matplotlib
-
     regions, report = load_regions(list(meshes), list(subcortical or []),
                                    read_names(names) if names else None, units=units, orientation=orientation,
                                    max_faces=max_faces, progress=progress)
+    source = {"folders": [p.name for p in [*meshes, *(subcortical or [])]], "units": units or "as given",
+              "orientation": (orientation or "as given (taken as RAS)").upper()}
+    return write_mesh_atlas(name, regions, report, source=source, title=title, description=description
+                            or f"{len(regions)} region meshes from {', '.join(source['folders'])}.",
+                            citation=citation, out=out, colors=colors, surface_also=surface_also)
+
+
+def write_mesh_atlas(name: str, regions: list[RegionMesh], report: list[str], *, source: dict[str, Any],
+                     title: str, description: str, citation: str, out: Path,
+                     colors: Mapping[str, tuple[int, int, int]] | None = None,
+                     surface_also: tuple[str, ...] = (),
+                     groups: Mapping[str, tuple[str, tuple[str, ...]]] | None = None,
+                     glass: tuple[NDArray[Any], NDArray[Any]] | None = None) -> dict[str, Any]:
+    """Write ``atlas.json``, ``regions.tsv`` and ``template/`` of checked region meshes into `out`.
+
+    `groups` maps a region that is not drawn (a BrainGlobe parent structure)
+    to its full name and the drawn regions it colours (its descendants);
+    `glass` is a whole-brain glass mesh; see :func:`write_mesh_template`.
+    Returns the ``atlas.json`` written.
+    """
+    import matplotlib
+
     cycle = matplotlib.colormaps["tab20"].colors  # type: ignore[attr-defined]
     rows = []
     for i, r in enumerate(regions):
@@ -591,14 +618,15 @@ def build_mesh_atlas(name: str, meshes: list[Path], *, subcortical: list[Path] |
     for key in surface_also:
         if key not in known:
             raise choice_error("--also-surface", key, known, "Name a structure with a hemisphere.")
+    for key, (full, _) in (groups or {}).items():
+        rows.append(Region(len(rows) + 1, key, "bilateral", "subcortical",
+                           (colors or {}).get(key, (200, 200, 200)), (full,) if full and full != key else ()))
     write_regions_tsv(rows, out / "regions.tsv")
-    source = {"folders": [p.name for p in [*meshes, *(subcortical or [])]], "units": units or "as given",
-              "orientation": (orientation or "as given (taken as RAS)").upper()}
-    write_mesh_template(out, name, regions, source=source, surface_also=tuple(surface_also))
+    write_mesh_template(out, name, regions, source=source, surface_also=tuple(surface_also), glass=glass)
     meta = {
         "name": name, "title": title or name, "kind": "meshes", "template_labels": name, "template": name,
-        "description": description or f"{len(regions)} region meshes from {', '.join(source['folders'])}.",
-        "citation": citation, "aliases": [], "source": source, "report": report,
+        "description": description, "citation": citation, "aliases": [], "source": source, "report": report,
+        "groups": {k: list(m) for k, (_, m) in (groups or {}).items()},
         "regions": [{"key": r.key, "file": r.file.name, "part": r.part, "n_vertices": len(r.vertices),
                      "n_faces": len(r.faces), "n_read_vertices": r.n_read_vertices, "notes": r.notes}
                     for r in regions],

@@ -201,6 +201,15 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, 
 @click.option("--orientation", default=None, metavar="XYZ",
               help="With --meshes: where each axis increases, e.g. RAS, LPS, PIL (BrainGlobe's 'asr'); not "
                    "given: taken as RAS and reported.")
+@click.option("--brainglobe", "brainglobe", default=None, metavar="ATLAS_NAME",
+              help="A BrainGlobe atlas already on this machine (e.g. allen_mouse_25um; needs "
+                   "brainglobe-atlasapi; nothing is downloaded).")
+@click.option("--brainglobe-dir", "brainglobe_dir", type=click.Path(path_type=Path, file_okay=False),
+              default=None, help="With --brainglobe: BrainGlobe's folder (default: its configured one).")
+@click.option("--structures", "structures", default=None, metavar="ACRONYMS",
+              help="With --brainglobe: comma-separated acronyms of the structures drawn (default: leaves).")
+@click.option("--depth", "depth", type=int, default=None,
+              help="With --brainglobe: draw the structures at this depth of the tree (and shallower leaves).")
 @click.option("--template", default="fsaverage", show_default=True,
               help="Template the label maps were made for.")
 @click.option("--title", default="", help="Human title (default: NAME).")
@@ -212,6 +221,7 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, 
 def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: Path | None, lut: Path | None,
               space: str, own_template: bool, meshes: tuple[Path, ...], sub_meshes: tuple[Path, ...],
               also_surface: tuple[str, ...], names: Path | None, units: str | None, orientation: str | None,
+              brainglobe: str | None, brainglobe_dir: Path | None, structures: str | None, depth: int | None,
               template: str, title: str,
               description: str, citation: str, replace: bool, out: Path | None) -> None:
     """Add atlas NAME from label maps (--annot), a label volume (--volume) or region groups (--config).
@@ -229,9 +239,27 @@ def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: P
     from brainpainter.atlas import registry
     from brainpainter.atlas import user as user_atlases
     mesh_input = bool(meshes or sub_meshes)
-    if sum([bool(annots), config is not None, volume is not None, mesh_input]) != 1:
+    if sum([bool(annots), config is not None, volume is not None, mesh_input, brainglobe is not None]) != 1:
         raise BrainPainterError("give either --annot lh=FILE --annot rh=FILE, --volume FILE --lut FILE, "
-                                "--meshes DIR or --config FILE.toml (one of them)")
+                                "--meshes DIR, --brainglobe ATLAS_NAME or --config FILE.toml (one of them)")
+    if brainglobe is None and (brainglobe_dir is not None or structures is not None or depth is not None):
+        raise BrainPainterError("--brainglobe-dir, --structures and --depth go with --brainglobe ATLAS_NAME")
+    if brainglobe is not None:
+        from brainpainter.atlas.brainglobe import add_brainglobe_atlas
+
+        if structures is not None and depth is not None:
+            raise BrainPainterError("give --structures or --depth, not both")
+        t0 = time.perf_counter()
+        folder, meta = add_brainglobe_atlas(
+            name, brainglobe, brainglobe_dir=brainglobe_dir, depth=depth, title=title,
+            description=description, citation=citation, replace=replace, out=out,
+            structures=[a.strip() for a in structures.split(",") if a.strip()] if structures else None)
+        for line in meta["report"]:
+            click.echo(line)
+        where = "written to" if out is not None else "added in"
+        click.echo(f"atlas {name!r} {where} {folder} ({len(meta['regions'])} structures drawn, "
+                   f"{len(meta['groups'])} parent structures; {time.perf_counter() - t0:.1f} s)")
+        return
     if not mesh_input and (names is not None or units is not None or orientation is not None):
         raise BrainPainterError("--names, --units and --orientation go with --meshes DIR (a folder of region "
                                 "meshes)")
