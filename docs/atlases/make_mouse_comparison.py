@@ -1,4 +1,4 @@
-"""docs/atlases/mouse-vs-original.png: the mouse atlas (brainpainter-atlas-mouse) beside the original's renders.
+"""docs/atlases/mouse-vs-original.png: the mouse atlas (brainpainter-atlas-mouse) beside the original's.
 
     python docs/atlases/make_mouse_comparison.py [/path/to/brainpainter2021]
 
@@ -41,7 +41,8 @@ def main(source: Path, out: Path = HERE / "mouse-vs-original.png") -> Path:
                views=",".join(v for v, _, _ in VIEWS), width=W, height=H, progress=False)
         for i, (view, label, ref) in enumerate(VIEWS):
             ours = Image.open(Path(tmp) / f"Image_0_{view}.png").convert("RGB")
-            theirs = Image.open(source / "reference-images" / ref).convert("RGB").resize((W, H), Image.LANCZOS)
+            theirs = Image.open(source / "reference-images" / ref).convert("RGB")
+            theirs = theirs.resize((W, H), Image.LANCZOS)
             sheet.paste(ours, (0, 24 + i * H))
             sheet.paste(theirs, (W, 24 + i * H))
             draw.text((8, 30 + i * H), f"--views {label} ({view})", fill="black")
