@@ -13,13 +13,8 @@ import trimesh
 from click.testing import CliRunner
 
 from brainpainter.atlas import registry
-from brainpainter.atlas.meshfolder import (
-    build_mesh_atlas,
-    name_regions,
-    orientation_matrix,
-    read_mesh,
-    read_ply_polygons,
-)
+from brainpainter.atlas.meshfiles import orientation_matrix, read_mesh, read_ply_polygons
+from brainpainter.atlas.meshfolder import build_mesh_atlas, name_regions
 from brainpainter.atlas.template import load_template
 from brainpainter.cli.main import cli, main
 from brainpainter.errors import BrainPainterError

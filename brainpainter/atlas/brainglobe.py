@@ -26,7 +26,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.atlas import registry
-from brainpainter.atlas.meshfolder import RegionMesh, check_region, describe_frame, orientation_matrix, weld
+from brainpainter.atlas.meshfiles import orientation_matrix, weld
+from brainpainter.atlas.meshfolder import RegionMesh, check_region, describe_frame
 from brainpainter.atlas.model import load_atlas_dir
 from brainpainter.atlas.registry import atlases_dir
 from brainpainter.atlas.user import check_name, check_syntax, staged_folder

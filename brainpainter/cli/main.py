@@ -242,55 +242,16 @@ def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: P
     if sum([bool(annots), config is not None, volume is not None, mesh_input, brainglobe is not None]) != 1:
         raise BrainPainterError("give either --annot lh=FILE --annot rh=FILE, --volume FILE --lut FILE, "
                                 "--meshes DIR, --brainglobe ATLAS_NAME or --config FILE.toml (one of them)")
-    if brainglobe is None and (brainglobe_dir is not None or structures is not None or depth is not None):
-        raise BrainPainterError("--brainglobe-dir, --structures and --depth go with --brainglobe ATLAS_NAME")
-    if brainglobe is not None:
-        from brainpainter.atlas.brainglobe import add_brainglobe_atlas
+    if brainglobe is not None or mesh_input or names or units or orientation or brainglobe_dir or structures \
+            or depth is not None or also_surface:
+        from brainpainter.cli.atlas_meshes import add_from_meshes_or_brainglobe
 
-        if structures is not None and depth is not None:
-            raise BrainPainterError("give --structures or --depth, not both")
-        t0 = time.perf_counter()
-        folder, meta = add_brainglobe_atlas(
-            name, brainglobe, brainglobe_dir=brainglobe_dir, depth=depth, title=title,
-            description=description, citation=citation, replace=replace, out=out,
-            structures=[a.strip() for a in structures.split(",") if a.strip()] if structures else None)
-        for line in meta["report"]:
-            click.echo(line)
-        where = "written to" if out is not None else "added in"
-        click.echo(f"atlas {name!r} {where} {folder} ({len(meta['regions'])} structures drawn, "
-                   f"{len(meta['groups'])} parent structures; {time.perf_counter() - t0:.1f} s)")
+        add_from_meshes_or_brainglobe(
+            name, meshes=meshes, sub_meshes=sub_meshes, also_surface=also_surface, names=names or lut,
+            lut_and_names=names is not None and lut is not None, units=units, orientation=orientation,
+            brainglobe=brainglobe, brainglobe_dir=brainglobe_dir, structures=structures, depth=depth,
+            title=title, description=description, citation=citation, replace=replace, out=out)
         return
-    if not mesh_input and (names is not None or units is not None or orientation is not None):
-        raise BrainPainterError("--names, --units and --orientation go with --meshes DIR (a folder of region "
-                                "meshes)")
-    if mesh_input:
-        from brainpainter.atlas.meshfolder import add_mesh_atlas
-
-        t0 = time.perf_counter()
-        if names is not None and lut is not None:
-            raise BrainPainterError("give the region names once: --names FILE (or --lut FILE), not both")
-        folder, meta = add_mesh_atlas(name, list(meshes), subcortical=list(sub_meshes), names=names or lut,
-                                      units=units, orientation=orientation, surface_also=also_surface,
-                                      title=title,
-                                      description=description, citation=citation, replace=replace, out=out)
-        for line in meta["report"]:
-            click.echo(line)
-        for r in meta["regions"]:
-            if r["notes"] and not all(n.startswith("welded") for n in r["notes"]):
-                click.echo(f"note: {r['file']}: {'; '.join(r['notes'])}")
-        n_weld = sum(1 for r in meta["regions"] if r["n_read_vertices"] > r["n_vertices"])
-        n_surface = sum(1 for r in meta["regions"] if r["part"] == "surface")
-        where = "written to" if out is not None else "added in"
-        click.echo(f"atlas {name!r} {where} {folder} ({n_surface} surface regions, "
-                   f"{len(meta['regions']) - n_surface} structures; {n_weld} meshes welded; "
-                   f"{time.perf_counter() - t0:.1f} s)")
-        if out is None:
-            click.echo(f"render with: brainpainter render TABLE --atlas {name} --views dorsal,lateral-left,"
-                       "subcortical --out DIR")
-        return
-    if own_template and volume is None:
-        raise BrainPainterError("--own-template goes with --volume FILE --lut FILE (a brain made of volume "
-                                "labels)")
     if (volume is None) != (lut is None):
         raise BrainPainterError("--volume and --lut go together: the look-up table names the volume's labels")
     t0 = time.perf_counter()
