@@ -80,8 +80,9 @@ class Atlas:
     members : tuple of (str, tuple of str)
         Region groups: ``(key, member keys)`` pairs saying which regions of the
         label set a region of this atlas stands for (``("Left-frontal",
-        ("Left-superiorfrontal", ...))``). Regions not listed stand for
-        themselves. Empty for ordinary atlases.
+        ("Left-superiorfrontal", ...))``; a BrainGlobe parent and its drawn
+        descendants, from ``groups`` in ``atlas.json``). Regions not listed
+        stand for themselves. Empty for ordinary atlases.
     volume_dirs : tuple of Path
         Folders of volumetric atlases (``subcortical.npz`` meshes, see
         :mod:`brainpainter.atlas.volumes`) drawn as the template's subcortical part
@@ -144,11 +145,15 @@ class Atlas:
         return dict(self.members).get(key, (key,))
 
     def expand(self, mapping: Mapping[str, T]) -> dict[str, T]:
-        """Copy of `mapping` (region key -> anything) with each group's value given to its members."""
+        """Copy of `mapping` (region key -> anything) with each group's value given to its members.
+
+        A member with a value of its own keeps it; of nested groups (a
+        structure tree's ancestors) the smallest wins.
+        """
         out = dict(mapping)
-        for key, members in self.members:
+        for key, members in sorted(self.members, key=lambda g: -len(g[1])):
             if key in mapping:
-                out.update(dict.fromkeys(members, mapping[key]))
+                out.update({m: mapping[key] for m in members if m not in mapping})
         return out
 
     def to_dict(self) -> dict[str, Any]:
@@ -257,6 +262,7 @@ def load_atlas_dir(path: str | Path) -> Atlas:
         label_dir=path if (path / "labels.json").is_file() else None,
         volume_dirs=(path,) if (path / "subcortical.npz").is_file() else (),
         template_dir=path / "template" if (path / "template" / "manifest.json").is_file() else None,
+        members=tuple((str(k), tuple(str(m) for m in v)) for k, v in meta.get("groups", {}).items()),
     )
 
 

@@ -10,7 +10,9 @@ A template is a directory::
 
 All arrays are plain ``.npz`` (loaded with ``allow_pickle=False``); all
 coordinates are FreeSurfer tkr-RAS millimetres (x right, y anterior, z
-superior). Cortex files hold one mesh per hemisphere whose faces carry a
+superior), unless the manifest's ``axes`` says which axis is anterior and
+which superior (:attr:`Template.to_ras`; templates of other species).
+Cortex files hold one mesh per hemisphere whose faces carry a
 region label: the per-region meshes are ``faces[face_label == i]``, so
 neighbouring regions share their boundary vertices exactly. The pial, white
 and inflated surfaces share one topology (``faces``) and differ in vertex
@@ -69,6 +71,8 @@ SURFACES = ("pial", "white", "inflated")
 HEMIS = ("lh", "rh")
 LABELS_FORMAT = "brainpainter-labels"
 LABELS_FILE = "labels.json"
+_AXIS_VECTORS = {f"{sign}{axis}": tuple(float(sign + "1") * (i == j) for j in range(3))
+                 for i, axis in enumerate("xyz") for sign in "+-"}
 
 
 @dataclass
@@ -270,9 +274,38 @@ class Template:
         return Template(path=self.path, manifest=manifest, _cache=self._cache)
 
     def glass(self, hemi: str) -> tuple[NDArray[Any], NDArray[Any]]:
-        """Glass-brain hull of one hemisphere: ``(vertices (n, 3), faces (m, 3))``."""
-        z = self._npz(self.manifest["glass"][hemi]["file"])
-        return z["vertices"], z["faces"]
+        """Glass-brain hull of one hemisphere: ``(vertices (n, 3), faces (m, 3))``.
+
+        The manifest entry names the file and, optionally, its vertex array
+        (``"vertices": "pial"``: a mesh template's glass is its cortex file).
+        """
+        entry = self.manifest["glass"][hemi]
+        z = self._npz(entry["file"])
+        return z[entry.get("vertices", "vertices")], z["faces"]
+
+    @cached_property
+    def to_ras(self) -> NDArray[Any]:
+        """3 x 3 rotation from the template's coordinates to RAS (x right, y anterior, z superior).
+
+        The manifest's optional ``axes`` entry says which axis points anterior
+        and which superior (``{"anterior": "-z", "superior": "+y"}``; default
+        ``+y`` and ``+z``): the views turn with it, so any species' brain is
+        drawn the right way up whatever its coordinates. Right is anterior x
+        superior (the coordinates are right-handed, as meshes with outward
+        faces need).
+        """
+        axes = self.manifest.get("axes") or {}
+        vec = {}
+        for key, default in (("anterior", "+y"), ("superior", "+z")):
+            text = str(axes.get(key, default)).strip().lower()
+            if text not in _AXIS_VECTORS:
+                raise BrainPainterError(f"template {self.name!r}: axes.{key} must be one of "
+                                        f"{sorted(_AXIS_VECTORS)}; {text!r} was given")
+            vec[key] = np.asarray(_AXIS_VECTORS[text], dtype=float)
+        if abs(float(vec["anterior"] @ vec["superior"])) > 0:
+            raise BrainPainterError(f"template {self.name!r}: axes.anterior and axes.superior must be two "
+                                    "different axes")
+        return np.vstack([np.cross(vec["anterior"], vec["superior"]), vec["anterior"], vec["superior"]])
 
     @cached_property
     def bounds(self) -> NDArray[Any]:

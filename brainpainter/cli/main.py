@@ -185,6 +185,31 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, 
 @click.option("--own-template", is_flag=True,
               help="With --volume: the volume is a brain of its own (e.g. a mouse atlas): make a template of "
                    "its labels only (no cortex) in the volume's coordinates; --space is not used.")
+@click.option("--meshes", "meshes", multiple=True, type=click.Path(path_type=Path, file_okay=False),
+              help="Folder of region meshes, one region per file (OBJ, PLY, STL, OFF, GLB/glTF, GIfTI): "
+                   "hemisphere-named ones (lh./Left-/_L) form the outer surface, the others are structures.")
+@click.option("--subcortical-meshes", "sub_meshes", multiple=True,
+              type=click.Path(path_type=Path, file_okay=False),
+              help="With --meshes (or alone): folder of structures drawn in the subcortical views.")
+@click.option("--also-surface", "also_surface", multiple=True, metavar="KEY",
+              help="With --subcortical-meshes: a structure also drawn in the surface views (e.g. "
+                   "Left-Cerebellum). Repeatable.")
+@click.option("--names", "names", type=click.Path(path_type=Path, dir_okay=False), default=None,
+              help="With --meshes: CSV of file,name[,aliases] naming the regions (also accepted as --lut).")
+@click.option("--units", type=click.Choice(["mm", "um", "cm", "m"]), default=None,
+              help="With --meshes: units of the mesh coordinates (scaled to mm); not given: kept, reported.")
+@click.option("--orientation", default=None, metavar="XYZ",
+              help="With --meshes: where each axis increases, e.g. RAS, LPS, PIL (BrainGlobe's 'asr'); not "
+                   "given: taken as RAS and reported.")
+@click.option("--brainglobe", "brainglobe", default=None, metavar="ATLAS_NAME",
+              help="A BrainGlobe atlas already on this machine (e.g. allen_mouse_25um; needs "
+                   "brainglobe-atlasapi; nothing is downloaded).")
+@click.option("--brainglobe-dir", "brainglobe_dir", type=click.Path(path_type=Path, file_okay=False),
+              default=None, help="With --brainglobe: BrainGlobe's folder (default: its configured one).")
+@click.option("--structures", "structures", default=None, metavar="ACRONYMS",
+              help="With --brainglobe: comma-separated acronyms of the structures drawn (default: leaves).")
+@click.option("--depth", "depth", type=int, default=None,
+              help="With --brainglobe: draw the structures at this depth of the tree (and shallower leaves).")
 @click.option("--template", default="fsaverage", show_default=True,
               help="Template the label maps were made for.")
 @click.option("--title", default="", help="Human title (default: NAME).")
@@ -194,8 +219,11 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, 
 @click.option("--out", "out", type=click.Path(path_type=Path, file_okay=False), default=None,
               help="Write the atlas folder to OUT (e.g. into an atlas plugin) instead of adding it.")
 def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: Path | None, lut: Path | None,
-              space: str, own_template: bool, template: str, title: str, description: str, citation: str,
-              replace: bool, out: Path | None) -> None:
+              space: str, own_template: bool, meshes: tuple[Path, ...], sub_meshes: tuple[Path, ...],
+              also_surface: tuple[str, ...], names: Path | None, units: str | None, orientation: str | None,
+              brainglobe: str | None, brainglobe_dir: Path | None, structures: str | None, depth: int | None,
+              template: str, title: str,
+              description: str, citation: str, replace: bool, out: Path | None) -> None:
     """Add atlas NAME from label maps (--annot), a label volume (--volume) or region groups (--config).
 
     \b
@@ -204,17 +232,26 @@ def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: P
                                   --annot rh=rh.Yeo2011_7Networks_N1000.annot
       brainpainter atlas add lobes --config lobes.toml
       brainpainter atlas add tian_s2 --volume Tian_S2.nii.gz --lut Tian_S2.csv --space MNI152NLin6Asym
+      brainpainter atlas add mymouse --meshes cortex_ply/ --subcortical-meshes deep_ply/ --units um
     """
     import time
 
     from brainpainter.atlas import registry
     from brainpainter.atlas import user as user_atlases
-    if sum([bool(annots), config is not None, volume is not None]) != 1:
-        raise BrainPainterError("give either --annot lh=FILE --annot rh=FILE, --volume FILE --lut FILE or "
-                                "--config FILE.toml (one of them)")
-    if own_template and volume is None:
-        raise BrainPainterError("--own-template goes with --volume FILE --lut FILE (a brain made of volume "
-                                "labels)")
+    mesh_input = bool(meshes or sub_meshes)
+    if sum([bool(annots), config is not None, volume is not None, mesh_input, brainglobe is not None]) != 1:
+        raise BrainPainterError("give either --annot lh=FILE --annot rh=FILE, --volume FILE --lut FILE, "
+                                "--meshes DIR, --brainglobe ATLAS_NAME or --config FILE.toml (one of them)")
+    if brainglobe is not None or mesh_input or names or units or orientation or brainglobe_dir or structures \
+            or depth is not None or also_surface:
+        from brainpainter.cli.atlas_meshes import add_from_meshes_or_brainglobe
+
+        add_from_meshes_or_brainglobe(
+            name, meshes=meshes, sub_meshes=sub_meshes, also_surface=also_surface, names=names or lut,
+            lut_and_names=names is not None and lut is not None, units=units, orientation=orientation,
+            brainglobe=brainglobe, brainglobe_dir=brainglobe_dir, structures=structures, depth=depth,
+            title=title, description=description, citation=citation, replace=replace, out=out)
+        return
     if (volume is None) != (lut is None):
         raise BrainPainterError("--volume and --lut go together: the look-up table names the volume's labels")
     t0 = time.perf_counter()

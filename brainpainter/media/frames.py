@@ -26,7 +26,7 @@ def orbit_views(painter: Painter, view: View, azimuths: Sequence[float], aspect:
     from brainpainter.rendering.framing import extent
 
     # the hull points the camera frames (brainpainter.rendering.geometry), so the orbit and each image agree
-    points = np.vstack([p.hull for p in painter.scene.geometry.visible(view)])
+    points = painter.scene.geometry.view_points(view)
     extents = [extent(points, az, view.elevation, aspect) for az in azimuths]
     widest = max((e for e in extents if e), default=None)
     out = []

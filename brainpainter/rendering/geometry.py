@@ -436,6 +436,8 @@ class SceneGeometry:
                 f"the scene needs {N_FIXED_SLOTS + len(keys):,} palette slots (regions, bundles and "
                 f"along-tract nodes); at most {MAX_SLOTS:,} fit a palette texture; give profiles with fewer "
                 "nodes or fewer bundles.")
+        #: rotation from the template's coordinates to RAS (its anterior and superior axes)
+        self.to_ras: NDArray[Any] = np.asarray(template.to_ras, dtype=float)
         self.parts: tuple[PartGeometry, ...] = tuple(parts)
         self.keys: tuple[str, ...] = tuple(keys)
         self.slot_of = slot_of
@@ -448,12 +450,24 @@ class SceneGeometry:
     def visible(self, view: View) -> list[PartGeometry]:
         """The parts `view` draws (:func:`brainpainter.rendering.framing.shows`), opaque parts first.
 
+        A template that lacks the part a view is about (a brain of region
+        meshes with structures only, or with an outer surface only) draws its
+        other part instead, so every view shows it. Renderers draw exactly
+        these parts.
+
         Raises
         ------
         BrainPainterError
             If the view draws nothing (its parts are absent from the template or all hidden).
         """
         parts = [p for p in self.parts if framing.shows(view, p.kind, p.hemi)]
+        kinds = {p.kind for p in self.parts}
+        if view.content == "cortex" and "cortex" not in kinds:
+            # a brain of region meshes without an outer surface: its structures stand for it
+            parts = [p for p in self.parts if p.kind == "subcortical" or framing.shows(view, p.kind, p.hemi)]
+        elif view.content == "subcortical" and "subcortical" not in kinds:
+            # ... and one without structures shows its surface (both hemispheres, no glass over it)
+            parts = [p for p in self.parts if p.kind == "cortex"]
         if not parts:
             raise BrainPainterError(
                 f"view {view.name!r} shows nothing: content={view.content!r}, hemis={list(view.hemis)}, "
@@ -461,7 +475,26 @@ class SceneGeometry:
             )
         return sorted(parts, key=lambda p: p.kind == "glass")
 
-    def camera(self, view: View, aspect: float) -> framing.CameraPose:
-        """The orthographic camera of `view` framing its visible parts (image width / height = `aspect`)."""
+    def view_points(self, view: View) -> NDArray[Any]:
+        """Hull points of the parts `view` draws, in RAS (what the camera frames), shape (n, 3)."""
         points = np.vstack([p.hull for p in self.visible(view)])
-        return framing.frame(points, view.azimuth, view.elevation, view.zoom, aspect)
+        if np.array_equal(self.to_ras, np.eye(3)):
+            return points
+        rotated: NDArray[Any] = points @ self.to_ras.T
+        return rotated
+
+    def camera(self, view: View, aspect: float) -> framing.CameraPose:
+        """The orthographic camera of `view` framing its visible parts (image width / height = `aspect`).
+
+        Views are anatomical (:mod:`brainpainter.rendering.views`): the camera
+        is placed in RAS and turned back into the template's coordinates
+        (:attr:`brainpainter.atlas.template.Template.to_ras`), so a template
+        whose anterior axis is not +y is still drawn the right way up.
+        """
+        pose = framing.frame(self.view_points(view), view.azimuth, view.elevation, view.zoom, aspect)
+        if np.array_equal(self.to_ras, np.eye(3)):
+            return pose
+        m = self.to_ras
+        return framing.CameraPose(location=m.T @ pose.location, rotation=m.T @ pose.rotation,
+                                  ortho_scale=pose.ortho_scale, clip_start=pose.clip_start,
+                                  clip_end=pose.clip_end)

@@ -74,6 +74,7 @@ def region_colors(values: Mapping[str, float], atlas: Atlas, scale: ColourScale)
         NaN = empty cell (``scale.nan_color``); keys absent = no data
         (``scale.missing_color``).
     """
+    values = atlas.expand(values)  # a group member without a value takes the group's
     keys = [k for k in atlas.keys if k in values]
     colors: dict[str, RGB] = {k: scale.missing_color for k in atlas.keys}
     if keys:

@@ -24,7 +24,6 @@ import numpy as np
 from PIL import Image
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.rendering import framing
 from brainpainter.rendering.geometry import Palette
 from brainpainter.rendering.scene import RGB, BlankRenderError, Scene, nothing_drawn
 from brainpainter.rendering.views import View
@@ -133,9 +132,9 @@ class BlenderRenderer:
         return pixels
 
     def _show(self, view: View) -> None:
-        self.scene.geometry.visible(view)  # a view that shows nothing is an error
+        shown = {(p.kind, p.hemi) for p in self.scene.geometry.visible(view)}  # nothing shown: an error
         for part in self._parts:
-            on = framing.shows(view, part.kind, part.hemi)
+            on = (part.kind, part.hemi) in shown
             if part.obj.hide_render == on:
                 part.obj.hide_render = not on
 
