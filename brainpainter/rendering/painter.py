@@ -22,7 +22,7 @@ from brainpainter.atlas.template import Template, load_template, template_for
 from brainpainter.color.rgb import ColorLike, to_rgb
 from brainpainter.color.scale import ColourScale
 from brainpainter.errors import choice_error
-from brainpainter.rendering.geometry import Palette
+from brainpainter.rendering.geometry import Palette, VertexColors
 from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.settings import RGB, RenderSettings
 from brainpainter.rendering.views import View
@@ -93,6 +93,7 @@ def load_scene(
     settings: RenderSettings | None = None,
     medial_wall_color: ColorLike = (0.72, 0.72, 0.72),
     atlas_config: str | Path | None = None,
+    coloring: str = "regions",
 ) -> tuple[Atlas, Scene]:
     """The atlas and the scene a renderer (or an exporter) draws; nothing is rendered.
 
@@ -126,6 +127,7 @@ def load_scene(
         hidden=frozenset(atlas.expand(dict.fromkeys(resolve_hidden(hidden, atlas)))),
         settings=settings or RenderSettings(),
         medial_wall_color=to_rgb(medial_wall_color),
+        coloring=coloring,
     )
     return atlas, scene
 
@@ -146,6 +148,8 @@ class Painter:
         Name in the ``brainpainter.renderers`` registry.
     atlas_config : path, optional
         Region-group TOML file (:mod:`brainpainter.atlas.config`); replaces `atlas`.
+    coloring : {"regions", "vertices"}
+        ``"vertices"`` draws per-vertex maps (:attr:`brainpainter.rendering.scene.Scene.coloring`).
     """
 
     atlas: Atlas | str = "dk"
@@ -156,11 +160,13 @@ class Painter:
     renderer: str = "blender"
     medial_wall_color: ColorLike = (0.72, 0.72, 0.72)
     atlas_config: str | Path | None = None
+    coloring: str = "regions"
     _renderer: Any = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         self.atlas, self.scene = load_scene(self.atlas, self.template, self.surface, self.hidden,
-                                            self.settings, self.medial_wall_color, self.atlas_config)
+                                            self.settings, self.medial_wall_color, self.atlas_config,
+                                            self.coloring)
         self.template = self.scene.template
         from brainpainter.atlas import registry
         from brainpainter.rendering.pythons import require_bpy
@@ -177,10 +183,14 @@ class Painter:
         return self._renderer
 
     def paint_colors(self, colors: Mapping[str, RGB], view: View) -> NDArray[Any]:
-        """Render explicit region colours (group keys colour their members); RGBA uint8, (h, w, 4)."""
+        """Render explicit region colours (group keys colour their members); RGBA uint8, (h, w, 4).
+
+        A :class:`~brainpainter.rendering.geometry.VertexColors` also colours each cortex vertex (a map).
+        """
         assert isinstance(self.atlas, Atlas)
         scene = self.scene
-        palette = Palette(self.atlas.expand(colors), lambda: scene.geometry)
+        vertex_rgb = colors.vertices if isinstance(colors, VertexColors) else None
+        palette = Palette(self.atlas.expand(colors), lambda: scene.geometry, vertex_rgb)
         pixels: NDArray[Any] = self.load().render(palette, view)
         return pixels
 

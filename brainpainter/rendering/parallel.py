@@ -97,6 +97,7 @@ class PainterSpec:
         ``"module:Class"`` of the renderer, registered under `renderer` in a
         worker that does not know that name (a renderer registered at run time).
     medial_wall_color : (float, float, float)
+    coloring : {"regions", "vertices"}
     """
 
     atlas: Any
@@ -107,6 +108,7 @@ class PainterSpec:
     renderer: str
     renderer_target: str | None
     medial_wall_color: RGB
+    coloring: str = "regions"
 
     @classmethod
     def of(cls, painter: Painter, template: Any = None) -> PainterSpec:
@@ -124,6 +126,7 @@ class PainterSpec:
             surface=painter.surface, hidden=tuple(str(h) for h in painter.hidden),
             settings=painter.settings, renderer=painter.renderer, renderer_target=target,
             medial_wall_color=tuple(float(c) for c in painter.scene.medial_wall_color),  # type: ignore[arg-type]
+            coloring=painter.scene.coloring,
         )
 
     @property
@@ -150,7 +153,7 @@ class PainterSpec:
             if obj is not None and current is not obj:
                 registry.renderers.register(self.renderer, lambda: obj, replace=True)
         return Painter(self.atlas, self.template, self.surface, self.hidden, self.settings,
-                       self.renderer, self.medial_wall_color)
+                       self.renderer, self.medial_wall_color, coloring=self.coloring)
 
 
 @dataclass(frozen=True)

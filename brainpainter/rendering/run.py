@@ -22,6 +22,7 @@ from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.registry import get_atlas, load_atlas_config
 from brainpainter.color.scale import ColourScale
 from brainpainter.errors import BrainPainterError
+from brainpainter.maps.inputs import is_map_input
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
 from brainpainter.rendering.painter import VOLUME_VIEWS, Painter, RenderResult, region_colors, resolve_hidden
 from brainpainter.rendering.parallel import Item, LocalRunner, PainterSpec, Runner, SerialRunner, chunked
@@ -80,7 +81,9 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     Parameters
     ----------
     data : path, DataFrame, dict, or a list of these
-        See :func:`brainpainter.table.region_table.read_table`.
+        See :func:`brainpainter.table.region_table.read_table`. A map
+        (``{"lh": array, "rh": array}``, or ``lh=``/``rh=`` options) makes a
+        :class:`~brainpainter.rendering.maprun.MapRun` instead.
     atlas : str or Atlas, optional
         Inferred from the region names when not given.
     options : Options, optional
@@ -91,6 +94,10 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     if options is None:
         options = Options.of(kwargs, "prepare_run")
     atlas_obj = resolve_atlas(atlas, options.scene.atlas_config)
+    if options.maps.given or is_map_input(data):  # per-vertex maps: the same run, coloured per vertex
+        from brainpainter.rendering.maprun import prepare_map_run
+
+        return prepare_map_run(data, atlas_obj, options)  # type: ignore[return-value]
     views = options.scene.views
     if views is None and atlas_obj is not None and not atlas_obj.cortical():
         views = VOLUME_VIEWS  # a volumetric atlas alone: its structures, not a grey cortex

@@ -39,6 +39,9 @@ __all__ = ["LIGHTINGS", "QUALITIES", "RGB", "SHADINGS", "SULC_LIGHTINGS", "Rende
 if TYPE_CHECKING:
     from brainpainter.rendering.geometry import Palette, SceneGeometry
 
+#: How a scene's cortex is coloured: one colour per region, or one per vertex (a map).
+COLORINGS = ("regions", "vertices")
+
 @dataclass(frozen=True)
 class Scene:
     """Everything loaded once per run.
@@ -56,6 +59,9 @@ class Scene:
         Region keys not drawn at all.
     settings : RenderSettings
     medial_wall_color : tuple of float, shape (3,)
+    coloring : {"regions", "vertices"}
+        ``"vertices"``: a map; the cortex has one palette slot per vertex
+        (:class:`~brainpainter.rendering.geometry.SceneGeometry`).
     """
 
     template: Template
@@ -64,10 +70,13 @@ class Scene:
     hidden: frozenset[str] = field(default_factory=frozenset)
     settings: RenderSettings = field(default_factory=RenderSettings)
     medial_wall_color: RGB = (0.72, 0.72, 0.72)
+    coloring: str = "regions"
 
     def __post_init__(self) -> None:
         if self.surface not in SURFACES:
             raise choice_error("surface", self.surface, SURFACES)
+        if self.coloring not in COLORINGS:
+            raise choice_error("coloring", self.coloring, COLORINGS)
 
     @cached_property
     def geometry(self) -> SceneGeometry:

@@ -1,0 +1,102 @@
+"""A run that draws per-vertex maps (:mod:`brainpainter.maps`) through the one paint loop.
+
+:func:`prepare_map_run` reads the maps (any input :func:`brainpainter.maps.inputs.read_maps`
+takes) and builds a :class:`MapRun`: the same :class:`~brainpainter.rendering.run.Run` as a
+region table's, whose painter draws a per-vertex scene (``coloring="vertices"``)
+and whose items carry :class:`~brainpainter.rendering.geometry.VertexColors`.
+So ``render``, ``--jobs`` and Dask paint maps exactly as they paint tables.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from brainpainter.atlas.model import Atlas
+from brainpainter.atlas.template import Template, load_template
+from brainpainter.maps.inputs import VertexMaps, read_maps
+from brainpainter.maps.layers import map_scale, vertex_colors
+from brainpainter.maps.resolution import map_mesh
+from brainpainter.rendering.geometry import VertexColors
+from brainpainter.rendering.options import DEFAULT_VIEWS, Options
+from brainpainter.rendering.painter import Painter, region_colors
+from brainpainter.rendering.parallel import Item
+from brainpainter.rendering.views import View, parse_views
+
+#: Default views of a map run: both hemispheres, outside and inside.
+MAP_VIEWS = "lateral-left,medial-left,lateral-right,medial-right"
+
+
+@dataclass
+class MapTable:
+    """What a map run has where a region run has its table: image names, the atlas, a summary."""
+
+    maps: VertexMaps
+    atlas: Atlas
+
+    @property
+    def images(self) -> list[str]:
+        return list(self.maps.images)
+
+    def summary(self) -> dict[str, Any]:
+        return self.maps.summary()
+
+
+@dataclass
+class MapRun:
+    """A checked map run (the interface of :class:`brainpainter.rendering.run.Run`)."""
+
+    table: MapTable
+    scale: Any
+    views: list[View]
+    settings: Any
+    options: Options
+    source_vertex: dict[str, NDArray[Any]]
+    _cache: dict[float, VertexColors] = field(default_factory=dict, repr=False)
+
+    @property
+    def maps(self) -> VertexMaps:
+        return self.table.maps
+
+    def painter(self) -> Painter:
+        """A new (not loaded) painter drawing a per-vertex scene."""
+        scene = self.options.scene
+        return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
+                       scene.renderer, coloring="vertices")
+
+    def items(self, rows: Any) -> list[tuple[int, View]]:
+        return [(i, view) for i in rows for view in self.views]
+
+    def colors(self, image: float) -> VertexColors:
+        """The colours of image `image` (a float between two images blends their values)."""
+        if image not in self._cache:
+            self._cache.clear()  # one image at a time: the views of a row share it
+            m = self.options.maps
+            cortex = vertex_colors(self.maps, image, self.source_vertex, self.scale, m.underlay, m.threshold)
+            self._cache[image] = VertexColors(region_colors({}, self.table.atlas, self.scale), cortex)
+        return self._cache[image]
+
+    def item(self, i: int, view: View, metadata: Any = None) -> Item:
+        return Item(self.colors(i), view, metadata, self.table.images[i])
+
+
+def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
+    """Read the maps and check the options of a map run (see :func:`~brainpainter.rendering.run.prepare_run`)."""
+    from brainpainter.atlas.registry import get_atlas
+
+    maps = read_maps(data, options.maps.lh, options.maps.rh)
+    atlas_obj = atlas if atlas is not None else get_atlas("dk")
+    views = options.scene.views
+    if views is None or views == DEFAULT_VIEWS:
+        views = MAP_VIEWS
+    view_list = parse_views(views if isinstance(views, str) else list(views))
+    template = options.scene.template
+    tpl = template if isinstance(template, Template) else load_template(template)
+    labels = atlas_obj.template_labels if atlas_obj.template_labels in tpl.label_sets else "dk"
+    source_vertex = {hemi: np.asarray(map_mesh(tpl, labels, hemi).source_vertex)
+                     for hemi in ("lh", "rh")}
+    return MapRun(MapTable(maps, atlas_obj), map_scale(options.scale, maps), view_list, options.settings,
+                  options, source_vertex)
