@@ -19,6 +19,7 @@ from typing import Any, TypeVar
 import click
 
 from brainpainter.color.scale import ScaleOptions
+from brainpainter.maps.options import MapOptions
 from brainpainter.rendering.options import DEFAULT_VIEWS, RunnerOptions, SceneOptions
 from brainpainter.rendering.settings import RenderSettings, parse_size
 from brainpainter.table.options import TableOptions
@@ -39,6 +40,7 @@ RENDER_OPTION_NAMES = (
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
+MAP_OPTION_NAMES = ("lh", "rh", "underlay", "threshold")
 
 
 class FiniteFloat(click.ParamType):  # type: ignore[type-arg]
@@ -152,6 +154,14 @@ render_options = make_render_options()
 #: ``@input_options``: how INPUT tables are read (as for ``render`` and ``check``).
 input_options = option_group(TableOptions)
 
+#: ``@map_options``: ``--lh``, ``--rh``, ``--underlay``, ``--threshold`` (per-vertex maps, docs/maps.md).
+map_options = stack([
+    field_option(MapOptions, "lh", type=click.Path(dir_okay=False), metavar="FILE"),
+    field_option(MapOptions, "rh", type=click.Path(dir_okay=False), metavar="FILE"),
+    field_option(MapOptions, "underlay"),
+    field_option(MapOptions, "threshold"),
+])
+
 #: ``@parallel_options``: ``--jobs`` and ``--scheduler``, where the images are rendered.
 parallel_options = stack([
     field_option(RunnerOptions, "jobs", "--jobs", "-j", default="1", type=str, metavar="N|auto"),
@@ -165,7 +175,7 @@ def render_kwargs(options: dict[str, Any]) -> dict[str, Any]:
     ``--size`` becomes ``width``/``height`` and ``--transparent`` a ``None``
     background; everything else keeps its name.
     """
-    names = (*RENDER_OPTION_NAMES, *INPUT_OPTION_NAMES, *PARALLEL_OPTION_NAMES)
+    names = (*RENDER_OPTION_NAMES, *INPUT_OPTION_NAMES, *PARALLEL_OPTION_NAMES, *MAP_OPTION_NAMES)
     out = {name: options.pop(name) for name in names if name in options}
     if "size" in out:
         out["width"], out["height"] = parse_size(out.pop("size"))

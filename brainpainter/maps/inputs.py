@@ -15,6 +15,7 @@ turned into the same arrays by ``brainpainter.maps.volume`` and handed to
 
 from __future__ import annotations
 
+import gzip
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -197,8 +198,8 @@ def _stem(path: str | Path) -> str:
         if name.lower().endswith(suffix):
             name = name[: -len(suffix)]
             break
-    for pat in (r"(^|[._-])[lr]h([._-]|$)", r"hemi-[LR]_?", r"(^|[._-])(left|right)([._-]|$)"):
-        name = re.sub(pat, lambda m: m.group(1) if m.group(1) in ".-_" else "", name)
+    for pat in (r"(^|[._-])[lr]h([._-]|$)", r"()hemi-[LR]_?", r"(^|[._-])(?:left|right)([._-]|$)"):
+        name = re.sub(pat, lambda m: m.group(1) or "", name)
     return name.strip("._-") or "map"
 
 
@@ -248,7 +249,10 @@ def read_file(path: Path, hemi: str) -> Hemi:
         if name.endswith(".gii"):
             return _gifti(nib.load(str(path)), what)
         if name.endswith((".mgh", ".mgz", ".nii", ".nii.gz")):
-            data = np.asarray(nib.load(str(path)).dataobj)  # type: ignore[attr-defined]
+            raw = path.read_bytes()  # read whole: no file left open by a lazy proxy
+            raw = gzip.decompress(raw) if name.endswith((".mgz", ".gz")) else raw
+            klass: Any = nib.MGHImage if name.endswith((".mgh", ".mgz")) else nib.Nifti1Image
+            data = np.asarray(klass.from_bytes(raw).dataobj)
             if data.ndim < 3 or data.shape[1] != 1 or data.shape[2] != 1:
                 raise BrainPainterError(
                     f"{what} has shape {data.shape}, not one value per vertex (N x 1 x 1); a volume in MNI "

@@ -84,7 +84,7 @@ class MapRun:
 
 
 def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
-    """Read the maps and check the options of a map run (see :func:`~brainpainter.rendering.run.prepare_run`)."""
+    """Read the maps and check the options of a map run (as ``prepare_run`` does for a table)."""
     from brainpainter.atlas.registry import get_atlas
 
     maps = read_maps(data, options.maps.lh, options.maps.rh)
