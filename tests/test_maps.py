@@ -8,6 +8,7 @@ docs/maps.md); ``integration`` tests read ../shared/data.
 from __future__ import annotations
 
 import colorsys
+import itertools
 import os
 import subprocess
 import sys
@@ -25,7 +26,8 @@ from brainpainter.maps.options import MapOptions
 from brainpainter.maps.resolution import LEVELS, N_FSAVERAGE, _family, masks, to_fsaverage
 
 #: ../shared/data beside the repository (as tests/conftest.py), or $BRAINPAINTER_SHARED_DATA.
-SHARED = Path(os.environ.get("BRAINPAINTER_SHARED_DATA", Path(__file__).resolve().parents[1].parent / "shared" / "data"))
+SHARED = Path(os.environ.get("BRAINPAINTER_SHARED_DATA",
+                            Path(__file__).resolve().parents[1].parent / "shared" / "data"))
 FS = SHARED / "freesurfer" / "subjects"
 N5 = 10242
 
@@ -34,7 +36,7 @@ N5 = 10242
 def test_counts_and_parents():
     parents = _family()["parents"]
     assert parents.shape == (N_FSAVERAGE - 12, 2)
-    for lo, hi in zip(LEVELS[:-1], LEVELS[1:], strict=True):  # parents are vertices of the level below
+    for lo, hi in itertools.pairwise(LEVELS):  # parents are vertices of the level below
         assert parents[lo - 12:hi - 12].max() < lo
 
 
@@ -49,7 +51,7 @@ def test_coarse_vertices_kept_and_constant_stays_constant():
 
 
 def test_linear_field_is_interpolated_linearly():
-    """A linear function of the icosahedron's unit vectors: interpolation errs by the sphere's curvature only."""
+    """A linear function of the unit vectors: interpolation errs by the sphere's curvature only."""
     sphere = FS / "fsaverage" / "surf" / "lh.sphere"
     if not sphere.is_file():
         pytest.skip("shared data not found")
@@ -69,7 +71,7 @@ def test_nan_and_categories():
 
 
 def test_count_of_no_fsaverage_is_one_line():
-    with pytest.raises(BrainPainterError, match="1000 values per hemisphere.*mri_surf2surf") as e:
+    with pytest.raises(BrainPainterError, match=r"1000 values per hemisphere.*mri_surf2surf") as e:
         to_fsaverage(np.zeros(1000))
     assert "\n" not in str(e.value)
 
@@ -95,7 +97,8 @@ def test_formats_read_alike(tmp_path):
     np.save(tmp_path / "lh.x.npy", v)
     np.savetxt(tmp_path / "lh.x.txt", v[0])
     one = [read_maps(lh=tmp_path / n).values["lh"] for n in ("lh.thickness", "lh.x.mgh", "lh.x.txt")]
-    two = [read_maps(lh=tmp_path / n).values["lh"] for n in ("lh.x.nii.gz", "hemi-L_x.func.gii", "lh.x.npy")]
+    two = [read_maps(lh=tmp_path / n).values["lh"]
+           for n in ("lh.x.nii.gz", "hemi-L_x.func.gii", "lh.x.npy")]
     for a in one:
         np.testing.assert_allclose(a[0, :N5], v[0], rtol=1e-5)
     for a in two:
@@ -108,7 +111,8 @@ def test_formats_read_alike(tmp_path):
 def test_pair_found_from_one_name(tmp_path):
     for hemi in ("lh", "rh"):
         nib.freesurfer.write_morph_data(str(tmp_path / f"{hemi}.thickness"), _values()[0])
-    assert pair_of(tmp_path / "lh.thickness") == {"lh": tmp_path / "lh.thickness", "rh": tmp_path / "rh.thickness"}
+    found = pair_of(tmp_path / "lh.thickness")
+    assert found == {"lh": tmp_path / "lh.thickness", "rh": tmp_path / "rh.thickness"}
     assert set(read_maps(tmp_path / "rh.thickness").values) == {"lh", "rh"}
     with pytest.raises(BrainPainterError, match="hemisphere"):
         pair_of(tmp_path / "thickness.mgh")
@@ -159,10 +163,9 @@ def test_threshold_medial_wall_and_underlay():
     assert np.allclose(rgb["rh"][masks("rh")["sulc"], 0], SULCUS_GREY)
     flat = vertex_colors(m, 0, sv, scale, "none")["rh"]
     assert np.allclose(flat, PLAIN_GREY)
-    half = vertex_colors(read_maps({"lh": np.stack([v * 0, v * 0 + 1])}), 0.5, sv, make_scale(cmap="viridis",
-                         vmin=0, vmax=1), "none")["lh"]
-    np.testing.assert_allclose(half[mk["cortex"]][0], make_scale(cmap="viridis", vmin=0, vmax=1)([0.5])[0, :3],
-                               atol=1e-6)  # a movie's in-between frame blends values
+    viridis = make_scale(cmap="viridis", vmin=0, vmax=1)
+    half = vertex_colors(read_maps({"lh": np.stack([v * 0, v * 0 + 1])}), 0.5, sv, viridis, "none")["lh"]
+    np.testing.assert_allclose(half[mk["cortex"]][0], viridis([0.5])[0, :3], atol=1e-6)  # a movie's blend
 
 
 # -- pictures -------------------------------------------------------------------------------
