@@ -250,3 +250,16 @@ def test_cli_count_of_no_fsaverage_exits_2(tmp_path):
     assert out.returncode == 2
     assert len(out.stderr.strip().splitlines()) == 1 and "1000" in out.stderr
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.render
+def test_map_series_with_jobs_is_identical_to_serial(tmp_path):
+    """A map run goes through the one paint loop: --jobs 2 writes the serial run's bytes."""
+    import brainpainter
+
+    v = np.random.default_rng(3).normal(size=(3, N5))
+    kw = {"width": 160, "height": 120, "views": "lateral-left,medial-left", "progress": False}
+    a = brainpainter.render({"lh": v}, out=tmp_path / "a", **kw)
+    b = brainpainter.render({"lh": v}, out=tmp_path / "b", jobs=2, **kw)
+    assert b.workers["backend"] == "LocalRunner" and len(a.files) == 6
+    assert all(x.read_bytes() == y.read_bytes() for x, y in zip(a.files, b.files, strict=True))
