@@ -263,3 +263,47 @@ def test_map_series_with_jobs_is_identical_to_serial(tmp_path):
     b = brainpainter.render({"lh": v}, out=tmp_path / "b", jobs=2, **kw)
     assert b.workers["backend"] == "LocalRunner" and len(a.files) == 6
     assert all(x.read_bytes() == y.read_bytes() for x, y in zip(a.files, b.files, strict=True))
+
+
+def test_colorbar_greys_out_the_threshold_band():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from brainpainter.media.colorbar import THRESHOLD_GREY, draw_colorbar
+
+    scale = map_scale(ScaleOptions(vmin=-3, vmax=3), read_maps({"lh": np.linspace(-3, 3, N5)}), threshold=1.0)
+    assert scale.threshold == 1.0 and scale.to_dict()["threshold"] == 1.0
+    fig, ax = plt.subplots(figsize=(4, 1), dpi=100)
+    draw_colorbar(ax, scale, orientation="horizontal")
+    ax.set_position((0, 0, 1, 1))
+    fig.canvas.draw()
+    img = np.asarray(fig.canvas.buffer_rgba())[..., :3]
+    middle, side = img[50, 200], img[50, 30]
+    np.testing.assert_allclose(middle / 255, THRESHOLD_GREY, atol=0.02)  # |v| < 1: grey
+    assert np.ptp(side) > 50  # outside the band: the colour map
+    plt.close(fig)
+
+
+@pytest.mark.render
+@pytest.mark.integration
+def test_figure_and_plot_of_a_map(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    import brainpainter
+
+    v = {"lh": np.random.default_rng(4).normal(size=(2, N5)), "rh": np.ones((2, N5))}
+    f = brainpainter.figure(v, out=tmp_path / "f.png", width=160, height=120,
+                            views="lateral-left,lateral-right", threshold=0.5, progress=False)
+    assert f.path.is_file() and len(f.images) == 4
+    assert f.scale.threshold == 0.5
+    fig, ax = plt.subplots()
+    p = brainpainter.plot(v, "lateral-right", ax=ax, width=160, height=120, vmin=-2, vmax=2, cmap="RdBu_r")
+    brain = _brain(p.image)
+    rgb = p.image[brain][:, :3].astype(float).mean(axis=0)
+    assert rgb[0] > rgb[2] + 30  # rh is 1 everywhere: reds of RdBu_r
+    plt.close(fig)

@@ -23,6 +23,7 @@ from brainpainter.cli.options import (
     parse_size,
     render_kwargs,
     render_options,
+    tables_or_maps,
 )
 from brainpainter.color.scale import ScaleOptions
 from brainpainter.errors import BrainPainterError
@@ -369,11 +370,7 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
     from brainpainter.rendering.run import render as run
 
     kwargs = render_kwargs(options)
-    if not inputs and kwargs.get("lh") is None and kwargs.get("rh") is None:
-        raise BrainPainterError("give INPUT tables, or maps with --lh FILE and/or --rh FILE.")
-    if inputs and (kwargs.get("lh") is not None or kwargs.get("rh") is not None):
-        raise BrainPainterError("give INPUT tables or maps (--lh/--rh), not both in one render.")
-    result = run(_one_or_many(inputs) if inputs else None, out=out, progress=not quiet, rows=rows, **kwargs)
+    result = run(tables_or_maps(inputs, kwargs), out=out, progress=not quiet, rows=rows, **kwargs)
     if result.manifest["input"].get("kind") == "vertex map":
         m = result.manifest["input"]
         click.echo(f"{len(result.files)} image(s) written to {out} ({m['n_images']} map image(s), "

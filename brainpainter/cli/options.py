@@ -169,6 +169,26 @@ parallel_options = stack([
 ])
 
 
+def tables_or_maps(inputs: Sequence[Any], kwargs: dict[str, Any]) -> Any:
+    """The data of a command: INPUT tables (one, or a list), or None when maps come by ``--lh/--rh``.
+
+    Raises
+    ------
+    BrainPainterError
+        Neither, or both, given.
+    """
+    from brainpainter.errors import BrainPainterError
+
+    maps = kwargs.get("lh") is not None or kwargs.get("rh") is not None
+    if not inputs and not maps:
+        raise BrainPainterError("give INPUT tables, or maps with --lh FILE and/or --rh FILE.")
+    if inputs and maps:
+        raise BrainPainterError("give INPUT tables or maps (--lh/--rh), not both in one command.")
+    if not inputs:
+        return None
+    return inputs[0] if len(inputs) == 1 else list(inputs)
+
+
 def render_kwargs(options: dict[str, Any]) -> dict[str, Any]:
     """Pop the render and input options from `options` and return API keyword arguments.
 

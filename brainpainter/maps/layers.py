@@ -29,11 +29,12 @@ GYRUS_GREY, SULCUS_GREY, PLAIN_GREY = 0.74, 0.52, 0.72
 DEFAULT_CMAP, DEFAULT_SIGNED_CMAP = "viridis", "RdBu_r"
 
 
-def map_scale(options: ScaleOptions, maps: VertexMaps) -> ColourScale:
+def map_scale(options: ScaleOptions, maps: VertexMaps, threshold: float | None = None) -> ColourScale:
     """The colour scale of a map run: `options`, with defaults that suit maps.
 
     No ``cmap``/``gradient``: ``viridis``, or ``RdBu_r`` for signed data. Signed
-    data and no ``vmin``/``vmax``/``center``: symmetric about 0.
+    data and no ``vmin``/``vmax``/``center``: symmetric about 0. The scale
+    carries `threshold`, so that its colour bar greys out ``|v| < threshold``.
     """
     data = maps.finite()
     signed = bool(data.size) and float(data.min()) < 0 < float(data.max())
@@ -41,7 +42,7 @@ def map_scale(options: ScaleOptions, maps: VertexMaps) -> ColourScale:
         options = replace(options, cmap=DEFAULT_SIGNED_CMAP if signed else DEFAULT_CMAP)
     if signed and options.vmin is None and options.vmax is None and options.center is None:
         options = replace(options, center=0.0)
-    return options.scale(data)
+    return replace(options.scale(data), threshold=threshold)
 
 
 def underlay(hemi: str, source_vertex: NDArray[Any], kind: str) -> NDArray[Any]:

@@ -41,6 +41,16 @@ class MapTable:
     def images(self) -> list[str]:
         return list(self.maps.images)
 
+    @property
+    def regions(self) -> list[str]:
+        """Every region key: a map leaves no region without a colour (no "missing" swatch)."""
+        return list(self.atlas.keys)
+
+    @property
+    def values(self) -> NDArray[Any]:
+        """No NaN region values (a map's NaN vertices show the underlay): zeros, (images, regions)."""
+        return np.zeros((len(self.maps.images), len(self.atlas.keys)))
+
     def summary(self) -> dict[str, Any]:
         return self.maps.summary()
 
@@ -98,5 +108,5 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     labels = atlas_obj.template_labels if atlas_obj.template_labels in tpl.label_sets else "dk"
     source_vertex = {hemi: np.asarray(map_mesh(tpl, labels, hemi).source_vertex)
                      for hemi in ("lh", "rh")}
-    return MapRun(MapTable(maps, atlas_obj), map_scale(options.scale, maps), view_list, options.settings,
-                  options, source_vertex)
+    scale = map_scale(options.scale, maps, options.maps.threshold)
+    return MapRun(MapTable(maps, atlas_obj), scale, view_list, options.settings, options, source_vertex)
