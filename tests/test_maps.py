@@ -307,3 +307,22 @@ def test_figure_and_plot_of_a_map(tmp_path):
     rgb = p.image[brain][:, :3].astype(float).mean(axis=0)
     assert rgb[0] > rgb[2] + 30  # rh is 1 everywhere: reds of RdBu_r
     plt.close(fig)
+
+
+@pytest.mark.render
+def test_movie_through_a_gifti_series(tmp_path):
+    """A GIfTI series is a movie's key frames; in-between frames blend the values per vertex."""
+    import brainpainter
+    from brainpainter.rendering.maprun import prepare_map_run
+    from brainpainter.rendering.options import Options
+
+    v = np.linspace(-1, 1, N5).astype(np.float32)
+    gii = nib.gifti.GiftiImage(darrays=[nib.gifti.GiftiDataArray(a) for a in (v, -v)])
+    nib.save(gii, tmp_path / "lh.series.func.gii")
+    run = prepare_map_run(None, None, Options.of({"lh": tmp_path / "lh.series.func.gii"}))
+    mid = run.blend(0, 1, 0.5).vertices["lh"]
+    cortex = masks("lh")["cortex"][run.source_vertex["lh"]]
+    assert np.abs(mid[cortex] - run.scale([0.0])[0, :3]).max() < 1e-5  # v and -v blend to 0
+    r = brainpainter.movie(None, lh=tmp_path / "lh.series.func.gii", out=tmp_path / "m.gif", width=160,
+                           height=120, views="lateral-left", frames_per_step=4, progress=False)
+    assert r.n_frames >= 5 and r.keys == ["series-1", "series-2"]

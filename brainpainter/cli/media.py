@@ -85,7 +85,7 @@ def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, ti
 
 # -- movie ---------------------------------------------------------------------------
 @click.command(context_settings=CONTEXT)
-@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
+@click.argument("inputs", nargs=-1, required=False, metavar="[INPUT...]",
                 type=click.Path(path_type=Path, dir_okay=False))
 @click.option("--out", "-o", required=True, type=click.Path(path_type=Path),
               help="Movie file: .mp4 (H.264) or .gif.")
@@ -94,13 +94,14 @@ def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, ti
               help="Image names to use as key frames, comma-separated (default: all).")
 @option_group(MovieOptions, ("title", "label", "ticks"))
 @make_render_options(size="800x600")
+@map_options
 @input_options
 @parallel_options
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def movie(inputs: tuple[Path, ...], out: Path, frames_per_step: int, easing: str, time_column: str | None,
           hold: int, fps: float, orbit: float, rows: str | None, title: str | None, label: str | None,
           ticks: str | None, quiet: bool, **options: Any) -> None:
-    """A movie through the rows of INPUT: each row a key frame, values interpolated in between.
+    """A movie through the rows of INPUT (or a map series, --lh/--rh): key frames, values interpolated.
 
     \b
     Rows are key frames in table order (or sorted by --time-column); one colour
@@ -115,7 +116,8 @@ def movie(inputs: tuple[Path, ...], out: Path, frames_per_step: int, easing: str
     """
     kwargs = render_kwargs(options)
     result = make_movie(
-        _one_or_many(inputs), out=out, rows=_rows(rows), frames_per_step=frames_per_step, easing=easing,
+        tables_or_maps(inputs, kwargs), out=out, rows=_rows(rows), frames_per_step=frames_per_step,
+        easing=easing,
         time_column=time_column, hold=hold, fps=fps, orbit=orbit, title=title, label=label, ticks=ticks,
         progress=not quiet, **kwargs,
     )

@@ -56,16 +56,20 @@ def underlay(hemi: str, source_vertex: NDArray[Any], kind: str) -> NDArray[Any]:
     return np.repeat(grey[:, None], 3, axis=1)
 
 
-def vertex_colors(maps: VertexMaps, image: float, source_vertex: dict[str, NDArray[Any]], scale: ColourScale,
+Image = float | tuple[int, int, float]
+
+
+def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArray[Any]], scale: ColourScale,
                   underlay_kind: str = "sulc", threshold: float | None = None) -> dict[str, NDArray[Any]]:
     """The colours of one image of `maps` at the drawn vertices.
 
     Parameters
     ----------
     maps : VertexMaps
-    image : float
-        Which of ``maps.images``; a float between two (a movie's in-between
-        frame) blends the two images' values linearly.
+    image : float or (int, int, float)
+        Which of ``maps.images``; a float between two, or ``(a, b, w)`` (a
+        movie's in-between frame), blends two images' values linearly
+        (``(1 - w) * a + w * b``; label maps take the nearer image).
     source_vertex : dict of str to ndarray of int, shape (n_hemi,)
         fsaverage vertex of each drawn vertex, per hemisphere.
     scale : ColourScale
@@ -95,14 +99,17 @@ def vertex_colors(maps: VertexMaps, image: float, source_vertex: dict[str, NDArr
     return out
 
 
-def _values_at(values: NDArray[Any], image: float, sv: NDArray[Any], categorical: bool) -> NDArray[Any]:
-    """Image `image` of `values` (k, n) at vertices `sv`; a fraction blends two (categories: nearest)."""
-    lo = int(np.floor(image))
-    t = float(image) - lo
+def _values_at(values: NDArray[Any], image: Image, sv: NDArray[Any], categorical: bool) -> NDArray[Any]:
+    """Image `image` of `values` (k, n) at vertices `sv`; a blend of two (categories: nearest)."""
+    if isinstance(image, tuple):
+        lo, hi, t = int(image[0]), int(image[1]), float(image[2])
+    else:
+        lo = int(np.floor(image))
+        hi, t = min(lo + 1, len(values) - 1), float(image) - lo
     a: NDArray[Any] = values[lo, sv].astype(np.float64)
-    if t == 0.0 or lo + 1 >= len(values):
+    if t == 0.0 or hi == lo:
         return a
-    b: NDArray[Any] = values[lo + 1, sv].astype(np.float64)
+    b: NDArray[Any] = values[hi, sv].astype(np.float64)
     if categorical:
         return a if t < 0.5 else b
     mixed: NDArray[Any] = (1.0 - t) * a + t * b

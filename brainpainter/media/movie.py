@@ -338,11 +338,17 @@ class MovieFrames:
         """The renders of each wanted state, one chunk per state."""
         table, names = self.run.table, self.keys.names
         key_values = table.values[self.keys.rows]
+        rows = self.keys.rows
+        blend = getattr(self.run, "blend", None)  # a map run: per-vertex values blended
         for s in wanted:
             a, b, weight, state_views = self.states[s]
-            values = interpolate(key_values[a], key_values[b], weight)
-            colors = region_colors(dict(zip(table.regions, values.tolist(), strict=True)), table.atlas,
-                                   self.run.scale)
+            colors: Any
+            if blend is not None:
+                colors = blend(rows[a], rows[b], weight)
+            else:
+                values = interpolate(key_values[a], key_values[b], weight)
+                colors = region_colors(dict(zip(table.regions, values.tolist(), strict=True)), table.atlas,
+                                       self.run.scale)
             label = names[a] if a == b else f"{names[a]} {ARROW} {names[b]} ({weight:.3f})"
             yield [Item(colors, view, label=label) for view in state_views]
 

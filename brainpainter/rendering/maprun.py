@@ -65,7 +65,7 @@ class MapRun:
     settings: Any
     options: Options
     source_vertex: dict[str, NDArray[Any]]
-    _cache: dict[float, VertexColors] = field(default_factory=dict, repr=False)
+    _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
     @property
     def maps(self) -> VertexMaps:
@@ -80,14 +80,18 @@ class MapRun:
     def items(self, rows: Any) -> list[tuple[int, View]]:
         return [(i, view) for i in rows for view in self.views]
 
-    def colors(self, image: float) -> VertexColors:
-        """The colours of image `image` (a float between two images blends their values)."""
+    def colors(self, image: float | tuple[int, int, float]) -> VertexColors:
+        """The colours of image `image` (or of ``(a, b, w)``: images a and b blended, a movie's frame)."""
         if image not in self._cache:
             self._cache.clear()  # one image at a time: the views of a row share it
             m = self.options.maps
             cortex = vertex_colors(self.maps, image, self.source_vertex, self.scale, m.underlay, m.threshold)
             self._cache[image] = VertexColors(region_colors({}, self.table.atlas, self.scale), cortex)
         return self._cache[image]
+
+    def blend(self, a: int, b: int, weight: float) -> VertexColors:
+        """Images `a` and `b` blended, ``(1 - weight) * a + weight * b`` (a movie's in-between frame)."""
+        return self.colors((a, b, float(weight)) if a != b and weight else a)
 
     def item(self, i: int, view: View, metadata: Any = None) -> Item:
         return Item(self.colors(i), view, metadata, self.table.images[i])
