@@ -326,3 +326,19 @@ def test_movie_through_a_gifti_series(tmp_path):
     r = brainpainter.movie(None, lh=tmp_path / "lh.series.func.gii", out=tmp_path / "m.gif", width=160,
                            height=120, views="lateral-left", frames_per_step=4, progress=False)
     assert r.n_frames >= 5 and r.keys == ["series-1", "series-2"]
+
+
+@pytest.mark.integration
+def test_export_glb_has_per_vertex_colours(tmp_path):
+    import trimesh
+
+    import brainpainter
+
+    v = np.linspace(-1, 1, N5)
+    path = brainpainter.export({"lh": v}, tmp_path / "m.glb", threshold=0.2)
+    scene = trimesh.load(path)
+    cortex = scene.geometry["Left-cortex"]
+    assert cortex.visual.kind == "vertex"
+    assert len(np.unique(cortex.visual.vertex_colors[:, :3], axis=0)) > 100  # a map, not one colour
+    html = brainpainter.export({"lh": v}, tmp_path / "m.html").read_text()
+    assert "vertexColors: m.vertexColors" in html

@@ -30,6 +30,8 @@ from numpy.typing import NDArray
 from brainpainter.atlas.model import HEMI_PREFIX, Atlas
 from brainpainter.atlas.template import Template
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.rendering.geometry import VertexColors
+from brainpainter.rendering.maprun import MapRun
 from brainpainter.rendering.options import Options, RenderKwargs
 from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.settings import RGB
@@ -59,6 +61,8 @@ class RegionMesh:
         seams at region borders).
     color : tuple of float, shape (3,)
         sRGB 0-1.
+    vertex_colors : ndarray of float, shape (n_vertices, 3), optional
+        A map's colour per vertex (sRGB 0-1), written as the mesh's ``COLOR_0``.
     """
 
     name: str
@@ -67,6 +71,7 @@ class RegionMesh:
     faces: NDArray[Any]
     normals: NDArray[Any]
     color: RGB
+    vertex_colors: NDArray[Any] | None = None
 
 
 def _vertex_normals(vertices: NDArray[Any], faces: NDArray[Any]) -> NDArray[Any]:
@@ -132,6 +137,29 @@ def region_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
     return out
 
 
+def vertex_meshes(scene: Scene, colors: VertexColors) -> list[RegionMesh]:
+    """A map's meshes: each hemisphere's cortex as one mesh coloured per vertex, plus the structures.
+
+    Parameters
+    ----------
+    scene : Scene
+    colors : VertexColors
+        One image of a map (:meth:`brainpainter.rendering.maprun.MapRun.colors`).
+    """
+    from brainpainter.maps.resolution import map_mesh
+
+    out: list[RegionMesh] = []
+    for hemi in ("lh", "rh"):
+        cm = map_mesh(scene.template, scene.labels, hemi)
+        if hemi not in colors.vertices or not len(cm.faces):
+            continue
+        verts = cm.vertices[scene.surface]
+        out.append(RegionMesh(f"{HEMI_PREFIX[hemi]}cortex", hemi, verts.astype(np.float32),
+                              np.asarray(cm.faces, np.int32), _vertex_normals(verts, cm.faces),
+                              scene.medial_wall_color, np.asarray(colors.vertices[hemi], np.float32)))
+    return out + [m for m in region_meshes(scene, dict(colors.regions)) if m.part == "subcortical"]
+
+
 def srgb_to_linear(c: NDArray[Any]) -> NDArray[Any]:
     """sRGB 0-1 -> linear 0-1 (glTF material colours are linear)."""
     c = np.asarray(c, dtype=float)
@@ -154,10 +182,16 @@ def glb_bytes(meshes: Sequence[RegionMesh]) -> bytes:
         material = PBRMaterial(  # type: ignore[no-untyped-call]
             name=m.name, baseColorFactor=[*linear, 1.0], metallicFactor=0.0, roughnessFactor=0.75,
             doubleSided=True)
+        visual: Any
+        if m.vertex_colors is not None:  # glTF vertex colours are linear
+            rgba = np.ones((len(m.vertex_colors), 4))
+            rgba[:, :3] = srgb_to_linear(m.vertex_colors)
+            visual = trimesh.visual.ColorVisuals(
+                vertex_colors=np.round(rgba * 255).astype(np.uint8))
+        else:
+            visual = trimesh.visual.TextureVisuals(material=material)  # type: ignore[no-untyped-call]
         mesh = trimesh.Trimesh(vertices=m.vertices @ RAS_TO_GLTF.T, faces=m.faces,
-                               vertex_normals=m.normals @ RAS_TO_GLTF.T, process=False,
-                               visual=trimesh.visual.TextureVisuals(  # type: ignore[no-untyped-call]
-                                   material=material))
+                               vertex_normals=m.normals @ RAS_TO_GLTF.T, process=False, visual=visual)
         hex_color = "#{:02x}{:02x}{:02x}".format(*(round(float(v) * 255) for v in m.color))
         scene.add_geometry(mesh, node_name=m.name, geom_name=m.name,
                            metadata={"part": m.part, "color": hex_color})
@@ -292,7 +326,7 @@ _VIEWER_JS = r"""
       meshes.push(o);
       lit.set(o, o.material);
       const m = o.material.clone();
-      flat.set(o, new T.MeshBasicMaterial({ color: m.color, side: m.side }));
+      flat.set(o, new T.MeshBasicMaterial({ color: m.color, side: m.side, vertexColors: m.vertexColors }));
     });
     scene.add(gltf.scene);
     const box = new T.Box3().setFromObject(gltf.scene);
@@ -335,7 +369,7 @@ _VIEWER_JS = r"""
 #: The options of a run that an export uses (it renders no image: no size, views, quality or workers).
 EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cmap", "vmin", "vmax", "center",
                   "nan_color", "missing_color", "background", "image_column", "value", "region_column",
-                  "strict")
+                  "strict", "lh", "rh", "underlay", "threshold")
 
 
 def export(data: Any, out: str | Path, *, format: str | None = None, row: str | int | None = None,
@@ -394,7 +428,10 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
     scene_options = checked.scene
     atlas_obj, scene = load_scene(table.atlas, scene_options.template, scene_options.surface,
                                   scene_options.hide)
-    meshes = region_meshes(scene, region_colors(table.row(i), atlas_obj, run.scale))
+    if isinstance(run, MapRun):  # a map: the cortex coloured per vertex
+        meshes = vertex_meshes(scene, run.colors(i))
+    else:
+        meshes = region_meshes(scene, region_colors(table.row(i), atlas_obj, run.scale))
     if not meshes:
         raise BrainPainterError("every region is hidden (--hide); nothing is left to export.")
     glb = glb_bytes(meshes)
