@@ -342,3 +342,29 @@ def test_export_glb_has_per_vertex_colours(tmp_path):
     assert len(np.unique(cortex.visual.vertex_colors[:, :3], axis=0)) > 100  # a map, not one colour
     html = brainpainter.export({"lh": v}, tmp_path / "m.html").read_text()
     assert "vertexColors: m.vertexColors" in html
+
+
+def test_border_vertices_one_side():
+    from brainpainter.maps.outlines import border_vertices, mesh_edges
+
+    faces = np.array([[0, 1, 2], [1, 3, 2], [2, 3, 4]])
+    edges = mesh_edges(faces)
+    assert len(edges) == 7
+    marked = border_vertices(np.array([0, 0, 1, 1, 1]), edges)
+    assert marked.tolist() == [True, True, False, False, False]  # the smaller label's side only
+
+
+@pytest.mark.render
+@pytest.mark.integration
+def test_outline_draws_dark_lines_over_a_map():
+    import brainpainter
+
+    v = np.ones(N5)
+    kw = {"views": "lateral-left", "width": 400, "height": 300, "progress": False, "vmin": 0, "vmax": 2,
+          "cmap": "viridis", "shading": "flat"}
+    plain = next(iter(brainpainter.render({"lh": v}, **kw).images.values()))
+    lined = next(iter(brainpainter.render({"lh": v}, outline="dk", **kw).images.values()))
+    brain = _brain(plain) & _brain(lined)
+    darker = (plain[..., :3].astype(int) - lined[..., :3].astype(int)).sum(-1) > 60
+    assert 0.01 < darker[brain].mean() < 0.15  # thin lines, not areas
+    assert not ((lined[..., :3].astype(int) - plain[..., :3].astype(int)).max(-1) > 10)[brain].any()

@@ -40,7 +40,7 @@ RENDER_OPTION_NAMES = (
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
-MAP_OPTION_NAMES = ("lh", "rh", "underlay", "threshold")
+MAP_OPTION_NAMES = ("lh", "rh", "underlay", "threshold", "outline", "outline_threshold")
 
 
 class FiniteFloat(click.ParamType):  # type: ignore[type-arg]
@@ -160,6 +160,8 @@ map_options = stack([
     field_option(MapOptions, "rh", type=click.Path(dir_okay=False), metavar="FILE"),
     field_option(MapOptions, "underlay"),
     field_option(MapOptions, "threshold"),
+    field_option(MapOptions, "outline", metavar="ATLAS"),
+    field_option(MapOptions, "outline_threshold"),
 ])
 
 #: ``@parallel_options``: ``--jobs`` and ``--scheduler``, where the images are rendered.

@@ -22,6 +22,8 @@ class MapKwargs(TypedDict, total=False):
     rh: Any
     underlay: str
     threshold: float | None
+    outline: str | None
+    outline_threshold: bool
 
 
 @dataclass(frozen=True)
@@ -36,6 +38,10 @@ class MapOptions:
         What shows where the map has no value.
     threshold : float, optional
         Values with ``|v| < threshold`` show the underlay.
+    outline : str, optional
+        An atlas whose region borders are drawn over the map.
+    outline_threshold : bool
+        Draw the borders of the supra-threshold areas.
     """
 
     lh: Any = field(default=None, metadata={
@@ -46,6 +52,10 @@ class MapOptions:
         "choices": UNDERLAYS, "help": "Map underlay: sulcal-depth or curvature greys, or one grey."})
     threshold: float | None = field(default=None, metadata={
         "help": "Map values with |v| below this show the underlay."})
+    outline: str | None = field(default=None, metadata={
+        "help": "Draw this atlas's region borders over the map (dk, destrieux, dkt, ...)."})
+    outline_threshold: bool = field(default=False, metadata={
+        "help": "Draw the borders of the areas above --threshold."})
 
     def __post_init__(self) -> None:
         if self.underlay not in UNDERLAYS:

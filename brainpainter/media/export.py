@@ -369,7 +369,8 @@ _VIEWER_JS = r"""
 #: The options of a run that an export uses (it renders no image: no size, views, quality or workers).
 EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cmap", "vmin", "vmax", "center",
                   "nan_color", "missing_color", "background", "image_column", "value", "region_column",
-                  "strict", "lh", "rh", "underlay", "threshold")
+                  "strict", "lh", "rh", "underlay", "threshold", "outline",
+                  "outline_threshold")
 
 
 def export(data: Any, out: str | Path, *, format: str | None = None, row: str | int | None = None,

@@ -19,6 +19,7 @@ from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.template import Template, load_template
 from brainpainter.maps.inputs import VertexMaps, read_maps
 from brainpainter.maps.layers import map_scale, vertex_colors
+from brainpainter.maps.outlines import border_vertices, mesh_edges, mesh_labels
 from brainpainter.maps.resolution import map_mesh
 from brainpainter.rendering.geometry import VertexColors
 from brainpainter.rendering.options import DEFAULT_VIEWS, Options
@@ -65,6 +66,8 @@ class MapRun:
     settings: Any
     options: Options
     source_vertex: dict[str, NDArray[Any]]
+    outline: dict[str, NDArray[Any]] | None = None
+    cluster_edges: dict[str, NDArray[Any]] | None = None
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
     @property
@@ -85,7 +88,8 @@ class MapRun:
         if image not in self._cache:
             self._cache.clear()  # one image at a time: the views of a row share it
             m = self.options.maps
-            cortex = vertex_colors(self.maps, image, self.source_vertex, self.scale, m.underlay, m.threshold)
+            cortex = vertex_colors(self.maps, image, self.source_vertex, self.scale, m.underlay, m.threshold,
+                                   self.outline, self.cluster_edges)
             self._cache[image] = VertexColors(region_colors({}, self.table.atlas, self.scale), cortex)
         return self._cache[image]
 
@@ -102,7 +106,9 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     from brainpainter.atlas.registry import get_atlas
 
     maps = read_maps(data, options.maps.lh, options.maps.rh)
-    atlas_obj = atlas if atlas is not None else get_atlas("dk")
+    outline = options.maps.outline
+    # --outline ATLAS: the map is drawn on that atlas's mesh, whose vertices carry its labels
+    atlas_obj = get_atlas(outline) if outline is not None else atlas if atlas is not None else get_atlas("dk")
     views = options.scene.views
     if views is None or views == DEFAULT_VIEWS:
         views = MAP_VIEWS
@@ -110,7 +116,16 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     template = options.scene.template
     tpl = template if isinstance(template, Template) else load_template(template)
     labels = atlas_obj.template_labels if atlas_obj.template_labels in tpl.label_sets else "dk"
-    source_vertex = {hemi: np.asarray(map_mesh(tpl, labels, hemi).source_vertex)
-                     for hemi in ("lh", "rh")}
+    meshes = {hemi: map_mesh(tpl, labels, hemi) for hemi in ("lh", "rh")}
+    source_vertex = {hemi: np.asarray(m.source_vertex) for hemi, m in meshes.items()}
+    edges = {hemi: mesh_edges(m.faces) for hemi, m in meshes.items()}
+    borders: dict[str, NDArray[Any]] | None = None
+    if outline is not None:
+        borders = {}
+        for hemi, m in meshes.items():
+            vertex_label = mesh_labels(tpl, labels, hemi, m)
+            if vertex_label is not None:
+                borders[hemi] = border_vertices(vertex_label, edges[hemi])
     scale = map_scale(options.scale, maps, options.maps.threshold)
-    return MapRun(MapTable(maps, atlas_obj), scale, view_list, options.settings, options, source_vertex)
+    return MapRun(MapTable(maps, atlas_obj), scale, view_list, options.settings, options, source_vertex,
+                  borders, edges if options.maps.outline_threshold else None)
