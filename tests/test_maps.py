@@ -368,3 +368,19 @@ def test_outline_draws_dark_lines_over_a_map():
     darker = (plain[..., :3].astype(int) - lined[..., :3].astype(int)).sum(-1) > 60
     assert 0.01 < darker[brain].mean() < 0.15  # thin lines, not areas
     assert not ((lined[..., :3].astype(int) - plain[..., :3].astype(int)).max(-1) > 10)[brain].any()
+
+
+@pytest.mark.render
+@pytest.mark.integration
+def test_region_render_with_outline():
+    import brainpainter
+
+    table = {"Left-precentral": 1.0, "Left-postcentral": 2.0, "Left-superiorfrontal": 3.0}
+    kw = {"views": "lateral-left", "width": 400, "height": 300, "progress": False, "shading": "flat"}
+    plain = next(iter(brainpainter.render(table, "dk", **kw).images.values()))
+    lined = next(iter(brainpainter.render(table, "dk", outline="dk", **kw).images.values()))
+    brain = _brain(plain) & _brain(lined)
+    darker = (plain[..., :3].astype(int) - lined[..., :3].astype(int)).sum(-1) > 60
+    assert 0.01 < darker[brain].mean() < 0.15
+    with pytest.raises(BrainPainterError, match="outlines its own atlas"):
+        brainpainter.render(table, "dk", outline="destrieux", **kw)

@@ -103,7 +103,12 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
         views = VOLUME_VIEWS  # a volumetric atlas alone: its structures, not a grey cortex
     view_list = parse_views(views if views is None or isinstance(views, str) else list(views))
     table = read_table(data, atlas_obj, **options.table.kwargs())
-    return Run(table, options.scale.scale(table.values), view_list, options.settings, options)
+    run = Run(table, options.scale.scale(table.values), view_list, options.settings, options)
+    if options.maps.outline is not None:  # region borders: the table drawn per vertex, borders outlined
+        from brainpainter.rendering.maprun import outlined_region_run
+
+        return outlined_region_run(run, options)  # type: ignore[return-value]
+    return run
 
 
 def make_runner(painter: Painter, template: Any = None, options: RunnerOptions | None = None,
