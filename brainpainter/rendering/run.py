@@ -141,7 +141,7 @@ def make_runner(painter: Painter, template: Any = None, options: RunnerOptions |
 
 
 # -- render ---------------------------------------------------------------------------------
-def render(data: Any, atlas: Atlas | str | None = None, *, out: str | Path | None = None,
+def render(data: Any = None, atlas: Atlas | str | None = None, *, out: str | Path | None = None,
            painter: Painter | None = None, rows: Iterable[str | int] | str | None = None,
            progress: bool = True, **options: Unpack[RenderKwargs]) -> RenderResult:
     """Render every row of a region-value table from every view.
@@ -150,6 +150,8 @@ def render(data: Any, atlas: Atlas | str | None = None, *, out: str | Path | Non
     ----------
     data : path, DataFrame, dict, or a list of these
         See :func:`brainpainter.table.region_table.read_table` (several inputs are merged by image name).
+        A map instead: ``{"lh": array, "rh": array}``, or None with ``lh=``/``rh=`` files
+        (:func:`brainpainter.maps.inputs.read_maps`, docs/maps.md).
     atlas : str or Atlas, optional
         ``"dk"``, ``"destrieux"``, ``"dkt"`` (alias ``"tourville"``) or a plugin atlas;
         inferred from the region names when not given.
