@@ -405,3 +405,19 @@ def test_map_run_on_a_dask_cluster_is_identical_to_serial(tmp_path, tiny):
 
     first = np.asarray(Image.open(a.files[0]))
     assert len(np.unique(first.reshape(-1, first.shape[-1]), axis=0)) > 5  # the stand-in drew vertex colours
+
+
+def test_label_gifti(tmp_path):
+    labels = (np.arange(N5) % 2 + 1).astype(np.int32)
+    table = nib.gifti.GiftiLabelTable()
+    for key, name, rgb in ((0, "???", (0, 0, 0)), (1, "A", (1, 0, 0)), (2, "B", (0, 0, 1))):
+        lab = nib.gifti.GiftiLabel(key, *rgb, 1.0)
+        lab.label = name
+        table.labels.append(lab)
+    img = nib.gifti.GiftiImage(labeltable=table, darrays=[nib.gifti.GiftiDataArray(
+        labels, intent="NIFTI_INTENT_LABEL", datatype="NIFTI_TYPE_INT32")])
+    nib.save(img, tmp_path / "lh.x.label.gii")
+    m = read_maps(lh=tmp_path / "lh.x.label.gii")
+    assert m.categories == ("???", "A", "B")
+    assert m.values["lh"][0, 0] == 1 and m.values["lh"][0, 1] == 2  # vertex 0: key 1, "A"; vertex 1: "B"
+    np.testing.assert_allclose(m.category_colors[1], (1, 0, 0))

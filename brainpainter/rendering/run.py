@@ -191,6 +191,11 @@ def render(data: Any = None, atlas: Atlas | str | None = None, *, out: str | Pat
     own = painter is None
     if painter is None:
         painter = run.painter()
+    elif (painter.scene.coloring == "vertices") != hasattr(run, "source_vertex"):
+        raise BrainPainterError(
+            f"the painter colours {painter.scene.coloring} but the data is "
+            f"{'a map' if hasattr(run, 'source_vertex') else 'a region table'}; make a Painter for it "
+            "(brainpainter.Painter(coloring='vertices') draws maps).")
     elif painter.atlas.name != run.table.atlas.name:  # type: ignore[union-attr]
         raise BrainPainterError(
             f"the table was read with atlas {run.table.atlas.name!r} but the painter draws "
