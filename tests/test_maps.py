@@ -100,10 +100,13 @@ def test_formats_read_alike(tmp_path):
     two = [read_maps(lh=tmp_path / n).values["lh"]
            for n in ("lh.x.nii.gz", "hemi-L_x.func.gii", "lh.x.npy")]
     for a in one:
-        np.testing.assert_allclose(a[0, :N5], v[0], rtol=1e-5)
+        np.testing.assert_allclose(a[0], v[0], rtol=1e-5)
     for a in two:
-        assert a.shape == (2, N_FSAVERAGE)
-        np.testing.assert_allclose(a[:, :N5], v, rtol=1e-5)
+        assert a.shape == (2, N5)  # kept at its own resolution
+        np.testing.assert_allclose(a, v, rtol=1e-5)
+    m = read_maps(lh=tmp_path / "lh.x.npy")
+    assert m.on_fsaverage("lh", 1).shape == (N_FSAVERAGE,)
+    np.testing.assert_allclose(m.on_fsaverage("lh", 1)[:N5], v[1], rtol=1e-6)
     assert read_maps(lh=tmp_path / "lh.thickness").images == ("thickness",)
     assert read_maps(lh=tmp_path / "lh.x.npy").images == ("x-1", "x-2")
 

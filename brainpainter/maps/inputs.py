@@ -7,8 +7,8 @@ data arrays = several images), NIfTI holding one value per vertex (``N x 1 x 1``
 label maps ``.annot``, ``.label.gii`` (categories, drawn in their own colours)
 and FreeSurfer ``.label`` vertex lists (a highlighted area). Arrays:
 ``{"lh": ndarray (n,) or (k, n), "rh": ...}`` (also ``left``/``right``, and
-nilearn's ``SurfaceImage``). Every map is brought to fsaverage
-(:func:`brainpainter.maps.resolution.to_fsaverage`). A volume in MNI space is
+nilearn's ``SurfaceImage``). Every map is kept at its own resolution and
+brought to fsaverage when drawn (:func:`brainpainter.maps.resolution.to_fsaverage`). A volume in MNI space is
 turned into the same arrays by ``brainpainter.maps.volume`` and handed to
 :func:`read_maps` as a dict.
 """
@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.maps.resolution import FAMILY, N_FSAVERAGE, to_fsaverage
+from brainpainter.maps.resolution import FAMILY, N_FSAVERAGE, native, to_fsaverage
 
 HEMIS = ("lh", "rh")
 #: File endings read as text, as arrays, as surface images, as label maps.
@@ -42,7 +42,7 @@ _PAIRS = ((r"(^|[._-])lh([._-])", r"\1rh\2"), (r"hemi-L", "hemi-R"), (r"([._-])L
 class Hemi:
     """One hemisphere's map as read: values on fsaverage and, for label maps, the category names."""
 
-    values: NDArray[Any]  # float32, shape (k, 163842); NaN = no value
+    values: NDArray[Any]  # float32, shape (k, n), n a count of the fsaverage family; NaN = no value
     categories: tuple[str, ...] | None = None
     colors: NDArray[Any] | None = None  # float, shape (n_categories, 3), sRGB 0-1
 
@@ -53,8 +53,10 @@ class VertexMaps:
 
     Attributes
     ----------
-    values : dict of str to ndarray of float32, shape (k, 163842)
-        Per hemisphere given (``lh``/``rh``); a hemisphere absent shows the underlay.
+    values : dict of str to ndarray of float32, shape (k, n)
+        Per hemisphere given (``lh``/``rh``), at the map's own resolution (``n``
+        a count of the fsaverage family; :meth:`on_fsaverage` brings one image
+        to fsaverage); a hemisphere absent shows the underlay.
     images : tuple of str
         Name of each of the ``k`` images.
     categories : tuple of str, optional
@@ -73,6 +75,11 @@ class VertexMaps:
     @property
     def n_images(self) -> int:
         return len(self.images)
+
+    def on_fsaverage(self, hemi: str, image: int) -> NDArray[Any]:
+        """Image `image` of hemisphere `hemi` on fsaverage, float32 (163842,)."""
+        row: NDArray[Any] = to_fsaverage(self.values[hemi][image], self.categories is not None)[0]
+        return row
 
     def finite(self) -> NDArray[Any]:
         """Every finite value of every image and hemisphere, shape (m,) (for the colour scale)."""
@@ -208,7 +215,7 @@ def read_hemi(value: Any, hemi: str) -> Hemi:
     if isinstance(value, str | Path):
         return read_file(Path(value), hemi)
     arr = np.asarray(value, dtype=np.float64) if not isinstance(value, np.ndarray) else value
-    return Hemi(to_fsaverage(_as_rows(arr, f"the {hemi} array"), what=f"the {hemi} array"))
+    return Hemi(native(_as_rows(arr, f"the {hemi} array"), what=f"the {hemi} array"))
 
 
 def _as_rows(arr: NDArray[Any], what: str) -> NDArray[Any]:
@@ -245,7 +252,7 @@ def read_file(path: Path, hemi: str) -> Hemi:
             n = next((c for c in sorted(FAMILY) if c > int(idx.max(initial=-1))), N_FSAVERAGE)
             v = np.full(n, np.nan, np.float32)
             v[idx] = 1.0
-            return Hemi(to_fsaverage(v, what=what))
+            return Hemi(native(v, what=what))
         if name.endswith(".gii"):
             return _gifti(nib.load(str(path)), what)
         if name.endswith((".mgh", ".mgz", ".nii", ".nii.gz")):
@@ -257,13 +264,13 @@ def read_file(path: Path, hemi: str) -> Hemi:
                 raise BrainPainterError(
                     f"{what} has shape {data.shape}, not one value per vertex (N x 1 x 1); a volume in MNI "
                     "space goes to --volume.")
-            return Hemi(to_fsaverage(_as_rows(data.reshape(data.shape[0], -1), what), what=what))
+            return Hemi(native(_as_rows(data.reshape(data.shape[0], -1), what), what=what))
         if name.endswith(".npy"):
-            return Hemi(to_fsaverage(_as_rows(np.load(path, allow_pickle=False), what), what=what))
+            return Hemi(native(_as_rows(np.load(path, allow_pickle=False), what), what=what))
         if name.endswith(TEXT):
             delim = "," if name.endswith(".csv") else ("\t" if name.endswith(".tsv") else None)
-            return Hemi(to_fsaverage(_as_rows(np.loadtxt(path, delimiter=delim, ndmin=2), what), what=what))
-        return Hemi(to_fsaverage(read_morph_data(str(path)), what=what))  # type: ignore[no-untyped-call]
+            return Hemi(native(_as_rows(np.loadtxt(path, delimiter=delim, ndmin=2), what), what=what))
+        return Hemi(native(read_morph_data(str(path)), what=what))  # type: ignore[no-untyped-call]
     except BrainPainterError:
         raise
     except Exception as exc:  # nibabel's many errors for a file that is not what its name says
@@ -285,7 +292,7 @@ def _gifti(img: Any, what: str) -> Hemi:
         code[~np.isin(arrays[0], keys)] = -1
         rgb = np.nan_to_num(colors.astype(float), nan=0.5)
         return _labels(code, [str(table[k]) for k in keys], rgb, what)
-    return Hemi(to_fsaverage(_as_rows(np.vstack([a.reshape(1, -1) for a in arrays]), what), what=what))
+    return Hemi(native(_as_rows(np.vstack([a.reshape(1, -1) for a in arrays]), what), what=what))
 
 
 def _labels(labels: NDArray[Any], names: list[str], colors: NDArray[Any], what: str) -> Hemi:
@@ -295,4 +302,4 @@ def _labels(labels: NDArray[Any], names: list[str], colors: NDArray[Any], what: 
     for i, n in enumerate(names):
         if n.lower() in ("unknown", "medial_wall", "???", "corpuscallosum") or "medial_wall" in n.lower():
             v[lab == i] = np.nan
-    return Hemi(to_fsaverage(v, categorical=True, what=what), tuple(names), np.asarray(colors, float))
+    return Hemi(native(v, what=what), tuple(names), np.asarray(colors, float))

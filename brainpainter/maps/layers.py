@@ -94,7 +94,7 @@ def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArr
         sv = np.asarray(sv, np.int64)
         rgb = underlay(hemi, sv, underlay_kind)
         if hemi in maps.values and len(sv):
-            v = _values_at(maps.values[hemi], image, sv, maps.categories is not None)
+            v = _values_at(maps, hemi, image, sv)
             show = np.isfinite(v) & masks(hemi)["cortex"][sv]
             if threshold is not None and maps.categories is None:
                 show &= np.abs(np.where(show, v, 0.0)) >= threshold
@@ -110,17 +110,19 @@ def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArr
     return out
 
 
-def _values_at(values: NDArray[Any], image: Image, sv: NDArray[Any], categorical: bool) -> NDArray[Any]:
-    """Image `image` of `values` (k, n) at vertices `sv`; a blend of two (categories: nearest)."""
+def _values_at(maps: VertexMaps, hemi: str, image: Image, sv: NDArray[Any]) -> NDArray[Any]:
+    """Image `image` of `maps` at fsaverage vertices `sv`; a blend of two (categories: nearest)."""
+    categorical = maps.categories is not None
+    n_images = len(maps.values[hemi])
     if isinstance(image, tuple):
         lo, hi, t = int(image[0]), int(image[1]), float(image[2])
     else:
         lo = int(np.floor(image))
-        hi, t = min(lo + 1, len(values) - 1), float(image) - lo
-    a: NDArray[Any] = values[lo, sv].astype(np.float64)
+        hi, t = min(lo + 1, n_images - 1), float(image) - lo
+    a: NDArray[Any] = maps.on_fsaverage(hemi, lo)[sv].astype(np.float64)
     if t == 0.0 or hi == lo:
         return a
-    b: NDArray[Any] = values[hi, sv].astype(np.float64)
+    b: NDArray[Any] = maps.on_fsaverage(hemi, hi)[sv].astype(np.float64)
     if categorical:
         return a if t < 0.5 else b
     mixed: NDArray[Any] = (1.0 - t) * a + t * b

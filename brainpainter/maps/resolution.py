@@ -54,6 +54,18 @@ def surface_of(n: int, what: str = "map") -> str:
         "FreeSurfer's mri_surf2surf (--trgsubject fsaverage).")
 
 
+def native(values: NDArray[Any], what: str = "map") -> NDArray[Any]:
+    """`values` as float32 (k images, n vertices), `n` checked to be a count of :data:`FAMILY`.
+
+    Maps are kept at their own resolution (a series of fsaverage5 images stays
+    small) and brought to fsaverage one image at a time, when drawn.
+    """
+    v = np.asarray(values, dtype=np.float32)
+    v = v[None] if v.ndim == 1 else v
+    surface_of(v.shape[1], what)
+    return v
+
+
 def to_fsaverage(values: NDArray[Any], categorical: bool = False, what: str = "map") -> NDArray[Any]:
     """Values of any fsaverage-family surface on fsaverage.
 
