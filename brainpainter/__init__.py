@@ -32,6 +32,7 @@ __all__ = [
     "make_scale",
     "movie",
     "plot",
+    "read_maps",
     "read_table",
     "render",
 ]
@@ -41,6 +42,7 @@ if TYPE_CHECKING:
     from brainpainter.atlas.template import load_template
     from brainpainter.color.scale import make_scale
     from brainpainter.errors import BrainPainterError
+    from brainpainter.maps.inputs import read_maps
     from brainpainter.media.export import export
     from brainpainter.media.figure import make_figure as figure
     from brainpainter.media.movie import make_movie as movie
@@ -64,6 +66,7 @@ _LAZY = {
     "make_scale": ("brainpainter.color.scale", "make_scale"),
     "movie": ("brainpainter.media.movie", "make_movie"),
     "plot": ("brainpainter.media.plot", "plot"),
+    "read_maps": ("brainpainter.maps.inputs", "read_maps"),
     "read_table": ("brainpainter.table.region_table", "read_table"),
     "render": ("brainpainter.rendering.run", "render"),
 }

@@ -39,7 +39,10 @@ def main() -> None:
     # 3. a label map (.annot) drawn in its own colours
     save(brainpainter.render(None, lh=FS / "fsaverage" / "label" / "lh.Yeo2011_7Networks_N1000.annot",
                              views=views, **SIZE), "yeo7_annot")
-    # 4. a single fsaverage5 vertex, on the inflated surface
+    # 4. DK borders over the thresholded map
+    save(brainpainter.render(None, lh=fs5 / "surf" / "lh.sulc", views=views, threshold=0.5, outline="dk",
+                             **SIZE), "outline_dk")
+    # 5. a single fsaverage5 vertex, on the inflated surface
     one = np.zeros(10242)
     xyz = nib.freesurfer.read_geometry(str(fs5 / "surf" / "lh.inflated"))[0]
     one[int(np.argmin(xyz[:, 0]))] = 1.0
