@@ -429,10 +429,8 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
     scene_options = checked.scene
     atlas_obj, scene = load_scene(table.atlas, scene_options.template, scene_options.surface,
                                   scene_options.hide)
-    if isinstance(run, MapRun):  # a map: the cortex coloured per vertex
-        meshes = vertex_meshes(scene, run.colors(i))
-    else:
-        meshes = region_meshes(scene, region_colors(table.row(i), atlas_obj, run.scale))
+    meshes = (vertex_meshes(scene, run.colors(i)) if isinstance(run, MapRun)  # a map: coloured per vertex
+              else region_meshes(scene, region_colors(table.row(i), atlas_obj, run.scale)))
     if not meshes:
         raise BrainPainterError("every region is hidden (--hide); nothing is left to export.")
     glb = glb_bytes(meshes)
