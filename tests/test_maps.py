@@ -111,6 +111,13 @@ def test_formats_read_alike(tmp_path):
     assert read_maps(lh=tmp_path / "lh.x.npy").images == ("x-1", "x-2")
 
 
+def test_folded_nifti(tmp_path):
+    """FreeSurfer writes fsaverage overlays to NIfTI folded (27307 x 1 x 6), first axis fastest."""
+    v = np.arange(N_FSAVERAGE, dtype=np.float32)
+    nib.save(nib.Nifti1Image(v.reshape((27307, 1, 6), order="F"), np.eye(4)), tmp_path / "lh.f.nii.gz")
+    np.testing.assert_array_equal(read_maps(lh=tmp_path / "lh.f.nii.gz").values["lh"][0], v)
+
+
 def test_pair_found_from_one_name(tmp_path):
     for hemi in ("lh", "rh"):
         nib.freesurfer.write_morph_data(str(tmp_path / f"{hemi}.thickness"), _values()[0])

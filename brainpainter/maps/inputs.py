@@ -259,12 +259,8 @@ def read_file(path: Path, hemi: str) -> Hemi:
             raw = path.read_bytes()  # read whole: no file left open by a lazy proxy
             raw = gzip.decompress(raw) if name.endswith((".mgz", ".gz")) else raw
             klass: Any = nib.MGHImage if name.endswith((".mgh", ".mgz")) else nib.Nifti1Image
-            data = np.asarray(klass.from_bytes(raw).dataobj)
-            if data.ndim < 3 or data.shape[1] != 1 or data.shape[2] != 1:
-                raise BrainPainterError(
-                    f"{what} has shape {data.shape}, not one value per vertex (N x 1 x 1); a volume in MNI "
-                    "space goes to --volume.")
-            return Hemi(native(_as_rows(data.reshape(data.shape[0], -1), what), what=what))
+            frames = _surface_frames(np.asarray(klass.from_bytes(raw).dataobj), what)
+            return Hemi(native(_as_rows(frames, what), what=what))
         if name.endswith(".npy"):
             return Hemi(native(_as_rows(np.load(path, allow_pickle=False), what), what=what))
         if name.endswith(TEXT):
@@ -277,6 +273,19 @@ def read_file(path: Path, hemi: str) -> Hemi:
         text = " ".join(str(exc).split())[:160]
         raise BrainPainterError(
             f"cannot read {what} ({hemi}): {text}. Maps are {', '.join(SUFFIXES)}.") from None
+
+
+def _surface_frames(data: NDArray[Any], what: str) -> NDArray[Any]:
+    """An ``.mgh``/NIfTI surface overlay as (n vertices, k frames).
+
+    ``N x 1 x 1 [x k]``, or FreeSurfer's folded form for NIfTI, whose
+    dimensions are limited to 32767 (fsaverage as ``27307 x 1 x 6``): the
+    vertex index runs over the first three axes, first axis fastest.
+    """
+    if data.ndim >= 3 and int(np.prod(data.shape[:3])) in FAMILY and 1 in data.shape[1:3]:
+        return data.reshape((-1, int(np.prod(data.shape[3:], dtype=np.int64))), order="F")
+    raise BrainPainterError(f"{what} has shape {data.shape}, not one value per vertex (N x 1 x 1) of an "
+                            "fsaverage surface; a volume in MNI space goes to --volume.")
 
 
 def _gifti(img: Any, what: str) -> Hemi:
