@@ -431,3 +431,13 @@ def test_label_gifti(tmp_path):
     assert m.categories == ("???", "A", "B")
     assert m.values["lh"][0, 0] == 1 and m.values["lh"][0, 1] == 2  # vertex 0: key 1, "A"; vertex 1: "B"
     np.testing.assert_allclose(m.category_colors[1], (1, 0, 0))
+
+
+def test_map_files_are_recognised_by_name():
+    from brainpainter.maps.inputs import is_map_input
+
+    for name in ("lh.thickness", "rh.sulc", "x.mgh", "hemi-L_x.func.gii", "lh.x.nii.gz", "lh.aparc.annot"):
+        assert is_map_input(name), name
+    for name in ("table.csv", "lh.stats.tsv", "regions.xlsx", "lh.values.txt", "lh.aparc.thickness.table"):
+        assert not is_map_input(name), name
+    assert is_map_input({"lh": np.zeros(3)}) and not is_map_input({"Left-insula": 1.0})

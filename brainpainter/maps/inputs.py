@@ -116,8 +116,26 @@ def _swap(lh_pat: str, rh_sub: str) -> tuple[str, str]:
     return table[lh_pat]
 
 
+#: File endings that are maps, never tables.
+MAP_ONLY_SUFFIXES = (".mgh", ".mgz", ".gii", ".nii", ".nii.gz", ".npy", ".annot", ".label")
+#: FreeSurfer morphometry files ("curv" format, no ending), e.g. ``lh.thickness``, ``rh.sulc``.
+_MORPH = re.compile(r"^[lr]h\.(thickness|sulc|curv|area|volume|jacobian_white|avg_curv|pial_lgi|w-g\.pct)"
+                    r"(\.|$)")
+_TABLE_SUFFIXES = (".csv", ".tsv", ".tab", ".txt", ".dat", ".xlsx", ".xlsm", ".xls", ".json")
+
+
 def is_map_input(data: Any) -> bool:
-    """Whether `data` is a map (a hemisphere dict of arrays, a surface image) rather than a region table."""
+    """Whether `data` is a map rather than a region table.
+
+    A hemisphere dict of arrays, a surface image, or one file that is a map
+    by its ending (``.mgh``, ``.gii``, ...) or a FreeSurfer morphometry name
+    (``lh.thickness``, ``rh.sulc``...; not ``lh.aparc.thickness.table``, a table).
+    """
+    if isinstance(data, str | Path):
+        name = Path(data).name.lower()
+        if name.endswith(MAP_ONLY_SUFFIXES):
+            return True
+        return bool(_MORPH.match(name)) and not name.endswith(_TABLE_SUFFIXES)
     if isinstance(data, Mapping):
         keys = {str(k).lower() for k in data}
         return bool(keys) and keys <= {"lh", "rh", "left", "right"}
