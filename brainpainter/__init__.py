@@ -33,6 +33,7 @@ __all__ = [
     "movie",
     "plot",
     "project_volume",
+    "read_maps",
     "read_table",
     "render",
 ]
@@ -42,6 +43,7 @@ if TYPE_CHECKING:
     from brainpainter.atlas.template import load_template
     from brainpainter.color.scale import make_scale
     from brainpainter.errors import BrainPainterError
+    from brainpainter.maps.inputs import read_maps
     from brainpainter.maps.volume import project_volume
     from brainpainter.media.export import export
     from brainpainter.media.figure import make_figure as figure
@@ -67,6 +69,7 @@ _LAZY = {
     "movie": ("brainpainter.media.movie", "make_movie"),
     "plot": ("brainpainter.media.plot", "plot"),
     "project_volume": ("brainpainter.maps.volume", "project_volume"),
+    "read_maps": ("brainpainter.maps.inputs", "read_maps"),
     "read_table": ("brainpainter.table.region_table", "read_table"),
     "render": ("brainpainter.rendering.run", "render"),
 }

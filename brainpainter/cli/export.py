@@ -11,7 +11,13 @@ from typing import Any
 
 import click
 
-from brainpainter.cli.options import input_options, make_render_options, render_kwargs
+from brainpainter.cli.options import (
+    input_options,
+    make_render_options,
+    map_options,
+    render_kwargs,
+    tables_or_maps,
+)
 from brainpainter.media.export import EXPORT_OPTIONS
 from brainpainter.media.export import export as run
 
@@ -19,7 +25,7 @@ CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 
 
 @click.command(context_settings=CONTEXT)
-@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
+@click.argument("inputs", nargs=-1, required=False, metavar="[INPUT...]",
                 type=click.Path(path_type=Path, dir_okay=False))
 @click.option("--format", "fmt", type=click.Choice(["glb", "html"]), default=None,
               help="glb: glTF binary for 3D software; html: one file that opens in any browser. "
@@ -30,6 +36,7 @@ CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 @click.option("--title", default=None, help="Heading of the HTML page (default: the image name).")
 @click.option("--label", default=None, help="Colour-bar label of the HTML page, e.g. 'z-score'.")
 @make_render_options(only=("atlas", *EXPORT_OPTIONS))
+@map_options
 @input_options
 def export(inputs: tuple[Path, ...], fmt: str | None, out: Path | None, row: str | None, title: str | None,
            label: str | None, **options: Any) -> None:
@@ -44,12 +51,12 @@ def export(inputs: tuple[Path, ...], fmt: str | None, out: Path | None, row: str
     """
     from brainpainter.io.output import safe_name
 
-    data = inputs[0] if len(inputs) == 1 else list(inputs)
     if fmt is None:
         fmt = out.suffix.lstrip(".").lower() if out is not None and out.suffix else "html"
     if out is None:
         out = Path("out") / f"{safe_name(row) if row else 'brain'}.{fmt}"
     kwargs = render_kwargs(options)
+    data = tables_or_maps(inputs, kwargs)
     path = run(data, out, format=fmt, row=row, title=title, label=label, **kwargs)
     size = path.stat().st_size / 1e6
     click.echo(f"{fmt} written to {path} ({size:.1f} MB)")

@@ -17,11 +17,13 @@ import click
 
 from brainpainter.cli.options import (
     input_options,
+    map_options,
     option_group,
     parallel_options,
     parse_size,
     render_kwargs,
     render_options,
+    tables_or_maps,
 )
 from brainpainter.color.scale import ScaleOptions
 from brainpainter.errors import BrainPainterError
@@ -385,24 +387,32 @@ def check(inputs: tuple[Path, ...], atlas: str | None, image_column: str | None,
 
 # -- render -------------------------------------------------------------------
 @cli.command(context_settings=CONTEXT)
-@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
+@click.argument("inputs", nargs=-1, required=False, metavar="[INPUT...]",
                 type=click.Path(path_type=Path, dir_okay=False))
 @click.option("--out", "-o", required=True, type=click.Path(path_type=Path, file_okay=False),
               help="Output folder for {image}_{view}.png and manifest.json.")
 @click.option("--rows", default=None,
               help="Image names to render, comma-separated, in this order (default: all rows).")
 @render_options
+@map_options
 @input_options
 @parallel_options
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, **options: Any) -> None:
-    """Render every image of INPUT tables (CSV, TSV, .xlsx; see 'check') from every view.
+    """Render every image of INPUT tables (CSV, TSV, .xlsx; see "check") or maps (--lh/--rh), from every view.
 
     Several INPUTs (e.g. lh and rh aparcstats2table files) are merged by image name.
+    Per-vertex maps (thickness, .mgh, .gii, ...) are given with --lh FILE --rh FILE (docs/maps.md).
     """
     from brainpainter.rendering.run import render as run
 
-    result = run(_one_or_many(inputs), out=out, progress=not quiet, rows=rows, **render_kwargs(options))
+    kwargs = render_kwargs(options)
+    result = run(tables_or_maps(inputs, kwargs), out=out, progress=not quiet, rows=rows, **kwargs)
+    if result.manifest["input"].get("kind") == "vertex map":
+        m = result.manifest["input"]
+        click.echo(f"{len(result.files)} image(s) written to {out} ({m['n_images']} map image(s), "
+                   f"hemispheres {', '.join(m['hemis'])})")
+        return
     from brainpainter.table.region_table import summary_line
     from brainpainter.table.report import input_warnings
 

@@ -14,10 +14,12 @@ import click
 from brainpainter.cli.options import (
     input_options,
     make_render_options,
+    map_options,
     option_group,
     parallel_options,
     render_kwargs,
     render_options,
+    tables_or_maps,
 )
 from brainpainter.media.layout import FigureOptions
 from brainpainter.media.movie import MovieOptions, make_movie
@@ -35,7 +37,7 @@ def _rows(value: str | None) -> list[str] | None:
 
 # -- figure --------------------------------------------------------------------------
 @click.command(context_settings=CONTEXT)
-@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
+@click.argument("inputs", nargs=-1, required=False, metavar="[INPUT...]",
                 type=click.Path(path_type=Path, dir_okay=False))
 @click.option("--out", "-o", required=True, type=click.Path(path_type=Path),
               help="Figure file: .png or .tif (at --dpi), .pdf or .svg (renders embedded, text as text).")
@@ -44,13 +46,14 @@ def _rows(value: str | None) -> list[str] | None:
               help="Image names to show, comma-separated, in this order (default: all rows).")
 @option_group(FigureOptions, ("title", "label", "ticks", "dpi", "fig_width", "font_size", "view_labels"))
 @render_options
+@map_options
 @input_options
 @parallel_options
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, title: str | None,
            label: str | None, ticks: str | None, dpi: float, fig_width: float | None, font_size: float,
            view_labels: bool, quiet: bool, **options: Any) -> None:
-    """A publication figure of INPUT rows: renders, titles and one colour bar.
+    """A publication figure of INPUT rows (or maps, --lh/--rh): renders, titles and one colour bar.
 
     \b
     Default: each row is a line of the chosen views side by side.
@@ -67,7 +70,8 @@ def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, ti
 
     kwargs = render_kwargs(options)
     result = make_figure(
-        _one_or_many(inputs), out=out, rows=_rows(rows), grid=grid, title=title, label=label, ticks=ticks,
+        tables_or_maps(inputs, kwargs), out=out, rows=_rows(rows), grid=grid, title=title, label=label,
+        ticks=ticks,
         dpi=dpi, fig_width=fig_width, font_size=font_size, view_labels=view_labels, progress=not quiet,
         **kwargs,
     )
@@ -81,7 +85,7 @@ def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, ti
 
 # -- movie ---------------------------------------------------------------------------
 @click.command(context_settings=CONTEXT)
-@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
+@click.argument("inputs", nargs=-1, required=False, metavar="[INPUT...]",
                 type=click.Path(path_type=Path, dir_okay=False))
 @click.option("--out", "-o", required=True, type=click.Path(path_type=Path),
               help="Movie file: .mp4 (H.264) or .gif.")
@@ -90,13 +94,14 @@ def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, ti
               help="Image names to use as key frames, comma-separated (default: all).")
 @option_group(MovieOptions, ("title", "label", "ticks"))
 @make_render_options(size="800x600")
+@map_options
 @input_options
 @parallel_options
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def movie(inputs: tuple[Path, ...], out: Path, frames_per_step: int, easing: str, time_column: str | None,
           hold: int, fps: float, orbit: float, rows: str | None, title: str | None, label: str | None,
           ticks: str | None, quiet: bool, **options: Any) -> None:
-    """A movie through the rows of INPUT: each row a key frame, values interpolated in between.
+    """A movie through the rows of INPUT (or a map series, --lh/--rh): key frames, values interpolated.
 
     \b
     Rows are key frames in table order (or sorted by --time-column); one colour
@@ -111,7 +116,8 @@ def movie(inputs: tuple[Path, ...], out: Path, frames_per_step: int, easing: str
     """
     kwargs = render_kwargs(options)
     result = make_movie(
-        _one_or_many(inputs), out=out, rows=_rows(rows), frames_per_step=frames_per_step, easing=easing,
+        tables_or_maps(inputs, kwargs), out=out, rows=_rows(rows), frames_per_step=frames_per_step,
+        easing=easing,
         time_column=time_column, hold=hold, fps=fps, orbit=orbit, title=title, label=label, ticks=ticks,
         progress=not quiet, **kwargs,
     )

@@ -19,6 +19,7 @@ from typing import Any, TypeVar
 import click
 
 from brainpainter.color.scale import ScaleOptions
+from brainpainter.maps.options import MapOptions
 from brainpainter.rendering.options import DEFAULT_VIEWS, RunnerOptions, SceneOptions
 from brainpainter.rendering.settings import RenderSettings, parse_size
 from brainpainter.table.options import TableOptions
@@ -40,6 +41,7 @@ RENDER_OPTION_NAMES = (
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
+MAP_OPTION_NAMES = ("lh", "rh", "underlay", "threshold", "outline", "outline_threshold")
 
 
 class FiniteFloat(click.ParamType):  # type: ignore[type-arg]
@@ -161,11 +163,41 @@ render_options = make_render_options()
 #: ``@input_options``: how INPUT tables are read (as for ``render`` and ``check``).
 input_options = option_group(TableOptions)
 
+#: ``@map_options``: ``--lh``, ``--rh``, ``--underlay``, ``--threshold`` (per-vertex maps, docs/maps.md).
+map_options = stack([
+    field_option(MapOptions, "lh", type=click.Path(dir_okay=False), metavar="FILE"),
+    field_option(MapOptions, "rh", type=click.Path(dir_okay=False), metavar="FILE"),
+    field_option(MapOptions, "underlay"),
+    field_option(MapOptions, "threshold"),
+    field_option(MapOptions, "outline", metavar="ATLAS"),
+    field_option(MapOptions, "outline_threshold"),
+])
+
 #: ``@parallel_options``: ``--jobs`` and ``--scheduler``, where the images are rendered.
 parallel_options = stack([
     field_option(RunnerOptions, "jobs", "--jobs", "-j", default="1", type=str, metavar="N|auto"),
     field_option(RunnerOptions, "scheduler", envvar="BRAINPAINTER_SCHEDULER", metavar="ADDRESS"),
 ])
+
+
+def tables_or_maps(inputs: Sequence[Any], kwargs: dict[str, Any]) -> Any:
+    """The data of a command: INPUT tables (one, or a list), or None when maps come by ``--lh/--rh``.
+
+    Raises
+    ------
+    BrainPainterError
+        Neither, or both, given.
+    """
+    from brainpainter.errors import BrainPainterError
+
+    maps = kwargs.get("lh") is not None or kwargs.get("rh") is not None
+    if not inputs and not maps:
+        raise BrainPainterError("give INPUT tables, or maps with --lh FILE and/or --rh FILE.")
+    if inputs and maps:
+        raise BrainPainterError("give INPUT tables or maps (--lh/--rh), not both in one command.")
+    if not inputs:
+        return None
+    return inputs[0] if len(inputs) == 1 else list(inputs)
 
 
 def render_kwargs(options: dict[str, Any]) -> dict[str, Any]:
@@ -174,7 +206,7 @@ def render_kwargs(options: dict[str, Any]) -> dict[str, Any]:
     ``--size`` becomes ``width``/``height`` and ``--transparent`` a ``None``
     background; everything else keeps its name.
     """
-    names = (*RENDER_OPTION_NAMES, *INPUT_OPTION_NAMES, *PARALLEL_OPTION_NAMES)
+    names = (*RENDER_OPTION_NAMES, *INPUT_OPTION_NAMES, *PARALLEL_OPTION_NAMES, *MAP_OPTION_NAMES)
     out = {name: options.pop(name) for name in names if name in options}
     if "size" in out:
         out["width"], out["height"] = parse_size(out.pop("size"))

@@ -40,6 +40,9 @@ class ColourScale:
         Colour of NaN / empty cells, and of regions absent from the input.
     name : str
         The gradient (``"white,yellow,orange,red"``) or colour-map name.
+    threshold : float or None
+        A map's ``--threshold``: values with ``|v|`` below it are not coloured
+        (the colour bar greys that band out).
     """
 
     colors: NDArray[Any]
@@ -51,6 +54,7 @@ class ColourScale:
         default_factory=lambda: to_rgb(DEFAULT_MISSING_COLOR)
     )
     name: str = ""
+    threshold: float | None = None
 
     def __post_init__(self) -> None:
         for what, v in (("vmin", self.vmin), ("vmax", self.vmax), ("center", self.center)):
@@ -137,6 +141,7 @@ class ColourScale:
             "center": self.center,
             "nan_color": to_hex(self.nan_color),
             "missing_color": to_hex(self.missing_color),
+            **({} if self.threshold is None else {"threshold": self.threshold}),
         }
 
 

@@ -99,6 +99,26 @@ def bar_colors(scale: ColourScale, n: int = N_SAMPLES) -> tuple[NDArray[Any], ND
     return values, np.clip(scale(values), 0.0, 1.0)
 
 
+#: Colour of the band of a map's colour bar below the threshold (the underlay's grey).
+THRESHOLD_GREY = (0.72, 0.72, 0.72)
+
+
+def _threshold_band(ax: Axes, scale: ColourScale, horizontal: bool) -> None:
+    """Grey out ``|v| < scale.threshold`` on the bar and mark its edges with thin lines."""
+    t = scale.threshold
+    if t is None or t <= 0:
+        return
+    lo, hi = max(-t, scale.vmin), min(t, scale.vmax)
+    if lo >= hi:
+        return
+    span = ax.axvspan if horizontal else ax.axhspan
+    line = ax.axvline if horizontal else ax.axhline
+    span(lo, hi, color=THRESHOLD_GREY, zorder=2)
+    for edge in (-t, t):
+        if scale.vmin < edge < scale.vmax:
+            line(edge, color="black", linewidth=0.6, zorder=3)
+
+
 def draw_colorbar(
     ax: Axes,
     scale: ColourScale,
@@ -148,6 +168,7 @@ def draw_colorbar(
     image = colors[None, :, :] if horizontal else colors[::-1, None, :]
     extent = (scale.vmin, scale.vmax, 0.0, 1.0) if horizontal else (0.0, 1.0, scale.vmin, scale.vmax)
     ax.imshow(image, extent=extent, aspect="auto", interpolation="nearest", origin="upper")
+    _threshold_band(ax, scale, horizontal)
     if horizontal:
         ax.set_xlim(scale.vmin, scale.vmax)
         ax.set_yticks([])

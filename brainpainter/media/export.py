@@ -30,6 +30,8 @@ from numpy.typing import NDArray
 from brainpainter.atlas.model import HEMI_PREFIX, Atlas
 from brainpainter.atlas.template import Template
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.rendering.geometry import VertexColors
+from brainpainter.rendering.maprun import MapRun
 from brainpainter.rendering.options import Options, RenderKwargs
 from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.settings import RGB
@@ -62,8 +64,9 @@ class RegionMesh:
         seams at region borders).
     color : tuple of float, shape (3,)
         sRGB 0-1.
-    vertex_colors : ndarray of float32, shape (n_vertices, 3), optional
-        sRGB 0-1 per vertex (white-matter tracts coloured along their length); `color` is then their mean.
+    vertex_colors : ndarray of float, shape (n_vertices, 3), optional
+        sRGB 0-1 per vertex (a map, or white-matter tracts coloured along their length), written as the
+        mesh's ``COLOR_0``; `color` is then a fallback (for tracts their mean).
     """
 
     name: str
@@ -171,6 +174,29 @@ def tract_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
     return out
 
 
+def vertex_meshes(scene: Scene, colors: VertexColors) -> list[RegionMesh]:
+    """A map's meshes: each hemisphere's cortex as one mesh coloured per vertex, plus the structures.
+
+    Parameters
+    ----------
+    scene : Scene
+    colors : VertexColors
+        One image of a map (:meth:`brainpainter.rendering.maprun.MapRun.colors`).
+    """
+    from brainpainter.maps.resolution import map_mesh
+
+    out: list[RegionMesh] = []
+    for hemi in ("lh", "rh"):
+        cm = map_mesh(scene.template, scene.labels, hemi)
+        if hemi not in colors.vertices or not len(cm.faces):
+            continue
+        verts = cm.vertices[scene.surface]
+        out.append(RegionMesh(f"{HEMI_PREFIX[hemi]}cortex", hemi, verts.astype(np.float32),
+                              np.asarray(cm.faces, np.int32), _vertex_normals(verts, cm.faces),
+                              scene.medial_wall_color, np.asarray(colors.vertices[hemi], np.float32)))
+    return out + [m for m in region_meshes(scene, dict(colors.regions)) if m.part == "subcortical"]
+
+
 def srgb_to_linear(c: NDArray[Any]) -> NDArray[Any]:
     """sRGB 0-1 -> linear 0-1 (glTF material colours are linear)."""
     c = np.asarray(c, dtype=float)
@@ -189,15 +215,17 @@ def glb_bytes(meshes: Sequence[RegionMesh]) -> bytes:
 
     scene = trimesh.Scene()
     for m in meshes:
-        if m.vertex_colors is not None:  # COLOR_0 (glTF vertex colours are linear)
-            linear_v = np.round(srgb_to_linear(m.vertex_colors) * 255).astype(np.uint8)
-            rgba = np.column_stack([linear_v, np.full(len(linear_v), 255, np.uint8)])
-            visual: Any = trimesh.visual.ColorVisuals(vertex_colors=rgba)
+        linear = srgb_to_linear(np.asarray(m.color))
+        material = PBRMaterial(  # type: ignore[no-untyped-call]
+            name=m.name, baseColorFactor=[*linear, 1.0], metallicFactor=0.0, roughnessFactor=0.75,
+            doubleSided=True)
+        visual: Any
+        if m.vertex_colors is not None:  # glTF vertex colours are linear
+            rgba = np.ones((len(m.vertex_colors), 4))
+            rgba[:, :3] = srgb_to_linear(m.vertex_colors)
+            visual = trimesh.visual.ColorVisuals(
+                vertex_colors=np.round(rgba * 255).astype(np.uint8))
         else:
-            linear = srgb_to_linear(np.asarray(m.color))
-            material = PBRMaterial(  # type: ignore[no-untyped-call]
-                name=m.name, baseColorFactor=[*linear, 1.0], metallicFactor=0.0, roughnessFactor=0.75,
-                doubleSided=True)
             visual = trimesh.visual.TextureVisuals(material=material)  # type: ignore[no-untyped-call]
         mesh = trimesh.Trimesh(vertices=m.vertices @ RAS_TO_GLTF.T, faces=m.faces,
                                vertex_normals=m.normals @ RAS_TO_GLTF.T, process=False, visual=visual)
@@ -379,15 +407,21 @@ _VIEWER_JS = r"""
 EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cmap", "vmin", "vmax", "center",
                   "nan_color", "missing_color", "background", "image_column", "value", "region_column",
                   "strict", "tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_values",
-                  "tract_value", "tract_radius")
+                  "tract_value", "tract_radius", "lh", "rh", "underlay", "threshold", "outline",
+                  "outline_threshold")
 
 
-def _row_meshes(run: Run, i: int) -> tuple[Scene, list[RegionMesh]]:
-    """The scene of a run and the meshes of its row `i`: regions, then the tracts' tubes."""
+def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
+    """The scene of a run and the meshes of its row `i`: a map's cortex coloured per vertex, or
+    the regions, then the tracts' tubes."""
     from brainpainter.rendering.painter import load_scene, region_colors
     from brainpainter.rendering.run import tract_colors
 
-    table, opts, tv = run.table, run.options.scene, run.tract_values
+    opts = run.options.scene
+    if isinstance(run, MapRun):
+        _, scene = load_scene(run.table.atlas, opts.template, opts.surface, opts.hide)
+        return scene, vertex_meshes(scene, run.colors(i))
+    table, tv = run.table, run.tract_values
     atlas_obj, scene = load_scene(table.atlas, opts.template, opts.surface, opts.hide,
                                   tracts=opts.tract_spec(), tract_nodes=tv.nodes if tv is not None else (),
                                   tract_radius=opts.tract_radius)

@@ -338,16 +338,22 @@ class MovieFrames:
         """The renders of each wanted state, one chunk per state."""
         table, names = self.run.table, self.keys.names
         key_values = table.values[self.keys.rows]
+        rows = self.keys.rows
+        blend = getattr(self.run, "blend", None)  # a map run: per-vertex values blended
         for s in wanted:
             a, b, weight, state_views = self.states[s]
-            values = interpolate(key_values[a], key_values[b], weight)
-            colors = region_colors(dict(zip(table.regions, values.tolist(), strict=True)), table.atlas,
-                                   self.run.scale)
-            tv = self.run.tract_values
-            if tv is not None:  # bundle values (and profiles) change between key frames like regions
-                ra, rb = (tv.row(table.images[self.keys.rows[k]]) for k in (a, b))
-                tvals = interpolate(np.array(list(ra.values())), np.array(list(rb.values())), weight)
-                colors.update(tract_colors(dict(zip(ra, tvals.tolist(), strict=True)), self.run.scale))
+            colors: Any
+            if blend is not None:
+                colors = blend(rows[a], rows[b], weight)
+            else:
+                values = interpolate(key_values[a], key_values[b], weight)
+                colors = region_colors(dict(zip(table.regions, values.tolist(), strict=True)), table.atlas,
+                                       self.run.scale)
+                tv = getattr(self.run, "tract_values", None)
+                if tv is not None:  # bundle values (and profiles) change between key frames like regions
+                    ra, rb = (tv.row(table.images[self.keys.rows[k]]) for k in (a, b))
+                    tvals = interpolate(np.array(list(ra.values())), np.array(list(rb.values())), weight)
+                    colors.update(tract_colors(dict(zip(ra, tvals.tolist(), strict=True)), self.run.scale))
             label = names[a] if a == b else f"{names[a]} {ARROW} {names[b]} ({weight:.3f})"
             yield [Item(colors, view, label=label) for view in state_views]
 

@@ -23,6 +23,15 @@ White-matter tracts are parts of kind ``tract`` (``tracts-lh``, ``tracts-rh``
 and ``tracts`` for commissural bundles): triangle tubes built here
 (:func:`brainpainter.tracts.tubes.tube_mesh`), so a renderer draws them as it
 draws any opaque part.
+(:attr:`SceneGeometry.keys`).
+
+A scene coloured per vertex (``Scene.coloring == "vertices"``, a map) keeps
+one drawing path: its cortex parts are the template's stored meshes, not
+split by region, and every cortex vertex has a palette slot of its own
+(:attr:`SceneGeometry.vertex_slots`: lh's vertices from slot 3, then rh's;
+region keys after them). The palette's colours of those slots are the map's
+colours per vertex (:class:`VertexColors`), which renderers interpolate
+across each triangle.
 """
 
 from __future__ import annotations
@@ -69,6 +78,8 @@ class SceneParts(Protocol):
     def tract_nodes(self) -> tuple[tuple[str, int], ...]: ...
     @property
     def tract_radius(self) -> float | None: ...
+    @property
+    def coloring(self) -> str: ...
 
 #: Colour of subcortical structures that have no colour in the mapping (sRGB).
 NEUTRAL_GREY = (0.8, 0.8, 0.8)
@@ -225,9 +236,9 @@ def _template_sulc(template: Template, labels: str, hemi: str, cm: Any) -> NDArr
     return _depth_0_1(np.asarray(raw, dtype=np.float64))  # FreeSurfer's sulc: sulci positive
 
 
-#: Palette slots at most: the palette is a 1-D texture, whose width GPUs limit (16384 on most,
-#: llvmpipe included); a scene needing more is refused with advice.
-MAX_SLOTS = 16_384
+#: Palette slots at most: a renderer's palette is a 2-D texture (the Blender renderer's: 4096 texels
+#: a row) whose rows GPUs limit to 16384 (llvmpipe included); a scene needing more is refused with advice.
+MAX_SLOTS = 4096 * 16_384
 #: Palette key prefix of the direction colours' slots.
 DIRECTION_KEY = "tract-direction:"
 
@@ -315,12 +326,17 @@ class Palette(Mapping[str, RGB]):
     colors : mapping of str to (r, g, b)
         sRGB 0-1 per region key.
     geometry : SceneGeometry, or a callable returning it
+    vertex_rgb : mapping of str to ndarray of float, shape (n_vertices, 3), optional
+        A per-vertex scene's cortex colours per hemisphere (sRGB 0-1), in the
+        order of its vertex slots (:attr:`SceneGeometry.vertex_slots`).
     """
 
     def __init__(self, colors: Mapping[str, RGB],
-                 geometry: SceneGeometry | Callable[[], SceneGeometry]) -> None:
+                 geometry: SceneGeometry | Callable[[], SceneGeometry],
+                 vertex_rgb: Mapping[str, NDArray[Any]] | None = None) -> None:
         self._colors = {k: tuple(float(c) for c in v[:3]) for k, v in colors.items()}
         self._geometry = geometry
+        self._vertex_rgb = dict(vertex_rgb or {})
         self._rgb: NDArray[Any] | None = None
 
     def __getitem__(self, key: str) -> RGB:
@@ -348,8 +364,36 @@ class Palette(Mapping[str, RGB]):
                 c = self._colors.get(key)
                 if c is not None:
                     rgb[i] = c
+            for hemi, (start, n) in g.vertex_slots.items():
+                if hemi in self._vertex_rgb:
+                    rgb[start:start + n] = np.asarray(self._vertex_rgb[hemi], np.float32)[:, :3]
             self._rgb = np.clip(rgb, 0.0, 1.0).astype(np.float32)
         return self._rgb
+
+
+class VertexColors(Mapping[str, RGB]):
+    """One image of a map: region colours (a mapping, as for a region image) plus per-vertex cortex colours.
+
+    Parameters
+    ----------
+    regions : mapping of str to (r, g, b)
+        Colours of region keys (the subcortical structures).
+    vertices : mapping of str to ndarray of float32, shape (n_vertices, 3)
+        sRGB 0-1 per cortex vertex of each hemisphere (:attr:`SceneGeometry.vertex_slots`).
+    """
+
+    def __init__(self, regions: Mapping[str, RGB], vertices: Mapping[str, NDArray[Any]]) -> None:
+        self.regions = dict(regions)
+        self.vertices = dict(vertices)
+
+    def __getitem__(self, key: str) -> RGB:
+        return self.regions[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.regions)
+
+    def __len__(self) -> int:
+        return len(self.regions)
 
 
 class SceneGeometry:
@@ -367,6 +411,10 @@ class SceneGeometry:
     slot_of : dict of str to int
     default_rgb : ndarray of float32, shape (n_slots, 3)
         Colour of each slot when the palette gives none.
+    vertex_slots : dict of str to (int, int)
+        Per-vertex scenes: first slot and number of cortex vertices of each hemisphere (else empty).
+    source_vertex : dict of str to ndarray of int32, shape (n_vertices,)
+        Per-vertex scenes: the fsaverage vertex of each cortex vertex, per hemisphere.
     """
 
     def __init__(self, scene: SceneParts) -> None:
@@ -380,6 +428,16 @@ class SceneGeometry:
         defaults: list[RGB] = [tuple(scene.medial_wall_color), NEUTRAL_GREY, GLASS_COLOR]  # type: ignore[list-item]
         slot_of: dict[str, int] = {}
         parts: list[PartGeometry] = []
+        per_vertex = getattr(scene, "coloring", "regions") == "vertices"
+        meshes = {hemi: self._cortex_mesh(scene, hemi, per_vertex) for hemi in HEMIS}
+        self.vertex_slots: dict[str, tuple[int, int]] = {}
+        self.source_vertex: dict[str, NDArray[Any]] = {}
+        if per_vertex:
+            for hemi, cm in meshes.items():
+                self.vertex_slots[hemi] = (len(defaults), len(cm.source_vertex))
+                self.source_vertex[hemi] = np.asarray(cm.source_vertex, np.int32)
+                defaults.extend([defaults[MEDIAL_SLOT]] * len(cm.source_vertex))
+        first_key = len(defaults)
 
         def slots_for(names: list[str], default: int | RGB, drop: frozenset[str]) -> NDArray[Any]:
             out = np.full(len(names), -1, dtype=np.int64)
@@ -387,25 +445,29 @@ class SceneGeometry:
                 if key in drop:
                     continue
                 if key not in slot_of:
-                    slot_of[key] = N_FIXED_SLOTS + len(keys)
+                    slot_of[key] = first_key + len(keys)
                     keys.append(key)
                     defaults.append(defaults[default] if isinstance(default, int) else default)
                 out[i] = slot_of[key]
             return out
 
         def add(name: str, kind: str, hemi: str | None, verts: NDArray[Any], faces: NDArray[Any],
-                face_slot: NDArray[Any], sulc: NDArray[Any]) -> None:
+                face_slot: NDArray[Any], sulc: NDArray[Any], first_slot: int | None = None) -> None:
             keep = face_slot >= 0
             faces, face_slot = np.asarray(faces)[keep], face_slot[keep]
             if not len(faces):
                 return
             normals = vertex_normals(verts, faces)
-            v, tri, pal, (nrm, dep) = split_by_label(verts, faces, face_slot, (normals, sulc))
+            if first_slot is not None:  # per vertex: the mesh as stored, one slot per vertex
+                v, tri, nrm, dep = verts, np.asarray(faces, np.uint32), normals, sulc
+                pal = (first_slot + np.arange(len(verts))).astype(np.int32)
+            else:
+                v, tri, pal, (nrm, dep) = split_by_label(verts, faces, face_slot, (normals, sulc))
             parts.append(PartGeometry(name, kind, hemi, v.astype(np.float32), nrm.astype(np.float32),
                                       tri, pal, dep.astype(np.float32), v))
 
         for hemi in HEMIS:
-            cm = template.cortex(scene.labels, hemi)
+            cm = meshes[hemi]
             if scene.surface not in cm.vertices:
                 raise choice_error("surface", scene.surface, list(cm.vertices),
                                    f"Template {template.name!r} lacks it.")
@@ -416,7 +478,8 @@ class SceneGeometry:
             if sulc is None:
                 sulc = (convexity(cm.vertices.get("pial", verts), cm.faces) if with_sulc
                         else np.zeros(len(verts), np.float32))
-            add(f"cortex-{hemi}", "cortex", hemi, verts, cm.faces, face_slot, sulc)
+            add(f"cortex-{hemi}", "cortex", hemi, verts, cm.faces, face_slot, sulc,
+                self.vertex_slots[hemi][0] if per_vertex else None)
         if template.manifest.get("subcortical"):
             sub = template.subcortical()
             face_slot = slots_for(list(sub.label_names), NEUTRAL_SLOT, hidden)[
@@ -431,9 +494,9 @@ class SceneGeometry:
             verts, faces = template.glass(hemi)
             add(f"glass-{hemi}", "glass", hemi, verts, faces, np.full(len(faces), GLASS_SLOT),
                 np.zeros(len(verts), np.float32))
-        if N_FIXED_SLOTS + len(keys) > MAX_SLOTS:
+        if len(defaults) > MAX_SLOTS:
             raise BrainPainterError(
-                f"the scene needs {N_FIXED_SLOTS + len(keys):,} palette slots (regions, bundles and "
+                f"the scene needs {len(defaults):,} palette slots (regions, vertices, bundles and "
                 f"along-tract nodes); at most {MAX_SLOTS:,} fit a palette texture; give profiles with fewer "
                 "nodes or fewer bundles.")
         #: rotation from the template's coordinates to RAS (its anterior and superior axes)
@@ -443,9 +506,18 @@ class SceneGeometry:
         self.slot_of = slot_of
         self.default_rgb = np.asarray(defaults, dtype=np.float32)
 
+    @staticmethod
+    def _cortex_mesh(scene: SceneParts, hemi: str, per_vertex: bool) -> Any:
+        """The hemisphere's cortex mesh: split by region, or (per vertex) as stored, not split."""
+        if per_vertex:
+            from brainpainter.maps.resolution import map_mesh
+
+            return map_mesh(scene.template, scene.labels, hemi)
+        return scene.template.cortex(scene.labels, hemi)
+
     @property
     def n_slots(self) -> int:
-        return N_FIXED_SLOTS + len(self.keys)
+        return len(self.default_rgb)
 
     def visible(self, view: View) -> list[PartGeometry]:
         """The parts `view` draws (:func:`brainpainter.rendering.framing.shows`), opaque parts first.

@@ -12,6 +12,7 @@ group                     options                                               
 :class:`RenderSettings`   width, height, background, quality, shading, lighting,     rendering.settings
                           glass_opacity
 :class:`TableOptions`     image_column, value, region_column, strict                  table.options
+:class:`MapOptions`       lh, rh, underlay, threshold                                 maps.options
 :class:`RunnerOptions`    jobs, client, scheduler                                     here
 ========================  ==========================================================  ============
 
@@ -36,6 +37,7 @@ from brainpainter.atlas.template import SURFACES
 from brainpainter.color.rgb import to_rgb
 from brainpainter.color.scale import ScaleKwargs, ScaleOptions
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.maps.options import MapKwargs, MapOptions
 from brainpainter.rendering.settings import RenderSettings, SettingsKwargs
 from brainpainter.rendering.views import parse_views
 from brainpainter.table.options import TableKwargs, TableOptions
@@ -76,7 +78,8 @@ class RunnerKwargs(TypedDict, total=False):
     scheduler: str | None
 
 
-class RenderKwargs(SceneKwargs, ScaleKwargs, SettingsKwargs, TableKwargs, RunnerKwargs, total=False):
+class RenderKwargs(SceneKwargs, ScaleKwargs, SettingsKwargs, TableKwargs, RunnerKwargs, MapKwargs,
+                   total=False):
     """Every option of a run as a flat keyword (see :class:`Options` for what each means)."""
 
 
@@ -265,7 +268,7 @@ class RunnerOptions:
 # -- all of them ----------------------------------------------------------------------------
 #: Option group -> its class, in the order they are checked (cheap checks first).
 GROUPS: dict[str, type] = {"runner": RunnerOptions, "scale": ScaleOptions, "scene": SceneOptions,
-                           "settings": RenderSettings, "table": TableOptions}
+                           "settings": RenderSettings, "table": TableOptions, "maps": MapOptions}
 
 
 def option_names(cls: type) -> list[str]:
@@ -294,6 +297,8 @@ class Options:
         width, height, background, quality, shading, lighting, glass_opacity.
     table : TableOptions
         image_column, value, region_column, strict.
+    maps : MapOptions
+        lh, rh, underlay, threshold (per-vertex maps, :mod:`brainpainter.maps`).
     """
 
     runner: RunnerOptions = field(default_factory=RunnerOptions)
@@ -301,6 +306,7 @@ class Options:
     scene: SceneOptions = field(default_factory=SceneOptions)
     settings: RenderSettings = field(default_factory=RenderSettings)
     table: TableOptions = field(default_factory=TableOptions)
+    maps: MapOptions = field(default_factory=MapOptions)
 
     @classmethod
     def of(cls, options: Mapping[str, Any], caller: str = "render", **defaults: Any) -> Options:

@@ -22,7 +22,7 @@ from brainpainter.atlas.template import Template, load_template, template_for
 from brainpainter.color.rgb import ColorLike, to_rgb
 from brainpainter.color.scale import ColourScale
 from brainpainter.errors import choice_error
-from brainpainter.rendering.geometry import Palette
+from brainpainter.rendering.geometry import Palette, VertexColors
 from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.settings import RGB, RenderSettings
 from brainpainter.rendering.views import View
@@ -98,6 +98,7 @@ def load_scene(
     tracts: TractSpec | None = None,
     tract_nodes: Iterable[tuple[str, int]] = (),
     tract_radius: float | None = None,
+    coloring: str = "regions",
 ) -> tuple[Atlas, Scene]:
     """The atlas and the scene a renderer (or an exporter) draws; nothing is rendered.
 
@@ -134,6 +135,7 @@ def load_scene(
         tracts=None if tracts is None else tracts.load(template),
         tract_nodes=tuple((str(n), int(k)) for n, k in tract_nodes),
         tract_radius=None if tract_radius is None else float(tract_radius),
+        coloring=coloring,
     )
     return atlas, scene
 
@@ -162,6 +164,8 @@ class Painter:
     tract_radius : float, optional
         Radius of the tubes, millimetres (default: by the number of streamlines,
         :func:`brainpainter.tracts.tubes.auto_radius`).
+    coloring : {"regions", "vertices"}
+        ``"vertices"`` draws per-vertex maps (:attr:`brainpainter.rendering.scene.Scene.coloring`).
     """
 
     atlas: Atlas | str = "dk"
@@ -175,13 +179,15 @@ class Painter:
     tracts: TractSpec | None = None
     tract_nodes: Iterable[tuple[str, int]] = ()
     tract_radius: float | None = None
+    coloring: str = "regions"
     _renderer: Any = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         self.tract_nodes = tuple(self.tract_nodes)
         self.atlas, self.scene = load_scene(self.atlas, self.template, self.surface, self.hidden,
                                             self.settings, self.medial_wall_color, self.atlas_config,
-                                            self.tracts, self.tract_nodes, self.tract_radius)
+                                            self.tracts, self.tract_nodes, self.tract_radius,
+                                            self.coloring)
         self.template = self.scene.template
         from brainpainter.atlas import registry
         from brainpainter.rendering.pythons import require_bpy
@@ -198,10 +204,14 @@ class Painter:
         return self._renderer
 
     def paint_colors(self, colors: Mapping[str, RGB], view: View) -> NDArray[Any]:
-        """Render explicit region colours (group keys colour their members); RGBA uint8, (h, w, 4)."""
+        """Render explicit region colours (group keys colour their members); RGBA uint8, (h, w, 4).
+
+        A :class:`~brainpainter.rendering.geometry.VertexColors` also colours each cortex vertex (a map).
+        """
         assert isinstance(self.atlas, Atlas)
         scene = self.scene
-        palette = Palette(self.atlas.expand(colors), lambda: scene.geometry)
+        vertex_rgb = colors.vertices if isinstance(colors, VertexColors) else None
+        palette = Palette(self.atlas.expand(colors), lambda: scene.geometry, vertex_rgb)
         pixels: NDArray[Any] = self.load().render(palette, view)
         return pixels
 

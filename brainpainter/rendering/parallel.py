@@ -101,6 +101,7 @@ class PainterSpec:
         The tractograms (paths and options: each worker reads them and draws the same subsample).
     tract_nodes : tuple of (str, int)
         How each bundle is coloured (:class:`~brainpainter.rendering.scene.Scene`).
+    coloring : {"regions", "vertices"}
     """
 
     atlas: Any
@@ -114,6 +115,7 @@ class PainterSpec:
     tracts: Any = None
     tract_nodes: tuple[tuple[str, int], ...] = ()
     tract_radius: float | None = None
+    coloring: str = "regions"
 
     @classmethod
     def of(cls, painter: Painter, template: Any = None) -> PainterSpec:
@@ -132,6 +134,7 @@ class PainterSpec:
             settings=painter.settings, renderer=painter.renderer, renderer_target=target,
             medial_wall_color=tuple(float(c) for c in painter.scene.medial_wall_color),  # type: ignore[arg-type]
             tracts=painter.tracts, tract_nodes=tuple(painter.tract_nodes), tract_radius=painter.tract_radius,
+            coloring=painter.scene.coloring,
         )
 
     @property
@@ -159,7 +162,7 @@ class PainterSpec:
                 registry.renderers.register(self.renderer, lambda: obj, replace=True)
         return Painter(self.atlas, self.template, self.surface, self.hidden, self.settings,
                        self.renderer, self.medial_wall_color, tracts=self.tracts,
-                       tract_nodes=self.tract_nodes, tract_radius=self.tract_radius)
+                       tract_nodes=self.tract_nodes, tract_radius=self.tract_radius, coloring=self.coloring)
 
 
 @dataclass(frozen=True)

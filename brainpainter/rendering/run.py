@@ -23,6 +23,7 @@ from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.registry import get_atlas, load_atlas_config
 from brainpainter.color.scale import ColourScale
 from brainpainter.errors import BrainPainterError
+from brainpainter.maps.inputs import is_map_input
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
 from brainpainter.rendering.painter import VOLUME_VIEWS, Painter, RenderResult, region_colors, resolve_hidden
 from brainpainter.rendering.parallel import Item, LocalRunner, PainterSpec, Runner, SerialRunner, chunked
@@ -138,7 +139,9 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     Parameters
     ----------
     data : path, DataFrame, dict, or a list of these
-        See :func:`brainpainter.table.region_table.read_table`.
+        See :func:`brainpainter.table.region_table.read_table`. A map
+        (``{"lh": array, "rh": array}``, or ``lh=``/``rh=`` options) makes a
+        :class:`~brainpainter.rendering.maprun.MapRun` instead.
     atlas : str or Atlas, optional
         Inferred from the region names when not given.
     options : Options, optional
@@ -149,6 +152,10 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     if options is None:
         options = Options.of(kwargs, "prepare_run")
     atlas_obj = resolve_atlas(atlas, options.scene.atlas_config)
+    if options.maps.given or is_map_input(data):  # per-vertex maps: the same run, coloured per vertex
+        from brainpainter.rendering.maprun import prepare_map_run
+
+        return prepare_map_run(data, atlas_obj, options)  # type: ignore[return-value]
     views = options.scene.views
     if views is None and atlas_obj is not None and not atlas_obj.cortical():
         views = VOLUME_VIEWS  # a volumetric atlas alone: its structures, not a grey cortex
@@ -162,7 +169,12 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
         table = read_table(data, atlas_obj, **options.table.kwargs())
     values = table.values if tract_values is None else np.concatenate(
         [np.ravel(table.values), np.ravel(tract_values.values)])
-    return Run(table, options.scale.scale(values), view_list, options.settings, options, tract_values)
+    run = Run(table, options.scale.scale(values), view_list, options.settings, options, tract_values)
+    if options.maps.outline is not None:  # region borders: the table drawn per vertex, borders outlined
+        from brainpainter.rendering.maprun import outlined_region_run
+
+        return outlined_region_run(run, options)  # type: ignore[return-value]
+    return run
 
 
 def make_runner(painter: Painter, template: Any = None, options: RunnerOptions | None = None,
@@ -195,7 +207,7 @@ def make_runner(painter: Painter, template: Any = None, options: RunnerOptions |
 
 
 # -- render ---------------------------------------------------------------------------------
-def render(data: Any, atlas: Atlas | str | None = None, *, out: str | Path | None = None,
+def render(data: Any = None, atlas: Atlas | str | None = None, *, out: str | Path | None = None,
            painter: Painter | None = None, rows: Iterable[str | int] | str | None = None,
            progress: bool = True, **options: Unpack[RenderKwargs]) -> RenderResult:
     """Render every row of a region-value table from every view.
@@ -204,6 +216,8 @@ def render(data: Any, atlas: Atlas | str | None = None, *, out: str | Path | Non
     ----------
     data : path, DataFrame, dict, or a list of these
         See :func:`brainpainter.table.region_table.read_table` (several inputs are merged by image name).
+        A map instead: ``{"lh": array, "rh": array}``, or None with ``lh=``/``rh=`` files
+        (:func:`brainpainter.maps.inputs.read_maps`, docs/maps.md).
     atlas : str or Atlas, optional
         ``"dk"``, ``"destrieux"``, ``"dkt"`` (alias ``"tourville"``) or a plugin atlas;
         inferred from the region names when not given.
@@ -243,6 +257,11 @@ def render(data: Any, atlas: Atlas | str | None = None, *, out: str | Path | Non
     own = painter is None
     if painter is None:
         painter = run.painter()
+    elif (painter.scene.coloring == "vertices") != hasattr(run, "source_vertex"):
+        raise BrainPainterError(
+            f"the painter colours {painter.scene.coloring} but the data is "
+            f"{'a map' if hasattr(run, 'source_vertex') else 'a region table'}; make a Painter for it "
+            "(brainpainter.Painter(coloring='vertices') draws maps).")
     elif painter.atlas.name != run.table.atlas.name:  # type: ignore[union-attr]
         raise BrainPainterError(
             f"the table was read with atlas {run.table.atlas.name!r} but the painter draws "

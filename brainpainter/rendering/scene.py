@@ -41,6 +41,9 @@ if TYPE_CHECKING:
     from brainpainter.rendering.geometry import Palette, SceneGeometry
     from brainpainter.tracts.model import Tracts
 
+#: How a scene's cortex is coloured: one colour per region, or one per vertex (a map).
+COLORINGS = ("regions", "vertices")
+
 @dataclass(frozen=True)
 class Scene:
     """Everything loaded once per run.
@@ -68,6 +71,9 @@ class Scene:
     tract_radius : float, optional
         Radius of the streamlines' tubes in millimetres; None: by their number
         (:func:`brainpainter.tracts.tubes.auto_radius`).
+    coloring : {"regions", "vertices"}
+        ``"vertices"``: a map; the cortex has one palette slot per vertex
+        (:class:`~brainpainter.rendering.geometry.SceneGeometry`).
     """
 
     template: Template
@@ -79,10 +85,13 @@ class Scene:
     tracts: Tracts | None = None
     tract_nodes: tuple[tuple[str, int], ...] = ()
     tract_radius: float | None = None
+    coloring: str = "regions"
 
     def __post_init__(self) -> None:
         if self.surface not in SURFACES:
             raise choice_error("surface", self.surface, SURFACES)
+        if self.coloring not in COLORINGS:
+            raise choice_error("coloring", self.coloring, COLORINGS)
 
     @cached_property
     def geometry(self) -> SceneGeometry:

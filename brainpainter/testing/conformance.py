@@ -26,7 +26,11 @@ the renderer needs none:
     hemisphere, one colour each) are drawn in their exact flat colour where the
     camera projects them, in the subcortical views, with the glass brain;
 ``memory``
-    resident memory does not grow per image (:func:`~brainpainter.testing.memory.growth_per_image`).
+    resident memory does not grow per image (:func:`~brainpainter.testing.memory.growth_per_image`);
+``vertex_colors``
+    a per-vertex scene (``Scene(coloring="vertices")``, a map) draws each
+    vertex's palette slot and interpolates between vertices: a colour ramp
+    along the front-back axis is drawn as a smooth ramp, in the right direction.
 """
 
 from __future__ import annotations
@@ -52,7 +56,7 @@ COLORS: dict[str, RGB] = {
     "Left-Hippocampus": (0.60, 0.05, 0.05), "Right-Hippocampus": (0.05, 0.35, 0.60),
 }
 CONFORMANCE_CHECKS = ("orientation", "flat_colors", "nan_missing", "transparent", "glass", "no_holes",
-                      "repeatable", "tracts", "memory")
+                      "repeatable", "tracts", "memory", "vertex_colors")
 #: Colours of the tracts check's two bundles (not among :data:`COLORS`).
 TRACT_COLORS: dict[str, RGB] = {"tract:AF_left": (1.0, 0.0, 0.5), "tract:CST_right": (0.0, 0.5, 1.0)}
 WHITE: RGB = (1.0, 1.0, 1.0)
@@ -319,6 +323,44 @@ def _tracts(run: _Run) -> None:
     run.report["tracts_worst_px"] = round(worst, 2)
 
 
+def _vertex_colors(run: _Run) -> None:
+    """A per-vertex scene: a red-to-blue ramp from back to front is drawn smooth and the right way round."""
+    from brainpainter.rendering.geometry import Palette
+    from brainpainter.rendering.scene import RenderSettings, Scene
+    from brainpainter.rendering.views import get_view
+
+    settings = RenderSettings(width=run.width, height=run.height, quality="fast", shading="flat",
+                              glass_opacity=0.0, background=WHITE)
+    scene = Scene(run.template, "dk", settings=settings, coloring="vertices")
+    geometry = scene.geometry
+    ramps = {}
+    for part in geometry.parts:
+        if part.kind == "cortex" and part.hemi is not None:
+            y = part.vertices[:, 1].astype(float)
+            t = (y - y.min()) / max(float(np.ptp(y)), 1e-9)  # 0 at the back, 1 at the front
+            ramps[part.hemi] = np.stack([1.0 - t, np.full_like(t, 0.2), t], axis=1)
+    renderer = run.cls(scene)
+    try:
+        img = np.asarray(renderer.render(Palette({}, geometry, ramps), get_view("lateral-left")))
+    finally:
+        renderer.close()
+    brain = ~near(img, WHITE, 0)
+    if brain.sum() < 50:
+        run.problems.append("vertex_colors: a per-vertex scene draws nothing in lateral-left")
+        return
+    ys, xs = np.nonzero(brain)
+    blue = img[ys, xs, 2].astype(float)
+    distinct = len(np.unique(blue))
+    corr = float(np.corrcoef(xs, blue)[0, 1]) if np.ptp(blue) else 0.0
+    run.report["vertex_colors_distinct"] = distinct
+    if distinct < 20:
+        run.problems.append(f"vertex_colors: a colour ramp over the vertices gave {distinct} distinct "
+                            "colours; per-vertex colours must be interpolated across triangles")
+    if corr > -0.8:  # lateral-left: the front (blue) is on the left of the image
+        run.problems.append(f"vertex_colors: the ramp is not drawn front (left) to back (correlation "
+                            f"{corr:.2f})")
+
+
 def _memory(run: _Run, n_memory: int) -> None:
     """Resident memory does not grow per image over `n_memory` renders (after 20 to warm up)."""
     from brainpainter.rendering.views import get_view
@@ -377,7 +419,8 @@ def check_renderer(renderer: str | type, size: tuple[int, int] = (160, 120),
         if {"orientation", "no_holes", "repeatable", "flat_colors"} & set(checks):
             _views(run)
         for check, step in (("flat_colors", _antialiased), ("nan_missing", _nan_missing),
-                            ("transparent", _transparent), ("glass", _glass), ("tracts", _tracts)):
+                            ("transparent", _transparent), ("glass", _glass), ("tracts", _tracts),
+                            ("vertex_colors", _vertex_colors)):
             if check in checks:
                 step(run)
         if "memory" in checks and can_measure():

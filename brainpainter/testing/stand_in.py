@@ -159,6 +159,11 @@ class StandInRenderer:
             if not shows(view, kind, hemi):
                 continue
             keys, labels = self.parts.get(part, ([], np.zeros(0, int)))
+            slots = getattr(getattr(self.scene, "geometry", None), "vertex_slots", {}) if hemi else {}
+            if getattr(self.scene, "coloring", "regions") == "vertices" and hemi in slots:
+                start, n = slots[hemi]  # a map: the cortex's per-vertex colours, in vertex order
+                stripes += [tuple(c) for c in colors.rgb[start:start + n]]  # type: ignore[attr-defined]
+                continue
             stripes += [colors.get(keys[i]) or default.get(part, self.scene.medial_wall_color)
                         for i in labels if keys[i] not in self.scene.hidden]
         stripes += [colors.get(key) or default["subcortical"] for hemi, key in self.tract_keys

@@ -11,7 +11,10 @@ and offscreen buffers survive between calls.
 Per renderer, every part of ``scene.geometry`` becomes one indexed batch
 (uploaded once, in an order that suits a software rasteriser's vertex
 cache: :mod:`brainpainter_blender.meshorder`); an image uploads only the
-palette (a 1-D float texture of linear colours), draws the visible parts
+palette (a 2-D float texture of linear colours,
+:data:`~brainpainter_blender.gpu_shaders.PALETTE_WIDTH` texels a row, looked up in
+the vertex shader: a map's per-vertex colours are interpolated across each
+triangle; a region's three vertices share one slot), draws the visible parts
 into a supersampled buffer of 16-bit linear light (opaque parts with depth,
 then the glass: back faces, then front faces, blended, no depth writes) and
 averages each SxS block in a second pass (S a compile-time constant) that
@@ -277,10 +280,12 @@ class GpuDraw:
 
         key = rgb.tobytes()
         if key != self._palette_key:
-            rgba = np.ones((len(rgb), 4), np.float32)
-            rgba[:, :3] = srgb_to_linear(rgb)
+            width = gpu_shaders.PALETTE_WIDTH
+            rows = max(1, -(-len(rgb) // width))
+            rgba = np.ones((rows * width, 4), np.float32)
+            rgba[:len(rgb), :3] = srgb_to_linear(rgb)
             buf = gpu.types.Buffer("FLOAT", rgba.size, rgba.ravel())
-            self._palette_tex = gpu.types.GPUTexture(len(rgba), format="RGBA32F", data=buf)
+            self._palette_tex = gpu.types.GPUTexture((width, rows), format="RGBA32F", data=buf)
             self._palette_key = key
         return self._palette_tex
 

@@ -12,10 +12,14 @@ from typing import Any
 #: Values of the part shader's ``mode``: lit opaque surface, or glass.
 MODE_LIT, MODE_GLASS = 0, 1
 
+#: Width of the 2-D palette texture: slot ``i`` is texel ``(i % PALETTE_WIDTH, i / PALETTE_WIDTH)``.
+PALETTE_WIDTH = 4096
+
 _VERTEX = """
 void main()
 {
-  vec3 base = texelFetch(palette, int(pal + 0.5), 0).rgb;
+  int slot = int(pal + 0.5);
+  vec3 base = texelFetch(palette, ivec2(slot % PALETTE_WIDTH, slot / PALETTE_WIDTH), 0).rgb;
   vec3 n = normalize(nrm);
   if (dot(n, back) < 0.0) {
     n = -n;  /* seen from inside (a hole, the cut medial wall): light the side we see */
@@ -80,12 +84,13 @@ def part_shader() -> Any:
     iface = gpu.types.GPUStageInterfaceInfo("brainpainter_part")
     iface.smooth("VEC4", "color")
     info = gpu.types.GPUShaderCreateInfo()
+    info.define("PALETTE_WIDTH", str(PALETTE_WIDTH))
     for kind, name in (("MAT4", "mvp"), ("VEC3", "back"), ("VEC3", "key_dir"), ("VEC3", "fill_dir"),
                        ("FLOAT", "ambient"), ("FLOAT", "key"), ("FLOAT", "fill"),
                        ("FLOAT", "sulc_strength"), ("FLOAT", "glass_alpha"), ("FLOAT", "glass_edge"),
                        ("INT", "mode")):
         info.push_constant(kind, name)
-    info.sampler(0, "FLOAT_1D", "palette")
+    info.sampler(0, "FLOAT_2D", "palette")
     info.vertex_in(0, "VEC3", "pos")
     info.vertex_in(1, "VEC3", "nrm")
     info.vertex_in(2, "FLOAT", "pal")

@@ -60,6 +60,10 @@ class BlenderRenderer:
         self._colors: dict[int, tuple[float, ...]] = {}
         self._gpu = None
         self.cycles = lighting.uses_cycles(scene.settings)
+        if self.cycles and getattr(scene, "coloring", "regions") == "vertices":
+            raise BrainPainterError(
+                "per-vertex maps are drawn by the gpu path, not by Cycles (--quality high with smooth "
+                "shading); use --quality default, or --quality high --shading flat.")
         with _bpy.LOCK:
             try:
                 if self.cycles:

@@ -1,0 +1,129 @@
+"""A map's per-vertex colours: the underlay, the data through the colour scale, threshold and medial wall.
+
+Layers, bottom first (the conventions of nilearn and surfplot):
+
+1. the underlay: two greys from fsaverage's ``sulc`` (or ``curv``) sign, light
+   on gyri and dark in sulci (``none``: one grey);
+2. the data, through the run's colour scale, where it is finite, on the
+   cortex (not on ``cortex.label``'s medial wall) and ``|v| >= threshold``.
+
+Signed data gets a symmetric diverging scale about 0 unless limits are given.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from brainpainter.color.scale import ColourScale, ScaleOptions
+from brainpainter.maps.inputs import VertexMaps
+from brainpainter.maps.outlines import OUTLINE_COLOR, border_vertices
+from brainpainter.maps.resolution import masks
+
+UNDERLAYS = ("sulc", "curv", "none")
+#: Underlay greys (sRGB): gyri, sulci, and the one grey of ``--underlay none``.
+GYRUS_GREY, SULCUS_GREY, PLAIN_GREY = 0.74, 0.52, 0.72
+#: Default colour maps of maps given no --cmap/--gradient: values of one sign, signed values.
+DEFAULT_CMAP, DEFAULT_SIGNED_CMAP = "viridis", "RdBu_r"
+
+
+def map_scale(options: ScaleOptions, maps: VertexMaps, threshold: float | None = None) -> ColourScale:
+    """The colour scale of a map run: `options`, with defaults that suit maps.
+
+    No ``cmap``/``gradient``: ``viridis``, or ``RdBu_r`` for signed data. Signed
+    data and no ``vmin``/``vmax``/``center``: symmetric about 0. The scale
+    carries `threshold`, so that its colour bar greys out ``|v| < threshold``.
+    """
+    data = maps.finite()
+    signed = bool(data.size) and float(data.min()) < 0 < float(data.max())
+    if options.cmap is None and options.gradient is None:
+        options = replace(options, cmap=DEFAULT_SIGNED_CMAP if signed else DEFAULT_CMAP)
+    if signed and options.vmin is None and options.vmax is None and options.center is None:
+        options = replace(options, center=0.0)
+    return replace(options.scale(data), threshold=threshold)
+
+
+def underlay(hemi: str, source_vertex: NDArray[Any], kind: str) -> NDArray[Any]:
+    """Underlay colour of each vertex, float32 (n, 3); `source_vertex` indexes fsaverage."""
+    sv = np.asarray(source_vertex, np.int64)
+    if kind == "none":
+        grey = np.full(len(sv), PLAIN_GREY, np.float32)
+    else:
+        deep = masks(hemi)[kind][sv]
+        grey = np.where(deep, SULCUS_GREY, GYRUS_GREY).astype(np.float32)
+    return np.repeat(grey[:, None], 3, axis=1)
+
+
+Image = float | tuple[int, int, float]
+
+
+def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArray[Any]], scale: ColourScale,
+                  underlay_kind: str = "sulc", threshold: float | None = None,
+                  outline: dict[str, NDArray[Any]] | None = None,
+                  cluster_edges: dict[str, NDArray[Any]] | None = None) -> dict[str, NDArray[Any]]:
+    """The colours of one image of `maps` at the drawn vertices.
+
+    Parameters
+    ----------
+    maps : VertexMaps
+    image : float or (int, int, float)
+        Which of ``maps.images``; a float between two, or ``(a, b, w)`` (a
+        movie's in-between frame), blends two images' values linearly
+        (``(1 - w) * a + w * b``; label maps take the nearer image).
+    source_vertex : dict of str to ndarray of int, shape (n_hemi,)
+        fsaverage vertex of each drawn vertex, per hemisphere.
+    scale : ColourScale
+    underlay_kind : {"sulc", "curv", "none"}
+    threshold : float, optional
+        ``|v| < threshold`` shows the underlay.
+    outline : dict of str to ndarray of bool, shape (n_hemi,), optional
+        Vertices drawn in the outline colour (region borders, :mod:`brainpainter.maps.outlines`).
+    cluster_edges : dict of str to ndarray of int, shape (m, 2), optional
+        The mesh's edges: the borders of the coloured (supra-threshold) areas are outlined too.
+
+    Returns
+    -------
+    dict of str to ndarray of float32, shape (n_hemi, 3)
+        sRGB 0-1.
+    """
+    out: dict[str, NDArray[Any]] = {}
+    for hemi, sv in source_vertex.items():
+        sv = np.asarray(sv, np.int64)
+        rgb = underlay(hemi, sv, underlay_kind)
+        if hemi in maps.values and len(sv):
+            v = _values_at(maps, hemi, image, sv)
+            show = np.isfinite(v) & masks(hemi)["cortex"][sv]
+            if threshold is not None and maps.categories is None:
+                show &= np.abs(np.where(show, v, 0.0)) >= threshold
+            if maps.categories is not None and maps.category_colors is not None:
+                rgb[show] = maps.category_colors[v[show].astype(np.int64)]
+            else:
+                rgb[show] = scale(v[show])[:, :3]
+            if cluster_edges is not None and hemi in cluster_edges:
+                rgb[border_vertices(~show, cluster_edges[hemi])] = OUTLINE_COLOR  # the cluster's edge
+        if outline is not None and hemi in outline:
+            rgb[outline[hemi]] = OUTLINE_COLOR
+        out[hemi] = np.clip(rgb, 0.0, 1.0).astype(np.float32)
+    return out
+
+
+def _values_at(maps: VertexMaps, hemi: str, image: Image, sv: NDArray[Any]) -> NDArray[Any]:
+    """Image `image` of `maps` at fsaverage vertices `sv`; a blend of two (categories: nearest)."""
+    categorical = maps.categories is not None
+    n_images = len(maps.values[hemi])
+    if isinstance(image, tuple):
+        lo, hi, t = int(image[0]), int(image[1]), float(image[2])
+    else:
+        lo = int(np.floor(image))
+        hi, t = min(lo + 1, n_images - 1), float(image) - lo
+    a: NDArray[Any] = maps.on_fsaverage(hemi, lo)[sv].astype(np.float64)
+    if t == 0.0 or hi == lo:
+        return a
+    b: NDArray[Any] = maps.on_fsaverage(hemi, hi)[sv].astype(np.float64)
+    if categorical:
+        return a if t < 0.5 else b
+    mixed: NDArray[Any] = (1.0 - t) * a + t * b
+    return mixed

@@ -1,0 +1,66 @@
+"""Outlines over a map: an atlas's region borders (``--outline``), cluster borders (``--outline-threshold``).
+
+Drawn per vertex, in the map's own colours (no second drawing path): a
+vertex on a border takes the outline colour and the renderer's interpolation
+across triangles turns the marked vertices into a line about one mesh edge
+wide (about 1.4 mm on the default template; 6-8 pixels at 1200x900). Only one
+side of each border is marked (the vertex whose label is the smaller), so the
+line is one edge wide, not two. A screen-space outline (a label pass and an
+edge pass in the resolve shader) would give lines of constant pixel width;
+it needs a second render target in every renderer and is left for later
+(docs/maps.md).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+#: Outline colour (sRGB).
+OUTLINE_COLOR = (0.05, 0.05, 0.05)
+
+
+def mesh_edges(faces: NDArray[Any]) -> NDArray[Any]:
+    """Unique undirected edges of a triangle mesh, int64 (m, 2), smaller index first."""
+    f = np.asarray(faces, np.int64)
+    e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    e.sort(axis=1)
+    unique: NDArray[Any] = np.unique(e, axis=0)
+    return unique
+
+
+def border_vertices(labels: NDArray[Any], edges: NDArray[Any]) -> NDArray[Any]:
+    """Vertices on a border between two labels (one side only: the smaller label), bool (n,).
+
+    Parameters
+    ----------
+    labels : ndarray, shape (n,)
+        A label (or a 0/1 mask) per vertex.
+    edges : ndarray of int, shape (m, 2)
+    """
+    lab = np.asarray(labels)
+    a, b = lab[edges[:, 0]], lab[edges[:, 1]]
+    differ = a != b
+    mark = np.zeros(len(lab), bool)
+    low = np.where(a < b, edges[:, 0], edges[:, 1])[differ]
+    mark[low] = True
+    return mark
+
+
+def mesh_labels(template: Any, labels: str, hemi: str, mesh: Any) -> NDArray[Any] | None:
+    """The label of each vertex of `mesh` (the map mesh of label set `labels`), or None if unknown."""
+    from brainpainter.atlas.mesh import labels_at_vertices
+
+    entry = template.manifest["labels"][labels]["cortex"].get(hemi)
+    if entry is None:
+        return None
+    z = template._npz(entry["file"])
+    if "base" not in entry and "vertex_label" in z and len(z["vertex_label"]) == len(mesh.source_vertex):
+        return np.asarray(z["vertex_label"])
+    if "source_label" in z:
+        return np.asarray(labels_at_vertices(z["source_label"], mesh))
+    if "vertex_label" in z and len(z["vertex_label"]) == len(mesh.source_vertex):
+        return np.asarray(z["vertex_label"])
+    return None

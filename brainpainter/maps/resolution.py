@@ -1,0 +1,136 @@
+"""The fsaverage family: which surface a vertex count is, and coarse values brought onto fsaverage.
+
+fsaverage is an icosahedron subdivided 7 times (163842 vertices per
+hemisphere); fsaverageK (K = 3..6) stops after K subdivisions and vertex ``i``
+of fsaverageK *is* vertex ``i`` of fsaverage for ``i < n_K``. Every vertex
+added at level ``L+1`` is the midpoint of an edge of level ``L`` (its two
+*parents*, shipped in ``brainpainter/data/fsaverage_family.npz``, built by
+``tools/build_fsaverage_family.py``). Coarse data is brought up one level at a
+time, each new vertex taking the mean of its two parents: this is linear
+interpolation along the edges of the coarse icosahedron, i.e. piecewise-linear
+(barycentric) interpolation inside each coarse triangle; the shared vertices
+keep their values exactly. Label maps take the first parent's label instead.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+from importlib import resources
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from brainpainter.errors import BrainPainterError
+
+#: Vertices per hemisphere of each member of the fsaverage family.
+FAMILY = {642: "fsaverage3", 2562: "fsaverage4", 10242: "fsaverage5", 40962: "fsaverage6",
+          163842: "fsaverage"}
+N_FSAVERAGE = 163842
+#: Vertex counts of the icosahedron at each subdivision level 0..7.
+LEVELS = tuple(10 * 4**k + 2 for k in range(8))
+
+
+@cache
+def _family() -> dict[str, NDArray[Any]]:
+    with resources.files("brainpainter").joinpath("data/fsaverage_family.npz").open("rb") as fh:
+        with np.load(fh) as z:
+            return {k: z[k] for k in z.files}
+
+
+def surface_of(n: int, what: str = "map") -> str:
+    """The fsaverage family member with `n` vertices per hemisphere.
+
+    Raises
+    ------
+    BrainPainterError
+        When `n` fits none (a subject's own surface).
+    """
+    if n in FAMILY:
+        return FAMILY[n]
+    raise BrainPainterError(
+        f"{what} has {n} values per hemisphere, which fits no fsaverage surface "
+        f"({', '.join(f'{v} {k}' for k, v in sorted(FAMILY.items()))}); resample it to fsaverage with "
+        "FreeSurfer's mri_surf2surf (--trgsubject fsaverage).")
+
+
+def native(values: NDArray[Any], what: str = "map") -> NDArray[Any]:
+    """`values` as float32 (k images, n vertices), `n` checked to be a count of :data:`FAMILY`.
+
+    Maps are kept at their own resolution (a series of fsaverage5 images stays
+    small) and brought to fsaverage one image at a time, when drawn.
+    """
+    v = np.asarray(values, dtype=np.float32)
+    v = v[None] if v.ndim == 1 else v
+    surface_of(v.shape[1], what)
+    return v
+
+
+def to_fsaverage(values: NDArray[Any], categorical: bool = False, what: str = "map") -> NDArray[Any]:
+    """Values of any fsaverage-family surface on fsaverage.
+
+    Parameters
+    ----------
+    values : ndarray, shape (n,) or (k, n)
+        One value per vertex (``k`` images); ``n`` a count of :data:`FAMILY`.
+    categorical : bool
+        Labels: a new vertex takes its first parent's label (no averaging).
+
+    Returns
+    -------
+    ndarray of float32, shape (k, 163842)
+        NaN where a new vertex has no finite parent.
+    """
+    v = np.asarray(values, dtype=np.float32)
+    v = v[None] if v.ndim == 1 else v
+    n = v.shape[1]
+    surface_of(n, what)
+    if n == N_FSAVERAGE:
+        return v
+    parents = _family()["parents"].astype(np.int64)
+    out = np.full((v.shape[0], N_FSAVERAGE), np.nan, np.float32)
+    out[:, :n] = v
+    level = LEVELS.index(n)
+    for lo, hi in zip(LEVELS[level:-1], LEVELS[level + 1:], strict=True):
+        p = parents[lo - LEVELS[0]:hi - LEVELS[0]]
+        a, b = out[:, p[:, 0]], out[:, p[:, 1]]
+        if categorical:
+            out[:, lo:hi] = np.where(np.isnan(a), b, a)
+        else:
+            with np.errstate(invalid="ignore"):
+                out[:, lo:hi] = np.where(np.isnan(a), b, np.where(np.isnan(b), a, (a + b) / 2))
+    return out
+
+
+def masks(hemi: str) -> dict[str, NDArray[Any]]:
+    """fsaverage's ``cortex`` (not medial wall), ``sulc`` (> 0) and ``curv`` (> 0) masks, bool (163842,)."""
+    z = _family()
+    return {name: np.unpackbits(z[f"{hemi}_{name}"])[:N_FSAVERAGE].astype(bool)
+            for name in ("cortex", "sulc", "curv")}
+
+
+def map_mesh(template: Any, labels: str, hemi: str) -> Any:
+    """The template's cortex mesh that maps are drawn on: one vertex per fsaverage vertex it keeps.
+
+    The stored (not region-split) mesh of label set `labels` (or of the mesh
+    an overlay label set labels); its ``source_vertex`` indexes fsaverage.
+
+    Returns
+    -------
+    brainpainter.atlas.mesh.CortexMesh
+
+    Raises
+    ------
+    BrainPainterError
+        When the template is not made from fsaverage.
+    """
+    entry = template.manifest["labels"][labels]["cortex"].get(hemi)
+    if entry is None:
+        return template.cortex(labels, hemi)  # no cortex: an empty mesh
+    mesh = template.base_cortex(entry.get("base", labels), hemi)
+    sv = np.asarray(mesh.source_vertex)
+    if len(sv) and (sv.min() < 0 or sv.max() >= N_FSAVERAGE):
+        raise BrainPainterError(
+            f"template {template.name!r} is not made from fsaverage, so per-vertex maps cannot be drawn on "
+            "it; use the default template (--template fsaverage).")
+    return mesh

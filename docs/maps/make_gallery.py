@@ -1,0 +1,54 @@
+"""Make the images of docs/maps.md (small PNGs) from ../shared/data.
+
+    python docs/maps/make_gallery.py [../shared/data]
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import nibabel as nib
+import numpy as np
+from PIL import Image
+
+import brainpainter
+
+HERE = Path(__file__).resolve().parent
+SHARED = Path(sys.argv[1]) if len(sys.argv) > 1 else HERE.parents[2] / "shared" / "data"
+FS = SHARED / "freesurfer" / "subjects"
+SIZE = {"width": 400, "height": 300, "progress": False}
+
+
+def save(result: brainpainter.RenderResult, name: str) -> None:
+    images = list(result.images.values())
+    sheet = Image.new("RGB", (400 * len(images), 300), "white")
+    for k, img in enumerate(images):
+        sheet.paste(Image.fromarray(img[..., :3]), (400 * k, 0))
+    sheet.resize((sheet.width // 2, 150), Image.LANCZOS).save(HERE / f"{name}.png", optimize=True)
+
+
+def main() -> None:
+    fs5 = FS / "fsaverage5"
+    views = "lateral-left,medial-left"
+    # 1. morphometry ("curv" format) at fsaverage5, no option: signed -> symmetric RdBu_r
+    save(brainpainter.render(None, lh=fs5 / "surf" / "lh.sulc", views=views, **SIZE), "sulc_fsaverage5")
+    # 2. the same with a threshold over the sulcal underlay
+    save(brainpainter.render(None, lh=fs5 / "surf" / "lh.sulc", views=views, threshold=0.5, **SIZE),
+         "sulc_threshold")
+    # 3. a label map (.annot) drawn in its own colours
+    save(brainpainter.render(None, lh=FS / "fsaverage" / "label" / "lh.Yeo2011_7Networks_N1000.annot",
+                             views=views, **SIZE), "yeo7_annot")
+    # 4. DK borders over the thresholded map
+    save(brainpainter.render(None, lh=fs5 / "surf" / "lh.sulc", views=views, threshold=0.5, outline="dk",
+                             **SIZE), "outline_dk")
+    # 5. a single fsaverage5 vertex, on the inflated surface
+    one = np.zeros(10242)
+    xyz = nib.freesurfer.read_geometry(str(fs5 / "surf" / "lh.inflated"))[0]
+    one[int(np.argmin(xyz[:, 0]))] = 1.0
+    save(brainpainter.render({"lh": one}, views="lateral-left", surface="inflated", threshold=0.05,
+                             cmap="autumn", vmin=0, vmax=1, **SIZE), "single_vertex")
+
+
+if __name__ == "__main__":
+    main()
