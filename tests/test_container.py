@@ -110,6 +110,7 @@ def image(podman: list[str]) -> str:
     run([*podman, "build", "--format", "docker", "--network", "host",
          "-v", f"{CA_BUNDLE}:{CA_BUNDLE}:ro", "--build-arg", f"BASE_IMAGE={BASE}", "-t", IMAGE, "."],
         cwd=REPO, timeout=2400)
+    run([*podman, "image", "prune", "-f"])  # earlier builds' untagged layers: disk use stays bounded
     size = int(run([*podman, "image", "inspect", "--format", "{{.Size}}", IMAGE]).stdout)
     print(f"\ncontainer image built in {time.monotonic() - start:.0f} s; size {size / 1e9:.2f} GB")
     return IMAGE
