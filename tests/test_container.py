@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -140,6 +141,11 @@ def _host_render(folder: Path) -> None:
 
 
 def test_render_without_network_matches_the_host(podman, image, tmp_path):
+    lock = (REPO / "container" / "requirements-py311.txt").read_text()
+    pinned = re.search(r"^bpy==(\S+)$", lock, re.MULTILINE)
+    assert pinned and pinned[1] == metadata.version("bpy"), (
+        f"the image's lock pins bpy {pinned and pinned[1]}, this environment has {metadata.version('bpy')}: "
+        "run python container/lock.py > container/requirements-py311.txt here (where the tests pass)")
     host, box = tmp_path / "host", tmp_path / "container"
     host.mkdir()
     box.mkdir()
