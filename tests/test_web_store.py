@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 
 import pytest
@@ -148,6 +149,11 @@ def test_serve_command_refuses_a_data_dir_in_use_and_bad_limits(tmp_path):
         lines = proc.stderr.strip().splitlines()
         assert proc.returncode == 2 and lines[-1].startswith("error: ") and message in lines[-1], proc.stderr
         assert "Traceback" not in proc.stderr
+    # the container image gives the data folder (and host, port) as environment variables
+    env = {**os.environ, "BRAINPAINTER_SERVE_DATA_DIR": str(data)}
+    proc = subprocess.run([sys.executable, "-m", "brainpainter", "serve", "--port", "1"], env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and "another brainpainter serve is using --data-dir" in proc.stderr
     unlock_data_dir(data)
     help_text = subprocess.run([sys.executable, "-m", "brainpainter", "--help"], capture_output=True,
                                text=True, timeout=60).stdout

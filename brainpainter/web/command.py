@@ -13,10 +13,12 @@ CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 
 
 @click.command(context_settings=CONTEXT)
-@click.option("--host", default="127.0.0.1", show_default=True,
-              help="Address to listen on (0.0.0.0: every interface, e.g. a lab server).")
-@click.option("--port", default=8000, show_default=True, type=click.IntRange(0, 65535))
+@click.option("--host", default="127.0.0.1", show_default=True, envvar="BRAINPAINTER_SERVE_HOST",
+              show_envvar=True, help="Address to listen on (0.0.0.0: every interface, e.g. a lab server).")
+@click.option("--port", default=8000, show_default=True, type=click.IntRange(0, 65535),
+              envvar="BRAINPAINTER_SERVE_PORT", show_envvar=True)
 @click.option("--data-dir", type=click.Path(path_type=Path, file_okay=False), default=None,
+              envvar="BRAINPAINTER_SERVE_DATA_DIR", show_envvar=True,
               help="Where jobs, uploads and results are kept (default: the user data folder).")
 @click.option("--workers", default=1, show_default=True, type=click.IntRange(0, 64),
               help="Rendering worker processes (each holds a warm renderer, ~0.6 GB).")
