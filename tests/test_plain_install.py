@@ -47,7 +47,8 @@ def test_the_blocker_blocks(plain_env, tmp_path):
 
 @pytest.mark.parametrize("args", [["template", "info", "fsaverage"], ["template", "info"],
                                   ["template", "info", "fsaverage", "--json"], ["atlas", "list"],
-                                  ["atlas", "show", "dk"], ["check", str(ROOT / "examples" / "brainpainter_dk.csv")]],
+                                  ["atlas", "show", "dk"],
+                                  ["check", str(ROOT / "examples" / "brainpainter_dk.csv")]],
                          ids=" ".join)
 def test_reading_commands_need_no_builder_extra(plain_env, tmp_path, args):
     proc = _run(args, plain_env, tmp_path)
