@@ -155,6 +155,13 @@ def read_label_map(path: str | Path, hemi: str) -> LabelMap:
     if bad is not None:
         raise BrainPainterError(f"{path}: the region name {bad[:40]!r} contains control or text-direction "
                                 "characters; names may hold letters, digits, spaces and punctuation only")
+    folded: dict[str, str] = {}
+    for n in (n for n in names if not is_non_region(n)):
+        if (other := folded.setdefault(n.strip().casefold(), n)) != n:
+            raise BrainPainterError(
+                f"{path}: the region names {other!r} and {n!r} differ only in case, so brainpainter (which "
+                "matches region names ignoring case) cannot keep them apart; rename one in the colour table"
+            )
     if (labels < 0).any():  # vertices outside the colour table: a non-region entry
         fill = next((i for i, n in enumerate(names) if is_non_region(n)), None)
         if fill is None:

@@ -34,6 +34,9 @@ from brainpainter.io.files import read_input
 from brainpainter.io.transaction import check_replaceable, replace_folder
 
 NAME_RE = re.compile(r"^[A-Za-z][A-Za-z0-9_.-]{0,63}$")
+#: Names Windows reserves for devices, with any extension (``CON``, ``con.txt``, ``COM1.x``).
+RESERVED = frozenset({"CON", "PRN", "AUX", "NUL", "CONIN$", "CONOUT$",
+                      *(f"COM{i}" for i in range(10)), *(f"LPT{i}" for i in range(10))})
 
 
 def check_name(name: str, *, replace: bool = False) -> str:
@@ -63,6 +66,16 @@ def check_syntax(name: str) -> str:
         raise BrainPainterError(
             f"atlas name {name!r} is not allowed; use a letter followed by letters, digits, '_', '-' or "
             "'.' (at most 64), e.g. yeo7"
+        )
+    if str(name).split(".")[0].upper() in RESERVED:
+        raise BrainPainterError(
+            f"atlas name {name!r} is not allowed: Windows reserves {str(name).split('.')[0].upper()!r} for a "
+            "device (with any extension), so its folder could not be copied there; choose another name"
+        )
+    if str(name).endswith("."):
+        raise BrainPainterError(
+            f"atlas name {name!r} is not allowed: Windows drops a final '.', so it would be another name "
+            "there; remove the final '.'"
         )
     return name
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import re
+import unicodedata
 from dataclasses import dataclass, field
 
 from brainpainter.errors import BrainPainterError
@@ -90,6 +91,17 @@ def too_big(name: str, size: int, limit: int) -> BrainPainterError:
 _CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u061c\u200b-\u200f\u2028-\u202e\u2060-\u2069\ufeff]")
 
 
+def is_emoji_joiner(text: str, i: int) -> bool:
+    """Whether ``text[i]`` is a zero-width joiner inside an emoji sequence (👨‍👩‍👧), which is allowed."""
+    if text[i] != "\u200d" or i == 0 or i + 1 >= len(text):
+        return False
+    before = text[i - 2] if text[i - 1] == "\ufe0f" and i >= 2 else text[i - 1]
+    return all(unicodedata.category(c) in ("So", "Sk") for c in (before, text[i + 1]))
+
+
 def has_control(text: str) -> bool:
-    """Whether `text` holds control characters (terminal escapes, NUL, line breaks, bidi overrides)."""
-    return _CONTROL.search(text) is not None
+    """Whether `text` holds control characters (terminal escapes, NUL, line breaks, bidi overrides).
+
+    A zero-width joiner between two emoji is part of the emoji, not a control character.
+    """
+    return any(not is_emoji_joiner(text, m.start()) for m in _CONTROL.finditer(text))

@@ -158,7 +158,7 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     BrainPainterError
         The CLI's one-line message for the first problem.
     """
-    from brainpainter.io.output import safe_name
+    from brainpainter.io.output import file_key, safe_name
     from brainpainter.rendering.painter import resolve_hidden
     from brainpainter.rendering.run import prepare_run
 
@@ -178,7 +178,8 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
             f"most {max_images} per job. Choose fewer views or split the table."
         )
     names = [safe_name(i) for i in run.table.images]
-    clash = sorted({n for n in names if names.count(n) > 1})
+    keys = [file_key(n) for n in names]
+    clash = sorted({n for n, k in zip(names, keys, strict=True) if keys.count(k) > 1})
     if clash:
         raise BrainPainterError(
             f"image names {clash[:3]} become the same file name after removing unsafe characters; "
