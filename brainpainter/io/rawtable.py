@@ -7,6 +7,7 @@ reading them; the limit can be raised with the environment variable
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import unicodedata
@@ -25,6 +26,10 @@ EXCEL_SUFFIXES = (".xlsx", ".xlsm")
 Cell = str | float | int | None
 
 
+#: Largest BRAINPAINTER_MAX_INPUT_MB accepted (1 TB): beyond it a limit is no limit.
+MAX_LIMIT_MB = 1_000_000
+
+
 def max_bytes() -> int:
     """The input size limit in bytes (``BRAINPAINTER_MAX_INPUT_MB`` overrides :data:`MAX_BYTES`)."""
     text = os.environ.get("BRAINPAINTER_MAX_INPUT_MB", "").strip()
@@ -33,10 +38,14 @@ def max_bytes() -> int:
     try:
         mb = float(text)
     except ValueError:
+        mb = math.nan
+    if not 0 < mb <= MAX_LIMIT_MB:  # also NaN and infinity
         raise BrainPainterError(
-            f"BRAINPAINTER_MAX_INPUT_MB must be a number of megabytes; {text!r} was given."
-        ) from None
-    return int(mb * 1024 * 1024)
+            f"BRAINPAINTER_MAX_INPUT_MB must be a number of megabytes greater than 0 and at most "
+            f"{MAX_LIMIT_MB} (e.g. 64); {text[:40]!r} was given. Set it to a number, or unset it for the "
+            f"default of {MAX_BYTES // 2**20} MB."
+        )
+    return max(1, int(mb * 1024 * 1024))
 
 
 @dataclass

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from brainpainter.color.scale import ColourScale
+from brainpainter.color.scale import ColourScale, between, fraction
 from brainpainter.errors import BrainPainterError, choice_error
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -76,8 +76,8 @@ def resolve_ticks(scale: ColourScale, ticks: Sequence[float] | str | None) -> ND
         values.append(v)
     if not values:
         raise BrainPainterError(f"no tick value in {ticks!r}; give numbers, e.g. --ticks 0,1.5,3")
-    span = scale.vmax - scale.vmin
-    outside = [v for v in values if not scale.vmin - 1e-9 * span <= v <= scale.vmax + 1e-9 * span]
+    where = fraction(np.asarray(values, dtype=float), scale.vmin, scale.vmax)
+    outside = [v for v, t in zip(values, where, strict=True) if not -1e-9 <= t <= 1 + 1e-9]
     if outside:
         raise BrainPainterError(
             f"tick {outside[0]:g} lies outside the colour scale {scale.vmin:g}..{scale.vmax:g}; "
@@ -95,7 +95,7 @@ def bar_colors(scale: ColourScale, n: int = N_SAMPLES) -> tuple[NDArray[Any], ND
     values : ndarray of float, shape (n,)
     colors : ndarray of float, shape (n, 3), sRGB 0-1
     """
-    values = np.linspace(scale.vmin, scale.vmax, n)
+    values = between(scale.vmin, scale.vmax, np.linspace(0.0, 1.0, n))  # no overflow at +-1e308
     return values, np.clip(scale(values), 0.0, 1.0)
 
 
@@ -143,21 +143,26 @@ def draw_colorbar(
     if orientation not in ORIENTATIONS:
         raise choice_error("orientation", orientation, ORIENTATIONS)
     tick_values = resolve_ticks(scale, ticks)
+    # The bar is drawn in fractions of the scale (0..1), so any finite range (1e-320..1e-310,
+    # -1e308..1e308) draws without overflow; ticks are placed at their fractions, one per label.
+    where = np.clip(fraction(tick_values, scale.vmin, scale.vmax), 0.0, 1.0)
+    labels = [format_tick(t) for t in tick_values]
+    keep = [i for i in range(len(labels)) if i == 0 or labels[i] != labels[i - 1]]
+    where, labels = where[keep], [labels[i] for i in keep]
     _, colors = bar_colors(scale)
     horizontal = orientation == "horizontal"
     image = colors[None, :, :] if horizontal else colors[::-1, None, :]
-    extent = (scale.vmin, scale.vmax, 0.0, 1.0) if horizontal else (0.0, 1.0, scale.vmin, scale.vmax)
-    ax.imshow(image, extent=extent, aspect="auto", interpolation="nearest", origin="upper")
+    ax.imshow(image, extent=(0.0, 1.0, 0.0, 1.0), aspect="auto", interpolation="nearest", origin="upper")
     if horizontal:
-        ax.set_xlim(scale.vmin, scale.vmax)
+        ax.set_xlim(0.0, 1.0)
         ax.set_yticks([])
-        ax.set_xticks(tick_values, [format_tick(t) for t in tick_values])
+        ax.set_xticks(where, labels)
         axis: Axis = ax.xaxis
     else:
-        ax.set_ylim(scale.vmin, scale.vmax)
+        ax.set_ylim(0.0, 1.0)
         ax.set_xticks([])
         ax.yaxis.tick_right()
-        ax.set_yticks(tick_values, [format_tick(t) for t in tick_values])
+        ax.set_yticks(where, labels)
         axis = ax.yaxis
     ax.tick_params(labelsize=fontsize - 1, length=2.5, width=0.6, pad=1.5, colors=color)
     for spine in ax.spines.values():

@@ -554,6 +554,16 @@ INPROCESS: list[Case] = [
                                                   "rh.a.annot": _annot_names(b"unknown", b"VIS", b"vis", b"Vis")},
          ["add", "net", "--annot", "lh=lh.a.annot", "--annot", "rh=rh.a.annot"], "'VIS' and 'vis' differ only in case",
          command="atlas"),
+    # -- limits from environment variables: one line for any text ---------------------------------------------
+    *[Case(f"max-input-mb-{cid}", {"in.csv": GOOD}, ["in.csv"], "BRAINPAINTER_MAX_INPUT_MB must be a number of megabytes greater than 0",
+           env={"BRAINPAINTER_MAX_INPUT_MB": value})
+      for cid, value in (("inf", "inf"), ("nan", "nan"), ("minus-inf", "-inf"), ("negative", "-1"), ("zero", "0"),
+                         ("overflow", "1e400"), ("huge", "1e12"))],
+    _render(["--out", "o", "--views", "lateral-left"], "BRAINPAINTER_MAX_INPUT_MB must be a number", "render-max-input-mb-nan",
+            env={"BRAINPAINTER_MAX_INPUT_MB": "nan"}),
+    *[_render(["--out", "o"], "is not host:port", f"scheduler-env-{cid}", env={"BRAINPAINTER_SCHEDULER": value})
+      for cid, value in (("nan", "nan"), ("negative", "-1"), ("no-port", "tcp://host"), ("text-port", "host:abc"))],
+    _render(["--out", "o", "--scheduler", "inf"], "is not host:port", "scheduler-option-inf"),
     # -- finite numbers only, checked before anything is written -----------------------------------------------
     _render(["--out", "o", "--vmin", "nan"], "is not a finite number", "vmin-nan"),
     _render(["--out", "o", "--vmax", "inf"], "is not a finite number", "vmax-inf"),
