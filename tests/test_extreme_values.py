@@ -85,7 +85,7 @@ def test_figure_colour_bar_over_an_extreme_range_is_readable(tmp_path, monkeypat
     args = ["figure", "in.csv", *[a.replace("{tiny}", str(tiny)) for a in RENDER], "--out", "f.png",
             *scale_args]
     with stand_in("solid"):
-        code, out, err = invoke(args)
+        code, _out, err = invoke(args)
     assert code == 0, err
     assert (tmp_path / "f.png").stat().st_size > 1000
 
@@ -111,6 +111,6 @@ def test_movie_through_extreme_values(tmp_path, monkeypatch, tiny):
     args = ["movie", "in.csv", *[a.replace("{tiny}", str(tiny)) for a in RENDER], "--out", "m.gif",
             "--cmap", "viridis", "--vmin", "-1e308", "--vmax", "1e308", "--frames-per-step", "3"]
     with stand_in("solid"):
-        code, out, err = invoke(args)
+        code, _out, err = invoke(args)
     assert code == 0, err
     assert (tmp_path / "m.gif").stat().st_size > 1000
