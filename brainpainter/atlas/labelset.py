@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import json
 import re
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -134,15 +135,16 @@ def read_label_map(path: str | Path, hemi: str) -> LabelMap:
     if named is not None and named != hemi:
         raise _swapped(path, hemi, named, "its file name")
     try:
-        if low.endswith(".annot"):
-            from nibabel.freesurfer import read_annot  # type: ignore[attr-defined]
+        with warnings.catch_warnings(action="ignore"):  # nibabel's parse warnings: the error says it
+            if low.endswith(".annot"):
+                from nibabel.freesurfer import read_annot  # type: ignore[attr-defined]
 
-            labels, ctab, raw_names = read_annot(str(path))  # type: ignore[no-untyped-call]
-            names = [n.decode("utf-8", "replace") if isinstance(n, bytes) else str(n) for n in raw_names]
-            colors = np.asarray(ctab, dtype=np.int64)[:, :3]
-            labels = np.asarray(labels, dtype=np.int64)
-        else:
-            labels, names, colors = _read_gifti_labels(path, hemi)
+                labels, ctab, raw_names = read_annot(str(path))  # type: ignore[no-untyped-call]
+                names = [n.decode("utf-8", "replace") if isinstance(n, bytes) else str(n) for n in raw_names]
+                colors = np.asarray(ctab, dtype=np.int64)[:, :3]
+                labels = np.asarray(labels, dtype=np.int64)
+            else:
+                labels, names, colors = _read_gifti_labels(path, hemi)
     except BrainPainterError:
         raise
     except Exception as exc:  # nibabel raises ValueError, struct.error, OSError, ExpatError...

@@ -143,9 +143,34 @@ def _one_line(text: str, limit: int = 500) -> str:
     return line if len(line) <= limit else line[: limit - 3] + "..."
 
 
+@contextmanager
+def warnings_on_stdout() -> Iterator[None]:
+    """A Python warning from a library is one ``warning: ...`` line on stdout, never lines on stderr.
+
+    stderr is kept for the one error line; a warning shown there as
+    ``file:line: UserWarning: ...`` plus its source line made a bad input's
+    error three lines.
+    """
+    import warnings
+
+    def show(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+             file: Any = None, line: str | None = None) -> None:
+        try:
+            click.echo(f"warning: {_one_line(str(message), 300)}")
+        except OSError:
+            pass
+
+    saved = warnings.showwarning
+    warnings.showwarning = show
+    try:
+        yield
+    finally:
+        warnings.showwarning = saved
+
+
 def run(group: click.Group, argv: Sequence[str] | None = None, prog_name: str = "brainpainter") -> int:
     """Run `group` with `argv`; returns the exit code (see the module docstring)."""
-    with signals_as_exceptions(), private_temp():
+    with signals_as_exceptions(), private_temp(), warnings_on_stdout():
         try:
             group.main(args=list(argv) if argv is not None else None, prog_name=prog_name,
                        standalone_mode=False)

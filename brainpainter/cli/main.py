@@ -16,6 +16,7 @@ from typing import Any
 import click
 
 from brainpainter.cli.options import (
+    OutPath,
     input_options,
     option_group,
     parallel_options,
@@ -191,7 +192,7 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, 
 @click.option("--description", default="", help="One-line description.")
 @click.option("--citation", default="", help="What to cite.")
 @click.option("--replace", is_flag=True, help="Replace your atlas of the same name.")
-@click.option("--out", "out", type=click.Path(path_type=Path, file_okay=False), default=None,
+@click.option("--out", "out", type=OutPath(path_type=Path, file_okay=False), default=None,
               help="Write the atlas folder to OUT (e.g. into an atlas plugin) instead of adding it.")
 def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: Path | None, lut: Path | None,
               space: str, own_template: bool, template: str, title: str, description: str, citation: str,
@@ -252,8 +253,9 @@ def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: P
 def atlas_remove(name: str) -> None:
     """Remove atlas NAME that you added with 'atlas add'."""
     from brainpainter.atlas import user as user_atlases
+    target = user_atlases.link_target(name)
     folder = user_atlases.remove(name)
-    click.echo(f"atlas {name!r} removed ({folder} deleted)")
+    click.echo(user_atlases.removal_message(name, folder, target))
 
 
 # -- plugins ------------------------------------------------------------------
@@ -350,7 +352,7 @@ def check(inputs: tuple[Path, ...], atlas: str | None, image_column: str | None,
 @cli.command(context_settings=CONTEXT)
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
                 type=click.Path(path_type=Path, dir_okay=False))
-@click.option("--out", "-o", required=True, type=click.Path(path_type=Path, file_okay=False),
+@click.option("--out", "-o", required=True, type=OutPath(path_type=Path, file_okay=False),
               help="Output folder for {image}_{view}.png and manifest.json.")
 @click.option("--rows", default=None,
               help="Image names to render, comma-separated, in this order (default: all rows).")

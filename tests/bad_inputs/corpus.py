@@ -564,6 +564,21 @@ INPROCESS: list[Case] = [
     *[_render(["--out", "o"], "is not host:port", f"scheduler-env-{cid}", env={"BRAINPAINTER_SCHEDULER": value})
       for cid, value in (("nan", "nan"), ("negative", "-1"), ("no-port", "tcp://host"), ("text-port", "host:abc"))],
     _render(["--out", "o", "--scheduler", "inf"], "is not host:port", "scheduler-option-inf"),
+    # -- paths: an empty --out is a mistake, not the current folder ----------------------------------------------
+    _render(["--out", ""], "is empty, which would mean the current folder", "render-out-empty"),
+    _render(["--out", "  "], "is empty, which would mean the current folder", "render-out-blank"),
+    _figure(["--out", ""], "is empty, which would mean the current folder", "figure-out-empty"),
+    _movie(["--out", ""], "is empty, which would mean the current folder", "movie-out-empty"),
+    Case("export-out-empty", {"in.csv": GOOD}, ["in.csv", "--row", "A", "--out", ""],
+         "is empty, which would mean the current folder", command="export"),
+    Case("atlas-add-out-empty", {"c.toml": LOBES, "lh.a.annot": _annot, "rh.a.annot": _annot},
+         ["add", "net", "--annot", "lh=lh.a.annot", "--annot", "rh=rh.a.annot", "--out", ""],
+         "is empty, which would mean the current folder", command="atlas"),
+    Case("annot-gifti-claims-two-arrays",
+         {"lh.a.label.gii": b'<?xml version="1.0"?><GIFTI Version="1.0" NumberOfDataArrays="2"></GIFTI>',
+          "rh.a.annot": _annot},
+         ["add", "net", "--annot", "lh=lh.a.label.gii", "--annot", "rh=rh.a.annot"], "holds no data array",
+         command="atlas"),
     # -- finite numbers only, checked before anything is written -----------------------------------------------
     _render(["--out", "o", "--vmin", "nan"], "is not a finite number", "vmin-nan"),
     _render(["--out", "o", "--vmax", "inf"], "is not a finite number", "vmax-inf"),
