@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import sys
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -434,6 +436,10 @@ def main(argv: list[str] | None = None) -> None:
     from brainpainter.cli.guard import run
 
     code = run(cli, join_split_lists(sys.argv[1:] if argv is None else list(argv)))
+    if argv is None and threading.current_thread() is threading.main_thread():
+        # the run is over (published or cleaned up): a signal now must not claim otherwise
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
     if argv is None and "bpy" in sys.modules:
         # Blender's own exit handlers (bpy 5.1+) write a shader cache under ~/.cache after the run's
         # private cache folder is gone; the run is complete and published, so leave without them.

@@ -36,6 +36,7 @@ from brainpainter.rendering.parallel import (
     drive,
     paint_items,
     prepare_worker,
+    worker_temp,
 )
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -66,6 +67,9 @@ class PainterPlugin(WorkerPlugin):
         self.warm: WarmPainter | None = None
 
     def setup(self, worker: Any) -> None:
+        local = getattr(worker, "local_directory", None)
+        if local:  # Dask removes the worker's folder when it closes, also after a kill of the worker
+            worker_temp(os.path.join(local, "brainpainter-tmp"))
         prepare_worker(self.threads)
         self.warm = WarmPainter(self.spec)
 

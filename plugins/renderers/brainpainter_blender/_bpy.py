@@ -18,6 +18,7 @@ from types import ModuleType
 from typing import IO
 
 from brainpainter.errors import BrainPainterError
+from brainpainter.rendering.interrupts import held
 
 #: Serialises every use of bpy in this process (Blender is not thread-safe).
 LOCK = threading.RLock()
@@ -39,7 +40,7 @@ def import_bpy() -> ModuleType:
         if "bpy" in _state:
             return _state["bpy"]  # type: ignore[return-value]
         try:
-            with quiet():
+            with quiet(), held():
                 import bpy
         except ImportError as exc:
             reason = " ".join(str(exc).split())
@@ -48,7 +49,7 @@ def import_bpy() -> ModuleType:
                 f"({reason}); install it with 'pip install bpy' (bpy 4.2-5.0 needs Python 3.11)."
             ) from None
         if bpy.app.background:  # never wipe a user's scene inside the Blender application
-            with quiet():
+            with quiet(), held():
                 bpy.ops.wm.read_factory_settings(use_empty=True)
         _state["bpy"] = bpy
         return bpy
