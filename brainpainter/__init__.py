@@ -74,6 +74,11 @@ def _version() -> str:
         return "0+unknown"
 
 
+def __dir__() -> list[str]:
+    """The public names (tab completion), though most are imported only on first use."""
+    return sorted({*__all__, *(name for name in globals() if name.startswith("_"))})
+
+
 def __getattr__(name: str) -> Any:
     if name == "__version__":
         globals()["__version__"] = value = _version()

@@ -377,9 +377,11 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
     click.echo(f"input: {summary_line(s)}")
     for line in input_warnings(s):
         click.echo(f"warning: {line}")
+    rendered = len({f["row"] for f in result.manifest["files"]})  # --rows may choose some of the rows
+    of = f" of {s['n_images']}" if rendered != s["n_images"] else ""
     click.echo(
         f"{len(result.files)} image(s) written to {out} "
-        f"({s['n_images']} row(s); {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
+        f"({rendered} row(s){of}; {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
         f"{len(s['unmatched_columns'])} unmatched column(s))"
     )
     w = result.workers

@@ -86,6 +86,11 @@ class ColourScale:
     )
     name: str = ""
 
+    def __repr__(self) -> str:
+        """One short line (the control colours are many)."""
+        center = "" if self.center is None else f", center={self.center:g}"
+        return f"<ColourScale {self.name or 'custom'!r} {self.vmin:g}..{self.vmax:g}{center}>"
+
     def __post_init__(self) -> None:
         for what, v in (("vmin", self.vmin), ("vmax", self.vmax), ("center", self.center)):
             if v is not None and not np.isfinite(v):

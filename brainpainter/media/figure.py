@@ -37,6 +37,7 @@ from brainpainter.media.layout import FigureKwargs, FigureOptions, compose_figur
 from brainpainter.media.outfile import check_out_file
 from brainpainter.rendering.options import Options, RenderKwargs, take
 from brainpainter.rendering.run import make_runner, paint, prepare_run
+from brainpainter.rendering.views import ImagesByView
 from brainpainter.table.rows import select_rows
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -78,6 +79,12 @@ class FigureResult:
     images: dict[tuple[str, str], NDArray[Any]]
     colorbar_ax: Axes
     image_axes: dict[tuple[str, str], Axes] = field(default_factory=dict)
+
+    def __repr__(self) -> str:
+        """One short line."""
+        w, h = self.figure.get_size_inches()
+        where = f" written to {self.path}" if self.path is not None else ""
+        return f"<FigureResult: {len(self.images)} render(s), {w:.2f} x {h:.2f} in{where}>"
 
     def _repr_png_(self) -> bytes:  # notebooks
         buf = io.BytesIO()
@@ -171,7 +178,7 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     with FileTransaction(path) if path is not None else nullcontext() as tx:
         with make_runner(painter, checked.scene.template, checked.runner, n_items=len(plan)) as runner, \
                 tqdm(total=len(plan), unit="img", desc="rendering", disable=not progress) as bar:
-            images: dict[tuple[str, str], NDArray[Any]] = {}
+            images: dict[tuple[str, str], NDArray[Any]] = ImagesByView()
             for (i, view), pixels in paint(run, runner, plan):
                 images[(table.images[i], view.name)] = pixels
                 bar.update(1)

@@ -166,6 +166,12 @@ class MovieResult:
     key_times: list[float]
     seconds: float
 
+    def __repr__(self) -> str:
+        """One short line."""
+        w, h = self.frame_size
+        return (f"<MovieResult: {self.path}, {self.n_frames} frames of {w}x{h} at {self.fps:g} fps, "
+                f"{len(self.keys)} key frame(s)>")
+
     @property
     def duration(self) -> float:
         """Length of the movie in seconds."""

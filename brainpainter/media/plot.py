@@ -60,6 +60,11 @@ class PlotResult:
     image: NDArray[Any]
     scale: ColourScale
 
+    def __repr__(self) -> str:
+        """One short line."""
+        h, w = self.image.shape[:2]
+        return f"<PlotResult: {w}x{h} render, scale {self.scale!r}>"
+
 
 def plot(values: Any, view: str = "lateral-left", *, ax: Axes | None = None, row: str | int = 0,
          atlas: Atlas | str | None = None, colorbar: bool = True, label: str | None = None,

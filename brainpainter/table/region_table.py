@@ -99,6 +99,11 @@ class RegionTable:
     notes: tuple[str, ...] = field(default_factory=tuple)
     sources: tuple[str, ...] = ()
 
+    def __repr__(self) -> str:
+        """One short line (the values are many)."""
+        return (f"<RegionTable {self.source!r}: {len(self.images)} image(s) x {len(self.regions)} region(s) "
+                f"of atlas {self.atlas.name!r}>")
+
     @property
     def columns(self) -> dict[str, tuple[str, ...]]:
         """Every region-like input name and the region keys it set (empty tuple: not a region)."""
