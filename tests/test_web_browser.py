@@ -142,8 +142,9 @@ def test_page_as_a_new_user_finds_it(served, tmp_path):
             assert not page.locator("#preview").is_visible()  # no broken-image icon before a preview
             assert not page.locator("#preview-bar").is_visible()
             api = page.evaluate("fetch('/openapi.json').then(r => r.json())")["components"]["schemas"]
-            for field, model in (("frames_per_step", "MovieParams"), ("hold", "MovieParams"), ("fps", "MovieParams"),
-                                 ("dpi", "FigureParams"), ("font_size", "FigureParams")):
+            fields = (("frames_per_step", "MovieParams"), ("hold", "MovieParams"), ("fps", "MovieParams"),
+                      ("dpi", "FigureParams"), ("font_size", "FigureParams"))
+            for field, model in fields:
                 default = api[model]["properties"][field]["default"]
                 assert float(page.locator(f"#{field}").input_value()) == default, field
             easing = api["MovieParams"]["properties"]["easing"]["default"]
