@@ -256,3 +256,18 @@ def test_render_summary_counts_the_rows_rendered(tmp_path, monkeypatch, tiny, co
     code, out, err = invoke(["render", "in.csv", "--out", "o2", "--renderer", counting, "--template",
                              str(tiny), "--views", "lateral-left", "--size", "32x32", "-q"])
     assert code == 0 and "3 image(s) written to o2 (3 row(s);" in out, out
+
+
+@pytest.mark.parametrize("command, out", [("figure", "f.png"), ("movie", "m.gif")])
+def test_figures_and_movies_of_names_in_any_script(tmp_path, monkeypatch, tiny, counting, command, out):
+    """Names whose characters the fonts lack (CJK, Arabic, emoji) draw without a flood of glyph warnings
+    (under pytest: errors) and the file is written."""
+    from bad_inputs.corpus import csv
+    from test_bad_inputs_inprocess import invoke
+
+    (tmp_path / "in.csv").write_bytes(csv("Image-name-unique,Left-insula", "患者 1,1", "مريض,2", "🧠,3"))
+    monkeypatch.chdir(tmp_path)
+    code, _out, err = invoke([command, "in.csv", "--out", out, "--renderer", counting, "--template",
+                              str(tiny), "--views", "lateral-left", "--size", "32x32", "-q"])
+    assert code == 0, err
+    assert (tmp_path / out).stat().st_size > 500

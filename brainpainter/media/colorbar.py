@@ -13,8 +13,10 @@ frames). matplotlib is imported inside the functions only.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+import functools
+import warnings
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any, TypeVar, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -27,11 +29,28 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axis import Axis
     from matplotlib.figure import Figure
 
+F = TypeVar("F", bound=Callable[..., Any])
+
 #: Samples along the bar; enough for a smooth ramp at print resolution.
 N_SAMPLES = 512
 NAN_LABEL = "no data"
 MISSING_LABEL = "not measured"
 ORIENTATIONS = ("horizontal", "vertical")
+
+
+def quiet_glyphs(func: F) -> F:
+    """Run `func` without matplotlib's "Glyph ... missing from font" warnings.
+
+    Image names in any script (``患者 1``) are drawn in figures and movies; where the installed fonts
+    lack a glyph matplotlib warns once per character. The file is still right (the name is in its
+    file name and manifest); the warnings would flood the output or, where warnings are errors, stop it.
+    """
+    @functools.wraps(func)
+    def run(*args: Any, **kwargs: Any) -> Any:
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message=r"Glyph \d+ .*missing from", category=UserWarning)
+            return func(*args, **kwargs)
+    return cast(F, run)
 
 
 def format_tick(value: float) -> str:

@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.color.scale import ColourScale
+from brainpainter.media.colorbar import quiet_glyphs
 from brainpainter.media.drawn import common_crop, content_box, swatches_needed
 from brainpainter.media.layout import FigureKwargs, FigureOptions, compose_figure
 from brainpainter.media.outfile import check_out_file
@@ -126,6 +127,7 @@ def figure_bytes(fig: Figure, path: Path, dpi: float, transparent: bool = False)
     return buf.getvalue()
 
 
+@quiet_glyphs
 def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path | None = None,
                 rows: Iterable[str | int] | str | None = None, progress: bool = True,
                 **options: Unpack[MakeFigureKwargs]) -> FigureResult:

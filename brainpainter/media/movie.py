@@ -38,6 +38,7 @@ from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.errors import BrainPainterError
+from brainpainter.media.colorbar import quiet_glyphs
 from brainpainter.media.drawn import swatches_needed
 from brainpainter.media.encode import GIF_PALETTE_FRAMES, MAX_GIF_FRAMES, _GifWriter, _Mp4Writer
 from brainpainter.media.frames import FrameComposer, orbit_views
@@ -178,6 +179,7 @@ class MovieResult:
         return self.n_frames / self.fps
 
 
+@quiet_glyphs
 def make_movie(data: Any, atlas: Atlas | str | None = None, *, out: str | Path,
                rows: Iterable[str | int] | str | None = None,
                progress: bool | Callable[[int, int], None] = True,

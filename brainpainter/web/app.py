@@ -245,7 +245,8 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
             raise BrainPainterError(f"a movie needs at least 2 rows (key frames); the table has {n_rows}.")
         params = body.figure.model_dump() if body.kind == "figure" else (
             body.movie.model_dump() if body.kind == "movie" else {})
-        total = {"images": n_rows * n_views, "movie": body.movie.n_frames(n_rows)}.get(body.kind, 1)
+        total = (n_rows * n_views if body.kind == "images" else
+                 body.movie.n_frames(n_rows) if body.kind == "movie" else 1)  # movie: progress per frame
         try:
             job_id = await run_in_threadpool(
                 store.submit, _client(request), body.kind, body.options.model_dump(), params, name, data,
