@@ -145,6 +145,7 @@ def test_path_like_image_names_stay_inside_the_output_folder(tmp_path, plugin_en
 SCRIPTS = {
     "患者 1": "患者_1", "患者 2": "患者_2", "مريض-٣": "مريض-٣", "José": "José", "Ünïcødé": "Ünïcødé",
     "Ελένη": "Ελένη", "🧠": "🧠", "🧠🔥": "🧠🔥", "👨\u200d👩\u200d👧": "👨\u200d👩\u200d👧", "नमस्ते": "नमस्ते",
+    "CON": "CON_", "nul.txt": "nul_.txt",  # names Windows reserves, also with an extension
 }
 
 

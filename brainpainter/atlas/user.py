@@ -31,12 +31,11 @@ from brainpainter.atlas.registry import CONFIG_FILE, atlases_dir, load_atlas_con
 from brainpainter.atlas.template import load_template
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.io.files import read_input
+from brainpainter.io.output import RESERVED_NAMES
 from brainpainter.io.transaction import check_replaceable, replace_folder
 
 NAME_RE = re.compile(r"^[A-Za-z][A-Za-z0-9_.-]{0,63}$")
-#: Names Windows reserves for devices, with any extension (``CON``, ``con.txt``, ``COM1.x``).
-RESERVED = frozenset({"CON", "PRN", "AUX", "NUL", "CONIN$", "CONOUT$",
-                      *(f"COM{i}" for i in range(10)), *(f"LPT{i}" for i in range(10))})
+RESERVED = RESERVED_NAMES
 
 
 def check_name(name: str, *, replace: bool = False) -> str:

@@ -22,6 +22,9 @@ MAX_IMAGE_NAME = 1000
 #: Longest file-name stem (UTF-8 bytes) made from an image name: with the view and ``.png`` it stays far
 #: below the 255 bytes of common file systems (143 on eCryptfs). Longer stems are cut and end in a hash.
 MAX_STEM_BYTES = 100
+#: Names Windows reserves for devices, with any extension (``CON``, ``con.txt``, ``COM1.x``).
+RESERVED_NAMES = frozenset({"CON", "PRN", "AUX", "NUL", "CONIN$", "CONOUT$",
+                            *(f"COM{i}" for i in range(10)), *(f"LPT{i}" for i in range(10))})
 #: Characters kept besides letters, digits, marks and symbols (emoji).
 _KEEP = frozenset("._+-")
 
@@ -45,7 +48,8 @@ def safe_name(name: str) -> str:
     becomes ``"患者_1"``. A stem longer than ``MAX_STEM_BYTES`` UTF-8 bytes is
     cut at a character boundary and ends in ``-`` and 8 hex digits of the
     name's SHA-256, so two long names that start alike stay distinct.
-    A name with nothing safe in it becomes ``"image"``.
+    A name with nothing safe in it becomes ``"image"``; one that Windows reserves
+    (``CON``, ``NUL``, ``COM1``...) gets a final ``_``.
     """
     text = unicodedata.normalize("NFC", str(name))
     parts: list[str] = []
@@ -55,6 +59,9 @@ def safe_name(name: str) -> str:
         elif not parts or parts[-1] != "_":
             parts.append("_")
     stem = "".join(parts).strip("._") or "image"
+    first, dot, rest = stem.partition(".")
+    if first.upper() in RESERVED_NAMES:  # "CON" -> "CON_", "nul.txt" -> "nul_.txt": files Windows can hold
+        stem = f"{first}_{dot}{rest}"
     if len(stem.encode("utf-8")) <= MAX_STEM_BYTES:
         return stem
     digest = hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()[:8]
