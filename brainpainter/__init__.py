@@ -10,13 +10,7 @@ and templates are loaded on first use through entry-point registries.
 
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version
 from typing import TYPE_CHECKING, Any
-
-try:
-    __version__ = version("brainpainter")
-except PackageNotFoundError:  # running from a source tree
-    __version__ = "0+unknown"
 
 __all__ = [
     "BrainPainterError",
@@ -39,6 +33,7 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
+    __version__: str
     from brainpainter.atlas.registry import get_atlas, list_atlases
     from brainpainter.atlas.template import load_template
     from brainpainter.color.scale import make_scale
@@ -75,7 +70,25 @@ _LAZY = {
 }
 
 
+def _version() -> str:
+    """The installed version (read on first use: importlib.metadata takes a while to import)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("brainpainter")
+    except PackageNotFoundError:  # running from a source tree
+        return "0+unknown"
+
+
+def __dir__() -> list[str]:
+    """The public names (tab completion), though most are imported only on first use."""
+    return sorted({*__all__, *(name for name in globals() if name.startswith("_"))})
+
+
 def __getattr__(name: str) -> Any:
+    if name == "__version__":
+        globals()["__version__"] = value = _version()
+        return value
     if name in _LAZY:
         import importlib
 

@@ -1,5 +1,5 @@
-"""``python -m brainpainter`` runs the CLI."""
+"""``python -m brainpainter`` runs the CLI (signals handled from the first moment: cli/entry.py)."""
 
-from brainpainter.cli.main import main
+from brainpainter.cli.entry import main
 
 main()

@@ -195,3 +195,79 @@ def test_template_build_names_the_builder_extra_when_missing(monkeypatch, tmp_pa
     assert exit_.value.code == 2 and err.count("\n") == 1
     assert "pymeshlab" in err and "pip install 'brainpainter[builder]'" in err
     assert not (tmp_path / "t").exists()
+
+
+def test_dir_lists_the_public_names_for_tab_completion():
+    names = dir(brainpainter)
+    assert set(brainpainter.__all__) <= set(names)
+    assert not {"Any", "TYPE_CHECKING", "annotations"} & set(names)
+    assert "__version__" in names and brainpainter.__version__
+
+
+def test_reprs_of_results_are_one_short_line(tiny, counting, tmp_path):
+    from matplotlib.figure import Figure
+
+    from brainpainter.media.movie import MovieResult
+
+    result = brainpainter.render({"Left-insula": [1.0, 2.0, 3.0]}, "dk", template=tiny, renderer=counting,
+                                 views="lateral-left,medial-left", width=32, height=32, progress=False)
+    written = brainpainter.render({"Left-insula": [1.0, 2.0]}, "dk", template=tiny, renderer=counting,
+                                  views="lateral-left", width=32, height=32, out=tmp_path / "o",
+                                  progress=False)
+    fig = brainpainter.figure({"Left-insula": [1.0, 2.0]}, "dk", template=tiny, renderer=counting,
+                              views="lateral-left", width=32, height=32, progress=False)
+    ax = Figure().add_subplot()
+    plotted = brainpainter.plot(VALUES, view="lateral-left", ax=ax, atlas="dk", template=tiny,
+                                renderer=counting, width=40, height=30)
+    movie = MovieResult(tmp_path / "m.mp4", 50, (640, 480), 24.0, [f"k{i}" for i in range(500)],
+                        list(range(500)), 1.0)
+    for obj, start in ((result, "<RenderResult: 6 image(s) of 32x32"), (written, "<RenderResult: 2 file(s)"),
+                       (fig, "<FigureResult: 2 render(s)"), (plotted, "<PlotResult: "),
+                       (movie, "<MovieResult: "), (result.scale, "<ColourScale "),
+                       (result.table, "<RegionTable 'dict': 3 image(s) x 1 region(s)")):
+        text = repr(obj)
+        assert "\n" not in text and len(text) < 200 and text.startswith(start), text
+
+
+def test_a_free_camera_is_found_under_the_name_the_user_gave(tiny, counting):
+    result = brainpainter.render({"Left-insula": [1.0, 2.0]}, "dk", template=tiny, renderer=counting,
+                                 views="lateral-left,camera:90:0,camera:135:30:1.2", width=32, height=32,
+                                 progress=False)
+    image = result.images[("1", "camera:90:0")]
+    assert image is result.images[("1", "az90-el0")]  # stored under the name its file gets
+    assert result.images[("2", "camera:135:30:1.2")].shape == (32, 32, 4)
+    assert ("1", "camera:90:0") in result.images and ("1", "camera:91:0") not in result.images
+    assert result.images[(1, "Lateral-Left")] is result.images[("1", "lateral-left")]
+    with pytest.raises(KeyError):
+        result.images[("3", "camera:90:0")]
+
+
+def test_render_summary_counts_the_rows_rendered(tmp_path, monkeypatch, tiny, counting):
+    from bad_inputs.corpus import HEADER, csv
+    from test_bad_inputs_inprocess import invoke
+
+    (tmp_path / "in.csv").write_bytes(csv(HEADER.strip(), "A,1,2", "B,2,3", "C,3,4"))
+    monkeypatch.chdir(tmp_path)
+    code, out, err = invoke(["render", "in.csv", "--out", "o", "--renderer", counting, "--template",
+                             str(tiny), "--views", "lateral-left,medial-left", "--size", "32x32",
+                             "--rows", "B", "-q"])
+    assert code == 0, err
+    assert "2 image(s) written to o (1 row(s) of 3;" in out, out
+    code, out, err = invoke(["render", "in.csv", "--out", "o2", "--renderer", counting, "--template",
+                             str(tiny), "--views", "lateral-left", "--size", "32x32", "-q"])
+    assert code == 0 and "3 image(s) written to o2 (3 row(s);" in out, out
+
+
+@pytest.mark.parametrize("command, out", [("figure", "f.png"), ("movie", "m.gif")])
+def test_figures_and_movies_of_names_in_any_script(tmp_path, monkeypatch, tiny, counting, command, out):
+    """Names whose characters the fonts lack (CJK, Arabic, emoji) draw without a flood of glyph warnings
+    (under pytest: errors) and the file is written."""
+    from bad_inputs.corpus import csv
+    from test_bad_inputs_inprocess import invoke
+
+    (tmp_path / "in.csv").write_bytes(csv("Image-name-unique,Left-insula", "患者 1,1", "مريض,2", "🧠,3"))
+    monkeypatch.chdir(tmp_path)
+    code, _out, err = invoke([command, "in.csv", "--out", out, "--renderer", counting, "--template",
+                              str(tiny), "--views", "lateral-left", "--size", "32x32", "-q"])
+    assert code == 0, err
+    assert (tmp_path / out).stat().st_size > 500

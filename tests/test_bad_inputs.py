@@ -26,7 +26,9 @@ folder exactly as it was.
 from __future__ import annotations
 
 import fcntl
+import json
 import os
+import re
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
@@ -43,6 +45,8 @@ REAL_PROCESS = {
     "render-non-numeric": "the stand-in renderer found as an installed entry point in a fresh interpreter",
     "device-file": "an endless device: a regression would fill memory (the process has a timeout)",
     "table-is-fifo": "a FIFO without a writer: a regression would block (the process has a timeout)",
+    "annot-gifti-claims-two-arrays": "a library's warning must not reach the real stderr (Python prints it "
+                                     "there as two more lines)",
 }
 SAMPLE = [c for c in [*corpus.CASES, *corpus.INPROCESS] if c.id in REAL_PROCESS]
 
@@ -135,6 +139,40 @@ def test_path_like_image_names_stay_inside_the_output_folder(tmp_path, plugin_en
     pngs = sorted(p.name for p in (work / "out").glob("*.png"))
     assert pngs == sorted(f"{safe}_lateral-left.png" for safe in corpus.SAFE.values())
     assert not (tmp_path / "a" / "x_lateral-left.png").exists()
+
+
+#: Image names in many scripts -> the file-name stem each must get (readable, distinct, short enough).
+SCRIPTS = {
+    "患者 1": "患者_1", "患者 2": "患者_2", "مريض-٣": "مريض-٣", "José": "José", "Ünïcødé": "Ünïcødé",
+    "Ελένη": "Ελένη", "🧠": "🧠", "🧠🔥": "🧠🔥", "👨\u200d👩\u200d👧": "👨\u200d👩\u200d👧", "नमस्ते": "नमस्ते",
+    "CON": "CON_", "nul.txt": "nul_.txt",  # names Windows reserves, also with an extension
+}
+
+
+def test_names_in_any_script_give_distinct_readable_files(tmp_path, plugin_env, tiny):
+    """Names in any script keep their letters; names too long for a file system end in a short hash."""
+    from brainpainter.io.output import MAX_STEM_BYTES, safe_name
+
+    long_names = ["x" * 300, "x" * 299 + "y", "日本語" * 50]
+    names = [*SCRIPTS, *long_names]
+    rows = "".join(f'"{name}",{i}\n' for i, name in enumerate(names))
+    (tmp_path / "in.csv").write_text("Image-name-unique,Left-insula\n" + rows, encoding="utf-8")
+    proc = _run(["render", "in.csv", "--out", "out", "--renderer", "solid", "--template", str(tiny),
+                 "--views", "lateral-left", "--size", "32x32", "--quiet"], tmp_path, plugin_env)
+    assert proc.returncode == 0, proc.stderr
+    manifest = json.loads((tmp_path / "out" / "manifest.json").read_text("utf-8"))
+    by_image = {f["image"]: f["file"] for f in manifest["files"]}
+    assert sorted(by_image) == sorted(names)  # every image maps to a file
+    assert len(set(by_image.values())) == len(names)  # distinct files
+    for name, stem in SCRIPTS.items():
+        assert by_image[name] == f"{stem}_lateral-left.png"
+    for name in long_names:
+        file = by_image[name]
+        assert len(file.encode()) <= MAX_STEM_BYTES + 20
+        assert re.search(r"-[0-9a-f]{8}_lateral-left\.png$", file)
+        assert file.startswith(name[:10]) and file == f"{safe_name(name)}_lateral-left.png"
+    on_disk = {p.name for p in (tmp_path / "out").glob("*.png")}
+    assert on_disk == set(by_image.values())
 
 
 # Peak RSS of this process image (VmHWM). ru_maxrss would also count the forking parent's

@@ -183,6 +183,26 @@ def test_remove_undoes_add(tiny, tiny_annots):
     assert code == 2 and "installed from brainpainter" in err and "pip uninstall brainpainter" in err
 
 
+def test_remove_of_a_symlinked_atlas_removes_the_link_only(tmp_path, tiny, tiny_annots):
+    """An atlas folder that is a symbolic link (kept elsewhere, linked in): the link goes, the files stay,
+    nothing is left in the atlas folder, and the message says so."""
+    user_atlases.add_label_map("toy", tiny_annots, template=str(tiny))
+    kept = tmp_path / "elsewhere" / "toy"
+    kept.parent.mkdir()
+    folder = user_atlases.atlases_dir() / "toy"
+    folder.rename(kept)
+    folder.symlink_to(kept, target_is_directory=True)
+    files = sorted(p.name for p in kept.iterdir())
+    registry.atlases.reset()
+    assert "toy" in registry.atlases.names()
+    code, out, err = run("atlas", "remove", "toy")
+    assert code == 0, err
+    assert "symbolic link" in out and str(kept) in out and "left as they are" in out and "deleted" not in out
+    assert list(user_atlases.atlases_dir().iterdir()) == []  # no link, no hidden leftover
+    assert sorted(p.name for p in kept.iterdir()) == files  # the target is untouched
+    assert "toy" not in registry.atlases.names()
+
+
 def test_failed_add_leaves_nothing(monkeypatch, tiny, tiny_annots):
     import brainpainter.atlas.labelset as ls
 

@@ -344,3 +344,15 @@ def test_library_api_refuses_non_finite_numbers(tmp_path, function, kwargs, mess
     with stand_in("solid"), pytest.raises(BrainPainterError, match=message):
         call(table, "dk", out=out[function], template=str(tiny), renderer="solid", progress=False, **kwargs)
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("out", ["", "   "])
+def test_an_empty_out_is_refused_not_the_current_folder(tmp_path, monkeypatch, out):
+    """``render(out="")`` (an unset variable in a script) must not write into the current folder."""
+    from brainpainter.io.transaction import FileTransaction, FolderTransaction
+
+    monkeypatch.chdir(tmp_path)
+    for make in (FolderTransaction, FileTransaction):
+        with pytest.raises(BrainPainterError, match="is empty"):
+            make(out)
+    assert list(tmp_path.iterdir()) == []

@@ -280,6 +280,27 @@ def test_figure_and_movie_jobs(server, kind, params, suffix, magic):
     assert f["name"].endswith(suffix) and server.get(f["url"]).content.startswith(magic)
 
 
+def test_movie_job_counts_frames_and_the_options_have_the_cli_defaults(server):
+    """A movie job's progress is per frame (total = frames), not 0/1; figure and movie options default to
+    the CLI's (frames per step 24, dpi 300), and the API documents them."""
+    from brainpainter.media.layout import FigureOptions
+    from brainpainter.media.movie import MovieOptions
+
+    uid = upload(server, EXAMPLE.read_bytes())["upload_id"]
+    job = run_job(server, uid, {"size": "64x48", "views": "lateral-left"}, kind="movie",
+                  movie={"format": "gif", "frames_per_step": 3, "hold": 1, "easing": "smooth"})
+    assert job["status"] == "done", job
+    n_keys = 4  # the example table's rows
+    assert job["total"] == (n_keys - 1) * 3 + 1 + n_keys * 1 and job["progress"] == job["total"], job
+    schema = server.get("/openapi.json").json()["components"]["schemas"]
+    movie, figure = schema["MovieParams"]["properties"], schema["FigureParams"]["properties"]
+    assert movie["frames_per_step"]["default"] == MovieOptions().frames_per_step == 24
+    assert movie["hold"]["default"] == 0 and movie["easing"]["default"] == "linear"
+    assert figure["dpi"]["default"] == FigureOptions().dpi and "fig_width" in figure and "font_size" in figure
+    r = server.post("/api/jobs", json={"upload_id": uid, "kind": "movie", "movie": {"frames_per_step": 0}})
+    assert r.status_code in (400, 422) and "frames_per_step" in r.text
+
+
 def test_access_log_is_one_json_line_per_request(server, caplog):
     with caplog.at_level(logging.INFO, logger="brainpainter.web.access"):
         server.get("/healthz", headers={"x-test": "1"})

@@ -104,3 +104,88 @@ def test_page_end_to_end_in_chromium(served, tmp_path):
             assert errors == []
         finally:
             context.close()
+
+
+OVERFLOW = "document.documentElement.scrollWidth - document.documentElement.clientWidth"
+#: The elements that reach past the right edge (for the message).
+WIDEST = ("[...document.querySelectorAll('body *')].filter(e => e.getBoundingClientRect().right > "
+          "document.documentElement.clientWidth + 0.5).slice(-5).map(e => e.tagName + '#' + e.id + '.' + "
+          "e.className + ' ' + Math.round(e.getBoundingClientRect().right))")
+
+
+def _contrast(fg: str, bg: str) -> float:
+    """WCAG contrast ratio of two CSS ``rgb(r, g, b)`` colours."""
+    def lum(css: str) -> float:
+        r, g, b = (int(v) / 255 for v in css[css.index("(") + 1:css.index(")")].split(",")[:3])
+        return sum(w * (c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4)
+                   for w, c in zip((0.2126, 0.7152, 0.0722), (r, g, b), strict=True))
+    hi, lo = sorted((lum(fg), lum(bg)), reverse=True)
+    return (hi + 0.05) / (lo + 0.05)
+
+
+def test_page_as_a_new_user_finds_it(served, tmp_path):
+    """No broken-image icon before the first preview, no horizontal scroll bar at any width, a readable
+    hovered primary button, a colour bar under the preview, option errors next to their field (named as on
+    the page), and figure/movie options with the CLI's defaults; a movie job counts frames."""
+    from playwright.sync_api import expect, sync_playwright
+
+    with sync_playwright() as p:
+        context = p.chromium.launch_persistent_context(
+            str(tmp_path / "profile"), executable_path=str(CHROMIUM), headless=True, args=FLAGS,
+            viewport={"width": 1440, "height": 1000})
+        try:
+            page = context.pages[0] if context.pages else context.new_page()
+            errors: list[str] = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(served.url + "/")
+            expect(page.locator("#atlas option[value=dk]")).to_have_count(1)
+            assert not page.locator("#preview").is_visible()  # no broken-image icon before a preview
+            assert not page.locator("#preview-bar").is_visible()
+            api = page.evaluate("fetch('/openapi.json').then(r => r.json())")["components"]["schemas"]
+            fields = (("frames_per_step", "MovieParams"), ("hold", "MovieParams"), ("fps", "MovieParams"),
+                      ("dpi", "FigureParams"), ("font_size", "FigureParams"))
+            for field, model in fields:
+                default = api[model]["properties"][field]["default"]
+                assert float(page.locator(f"#{field}").input_value()) == default, field
+            easing = api["MovieParams"]["properties"]["easing"]["default"]
+            assert page.locator("#easing").input_value() == easing
+            for width in (320, 375, 480, 720, 800, 1024, 1100, 1440):
+                page.set_viewport_size({"width": width, "height": 900})
+                over = page.evaluate(OVERFLOW)
+                assert over <= 0, (f"horizontal scroll of {over} px at width {width}", page.evaluate(WIDEST))
+            page.set_viewport_size({"width": 1440, "height": 1000})
+            page.locator("#size").fill("160x120")
+            page.get_by_role("button", name="Use the example table").click()
+            expect(page.locator("#preview-status")).to_contain_text("rendered in", timeout=120_000)
+            bar = page.locator("#preview-bar")
+            expect(bar).to_be_visible()
+            expect(bar.locator(".ticks span")).to_have_count(4)  # white,yellow,orange,red: 0 1 2 3
+            expect(bar.locator(".ticks")).to_contain_text("3")
+            assert page.evaluate(OVERFLOW) <= 0
+            button = page.locator("#render-all")
+            expect(button).to_be_enabled()
+            button.hover()
+            fg, bg = button.evaluate("b => [getComputedStyle(b).color, getComputedStyle(b).backgroundColor]")
+            assert _contrast(fg, bg) >= 4.5, (fg, bg)
+            # an option error: next to its field, named as on the page
+            page.locator("#size").fill("5x5")
+            note = page.locator("#size-error")
+            expect(note).to_be_visible(timeout=60_000)
+            expect(note).to_contain_text("Size (WIDTHxHEIGHT)")
+            assert "--size" not in note.inner_text()
+            expect(page.locator("#size")).to_have_attribute("aria-invalid", "true")
+            page.locator("#size").fill("160x120")
+            expect(note).to_have_count(0, timeout=60_000)
+            # a movie job reports progress per frame
+            page.locator("summary", has_text="Figure and movie options").click()
+            page.locator("#frames_per_step").fill("2")
+            page.get_by_role("button", name="Movie (GIF)").click()
+            job = page.locator(".job").first
+            expect(job).to_contain_text("done", timeout=180_000)
+            expect(job.locator("p").first).to_contain_text("movie (GIF): done")
+            status = page.evaluate("fetch(document.querySelector('.job a').href.split('/files/')[0])"
+                                   ".then(r => r.json())")
+            assert status["total"] == 7 and status["progress"] == 7, status  # 4 key frames, 2 per step
+            assert errors == []
+        finally:
+            context.close()

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import json
 import re
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -134,15 +135,16 @@ def read_label_map(path: str | Path, hemi: str) -> LabelMap:
     if named is not None and named != hemi:
         raise _swapped(path, hemi, named, "its file name")
     try:
-        if low.endswith(".annot"):
-            from nibabel.freesurfer import read_annot  # type: ignore[attr-defined]
+        with warnings.catch_warnings(action="ignore"):  # nibabel's parse warnings: the error says it
+            if low.endswith(".annot"):
+                from nibabel.freesurfer import read_annot  # type: ignore[attr-defined]
 
-            labels, ctab, raw_names = read_annot(str(path))  # type: ignore[no-untyped-call]
-            names = [n.decode("utf-8", "replace") if isinstance(n, bytes) else str(n) for n in raw_names]
-            colors = np.asarray(ctab, dtype=np.int64)[:, :3]
-            labels = np.asarray(labels, dtype=np.int64)
-        else:
-            labels, names, colors = _read_gifti_labels(path, hemi)
+                labels, ctab, raw_names = read_annot(str(path))  # type: ignore[no-untyped-call]
+                names = [n.decode("utf-8", "replace") if isinstance(n, bytes) else str(n) for n in raw_names]
+                colors = np.asarray(ctab, dtype=np.int64)[:, :3]
+                labels = np.asarray(labels, dtype=np.int64)
+            else:
+                labels, names, colors = _read_gifti_labels(path, hemi)
     except BrainPainterError:
         raise
     except Exception as exc:  # nibabel raises ValueError, struct.error, OSError, ExpatError...
@@ -155,6 +157,13 @@ def read_label_map(path: str | Path, hemi: str) -> LabelMap:
     if bad is not None:
         raise BrainPainterError(f"{path}: the region name {bad[:40]!r} contains control or text-direction "
                                 "characters; names may hold letters, digits, spaces and punctuation only")
+    folded: dict[str, str] = {}
+    for n in (n for n in names if not is_non_region(n)):
+        if (other := folded.setdefault(n.strip().casefold(), n)) != n:
+            raise BrainPainterError(
+                f"{path}: the region names {other!r} and {n!r} differ only in case, so brainpainter (which "
+                "matches region names ignoring case) cannot keep them apart; rename one in the colour table"
+            )
     if (labels < 0).any():  # vertices outside the colour table: a non-region entry
         fill = next((i for i, n in enumerate(names) if is_non_region(n)), None)
         if fill is None:

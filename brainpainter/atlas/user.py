@@ -31,9 +31,11 @@ from brainpainter.atlas.registry import CONFIG_FILE, atlases_dir, load_atlas_con
 from brainpainter.atlas.template import load_template
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.io.files import read_input
+from brainpainter.io.output import RESERVED_NAMES
 from brainpainter.io.transaction import check_replaceable, replace_folder
 
 NAME_RE = re.compile(r"^[A-Za-z][A-Za-z0-9_.-]{0,63}$")
+RESERVED = RESERVED_NAMES
 
 
 def check_name(name: str, *, replace: bool = False) -> str:
@@ -63,6 +65,16 @@ def check_syntax(name: str) -> str:
         raise BrainPainterError(
             f"atlas name {name!r} is not allowed; use a letter followed by letters, digits, '_', '-' or "
             "'.' (at most 64), e.g. yeo7"
+        )
+    if str(name).split(".")[0].upper() in RESERVED:
+        raise BrainPainterError(
+            f"atlas name {name!r} is not allowed: Windows reserves {str(name).split('.')[0].upper()!r} for a "
+            "device (with any extension), so its folder could not be copied there; choose another name"
+        )
+    if str(name).endswith("."):
+        raise BrainPainterError(
+            f"atlas name {name!r} is not allowed: Windows drops a final '.', so it would be another name "
+            "there; remove the final '.'"
         )
     return name
 
@@ -169,7 +181,12 @@ def add_config(name: str, config: str | Path, *, replace: bool = False) -> Path:
 
 
 def remove(name: str) -> Path:
-    """Remove the user atlas `name`; returns the folder that was deleted."""
+    """Remove the user atlas `name`; returns the folder (or symbolic link) that was removed.
+
+    A folder that is a symbolic link (to an atlas kept elsewhere) is removed
+    as a link: the files it points to are left as they are
+    (:func:`removal_message` says so).
+    """
     folders = user_folders()
     hit = next((n for n in folders if n.lower() == str(name).lower()), None)
     if hit is None:
@@ -183,9 +200,29 @@ def remove(name: str) -> Path:
         raise choice_error("'atlas'", name, list(folders),
                            "Only atlases added with 'brainpainter atlas add' can be removed.")
     folder = folders[hit]
+    if folder.is_symlink():
+        folder.unlink()  # the link only: rmtree would refuse it, and the target is not ours to delete
+        registry.atlases.reset()
+        return folder
     trash = Path(tempfile.mkdtemp(prefix=f".{hit}.removing-", dir=folder.parent))
     trash.rmdir()
     folder.rename(trash)  # atomic: the atlas is gone at once, then the files
     shutil.rmtree(trash, ignore_errors=True)
     registry.atlases.reset()
     return folder
+
+
+def removal_message(name: str, folder: Path, link_target: str | None) -> str:
+    """What ``atlas remove`` did: a folder deleted, or a symbolic link removed and its target kept."""
+    if link_target is not None:
+        return (f"atlas {name!r} removed: {folder} was a symbolic link to {link_target}; the link was "
+                f"removed, the files in {link_target} were left as they are")
+    return f"atlas {name!r} removed ({folder} deleted)"
+
+
+def link_target(name: str) -> str | None:
+    """Where the folder of user atlas `name` points, if it is a symbolic link (None otherwise)."""
+    import os
+
+    folder = next((p for n, p in user_folders().items() if n.lower() == str(name).lower()), None)
+    return os.readlink(folder) if folder is not None and folder.is_symlink() else None

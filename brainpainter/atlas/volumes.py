@@ -53,6 +53,7 @@ from __future__ import annotations
 import csv
 import json
 import re
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -257,8 +258,9 @@ def read_volume(path: str | Path) -> LabelVolume:
         raise BrainPainterError(f"label volume {path} does not exist; give a NIfTI (.nii, .nii.gz) or MGH "
                                 "(.mgz) file of integer labels")
     try:
-        img: Any = nib.load(str(path))
-        data = np.asanyarray(img.dataobj)
+        with warnings.catch_warnings(action="ignore"):  # nibabel's parse warnings: the error says it
+            img: Any = nib.load(str(path))
+            data = np.asanyarray(img.dataobj)
     except Exception as exc:  # nibabel raises ImageFileError, ValueError, OSError, ...
         reason = " ".join(str(exc).split()) or type(exc).__name__
         raise BrainPainterError(f"cannot read {path} as a label volume: {reason}") from None

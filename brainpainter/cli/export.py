@@ -12,6 +12,7 @@ from typing import Any
 import click
 
 from brainpainter.cli.options import (
+    OutPath,
     input_options,
     make_render_options,
     map_options,
@@ -30,7 +31,7 @@ CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 @click.option("--format", "fmt", type=click.Choice(["glb", "html"]), default=None,
               help="glb: glTF binary for 3D software; html: one file that opens in any browser. "
                    "Default: from --out's suffix, else html.")
-@click.option("--out", "-o", type=click.Path(path_type=Path, dir_okay=False), default=None,
+@click.option("--out", "-o", type=OutPath(path_type=Path, dir_okay=False), default=None,
               help="File to write (default: out/IMAGE.FORMAT).")
 @click.option("--row", default=None, help="Image name of the row to export (needed when there are several).")
 @click.option("--title", default=None, help="Heading of the HTML page (default: the image name).")

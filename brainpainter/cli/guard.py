@@ -27,6 +27,7 @@ import signal
 import sys
 import tempfile
 import threading
+import time
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
@@ -34,6 +35,7 @@ from typing import Any
 import click
 
 from brainpainter.errors import BrainPainterError
+from brainpainter.rendering.interrupts import defer
 
 EXIT_USER = 2
 EXIT_INTERNAL = 1
@@ -50,6 +52,10 @@ CACHE_VARIABLES = {
     "BLENDER_USER_EXTENSIONS": "blender/extensions",
     "BLENDER_USER_RESOURCES": "blender/resources",
 }
+
+#: Caches that would only be written into the run's temporary folder and thrown away with it; Mesa's
+#: shader cache thread also kept writing there after a Ctrl-C had removed it ("Failed to create ...").
+NO_DISK_CACHE = {"MESA_SHADER_CACHE_DISABLE": "true"}
 
 
 class Stopped(BaseException):
@@ -75,6 +81,8 @@ class Terminated(Stopped):
 
 
 def _on_signal(signum: int, frame: Any) -> None:
+    if defer(signum):  # a renderer cannot be interrupted just now: raised when it can
+        return
     # a second Ctrl-C must not cut the clean-up short (kill -9 still stops everything)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
@@ -85,12 +93,14 @@ def _on_signal(signum: int, frame: Any) -> None:
 def private_temp() -> Iterator[str]:
     """Point caches and temporary files at a fresh folder; remove it afterwards."""
     root = tempfile.mkdtemp(prefix="brainpainter-run-")
-    saved = {k: os.environ.get(k) for k in (*CACHE_VARIABLES, "TMPDIR")}
+    saved = {k: os.environ.get(k) for k in (*CACHE_VARIABLES, *NO_DISK_CACHE, "TMPDIR")}
     saved_tempdir = tempfile.tempdir
     try:
         for var, sub in CACHE_VARIABLES.items():
             if not os.environ.get(var):
                 os.environ[var] = os.path.join(root, sub)
+        for var, value in NO_DISK_CACHE.items():
+            os.environ.setdefault(var, value)
         tmp = os.path.join(root, "tmp")
         os.makedirs(tmp)
         os.environ["TMPDIR"] = tmp
@@ -103,7 +113,11 @@ def private_temp() -> Iterator[str]:
                 os.environ.pop(k, None)
             else:
                 os.environ[k] = v
-        shutil.rmtree(root, ignore_errors=True)
+        for _ in range(5):  # a library thread (Blender's shader cache) may still be writing there
+            shutil.rmtree(root, ignore_errors=True)
+            if not os.path.exists(root):
+                break
+            time.sleep(0.05)
 
 
 @contextmanager
@@ -143,9 +157,34 @@ def _one_line(text: str, limit: int = 500) -> str:
     return line if len(line) <= limit else line[: limit - 3] + "..."
 
 
+@contextmanager
+def warnings_on_stdout() -> Iterator[None]:
+    """A Python warning from a library is one ``warning: ...`` line on stdout, never lines on stderr.
+
+    stderr is kept for the one error line; a warning shown there as
+    ``file:line: UserWarning: ...`` plus its source line made a bad input's
+    error three lines.
+    """
+    import warnings
+
+    def show(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+             file: Any = None, line: str | None = None) -> None:
+        try:
+            click.echo(f"warning: {_one_line(str(message), 300)}")
+        except OSError:
+            pass
+
+    saved = warnings.showwarning
+    warnings.showwarning = show
+    try:
+        yield
+    finally:
+        warnings.showwarning = saved
+
+
 def run(group: click.Group, argv: Sequence[str] | None = None, prog_name: str = "brainpainter") -> int:
     """Run `group` with `argv`; returns the exit code (see the module docstring)."""
-    with signals_as_exceptions(), private_temp():
+    with signals_as_exceptions(), private_temp(), warnings_on_stdout():
         try:
             group.main(args=list(argv) if argv is not None else None, prog_name=prog_name,
                        standalone_mode=False)

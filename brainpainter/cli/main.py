@@ -9,13 +9,16 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import sys
+import threading
 from pathlib import Path
 from typing import Any
 
 import click
 
 from brainpainter.cli.options import (
+    OutPath,
     input_options,
     map_options,
     option_group,
@@ -218,7 +221,7 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, 
 @click.option("--description", default="", help="One-line description.")
 @click.option("--citation", default="", help="What to cite.")
 @click.option("--replace", is_flag=True, help="Replace your atlas of the same name.")
-@click.option("--out", "out", type=click.Path(path_type=Path, file_okay=False), default=None,
+@click.option("--out", "out", type=OutPath(path_type=Path, file_okay=False), default=None,
               help="Write the atlas folder to OUT (e.g. into an atlas plugin) instead of adding it.")
 def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: Path | None, lut: Path | None,
               space: str, own_template: bool, meshes: tuple[Path, ...], sub_meshes: tuple[Path, ...],
@@ -291,8 +294,9 @@ def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: P
 def atlas_remove(name: str) -> None:
     """Remove atlas NAME that you added with 'atlas add'."""
     from brainpainter.atlas import user as user_atlases
+    target = user_atlases.link_target(name)
     folder = user_atlases.remove(name)
-    click.echo(f"atlas {name!r} removed ({folder} deleted)")
+    click.echo(user_atlases.removal_message(name, folder, target))
 
 
 # -- plugins ------------------------------------------------------------------
@@ -389,7 +393,7 @@ def check(inputs: tuple[Path, ...], atlas: str | None, image_column: str | None,
 @cli.command(context_settings=CONTEXT)
 @click.argument("inputs", nargs=-1, required=False, metavar="[INPUT...]",
                 type=click.Path(path_type=Path, dir_okay=False))
-@click.option("--out", "-o", required=True, type=click.Path(path_type=Path, file_okay=False),
+@click.option("--out", "-o", required=True, type=OutPath(path_type=Path, file_okay=False),
               help="Output folder for {image}_{view}.png and manifest.json.")
 @click.option("--rows", default=None,
               help="Image names to render, comma-separated, in this order (default: all rows).")
@@ -420,9 +424,11 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
     click.echo(f"input: {summary_line(s)}")
     for line in input_warnings(s):
         click.echo(f"warning: {line}")
+    rendered = len({f["row"] for f in result.manifest["files"]})  # --rows may choose some of the rows
+    of = f" of {s['n_images']}" if rendered != s["n_images"] else ""
     click.echo(
         f"{len(result.files)} image(s) written to {out} "
-        f"({s['n_images']} row(s); {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
+        f"({rendered} row(s){of}; {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
         f"{len(s['unmatched_columns'])} unmatched column(s))"
     )
     tracts = result.manifest.get("tracts")
@@ -486,6 +492,10 @@ def main(argv: list[str] | None = None) -> None:
     from brainpainter.cli.guard import run
 
     code = run(cli, join_split_lists(sys.argv[1:] if argv is None else list(argv)))
+    if argv is None and threading.current_thread() is threading.main_thread():
+        # the run is over (published or cleaned up): a signal now must not claim otherwise
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
     if argv is None and "bpy" in sys.modules:
         # Blender's own exit handlers (bpy 5.1+) write a shader cache under ~/.cache after the run's
         # private cache folder is gone; the run is complete and published, so leave without them.

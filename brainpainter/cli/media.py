@@ -12,6 +12,7 @@ from typing import Any
 import click
 
 from brainpainter.cli.options import (
+    OutPath,
     input_options,
     make_render_options,
     map_options,
@@ -39,7 +40,7 @@ def _rows(value: str | None) -> list[str] | None:
 @click.command(context_settings=CONTEXT)
 @click.argument("inputs", nargs=-1, required=False, metavar="[INPUT...]",
                 type=click.Path(path_type=Path, dir_okay=False))
-@click.option("--out", "-o", required=True, type=click.Path(path_type=Path),
+@click.option("--out", "-o", required=True, type=OutPath(path_type=Path),
               help="Figure file: .png or .tif (at --dpi), .pdf or .svg (renders embedded, text as text).")
 @option_group(FigureOptions, ("grid",))
 @click.option("--rows", default=None,
@@ -87,7 +88,7 @@ def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, ti
 @click.command(context_settings=CONTEXT)
 @click.argument("inputs", nargs=-1, required=False, metavar="[INPUT...]",
                 type=click.Path(path_type=Path, dir_okay=False))
-@click.option("--out", "-o", required=True, type=click.Path(path_type=Path),
+@click.option("--out", "-o", required=True, type=OutPath(path_type=Path),
               help="Movie file: .mp4 (H.264) or .gif.")
 @option_group(MovieOptions, ("frames_per_step", "easing", "time_column", "hold", "fps", "orbit"))
 @click.option("--rows", default=None,

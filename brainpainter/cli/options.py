@@ -61,6 +61,20 @@ class FiniteFloat(click.ParamType):  # type: ignore[type-arg]
         return number
 
 
+class OutPath(click.Path):
+    """``click.Path`` for ``--out`` that refuses an empty value.
+
+    ``--out ''`` (often an unset shell variable, ``--out "$DIR"``) would
+    otherwise become ``Path('')``, the current folder.
+    """
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        if isinstance(value, str) and not value.strip():
+            self.fail(f"{value!r} is empty, which would mean the current folder; give a folder or file name "
+                      "(use '.' for the current folder if that is meant).", param, ctx)
+        return super().convert(value, param, ctx)
+
+
 #: Click type of every float option: finite numbers only.
 FINITE = FiniteFloat()
 

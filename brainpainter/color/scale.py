@@ -23,6 +23,40 @@ DEFAULT_NAN_COLOR = "#8c8c8c"
 DEFAULT_MISSING_COLOR = "#d0d0d0"
 
 
+def fraction(values: NDArray[Any], lo: float, hi: float) -> NDArray[Any]:
+    """``(values - lo) / (hi - lo)`` without overflow for any finite numbers (``±1e308``, subnormals).
+
+    Parameters
+    ----------
+    values : ndarray of float, shape (n,)
+    lo, hi : float
+        Finite, ``lo < hi``.
+
+    Returns
+    -------
+    ndarray of float, shape (n,): finite for finite values (possibly far outside [0, 1], never NaN),
+    NaN for NaN.
+    """
+    v = np.asarray(values, dtype=float)
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore", under="ignore"):
+        if np.isfinite(hi - lo):
+            t = (v - lo) / (hi - lo)  # exact for subnormal ranges; far outside the range -> +-inf
+        else:  # the span itself overflows: halve everything first
+            t = (v * 0.5 - lo * 0.5) / (hi * 0.5 - lo * 0.5)
+    return np.where(np.isnan(v), np.nan, np.clip(t, -1e300, 1e300))
+
+
+def between(lo: float, hi: float, t: NDArray[Any] | float) -> NDArray[Any]:
+    """``lo + t * (hi - lo)`` for ``t`` in [0, 1], without overflow for any finite `lo`, `hi`."""
+    t = np.clip(np.asarray(t, dtype=float), 0.0, 1.0)
+    with np.errstate(under="ignore"):
+        return np.asarray(lo * (1.0 - t) + hi * t)
+
+
+#: The largest finite float: limits are kept within +-BIGGEST.
+BIGGEST = float(np.finfo(float).max)
+
+
 @dataclass(frozen=True)
 class ColourScale:
     """A value-to-colour mapping fixed for a whole run (all rows, all frames).
@@ -56,6 +90,11 @@ class ColourScale:
     name: str = ""
     threshold: float | None = None
 
+    def __repr__(self) -> str:
+        """One short line (the control colours are many)."""
+        center = "" if self.center is None else f", center={self.center:g}"
+        return f"<ColourScale {self.name or 'custom'!r} {self.vmin:g}..{self.vmax:g}{center}>"
+
     def __post_init__(self) -> None:
         for what, v in (("vmin", self.vmin), ("vmax", self.vmax), ("center", self.center)):
             if v is not None and not np.isfinite(v):
@@ -88,11 +127,10 @@ class ColourScale:
         v = np.asarray(values, dtype=float)
         top = self.n_colors - 1
         if self.center is None:
-            t = (v - self.vmin) / (self.vmax - self.vmin)
+            t = fraction(v, self.vmin, self.vmax)
         else:
             c = self.center
-            t = np.where(v < c, 0.5 * (v - self.vmin) / (c - self.vmin),
-                         0.5 + 0.5 * (v - c) / (self.vmax - c))
+            t = np.where(v < c, 0.5 * fraction(v, self.vmin, c), 0.5 + 0.5 * fraction(v, c, self.vmax))
         return np.clip(t, 0.0, 1.0) * top
 
     def __call__(self, values: NDArray[Any] | Sequence[float] | float) -> NDArray[Any]:
@@ -127,9 +165,9 @@ class ColourScale:
         n = self.n_colors if self.n_colors <= 12 else 5
         pos = np.linspace(0.0, 1.0, n)
         if self.center is None:
-            return self.vmin + pos * (self.vmax - self.vmin)
+            return between(self.vmin, self.vmax, pos)
         c = self.center
-        return np.where(pos < 0.5, self.vmin + 2 * pos * (c - self.vmin), c + (2 * pos - 1) * (self.vmax - c))
+        return np.where(pos < 0.5, between(self.vmin, c, 2 * pos), between(c, self.vmax, 2 * pos - 1))
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready settings (for manifests and PNG metadata)."""
@@ -260,13 +298,14 @@ class ScaleOptions:
             return 0.0, float(len(self._colors) - 1)
         lo, hi = self.vmin, self.vmax
         if center is not None and lo is None and hi is None:
-            half = float(np.max(np.abs(finite - center))) if finite.size else 1.0
-            half = half or 1.0
-            return center - half, center + half
+            with np.errstate(over="ignore"):
+                half = float(np.max(np.abs(finite - center))) if finite.size else 1.0
+            half = min(max(half or 1.0, abs(center) * 1e-6), BIGGEST)
+            return max(center - half, -BIGGEST), min(center + half, BIGGEST)
         lo = (float(finite.min()) if finite.size else 0.0) if lo is None else lo
         hi = (float(finite.max()) if finite.size else 1.0) if hi is None else hi
         if (self.vmin is None or self.vmax is None) and hi <= lo:
-            hi = lo + 1.0
+            return widen(lo)
         return lo, hi
 
     def scale(self, data: NDArray[Any] | Sequence[float] | None = None) -> ColourScale:
@@ -281,6 +320,12 @@ class ScaleOptions:
             missing_color=to_rgb(self.missing_color),
             name=self.name,
         )
+
+
+def widen(value: float) -> tuple[float, float]:
+    """A range for data with one value: ``value..value+1``, or ``1e-6 * |value|`` wide for huge values."""
+    step = max(1.0, abs(value) * 1e-6)
+    return (value, value + step) if value + step <= BIGGEST else (value - step, value)
 
 
 def make_scale(data: NDArray[Any] | Sequence[float] | None = None,

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import hashlib
 import os
-import re
 import tempfile
+import unicodedata
 from collections import deque
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
@@ -14,17 +15,70 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
+from brainpainter.io.rawtable import is_emoji_joiner
 
-_UNSAFE = re.compile(r"[^A-Za-z0-9._+-]+")
-#: The longest image name (characters); it becomes part of a file name. The table check refuses
-#: longer names, so a file name is never cut.
-MAX_IMAGE_NAME = 100
+#: Longest image name (characters) a table may hold; longer file names are shortened (see safe_name).
+MAX_IMAGE_NAME = 1000
+#: Longest file-name stem (UTF-8 bytes) made from an image name: with the view and ``.png`` it stays far
+#: below the 255 bytes of common file systems (143 on eCryptfs). Longer stems are cut and end in a hash.
+MAX_STEM_BYTES = 100
+#: Names Windows reserves for devices, with any extension (``CON``, ``con.txt``, ``COM1.x``).
+RESERVED_NAMES = frozenset({"CON", "PRN", "AUX", "NUL", "CONIN$", "CONOUT$",
+                            *(f"COM{i}" for i in range(10)), *(f"LPT{i}" for i in range(10))})
+#: Characters kept besides letters, digits, marks and symbols (emoji).
+_KEEP = frozenset("._+-")
+
+
+def _kept(ch: str) -> bool:
+    """Whether `ch` may stay in a file name on Linux, macOS and Windows (letters of any script, emoji)."""
+    if ch in _KEEP:
+        return True
+    if ch.isascii():
+        return ch.isalnum()
+    return unicodedata.category(ch)[0] in "LNM" or unicodedata.category(ch) in ("So", "Sk")
 
 
 def safe_name(name: str) -> str:
-    """A file-name-safe version of an image name (no path parts, <= ``MAX_IMAGE_NAME`` characters)."""
-    text = _UNSAFE.sub("_", str(name)).strip("._") or "image"
-    return text[:MAX_IMAGE_NAME]
+    """A file-name-safe version of an image name: no path parts, letters of any script kept.
+
+    The name is put in Unicode NFC form (macOS stores names decomposed); runs of
+    characters that are unsafe in a file name (path separators, ``:*?"<>|``,
+    spaces, punctuation, control characters) become one ``_``; letters, digits
+    and marks of any script and symbols such as emoji are kept, so ``"患者 1"``
+    becomes ``"患者_1"``. A stem longer than ``MAX_STEM_BYTES`` UTF-8 bytes is
+    cut at a character boundary and ends in ``-`` and 8 hex digits of the
+    name's SHA-256, so two long names that start alike stay distinct.
+    A name with nothing safe in it becomes ``"image"``; one that Windows reserves
+    (``CON``, ``NUL``, ``COM1``...) gets a final ``_``.
+    """
+    text = unicodedata.normalize("NFC", str(name))
+    parts: list[str] = []
+    for i, ch in enumerate(text):
+        if _kept(ch) or is_emoji_joiner(text, i):
+            parts.append(ch)
+        elif not parts or parts[-1] != "_":
+            parts.append("_")
+    stem = "".join(parts).strip("._") or "image"
+    first, dot, rest = stem.partition(".")
+    if first.upper() in RESERVED_NAMES:  # "CON" -> "CON_", "nul.txt" -> "nul_.txt": files Windows can hold
+        stem = f"{first}_{dot}{rest}"
+    if len(stem.encode("utf-8")) <= MAX_STEM_BYTES:
+        return stem
+    digest = hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()[:8]
+    cut = stem.encode("utf-8")[:MAX_STEM_BYTES - 9].decode("utf-8", "ignore").rstrip("._")
+    return f"{cut}-{digest}"
+
+
+def same_file_phrase(a: str, b: str) -> str:
+    """How image names `a` and `b` with the same :func:`file_key` differ, for messages."""
+    if unicodedata.normalize("NFC", a) == unicodedata.normalize("NFC", b):
+        return f"{a!a} and {b!a} are the same text with accents encoded differently (Unicode forms)"
+    return f"{a!r} and {b!r} differ only in case"
+
+
+def file_key(name: str) -> str:
+    """The key under which two file names are the same on a case-insensitive file system (macOS, Windows)."""
+    return unicodedata.normalize("NFC", name).casefold()
 
 
 def prepare_out_dir(out: str | Path) -> Path:

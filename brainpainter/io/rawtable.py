@@ -7,8 +7,10 @@ reading them; the limit can be raised with the environment variable
 
 from __future__ import annotations
 
+import math
 import os
 import re
+import unicodedata
 from dataclasses import dataclass, field
 
 from brainpainter.errors import BrainPainterError
@@ -24,6 +26,10 @@ EXCEL_SUFFIXES = (".xlsx", ".xlsm")
 Cell = str | float | int | None
 
 
+#: Largest BRAINPAINTER_MAX_INPUT_MB accepted (1 TB): beyond it a limit is no limit.
+MAX_LIMIT_MB = 1_000_000
+
+
 def max_bytes() -> int:
     """The input size limit in bytes (``BRAINPAINTER_MAX_INPUT_MB`` overrides :data:`MAX_BYTES`)."""
     text = os.environ.get("BRAINPAINTER_MAX_INPUT_MB", "").strip()
@@ -32,10 +38,14 @@ def max_bytes() -> int:
     try:
         mb = float(text)
     except ValueError:
+        mb = math.nan
+    if not 0 < mb <= MAX_LIMIT_MB:  # also NaN and infinity
         raise BrainPainterError(
-            f"BRAINPAINTER_MAX_INPUT_MB must be a number of megabytes; {text!r} was given."
-        ) from None
-    return int(mb * 1024 * 1024)
+            f"BRAINPAINTER_MAX_INPUT_MB must be a number of megabytes greater than 0 and at most "
+            f"{MAX_LIMIT_MB} (e.g. 64); {text[:40]!r} was given. Set it to a number, or unset it for the "
+            f"default of {MAX_BYTES // 2**20} MB."
+        )
+    return max(1, int(mb * 1024 * 1024))
 
 
 @dataclass
@@ -90,6 +100,17 @@ def too_big(name: str, size: int, limit: int) -> BrainPainterError:
 _CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u061c\u200b-\u200f\u2028-\u202e\u2060-\u2069\ufeff]")
 
 
+def is_emoji_joiner(text: str, i: int) -> bool:
+    """Whether ``text[i]`` is a zero-width joiner inside an emoji sequence (👨‍👩‍👧), which is allowed."""
+    if text[i] != "\u200d" or i == 0 or i + 1 >= len(text):
+        return False
+    before = text[i - 2] if text[i - 1] == "\ufe0f" and i >= 2 else text[i - 1]
+    return all(unicodedata.category(c) in ("So", "Sk") for c in (before, text[i + 1]))
+
+
 def has_control(text: str) -> bool:
-    """Whether `text` holds control characters (terminal escapes, NUL, line breaks, bidi overrides)."""
-    return _CONTROL.search(text) is not None
+    """Whether `text` holds control characters (terminal escapes, NUL, line breaks, bidi overrides).
+
+    A zero-width joiner between two emoji is part of the emoji, not a control character.
+    """
+    return any(not is_emoji_joiner(text, m.start()) for m in _CONTROL.finditer(text))

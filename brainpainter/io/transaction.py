@@ -83,6 +83,14 @@ class _Staged:
                 remove_empty(self._created)  # a failed run leaves no empty output folder behind
 
 
+def refuse_empty(path: str | os.PathLike[str], what: str) -> str | os.PathLike[str]:
+    """`path`, unless it is an empty text (``out=""``), which ``Path`` would turn into the current folder."""
+    if isinstance(path, str) and not path.strip():
+        raise BrainPainterError(f"{what} is empty ({path!r}), which would mean the current folder; give a "
+                                "folder or file name ('.' for the current folder if that is meant).")
+    return path
+
+
 class FolderTransaction(_Staged):
     """Write several files and a manifest into an output folder, all or nothing.
 
@@ -100,7 +108,7 @@ class FolderTransaction(_Staged):
 
     def __init__(self, out: str | os.PathLike[str], what: str = "output folder",
                  manifest: str = MANIFEST) -> None:
-        self.out = Path(out)
+        self.out = Path(refuse_empty(out, what))
         self.what = what
         self.manifest = manifest
         self._expected: dict[str, tuple[tuple[int, int] | None, int | None]] = {}
@@ -183,7 +191,7 @@ class FileTransaction(_Staged):
     """
 
     def __init__(self, path: str | os.PathLike[str], what: str = "--out") -> None:
-        self.target = Path(path)
+        self.target = Path(refuse_empty(path, what))
         self.what = what
         self._lock: Any = None
         self.stage: Path | None = None

@@ -13,13 +13,15 @@ frames). matplotlib is imported inside the functions only.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+import functools
+import warnings
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any, TypeVar, cast
 
 import numpy as np
 from numpy.typing import NDArray
 
-from brainpainter.color.scale import ColourScale
+from brainpainter.color.scale import ColourScale, between, fraction
 from brainpainter.errors import BrainPainterError, choice_error
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -27,11 +29,28 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axis import Axis
     from matplotlib.figure import Figure
 
+F = TypeVar("F", bound=Callable[..., Any])
+
 #: Samples along the bar; enough for a smooth ramp at print resolution.
 N_SAMPLES = 512
 NAN_LABEL = "no data"
 MISSING_LABEL = "not measured"
 ORIENTATIONS = ("horizontal", "vertical")
+
+
+def quiet_glyphs(func: F) -> F:
+    """Run `func` without matplotlib's "Glyph ... missing from font" warnings.
+
+    Image names in any script (``患者 1``) are drawn in figures and movies; where the installed fonts
+    lack a glyph matplotlib warns once per character. The file is still right (the name is in its
+    file name and manifest); the warnings would flood the output or, where warnings are errors, stop it.
+    """
+    @functools.wraps(func)
+    def run(*args: Any, **kwargs: Any) -> Any:
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message=r"Glyph \d+ .*missing from", category=UserWarning)
+            return func(*args, **kwargs)
+    return cast(F, run)
 
 
 def format_tick(value: float) -> str:
@@ -76,8 +95,8 @@ def resolve_ticks(scale: ColourScale, ticks: Sequence[float] | str | None) -> ND
         values.append(v)
     if not values:
         raise BrainPainterError(f"no tick value in {ticks!r}; give numbers, e.g. --ticks 0,1.5,3")
-    span = scale.vmax - scale.vmin
-    outside = [v for v in values if not scale.vmin - 1e-9 * span <= v <= scale.vmax + 1e-9 * span]
+    where = fraction(np.asarray(values, dtype=float), scale.vmin, scale.vmax)
+    outside = [v for v, t in zip(values, where, strict=True) if not -1e-9 <= t <= 1 + 1e-9]
     if outside:
         raise BrainPainterError(
             f"tick {outside[0]:g} lies outside the colour scale {scale.vmin:g}..{scale.vmax:g}; "
@@ -95,7 +114,7 @@ def bar_colors(scale: ColourScale, n: int = N_SAMPLES) -> tuple[NDArray[Any], ND
     values : ndarray of float, shape (n,)
     colors : ndarray of float, shape (n, 3), sRGB 0-1
     """
-    values = np.linspace(scale.vmin, scale.vmax, n)
+    values = between(scale.vmin, scale.vmax, np.linspace(0.0, 1.0, n))  # no overflow at +-1e308
     return values, np.clip(scale(values), 0.0, 1.0)
 
 
@@ -113,10 +132,13 @@ def _threshold_band(ax: Axes, scale: ColourScale, horizontal: bool) -> None:
         return
     span = ax.axvspan if horizontal else ax.axhspan
     line = ax.axvline if horizontal else ax.axhline
-    span(lo, hi, color=THRESHOLD_GREY, zorder=2)
+    # the bar is drawn in fractions of the scale (0..1): place the band there too
+    flo, fhi = (float(f) for f in fraction(np.array([lo, hi]), scale.vmin, scale.vmax))
+    span(flo, fhi, color=THRESHOLD_GREY, zorder=2)
     for edge in (-t, t):
         if scale.vmin < edge < scale.vmax:
-            line(edge, color="black", linewidth=0.6, zorder=3)
+            at = float(fraction(np.array([edge]), scale.vmin, scale.vmax)[0])
+            line(at, color="black", linewidth=0.6, zorder=3)
 
 
 def draw_colorbar(
@@ -163,22 +185,27 @@ def draw_colorbar(
     if orientation not in ORIENTATIONS:
         raise choice_error("orientation", orientation, ORIENTATIONS)
     tick_values = resolve_ticks(scale, ticks)
+    # The bar is drawn in fractions of the scale (0..1), so any finite range (1e-320..1e-310,
+    # -1e308..1e308) draws without overflow; ticks are placed at their fractions, one per label.
+    where = np.clip(fraction(tick_values, scale.vmin, scale.vmax), 0.0, 1.0)
+    labels = [format_tick(t) for t in tick_values]
+    keep = [i for i in range(len(labels)) if i == 0 or labels[i] != labels[i - 1]]
+    where, labels = where[keep], [labels[i] for i in keep]
     _, colors = bar_colors(scale)
     horizontal = orientation == "horizontal"
     image = colors[None, :, :] if horizontal else colors[::-1, None, :]
-    extent = (scale.vmin, scale.vmax, 0.0, 1.0) if horizontal else (0.0, 1.0, scale.vmin, scale.vmax)
-    ax.imshow(image, extent=extent, aspect="auto", interpolation="nearest", origin="upper")
+    ax.imshow(image, extent=(0.0, 1.0, 0.0, 1.0), aspect="auto", interpolation="nearest", origin="upper")
     _threshold_band(ax, scale, horizontal)
     if horizontal:
-        ax.set_xlim(scale.vmin, scale.vmax)
+        ax.set_xlim(0.0, 1.0)
         ax.set_yticks([])
-        ax.set_xticks(tick_values, [format_tick(t) for t in tick_values])
+        ax.set_xticks(where, labels)
         axis: Axis = ax.xaxis
     else:
-        ax.set_ylim(scale.vmin, scale.vmax)
+        ax.set_ylim(0.0, 1.0)
         ax.set_xticks([])
         ax.yaxis.tick_right()
-        ax.set_yticks(tick_values, [format_tick(t) for t in tick_values])
+        ax.set_yticks(where, labels)
         axis = ax.yaxis
     ax.tick_params(labelsize=fontsize - 1, length=2.5, width=0.6, pad=1.5, colors=color)
     for spine in ax.spines.values():

@@ -32,11 +32,13 @@ from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.color.scale import ColourScale
+from brainpainter.media.colorbar import quiet_glyphs
 from brainpainter.media.drawn import common_crop, content_box, swatches_needed
 from brainpainter.media.layout import FigureKwargs, FigureOptions, compose_figure
 from brainpainter.media.outfile import check_out_file
 from brainpainter.rendering.options import Options, RenderKwargs, take
 from brainpainter.rendering.run import make_runner, paint, prepare_run
+from brainpainter.rendering.views import ImagesByView
 from brainpainter.table.rows import select_rows
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -79,6 +81,12 @@ class FigureResult:
     colorbar_ax: Axes
     image_axes: dict[tuple[str, str], Axes] = field(default_factory=dict)
 
+    def __repr__(self) -> str:
+        """One short line."""
+        w, h = self.figure.get_size_inches()
+        where = f" written to {self.path}" if self.path is not None else ""
+        return f"<FigureResult: {len(self.images)} render(s), {w:.2f} x {h:.2f} in{where}>"
+
     def _repr_png_(self) -> bytes:  # notebooks
         buf = io.BytesIO()
         self.figure.savefig(buf, format="png", dpi=100)
@@ -119,6 +127,7 @@ def figure_bytes(fig: Figure, path: Path, dpi: float, transparent: bool = False)
     return buf.getvalue()
 
 
+@quiet_glyphs
 def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path | None = None,
                 rows: Iterable[str | int] | str | None = None, progress: bool = True,
                 **options: Unpack[MakeFigureKwargs]) -> FigureResult:
@@ -171,7 +180,7 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     with FileTransaction(path) if path is not None else nullcontext() as tx:
         with make_runner(painter, checked.scene.template, checked.runner, n_items=len(plan)) as runner, \
                 tqdm(total=len(plan), unit="img", desc="rendering", disable=not progress) as bar:
-            images: dict[tuple[str, str], NDArray[Any]] = {}
+            images: dict[tuple[str, str], NDArray[Any]] = ImagesByView()
             for (i, view), pixels in paint(run, runner, plan):
                 images[(table.images[i], view.name)] = pixels
                 bar.update(1)

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Unpack
@@ -38,6 +38,7 @@ from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.errors import BrainPainterError
+from brainpainter.media.colorbar import quiet_glyphs
 from brainpainter.media.drawn import swatches_needed
 from brainpainter.media.encode import GIF_PALETTE_FRAMES, MAX_GIF_FRAMES, _GifWriter, _Mp4Writer
 from brainpainter.media.frames import FrameComposer, orbit_views
@@ -166,14 +167,22 @@ class MovieResult:
     key_times: list[float]
     seconds: float
 
+    def __repr__(self) -> str:
+        """One short line."""
+        w, h = self.frame_size
+        return (f"<MovieResult: {self.path}, {self.n_frames} frames of {w}x{h} at {self.fps:g} fps, "
+                f"{len(self.keys)} key frame(s)>")
+
     @property
     def duration(self) -> float:
         """Length of the movie in seconds."""
         return self.n_frames / self.fps
 
 
+@quiet_glyphs
 def make_movie(data: Any, atlas: Atlas | str | None = None, *, out: str | Path,
-               rows: Iterable[str | int] | str | None = None, progress: bool = True,
+               rows: Iterable[str | int] | str | None = None,
+               progress: bool | Callable[[int, int], None] = True,
                **options: Unpack[MakeMovieKwargs]) -> MovieResult:
     """Make a movie through the rows of a region-value table.
 
@@ -187,8 +196,9 @@ def make_movie(data: Any, atlas: Atlas | str | None = None, *, out: str | Path,
     rows : iterable of str or int, or str, optional
         Image names (or 0-based positions) to use as key frames, in this order
         (sorted by time with `time_column`); default all rows.
-    progress : bool
-        Show a progress bar.
+    progress : bool or callable
+        Show a progress bar; or a function called with ``(frames done, frames)`` after each frame
+        (the web server's job progress).
     **options
         The movie's own: :class:`MovieOptions` (``frames_per_step``, ``easing``,
         ``time_column``, ``hold``, ``fps``, ``orbit``, ``title``, ``label``,
@@ -369,8 +379,12 @@ class MovieFrames:
                 i = next(todo, None)
 
 
-def encode(path: Path, frames: MovieFrames, runner: Runner, fps: float, progress: bool) -> tuple[int, int]:
-    """Render, compose and encode every frame into `path`, published atomically; returns the frame size."""
+def encode(path: Path, frames: MovieFrames, runner: Runner, fps: float,
+           progress: bool | Callable[[int, int], None]) -> tuple[int, int]:
+    """Render, compose and encode every frame into `path`, published atomically; returns the frame size.
+
+    `progress`: a progress bar (True), or a function called with (frames done, frames) after each frame.
+    """
     from tqdm.auto import tqdm
 
     from brainpainter.io.transaction import FileTransaction
@@ -378,7 +392,7 @@ def encode(path: Path, frames: MovieFrames, runner: Runner, fps: float, progress
     n, composer, gif = len(frames.plan), frames.composer, path.suffix.lower() == ".gif"
     # the output folder is locked from before the first frame until the movie is published
     with FileTransaction(path) as tx, runner, \
-            tqdm(total=n, unit="frame", desc="movie", disable=not progress) as bar:
+            tqdm(total=n, unit="frame", desc="movie", disable=progress is not True) as bar:
         samples: dict[int, NDArray[Any]] = {}
         if gif:  # the palette comes from up to 12 frames spread over the movie
             picks = np.linspace(0, n - 1, min(n, GIF_PALETTE_FRAMES)).round().astype(int)
@@ -391,6 +405,8 @@ def encode(path: Path, frames: MovieFrames, runner: Runner, fps: float, progress
             for i in range(n):  # encoded in order
                 writer.write(samples.pop(i) if i in samples else next(rest)[1])
                 bar.update(1)
+                if callable(progress):
+                    progress(i + 1, n)
         except BaseException:
             writer.abort()
             raise

@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 
 from brainpainter.color.scale import ColourScale
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.media.colorbar import quiet_glyphs
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -60,7 +61,13 @@ class PlotResult:
     image: NDArray[Any]
     scale: ColourScale
 
+    def __repr__(self) -> str:
+        """One short line."""
+        h, w = self.image.shape[:2]
+        return f"<PlotResult: {w}x{h} render, scale {self.scale!r}>"
 
+
+@quiet_glyphs
 def plot(values: Any, view: str = "lateral-left", *, ax: Axes | None = None, row: str | int = 0,
          atlas: Atlas | str | None = None, colorbar: bool = True, label: str | None = None,
          ticks: Sequence[float] | str | None = None, orientation: str = "vertical", crop: bool = True,

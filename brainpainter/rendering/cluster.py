@@ -36,6 +36,7 @@ from brainpainter.rendering.parallel import (
     drive,
     paint_items,
     prepare_worker,
+    worker_temp,
 )
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -66,6 +67,9 @@ class PainterPlugin(WorkerPlugin):
         self.warm: WarmPainter | None = None
 
     def setup(self, worker: Any) -> None:
+        local = getattr(worker, "local_directory", None)
+        if local:  # Dask removes the worker's folder when it closes, also after a kill of the worker
+            worker_temp(os.path.join(local, "brainpainter-tmp"))
         prepare_worker(self.threads)
         self.warm = WarmPainter(self.spec)
 
@@ -95,6 +99,30 @@ def _dask_warm(name: str) -> tuple[str, int, float]:
 
 def _dask_paint(name: str, items: Sequence[Item]) -> list[bytes]:
     return paint_items(_dask_plugin(name).painter(), items, encode=True)
+
+
+def check_address(address: object) -> None:
+    """Refuse a scheduler address (``--scheduler``, ``BRAINPAINTER_SCHEDULER``) without host and port.
+
+    ``nan``, ``-1`` or ``host`` would otherwise make Dask retry for 30 s and print a traceback.
+    """
+    from urllib.parse import urlsplit
+
+    if not isinstance(address, str):
+        return
+    text = address.strip() if "://" in address else "tcp://" + address.strip()
+    parts = urlsplit(text)
+    if parts.scheme not in ("tcp", "tls", "ws", "wss"):
+        return  # inproc://, ucx://...: Dask checks them
+    try:
+        port = parts.port
+    except ValueError:
+        port = None
+    if not parts.hostname or port is None:
+        raise BrainPainterError(
+            f"the Dask scheduler address {address[:80]!r} (--scheduler or BRAINPAINTER_SCHEDULER) is not "
+            "host:port; give e.g. tcp://host:8786, or unset BRAINPAINTER_SCHEDULER to render here."
+        )
 
 
 def _describe(chunk: Sequence[Item]) -> str:
@@ -133,9 +161,10 @@ class DaskRunner(Runner):
         distributed = import_distributed()
         assert self.spec is not None
         if self.client is None:
+            check_address(self.address)
             try:
                 self.client = distributed.Client(self.address, timeout="15s", set_as_default=False)
-            except (OSError, TimeoutError) as exc:
+            except (OSError, TimeoutError, ValueError) as exc:
                 raise BrainPainterError(
                     f"cannot reach the Dask scheduler at {self.address!r} ({exc}); check the address "
                     "(e.g. tcp://host:8786) and that the scheduler is running."

@@ -263,6 +263,14 @@ class RenderResult:
     table: RegionTable | None = None
     workers: dict[str, Any] = field(default_factory=dict)
 
+    def __repr__(self) -> str:
+        """One short line (the images and files are many and large)."""
+        sizes = {arr.shape[1::-1] for arr in self.images.values()}
+        size = "x".join(map(str, next(iter(sizes)))) if len(sizes) == 1 else "mixed"
+        what = (f"{len(self.images)} image(s) of {size} in memory" if self.images
+                else f"{len(self.files)} file(s)" + (f" in {self.files[0].parent}" if self.files else ""))
+        return f"<RenderResult: {what}{'' if self.scale is None else f', scale {self.scale!r}'}>"
+
     def _repr_html_(self) -> str:  # notebooks: show the images
         import base64
         import html

@@ -31,7 +31,9 @@ import io
 import math
 import os
 import pickle
+import shutil
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
@@ -386,12 +388,25 @@ def prepare_worker(threads: int) -> None:
     import brainpainter.io.output  # noqa: F401 - its PNG encoder imports slowly once bpy is loaded
 
 
-def _init_process(spec: PainterSpec, threads: int) -> None:
+def worker_temp(base: str) -> None:
+    """Put this worker's temporary files (Blender's ``blender_*`` session folder) in a folder in `base`.
+
+    Blender removes that folder only on a normal exit; a terminated worker left one behind per run.
+    `base` belongs to whoever started the worker, and is removed by it. No effect once bpy is loaded.
+    """
+    if "bpy" not in sys.modules:
+        os.makedirs(base, exist_ok=True)
+        os.environ["TMPDIR"] = tempfile.tempdir = tempfile.mkdtemp(prefix="worker-", dir=base)
+
+
+def _init_process(spec: PainterSpec, threads: int, temp: str | None = None) -> None:
     """Pool worker start: renderer threads set before Blender loads; Ctrl-C left to the parent."""
     import signal
 
     global _PROCESS_PAINTER
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent stops the pool on Ctrl-C
+    if temp is not None:
+        worker_temp(temp)
     prepare_worker(threads)
     _PROCESS_PAINTER = WarmPainter(spec)
 
@@ -423,17 +438,19 @@ class LocalRunner(Runner):
     spec: PainterSpec | None = None
     threads: int | None = None
     _pool: Any = field(default=None, init=False, repr=False)
+    _temp: str | None = field(default=None, init=False, repr=False)
 
     def _start(self) -> None:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
         threads = self.threads or render_threads(self.n_workers)
+        self._temp = tempfile.mkdtemp(prefix="brainpainter-jobs-")  # the workers' temporary files
         # spawn: a fresh interpreter per worker; forking a process with Blender loaded is unsafe.
         self._pool = ProcessPoolExecutor(
             self.n_workers, mp_context=multiprocessing.get_context("spawn"),
             initializer=_init_process,  # type: ignore[arg-type]
-            initargs=(self.spec, threads))  # type: ignore[arg-type]
+            initargs=(self.spec, threads, self._temp))  # type: ignore[arg-type]
         try:
             warm = [self._pool.submit(_process_warm) for _ in range(self.n_workers)]
             loads = {pid: seconds for pid, seconds in (f.result() for f in warm)}
@@ -465,6 +482,14 @@ class LocalRunner(Runner):
             raise
 
     def close(self, abort: bool = False) -> None:
+        try:
+            self._stop(abort)
+        finally:
+            temp, self._temp = self._temp, None
+            if temp is not None:  # the workers are gone: their blender_* folders go too
+                shutil.rmtree(temp, ignore_errors=True)
+
+    def _stop(self, abort: bool) -> None:
         pool, self._pool = self._pool, None
         if pool is None:
             return

@@ -28,7 +28,7 @@ from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, Runner
 from brainpainter.rendering.painter import VOLUME_VIEWS, Painter, RenderResult, region_colors, resolve_hidden
 from brainpainter.rendering.parallel import Item, LocalRunner, PainterSpec, Runner, SerialRunner, chunked
 from brainpainter.rendering.settings import RGB, RenderSettings
-from brainpainter.rendering.views import View, parse_views
+from brainpainter.rendering.views import ImagesByView, View, parse_views
 from brainpainter.table.region_table import RegionTable, read_table
 from brainpainter.table.rows import select_rows
 from brainpainter.tracts.values import TractValues, read_tract_values
@@ -342,7 +342,7 @@ def write_images(run: Run, painter: Painter, runner: Runner, chosen: Sequence[in
     plan = run.items(chosen)
     tx = FolderTransaction(out) if out is not None else None  # lock, stage, verify, publish
     files = [tx.out / f"{names[i]}_{view.name}.png" for i, view in plan] if tx is not None else []
-    images: dict[tuple[str, str], NDArray[Any]] = {}
+    images: dict[tuple[str, str], NDArray[Any]] = ImagesByView()
     with tx or nullcontext(), tqdm(total=len(plan), unit="img", desc="rendering",
                                    disable=not progress) as bar:
         painted = paint(run, runner, plan, settings if tx is not None else None)

@@ -163,3 +163,38 @@ def parse_views(spec: str | list[str] | tuple[str, ...] | None) -> list[View]:
 
 def with_zoom(view: View, zoom: float) -> View:
     return replace(view, zoom=zoom)
+
+
+class ImagesByView(dict[tuple[str, str], Any]):
+    """``(image name, view name) -> image``, also found under the view as the user wrote it.
+
+    A free camera is stored under its canonical name (``az90-el0``, also in
+    file names) and found as written: ``images[("1", "camera:90:0")]``, as
+    are other spellings of a view (``"Lateral-Left"``) and a row number given
+    as an int (``images[(1, "lateral-left")]``).
+    """
+
+    def __missing__(self, key: tuple[Any, Any]) -> Any:
+        if isinstance(key, tuple) and len(key) == 2 and isinstance(key[1], str):
+            image, view = key
+            try:
+                names = [v.name for v in parse_views(view)]
+            except BrainPainterError:
+                names = []
+            other = (str(image), names[0]) if len(names) == 1 else None
+            if other is not None and other != key and dict.__contains__(self, other):
+                return dict.__getitem__(self, other)
+        raise KeyError(key)
+
+    def __contains__(self, key: object) -> bool:
+        try:
+            self[key]  # type: ignore[index]
+        except KeyError:
+            return False
+        return True
+
+    def get(self, key: Any, default: Any = None) -> Any:
+        try:
+            return self[key]
+        except KeyError:
+            return default

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.io.output import MAX_IMAGE_NAME
+from brainpainter.io.output import MAX_IMAGE_NAME, file_key, same_file_phrase
 from brainpainter.io.rawtable import RawTable, has_control
 from brainpainter.table.cells import is_empty, to_number
 from brainpainter.table.names import REGION, NameResolver, Resolution
@@ -98,21 +98,21 @@ def validate_images(images: list[str], source: str, where: list[str], column: st
         if len(name) > MAX_IMAGE_NAME:
             raise BrainPainterError(
                 f"{source}: the image name at {where[i]} is {len(name)} characters long; at most "
-                f"{MAX_IMAGE_NAME} are allowed (it becomes a file name). Shorten it."
+                f"{MAX_IMAGE_NAME} are allowed. Shorten it."
             )
         if name in seen:
             raise BrainPainterError(
                 f"{source}: image names must be unique; {name!r} appears at {where[seen[name]]} and "
                 f"{where[i]}."
             )
-        if name.lower() in folded:
-            other = images[folded[name.lower()]]
+        if file_key(name) in folded:
+            other = images[folded[file_key(name)]]
             raise BrainPainterError(
-                f"{source}: image names {other!r} and {name!r} differ only in case, so their files would "
+                f"{source}: image names {same_file_phrase(other, name)}, so their files would "
                 "collide on macOS and Windows; make them differ in letters or digits."
             )
         seen[name] = i
-        folded[name.lower()] = i
+        folded[file_key(name)] = i
 
 
 def _convert(cells: Sequence[Any], raw: RawTable, column: str, rows: Sequence[int],

@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.errors import BrainPainterError, NoRegionColumnError
+from brainpainter.io.output import file_key, same_file_phrase
 from brainpainter.io.rawtable import MAX_BYTES, RawTable
 from brainpainter.io.readers import read_raw
 from brainpainter.table.cells import is_text
@@ -97,6 +98,11 @@ class RegionTable:
     errors: tuple[str, ...] = ()
     notes: tuple[str, ...] = field(default_factory=tuple)
     sources: tuple[str, ...] = ()
+
+    def __repr__(self) -> str:
+        """One short line (the values are many)."""
+        return (f"<RegionTable {self.source!r}: {len(self.images)} image(s) x {len(self.regions)} region(s) "
+                f"of atlas {self.atlas.name!r}>")
 
     @property
     def columns(self) -> dict[str, tuple[str, ...]]:
@@ -277,11 +283,11 @@ def inspect_table(data: Any, atlas: Atlas | str | None = None, *, image_column: 
 
 def _check_file_names(table: RegionTable) -> None:
     """Refuse image names that become the same file name (ignoring case, as macOS and Windows do)."""
-    from brainpainter.io.output import safe_name
+    from brainpainter.io.output import file_key, safe_name
 
     seen: dict[str, str] = {}
     for name in table.images:
-        other = seen.setdefault(safe_name(name).lower(), name)
+        other = seen.setdefault(file_key(safe_name(name)), name)
         if other != name:
             raise BrainPainterError(
                 f"{table.source}: image names {other!r} and {name!r} become the same file name "
@@ -343,12 +349,12 @@ def _merge(parts: list[Part], atlas: Atlas, guess: AtlasGuess | None) -> RegionT
         images = list(dict.fromkeys(i for p in parts for i in p.images))
         folded: dict[str, str] = {}
         for name in images:
-            other = folded.setdefault(name.lower(), name)
+            other = folded.setdefault(file_key(name), name)
             if other != name:
                 src = {n: p.source for p in parts for n in p.images}
                 raise BrainPainterError(
-                    f"image names {other!r} ({src[other]}) and {name!r} ({src[name]}) differ only in case, "
-                    "so they would be two half-empty images; spell the image names the same in every input."
+                    f"image names {same_file_phrase(other, name)} ({src[other]}, {src[name]}), so they would "
+                    "be two half-empty images; spell the image names the same in every input."
                 )
         pos = {name: k for k, name in enumerate(images)}
         owner: dict[str, Part] = {}

@@ -35,6 +35,19 @@ def _closest(name: str, table: RegionTable) -> dict[str, Any]:
     return {"closest": resolver.suggest(name), "region_of_atlas": elsewhere}
 
 
+def _bar(scale: Any) -> dict[str, Any]:
+    """A colour bar of `scale` for a page: ``ramp`` (32 hex colours, vmin to vmax) and ``ticks``."""
+    from brainpainter.color.rgb import to_hex
+    from brainpainter.color.scale import between, fraction
+
+    ramp = scale(between(scale.vmin, scale.vmax, np.linspace(0.0, 1.0, 32)))
+    ticks = np.asarray(scale.ticks(), dtype=float)
+    at = np.clip(fraction(ticks, scale.vmin, scale.vmax), 0.0, 1.0)
+    labels = ["0" if v == 0 else f"{v:.3g}" for v in ticks]
+    return {"ramp": [to_hex(c) for c in ramp],
+            "ticks": [{"at": round(float(a), 4), "label": t} for a, t in zip(at, labels, strict=True)]}
+
+
 def _scale_check(values: NDArray[Any], scale_options: dict[str, Any]) -> dict[str, Any]:
     from brainpainter.color.scale import make_scale
 
@@ -50,7 +63,8 @@ def _scale_check(values: NDArray[Any], scale_options: dict[str, Any]) -> dict[st
         hints.append("values have both signs: a diverging scale (--cmap RdBu_r --center 0) may read better")
     return {
         "range": [float(finite.min()), float(finite.max())] if finite.size else None,
-        "scale": {"name": scale.name, "vmin": scale.vmin, "vmax": scale.vmax, "center": scale.center},
+        "scale": {"name": scale.name, "vmin": scale.vmin, "vmax": scale.vmax, "center": scale.center,
+                  **_bar(scale)},
         "n_below_vmin": below,
         "n_above_vmax": above,
         "hints": hints,

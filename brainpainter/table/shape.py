@@ -159,6 +159,21 @@ def _image_column_wide(raw: RawTable, resolver: NameResolver) -> tuple[int | Non
     return None, "no image-name column, rows numbered"
 
 
+def _unique(raw: RawTable, j: int | None, role: str) -> None:
+    """Refuse a second column named like column `j` (ignoring case): which one holds the `role` is unclear."""
+    if j is None or not raw.header[j].strip():
+        return
+    key = raw.header[j].strip().casefold()
+    same = [k for k, h in enumerate(raw.header) if h.strip().casefold() == key]
+    if len(same) > 1:
+        a, b = same[:2]
+        how = "the same name" if raw.header[a] == raw.header[b] else "the same name ignoring case"
+        raise BrainPainterError(
+            f"{raw.source}: columns {a + 1} ({raw.header[a]!r}) and {b + 1} ({raw.header[b]!r}) have {how}, "
+            f"so it is unclear which holds the {role}; rename or remove one."
+        )
+
+
 def detect_shape(raw: RawTable, resolver: NameResolver, *, image_column: str | None = None,
                  region_column: str | None = None, value_column: str | None = None) -> TableShape:
     """Recognise the layout of `raw`.
@@ -194,6 +209,7 @@ def detect_shape(raw: RawTable, resolver: NameResolver, *, image_column: str | N
             img, why = _image_column_wide(raw, resolver)
         else:
             why = f"image names in column {header[img]!r} (--image-column)"
+        _unique(raw, img, "image names")
         return TableShape("wide", header, image_index=img,
                           why=f"{n_region_heads} column name(s) name regions; {why}")
     return _long(raw, resolver, img, None, None)
@@ -248,6 +264,8 @@ def _long(raw: RawTable, resolver: NameResolver, img: int | None, region_column:
                 f"{raw.source}: a long table with regions in {header[reg]!r} but no column of numbers; "
                 "add one, or name the value column with --value."
             )
+        for j in numeric:
+            _unique(raw, j, "values")
         if len(numeric) > 1:
             names = [header[j] for j in numeric]
             shown = names[:8] + (["..."] if len(names) > 8 else [])
@@ -262,4 +280,6 @@ def _long(raw: RawTable, resolver: NameResolver, img: int | None, region_column:
             f"{raw.source}: --value {header[val]!r} is also the region or image column; choose the column "
             "with the numbers."
         )
+    for col, role in ((img, "image names"), (reg, "region names"), (val, "values")):
+        _unique(raw, col, role)
     return TableShape("long", header, image_index=img, region_index=reg, value_index=val, why="; ".join(why))

@@ -41,7 +41,15 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from brainpainter.errors import BrainPainterError
 from brainpainter.web.config import ServerConfig
 from brainpainter.web.guard import Guard
-from brainpainter.web.options import RenderOptions, TableOptions, prepare, table_stream, upload_name
+from brainpainter.web.options import (
+    FigureParams,
+    MovieParams,
+    RenderOptions,
+    TableOptions,
+    prepare,
+    table_stream,
+    upload_name,
+)
 from brainpainter.web.pool import Pool, PreviewBusy, PreviewUnavailable, preview_settings
 from brainpainter.web.store import LimitError, Store, valid_id
 
@@ -71,26 +79,6 @@ class CheckRequest(BaseModel):
 class PreviewRequest(CheckRequest):
     row: int | str = Field(0, description="Row number (0-based) or image name.")
     view: str = Field("lateral-left", description="A view name or camera:AZ:EL[:ZOOM].")
-
-
-class FigureParams(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-    format: Literal["pdf", "png"] = "pdf"
-    grid: bool = False
-    title: str | None = Field(None, max_length=200)
-    label: str | None = Field(None, max_length=200)
-    dpi: float = Field(150.0, ge=50, le=600)
-
-
-class MovieParams(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-    format: Literal["mp4", "gif"] = "mp4"
-    frames_per_step: int = Field(12, ge=1, le=120)
-    easing: Literal["linear", "smooth"] = "linear"
-    hold: int = Field(0, ge=0, le=120)
-    fps: float = Field(24.0, ge=1, le=60)
-    title: str | None = Field(None, max_length=200)
-    label: str | None = Field(None, max_length=200)
 
 
 class JobRequest(CheckRequest):
@@ -257,7 +245,8 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
             raise BrainPainterError(f"a movie needs at least 2 rows (key frames); the table has {n_rows}.")
         params = body.figure.model_dump() if body.kind == "figure" else (
             body.movie.model_dump() if body.kind == "movie" else {})
-        total = n_rows * n_views if body.kind == "images" else 1
+        total = (n_rows * n_views if body.kind == "images" else
+                 body.movie.n_frames(n_rows) if body.kind == "movie" else 1)  # movie: progress per frame
         try:
             job_id = await run_in_threadpool(
                 store.submit, _client(request), body.kind, body.options.model_dump(), params, name, data,

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import io
 from dataclasses import dataclass, fields
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
@@ -158,7 +158,7 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     BrainPainterError
         The CLI's one-line message for the first problem.
     """
-    from brainpainter.io.output import safe_name
+    from brainpainter.io.output import file_key, safe_name
     from brainpainter.rendering.painter import resolve_hidden
     from brainpainter.rendering.run import prepare_run
 
@@ -178,10 +178,61 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
             f"most {max_images} per job. Choose fewer views or split the table."
         )
     names = [safe_name(i) for i in run.table.images]
-    clash = sorted({n for n in names if names.count(n) > 1})
+    keys = [file_key(n) for n in names]
+    clash = sorted({n for n, k in zip(names, keys, strict=True) if keys.count(k) > 1})
     if clash:
         raise BrainPainterError(
             f"image names {clash[:3]} become the same file name after removing unsafe characters; "
             "make the image names differ in letters or digits."
         )
     return Prepared(run, options, hidden, names)
+
+
+# -- figure and movie options of a job: the CLI's defaults (core option classes) ----------------------
+def _figure_options() -> type:
+    from brainpainter.media.layout import FigureOptions
+
+    return FigureOptions
+
+
+def _movie_options() -> type:
+    from brainpainter.media.movie import MovieOptions
+
+    return MovieOptions
+
+
+class FigureParams(BaseModel):
+    """``figure`` job options, with ``brainpainter figure``'s defaults (render size: option ``size``)."""
+
+    model_config = ConfigDict(extra="forbid")
+    format: Literal["pdf", "png"] = "pdf"
+    grid: bool = core(_figure_options(), "grid")
+    title: str | None = Field(None, max_length=200)
+    label: str | None = Field(None, max_length=200)
+    dpi: float = Field(core(_figure_options(), "dpi").default, ge=50, le=600,
+                       description="Resolution of PNG output (dots per inch).")
+    fig_width: float | None = Field(None, gt=0, le=40,
+                                    description="Figure width in inches (default: from the layout).")
+    font_size: float = Field(core(_figure_options(), "font_size").default, ge=1, le=72,
+                             description="Text size in points.")
+
+
+class MovieParams(BaseModel):
+    """``movie`` job options, with ``brainpainter movie``'s defaults."""
+
+    model_config = ConfigDict(extra="forbid")
+    format: Literal["mp4", "gif"] = "mp4"
+    frames_per_step: int = Field(core(_movie_options(), "frames_per_step").default, ge=1, le=120,
+                                 description="Frames from one key frame (row) to the next.")
+    easing: Literal["linear", "smooth"] = core(_movie_options(), "easing")
+    hold: int = Field(core(_movie_options(), "hold").default, ge=0, le=120,
+                      description="Extra frames showing each key frame still.")
+    fps: float = Field(core(_movie_options(), "fps").default, ge=1, le=60, description="Frames per second.")
+    title: str | None = Field(None, max_length=200)
+    label: str | None = Field(None, max_length=200)
+
+    def n_frames(self, n_keys: int) -> int:
+        """Frames of a movie through `n_keys` key frames (the job's progress total)."""
+        from brainpainter.media.timeline import plan_frames
+
+        return len(plan_frames(list(range(n_keys)), self.frames_per_step, self.easing, self.hold))

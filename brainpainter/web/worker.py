@@ -202,30 +202,34 @@ def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
 
 def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
     from brainpainter.media.figure import make_figure
-    from brainpainter.web.options import table_stream
+    from brainpainter.web.options import FigureParams, table_stream
 
     data, prep = _prepared(folder, job)
     p = job["params"]
     name = f"figure.{p.get('format', 'pdf')}"
     tick(0)
-    make_figure(table_stream(data, job["input_name"]), out=folder / "out" / name, grid=bool(p.get("grid")),
-                title=p.get("title") or None, label=p.get("label") or None, dpi=float(p.get("dpi", 150)),
+    params = FigureParams(**p)  # the CLI's defaults for what the job did not give
+    make_figure(table_stream(data, job["input_name"]), out=folder / "out" / name, grid=params.grid,
+                title=params.title or None, label=params.label or None, dpi=params.dpi,
+                fig_width=params.fig_width, font_size=params.font_size,
                 **_media_kwargs(prep, painters.renderer))
     return [name]
 
 
 def _run_movie(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
     from brainpainter.media.movie import make_movie
-    from brainpainter.web.options import table_stream
+    from brainpainter.web.options import MovieParams, table_stream
 
     data, prep = _prepared(folder, job)
     p = job["params"]
     name = f"movie.{p.get('format', 'mp4')}"
     tick(0)
+    params = MovieParams(**p)  # the CLI's defaults for what the job did not give
+    kwargs = _media_kwargs(prep, painters.renderer)
+    kwargs["progress"] = lambda done, n: tick(done)  # per frame, not 0/1 for the whole movie
     make_movie(table_stream(data, job["input_name"]), out=folder / "out" / name,
-               frames_per_step=int(p.get("frames_per_step", 12)), easing=p.get("easing", "linear"),
-               hold=int(p.get("hold", 0)), fps=float(p.get("fps", 24.0)), title=p.get("title") or None,
-               label=p.get("label") or None, **_media_kwargs(prep, painters.renderer))
+               frames_per_step=params.frames_per_step, easing=params.easing, hold=params.hold, fps=params.fps,
+               title=params.title or None, label=params.label or None, **kwargs)
     return [name]
 
 

@@ -204,8 +204,8 @@ CASES: list[Case] = [
     Case("image-name-with-nul", {"in.csv": csv(HEADER.strip(), "a\x00b,1,2")}, ["in.csv"], "NUL"),
     Case("image-name-with-escape", {"in.csv": csv(HEADER.strip(), "\x1b[31mred,1,2")}, ["in.csv"],
          "contains control characters"),
-    Case("image-name-300-chars", {"in.csv": csv(HEADER.strip(), "x" * 300 + ",1,2")}, ["in.csv"],
-         "is 300 characters long; at most 100"),
+    Case("image-name-1001-chars", {"in.csv": csv(HEADER.strip(), "x" * 1001 + ",1,2")}, ["in.csv"],
+         "is 1001 characters long; at most 1000"),
     Case("duplicate-image-names", {"in.csv": csv(HEADER.strip(), "A,1,2", "A,2,3")}, ["in.csv"],
          "'A' appears at line 2 and line 3"),
     Case("image-names-differ-in-case", {"in.csv": csv(HEADER.strip(), "sub-A,1,2", "sub-a,2,3")}, ["in.csv"],
@@ -293,6 +293,17 @@ def _annot(path: Path) -> None:
 
     ctab = np.array([[25, 5, 25, 0, 0], [200, 0, 0, 0, 0]], dtype=np.int32)
     write_annot(str(path), np.array([0, 1, 1, 0]), ctab, [b"unknown", b"net1"], fill_ctab=True)
+
+
+def _annot_names(*names: bytes) -> Callable[[Path], None]:
+    """An .annot whose colour table has `names` (the first is the background)."""
+    def make(path: Path) -> None:
+        import numpy as np
+        from nibabel.freesurfer import write_annot
+
+        ctab = np.array([[25 + 40 * i, 5, 25, 0, 0] for i in range(len(names))], dtype=np.int32)
+        write_annot(str(path), np.array([i % len(names) for i in range(8)]), ctab, list(names), fill_ctab=True)
+    return make
 
 
 def _gifti(structure: str) -> Callable[[Path], None]:
@@ -496,6 +507,78 @@ INPROCESS: list[Case] = [
          command="atlas"),
     Case("group-name-with-bidi", {"c.toml": toml('[atlas]\nbase = "dk"\n[groups]\n"fr\u202eontal" = ["insula"]')},
          ["add", "lobes", "--config", "c.toml"], "control characters", command="atlas"),
+    # -- names: any script, case-folding, Unicode forms, duplicate columns, reserved atlas names ---------------------
+    Case("image-names-nfc-nfd", {"in.csv": csv(HEADER.strip(), "Jos\u00e9,1,2", "Jose\u0301,2,3")}, ["in.csv"],
+         "accents encoded differently"),
+    Case("render-image-names-nfc-nfd", {"in.csv": csv(HEADER.strip(), "Jos\u00e9,1,2", "Jose\u0301,2,3")},
+         ["in.csv", "--out", "o", *RENDER], "accents encoded differently", command="render"),
+    Case("image-names-equal-after-casefold", {"in.csv": csv(HEADER.strip(), "STRASSE,1,2", "stra\u00dfe,2,3")},
+         ["in.csv"], "differ only in case"),
+    Case("lh-rh-image-names-nfc-nfd", {"lh.csv": csv("Image-name-unique,Left-insula", "Jos\u00e9,1"),
+                                       "rh.csv": csv("Image-name-unique,Right-insula", "Jose\u0301,2")},
+         ["lh.csv", "rh.csv"], "accents encoded differently"),
+    Case("cjk-names-collide-as-files", {"in.csv": csv(HEADER.strip(), "\u60a3\u8005 1,1,2", "\u60a3\u8005/1,2,3")},
+         ["in.csv"], "become the same file name"),
+    Case("two-image-name-columns-same-name",
+         {"in.csv": csv("Image-name-unique,Image-name-unique,Left-insula", "A,B,1")}, ["in.csv"],
+         "columns 1 ('Image-name-unique') and 2 ('Image-name-unique') have the same name"),
+    Case("render-two-image-name-columns-same-name",
+         {"in.csv": csv("Image-name-unique,Left-insula,Image-name-unique", "A,1,B")}, ["in.csv", "--out", "o", *RENDER],
+         "have the same name", command="render"),
+    Case("image-columns-differ-in-case", {"in.csv": csv("subject,Subject,Left-insula", "A,B,1")}, ["in.csv"],
+         "have the same name ignoring case"),
+    Case("image-column-option-names-two", {"in.csv": csv("name,Left-insula,NAME", "A,1,B")},
+         ["in.csv", "--image-column", "name"], "have the same name ignoring case"),
+    Case("long-two-value-columns-same-name", {"in.csv": csv("Structure,d,d", "L_insula,0.2,0.3")}, ["in.csv"],
+         "columns 2 ('d') and 3 ('d') have the same name"),
+    Case("atlas-name-con", {"c.toml": LOBES}, ["add", "CON", "--config", "c.toml"], "Windows reserves 'CON'",
+         command="atlas"),
+    Case("atlas-name-nul-lower", {"c.toml": LOBES}, ["add", "nul", "--config", "c.toml"], "Windows reserves 'NUL'",
+         command="atlas"),
+    Case("atlas-name-con-with-extension", {"c.toml": LOBES}, ["add", "CON.txt", "--config", "c.toml"],
+         "Windows reserves 'CON'", command="atlas"),
+    Case("atlas-name-com1", {"c.toml": LOBES}, ["add", "COM1", "--config", "c.toml"], "Windows reserves 'COM1'",
+         command="atlas"),
+    Case("atlas-name-lpt9-ext", {"c.toml": LOBES}, ["add", "Lpt9.x", "--config", "c.toml"],
+         "Windows reserves 'LPT9'", command="atlas"),
+    Case("atlas-name-aux-annot", {"lh.a.annot": _annot, "rh.a.annot": _annot},
+         ["add", "aux", "--annot", "lh=lh.a.annot", "--annot", "rh=rh.a.annot"], "Windows reserves 'AUX'",
+         command="atlas"),
+    Case("atlas-name-final-dot", {"c.toml": LOBES}, ["add", "lobes.", "--config", "c.toml"], "drops a final '.'",
+         command="atlas"),
+    Case("annot-region-names-differ-in-case", {"lh.a.annot": _annot_names(b"unknown", b"Net1", b"net1"),
+                                               "rh.a.annot": _annot},
+         ["add", "net", "--annot", "lh=lh.a.annot", "--annot", "rh=rh.a.annot"], "differ only in case",
+         command="atlas"),
+    Case("annot-region-names-differ-in-case-rh", {"lh.a.annot": _annot,
+                                                  "rh.a.annot": _annot_names(b"unknown", b"VIS", b"vis", b"Vis")},
+         ["add", "net", "--annot", "lh=lh.a.annot", "--annot", "rh=rh.a.annot"], "'VIS' and 'vis' differ only in case",
+         command="atlas"),
+    # -- limits from environment variables: one line for any text ---------------------------------------------
+    *[Case(f"max-input-mb-{cid}", {"in.csv": GOOD}, ["in.csv"], "BRAINPAINTER_MAX_INPUT_MB must be a number of megabytes greater than 0",
+           env={"BRAINPAINTER_MAX_INPUT_MB": value})
+      for cid, value in (("inf", "inf"), ("nan", "nan"), ("minus-inf", "-inf"), ("negative", "-1"), ("zero", "0"),
+                         ("overflow", "1e400"), ("huge", "1e12"))],
+    _render(["--out", "o", "--views", "lateral-left"], "BRAINPAINTER_MAX_INPUT_MB must be a number", "render-max-input-mb-nan",
+            env={"BRAINPAINTER_MAX_INPUT_MB": "nan"}),
+    *[_render(["--out", "o"], "is not host:port", f"scheduler-env-{cid}", env={"BRAINPAINTER_SCHEDULER": value})
+      for cid, value in (("nan", "nan"), ("negative", "-1"), ("no-port", "tcp://host"), ("text-port", "host:abc"))],
+    _render(["--out", "o", "--scheduler", "inf"], "is not host:port", "scheduler-option-inf"),
+    # -- paths: an empty --out is a mistake, not the current folder ----------------------------------------------
+    _render(["--out", ""], "is empty, which would mean the current folder", "render-out-empty"),
+    _render(["--out", "  "], "is empty, which would mean the current folder", "render-out-blank"),
+    _figure(["--out", ""], "is empty, which would mean the current folder", "figure-out-empty"),
+    _movie(["--out", ""], "is empty, which would mean the current folder", "movie-out-empty"),
+    Case("export-out-empty", {"in.csv": GOOD}, ["in.csv", "--row", "A", "--out", ""],
+         "is empty, which would mean the current folder", command="export"),
+    Case("atlas-add-out-empty", {"c.toml": LOBES, "lh.a.annot": _annot, "rh.a.annot": _annot},
+         ["add", "net", "--annot", "lh=lh.a.annot", "--annot", "rh=rh.a.annot", "--out", ""],
+         "is empty, which would mean the current folder", command="atlas"),
+    Case("annot-gifti-claims-two-arrays",
+         {"lh.a.label.gii": b'<?xml version="1.0"?><GIFTI Version="1.0" NumberOfDataArrays="2"></GIFTI>',
+          "rh.a.annot": _annot},
+         ["add", "net", "--annot", "lh=lh.a.label.gii", "--annot", "rh=rh.a.annot"], "holds no data array",
+         command="atlas"),
     # -- finite numbers only, checked before anything is written -----------------------------------------------
     _render(["--out", "o", "--vmin", "nan"], "is not a finite number", "vmin-nan"),
     _render(["--out", "o", "--vmax", "inf"], "is not a finite number", "vmax-inf"),

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import click
 
-from brainpainter.cli.options import split_commas
+from brainpainter.cli.options import OutPath, split_commas
 from brainpainter.errors import BrainPainterError
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
@@ -25,7 +25,7 @@ def template() -> None:
 
 @template.command("build", context_settings=CONTEXT)
 @click.argument("subject_dir", type=click.Path(path_type=Path, file_okay=False))
-@click.option("--out", "-o", required=True, type=click.Path(path_type=Path, file_okay=False))
+@click.option("--out", "-o", required=True, type=OutPath(path_type=Path, file_okay=False))
 @click.option("--atlas", "atlases", multiple=True, callback=split_commas,
               help="Label sets to build: dk, destrieux, dkt (default: all three).")
 @click.option("--surface", "surfaces", multiple=True, callback=split_commas,

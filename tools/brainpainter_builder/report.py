@@ -16,11 +16,25 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from brainpainter.atlas.meshing import count_self_intersections
+from brainpainter.atlas.meshing import BUILDER_HINT, count_self_intersections, import_pymeshlab
 from brainpainter.atlas.template import SURFACES, Template, load_template
+from brainpainter.errors import BrainPainterError
 
 #: Largest allowed |mesh volume / voxel volume - 1| of a subcortical structure.
 VOLUME_TOLERANCE = 0.05
+
+
+def _crossings(vertices: NDArray[Any], faces: NDArray[Any]) -> int | None:
+    """Self-intersecting faces of a mesh, or None where pymeshlab (the ``builder`` extra) is missing.
+
+    Reading a template needs no extra: without pymeshlab this one check is
+    reported as not run, never as an error.
+    """
+    try:
+        import_pymeshlab()
+    except BrainPainterError:
+        return None
+    return count_self_intersections(vertices, faces)
 
 
 def _open_edges(faces: NDArray[Any]) -> int:
@@ -142,7 +156,7 @@ def _check(path: Path, max_size_mb: float | None) -> tuple[dict[str, Any], list[
     for hemi in ("lh", "rh"):
         v, f = tpl.glass(hemi)
         glass[hemi] = {"n_vertices": len(v), "n_faces": len(f), "open_edges": _open_edges(f),
-                       "self_intersecting_faces": count_self_intersections(v, f)}
+                       "self_intersecting_faces": _crossings(v, f)}
         if glass[hemi]["open_edges"]:
             problems.append(f"glass/{hemi}: {glass[hemi]['open_edges']} open edges")
         if glass[hemi]["self_intersecting_faces"]:
@@ -222,8 +236,12 @@ def format_report(report: dict[str, Any]) -> str:
                  f"{crossing.get('template', 0)}")
     lines.append(line)
     glass = report["checks"]["glass"]
-    lines.append("  glass: " + ", ".join(f"{h} {g['n_faces']} faces, {g['self_intersecting_faces']} "
-                                         "self-intersecting" for h, g in glass.items()))
+    if any(g["self_intersecting_faces"] is None for g in glass.values()):
+        lines.append("  glass: " + ", ".join(f"{h} {g['n_faces']} faces" for h, g in glass.items())
+                     + f"; self-intersections not checked (needs pymeshlab: {BUILDER_HINT})")
+    else:
+        lines.append("  glass: " + ", ".join(f"{h} {g['n_faces']} faces, {g['self_intersecting_faces']} "
+                                             "self-intersecting" for h, g in glass.items()))
     if report["problems"]:
         lines.append("  PROBLEMS:")
         lines += [f"    - {p}" for p in report["problems"]]

@@ -4,7 +4,7 @@
 
 const $ = (id) => document.getElementById(id);
 const state = { uploadId: null, file: null, name: null, report: null, meta: null,
-                previewCtl: null, previewTimer: null, previewUrl: null, seq: 0 };
+                previewCtl: null, previewTimer: null, previewUrl: null, seq: 0, scale: null };
 const DEFAULT_VIEWS = ["lateral-left", "medial-left", "subcortical"];
 
 function el(tag, attrs = {}, ...children) {
@@ -21,6 +21,47 @@ function showError(message) {
   const box = $("error");
   box.textContent = message || "";
   box.hidden = !message;
+}
+
+// An option error names a CLI flag (--size) or an API field (options.size, movie.hold): shown next to
+// that field, under the field's label, and the message says the label instead of the flag.
+function fieldError(message) {
+  for (const old of document.querySelectorAll(".field-error")) old.remove();
+  for (const n of document.querySelectorAll("[aria-invalid]")) {
+    n.removeAttribute("aria-invalid"); n.removeAttribute("aria-errormessage");
+  }
+  if (!message) return message;
+  // a message about a value names the core setting ("width must be ..."): the field that sets it
+  const SETTING = { width: "size", height: "size", azimuth: "views", elevation: "views", zoom: "views" };
+  const m = message.match(/--([a-z][a-z-]*)/) || message.match(/'(?:options|movie|figure)\.([a-z_]+)'/);
+  const w = m ? null : message.match(/^([a-z_]+) must\b/);
+  const id = m ? m[1].replace(/-/g, "_") : w ? (SETTING[w[1]] || w[1]) : null;
+  const input = id ? $(id) : null;
+  if (!input) return message;
+  const label = document.querySelector(`label[for="${id}"]`) || input.closest("fieldset")?.querySelector("legend");
+  const name = label ? label.textContent.trim() : id;
+  const text = m ? message.split(m[0]).join(`“${name}”`) : `“${name}”: ${message}`;
+  const note = el("div", { class: "field-error", id: `${id}-error`, role: "alert", text });
+  input.setAttribute("aria-invalid", "true"); input.setAttribute("aria-errormessage", note.id);
+  input.insertAdjacentElement("afterend", note);
+  const details = input.closest("details");
+  if (details) details.open = true;
+  return text;
+}
+
+// The colour bar under the preview: the scale of the check report (colours from vmin to vmax, ticks).
+function showBar(scale) {
+  const bar = $("preview-bar");
+  if (!scale || !scale.ramp) { bar.hidden = true; return; }
+  bar.querySelector(".ramp").style.background = `linear-gradient(to right, ${scale.ramp.join(", ")})`;
+  const ticks = bar.querySelector(".ticks");
+  ticks.replaceChildren(...scale.ticks.map((t) => {
+    const span = el("span", { text: t.label });
+    span.style.left = `${(100 * t.at).toFixed(2)}%`;
+    return span;
+  }));
+  bar.setAttribute("aria-label", `Colour bar ${scale.name}: ${scale.ticks.map((t) => t.label).join(", ")}`);
+  bar.hidden = !$("preview").src;
 }
 
 async function api(path, opts = {}) {
@@ -137,6 +178,8 @@ async function upload(blob, name) {
 function showReport(r) {
   const box = $("report");
   box.replaceChildren();
+  state.scale = r.values ? r.values.scale : null;
+  showBar(state.scale);
   box.append(el("p", { class: "ok", text: `OK: ${r.summary}` }));
   const dl = el("dl");
   const add = (k, v) => dl.append(el("dt", { text: k }), el("dd", { text: v }));
@@ -202,16 +245,17 @@ async function preview() {
     state.previewUrl = URL.createObjectURL(blob);
     const img = $("preview");
     img.src = state.previewUrl; img.hidden = false;
+    showBar(state.scale);
     img.dataset.seq = String(seq);
     img.alt = `Preview of ${$("row").selectedOptions[0]?.textContent || "row"} from ${body.view}`;
     $("preview-status").textContent =
       `${$("row").selectedOptions[0]?.textContent || ""} · ${body.view} · rendered in ${res.headers.get("x-render-ms")} ms ` +
       `(round trip ${Math.round(performance.now() - t0)} ms)`;
-    showError("");
+    showError(""); fieldError("");
   } catch (e) {
     if (e.name === "AbortError") return;
     $("preview-status").textContent = "No preview.";
-    showError(e.message);
+    showError(fieldError(e.message));
   }
 }
 
@@ -230,14 +274,21 @@ async function submit(kind, format) {
   if (!state.uploadId) return;
   showError("");
   const body = { upload_id: state.uploadId, kind, options: options() };
-  if (kind === "figure") body.figure = { format };
-  if (kind === "movie") body.movie = { format };
+  if (kind === "figure") {
+    body.figure = { format, dpi: Number($("dpi").value), font_size: Number($("font_size").value),
+                    fig_width: numberOrNull("fig_width") };
+  }
+  if (kind === "movie") {
+    body.movie = { format, frames_per_step: Number($("frames_per_step").value), hold: Number($("hold").value),
+                   easing: $("easing").value, fps: Number($("fps").value) };
+  }
   let job;
   try {
     const res = await api("/api/jobs", { method: "POST", headers: { "content-type": "application/json" },
                                          body: JSON.stringify(body) });
     job = await res.json();
-  } catch (e) { showError(e.message); return; }
+    fieldError("");
+  } catch (e) { showError(fieldError(e.message)); return; }
   const label = kind === "images" ? "All images" : `${kind} (${format.toUpperCase()})`;
   const box = el("div", { class: "job", "data-job": job.id });
   const progId = `prog-${job.id.slice(0, 8)}`;
@@ -251,7 +302,9 @@ async function submit(kind, format) {
     await new Promise((r) => setTimeout(r, 500));
     try { job = await (await api(job.url)).json(); } catch (e) { status.textContent = e.message; return; }
     prog.value = job.progress;
-    status.textContent = `${label}: ${job.status} (${job.progress}/${job.total})`;
+    prog.max = Math.max(1, job.total);
+    const unit = job.kind === "movie" ? " frames" : job.kind === "images" ? " images" : "";
+    status.textContent = `${label}: ${job.status} (${job.progress}/${job.total}${unit})`;
     if (["done", "failed", "cancelled", "expired"].includes(job.status)) break;
   }
   cancel.remove();

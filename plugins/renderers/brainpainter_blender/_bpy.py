@@ -18,6 +18,7 @@ from types import ModuleType
 from typing import IO
 
 from brainpainter.errors import BrainPainterError
+from brainpainter.rendering.interrupts import held
 
 #: The bpy releases brainpainter is tested with, per Python (the same pins as pyproject.toml's
 #: dependencies; tests/test_renderer_blender.py checks they agree).
@@ -43,7 +44,7 @@ def import_bpy() -> ModuleType:
         if "bpy" in _state:
             return _state["bpy"]  # type: ignore[return-value]
         try:
-            with quiet():
+            with quiet(), held():
                 import bpy
         except ImportError as exc:
             reason = " ".join(str(exc).split())
@@ -53,7 +54,7 @@ def import_bpy() -> ModuleType:
                 f"bpy 5.2-5.3 Python 3.13)."
             ) from None
         if bpy.app.background:  # never wipe a user's scene inside the Blender application
-            with quiet():
+            with quiet(), held():
                 bpy.ops.wm.read_factory_settings(use_empty=True)
         _state["bpy"] = bpy
         return bpy

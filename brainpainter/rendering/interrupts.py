@@ -1,0 +1,50 @@
+"""Holding Ctrl-C and SIGTERM while a renderer is in a state it cannot be interrupted in.
+
+The command line's guard turns SIGINT/SIGTERM into an exception so that
+output is cleaned up. Python raises it in the main thread at the next Python
+instruction, wherever that is: inside ``import bpy``, Blender runs its own
+start-up scripts, and an exception raised there left Blender half-made (a
+segmentation fault, or a later internal error). A renderer wraps such a
+section in :func:`held`; a signal that arrives meanwhile is kept and
+delivered again as soon as the section ends, so the run still stops, cleanly.
+
+Blocking the signal (``pthread_sigmask``) is not enough: it only blocks it in
+the calling thread, and another thread (a writer, a progress bar) receives it
+and sets Python's flag all the same.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+_LOCK = threading.Lock()
+_state = {"held": 0}
+_pending: list[int] = []
+
+
+@contextmanager
+def held() -> Iterator[None]:
+    """Keep SIGINT/SIGTERM handled by :func:`defer` for the duration; re-deliver them afterwards."""
+    with _LOCK:
+        _state["held"] += 1
+    try:
+        yield
+    finally:
+        with _LOCK:
+            _state["held"] -= 1
+            again = _pending[:1] if _state["held"] == 0 else []
+            _pending.clear() if again else None
+        for signum in again:
+            signal.raise_signal(signum)  # the handler runs now, outside the section
+
+
+def defer(signum: int) -> bool:
+    """Called by a signal handler: True when the signal was kept for later (a section is held)."""
+    with _LOCK:
+        if _state["held"] > 0:
+            _pending.append(signum)
+            return True
+    return False

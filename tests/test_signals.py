@@ -1,0 +1,117 @@
+"""Signals at any moment: SIGINT/SIGTERM to the process group from start-up on.
+
+A real ``python -m brainpainter render`` with the Blender renderer gets the
+signal after several delays: while Python imports the command line, while
+Blender loads (``import bpy`` runs Blender's own start-up scripts; an
+exception raised there was a segmentation fault), and while it renders.
+Every run must end with 130 (SIGINT) or 143 (SIGTERM) and one line, or, when
+the signal came after the run ended, 0 with complete output; never a
+traceback, a crash or an exit 0 without output. Nothing is published, no
+staging folder and no temporary folder (``brainpainter-run-*``,
+``blender_*``) is left.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+from bad_inputs.corpus import GOOD
+
+from brainpainter.rendering import interrupts
+
+DELAYS = (0.5, 1.5, 3.0, 5.0, 7.0, 10.0)
+CODES = {signal.SIGINT: (130, "interrupted"), signal.SIGTERM: (143, "terminated")}
+
+
+def _run_and_signal(root: Path, tiny: Path, delay: float, signum: int, extra: list[str]) -> dict:
+    work = root / f"{signum}-{delay}-{len(extra)}"
+    tmp = work / "tmp"
+    tmp.mkdir(parents=True)
+    (work / "in.csv").write_bytes(GOOD)
+    env = {k: v for k, v in os.environ.items() if k != "BRAINPAINTER_DEBUG"}
+    env["TMPDIR"] = str(tmp)
+    args = ["render", "in.csv", "--out", "out", "--template", str(tiny), "--views",
+            "lateral-left,medial-left",
+            "--size", "48x48", "--quality", "fast", "-q", *extra]
+    proc = subprocess.Popen([sys.executable, "-m", "brainpainter", *args], cwd=work, env=env,
+                            start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(delay)
+    try:
+        os.killpg(proc.pid, signum)
+    except ProcessLookupError:
+        pass
+    _, err = proc.communicate(timeout=300)
+    time.sleep(0.5)  # worker processes of --jobs finish dying
+    return {"code": proc.returncode, "err": err, "out": work / "out", "tmp": sorted(os.listdir(tmp)),
+            "work": sorted(p.name for p in work.iterdir())}
+
+
+def _check(result: dict, signum: int, delay: float) -> None:
+    code, word = CODES[signum]
+    lines = result["err"].strip().splitlines()
+    assert "Traceback" not in result["err"], result["err"][-2000:]
+    assert "KeyboardInterrupt" not in result["err"], result["err"][-2000:]
+    assert result["code"] != -signal.SIGSEGV, f"segmentation fault after {delay} s"
+    if result["code"] == -signum:  # still in Python's own start-up (site): the signal's default action,
+        assert lines == [], (delay, lines)  # which a shell reports as 128 + signum; nothing was run yet
+    elif result["code"] == 0:  # the signal came after the run: complete output
+        assert sorted(p.name for p in result["out"].iterdir()) == [
+            "A_lateral-left.png", "A_medial-left.png", "manifest.json"], delay
+    else:
+        assert result["code"] == code, (delay, result["code"], result["err"][-2000:])
+        assert lines == [f"{word}: nothing was published; partial output was removed"], (delay, lines)
+        assert not result["out"].exists(), delay  # nothing published, no staging folder
+    assert result["tmp"] == [], (delay, result["tmp"])  # no brainpainter-run-*, no blender_*
+    assert result["work"] in (["in.csv", "out", "tmp"], ["in.csv", "tmp"]), result["work"]
+
+
+@pytest.mark.render
+@pytest.mark.slow
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_signal_at_any_moment_stops_cleanly(tmp_path, tiny, signum):
+    pytest.importorskip("bpy")
+    with ThreadPoolExecutor(max_workers=3) as pool:
+        results = list(pool.map(lambda d: _run_and_signal(tmp_path, tiny, d, signum, []), DELAYS))
+    for delay, result in zip(DELAYS, results, strict=True):
+        _check(result, signum, delay)
+    assert any(r["code"] != 0 for r in results)  # at least one run was really interrupted
+
+
+@pytest.mark.render
+@pytest.mark.slow
+def test_jobs_workers_leave_no_blender_folders(tmp_path, tiny):
+    pytest.importorskip("bpy")
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        results = list(pool.map(lambda d: _run_and_signal(tmp_path, tiny, d, signal.SIGTERM, ["--jobs", "2"]),
+                                (6.0, 9.0)))
+    for delay, result in zip((6.0, 9.0), results, strict=True):
+        _check(result, signal.SIGTERM, delay)
+
+
+def test_a_signal_in_a_held_section_is_delivered_after_it():
+    """The guard's handler defers a signal while a renderer holds (Blender starting up), then raises."""
+    seen: list[str] = []
+
+    def handler(signum, frame):
+        if interrupts.defer(signum):
+            seen.append("deferred")
+            return
+        seen.append("raised")
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGINT, handler)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            with interrupts.held():
+                signal.raise_signal(signal.SIGINT)
+                seen.append("section finished")
+    finally:
+        signal.signal(signal.SIGINT, old)
+    assert seen == ["deferred", "section finished", "raised"]
