@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Unpack
@@ -174,6 +174,7 @@ class MovieResult:
 
 def make_movie(data: Any, atlas: Atlas | str | None = None, *, out: str | Path,
                rows: Iterable[str | int] | str | None = None, progress: bool = True,
+               on_progress: Callable[[int, int], None] | None = None,
                **options: Unpack[MakeMovieKwargs]) -> MovieResult:
     """Make a movie through the rows of a region-value table.
 
@@ -189,6 +190,9 @@ def make_movie(data: Any, atlas: Atlas | str | None = None, *, out: str | Path,
         (sorted by time with `time_column`); default all rows.
     progress : bool
         Show a progress bar.
+    on_progress : callable, optional
+        Called as ``on_progress(frames_done, n_frames)`` after each frame is encoded; an exception
+        it raises stops the movie (nothing is written), e.g. to cancel it.
     **options
         The movie's own: :class:`MovieOptions` (``frames_per_step``, ``easing``,
         ``time_column``, ``hold``, ``fps``, ``orbit``, ``title``, ``label``,
@@ -226,7 +230,7 @@ def make_movie(data: Any, atlas: Atlas | str | None = None, *, out: str | Path,
     check_frames(len(plan), path.suffix.lower(), run)
     frames = MovieFrames.of(run, keys, plan, movie)
     runner = make_runner(frames.painter, checked.scene.template, checked.runner, n_items=len(frames.states))
-    size = encode(path, frames, runner, float(movie.fps), progress)
+    size = encode(path, frames, runner, float(movie.fps), progress, on_progress)
     return MovieResult(path, len(plan), size, float(movie.fps), keys.names, keys.times,
                        time.perf_counter() - start)
 
@@ -358,8 +362,12 @@ class MovieFrames:
                 i = next(todo, None)
 
 
-def encode(path: Path, frames: MovieFrames, runner: Runner, fps: float, progress: bool) -> tuple[int, int]:
-    """Render, compose and encode every frame into `path`, published atomically; returns the frame size."""
+def encode(path: Path, frames: MovieFrames, runner: Runner, fps: float, progress: bool,
+           on_progress: Callable[[int, int], None] | None = None) -> tuple[int, int]:
+    """Render, compose and encode every frame into `path`, published atomically; returns the frame size.
+
+    `on_progress(done, n)` is called after each frame is encoded (see :func:`make_movie`).
+    """
     from tqdm.auto import tqdm
 
     from brainpainter.io.transaction import FileTransaction
@@ -380,6 +388,8 @@ def encode(path: Path, frames: MovieFrames, runner: Runner, fps: float, progress
             for i in range(n):  # encoded in order
                 writer.write(samples.pop(i) if i in samples else next(rest)[1])
                 bar.update(1)
+                if on_progress is not None:
+                    on_progress(i + 1, n)
         except BaseException:
             writer.abort()
             raise

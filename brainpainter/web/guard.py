@@ -14,6 +14,7 @@ import threading
 import time
 from typing import Any
 
+import anyio
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import Message, Receive, Scope, Send
 
@@ -32,6 +33,8 @@ SECURITY_HEADERS = [
     (b"cross-origin-resource-policy", b"same-origin"),
 ]
 JSON_BODY_LIMIT = 64 * 1024
+JSON_BODY_TIME_LIMIT_S = 30.0
+MAX_UPLOADS_IN_FLIGHT = 64  # uploads being received from all clients together
 STATE_CHANGING = ("POST", "PUT", "DELETE", "PATCH")
 
 
@@ -39,9 +42,19 @@ class _TooLarge(StarletteHTTPException):
     """A request body over its limit (raised while it is read: the app answers 413 with the message)."""
 
     def __init__(self, what: str, limit: int) -> None:
-        super().__init__(413, f"the {what} is larger than this server's limit; at most "
-                              f"{limit / 2**20:.3g} MB is read, to keep memory bounded. Split the table or "
-                              "remove unneeded columns.")
+        hint = ("Split the table or remove unneeded columns." if what == "upload" else
+                "Send the table as an upload (POST /api/uploads) and refer to it by its upload_id.")
+        size = f"{limit / 2**20:.3g} MB" if limit >= 2**20 else f"{limit // 1024} KiB"
+        super().__init__(413, f"the {what} is larger than this server's limit; at most {size} is read, to "
+                              f"keep memory bounded. {hint}")
+
+
+class _TooSlow(StarletteHTTPException):
+    """A request body not received within its deadline (408)."""
+
+    def __init__(self, what: str, seconds: float) -> None:
+        super().__init__(408, f"the {what} was not received within {seconds:g} s; send it again (on a slow "
+                              "connection, a smaller file).")
 
 
 class RateLimiter:
@@ -76,6 +89,7 @@ class Guard:
         self.app = app
         self.config = config
         self.limiter = RateLimiter(config.rate_per_minute)
+        self._uploading: dict[str, int] = {}  # client -> uploads being received (event loop only)
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
@@ -88,6 +102,9 @@ class Guard:
         is_upload = path == "/api/uploads"
         limit = self.config.max_upload_bytes if is_upload else JSON_BODY_LIMIT
         what = "upload" if is_upload else "request body"
+        seconds = self.config.upload_time_limit_s if is_upload else JSON_BODY_TIME_LIMIT_S
+        deadline = time.monotonic() + seconds
+        body_done = method not in STATE_CHANGING
         state = {"status": 0, "bytes": 0, "started": False}
 
         async def send_wrapper(message: Message) -> None:
@@ -105,18 +122,31 @@ class Guard:
         received = 0
 
         async def receive_wrapper() -> Message:
-            nonlocal received
-            message = await receive()
+            nonlocal received, body_done
+            if body_done:  # e.g. waiting for a disconnect while a file streams out: no deadline
+                return await receive()
+            try:
+                with anyio.fail_after(max(0.0, deadline - time.monotonic())):
+                    message = await receive()
+            except TimeoutError:
+                raise _TooSlow(what, seconds) from None
             if message["type"] == "http.request":
                 received += len(message.get("body", b""))
                 if received > limit:
                     raise _TooLarge(what, limit)
+                body_done = not message.get("more_body", False)
             return message
 
+        counted = False
         try:
-            length = dict(scope.get("headers", [])).get(b"content-length")
+            headers = dict(scope.get("headers", []))
+            length = headers.get(b"content-length")
             if length is not None and length.isdigit() and int(length) > limit:
                 raise _TooLarge(what, limit)
+            if method in STATE_CHANGING and headers.get(b"sec-fetch-site") == b"cross-site":
+                await _send_json(send_wrapper, 403, {"error": "requests from other web sites are refused; "
+                                                     "use this server's own page or a script."})
+                return
             if method in STATE_CHANGING and path.startswith("/api/"):
                 wait = self.limiter.allow(client)
                 if wait:
@@ -125,11 +155,25 @@ class Guard:
                                                          f"{wait:.0f} s."},
                                      {"retry-after": str(max(1, round(wait)))})
                     return
+            if is_upload and method == "POST":
+                mine = self._uploading.get(client, 0)
+                if mine >= self.config.max_uploads_in_flight or sum(self._uploading.values()) >= \
+                        MAX_UPLOADS_IN_FLIGHT:
+                    busy = (f"{mine} upload(s) from {client} are still being received; wait for them to "
+                            "finish, then upload again.")
+                    await _send_json(send_wrapper, 429, {"error": busy}, {"retry-after": "5"})
+                    return
+                self._uploading[client] = mine + 1
+                counted = True
             await self.app(scope, receive_wrapper, send_wrapper)
-        except _TooLarge as exc:
+        except (_TooLarge, _TooSlow) as exc:
             if not state["started"]:
-                await _send_json(send_wrapper, 413, {"error": exc.detail})
+                await _send_json(send_wrapper, exc.status_code, {"error": exc.detail})
         finally:
+            if counted:
+                left = self._uploading.pop(client, 1) - 1
+                if left > 0:
+                    self._uploading[client] = left
             access_log.info(json.dumps({
                 "t": round(time.time(), 3), "id": rid, "client": client, "method": method, "path": path,
                 "status": state["status"], "ms": round((time.perf_counter() - t0) * 1000, 1),
