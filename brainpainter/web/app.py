@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import logging
 import re
+import sqlite3
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from functools import partial
@@ -191,10 +192,17 @@ def _add_error_handlers(app: FastAPI, config: ServerConfig) -> None:
         log.info("client left during %s %s", request.method, request.url.path)
         return Response(status_code=400)  # nobody reads it
 
-    @app.exception_handler(Exception)
-    async def _internal(request: Request, exc: Exception) -> JSONResponse:
+    @app.exception_handler(OSError)
+    @app.exception_handler(sqlite3.OperationalError)
+    async def _os_error(request: Request, exc: Exception) -> JSONResponse:
         if _disk_full(exc):
             return _full(request, exc)
+        log.error("internal error on %s %s", request.method, request.url.path, exc_info=exc)
+        return JSONResponse({"error": f"internal error: {type(exc).__name__} (logged on the server)"},
+                            status_code=500)
+
+    @app.exception_handler(Exception)
+    async def _internal(request: Request, exc: Exception) -> JSONResponse:
         log.exception("internal error on %s %s", request.method, request.url.path)
         return JSONResponse({"error": f"internal error: {type(exc).__name__} (logged on the server)"},
                             status_code=500)
@@ -404,7 +412,6 @@ def _full(request: Request, exc: BaseException) -> JSONResponse:
 def _disk_full(exc: BaseException) -> bool:
     """An error that means the disk (or the data folder's quota) is full."""
     import errno
-    import sqlite3
 
     if getattr(exc, "errno", None) in (errno.ENOSPC, errno.EDQUOT):  # OSError, or os_error's one line
         return True

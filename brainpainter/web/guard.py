@@ -44,9 +44,9 @@ class _TooLarge(StarletteHTTPException):
     def __init__(self, what: str, limit: int) -> None:
         hint = ("Split the table or remove unneeded columns." if what == "upload" else
                 "Send the table as an upload (POST /api/uploads) and refer to it by its upload_id.")
-        size = f"{limit / 2**20:.3g} MB" if limit >= 2**20 else f"{limit // 1024} KiB"
-        super().__init__(413, f"the {what} is larger than this server's limit; at most {size} is read, to "
-                              f"keep memory bounded. {hint}")
+        mb = f"{limit / 2**20:.3g} MB"
+        super().__init__(413, f"the {what} is larger than this server's limit; at most {mb} is read, to keep "
+                              f"memory bounded. {hint}")
 
 
 class _TooSlow(StarletteHTTPException):
