@@ -350,3 +350,18 @@ def test_only_worker_deaths_the_job_caused_count(tmp_path):
         store.requeue(worker=f"w{k}", max_attempts=3, ttl_s=60)
     job = store.get(job_id)
     assert job["status"] == "failed" and "stopped its worker 3 times" in job["error"]
+
+
+def test_repeated_log_lines_are_kept_to_a_few_a_minute():
+    import logging
+
+    from brainpainter.web.server import RepeatFilter
+
+    f = RepeatFilter(per_minute=3)
+
+    def record(msg: str) -> logging.LogRecord:
+        return logging.LogRecord("uvicorn.error", logging.ERROR, __file__, 1, msg, None, None)
+
+    passed = [f.filter(record("accept failed: EMFILE")) for _ in range(1000)]
+    assert passed.count(True) == 3
+    assert f.filter(record("another message"))
