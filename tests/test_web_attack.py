@@ -226,6 +226,8 @@ def test_smaller_items(api):
         r = api.post("/api/check", content=f'{{"upload_id": "{uid}", "options": {{"vmax": {value}}}}}',
                      headers={"content-type": "application/json"})
         assert r.status_code == 422 and "vmax" in r.json()["error"], value
+    r = api.post("/api/check", json={"upload_id": uid, "options": {"vmax": -1}})
+    assert r.status_code == 400 and r.json()["error"].startswith("vmax=-1 is not above the smallest value")
     r = api.post("/api/preview", json={"upload_id": uid, "row": "²"})
     assert r.status_code == 400 and "not an image of the table" in r.json()["error"]
     assert not valid_id("a" * 32 + "\n") and valid_id("a" * 32)

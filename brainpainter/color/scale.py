@@ -258,10 +258,23 @@ class ScaleOptions:
             half = float(np.max(np.abs(finite - center))) if finite.size else 1.0
             half = half or 1.0
             return center - half, center + half
-        lo = (float(finite.min()) if finite.size else 0.0) if lo is None else lo
-        hi = (float(finite.max()) if finite.size else 1.0) if hi is None else hi
-        if (self.vmin is None or self.vmax is None) and hi <= lo:
-            hi = lo + 1.0
+        if finite.size == 0:  # nothing to scale: a unit range beside what was given
+            lo = (hi - 1.0 if hi is not None else 0.0) if lo is None else lo
+            hi = lo + 1.0 if hi is None else hi
+        elif lo is None and hi is not None and hi <= float(finite.min()):
+            raise BrainPainterError(
+                f"vmax={hi:g} is not above the smallest value of the table ({float(finite.min()):g}); "
+                f"give a larger vmax, or also a vmin below {hi:g}."
+            )
+        elif hi is None and lo is not None and lo >= float(finite.max()):
+            raise BrainPainterError(
+                f"vmin={lo:g} is not below the largest value of the table ({float(finite.max()):g}); "
+                f"give a smaller vmin, or also a vmax above {lo:g}."
+            )
+        lo = float(finite.min()) if lo is None else lo
+        hi = float(finite.max()) if hi is None else hi
+        if (self.vmin is None and self.vmax is None) and hi <= lo:
+            hi = lo + 1.0  # every value the same
         return lo, hi
 
     def scale(self, data: NDArray[Any] | Sequence[float] | None = None) -> ColourScale:
