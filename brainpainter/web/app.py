@@ -303,6 +303,9 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
         """One row from one view, small, rendered by the warm preview painter."""
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
         req = await work.run(_preview_request, data, name, body, config)
+        if previews.borrowed_tokens >= previews.total_tokens:  # never queue without bound
+            raise ApiError(503, f"{MAX_PREVIEW_WAITING} previews are waiting; try again in a moment",
+                           {"retry-after": "2"})
         try:
             png, ms = await anyio.to_thread.run_sync(pool.preview, req, limiter=previews)
         except PreviewBusy as exc:
