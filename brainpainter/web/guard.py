@@ -160,7 +160,9 @@ class Guard:
                 if mine >= self.config.max_uploads_in_flight or sum(self._uploading.values()) >= \
                         MAX_UPLOADS_IN_FLIGHT:
                     busy = (f"{mine} upload(s) from {client} are still being received; wait for them to "
-                            "finish, then upload again.")
+                            "finish, then upload again." if mine >= self.config.max_uploads_in_flight else
+                            "the server is receiving as many uploads as it takes at once; upload again in a "
+                            "few seconds.")
                     await _send_json(send_wrapper, 429, {"error": busy}, {"retry-after": "5"})
                     return
                 self._uploading[client] = mine + 1

@@ -172,13 +172,23 @@ def run_job(store: Any, job: dict[str, Any], painters: PainterCache, *, ttl_s: f
             shutil.rmtree(folder / "out", ignore_errors=True)
         return
     except BrainPainterError as exc:
-        store.fail(job_id, attempt, str(exc).splitlines()[0] if str(exc) else type(exc).__name__, ttl_s)
+        line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        store.fail(job_id, attempt, _no_paths(line, store), ttl_s)
         return
     except Exception as exc:
         traceback.print_exc(file=sys.stderr)
-        store.fail(job_id, attempt, f"internal error: {type(exc).__name__}: {exc}", ttl_s)
+        line = f"internal error: {type(exc).__name__}: {exc}".splitlines()[0]
+        store.fail(job_id, attempt, _no_paths(line, store), ttl_s)
         return
     store.finish(job_id, attempt, files, ttl_s)
+
+
+def _no_paths(message: str, store: Any) -> str:
+    """`message` without the server's own paths (clients see job errors)."""
+    root = Path(store.root)
+    for shown in {str(root.resolve()), str(root)}:
+        message = message.replace(shown, "DATA_DIR")
+    return message
 
 
 def _prepared(folder: Path, job: dict[str, Any]) -> Any:
