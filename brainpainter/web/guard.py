@@ -35,6 +35,7 @@ SECURITY_HEADERS = [
 JSON_BODY_LIMIT = 64 * 1024
 JSON_BODY_TIME_LIMIT_S = 30.0
 MAX_UPLOADS_IN_FLIGHT = 64  # uploads being received from all clients together
+UPLOAD_SLOT_WAIT_S = 5.0  # an upload beyond a client's slots waits this long for one, then gets 429
 STATE_CHANGING = ("POST", "PUT", "DELETE", "PATCH")
 
 
@@ -90,6 +91,25 @@ class Guard:
         self.config = config
         self.limiter = RateLimiter(config.rate_per_minute)
         self._uploading: dict[str, int] = {}  # client -> uploads being received (event loop only)
+        self._slot_freed: anyio.Event | None = None  # made in the event loop
+
+    async def _upload_slot(self, client: str) -> bool:
+        """Take one of `client`'s upload slots, waiting up to :data:`UPLOAD_SLOT_WAIT_S` for one (a
+        waiting request's body is not read: it costs a socket, not memory); False when none came."""
+        end = time.monotonic() + UPLOAD_SLOT_WAIT_S
+        while True:
+            mine = self._uploading.get(client, 0)
+            if mine < self.config.max_uploads_in_flight and sum(self._uploading.values()) < \
+                    MAX_UPLOADS_IN_FLIGHT:
+                self._uploading[client] = mine + 1
+                return True
+            left = end - time.monotonic()
+            if left <= 0:
+                return False
+            if self._slot_freed is None or self._slot_freed.is_set():
+                self._slot_freed = anyio.Event()
+            with anyio.move_on_after(left):
+                await self._slot_freed.wait()
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
@@ -156,16 +176,14 @@ class Guard:
                                      {"retry-after": str(max(1, round(wait)))})
                     return
             if is_upload and method == "POST":
-                mine = self._uploading.get(client, 0)
-                if mine >= self.config.max_uploads_in_flight or sum(self._uploading.values()) >= \
-                        MAX_UPLOADS_IN_FLIGHT:
+                if not await self._upload_slot(client):
+                    mine = self._uploading.get(client, 0)
                     busy = (f"{mine} upload(s) from {client} are still being received; wait for them to "
                             "finish, then upload again." if mine >= self.config.max_uploads_in_flight else
                             "the server is receiving as many uploads as it takes at once; upload again in a "
                             "few seconds.")
                     await _send_json(send_wrapper, 429, {"error": busy}, {"retry-after": "5"})
                     return
-                self._uploading[client] = mine + 1
                 counted = True
             await self.app(scope, receive_wrapper, send_wrapper)
         except (_TooLarge, _TooSlow) as exc:
@@ -176,6 +194,8 @@ class Guard:
                 left = self._uploading.pop(client, 1) - 1
                 if left > 0:
                     self._uploading[client] = left
+                if self._slot_freed is not None:
+                    self._slot_freed.set()
             access_log.info(json.dumps({
                 "t": round(time.time(), 3), "id": rid, "client": client, "method": method, "path": path,
                 "status": state["status"], "ms": round((time.perf_counter() - t0) * 1000, 1),
