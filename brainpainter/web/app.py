@@ -31,6 +31,7 @@ from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from functools import partial
 from importlib import resources
+from pathlib import Path
 from typing import Any, Literal, TypeVar
 
 import anyio
@@ -268,19 +269,18 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
         await _disk_budget(store, config)
         shown = upload_name(name)
         fh, path = await run_in_threadpool(new_incoming, store.root)
+        opts = {"atlas": atlas or None, "image_column": image_column or None, "value": value or None,
+                "region_column": region_column or None, "strict": strict}
         try:
             size = 0
             with fh:
                 async for chunk in request.stream():
                     size += len(chunk)
                     fh.write(chunk)
-            data = await run_in_threadpool(path.read_bytes)
+            # read into memory only on a work thread: at most a few bodies are in memory at once
+            data, (report, images) = await work.run(_read_and_check, path, shown, opts, config)
         finally:
             path.unlink(missing_ok=True)
-        opts = {"atlas": atlas or None, "image_column": image_column or None, "value": value or None,
-                "region_column": region_column or None, "strict": strict}
-        report, images = await work.run(check_upload, data, shown, opts, max_rows=config.max_rows,
-                                        time_limit_s=config.parse_time_limit_s)
         upload_id = await run_in_threadpool(store.add_upload, _client(request), shown, data,
                                             config.result_ttl_s, config.max_uploads_per_client)
         return {"upload_id": upload_id, "name": shown, "size": size, "report": report,
@@ -393,6 +393,13 @@ def _upload(store: Store, upload_id: str) -> tuple[str, bytes]:
     if got is None:
         raise ApiError(404, "upload not found (it expired, or the id is wrong); upload the table again.")
     return got
+
+
+def _read_and_check(path: Path, name: str, options: dict[str, Any],
+                    config: ServerConfig) -> tuple[bytes, tuple[dict[str, Any], list[str]]]:
+    data = path.read_bytes()
+    return data, check_upload(data, name, options, max_rows=config.max_rows,
+                              time_limit_s=config.parse_time_limit_s)
 
 
 async def _disk_budget(store: Store, config: ServerConfig) -> None:

@@ -155,9 +155,22 @@ class Guard:
                 if received > limit:
                     raise _TooLarge(what, limit)
                 body_done = not message.get("more_body", False)
+                if body_done:
+                    release()  # the slot is for receiving; reading the table is bounded elsewhere
             return message
 
         counted = False
+
+        def release() -> None:
+            nonlocal counted
+            if counted:
+                counted = False
+                left = self._uploading.pop(client, 1) - 1
+                if left > 0:
+                    self._uploading[client] = left
+                if self._slot_freed is not None:
+                    self._slot_freed.set()
+
         try:
             headers = dict(scope.get("headers", []))
             length = headers.get(b"content-length")
@@ -190,12 +203,7 @@ class Guard:
             if not state["started"]:
                 await _send_json(send_wrapper, exc.status_code, {"error": exc.detail})
         finally:
-            if counted:
-                left = self._uploading.pop(client, 1) - 1
-                if left > 0:
-                    self._uploading[client] = left
-                if self._slot_freed is not None:
-                    self._slot_freed.set()
+            release()
             access_log.info(json.dumps({
                 "t": round(time.time(), 3), "id": rid, "client": client, "method": method, "path": path,
                 "status": state["status"], "ms": round((time.perf_counter() - t0) * 1000, 1),
