@@ -54,6 +54,7 @@ def test_stalled_uploads_and_idle_sockets_do_not_hold_the_server(tmp_path):
     sockets: list[socket.socket] = []
     idle: list[socket.socket] = []
     try:
+        assert httpx.get(f"{server.url}/api/meta", timeout=30).status_code == 200  # imports done
         base = rss_mb(server.proc.pid)
         sockets = [_stalled_upload(server.port, 2 * 2**20, 10 * 2**20) for _ in range(30)]
         idle = [socket.create_connection(("127.0.0.1", server.port)) for _ in range(50)]
