@@ -51,7 +51,7 @@ from brainpainter.web.guard import Guard
 from brainpainter.web.options import RenderOptions, TableOptions, prepare, upload_name
 from brainpainter.web.pool import MAX_PREVIEW_WAITING, Pool, PreviewBusy, PreviewUnavailable, preview_settings
 from brainpainter.web.store import LimitError, Store, valid_id
-from brainpainter.web.upload import check_upload, content_type_allowed, new_incoming
+from brainpainter.web.upload import check_table, check_upload, content_type_allowed, new_incoming
 
 T = TypeVar("T")
 
@@ -294,8 +294,9 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
         opts = {**o.model_dump(include=set(TableOptions.model_fields)),
                 "scale": {"gradient": o.gradient, "cmap": o.cmap, "vmin": o.vmin, "vmax": o.vmax,
                           "center": o.center}}
-        return (await work.run(check_upload, data, name, opts, max_rows=config.max_rows,
-                               time_limit_s=config.parse_time_limit_s))[0]
+        # read on a work thread: the upload was read within the time limit already (as preview and
+        # job submission read it)
+        return (await work.run(check_table, data, name, opts, config.max_rows))[0]
 
     # -- preview -------------------------------------------------------------------------------
     @app.post("/api/preview", tags=["api"], responses={200: {"content": {"image/png": {}}}})
