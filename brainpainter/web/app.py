@@ -31,7 +31,6 @@ from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from functools import partial
 from importlib import resources
-from pathlib import Path
 from typing import Any, Literal, TypeVar
 
 import anyio
@@ -51,7 +50,7 @@ from brainpainter.web.guard import Guard
 from brainpainter.web.options import RenderOptions, TableOptions, prepare, upload_name
 from brainpainter.web.pool import MAX_PREVIEW_WAITING, Pool, PreviewBusy, PreviewUnavailable, preview_settings
 from brainpainter.web.store import LimitError, Store, valid_id
-from brainpainter.web.upload import check_table, check_upload, content_type_allowed, new_incoming
+from brainpainter.web.upload import check_table, content_type_allowed, new_incoming, read_and_check
 
 T = TypeVar("T")
 
@@ -278,7 +277,9 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
                     size += len(chunk)
                     fh.write(chunk)
             # read into memory only on a work thread: at most a few bodies are in memory at once
-            data, (report, images) = await work.run(_read_and_check, path, shown, opts, config)
+            data, (report, images) = await work.run(read_and_check, path, shown, opts,
+                                                    max_rows=config.max_rows,
+                                                    time_limit_s=config.parse_time_limit_s)
         finally:
             path.unlink(missing_ok=True)
         upload_id = await run_in_threadpool(store.add_upload, _client(request), shown, data,
@@ -394,13 +395,6 @@ def _upload(store: Store, upload_id: str) -> tuple[str, bytes]:
     if got is None:
         raise ApiError(404, "upload not found (it expired, or the id is wrong); upload the table again.")
     return got
-
-
-def _read_and_check(path: Path, name: str, options: dict[str, Any],
-                    config: ServerConfig) -> tuple[bytes, tuple[dict[str, Any], list[str]]]:
-    data = path.read_bytes()
-    return data, check_upload(data, name, options, max_rows=config.max_rows,
-                              time_limit_s=config.parse_time_limit_s)
 
 
 async def _disk_budget(store: Store, config: ServerConfig) -> None:

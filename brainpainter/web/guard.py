@@ -111,6 +111,36 @@ class Guard:
             with anyio.move_on_after(left):
                 await self._slot_freed.wait()
 
+    def _release_slot(self, client: str) -> None:
+        left = self._uploading.pop(client, 1) - 1
+        if left > 0:
+            self._uploading[client] = left
+        if self._slot_freed is not None:
+            self._slot_freed.set()
+
+    async def _refusal(self, method: str, path: str, client: str,
+                       headers: dict[bytes, bytes]) -> tuple[int, str, dict[str, str]] | None:
+        """``(status, message, headers)`` when the request is refused before it is read; else None (an
+        upload then holds one of its client's upload slots)."""
+        if method not in STATE_CHANGING:
+            return None
+        if headers.get(b"sec-fetch-site") == b"cross-site":
+            return 403, ("requests from other web sites are refused; use this server's own page or a "
+                         "script."), {}
+        if path.startswith("/api/"):
+            wait = self.limiter.allow(client)
+            if wait:
+                return (429, f"too many requests from {client}; at most {self.config.rate_per_minute} a "
+                             f"minute. Retry in {wait:.0f} s.", {"retry-after": str(max(1, round(wait)))})
+        if path == "/api/uploads" and method == "POST" and not await self._upload_slot(client):
+            mine = self._uploading.get(client, 0)
+            busy = (f"{mine} upload(s) from {client} are still being received; wait for them to finish, then "
+                    "upload again." if mine >= self.config.max_uploads_in_flight else
+                    "the server is receiving as many uploads as it takes at once; upload again in a few "
+                    "seconds.")
+            return 429, busy, {"retry-after": "5"}
+        return None
+
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
@@ -165,39 +195,18 @@ class Guard:
             nonlocal counted
             if counted:
                 counted = False
-                left = self._uploading.pop(client, 1) - 1
-                if left > 0:
-                    self._uploading[client] = left
-                if self._slot_freed is not None:
-                    self._slot_freed.set()
+                self._release_slot(client)
 
         try:
             headers = dict(scope.get("headers", []))
             length = headers.get(b"content-length")
             if length is not None and length.isdigit() and int(length) > limit:
                 raise _TooLarge(what, limit)
-            if method in STATE_CHANGING and headers.get(b"sec-fetch-site") == b"cross-site":
-                await _send_json(send_wrapper, 403, {"error": "requests from other web sites are refused; "
-                                                     "use this server's own page or a script."})
+            refusal = await self._refusal(method, path, client, headers)
+            if refusal is not None:
+                await _send_json(send_wrapper, refusal[0], {"error": refusal[1]}, refusal[2])
                 return
-            if method in STATE_CHANGING and path.startswith("/api/"):
-                wait = self.limiter.allow(client)
-                if wait:
-                    await _send_json(send_wrapper, 429, {"error": f"too many requests from {client}; at most "
-                                                         f"{self.config.rate_per_minute} a minute. Retry in "
-                                                         f"{wait:.0f} s."},
-                                     {"retry-after": str(max(1, round(wait)))})
-                    return
-            if is_upload and method == "POST":
-                if not await self._upload_slot(client):
-                    mine = self._uploading.get(client, 0)
-                    busy = (f"{mine} upload(s) from {client} are still being received; wait for them to "
-                            "finish, then upload again." if mine >= self.config.max_uploads_in_flight else
-                            "the server is receiving as many uploads as it takes at once; upload again in a "
-                            "few seconds.")
-                    await _send_json(send_wrapper, 429, {"error": busy}, {"retry-after": "5"})
-                    return
-                counted = True
+            counted = is_upload and method == "POST"  # _refusal took an upload slot
             await self.app(scope, receive_wrapper, send_wrapper)
         except (_TooLarge, _TooSlow) as exc:
             if not state["started"]:

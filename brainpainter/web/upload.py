@@ -103,6 +103,13 @@ def check_upload(data: bytes, name: str, options: dict[str, Any], *, max_rows: i
     return report, images
 
 
+def read_and_check(path: Path, name: str, options: dict[str, Any], *, max_rows: int,
+                   time_limit_s: float) -> tuple[bytes, tuple[dict[str, Any], list[str]]]:
+    """The received body at `path` and :func:`check_upload`'s answer for it."""
+    data = path.read_bytes()
+    return data, check_upload(data, name, options, max_rows=max_rows, time_limit_s=time_limit_s)
+
+
 def check_table(data: bytes, name: str, options: dict[str, Any],
                 max_rows: int) -> tuple[dict[str, Any], list[str]]:
     """The check report and image names (in this process); raises the first error as the CLI does."""
