@@ -71,7 +71,8 @@ class Serve:
 
 
 def _upload(client: httpx.Client) -> str:
-    r = client.post("/api/uploads", params={"name": EXAMPLE.name}, content=EXAMPLE.read_bytes())
+    r = client.post("/api/uploads", params={"name": EXAMPLE.name}, content=EXAMPLE.read_bytes(),
+                    headers={"content-type": "application/octet-stream"})
     r.raise_for_status()
     return r.json()["upload_id"]
 

@@ -65,7 +65,8 @@ def submit_all(server: Server, n_jobs: int, n_clients: int, halfway: threading.E
                         halfway.set()
                 if k is None:
                     return
-                r = post(client, "/api/uploads", params={"name": f"t{k}.csv"}, content=table(k))
+                r = post(client, "/api/uploads", params={"name": f"t{k}.csv"}, content=table(k),
+                         headers={"content-type": "application/octet-stream"})
                 assert r.status_code == 200, r.text
                 uid = r.json()["upload_id"]
                 r = post(client, "/api/jobs", json={"upload_id": uid, "options": {

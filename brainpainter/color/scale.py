@@ -302,6 +302,16 @@ class ScaleOptions:
                 half = float(np.max(np.abs(finite - center))) if finite.size else 1.0
             half = min(max(half or 1.0, abs(center) * 1e-6), BIGGEST)
             return max(center - half, -BIGGEST), min(center + half, BIGGEST)
+        if finite.size and lo is None and hi is not None and hi <= float(finite.min()):
+            raise BrainPainterError(
+                f"vmax={hi:g} is not above the smallest value of the table ({float(finite.min()):g}); "
+                f"give a larger vmax, or also a vmin below {hi:g}."
+            )
+        if finite.size and hi is None and lo is not None and lo >= float(finite.max()):
+            raise BrainPainterError(
+                f"vmin={lo:g} is not below the largest value of the table ({float(finite.max()):g}); "
+                f"give a smaller vmin, or also a vmax above {lo:g}."
+            )
         lo = (float(finite.min()) if finite.size else 0.0) if lo is None else lo
         hi = (float(finite.max()) if finite.size else 1.0) if hi is None else hi
         if (self.vmin is None or self.vmax is None) and hi <= lo:

@@ -23,7 +23,7 @@ images in one row or column align.
 from __future__ import annotations
 
 import io
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Unpack
@@ -130,6 +130,7 @@ def figure_bytes(fig: Figure, path: Path, dpi: float, transparent: bool = False)
 @quiet_glyphs
 def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path | None = None,
                 rows: Iterable[str | int] | str | None = None, progress: bool = True,
+                on_progress: Callable[[int, int], None] | None = None,
                 **options: Unpack[MakeFigureKwargs]) -> FigureResult:
     """Render rows of a region-value table and lay them out as a figure with a colour bar.
 
@@ -146,6 +147,9 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
         The colour scale is computed over all rows of the table, not only `rows`.
     progress : bool
         Show a progress bar.
+    on_progress : callable, optional
+        Called as ``on_progress(images_done, n_images)`` after each image is rendered; an exception it
+        raises stops the figure (nothing is written), e.g. to cancel it.
     **options
         The layout: :class:`brainpainter.media.layout.FigureOptions` (``grid``,
         ``title``, ``label``, ``ticks``, ``dpi``, ``fig_width``, ``font_size``,
@@ -184,6 +188,8 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
             for (i, view), pixels in paint(run, runner, plan):
                 images[(table.images[i], view.name)] = pixels
                 bar.update(1)
+                if on_progress is not None:
+                    on_progress(len(images), len(plan))
         layout = compose_figure(images, [table.images[i] for i in chosen], [v.name for v in run.views],
                                 run.scale, figure_opts, nan=nan, missing=missing, background=background)
         if tx is not None and path is not None:

@@ -181,8 +181,8 @@ class MovieResult:
 
 @quiet_glyphs
 def make_movie(data: Any, atlas: Atlas | str | None = None, *, out: str | Path,
-               rows: Iterable[str | int] | str | None = None,
-               progress: bool | Callable[[int, int], None] = True,
+               rows: Iterable[str | int] | str | None = None, progress: bool = True,
+               on_progress: Callable[[int, int], None] | None = None,
                **options: Unpack[MakeMovieKwargs]) -> MovieResult:
     """Make a movie through the rows of a region-value table.
 
@@ -196,9 +196,11 @@ def make_movie(data: Any, atlas: Atlas | str | None = None, *, out: str | Path,
     rows : iterable of str or int, or str, optional
         Image names (or 0-based positions) to use as key frames, in this order
         (sorted by time with `time_column`); default all rows.
-    progress : bool or callable
-        Show a progress bar; or a function called with ``(frames done, frames)`` after each frame
-        (the web server's job progress).
+    progress : bool
+        Show a progress bar.
+    on_progress : callable, optional
+        Called as ``on_progress(frames_done, n_frames)`` after each frame is encoded; an exception
+        it raises stops the movie (nothing is written), e.g. to cancel it.
     **options
         The movie's own: :class:`MovieOptions` (``frames_per_step``, ``easing``,
         ``time_column``, ``hold``, ``fps``, ``orbit``, ``title``, ``label``,
@@ -236,7 +238,7 @@ def make_movie(data: Any, atlas: Atlas | str | None = None, *, out: str | Path,
     check_frames(len(plan), path.suffix.lower(), run)
     frames = MovieFrames.of(run, keys, plan, movie)
     runner = make_runner(frames.painter, checked.scene.template, checked.runner, n_items=len(frames.states))
-    size = encode(path, frames, runner, float(movie.fps), progress)
+    size = encode(path, frames, runner, float(movie.fps), progress, on_progress)
     return MovieResult(path, len(plan), size, float(movie.fps), keys.names, keys.times,
                        time.perf_counter() - start)
 
@@ -379,11 +381,11 @@ class MovieFrames:
                 i = next(todo, None)
 
 
-def encode(path: Path, frames: MovieFrames, runner: Runner, fps: float,
-           progress: bool | Callable[[int, int], None]) -> tuple[int, int]:
+def encode(path: Path, frames: MovieFrames, runner: Runner, fps: float, progress: bool,
+           on_progress: Callable[[int, int], None] | None = None) -> tuple[int, int]:
     """Render, compose and encode every frame into `path`, published atomically; returns the frame size.
 
-    `progress`: a progress bar (True), or a function called with (frames done, frames) after each frame.
+    `on_progress(done, n)` is called after each frame is encoded (see :func:`make_movie`).
     """
     from tqdm.auto import tqdm
 
@@ -405,8 +407,8 @@ def encode(path: Path, frames: MovieFrames, runner: Runner, fps: float,
             for i in range(n):  # encoded in order
                 writer.write(samples.pop(i) if i in samples else next(rest)[1])
                 bar.update(1)
-                if callable(progress):
-                    progress(i + 1, n)
+                if on_progress is not None:
+                    on_progress(i + 1, n)
         except BaseException:
             writer.abort()
             raise

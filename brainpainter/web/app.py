@@ -25,18 +25,24 @@ logged as one JSON line on the ``brainpainter.web.access`` logger (both by
 from __future__ import annotations
 
 import logging
-from collections.abc import AsyncIterator
+import re
+import sqlite3
+from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
+from functools import partial
 from importlib import resources
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
+import anyio
+import anyio.to_thread
 from fastapi import FastAPI, Query, Request
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import FileResponse, JSONResponse, Response
+from fastapi.responses import FileResponse, JSONResponse, Response, StreamingResponse
 from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, ConfigDict, Field
 from starlette.concurrency import run_in_threadpool
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.requests import ClientDisconnect
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.web.config import ServerConfig
@@ -47,15 +53,37 @@ from brainpainter.web.options import (
     RenderOptions,
     TableOptions,
     prepare,
-    table_stream,
     upload_name,
 )
-from brainpainter.web.pool import Pool, PreviewBusy, PreviewUnavailable, preview_settings
+from brainpainter.web.pool import MAX_PREVIEW_WAITING, Pool, PreviewBusy, PreviewUnavailable, preview_settings
 from brainpainter.web.store import LimitError, Store, valid_id
+from brainpainter.web.upload import check_table, content_type_allowed, new_incoming, read_and_check
+
+T = TypeVar("T")
 
 log = logging.getLogger("brainpainter.web")
 
 MAX_LISTED_IMAGES = 5000  # image names sent to the page for its row chooser
+
+
+class Work:
+    """Threads for work that grows with the table (reading it, checking options), apart from the threads
+    that answer status reads: at most `threads` run and `max_waiting` wait; more get 503 at once."""
+
+    def __init__(self, threads: int, max_waiting: int) -> None:
+        self.limiter = anyio.CapacityLimiter(max(1, threads))
+        self.max_waiting = max_waiting
+        self.pending = 0
+
+    async def run(self, func: Callable[..., T], *args: Any, **kwargs: Any) -> T:
+        if self.pending >= self.limiter.total_tokens + self.max_waiting:
+            raise ApiError(503, f"the server is reading {self.pending} tables already; try again in a few "
+                                "seconds.", {"retry-after": "5"})
+        self.pending += 1
+        try:
+            return await anyio.to_thread.run_sync(partial(func, *args, **kwargs), limiter=self.limiter)
+        finally:
+            self.pending -= 1
 
 
 class ApiError(Exception):
@@ -107,26 +135,35 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
             pool.stop()
 
     app = FastAPI(title="brainpainter", version=_version(), lifespan=lifespan, docs_url=None, redoc_url=None,
-                  description="Upload a table of values per brain region, check it, preview and render it.")
+                  description="Upload a table of values per brain region, check it, preview and render it.",
+                  redirect_slashes=False)  # a redirect would build its Location from the Host header
     app.state.config, app.state.store, app.state.pool = config, store, pool
+    app.state.work = Work(config.work_threads, config.max_waiting_work)
     app.add_middleware(Guard, config=config)
 
-    _add_error_handlers(app)
+    _add_error_handlers(app, config)
     _add_page_and_probes(app, config, store, pool)
     _add_table_routes(app, config, store, pool)
     _add_job_routes(app, config, store)
     return app
 
 
-def _add_error_handlers(app: FastAPI) -> None:
-    """Every error becomes ``{"error": "one line"}`` with its status."""
+def _add_error_handlers(app: FastAPI, config: ServerConfig) -> None:
+    """Every error becomes ``{"error": "one line"}`` with its status (no server path in it)."""
+    root = str(config.data_dir.resolve())
+
+    def line(exc: BaseException) -> str:
+        return _one_line(exc).replace(root, "DATA_DIR").replace(str(config.data_dir), "DATA_DIR")
+
     @app.exception_handler(BrainPainterError)
     async def _bp_error(request: Request, exc: BrainPainterError) -> JSONResponse:
-        return JSONResponse({"error": _one_line(exc)}, status_code=400)
+        if _disk_full(exc):
+            return _full(request, exc)
+        return JSONResponse({"error": line(exc)}, status_code=400)
 
     @app.exception_handler(ApiError)
     async def _api_error(request: Request, exc: ApiError) -> JSONResponse:
-        return JSONResponse({"error": _one_line(exc)}, status_code=exc.status, headers=exc.headers)
+        return JSONResponse({"error": line(exc)}, status_code=exc.status, headers=exc.headers)
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
@@ -136,6 +173,20 @@ def _add_error_handlers(app: FastAPI) -> None:
     async def _http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
         return JSONResponse({"error": str(exc.detail)}, status_code=exc.status_code,
                             headers=getattr(exc, "headers", None))
+
+    @app.exception_handler(ClientDisconnect)
+    async def _gone(request: Request, exc: ClientDisconnect) -> Response:
+        log.info("client left during %s %s", request.method, request.url.path)
+        return Response(status_code=400)  # nobody reads it
+
+    @app.exception_handler(OSError)
+    @app.exception_handler(sqlite3.OperationalError)
+    async def _os_error(request: Request, exc: Exception) -> JSONResponse:
+        if _disk_full(exc):
+            return _full(request, exc)
+        log.error("internal error on %s %s", request.method, request.url.path, exc_info=exc)
+        return JSONResponse({"error": f"internal error: {type(exc).__name__} (logged on the server)"},
+                            status_code=500)
 
     @app.exception_handler(Exception)
     async def _internal(request: Request, exc: Exception) -> JSONResponse:
@@ -183,6 +234,9 @@ def _add_page_and_probes(app: FastAPI, config: ServerConfig, store: Store, pool:
 
 def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Pool) -> None:
     """Uploads, checks and previews of a table."""
+    work: Work = app.state.work
+    previews = anyio.CapacityLimiter(MAX_PREVIEW_WAITING)
+
     @app.post("/api/uploads", tags=["api"], openapi_extra={"requestBody": {
         "required": True, "content": {"application/octet-stream": {"schema": {"type": "string",
                                                                               "format": "binary"}}}}})
@@ -194,15 +248,27 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
                      strict: bool = False) -> dict[str, Any]:
         """Upload a table (the raw file as the body) and get the ``check`` report; nothing is kept
         when the table would not render."""
-        chunks, size = [], 0
-        async for chunk in request.stream():
-            size += len(chunk)
-            chunks.append(chunk)
-        data = b"".join(chunks)
+        if not content_type_allowed(request.headers.get("content-type")):
+            raise ApiError(415, "send the table as the request body with 'Content-Type: "
+                                "application/octet-stream' (form and text/plain bodies are refused, so that "
+                                "other web sites cannot upload into this server).")
+        await _disk_budget(store, config)
         shown = upload_name(name)
-        opts = TableOptions(atlas=atlas or None, image_column=image_column or None, value=value or None,
-                            region_column=region_column or None, strict=strict)
-        report, images = await run_in_threadpool(_check, data, shown, opts, {})
+        fh, path = await run_in_threadpool(new_incoming, store.root)
+        opts = {"atlas": atlas or None, "image_column": image_column or None, "value": value or None,
+                "region_column": region_column or None, "strict": strict}
+        try:
+            size = 0
+            with fh:
+                async for chunk in request.stream():
+                    size += len(chunk)
+                    fh.write(chunk)
+            # read into memory only on a work thread: at most a few bodies are in memory at once
+            data, (report, images) = await work.run(read_and_check, path, shown, opts,
+                                                    max_rows=config.max_rows,
+                                                    time_limit_s=config.parse_time_limit_s)
+        finally:
+            path.unlink(missing_ok=True)
         upload_id = await run_in_threadpool(store.add_upload, _client(request), shown, data,
                                             config.result_ttl_s, config.max_uploads_per_client)
         return {"upload_id": upload_id, "name": shown, "size": size, "report": report,
@@ -213,17 +279,24 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
         """The ``check`` report of an upload with these options (the colour scale included)."""
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
         o = body.options
-        scale = {"gradient": o.gradient, "cmap": o.cmap, "vmin": o.vmin, "vmax": o.vmax, "center": o.center}
-        return (await run_in_threadpool(_check, data, name, o, scale))[0]
+        opts = {**o.model_dump(include=set(TableOptions.model_fields)),
+                "scale": {"gradient": o.gradient, "cmap": o.cmap, "vmin": o.vmin, "vmax": o.vmax,
+                          "center": o.center}}
+        # read on a work thread: the upload was read within the time limit already (as preview and
+        # job submission read it)
+        return (await work.run(check_table, data, name, opts, config.max_rows))[0]
 
     # -- preview -------------------------------------------------------------------------------
     @app.post("/api/preview", tags=["api"], responses={200: {"content": {"image/png": {}}}})
     async def preview(body: PreviewRequest) -> Response:
         """One row from one view, small, rendered by the warm preview painter."""
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
-        req = await run_in_threadpool(_preview_request, data, name, body, config)
+        req = await work.run(_preview_request, data, name, body, config)
+        if previews.borrowed_tokens >= previews.total_tokens:  # never queue without bound
+            raise ApiError(503, f"{MAX_PREVIEW_WAITING} previews are waiting; try again in a moment",
+                           {"retry-after": "2"})
         try:
-            png, ms = await run_in_threadpool(pool.preview, req)
+            png, ms = await anyio.to_thread.run_sync(pool.preview, req, limiter=previews)
         except PreviewBusy as exc:
             raise ApiError(503, str(exc), {"retry-after": "2"}) from None
         except PreviewUnavailable as exc:
@@ -233,13 +306,16 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
 
 def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
     """Jobs: submit, status, cancel, files."""
+    work: Work = app.state.work
+
     @app.post("/api/jobs", tags=["api"], status_code=202)
     async def submit(body: JobRequest, request: Request) -> dict[str, Any]:
         """Queue a job: ``images`` (every row from every view, as PNGs plus a zip), ``figure`` (PDF/PNG)
         or ``movie`` (MP4/GIF)."""
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
-        prep = await run_in_threadpool(prepare, data, name, body.options, max_images=config.max_images,
-                                       max_pixels=config.max_pixels)
+        await _disk_budget(store, config)
+        prep = await work.run(prepare, data, name, body.options, max_images=config.max_images,
+                              max_pixels=config.max_pixels)
         n_rows, n_views = len(prep.run.table.images), len(prep.run.views)
         if body.kind == "movie" and n_rows < 2:
             raise BrainPainterError(f"a movie needs at least 2 rows (key frames); the table has {n_rows}.")
@@ -267,18 +343,29 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
         await run_in_threadpool(store.cancel, job_id)
         return _public(await run_in_threadpool(_job, store, job_id))
 
-    @app.get("/api/jobs/{job_id}/files/{file_name}", tags=["api"])
-    async def job_file(job_id: str, file_name: str, download: bool = False) -> FileResponse:
+    @app.get("/api/jobs/{job_id}/files/{file_name}", tags=["api"], response_model=None)
+    async def job_file(job_id: str, file_name: str, download: bool = False) -> Response:
         """One file the job made (only names listed in its ``files``)."""
+        from brainpainter.web.worker import zip_name, zip_stream
+
         job = await run_in_threadpool(_job, store, job_id)
         if file_name not in job["files"]:
             raise ApiError(404, f"job {job_id} has no file {file_name[:100]!r}; its files are listed in "
                                 f"GET /api/jobs/{job_id}.")
-        path = store.job_dir(job_id) / "out" / job["files"][job["files"].index(file_name)]
+        listed = job["files"][job["files"].index(file_name)]
+        out = store.job_dir(job_id) / "out"
+        path = out / listed
+        disposition = "attachment" if download else "inline"
+        if listed == zip_name(job_id) and not path.is_file():  # made while it is sent, never stored
+            members = [f for f in job["files"] if f != listed]
+            if not all((out / f).is_file() for f in members):
+                raise ApiError(410, "the job's files have expired or were removed; render again.")
+            return StreamingResponse(zip_stream(out, members), media_type="application/zip",
+                                     headers={"content-disposition": f'{disposition}; filename="{listed}"'})
         if not path.is_file():
             raise ApiError(410, "the job's files have expired or were removed; render again.")
         return FileResponse(path, filename=file_name if download else None,
-                            content_disposition_type="attachment" if download else "inline")
+                            content_disposition_type=disposition)
 
 
 # -- helpers ------------------------------------------------------------------------------------
@@ -296,6 +383,32 @@ def _upload(store: Store, upload_id: str) -> tuple[str, bytes]:
     if got is None:
         raise ApiError(404, "upload not found (it expired, or the id is wrong); upload the table again.")
     return got
+
+
+async def _disk_budget(store: Store, config: ServerConfig) -> None:
+    """507 when the data folder uses its ``--max-disk-gb`` budget."""
+    if config.max_disk_bytes <= 0:
+        return
+    used = await run_in_threadpool(store.disk_usage)
+    if used >= config.max_disk_bytes:
+        raise ApiError(507, f"this server's storage budget ({config.max_disk_gb:g} GB) is used up; try "
+                            "again after older results expire.", {"retry-after": "600"})
+
+
+def _full(request: Request, exc: BaseException) -> JSONResponse:
+    log.warning("disk full during %s %s: %s", request.method, request.url.path, _one_line(exc))
+    return JSONResponse({"error": "the server's disk is full; nothing was changed. Try again later (the "
+                                  "operator must free space)."}, status_code=507,
+                        headers={"retry-after": "600"})
+
+
+def _disk_full(exc: BaseException) -> bool:
+    """An error that means the disk (or the data folder's quota) is full."""
+    import errno
+
+    if getattr(exc, "errno", None) in (errno.ENOSPC, errno.EDQUOT):  # OSError, or os_error's one line
+        return True
+    return isinstance(exc, sqlite3.OperationalError) and "full" in str(exc)
 
 
 def _job(store: Store, job_id: str) -> dict[str, Any]:
@@ -316,28 +429,13 @@ def _public(job: dict[str, Any] | None) -> dict[str, Any]:
     }
 
 
-def _check(data: bytes, name: str, opts: TableOptions,
-           scale: dict[str, Any]) -> tuple[dict[str, Any], list[str]]:
-    """``brainpainter check --json`` for uploaded bytes, and every image name; raises the first error
-    as the CLI does."""
-    from brainpainter.table.region_table import inspect_table
-    from brainpainter.table.report import check_report
-
-    table = inspect_table(table_stream(data, name), opts.atlas, image_column=opts.image_column,
-                          value=opts.value, region_column=opts.region_column, strict=opts.strict)
-    report = check_report(table, **scale)
-    if report["errors"]:
-        raise BrainPainterError(report["errors"][0])
-    return report, list(table.images)
-
-
 def _preview_request(data: bytes, name: str, body: PreviewRequest, config: ServerConfig) -> dict[str, Any]:
     from brainpainter.rendering.painter import region_colors
     from brainpainter.rendering.views import parse_views
 
     prep = prepare(data, name, body.options, max_pixels=config.max_pixels)
     table = prep.run.table
-    if isinstance(body.row, int) or str(body.row).isdigit():
+    if isinstance(body.row, int) or re.fullmatch(r"[0-9]{1,9}", body.row):
         i = int(body.row)
         if not 0 <= i < len(table.images):
             raise BrainPainterError(f"row must be 0..{len(table.images) - 1}; {body.row} was given.")

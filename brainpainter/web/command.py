@@ -36,10 +36,20 @@ CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
               help="Seconds a job may run.")
 @click.option("--keep-results", "result_ttl_s", type=float, default=86400.0, show_default=True,
               help="Seconds results and uploads are kept.")
+@click.option("--max-rows", type=int, default=20_000, show_default=True,
+              help="Largest number of table rows in one upload.")
+@click.option("--max-disk-gb", type=float, default=0.0, show_default=True,
+              help="Disk the data folder may use; beyond it new uploads and jobs get 507 (0: no budget).")
+@click.option("--max-connections", type=click.IntRange(1, 100_000), default=500, show_default=True,
+              help="Open connections; beyond it new requests get 503.")
+@click.option("--forwarded-allow-ips", default=None, metavar="IPS",
+              help="Behind a reverse proxy: the proxy's address(es), comma-separated; only then is "
+                   "X-Forwarded-For trusted to name the client. Without it the client is the connection's "
+                   "address.")
 @click.option("--log-level", default="info", show_default=True,
               type=click.Choice(["debug", "info", "warning", "error"]))
 def serve(host: str, port: int, data_dir: Path | None, workers: int, no_preview: bool, renderer: str,
-          log_level: str, **limits: Any) -> None:
+          log_level: str, max_connections: int, forwarded_allow_ips: str | None, **limits: Any) -> None:
     """Serve the web page and JSON API: upload a table, check it, preview it, render it.
 
     \b
@@ -49,18 +59,26 @@ def serve(host: str, port: int, data_dir: Path | None, workers: int, no_preview:
     """
     import json
     import logging
+    import math
+    import os
 
     try:
-        import uvicorn
+        import uvicorn  # noqa: F401 - fails here when missing
 
         from brainpainter.web.app import create_app
         from brainpainter.web.config import ServerConfig, default_data_dir
     except ImportError as exc:  # pragma: no cover - core dependencies
         raise BrainPainterError(f"serve needs FastAPI and uvicorn ({exc}); "
                                 "pip install fastapi uvicorn") from None
-    for key in ("max_images", "max_jobs_per_client", "max_queued", "rate_per_minute"):
+    for key in ("max_images", "max_jobs_per_client", "max_queued", "rate_per_minute", "max_rows"):
         if limits[key] < 1:
             raise BrainPainterError(f"--{key.replace('_', '-')} must be at least 1; {limits[key]} was given.")
+    for key in ("max_upload_mb", "job_time_limit_s", "result_ttl_s", "max_disk_gb"):
+        value = limits[key]
+        if not math.isfinite(value) or value < 0 or (value == 0 and key != "max_disk_gb"):
+            option = {"job_time_limit_s": "job-time-limit", "result_ttl_s": "keep-results"}.get(
+                key, key.replace("_", "-"))
+            raise BrainPainterError(f"--{option} must be a positive number; {value} was given.")
     config = ServerConfig(data_dir=data_dir or default_data_dir(), workers=workers, preview=not no_preview,
                           renderer=renderer, **limits)
     from brainpainter.atlas import registry
@@ -73,6 +91,13 @@ def serve(host: str, port: int, data_dir: Path | None, workers: int, no_preview:
     from brainpainter.web.store import lock_data_dir
 
     lock_data_dir(config.data_dir)  # one server per data folder (held until this process ends)
+    os.umask(0o077)  # uploads, results and the database: this user only (the workers inherit it)
+    os.chmod(config.data_dir, 0o700)
+    cache = config.data_dir / "cache"
+    cache.mkdir(mode=0o700, exist_ok=True)
+    # matplotlib's and other caches go under the data folder, not the user's home
+    os.environ["MPLCONFIGDIR"] = str(cache / "matplotlib")
+    os.environ["XDG_CACHE_HOME"] = str(cache)
     level = getattr(logging, log_level.upper())
     handler = logging.StreamHandler()  # uvicorn configures its own loggers; ours log one line per record
     handler.setFormatter(logging.Formatter("%(message)s"))
@@ -80,8 +105,16 @@ def serve(host: str, port: int, data_dir: Path | None, workers: int, no_preview:
     web_log.setLevel(level)
     web_log.addHandler(handler)
     web_log.propagate = False
-    click.echo(json.dumps({"event": "start", "url": f"http://{host}:{port}/",
+    shown_host = host if host not in ("0.0.0.0", "::", "") else "127.0.0.1"
+    shown_host = f"[{shown_host}]" if ":" in shown_host else shown_host
+    click.echo(json.dumps({"event": "start", "url": f"http://{shown_host}:{port}/", "listen": host,
                            "data_dir": str(config.data_dir), "workers": workers,
                            "preview": not no_preview}), err=True)
-    uvicorn.run(create_app(config), host=host, port=port, access_log=False, log_level=log_level,
-                server_header=False, timeout_graceful_shutdown=10)
+    if host not in ("127.0.0.1", "localhost", "::1"):
+        click.echo(f"warning: listening on {host}: anyone who can reach this machine on port {port} can "
+                   "use this server (it has no authentication); put it behind a proxy that "
+                   "authenticates, or a firewall, when that is not intended.", err=True)
+    from brainpainter.web.server import run
+
+    run(create_app(config), host=host, port=port, log_level=log_level, max_connections=max_connections,
+        forwarded_allow_ips=forwarded_allow_ips)

@@ -51,6 +51,22 @@ class ServerConfig:
     threads_per_worker : int
         ``LP_NUM_THREADS`` (Mesa llvmpipe threads) of each rendering process;
         0 = CPU cores divided among the workers and the preview process.
+    max_rows : int
+        Largest number of table rows in one upload (like the readers' column limit: every request
+        that reads the table stays bounded).
+    max_disk_gb : float
+        Disk the data folder may use (uploads and results); beyond it new uploads and jobs get 507.
+        0 = no budget.
+    work_threads : int
+        Threads that read tables for requests (check, preview, submit); status reads never wait for them.
+    max_waiting_work : int
+        Requests that may wait for a work thread; beyond it they get 503 + Retry-After.
+    parse_time_limit_s : float
+        Seconds a spreadsheet (``.xlsx``) upload may take to read (in its own process, killed after).
+    upload_time_limit_s : float
+        Seconds a request may take to send its body (uploads); slower ones get 408.
+    max_uploads_in_flight : int
+        Uploads one client may be sending at once (more get 429 without being read).
     """
 
     data_dir: Path = field(default_factory=default_data_dir)
@@ -69,6 +85,17 @@ class ServerConfig:
     max_attempts: int = 3
     threads_per_worker: int = 0
     preview_max_width: int = 480
+    max_rows: int = 20_000
+    max_disk_gb: float = 0.0
+    work_threads: int = 2
+    max_waiting_work: int = 16
+    parse_time_limit_s: float = 20.0
+    upload_time_limit_s: float = 60.0
+    max_uploads_in_flight: int = 4
+
+    @property
+    def max_disk_bytes(self) -> int:
+        return int(self.max_disk_gb * 1024**3)
 
     @property
     def max_upload_bytes(self) -> int:

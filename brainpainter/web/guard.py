@@ -14,6 +14,7 @@ import threading
 import time
 from typing import Any
 
+import anyio
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import Message, Receive, Scope, Send
 
@@ -32,6 +33,9 @@ SECURITY_HEADERS = [
     (b"cross-origin-resource-policy", b"same-origin"),
 ]
 JSON_BODY_LIMIT = 64 * 1024
+JSON_BODY_TIME_LIMIT_S = 30.0
+MAX_UPLOADS_IN_FLIGHT = 64  # uploads being received from all clients together
+UPLOAD_SLOT_WAIT_S = 5.0  # an upload beyond a client's slots waits this long for one, then gets 429
 STATE_CHANGING = ("POST", "PUT", "DELETE", "PATCH")
 
 
@@ -39,9 +43,19 @@ class _TooLarge(StarletteHTTPException):
     """A request body over its limit (raised while it is read: the app answers 413 with the message)."""
 
     def __init__(self, what: str, limit: int) -> None:
-        super().__init__(413, f"the {what} is larger than this server's limit; at most "
-                              f"{limit / 2**20:.3g} MB is read, to keep memory bounded. Split the table or "
-                              "remove unneeded columns.")
+        hint = ("Split the table or remove unneeded columns." if what == "upload" else
+                "Send the table as an upload (POST /api/uploads) and refer to it by its upload_id.")
+        mb = f"{limit / 2**20:.3g} MB"
+        super().__init__(413, f"the {what} is larger than this server's limit; at most {mb} is read, to keep "
+                              f"memory bounded. {hint}")
+
+
+class _TooSlow(StarletteHTTPException):
+    """A request body not received within its deadline (408)."""
+
+    def __init__(self, what: str, seconds: float) -> None:
+        super().__init__(408, f"the {what} was not received within {seconds:g} s; send it again (on a slow "
+                              "connection, a smaller file).")
 
 
 class RateLimiter:
@@ -76,6 +90,56 @@ class Guard:
         self.app = app
         self.config = config
         self.limiter = RateLimiter(config.rate_per_minute)
+        self._uploading: dict[str, int] = {}  # client -> uploads being received (event loop only)
+        self._slot_freed: anyio.Event | None = None  # made in the event loop
+
+    async def _upload_slot(self, client: str) -> bool:
+        """Take one of `client`'s upload slots, waiting up to :data:`UPLOAD_SLOT_WAIT_S` for one (a
+        waiting request's body is not read: it costs a socket, not memory); False when none came."""
+        end = time.monotonic() + UPLOAD_SLOT_WAIT_S
+        while True:
+            mine = self._uploading.get(client, 0)
+            if mine < self.config.max_uploads_in_flight and sum(self._uploading.values()) < \
+                    MAX_UPLOADS_IN_FLIGHT:
+                self._uploading[client] = mine + 1
+                return True
+            left = end - time.monotonic()
+            if left <= 0:
+                return False
+            if self._slot_freed is None or self._slot_freed.is_set():
+                self._slot_freed = anyio.Event()
+            with anyio.move_on_after(left):
+                await self._slot_freed.wait()
+
+    def _release_slot(self, client: str) -> None:
+        left = self._uploading.pop(client, 1) - 1
+        if left > 0:
+            self._uploading[client] = left
+        if self._slot_freed is not None:
+            self._slot_freed.set()
+
+    async def _refusal(self, method: str, path: str, client: str,
+                       headers: dict[bytes, bytes]) -> tuple[int, str, dict[str, str]] | None:
+        """``(status, message, headers)`` when the request is refused before it is read; else None (an
+        upload then holds one of its client's upload slots)."""
+        if method not in STATE_CHANGING:
+            return None
+        if headers.get(b"sec-fetch-site") == b"cross-site":
+            return 403, ("requests from other web sites are refused; use this server's own page or a "
+                         "script."), {}
+        if path.startswith("/api/"):
+            wait = self.limiter.allow(client)
+            if wait:
+                return (429, f"too many requests from {client}; at most {self.config.rate_per_minute} a "
+                             f"minute. Retry in {wait:.0f} s.", {"retry-after": str(max(1, round(wait)))})
+        if path == "/api/uploads" and method == "POST" and not await self._upload_slot(client):
+            mine = self._uploading.get(client, 0)
+            busy = (f"{mine} upload(s) from {client} are still being received; wait for them to finish, then "
+                    "upload again." if mine >= self.config.max_uploads_in_flight else
+                    "the server is receiving as many uploads as it takes at once; upload again in a few "
+                    "seconds.")
+            return 429, busy, {"retry-after": "5"}
+        return None
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
@@ -88,6 +152,9 @@ class Guard:
         is_upload = path == "/api/uploads"
         limit = self.config.max_upload_bytes if is_upload else JSON_BODY_LIMIT
         what = "upload" if is_upload else "request body"
+        seconds = self.config.upload_time_limit_s if is_upload else JSON_BODY_TIME_LIMIT_S
+        deadline = time.monotonic() + seconds
+        body_done = method not in STATE_CHANGING
         state = {"status": 0, "bytes": 0, "started": False}
 
         async def send_wrapper(message: Message) -> None:
@@ -105,31 +172,47 @@ class Guard:
         received = 0
 
         async def receive_wrapper() -> Message:
-            nonlocal received
-            message = await receive()
+            nonlocal received, body_done
+            if body_done:  # e.g. waiting for a disconnect while a file streams out: no deadline
+                return await receive()
+            try:
+                with anyio.fail_after(max(0.0, deadline - time.monotonic())):
+                    message = await receive()
+            except TimeoutError:
+                raise _TooSlow(what, seconds) from None
             if message["type"] == "http.request":
                 received += len(message.get("body", b""))
                 if received > limit:
                     raise _TooLarge(what, limit)
+                body_done = not message.get("more_body", False)
+                if body_done:
+                    release()  # the slot is for receiving; reading the table is bounded elsewhere
             return message
 
+        counted = False
+
+        def release() -> None:
+            nonlocal counted
+            if counted:
+                counted = False
+                self._release_slot(client)
+
         try:
-            length = dict(scope.get("headers", [])).get(b"content-length")
+            headers = dict(scope.get("headers", []))
+            length = headers.get(b"content-length")
             if length is not None and length.isdigit() and int(length) > limit:
                 raise _TooLarge(what, limit)
-            if method in STATE_CHANGING and path.startswith("/api/"):
-                wait = self.limiter.allow(client)
-                if wait:
-                    await _send_json(send_wrapper, 429, {"error": f"too many requests from {client}; at most "
-                                                         f"{self.config.rate_per_minute} a minute. Retry in "
-                                                         f"{wait:.0f} s."},
-                                     {"retry-after": str(max(1, round(wait)))})
-                    return
+            refusal = await self._refusal(method, path, client, headers)
+            if refusal is not None:
+                await _send_json(send_wrapper, refusal[0], {"error": refusal[1]}, refusal[2])
+                return
+            counted = is_upload and method == "POST"  # _refusal took an upload slot
             await self.app(scope, receive_wrapper, send_wrapper)
-        except _TooLarge as exc:
+        except (_TooLarge, _TooSlow) as exc:
             if not state["started"]:
-                await _send_json(send_wrapper, 413, {"error": exc.detail})
+                await _send_json(send_wrapper, exc.status_code, {"error": exc.detail})
         finally:
+            release()
             access_log.info(json.dumps({
                 "t": round(time.time(), 3), "id": rid, "client": client, "method": method, "path": path,
                 "status": state["status"], "ms": round((time.perf_counter() - t0) * 1000, 1),

@@ -12,10 +12,11 @@ checks a server adds (no paths, size limits). Nothing here imports bpy.
 from __future__ import annotations
 
 import io
+from collections import Counter
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, FiniteFloat
 
 from brainpainter.color.scale import ScaleOptions
 from brainpainter.errors import BrainPainterError
@@ -78,9 +79,9 @@ class RenderOptions(TableOptions):
     surface: Annotated[str, one_of(SceneOptions, "surface")] = core(SceneOptions, "surface")
     gradient: str | None = core(ScaleOptions, "gradient")
     cmap: str | None = core(ScaleOptions, "cmap")
-    vmin: float | None = core(ScaleOptions, "vmin")
-    vmax: float | None = core(ScaleOptions, "vmax")
-    center: float | None = core(ScaleOptions, "center")
+    vmin: FiniteFloat | None = core(ScaleOptions, "vmin")  # the CLI refuses inf and nan too
+    vmax: FiniteFloat | None = core(ScaleOptions, "vmax")
+    center: FiniteFloat | None = core(ScaleOptions, "center")
     nan_color: str = core(ScaleOptions, "nan_color")
     missing_color: str = core(ScaleOptions, "missing_color")
     hide: list[str] = core(SceneOptions, "hide")
@@ -90,7 +91,7 @@ class RenderOptions(TableOptions):
     quality: Annotated[str, one_of(RenderSettings, "quality")] = core(RenderSettings, "quality")
     shading: Annotated[str, one_of(RenderSettings, "shading")] = core(RenderSettings, "shading")
     lighting: Annotated[str, one_of(RenderSettings, "lighting")] = core(RenderSettings, "lighting")
-    glass_opacity: float = core(RenderSettings, "glass_opacity")
+    glass_opacity: FiniteFloat = core(RenderSettings, "glass_opacity")
 
     def table_kwargs(self) -> dict[str, Any]:
         return {name: getattr(self, name) for name in option_names(ReadOptions)}
@@ -178,8 +179,8 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
             f"most {max_images} per job. Choose fewer views or split the table."
         )
     names = [safe_name(i) for i in run.table.images]
-    keys = [file_key(n) for n in names]
-    clash = sorted({n for n, k in zip(names, keys, strict=True) if keys.count(k) > 1})
+    counts = Counter(file_key(n) for n in names)  # linear: tables may have many rows
+    clash = sorted(n for n in set(names) if counts[file_key(n)] > 1)
     if clash:
         raise BrainPainterError(
             f"image names {clash[:3]} become the same file name after removing unsafe characters; "

@@ -4,16 +4,19 @@
 from the store) and the preview process (one warm painter answering one
 request at a time over a pipe). A monitor thread, once a second:
 
-- restarts a dead worker and re-queues the job it held (or fails it after
-  ``max_attempts`` starts);
+- restarts a dead worker and re-queues the job it held (or fails it when its
+  worker died ``max_attempts`` times while running it; restarts of the server
+  do not count);
 - stops a job past ``job_time_limit_s`` (the worker is killed and restarted;
   the job fails with a one-line message);
 - restarts a dead preview process;
 - every 30 s deletes expired results and uploads.
 
 At start-up every job still marked ``running`` belongs to a previous server's
-workers: it is queued again with a new attempt number, so those workers (which
-stop when their parent is gone) can no longer finish it.
+workers: it is queued again with a new attempt number, so those workers can no
+longer change it. Workers die with their server: Linux's parent-death signal
+(``PR_SET_PDEATHSIG``) reaches them within milliseconds of a ``kill -9``, and
+they also check their parent after every image and movie frame.
 """
 
 from __future__ import annotations
@@ -101,7 +104,7 @@ class Pool:
                 p.kill()
                 p.join(timeout=5)
         # jobs the stopped workers held go back to the queue now (a restart would do it too)
-        self.store.requeue(max_attempts=self.config.max_attempts + 1, ttl_s=self.config.result_ttl_s)
+        self.store.requeue(max_attempts=self.config.max_attempts, ttl_s=self.config.result_ttl_s)
         unlock_data_dir(self.store.root)
 
     def _spawn_worker(self, slot: int) -> None:
@@ -216,9 +219,11 @@ class Pool:
                         raise TimeoutError
                     status, payload, ms = conn.recv()
                 except (EOFError, OSError, TimeoutError, BrokenPipeError):
+                    # the monitor thread starts a new one: processes are started only by long-lived
+                    # threads (a process's death signal fires when the thread that started it ends)
                     self._preview_proc.kill()
                     self._preview_proc.join(timeout=5)
-                    self._spawn_preview()
+                    self._preview_ready = False
                     raise PreviewUnavailable("the preview renderer stopped and is restarting; try again "
                                              "in a few seconds") from None
         finally:

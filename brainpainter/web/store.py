@@ -21,6 +21,7 @@ was running when the server stopped is queued again (``attempt`` + 1).
 from __future__ import annotations
 
 import json
+import os
 import re
 import secrets
 import shutil
@@ -33,8 +34,9 @@ from typing import Any
 
 from brainpainter.io.output import atomic_write_bytes
 
-_ID = re.compile(r"^[0-9a-f]{32}$")
+_ID = re.compile(r"[0-9a-f]{32}")
 ACTIVE = ("queued", "running")
+ORPHAN_GRACE_S = 3600.0  # a file without a database row is deleted when older than this
 FORGET_AFTER_S = 30 * 24 * 3600.0  # an expired job's row is kept this long (its id then answers 404)
 
 SCHEMA = """
@@ -48,7 +50,8 @@ CREATE TABLE IF NOT EXISTS jobs (
     created REAL NOT NULL, started REAL, finished REAL, expires REAL,
     progress INTEGER NOT NULL DEFAULT 0, total INTEGER NOT NULL DEFAULT 0,
     attempt INTEGER NOT NULL DEFAULT 0, worker TEXT, heartbeat REAL,
-    error TEXT, files TEXT NOT NULL DEFAULT '[]', completions INTEGER NOT NULL DEFAULT 0
+    error TEXT, files TEXT NOT NULL DEFAULT '[]', completions INTEGER NOT NULL DEFAULT 0,
+    deaths INTEGER NOT NULL DEFAULT 0
 );
 CREATE INDEX IF NOT EXISTS jobs_status ON jobs (status, created);
 CREATE INDEX IF NOT EXISTS jobs_client ON jobs (client, status);
@@ -120,7 +123,7 @@ def new_id() -> str:
 
 def valid_id(text: str) -> bool:
     """True when `text` is an id this store could have made (so it is safe as a path part)."""
-    return bool(_ID.match(text or ""))
+    return isinstance(text, str) and _ID.fullmatch(text) is not None
 
 
 class Store:
@@ -133,13 +136,30 @@ class Store:
     """
 
     def __init__(self, data_dir: str | Path) -> None:
+        from brainpainter.errors import BrainPainterError
+
         self.root = Path(data_dir)
-        (self.root / "uploads").mkdir(parents=True, exist_ok=True)
-        (self.root / "jobs").mkdir(parents=True, exist_ok=True)
+        for folder in (self.root, self.root / "uploads", self.root / "jobs"):
+            folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+            _private(folder)  # uploaded tables are readable by this user only
         self.path = self.root / "jobs.sqlite3"
-        with self.connect() as db:
-            db.execute("PRAGMA journal_mode=WAL")
-            db.executescript(SCHEMA)
+        self._usage: tuple[float, int] = (0.0, 0)
+        try:
+            with self.connect() as db:
+                db.execute("PRAGMA journal_mode=WAL")
+                db.executescript(SCHEMA)
+                columns = {r["name"] for r in db.execute("PRAGMA table_info(jobs)")}
+                if "deaths" not in columns:  # a database of an earlier version
+                    db.execute("ALTER TABLE jobs ADD COLUMN deaths INTEGER NOT NULL DEFAULT 0")
+                db.execute("SELECT count(*) FROM jobs").fetchone()
+        except sqlite3.DatabaseError as exc:
+            raise BrainPainterError(
+                f"the job database DATA_DIR/jobs.sqlite3 cannot be used ({exc}); stop the server, move "
+                "the file away (its jobs are lost) or restore it from a backup, and start again."
+            ) from None
+        for name in ("jobs.sqlite3", "jobs.sqlite3-wal", "jobs.sqlite3-shm"):
+            if (self.root / name).exists():
+                _private(self.root / name)
 
     # -- plumbing ------------------------------------------------------------------------
     @contextmanager
@@ -181,12 +201,28 @@ class Store:
             db.execute("SELECT count(*) FROM jobs").fetchone()
         return True
 
+    def disk_usage(self, max_age_s: float = 10.0) -> int:
+        """Bytes used by the data folder (walked at most every `max_age_s` seconds)."""
+        t, used = self._usage
+        if time.monotonic() - t < max_age_s:
+            return used
+        used = 0
+        for dirpath, _, names in os.walk(self.root):
+            for n in names:
+                try:
+                    used += os.lstat(os.path.join(dirpath, n)).st_blocks * 512
+                except OSError:
+                    pass
+        self._usage = (time.monotonic(), used)
+        return used
+
     # -- uploads -------------------------------------------------------------------------
     def add_upload(self, client: str, name: str, data: bytes, ttl_s: float, keep: int = 20) -> str:
         """Store an upload; the client's uploads beyond its newest `keep` are deleted (disk stays bounded;
         jobs keep their own copy of their table)."""
         upload_id = new_id()
         atomic_write_bytes(self.upload_path(upload_id), data)
+        _private(self.upload_path(upload_id))
         now = time.time()
         with self.transaction() as db:
             db.execute("INSERT INTO uploads VALUES (?, ?, ?, ?, ?, ?)",
@@ -215,8 +251,10 @@ class Store:
         """Queue a job, or raise :class:`LimitError` (nothing stored then)."""
         job_id = new_id()
         folder = self.job_dir(job_id)
-        (folder / "out").mkdir(parents=True)
+        (folder / "out").mkdir(mode=0o700, parents=True)
+        _private(folder)
         atomic_write_bytes(folder / "input.bin", data)
+        _private(folder / "input.bin")
         try:
             with self.transaction() as db:
                 mine = db.execute("SELECT count(*) FROM jobs WHERE client = ? AND status IN (?, ?)",
@@ -289,11 +327,13 @@ class Store:
             self._event(db, job["id"], job["attempt"], "started", worker)
         return job
 
-    def progress(self, job_id: str, attempt: int, done: int) -> bool:
-        """Record progress; False when the job is no longer this attempt's (cancelled, given up)."""
+    def progress(self, job_id: str, attempt: int, done: int, total: int | None = None) -> bool:
+        """Record progress (and the total of steps when it is known only now, e.g. a movie's frames);
+        False when the job is no longer this attempt's (cancelled, given up)."""
         with self.transaction() as db:
-            cur = db.execute("UPDATE jobs SET progress = ?, heartbeat = ? WHERE id = ? AND attempt = ? AND "
-                             "status = 'running'", (done, time.time(), job_id, attempt))
+            cur = db.execute("UPDATE jobs SET progress = ?, total = coalesce(?, total), heartbeat = ? "
+                             "WHERE id = ? AND attempt = ? AND status = 'running'",
+                             (done, total, time.time(), job_id, attempt))
         return cur.rowcount == 1
 
     def finish(self, job_id: str, attempt: int, files: list[str], ttl_s: float) -> bool:
@@ -325,26 +365,32 @@ class Store:
     def requeue(self, *, worker: str | None = None, max_attempts: int, ttl_s: float) -> list[str]:
         """Queue again the running jobs of `worker` (all running jobs when None), with a new attempt.
 
-        Jobs that already started `max_attempts` times fail instead (a job that kills its worker
-        every time must not loop forever).
+        With `worker` given, that worker died while holding the job: the job's ``deaths`` count
+        goes up, and a job whose worker died `max_attempts` times fails instead (a job that kills
+        its worker every time must not loop forever). Without it (the server stopped or restarted)
+        the job did nothing wrong and only its attempt number changes, so that the old workers can
+        no longer change it.
         """
         now = time.time()
+        died = 1 if worker is not None else 0
         with self.transaction() as db:
-            sql = "SELECT id, attempt FROM jobs WHERE status = 'running'"
+            sql = "SELECT id, attempt, deaths FROM jobs WHERE status = 'running'"
             args: tuple[str, ...] = ()
             if worker is not None:
                 sql, args = sql + " AND worker = ?", (worker,)
             rows = db.execute(sql, args).fetchall()
             for r in rows:
-                if r["attempt"] >= max_attempts:
-                    msg = (f"the job stopped its worker {r['attempt']} times; it is not tried again. Try a "
+                deaths = r["deaths"] + died
+                if deaths >= max_attempts:
+                    msg = (f"the job stopped its worker {deaths} times; it is not tried again. Try a "
                            "smaller size or fewer views, or report it.")
                     db.execute("UPDATE jobs SET status = 'failed', error = ?, finished = ?, expires = ?, "
-                               "attempt = attempt + 1 WHERE id = ?", (msg, now, now + ttl_s, r["id"]))
+                               "attempt = attempt + 1, deaths = ? WHERE id = ?",
+                               (msg, now, now + ttl_s, deaths, r["id"]))
                     self._event(db, r["id"], r["attempt"], "failed", msg)
                 else:
-                    db.execute("UPDATE jobs SET status = 'queued', worker = NULL, attempt = attempt + 1 "
-                               "WHERE id = ?", (r["id"],))
+                    db.execute("UPDATE jobs SET status = 'queued', worker = NULL, attempt = attempt + 1, "
+                               "deaths = ? WHERE id = ?", (deaths, r["id"]))
                     self._event(db, r["id"], r["attempt"], "requeued", worker)
         return [r["id"] for r in rows]
 
@@ -391,12 +437,45 @@ class Store:
             shutil.rmtree(self.job_dir(job_id), ignore_errors=True)
         for upload_id in uploads:
             self.upload_path(upload_id).unlink(missing_ok=True)
-        return len(jobs) + len(uploads)
+        return len(jobs) + len(uploads) + self._orphans(now)
+
+    def _orphans(self, now: float, grace_s: float = ORPHAN_GRACE_S) -> int:
+        """Delete files and folders older than `grace_s` that no database row owns (a crash between
+        writing a file and its row, a body half received, a cancelled job's outputs)."""
+        with self.connect() as db:
+            uploads = {r[0] for r in db.execute("SELECT id FROM uploads")}
+            live_jobs = {r[0] for r in db.execute("SELECT id FROM jobs WHERE status != 'expired'")}
+        gone = 0
+        paths = [p for sub in ("uploads", "jobs", "incoming") for p in (self.root / sub).glob("*")]
+        for path in paths:
+            try:
+                if now - path.lstat().st_mtime < grace_s:
+                    continue
+            except OSError:
+                continue
+            stem = path.name[:-4] if path.name.endswith(".bin") else path.name
+            owner = uploads if path.parent.name == "uploads" else live_jobs
+            if path.parent.name != "incoming" and stem in owner:
+                continue
+            if path.is_dir() and not path.is_symlink():
+                shutil.rmtree(path, ignore_errors=True)
+            else:
+                path.unlink(missing_ok=True)
+            gone += 1
+        return gone
 
     @staticmethod
     def _event(db: sqlite3.Connection, job_id: str, attempt: int, event: str, detail: str | None) -> None:
         db.execute("INSERT INTO events (job_id, attempt, event, detail, t) VALUES (?, ?, ?, ?, ?)",
                    (job_id, attempt, event, detail, time.time()))
+
+
+def _private(path: Path) -> None:
+    """Readable and writable by this user only (0700 folders, 0600 files); a no-op where not allowed."""
+    try:
+        os.chmod(path, 0o700 if path.is_dir() else 0o600)
+    except OSError:
+        pass
 
 
 def _job(row: sqlite3.Row) -> dict[str, Any]:

@@ -15,12 +15,15 @@ last, then the job is marked done (at most once: see the store).
 
 from __future__ import annotations
 
+import io
 import os
+import shutil
 import sys
 import time
 import traceback
 import zipfile
 from collections import OrderedDict
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -71,6 +74,35 @@ def _orphaned(parent: int) -> bool:
     return os.getppid() != parent
 
 
+def die_with_parent() -> None:
+    """Ask Linux to kill this process when the process that started it dies (``PR_SET_PDEATHSIG``).
+
+    The signal is ``SIGUSR1``, not ``SIGKILL``: Linux sends it when the *thread* that started this
+    process ends, so the handler exits only when the parent process is really gone. Elsewhere (or
+    when prctl is unavailable) the per-image and per-frame checks of :func:`_orphaned` remain.
+    """
+    import signal
+
+    parent = os.getppid()
+
+    def _parent_gone(signum: int, frame: Any) -> None:
+        if _orphaned(parent):
+            os._exit(0)  # nothing more is written: the next server re-queues what this one held
+
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        import ctypes
+
+        signal.signal(signal.SIGUSR1, _parent_gone)
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, int(signal.SIGUSR1), 0, 0, 0)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError, ValueError):
+        return
+    if _orphaned(parent):  # the parent died before prctl
+        os._exit(0)
+
+
 def _set_threads(lp_threads: int) -> None:
     os.environ["LP_NUM_THREADS"] = str(max(1, int(lp_threads)))
 
@@ -80,6 +112,7 @@ def job_worker_main(data_dir: str, name: str, renderer: str, lp_threads: int, tt
                     time_limit_s: float, warm: bool = True) -> None:
     """Entry point of a job worker process: take jobs until the parent process is gone."""
     _set_threads(lp_threads)
+    die_with_parent()
     from brainpainter.web.store import Store
 
     parent = os.getppid()
@@ -119,28 +152,43 @@ def run_job(store: Any, job: dict[str, Any], painters: PainterCache, *, ttl_s: f
     job_id, attempt = job["id"], job["attempt"]
     started = time.time() if job.get("started") is None else job["started"]
 
-    def tick(done: int) -> None:
+    def tick(done: int, total: int | None = None) -> None:
+        """After each image or frame: stop when the server is gone, the job was cancelled or given to
+        another attempt, or it ran past its time limit."""
         if parent is not None and _orphaned(parent):
             raise _Stop
         if time.time() - started > time_limit_s:
             raise BrainPainterError(f"the job ran longer than this server's limit of {time_limit_s:g} s; "
                                     "choose fewer rows or views, or a smaller size.")
-        if not store.progress(job_id, attempt, done):
+        if not store.progress(job_id, attempt, done, total):
             raise _Stop
 
+    folder = store.job_dir(job_id)
     try:
-        folder = store.job_dir(job_id)
         files = _KIND_RUNNERS[job["kind"]](folder, job, painters, tick)
     except _Stop:
+        now = store.get(job_id)
+        if now is not None and now["status"] == "cancelled":  # cancelled: what was made goes now
+            shutil.rmtree(folder / "out", ignore_errors=True)
         return
     except BrainPainterError as exc:
-        store.fail(job_id, attempt, str(exc).splitlines()[0] if str(exc) else type(exc).__name__, ttl_s)
+        line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        store.fail(job_id, attempt, _no_paths(line, store), ttl_s)
         return
     except Exception as exc:
         traceback.print_exc(file=sys.stderr)
-        store.fail(job_id, attempt, f"internal error: {type(exc).__name__}: {exc}", ttl_s)
+        line = f"internal error: {type(exc).__name__}: {exc}".splitlines()[0]
+        store.fail(job_id, attempt, _no_paths(line, store), ttl_s)
         return
     store.finish(job_id, attempt, files, ttl_s)
+
+
+def _no_paths(message: str, store: Any) -> str:
+    """`message` without the server's own paths (clients see job errors)."""
+    root = Path(store.root)
+    for shown in {str(root.resolve()), str(root)}:
+        message = message.replace(shown, "DATA_DIR")
+    return message
 
 
 def _prepared(folder: Path, job: dict[str, Any]) -> Any:
@@ -180,17 +228,52 @@ def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
                 "files": entries}
     write_json(out / "manifest.json", manifest)
     names = [e["file"] for e in entries] + ["manifest.json"]
-    _write_zip(out, names, f"brainpainter-{job['id'][:8]}.zip")
-    return [*names, f"brainpainter-{job['id'][:8]}.zip"]
+    # the zip is not stored (it would copy every PNG): it is made while it is downloaded
+    return [*names, zip_name(job["id"])]
 
 
-def _write_zip(out: Path, names: list[str], zip_name: str) -> None:
-    """Zip `names` (files in `out`) into `out/zip_name`, atomically."""
-    tmp = out / f".{zip_name}.part"
-    with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_STORED) as zf:  # PNGs are compressed already
+def zip_name(job_id: str) -> str:
+    """The name of an ``images`` job's zip of all its files."""
+    return f"brainpainter-{job_id[:8]}.zip"
+
+
+def zip_stream(out: Path, names: list[str], chunk: int = 1 << 20) -> Iterator[bytes]:
+    """The bytes of a zip of `names` (files in `out`), made as they are sent: nothing is stored.
+
+    PNGs are compressed already, so members are stored; memory holds about one `chunk`.
+    """
+    class _Sink(io.RawIOBase):
+        def __init__(self) -> None:
+            self.parts: list[bytes] = []
+            self.pos = 0
+
+        def writable(self) -> bool:
+            return True
+
+        def write(self, b: Any) -> int:
+            data = bytes(b)
+            self.parts.append(data)
+            self.pos += len(data)
+            return len(data)
+
+        def tell(self) -> int:
+            return self.pos
+
+        def take(self) -> bytes:
+            data, self.parts = b"".join(self.parts), []
+            return data
+
+    sink = _Sink()
+    with zipfile.ZipFile(sink, "w", compression=zipfile.ZIP_STORED) as zf:
         for n in names:
-            zf.write(out / n, arcname=n)
-    os.replace(tmp, out / zip_name)
+            path = out / n
+            info = zipfile.ZipInfo.from_file(path, arcname=n)
+            with path.open("rb") as src, zf.open(info, "w", force_zip64=True) as dst:
+                while block := src.read(chunk):
+                    dst.write(block)
+                    yield sink.take()
+            yield sink.take()
+    yield sink.take()
 
 
 def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
@@ -211,7 +294,7 @@ def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
     params = FigureParams(**p)  # the CLI's defaults for what the job did not give
     make_figure(table_stream(data, job["input_name"]), out=folder / "out" / name, grid=params.grid,
                 title=params.title or None, label=params.label or None, dpi=params.dpi,
-                fig_width=params.fig_width, font_size=params.font_size,
+                fig_width=params.fig_width, font_size=params.font_size, on_progress=tick,
                 **_media_kwargs(prep, painters.renderer))
     return [name]
 
@@ -225,11 +308,10 @@ def _run_movie(folder: Path, job: dict[str, Any], painters: PainterCache, tick: 
     name = f"movie.{p.get('format', 'mp4')}"
     tick(0)
     params = MovieParams(**p)  # the CLI's defaults for what the job did not give
-    kwargs = _media_kwargs(prep, painters.renderer)
-    kwargs["progress"] = lambda done, n: tick(done)  # per frame, not 0/1 for the whole movie
+    kwargs = _media_kwargs(prep, painters.renderer)  # progress: per frame (on_progress), not 0/1
     make_movie(table_stream(data, job["input_name"]), out=folder / "out" / name,
                frames_per_step=params.frames_per_step, easing=params.easing, hold=params.hold, fps=params.fps,
-               title=params.title or None, label=params.label or None, **kwargs)
+               title=params.title or None, label=params.label or None, on_progress=tick, **kwargs)
     return [name]
 
 
@@ -244,6 +326,7 @@ def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int
     ``("ok", png_bytes, milliseconds)`` or ``("error", one_line_message, 0)``.
     """
     _set_threads(lp_threads)
+    die_with_parent()
     from brainpainter.atlas.registry import get_atlas
     from brainpainter.errors import BrainPainterError
     from brainpainter.io.output import png_bytes
