@@ -27,7 +27,11 @@ per label-crossing edge) caches where the border crosses each edge
 (:func:`brainpainter.atlas.mesh.smooth_crossings`), so loading only splits.
 ``sulc`` (float32, one per
 vertex) is FreeSurfer's sulcal depth (``surf/?h.sulc``, mm, positive in
-sulci) for shading.
+sulci) for shading. ``ao_{surface}`` (uint8 per vertex, 255 = open sky) is
+the ambient occlusion baked by the builder for each surface
+(:mod:`brainpainter.atlas.occlusion`); ``subcortical.npz`` may hold ``ao``
+(the structures baked together). A template without them draws without
+occlusion (:attr:`Template.notes` says so).
 
 Label-set overlays
 ------------------
@@ -61,6 +65,7 @@ from numpy.typing import NDArray
 from brainpainter.atlas import registry
 from brainpainter.atlas.mesh import CortexMesh, LabelledMesh, faces_digest, labels_at_vertices, split_mesh
 from brainpainter.atlas.model import Atlas
+from brainpainter.atlas.occlusion import from_stored
 from brainpainter.errors import BrainPainterError
 
 FORMAT = "brainpainter-template"
@@ -128,7 +133,27 @@ class Template:
             vertices={s: z[s] for s in self.surfaces if s in z},
             source_vertex=z["source_vertex"],
             sulc=z.get("sulc"),
+            occlusion=self._occlusion(z),
         )
+
+    def _occlusion(self, z: dict[str, NDArray[Any]]) -> dict[str, NDArray[Any]] | None:
+        """The baked ``ao_{surface}`` arrays of a cortex file, or None when one surface lacks it."""
+        if not all(f"ao_{s}" in z for s in self.surfaces if s in z):
+            return None
+        return {s: from_stored(z[f"ao_{s}"]) for s in self.surfaces if s in z}
+
+    @property
+    def has_occlusion(self) -> bool:
+        """Whether the template has baked ambient occlusion (``occlusion`` in its manifest)."""
+        return bool(self.manifest.get("occlusion"))
+
+    @property
+    def notes(self) -> list[str]:
+        """What a user may want to know about this template (e.g. a feature an old build lacks)."""
+        if self.has_occlusion:
+            return []
+        return [f"template {self.name!r} has no baked ambient occlusion (built before it existed): folds "
+                "are shaded by the lights only; rebuild it with 'brainpainter template build' to add it."]
 
     def cortex(self, labels: str, hemi: str) -> CortexMesh:
         """The hemisphere `hemi` split by label set `labels`.
@@ -164,7 +189,8 @@ class Template:
             if not per_vertex:
                 return CortexMesh(hemi=hemi, labels=labels, faces=base.faces, face_label=z["face_label"],
                                   label_names=tuple(entry["names"]), vertices=base.vertices,
-                                  source_vertex=base.source_vertex, sulc=base.sulc)
+                                  source_vertex=base.source_vertex, sulc=base.sulc,
+                                  occlusion=base.occlusion)
         else:
             base = self.base_cortex(labels, hemi)
             if "vertex_label" not in z:
@@ -229,9 +255,11 @@ class Template:
         names = tuple(s["name"] for s in entry["structures"])
         files = entry.get("parts", [entry["file"]])
         arrays = [self._npz(f) for f in files]
+        occlusion = (np.concatenate([from_stored(z["ao"]) for z in arrays])
+                     if all("ao" in z for z in arrays) else None)
         if len(arrays) == 1:
             z = arrays[0]
-            return LabelledMesh(z["vertices"], z["faces"], z["face_label"], names)
+            return LabelledMesh(z["vertices"], z["faces"], z["face_label"], names, occlusion)
         verts, faces, labels, n_v, n_l = [], [], [], 0, 0
         for z in arrays:
             verts.append(z["vertices"])
@@ -240,7 +268,7 @@ class Template:
             n_v += len(z["vertices"])
             n_l += int(z["face_label"].max()) + 1 if len(z["face_label"]) else 0
         return LabelledMesh(np.concatenate(verts), np.concatenate(faces).astype(np.int32),
-                            np.concatenate(labels).astype(np.int16), names)
+                            np.concatenate(labels).astype(np.int16), names, occlusion)
 
     def with_volumes(self, folders: list[Path] | tuple[Path, ...]) -> Template:
         """This template with the meshes of volumetric atlases as its subcortical part.
