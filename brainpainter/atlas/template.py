@@ -64,13 +64,13 @@ from numpy.typing import NDArray
 
 from brainpainter.atlas import registry
 from brainpainter.atlas.mesh import CortexMesh, LabelledMesh, faces_digest, labels_at_vertices, split_mesh
+from brainpainter.atlas.model import SURFACES as SURFACES  # re-exported: readers of templates look here
 from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.occlusion import from_stored
 from brainpainter.errors import BrainPainterError
 
 FORMAT = "brainpainter-template"
 FORMAT_VERSION = 1
-SURFACES = ("pial", "white", "inflated")
 HEMIS = ("lh", "rh")
 LABELS_FORMAT = "brainpainter-labels"
 LABELS_FILE = "labels.json"

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, TypedDict, Unpack
+from typing import TYPE_CHECKING, Any, TypedDict, Unpack
 
-import numpy as np
-from numpy.typing import NDArray
+if TYPE_CHECKING:
+    from numpy.typing import NDArray
 
 from brainpainter.color.rgb import ColorLike, to_hex, to_rgb
 from brainpainter.errors import BrainPainterError, nearest
@@ -53,6 +53,7 @@ class ColourScale:
     name: str = ""
 
     def __post_init__(self) -> None:
+        import numpy as np
         for what, v in (("vmin", self.vmin), ("vmax", self.vmax), ("center", self.center)):
             if v is not None and not np.isfinite(v):
                 raise BrainPainterError(f"{what} must be a finite number; {v!r} was given.")
@@ -81,6 +82,7 @@ class ColourScale:
         -------
         ndarray of float, shape (n,); NaN stays NaN.
         """
+        import numpy as np
         v = np.asarray(values, dtype=float)
         top = self.n_colors - 1
         if self.center is None:
@@ -103,6 +105,7 @@ class ColourScale:
         ndarray of float, shape (n, 3) (or (3,) for a scalar), sRGB in 0-1.
         NaN values get ``nan_color``.
         """
+        import numpy as np
         v = np.asarray(values, dtype=float)
         scalar = v.ndim == 0
         v = np.atleast_1d(v)
@@ -120,6 +123,7 @@ class ColourScale:
 
     def ticks(self) -> NDArray[Any]:
         """Values at the control colours of a gradient (or 5 ticks for a colour map)."""
+        import numpy as np
         n = self.n_colors if self.n_colors <= 12 else 5
         pos = np.linspace(0.0, 1.0, n)
         if self.center is None:
@@ -147,6 +151,7 @@ def gradient_colors(gradient: Sequence[ColorLike] | str) -> NDArray[Any]:
     -------
     ndarray of float, shape (N, 3)
     """
+    import numpy as np
     if isinstance(gradient, str):
         items: list[ColorLike] = [g for g in gradient.replace(";", ",").split(",") if g.strip()]
         # "255 0 0, 0 0 255" style triples are not supported in one string: use hex or names.
@@ -168,6 +173,7 @@ def cmap_colors(name: str, n: int = 256) -> NDArray[Any]:
     ndarray of float, shape (n, 3)
     """
     import matplotlib
+    import numpy as np
 
     try:
         cmap = matplotlib.colormaps[name]
@@ -248,6 +254,7 @@ class ScaleOptions:
 
     def limits(self, data: NDArray[Any] | Sequence[float] | None = None) -> tuple[float, float]:
         """``(vmin, vmax)``: as given, else from the finite values of `data` (shape any)."""
+        import numpy as np
         values = np.asarray(data if data is not None else [], dtype=float).ravel()
         finite = values[np.isfinite(values)]
         center = self.center
