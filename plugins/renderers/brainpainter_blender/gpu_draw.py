@@ -121,7 +121,7 @@ MAX_CACHED_VIEWS = 64
 #: Glass: opacity at grazing angles, as a multiple of the opacity facing the camera.
 GLASS_EDGE = 2.5
 #: Glass: extra opacity at the very outline (Fresnel-like), so the glass reads as a shell, not a fog.
-GLASS_RIM = 0.35
+GLASS_RIM = 0.5
 
 def srgb_to_linear(rgb: np.ndarray) -> np.ndarray:
     """The IEC 61966-2-1 sRGB transfer function inverted, for an array of sRGB 0-1 values."""
