@@ -83,7 +83,7 @@ def render(out: Path, width: int = 800, height: int = 600) -> dict[str, dict[str
     return numbers
 
 
-def compare(before: Path, after: Path, out: Path, tile: int = 300) -> None:
+def compare(before: Path, after: Path, out: Path, tile: int = 200) -> None:
     """One PNG per preset: the images of `before` on the top row, those of `after` below."""
     from PIL import Image, ImageDraw
 
@@ -101,6 +101,7 @@ def compare(before: Path, after: Path, out: Path, tile: int = 300) -> None:
                     im = Image.open(src).convert("RGB")
                     im.thumbnail((tile, h))
                     sheet.paste(im, (60 + c * tile, r * h))
+        # full colour: a 256-colour palette tints the grey shading
         sheet.save(out / f"lighting-{preset}.png", optimize=True)
 
 

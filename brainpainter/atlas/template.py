@@ -155,6 +155,17 @@ class Template:
         return [f"template {self.name!r} has no baked ambient occlusion (built before it existed): folds "
                 "are shaded by the lights only; rebuild it with 'brainpainter template build' to add it."]
 
+    def cortex_names(self, labels: str, hemi: str) -> tuple[str, ...]:
+        """``cortex(labels, hemi).label_names``, read from the manifest (no mesh is loaded)."""
+        label_set = self.manifest["labels"].get(labels)
+        if label_set is not None and hemi not in label_set.get("cortex", {}):
+            return ()
+        return tuple(self._entry(labels, hemi)["names"])
+
+    def subcortical_names(self) -> tuple[str, ...]:
+        """``subcortical().label_names``, read from the manifest (no mesh is loaded)."""
+        return tuple(s["name"] for s in self.manifest["subcortical"]["structures"])
+
     def cortex(self, labels: str, hemi: str) -> CortexMesh:
         """The hemisphere `hemi` split by label set `labels`.
 
@@ -252,7 +263,7 @@ class Template:
     def subcortical(self) -> LabelledMesh:
         """All subcortical structures (names as in FreeSurfer's aseg LUT, or a volume atlas's keys)."""
         entry = self.manifest["subcortical"]
-        names = tuple(s["name"] for s in entry["structures"])
+        names = self.subcortical_names()
         files = entry.get("parts", [entry["file"]])
         arrays = [self._npz(f) for f in files]
         occlusion = (np.concatenate([from_stored(z["ao"]) for z in arrays])

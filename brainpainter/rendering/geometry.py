@@ -20,8 +20,10 @@ colour) and the glass colour; slots from 3 on are region keys
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
+from functools import partial
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
@@ -278,12 +280,11 @@ class SceneGeometry:
         keys: list[str] = []
         defaults: list[RGB] = [tuple(scene.medial_wall_color), NEUTRAL_GREY, GLASS_COLOR]  # type: ignore[list-item]
         slot_of: dict[str, int] = {}
-        parts: list[PartGeometry] = []
 
-        def slots_for(names: list[str], default: int, drop: frozenset[str]) -> NDArray[Any]:
+        def slots_for(names: list[str], default: int) -> NDArray[Any]:
             out = np.full(len(names), -1, dtype=np.int64)
             for i, key in enumerate(names):
-                if key in drop:
+                if key in hidden:
                     continue
                 if key not in slot_of:
                     slot_of[key] = N_FIXED_SLOTS + len(keys)
@@ -292,51 +293,82 @@ class SceneGeometry:
                 out[i] = slot_of[key]
             return out
 
-        def add(name: str, kind: str, hemi: str | None, verts: NDArray[Any], faces: NDArray[Any],
-                face_slot: NDArray[Any], sulc: NDArray[Any], ao: NDArray[Any] | None = None) -> None:
+        def part(name: str, kind: str, hemi: str | None, verts: NDArray[Any], faces: NDArray[Any],
+                 face_slot: NDArray[Any], sulc: NDArray[Any], ao: NDArray[Any] | None = None
+                 ) -> PartGeometry | None:
             keep = face_slot >= 0
             faces, face_slot = np.asarray(faces)[keep], face_slot[keep]
             if not len(faces):
-                return
+                return None
             normals = vertex_normals(verts, faces)
             if settings.shading == "flat" or ao is None or len(ao) != len(verts):
                 ao = None
             per_vertex = (normals, sulc) if ao is None else (normals, sulc, ao)
             v, tri, pal, extra = split_by_label(verts, faces, face_slot, per_vertex)
-            parts.append(PartGeometry(name, kind, hemi, v.astype(np.float32), extra[0].astype(np.float32),
-                                      tri, pal, extra[1].astype(np.float32), v,
-                                      None if ao is None else extra[2].astype(np.float32)))
+            return PartGeometry(name, kind, hemi, v.astype(np.float32), extra[0].astype(np.float32),
+                                tri, pal, extra[1].astype(np.float32), v,
+                                None if ao is None else extra[2].astype(np.float32))
 
-        for hemi in HEMIS:
+        def cortex(hemi: str, slots: NDArray[Any]) -> PartGeometry | None:
             cm = template.cortex(scene.labels, hemi)
             if scene.surface not in cm.vertices:
                 raise choice_error("surface", scene.surface, list(cm.vertices),
                                    f"Template {template.name!r} lacks it.")
-            names = [HEMI_PREFIX[hemi] + n for n in cm.label_names]
-            face_slot = slots_for(names, MEDIAL_SLOT, hidden)[np.asarray(cm.face_label, np.int64)]
             verts = cm.vertices[scene.surface]
             sulc = _template_sulc(template, scene.labels, hemi, cm) if with_sulc else None
             if sulc is None:
                 sulc = (convexity(cm.vertices.get("pial", verts), cm.faces) if with_sulc
                         else np.zeros(len(verts), np.float32))
             ao = None if cm.occlusion is None else cm.occlusion.get(scene.surface)
-            add(f"cortex-{hemi}", "cortex", hemi, verts, cm.faces, face_slot, sulc, ao)
-        if template.manifest.get("subcortical"):
+            return part(f"cortex-{hemi}", "cortex", hemi, verts, cm.faces,
+                        slots[np.asarray(cm.face_label, np.int64)], sulc, ao)
+
+        def subcortical(slots: NDArray[Any]) -> PartGeometry | None:
             sub = template.subcortical()
-            face_slot = slots_for(list(sub.label_names), NEUTRAL_SLOT, hidden)[
-                np.asarray(sub.face_label, np.int64)]
-            add("subcortical", "subcortical", None, sub.vertices, sub.faces, face_slot,
-                np.zeros(len(sub.vertices), np.float32), sub.occlusion)
-        for hemi in HEMIS:
-            if hemi not in template.manifest.get("glass", {}):
-                continue
+            return part("subcortical", "subcortical", None, sub.vertices, sub.faces,
+                        slots[np.asarray(sub.face_label, np.int64)],
+                        np.zeros(len(sub.vertices), np.float32), sub.occlusion)
+
+        def glass(hemi: str) -> PartGeometry | None:
             verts, faces = template.glass(hemi)
-            add(f"glass-{hemi}", "glass", hemi, verts, faces, np.full(len(faces), GLASS_SLOT),
-                np.zeros(len(verts), np.float32))
-        self.parts: tuple[PartGeometry, ...] = tuple(parts)
+            return part(f"glass-{hemi}", "glass", hemi, verts, faces, np.full(len(faces), GLASS_SLOT),
+                        np.zeros(len(verts), np.float32))
+
+        if scene.surface not in template.surfaces:
+            raise choice_error("surface", scene.surface, template.surfaces,
+                               f"Template {template.name!r} lacks it.")
+        # Palette slots come from the region names alone (the manifest): a part's mesh is loaded and
+        # built when a view first shows it, so a one-hemisphere figure never pays for the other.
+        builders: dict[str, tuple[str, str | None, Callable[[], PartGeometry | None]]] = {}
+        for hemi in HEMIS:
+            slots = slots_for([HEMI_PREFIX[hemi] + n for n in template.cortex_names(scene.labels, hemi)],
+                              MEDIAL_SLOT)
+            builders[f"cortex-{hemi}"] = ("cortex", hemi, partial(cortex, hemi, slots))
+        if template.manifest.get("subcortical"):
+            slots = slots_for(list(template.subcortical_names()), NEUTRAL_SLOT)
+            builders["subcortical"] = ("subcortical", None, partial(subcortical, slots))
+        for hemi in HEMIS:
+            if hemi in template.manifest.get("glass", {}):
+                builders[f"glass-{hemi}"] = ("glass", hemi, partial(glass, hemi))
+        self._builders = builders
+        self._built: dict[str, PartGeometry | None] = {}
+        self._lock = threading.Lock()
         self.keys: tuple[str, ...] = tuple(keys)
         self.slot_of = slot_of
         self.default_rgb = np.asarray(defaults, dtype=np.float32)
+
+    def _parts(self, names: list[str]) -> list[PartGeometry]:
+        """The named parts, built now if not yet (in a fixed order; empty parts left out)."""
+        with self._lock:
+            for name in names:
+                if name not in self._built:
+                    self._built[name] = self._builders[name][2]()
+        return [p for name in names if (p := self._built[name]) is not None]
+
+    @property
+    def parts(self) -> tuple[PartGeometry, ...]:
+        """Every drawable part: cortex-lh, cortex-rh, subcortical, glass-lh, glass-rh (those present)."""
+        return tuple(self._parts(list(self._builders)))
 
     @property
     def n_slots(self) -> int:
@@ -350,7 +382,8 @@ class SceneGeometry:
         BrainPainterError
             If the view draws nothing (its parts are absent from the template or all hidden).
         """
-        parts = [p for p in self.parts if framing.shows(view, p.kind, p.hemi)]
+        parts = self._parts([name for name, (kind, hemi, _) in self._builders.items()
+                             if framing.shows(view, kind, hemi)])
         if not parts:
             raise BrainPainterError(
                 f"view {view.name!r} shows nothing: content={view.content!r}, hemis={list(view.hemis)}, "
