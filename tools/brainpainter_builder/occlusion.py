@@ -64,7 +64,12 @@ def add_to_template(path: str | Path) -> dict[str, float]:
         arrays["ao"] = subcortical_array(arrays["vertices"], arrays["faces"])
         writer.save_npz(path / file, arrays)
         seconds[file] = time.perf_counter() - t0
-    manifest["occlusion"] = manifest_entry()
+    # where build.py puts it (after "bounds"), so that a rebuild gives the same bytes
+    manifest.pop("occlusion", None)
+    keys = list(manifest)
+    at = keys.index("bounds") + 1 if "bounds" in keys else len(keys)
+    manifest = {**{k: manifest[k] for k in keys[:at]}, "occlusion": manifest_entry(),
+                **{k: manifest[k] for k in keys[at:]}}
     writer.write_json(path / "manifest.json", manifest)
     return seconds
 
