@@ -118,6 +118,7 @@ else:
     pl.camera.up = tuple(pose.up)
     pl.camera.parallel_scale = pose.ortho_scale / args["width"] * args["height"] / 2
     pl.renderer.ResetCameraClippingRange()
+    pl.camera_set = True  # else the first render resets the camera to its own framing (smaller brain)
     pl.render()
     pl.screenshot(return_img=True)  # warm-up
     for pal in palettes:
