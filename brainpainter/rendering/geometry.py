@@ -253,6 +253,24 @@ class Palette(Mapping[str, RGB]):
         return self._rgb
 
 
+def _part(name: str, kind: str, hemi: str | None, verts: NDArray[Any], faces: NDArray[Any],
+          face_slot: NDArray[Any], sulc: NDArray[Any], ao: NDArray[Any] | None = None, *,
+          with_occlusion: bool = True) -> PartGeometry | None:
+    """One part from its mesh and per-face slots (faces of slot -1 are hidden); None when nothing is left."""
+    keep = face_slot >= 0
+    faces, face_slot = np.asarray(faces)[keep], face_slot[keep]
+    if not len(faces):
+        return None
+    normals = vertex_normals(verts, faces)
+    if not with_occlusion or ao is None or len(ao) != len(verts):
+        ao = None
+    per_vertex = (normals, sulc) if ao is None else (normals, sulc, ao)
+    v, tri, pal, extra = split_by_label(verts, faces, face_slot, per_vertex)
+    return PartGeometry(name, kind, hemi, v.astype(np.float32), extra[0].astype(np.float32),
+                        tri, pal, extra[1].astype(np.float32), v,
+                        None if ao is None else extra[2].astype(np.float32))
+
+
 class SceneGeometry:
     """Every drawable part of a scene, built once from its template.
 
@@ -293,21 +311,8 @@ class SceneGeometry:
                 out[i] = slot_of[key]
             return out
 
-        def part(name: str, kind: str, hemi: str | None, verts: NDArray[Any], faces: NDArray[Any],
-                 face_slot: NDArray[Any], sulc: NDArray[Any], ao: NDArray[Any] | None = None
-                 ) -> PartGeometry | None:
-            keep = face_slot >= 0
-            faces, face_slot = np.asarray(faces)[keep], face_slot[keep]
-            if not len(faces):
-                return None
-            normals = vertex_normals(verts, faces)
-            if settings.shading == "flat" or ao is None or len(ao) != len(verts):
-                ao = None
-            per_vertex = (normals, sulc) if ao is None else (normals, sulc, ao)
-            v, tri, pal, extra = split_by_label(verts, faces, face_slot, per_vertex)
-            return PartGeometry(name, kind, hemi, v.astype(np.float32), extra[0].astype(np.float32),
-                                tri, pal, extra[1].astype(np.float32), v,
-                                None if ao is None else extra[2].astype(np.float32))
+        def part(*args: Any) -> PartGeometry | None:
+            return _part(*args, with_occlusion=settings.shading != "flat")
 
         def cortex(hemi: str, slots: NDArray[Any]) -> PartGeometry | None:
             cm = template.cortex(scene.labels, hemi)
