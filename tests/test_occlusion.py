@@ -21,6 +21,18 @@ def test_one_vertex_normals_function():
     assert export.vertex_normals is mesh.vertex_normals
 
 
+def test_vertex_normals_sum_corner_by_corner():
+    """The builder's meshing summed face normals corner by corner; rebuilt templates need the same bits."""
+    m = trimesh.creation.icosphere(subdivisions=3)
+    v = m.vertices + np.random.default_rng(0).normal(0.0, 0.05, m.vertices.shape)
+    fn = np.cross(v[m.faces[:, 1]] - v[m.faces[:, 0]], v[m.faces[:, 2]] - v[m.faces[:, 0]])
+    summed = np.zeros_like(v)
+    for k in range(3):
+        np.add.at(summed, m.faces[:, k], fn)
+    expected = summed / np.linalg.norm(summed, axis=1, keepdims=True)
+    assert np.array_equal(mesh.vertex_normals(v, m.faces, np.float64), expected)
+
+
 def test_an_enclosed_surface_is_occluded_and_an_open_one_is_not():
     outer = trimesh.creation.icosphere(subdivisions=3, radius=20.0)
     inner = trimesh.creation.icosphere(subdivisions=3, radius=5.0)

@@ -40,9 +40,11 @@ def vertex_normals(vertices: NDArray[Any], faces: NDArray[Any],
     n = np.zeros_like(v)
     if len(f):
         fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
-        idx = f.ravel()
+        # corner by corner (all first corners, then all second, ...): the order in which the
+        # builder's meshing always summed, so rebuilt templates stay byte-identical
+        idx = f.T.ravel()
         for c in range(3):
-            n[:, c] = np.bincount(idx, weights=np.repeat(fn[:, c], 3), minlength=len(v))
+            n[:, c] = np.bincount(idx, weights=np.tile(fn[:, c], 3), minlength=len(v))
     length = np.linalg.norm(n, axis=1, keepdims=True)
     unit: NDArray[Any] = (n / np.where(length > 0, length, 1.0)).astype(dtype)
     return unit
