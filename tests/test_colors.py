@@ -44,3 +44,14 @@ def test_bad_colours(given, message):
 
 def test_hex_round_trip():
     assert to_hex(to_rgb("#12abef")) == "#12abef"
+
+
+def test_common_colour_names_are_matplotlibs():
+    """The names to_rgb knows without importing matplotlib give matplotlib's colours."""
+    from matplotlib import colors as mcolors
+
+    from brainpainter.color.rgb import COMMON_NAMES
+
+    mapping = mcolors.get_named_colors_mapping()
+    for name in COMMON_NAMES:
+        assert to_rgb(name) == tuple(float(c) for c in mcolors.to_rgb(mapping[name])), name

@@ -18,6 +18,38 @@ import numpy as np
 from numpy.typing import NDArray
 
 
+def vertex_normals(vertices: NDArray[Any], faces: NDArray[Any],
+                   dtype: type[np.floating[Any]] = np.float32) -> NDArray[Any]:
+    """Area-weighted unit vertex normals: the one normals function of brainpainter.
+
+    Parameters
+    ----------
+    vertices : ndarray of float, shape (n_vertices, 3)
+    faces : ndarray of int, shape (n_faces, 3)
+        Counter-clockwise seen from outside (normals then point outwards).
+    dtype : numpy float type
+        Of the result (float32 for drawing; float64 where geometry is changed by them).
+
+    Returns
+    -------
+    ndarray, shape (n_vertices, 3)
+        Unit length; zero for a vertex no face uses.
+    """
+    v = np.asarray(vertices, dtype=np.float64)
+    f = np.asarray(faces, dtype=np.int64)
+    n = np.zeros_like(v)
+    if len(f):
+        fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+        # corner by corner (all first corners, then all second, ...): the order in which the
+        # builder's meshing always summed, so rebuilt templates stay byte-identical
+        idx = f.T.ravel()
+        for c in range(3):
+            n[:, c] = np.bincount(idx, weights=np.tile(fn[:, c], 3), minlength=len(v))
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    unit: NDArray[Any] = (n / np.where(length > 0, length, 1.0)).astype(dtype)
+    return unit
+
+
 def faces_digest(faces: NDArray[Any]) -> str:
     """SHA-256 of a face array (as little-endian int32), to recognise a mesh."""
     return hashlib.sha256(np.ascontiguousarray(faces, dtype="<i4").tobytes()).hexdigest()
@@ -45,6 +77,9 @@ class CortexMesh:
     sulc : ndarray of float32, shape (n_vertices,), or None
         Sulcal depth (FreeSurfer ``?h.sulc``, mm; positive in sulci, negative
         on gyral crowns), when the template has it.
+    occlusion : dict of str to ndarray of float32, shape (n_vertices,), or None
+        Ambient occlusion per surface (1 = open sky, towards 0 deep in a fold;
+        :mod:`brainpainter.atlas.occlusion`), when the template has it baked.
     """
 
     hemi: str
@@ -55,6 +90,7 @@ class CortexMesh:
     vertices: dict[str, NDArray[Any]]
     source_vertex: NDArray[Any]
     sulc: NDArray[Any] | None = None
+    occlusion: dict[str, NDArray[Any]] | None = None
 
 
 @dataclass(frozen=True)
@@ -68,12 +104,15 @@ class LabelledMesh:
     face_label : ndarray of int16, shape (n_faces,)
         Index into `label_names`.
     label_names : tuple of str
+    occlusion : ndarray of float32, shape (n_vertices,), or None
+        Ambient occlusion of the structures together (1 = open sky), when baked.
     """
 
     vertices: NDArray[Any]
     faces: NDArray[Any]
     face_label: NDArray[Any]
     label_names: tuple[str, ...]
+    occlusion: NDArray[Any] | None = None
 
 
 def labels_at_vertices(source_label: NDArray[Any], base: CortexMesh) -> NDArray[Any]:
@@ -270,7 +309,7 @@ def split_mesh(base: CortexMesh, vertex_label: NDArray[Any], labels: str,
     :func:`crossing_edges`, as :func:`smooth_crossings` computed them when
     the file was written) or, when not given or not matching, computed now
     with :func:`smooth_crossings`. Per-vertex arrays (positions of every
-    surface, `sulc`) are interpolated at the new vertices.
+    surface, `sulc`, `occlusion`) are interpolated at the new vertices.
     """
     n_edges = len(crossing_edges(base.faces, vertex_label)) if crossing is not None else -1
     if crossing is not None and np.shape(crossing) == (n_edges,):
@@ -289,4 +328,6 @@ def split_mesh(base: CortexMesh, vertex_label: NDArray[Any], labels: str,
     return CortexMesh(hemi=base.hemi, labels=labels, faces=faces.astype(np.int32),
                       face_label=face_label.astype(np.int16), label_names=names,
                       vertices={s: extend(v) for s, v in base.vertices.items()},
-                      source_vertex=source, sulc=None if base.sulc is None else extend(base.sulc))
+                      source_vertex=source, sulc=None if base.sulc is None else extend(base.sulc),
+                      occlusion=None if base.occlusion is None else {
+                          k: extend(v) for k, v in base.occlusion.items()})

@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.atlas.model import Region
 from brainpainter.errors import BrainPainterError
 
@@ -171,16 +172,11 @@ def _signed_volume(vertices: NDArray[Any], faces: NDArray[Any]) -> float:
     return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
 
 
-def vertex_normals(vertices: NDArray[Any], faces: NDArray[Any]) -> tuple[NDArray[Any], float]:
-    """Area-weighted unit vertex normals, shape (n, 3), and the total area."""
+def surface_area(vertices: NDArray[Any], faces: NDArray[Any]) -> float:
+    """Total area of a triangle mesh (mm^2 for mm vertices)."""
     fn = np.cross(vertices[faces[:, 1]] - vertices[faces[:, 0]],
                   vertices[faces[:, 2]] - vertices[faces[:, 0]])
-    area = 0.5 * float(np.linalg.norm(fn, axis=1).sum())
-    vn = np.zeros_like(vertices)
-    for k in range(3):
-        np.add.at(vn, faces[:, k], fn)
-    norm = np.linalg.norm(vn, axis=1, keepdims=True)
-    return vn / np.where(norm > 0, norm, 1.0), area
+    return 0.5 * float(np.linalg.norm(fn, axis=1).sum())
 
 
 def _match_volume(vertices: NDArray[Any], faces: NDArray[Any], target: float,
@@ -188,7 +184,7 @@ def _match_volume(vertices: NDArray[Any], faces: NDArray[Any], target: float,
     """Offset vertices along their normals until the enclosed volume is `target`."""
     for _ in range(steps):
         volume = _signed_volume(vertices, faces)
-        normals, area = vertex_normals(vertices, faces)
+        normals, area = vertex_normals(vertices, faces, np.float64), surface_area(vertices, faces)
         if area <= 0 or abs(volume - target) <= 1e-4 * target:
             break
         vertices = vertices + normals * ((target - volume) / area)

@@ -18,6 +18,9 @@ from typing import Any, TypeVar
 
 from brainpainter.errors import BrainPainterError
 
+#: The cortical surfaces of a template (here, not in template.py: option parsing needs them cheaply).
+SURFACES = ("pial", "white", "inflated")
+
 HEMIS = ("lh", "rh", "bilateral")
 HEMI_PREFIX = {"lh": "Left-", "rh": "Right-", "bilateral": ""}
 KINDS = ("cortical", "subcortical")

@@ -29,7 +29,11 @@ per label-crossing edge) caches where the border crosses each edge
 (:func:`brainpainter.atlas.mesh.smooth_crossings`), so loading only splits.
 ``sulc`` (float32, one per
 vertex) is FreeSurfer's sulcal depth (``surf/?h.sulc``, mm, positive in
-sulci) for shading.
+sulci) for shading. ``ao_{surface}`` (uint8 per vertex, 255 = open sky) is
+the ambient occlusion baked by the builder for each surface
+(:mod:`brainpainter.atlas.occlusion`); ``subcortical.npz`` may hold ``ao``
+(the structures baked together). A template without them draws without
+occlusion (:attr:`Template.notes` says so).
 
 Label-set overlays
 ------------------
@@ -62,12 +66,13 @@ from numpy.typing import NDArray
 
 from brainpainter.atlas import registry
 from brainpainter.atlas.mesh import CortexMesh, LabelledMesh, faces_digest, labels_at_vertices, split_mesh
+from brainpainter.atlas.model import SURFACES as SURFACES  # re-exported: readers of templates look here
 from brainpainter.atlas.model import Atlas
+from brainpainter.atlas.occlusion import from_stored
 from brainpainter.errors import BrainPainterError
 
 FORMAT = "brainpainter-template"
 FORMAT_VERSION = 1
-SURFACES = ("pial", "white", "inflated")
 HEMIS = ("lh", "rh")
 LABELS_FORMAT = "brainpainter-labels"
 LABELS_FILE = "labels.json"
@@ -132,7 +137,38 @@ class Template:
             vertices={s: z[s] for s in self.surfaces if s in z},
             source_vertex=z["source_vertex"],
             sulc=z.get("sulc"),
+            occlusion=self._occlusion(z),
         )
+
+    def _occlusion(self, z: dict[str, NDArray[Any]]) -> dict[str, NDArray[Any]] | None:
+        """The baked ``ao_{surface}`` arrays of a cortex file, or None when one surface lacks it."""
+        if not all(f"ao_{s}" in z for s in self.surfaces if s in z):
+            return None
+        return {s: from_stored(z[f"ao_{s}"]) for s in self.surfaces if s in z}
+
+    @property
+    def has_occlusion(self) -> bool:
+        """Whether the template has baked ambient occlusion (``occlusion`` in its manifest)."""
+        return bool(self.manifest.get("occlusion"))
+
+    @property
+    def notes(self) -> list[str]:
+        """What a user may want to know about this template (e.g. a feature an old build lacks)."""
+        if self.has_occlusion:
+            return []
+        return [f"template {self.name!r} has no baked ambient occlusion (built before it existed): folds "
+                "are shaded by the lights only; rebuild it with 'brainpainter template build' to add it."]
+
+    def cortex_names(self, labels: str, hemi: str) -> tuple[str, ...]:
+        """``cortex(labels, hemi).label_names``, read from the manifest (no mesh is loaded)."""
+        label_set = self.manifest["labels"].get(labels)
+        if label_set is not None and hemi not in label_set.get("cortex", {}):
+            return ()
+        return tuple(self._entry(labels, hemi)["names"])
+
+    def subcortical_names(self) -> tuple[str, ...]:
+        """``subcortical().label_names``, read from the manifest (no mesh is loaded)."""
+        return tuple(s["name"] for s in self.manifest["subcortical"]["structures"])
 
     def cortex(self, labels: str, hemi: str) -> CortexMesh:
         """The hemisphere `hemi` split by label set `labels`.
@@ -168,7 +204,8 @@ class Template:
             if not per_vertex:
                 return CortexMesh(hemi=hemi, labels=labels, faces=base.faces, face_label=z["face_label"],
                                   label_names=tuple(entry["names"]), vertices=base.vertices,
-                                  source_vertex=base.source_vertex, sulc=base.sulc)
+                                  source_vertex=base.source_vertex, sulc=base.sulc,
+                                  occlusion=base.occlusion)
         else:
             base = self.base_cortex(labels, hemi)
             if "vertex_label" not in z:
@@ -230,12 +267,14 @@ class Template:
     def subcortical(self) -> LabelledMesh:
         """All subcortical structures (names as in FreeSurfer's aseg LUT, or a volume atlas's keys)."""
         entry = self.manifest["subcortical"]
-        names = tuple(s["name"] for s in entry["structures"])
+        names = self.subcortical_names()
         files = entry.get("parts", [entry["file"]])
         arrays = [self._npz(f) for f in files]
+        occlusion = (np.concatenate([from_stored(z["ao"]) for z in arrays])
+                     if all("ao" in z for z in arrays) else None)
         if len(arrays) == 1:
             z = arrays[0]
-            return LabelledMesh(z["vertices"], z["faces"], z["face_label"], names)
+            return LabelledMesh(z["vertices"], z["faces"], z["face_label"], names, occlusion)
         verts, faces, labels, n_v, n_l = [], [], [], 0, 0
         for z in arrays:
             verts.append(z["vertices"])
@@ -244,7 +283,7 @@ class Template:
             n_v += len(z["vertices"])
             n_l += int(z["face_label"].max()) + 1 if len(z["face_label"]) else 0
         return LabelledMesh(np.concatenate(verts), np.concatenate(faces).astype(np.int32),
-                            np.concatenate(labels).astype(np.int16), names)
+                            np.concatenate(labels).astype(np.int16), names, occlusion)
 
     def with_volumes(self, folders: list[Path] | tuple[Path, ...]) -> Template:
         """This template with the meshes of volumetric atlases as its subcortical part.

@@ -7,6 +7,7 @@ inside the commands, so ``brainpainter --help`` stays fast.
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import signal
@@ -42,6 +43,19 @@ def _echo_json(obj: object) -> None:
 
 COMMANDS_GROUP = "brainpainter.commands"
 
+#: Built-in commands loaded only when they run or their help is asked for (their options pull in
+#: the media stack: numpy, matplotlib), with the short help that ``brainpainter --help`` lists.
+LAZY_COMMANDS = {
+    "figure": ("brainpainter.cli.media:figure",
+               "A publication figure of INPUT rows: renders, titles and one colour bar."),
+    "movie": ("brainpainter.cli.media:movie",
+              "A movie through the rows of INPUT: each row a key frame, eased in between."),
+    "export": ("brainpainter.cli.export:export",
+               "One row of INPUT as an interactive 3D brain: a .glb, or an HTML page."),
+    "serve": ("brainpainter.web.command:serve",
+              "Serve the web page and JSON API: upload a table, check it, render it."),
+}
+
 
 class CommandsFromPlugins(click.Group):
     """The top-level group plus the commands that distributions add through ``brainpainter.commands``.
@@ -56,10 +70,31 @@ class CommandsFromPlugins(click.Group):
         return {ep.name: ep for ep in entry_points(group=COMMANDS_GROUP) if ep.name not in self.commands}
 
     def list_commands(self, ctx: click.Context) -> list[str]:
-        return sorted([*super().list_commands(ctx), *self._entry_points()])
+        return sorted({*super().list_commands(ctx), *LAZY_COMMANDS, *self._entry_points()})
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        """The command list of ``--help``, without importing the lazy built-in commands."""
+        from click.utils import make_default_short_help
+
+        rows = []
+        for name in self.list_commands(ctx):
+            if name in LAZY_COMMANDS and name not in self.commands:
+                rows.append((name, make_default_short_help(LAZY_COMMANDS[name][1],
+                                                           formatter.width - 6 - len(name))))
+                continue
+            command = self.get_command(ctx, name)
+            if command is not None and not command.hidden:
+                rows.append((name, command.get_short_help_str(formatter.width - 6 - len(name))))
+        if rows:
+            with formatter.section("Commands"):
+                formatter.write_dl(rows)
 
     def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
         command = super().get_command(ctx, cmd_name)
+        if command is None and cmd_name in LAZY_COMMANDS:
+            module, _, attr = LAZY_COMMANDS[cmd_name][0].partition(":")
+            command = getattr(importlib.import_module(module), attr)
+            self.add_command(command, cmd_name)
         entry = None if command is not None else self._entry_points().get(cmd_name)
         if entry is None:
             return command
@@ -445,13 +480,6 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
                    + (f"; {len(w['retried'])} task(s) retried" if w["retried"] else "") + ")")
 
 
-from brainpainter.cli.media import figure, movie  # noqa: E402
-
-cli.add_command(figure)
-cli.add_command(movie)
-from brainpainter.cli.export import export  # noqa: E402
-
-cli.add_command(export)
 
 
 #: Options whose value is a comma-separated list.
@@ -482,9 +510,6 @@ def join_split_lists(args: list[str]) -> list[str]:
         i += 1
     return out
 
-from brainpainter.web.command import serve  # noqa: E402
-
-cli.add_command(serve)
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, TypedDict, Unpack
+from typing import TYPE_CHECKING, Any, TypedDict, Unpack
 
-import numpy as np
-from numpy.typing import NDArray
+if TYPE_CHECKING:
+    from numpy.typing import NDArray
 
 from brainpainter.color.rgb import ColorLike, to_hex, to_rgb
 from brainpainter.errors import BrainPainterError, nearest
@@ -37,6 +37,8 @@ def fraction(values: NDArray[Any], lo: float, hi: float) -> NDArray[Any]:
     ndarray of float, shape (n,): finite for finite values (possibly far outside [0, 1], never NaN),
     NaN for NaN.
     """
+    import numpy as np
+
     v = np.asarray(values, dtype=float)
     with np.errstate(over="ignore", divide="ignore", invalid="ignore", under="ignore"):
         if np.isfinite(hi - lo):
@@ -48,13 +50,15 @@ def fraction(values: NDArray[Any], lo: float, hi: float) -> NDArray[Any]:
 
 def between(lo: float, hi: float, t: NDArray[Any] | float) -> NDArray[Any]:
     """``lo + t * (hi - lo)`` for ``t`` in [0, 1], without overflow for any finite `lo`, `hi`."""
+    import numpy as np
+
     t = np.clip(np.asarray(t, dtype=float), 0.0, 1.0)
     with np.errstate(under="ignore"):
         return np.asarray(lo * (1.0 - t) + hi * t)
 
 
 #: The largest finite float: limits are kept within +-BIGGEST.
-BIGGEST = float(np.finfo(float).max)
+BIGGEST = 1.7976931348623157e308  # float(np.finfo(float).max), without importing numpy
 
 
 @dataclass(frozen=True)
@@ -96,6 +100,7 @@ class ColourScale:
         return f"<ColourScale {self.name or 'custom'!r} {self.vmin:g}..{self.vmax:g}{center}>"
 
     def __post_init__(self) -> None:
+        import numpy as np
         for what, v in (("vmin", self.vmin), ("vmax", self.vmax), ("center", self.center)):
             if v is not None and not np.isfinite(v):
                 raise BrainPainterError(f"{what} must be a finite number; {v!r} was given.")
@@ -124,6 +129,7 @@ class ColourScale:
         -------
         ndarray of float, shape (n,); NaN stays NaN.
         """
+        import numpy as np
         v = np.asarray(values, dtype=float)
         top = self.n_colors - 1
         if self.center is None:
@@ -145,6 +151,7 @@ class ColourScale:
         ndarray of float, shape (n, 3) (or (3,) for a scalar), sRGB in 0-1.
         NaN values get ``nan_color``.
         """
+        import numpy as np
         v = np.asarray(values, dtype=float)
         scalar = v.ndim == 0
         v = np.atleast_1d(v)
@@ -162,6 +169,7 @@ class ColourScale:
 
     def ticks(self) -> NDArray[Any]:
         """Values at the control colours of a gradient (or 5 ticks for a colour map)."""
+        import numpy as np
         n = self.n_colors if self.n_colors <= 12 else 5
         pos = np.linspace(0.0, 1.0, n)
         if self.center is None:
@@ -190,6 +198,7 @@ def gradient_colors(gradient: Sequence[ColorLike] | str) -> NDArray[Any]:
     -------
     ndarray of float, shape (N, 3)
     """
+    import numpy as np
     if isinstance(gradient, str):
         items: list[ColorLike] = [g for g in gradient.replace(";", ",").split(",") if g.strip()]
         # "255 0 0, 0 0 255" style triples are not supported in one string: use hex or names.
@@ -211,6 +220,7 @@ def cmap_colors(name: str, n: int = 256) -> NDArray[Any]:
     ndarray of float, shape (n, 3)
     """
     import matplotlib
+    import numpy as np
 
     try:
         cmap = matplotlib.colormaps[name]
@@ -291,6 +301,7 @@ class ScaleOptions:
 
     def limits(self, data: NDArray[Any] | Sequence[float] | None = None) -> tuple[float, float]:
         """``(vmin, vmax)``: as given, else from the finite values of `data` (shape any)."""
+        import numpy as np
         values = np.asarray(data if data is not None else [], dtype=float).ravel()
         finite = values[np.isfinite(values)]
         center = self.center

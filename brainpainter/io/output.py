@@ -127,12 +127,24 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
         raise
 
 
-# Imported with this module, early and on the caller's thread: fpng's import walks the
-# interpreter stack (lazy_loader), which takes seconds on a PNG worker thread once bpy is loaded.
-try:
-    import fpng as _fpng
-except ImportError:  # pragma: no cover - fpng is a dependency; Pillow is the fallback
-    _fpng = None
+_encoder: dict[str, Any] = {}
+
+
+def load_encoder() -> Any:
+    """The ``fpng`` module (None when missing: Pillow encodes), imported once.
+
+    Call it on the caller's thread before PNG worker threads encode (``PngWriter``
+    does): fpng's import walks the interpreter stack (lazy_loader), which takes
+    seconds on a worker thread once bpy is loaded. Not imported with this module,
+    whose names ``brainpainter --help`` needs (fpng and Pillow cost ~0.1 s).
+    """
+    if "fpng" not in _encoder:
+        try:
+            import fpng
+        except ImportError:  # pragma: no cover - fpng is a dependency; Pillow is the fallback
+            fpng = None
+        _encoder["fpng"] = fpng
+    return _encoder["fpng"]
 
 
 def _png_chunk(kind: bytes, data: bytes) -> bytes:
@@ -150,8 +162,9 @@ def png_bytes(image: NDArray[Any], metadata: dict[str, str] | None = None) -> by
     text chunks go right after the header, as Pillow writes them.
     """
     pixels = np.ascontiguousarray(image, dtype=np.uint8)
-    if _fpng is not None and pixels.ndim == 3 and pixels.shape[2] in (3, 4):
-        data = _fpng.from_ndarray(pixels)
+    fpng = load_encoder()
+    if fpng is not None and pixels.ndim == 3 and pixels.shape[2] in (3, 4):
+        data = fpng.from_ndarray(pixels)
         chunks = b"".join(
             _png_chunk(b"iTXt", k.encode("latin-1") + b"\0\0\0\0\0" + str(v).encode("utf-8"))
             for k, v in (metadata or {}).items())
@@ -191,6 +204,7 @@ class PngWriter:
     """
 
     def __init__(self, max_pending: int = 2) -> None:
+        load_encoder()  # on this thread, not the worker's
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="brainpainter-png")
         self._pending: deque[Future[None]] = deque()
         self._max = max_pending

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any, Unpack
 import numpy as np
 from numpy.typing import NDArray
 
+from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.atlas.model import HEMI_PREFIX, Atlas
 from brainpainter.atlas.template import Template
 from brainpainter.errors import BrainPainterError, choice_error
@@ -78,13 +79,6 @@ class RegionMesh:
     vertex_colors: NDArray[Any] | None = None
 
 
-def _vertex_normals(vertices: NDArray[Any], faces: NDArray[Any]) -> NDArray[Any]:
-    import trimesh
-
-    mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
-    return np.asarray(mesh.vertex_normals, dtype=np.float32)
-
-
 def _submesh(vertices: NDArray[Any], normals: NDArray[Any],
              faces: NDArray[Any]) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any]]:
     """``(vertices, faces, normals)`` of the part of a mesh that `faces` use, renumbered."""
@@ -116,7 +110,7 @@ def region_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
     for hemi in ("lh", "rh"):
         cm = template.cortex(scene.labels, hemi)
         verts = cm.vertices[scene.surface]
-        normals = _vertex_normals(verts, cm.faces)
+        normals = vertex_normals(verts, cm.faces)
         wall: list[NDArray[Any]] = []
         for i, label in enumerate(cm.label_names):
             key = HEMI_PREFIX[hemi] + label
@@ -131,7 +125,7 @@ def region_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
             out.append(RegionMesh(f"{HEMI_PREFIX[hemi]}medial-wall", hemi,
                                   *_submesh(verts, normals, np.concatenate(wall)), scene.medial_wall_color))
     sub = template.subcortical()
-    normals = _vertex_normals(sub.vertices, sub.faces)
+    normals = vertex_normals(sub.vertices, sub.faces)
     for i, key in enumerate(sub.label_names):
         faces = sub.faces[sub.face_label == i]
         if key in scene.hidden or not len(faces):
@@ -192,7 +186,7 @@ def vertex_meshes(scene: Scene, colors: VertexColors) -> list[RegionMesh]:
             continue
         verts = cm.vertices[scene.surface]
         out.append(RegionMesh(f"{HEMI_PREFIX[hemi]}cortex", hemi, verts.astype(np.float32),
-                              np.asarray(cm.faces, np.int32), _vertex_normals(verts, cm.faces),
+                              np.asarray(cm.faces, np.int32), vertex_normals(verts, cm.faces),
                               scene.medial_wall_color, np.asarray(colors.vertices[hemi], np.float32)))
     return out + [m for m in region_meshes(scene, dict(colors.regions)) if m.part == "subcortical"]
 

@@ -101,3 +101,33 @@ def border_ratio(image: NDArray[Any], a: tuple[int, int, int], b: tuple[int, int
     if smoothed <= 0:
         raise ValueError("no border between the two colours in the image")
     return raw / smoothed, raw
+
+
+def lightness(rgb: NDArray[Any]) -> NDArray[Any]:
+    """CIE L* (0-100) of sRGB pixels (0-255), D65 white; shape of `rgb` without its last axis.
+
+    Parameters
+    ----------
+    rgb : ndarray, shape (..., 3) or (..., 4)
+        sRGB values 0-255 (alpha, if any, ignored).
+    """
+    lin = _srgb_to_linear(np.asarray(rgb, dtype=np.float64)[..., :3])
+    y = lin @ np.array([0.2126, 0.7152, 0.0722])
+    out: NDArray[Any] = np.where(y > (6 / 29) ** 3, 116.0 * np.cbrt(y) - 16.0, y * (29 / 3) ** 3)
+    return out
+
+
+def lightness_spread(image: NDArray[Any], background: tuple[int, int, int] = (255, 255, 255)) -> float:
+    """How much shading varies on the brain: L* 90th minus 10th percentile of the non-background pixels.
+
+    Parameters
+    ----------
+    image : ndarray of uint8, shape (h, w, 3) or (h, w, 4)
+        A render on an opaque `background`.
+    background : tuple of int
+        Pixels exactly this colour are left out.
+    """
+    rgb = np.asarray(image)[..., :3]
+    brain = ~np.all(rgb == np.asarray(background, dtype=rgb.dtype), axis=-1)
+    p10, p90 = np.percentile(lightness(rgb[brain]), [10, 90])
+    return float(p90 - p10)

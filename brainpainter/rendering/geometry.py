@@ -43,6 +43,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.rendering import framing
 from brainpainter.rendering.settings import RGB, SULC_LIGHTINGS, RenderSettings
@@ -118,6 +119,11 @@ class PartGeometry:
         Points whose projections bound the part (here its vertices: projecting
         them costs about a millisecond, less than a convex hull, whose import
         alone costs a second at start-up).
+    occlusion : ndarray of float32, shape (n_vertices,), or None
+        Ambient occlusion baked into the template (1 = open sky, towards 0
+        deep in a fold; :mod:`brainpainter.atlas.occlusion`), for the
+        renderer's shading; None when the template has none (old templates,
+        the glass) or the shading is flat.
     """
 
     name: str
@@ -129,21 +135,7 @@ class PartGeometry:
     palette_index: NDArray[Any]
     sulc: NDArray[Any]
     hull: NDArray[Any]
-
-
-def vertex_normals(vertices: NDArray[Any], faces: NDArray[Any]) -> NDArray[Any]:
-    """Area-weighted unit vertex normals, shape (n_vertices, 3), float32."""
-    v = np.asarray(vertices, dtype=np.float64)
-    f = np.asarray(faces, dtype=np.int64)
-    n = np.zeros_like(v)
-    if len(f):
-        fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
-        idx = f.ravel()
-        for c in range(3):
-            n[:, c] = np.bincount(idx, weights=np.repeat(fn[:, c], 3), minlength=len(v))
-    length = np.linalg.norm(n, axis=1, keepdims=True)
-    unit: NDArray[Any] = (n / np.where(length > 0, length, 1.0)).astype(np.float32)
-    return unit
+    occlusion: NDArray[Any] | None = None
 
 
 def convexity(vertices: NDArray[Any], faces: NDArray[Any], iterations: int = 60) -> NDArray[Any]:
@@ -452,19 +444,25 @@ class SceneGeometry:
             return out
 
         def add(name: str, kind: str, hemi: str | None, verts: NDArray[Any], faces: NDArray[Any],
-                face_slot: NDArray[Any], sulc: NDArray[Any], first_slot: int | None = None) -> None:
+                face_slot: NDArray[Any], sulc: NDArray[Any], first_slot: int | None = None,
+                ao: NDArray[Any] | None = None) -> None:
             keep = face_slot >= 0
             faces, face_slot = np.asarray(faces)[keep], face_slot[keep]
             if not len(faces):
                 return
             normals = vertex_normals(verts, faces)
+            if settings.shading == "flat" or ao is None or len(ao) != len(verts):
+                ao = None  # flat colours stay exact; a template without occlusion draws without it
+            per_vertex: tuple[NDArray[Any], ...] = (normals, sulc) if ao is None else (normals, sulc, ao)
+            extra: tuple[NDArray[Any], ...]
             if first_slot is not None:  # per vertex: the mesh as stored, one slot per vertex
-                v, tri, nrm, dep = verts, np.asarray(faces, np.uint32), normals, sulc
+                v, tri, extra = verts, np.asarray(faces, np.uint32), per_vertex
                 pal = (first_slot + np.arange(len(verts))).astype(np.int32)
             else:
-                v, tri, pal, (nrm, dep) = split_by_label(verts, faces, face_slot, (normals, sulc))
-            parts.append(PartGeometry(name, kind, hemi, v.astype(np.float32), nrm.astype(np.float32),
-                                      tri, pal, dep.astype(np.float32), v))
+                v, tri, pal, extra = split_by_label(verts, faces, face_slot, per_vertex)
+            parts.append(PartGeometry(name, kind, hemi, v.astype(np.float32), extra[0].astype(np.float32),
+                                      tri, pal, extra[1].astype(np.float32), v,
+                                      None if ao is None else extra[2].astype(np.float32)))
 
         for hemi in HEMIS:
             cm = meshes[hemi]
@@ -478,14 +476,16 @@ class SceneGeometry:
             if sulc is None:
                 sulc = (convexity(cm.vertices.get("pial", verts), cm.faces) if with_sulc
                         else np.zeros(len(verts), np.float32))
+            occlusion = getattr(cm, "occlusion", None)
             add(f"cortex-{hemi}", "cortex", hemi, verts, cm.faces, face_slot, sulc,
-                self.vertex_slots[hemi][0] if per_vertex else None)
+                self.vertex_slots[hemi][0] if per_vertex else None,
+                None if occlusion is None else occlusion.get(scene.surface))
         if template.manifest.get("subcortical"):
             sub = template.subcortical()
             face_slot = slots_for(list(sub.label_names), NEUTRAL_SLOT, hidden)[
                 np.asarray(sub.face_label, np.int64)]
             add("subcortical", "subcortical", None, sub.vertices, sub.faces, face_slot,
-                np.zeros(len(sub.vertices), np.float32))
+                np.zeros(len(sub.vertices), np.float32), ao=getattr(sub, "occlusion", None))
         if scene.tracts is not None:
             parts += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for, scene.tract_radius)
         for hemi in HEMIS:

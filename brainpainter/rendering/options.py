@@ -25,15 +25,14 @@ web API's fields are generated from the same fields (defaults, choices, help).
 
 from __future__ import annotations
 
+import numbers
 import os
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypedDict
 
-import numpy as np
-
-from brainpainter.atlas.template import SURFACES
+from brainpainter.atlas.model import SURFACES
 from brainpainter.color.rgb import to_rgb
 from brainpainter.color.scale import ScaleKwargs, ScaleOptions
 from brainpainter.errors import BrainPainterError, choice_error
@@ -203,7 +202,7 @@ def resolve_jobs(jobs: int | str | None) -> int:
             return cpu_count()
         if text.isdigit() and int(text) > 0:
             return int(text)
-    elif isinstance(jobs, int | np.integer) and not isinstance(jobs, bool) and int(jobs) > 0:
+    elif isinstance(jobs, numbers.Integral) and not isinstance(jobs, bool) and int(jobs) > 0:
         return int(jobs)
     raise BrainPainterError(
         f"--jobs must be a positive whole number of processes or 'auto' (one per core, {cpu_count()} "

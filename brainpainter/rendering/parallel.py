@@ -385,7 +385,9 @@ def prepare_worker(threads: int) -> None:
     if "bpy" not in sys.modules:
         marker = f"{os.sep}bpy{os.sep}"
         sys.path[:] = [p for p in sys.path if marker not in os.path.join(str(p), "")]
-    import brainpainter.io.output  # noqa: F401 - its PNG encoder imports slowly once bpy is loaded
+    from brainpainter.io.output import load_encoder
+
+    load_encoder()  # the PNG encoder imports slowly once bpy is loaded
 
 
 def worker_temp(base: str) -> None:

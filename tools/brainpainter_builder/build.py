@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 from brainpainter.atlas.meshing import Structure
 from brainpainter.atlas.template import FORMAT, FORMAT_VERSION, HEMIS, SURFACES
 from brainpainter.errors import BrainPainterError, choice_error
-from brainpainter_builder import cortex, glass, report, sources, subcortical, writer
+from brainpainter_builder import cortex, glass, occlusion, report, sources, subcortical, writer
 
 #: Faces per hemisphere and label set of a default build (full fsaverage: 327680).
 DEFAULT_TARGET_FACES = 120_000
@@ -288,6 +288,7 @@ def _write(stage: Path, *, name: str, subject: sources.Subject, version: str, su
                                              all_vertices, totals)
                     for label_set, per_hemi in meshes.items()}
     merged = subcortical.merge_structures(structures)
+    merged["ao"] = occlusion.subcortical_array(merged["vertices"], merged["faces"])
     writer.save_npz(stage / "subcortical.npz", merged)
     totals["subcortical"] = len(merged["faces"])
     glass_entry = {}
@@ -317,6 +318,7 @@ def _write(stage: Path, *, name: str, subject: sources.Subject, version: str, su
         "inflated_offset": {h: offsets[h]["inflated"].tolist() for h in HEMIS
                             if "inflated" in offsets[h]},
         "bounds": {s: _bounds(all_vertices[s]) for s in surfaces},
+        "occlusion": occlusion.manifest_entry(),
         "n_faces": totals,
         "license": "FreeSurfer Software License Agreement, Part B (research use); "
                    "see LICENSE.FreeSurfer.txt",
@@ -344,6 +346,7 @@ def _write_cortex(stage: Path, label_set: str, per_hemi: dict[str, cortex.Labell
         arrays["boundary_t"] = m.boundary_t
         if m.sulc is not None:
             arrays["sulc"] = m.sulc
+        arrays.update(occlusion.cortex_arrays({s: m.vertices[s] for s in surfaces}, m.faces))
         writer.save_npz(stage / file, arrays)
         for s in surfaces:
             all_vertices[s].append(m.vertices[s])

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from brainpainter.atlas.meshing import vertex_normals
+from brainpainter.atlas.mesh import vertex_normals
 
 
 def pial_hull(vertices: NDArray[Any], faces: NDArray[Any], *, voxel: float = 1.5,
@@ -90,7 +90,7 @@ def pial_hull(vertices: NDArray[Any], faces: NDArray[Any], *, voxel: float = 1.5
     a, b, c = (out_v[out_f[:, k]] for k in range(3))
     if np.einsum("ij,ij->i", a, np.cross(b, c)).sum() < 0:
         out_f = out_f[:, ::-1]
-    normals, _ = vertex_normals(out_v, out_f)
+    normals = vertex_normals(out_v, out_f, np.float64)
     out_v = out_v + offset * normals
     return out_v, np.ascontiguousarray(out_f)
 

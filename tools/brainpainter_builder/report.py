@@ -175,6 +175,7 @@ def _check(path: Path, max_size_mb: float | None) -> tuple[dict[str, Any], list[
         "size_mb": round(size / 1e6, 2),
         "load_s": round(load_s, 3),
         "problems": problems,
+        "notes": tpl.notes,
         "ok": not problems,
     }
     return info, problems
@@ -242,6 +243,7 @@ def format_report(report: dict[str, Any]) -> str:
     else:
         lines.append("  glass: " + ", ".join(f"{h} {g['n_faces']} faces, {g['self_intersecting_faces']} "
                                              "self-intersecting" for h, g in glass.items()))
+    lines += [f"  note: {n}" for n in report.get("notes", [])]
     if report["problems"]:
         lines.append("  PROBLEMS:")
         lines += [f"    - {p}" for p in report["problems"]]

@@ -15,6 +15,7 @@ from typing import Any
 from numpy.typing import NDArray
 
 from brainpainter.atlas import meshing
+from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.atlas.meshing import (
     BLUR_KEEP,
     BLUR_VOXELS,
@@ -23,7 +24,6 @@ from brainpainter.atlas.meshing import (
     blur_for,
     merge_structures,
     mesh_mask,
-    vertex_normals,
 )
 from brainpainter.atlas.model import Region, read_regions_tsv
 

@@ -27,7 +27,11 @@ steps of one image.
 
 Lighting is per vertex, in linear light, from lights fixed to the camera:
 a key light from the upper left, a fill light from the right and an
-ambient term (:data:`LIGHTING`).
+ambient term (:data:`LIGHTING`), all multiplied by the ambient occlusion
+the template has baked per vertex (an extra vertex attribute, ones for old
+templates), then an S-curve; subcortical structures get a darker outline
+and the glass a Fresnel-like edge. Colours are multiplied, never mixed
+towards white or black, and the peak stays <= 1, so hues stay pure.
 """
 
 from __future__ import annotations
@@ -62,6 +66,19 @@ class Lighting:
         Darkening at the bottom of sulci (0 = none, 1 = black).
     lit : bool
         False: unlit palette colours (times the sulcal darkening).
+    occlusion : float
+        Weight of the template's baked ambient occlusion (0 = ignored, 1 = full) on the ambient light.
+    occlusion_direct : float
+        Share of that occlusion that also dims the key and fill lights (0-1).
+    occlusion_open : float
+        Baked occlusion at or above which a vertex counts as fully open (the walls of a
+        sulcus's mouth stay bright; only what lies deeper darkens).
+    contrast : float
+        Weight of an S-curve (smoothstep) on the lighting: lit crowns nearer their full colour,
+        folds darker, never above 1 (0 = linear).
+    rim : float
+        Darkening of the outline of subcortical structures (0 = none; at a grazing angle the
+        colour is multiplied by ``1 - rim``).
     """
 
     ambient: float
@@ -71,16 +88,27 @@ class Lighting:
     fill_dir: tuple[float, float, float] = (0.60, -0.20, 0.77)
     sulc: float = 0.0
     lit: bool = True
+    occlusion: float = 0.0
+    occlusion_direct: float = 0.0
+    occlusion_open: float = 1.0
+    contrast: float = 0.0
+    rim: float = 0.0
 
 
 #: Lighting per ``--lighting`` preset; ``--shading flat`` is always unlit and exact.
 LIGHTING = {
     # ambient + key + fill peak near 1 (a facing surface keeps its colour, no clipping to white
-    # or to a pure hue on lit slopes) and the median white surface stays near-white
-    "studio": Lighting(ambient=0.36, key=0.62, fill=0.10),
-    "soft": Lighting(ambient=0.56, key=0.40, fill=0.06),
-    "sulc": Lighting(ambient=0.36, key=0.62, fill=0.10, sulc=0.3),
-    "flat-studio": Lighting(ambient=1.0, key=0.0, fill=0.0, sulc=0.35, lit=False),
+    # or to a pure hue on lit slopes); the baked occlusion darkens what lies deeper than a
+    # sulcus's mouth and the S-curve spreads lightness, so the folds read in a saturated colour
+    # (L* p90 - p10 >= 25 for pure red) while the median white surface stays near-white
+    "studio": Lighting(ambient=0.5, key=0.5, fill=0.05, occlusion=1.0, occlusion_direct=1.0,
+                       occlusion_open=0.8, contrast=1.0, rim=0.5),
+    "soft": Lighting(ambient=0.62, key=0.36, fill=0.05, occlusion=1.0, occlusion_direct=0.5,
+                     occlusion_open=0.8, contrast=0.5, rim=0.4),
+    "sulc": Lighting(ambient=0.5, key=0.5, fill=0.05, sulc=0.3, occlusion=1.0, occlusion_direct=1.0,
+                     occlusion_open=0.8, contrast=1.0, rim=0.5),
+    "flat-studio": Lighting(ambient=1.0, key=0.0, fill=0.0, sulc=0.35, lit=False, occlusion=0.5,
+                            occlusion_open=0.8),
 }
 FLAT = Lighting(ambient=1.0, key=0.0, fill=0.0, lit=False)
 #: Supersampling factor per quality (per axis); ``high`` reaches here only for flat shading.
@@ -95,6 +123,8 @@ MAX_SUPERSAMPLED_PIXELS = 64_000_000
 MAX_CACHED_VIEWS = 64
 #: Glass: opacity at grazing angles, as a multiple of the opacity facing the camera.
 GLASS_EDGE = 2.5
+#: Glass: extra opacity at the very outline (Fresnel-like), so the glass reads as a shell, not a fog.
+GLASS_RIM = 0.5
 
 def srgb_to_linear(rgb: np.ndarray) -> np.ndarray:
     """The IEC 61966-2-1 sRGB transfer function inverted, for an array of sRGB 0-1 values."""
@@ -250,10 +280,17 @@ class GpuDraw:
             batch = self._batches[part.name] = batch_for_shader(
                 gpu_shaders.part_shader(), "TRIS",
                 {"pos": part.vertices[order], "nrm": part.normals[order],
-                 "pal": part.palette_index[order].astype(np.float32), "sulc": part.sulc[order]},
+                 "pal": part.palette_index[order].astype(np.float32), "sulc": part.sulc[order],
+                 "ao": self._occlusion(part)[order]},
                 indices=triangles,
             )
         return batch
+
+    def _occlusion(self, part: PartGeometry) -> np.ndarray:
+        """The part's baked occlusion as the shader uses it: 1 at and above ``occlusion_open``, float32."""
+        if part.occlusion is None:
+            return np.ones(len(part.vertices), np.float32)
+        return np.clip(part.occlusion / self.lighting.occlusion_open, 0.0, 1.0).astype(np.float32)
 
     def render(self, palette_rgb: np.ndarray, view: View) -> np.ndarray:
         """Draw one image; `palette_rgb` is sRGB 0-1, shape (n_slots, 3). Returns RGBA uint8 (h, w, 4)."""
@@ -359,7 +396,9 @@ class GpuDraw:
                             ("fill_dir", aim.fill_dir), ("ambient", light.ambient),
                             ("key", light.key if light.lit else 0.0),
                             ("fill", light.fill if light.lit else 0.0),
-                            ("glass_alpha", float(s.glass_opacity)), ("glass_edge", GLASS_EDGE)):
+                            ("glass_alpha", float(s.glass_opacity)), ("glass_edge", GLASS_EDGE),
+                            ("glass_rim", GLASS_RIM if light.lit else 0.0),
+                            ("ao_direct", light.occlusion_direct), ("contrast", light.contrast)):
             shader.uniform_float(name, value)
         gpu.state.depth_test_set("LESS_EQUAL")
         gpu.state.depth_mask_set(True)
@@ -370,6 +409,8 @@ class GpuDraw:
         for p in aim.visible:
             if p.kind != "glass":
                 shader.uniform_float("sulc_strength", light.sulc if p.kind == "cortex" else 0.0)
+                shader.uniform_float("ao_strength", light.occlusion)
+                shader.uniform_float("rim", light.rim if p.kind == "subcortical" else 0.0)
                 self._batch(p).draw(shader)
                 mark(f"draw {p.name}")
         glass = [p for p in aim.visible if p.kind == "glass"]
@@ -378,6 +419,8 @@ class GpuDraw:
             gpu.state.blend_set("ALPHA_PREMULT")
             shader.uniform_int("mode", gpu_shaders.MODE_GLASS)
             shader.uniform_float("sulc_strength", 0.0)
+            shader.uniform_float("ao_strength", 0.0)
+            shader.uniform_float("rim", 0.0)
             for cull in ("FRONT", "BACK"):  # far side first, then the near side over it
                 gpu.state.face_culling_set(cull)
                 for p in glass:

@@ -24,12 +24,24 @@ void main()
   if (dot(n, back) < 0.0) {
     n = -n;  /* seen from inside (a hole, the cut medial wall): light the side we see */
   }
-  float shade = ambient + key * max(dot(n, key_dir), 0.0) + fill * max(dot(n, fill_dir), 0.0);
+  /* baked ambient occlusion (1 = open sky): darkens the ambient light fully and the direct
+     lights partly, so folds read in every colour; a multiplier in linear light keeps the hue */
+  float occ = mix(1.0, ao, ao_strength);
+  float direct = key * max(dot(n, key_dir), 0.0) + fill * max(dot(n, fill_dir), 0.0);
+  float shade = ambient * occ + direct * mix(1.0, occ, ao_direct);
   shade *= 1.0 - sulc_strength * sulc;
+  /* an S-curve around mid-grey: crowns towards full colour, folds towards dark; 0 and 1 stay */
+  float s = clamp(shade, 0.0, 1.0);
+  shade = mix(shade, s * s * (3.0 - 2.0 * s), contrast);
+  float facing = clamp(abs(dot(normalize(nrm), back)), 0.0, 1.0);
+  /* rim: silhouettes darken, so a structure in front stands out of the one behind it */
+  float edge = 1.0 - facing;
+  shade *= 1.0 - rim * edge * edge;
   vec3 c = base * shade;
   if (mode == 1) {
-    float facing = clamp(abs(dot(normalize(nrm), back)), 0.0, 1.0);
-    float a = clamp(mix(glass_alpha * glass_edge, glass_alpha, facing), 0.0, 1.0);
+    /* Fresnel-like glass: nearly clear facing the camera, opaque towards the outline (a shell) */
+    float a = clamp(glass_alpha + (glass_edge * glass_alpha - glass_alpha) * edge
+                    + glass_rim * edge * edge * edge, 0.0, 1.0);
     color = vec4(base * a, a);
   } else {
     color = vec4(c, 1.0);
@@ -88,13 +100,15 @@ def part_shader() -> Any:
     for kind, name in (("MAT4", "mvp"), ("VEC3", "back"), ("VEC3", "key_dir"), ("VEC3", "fill_dir"),
                        ("FLOAT", "ambient"), ("FLOAT", "key"), ("FLOAT", "fill"),
                        ("FLOAT", "sulc_strength"), ("FLOAT", "glass_alpha"), ("FLOAT", "glass_edge"),
-                       ("INT", "mode")):
+                       ("FLOAT", "ao_strength"), ("FLOAT", "ao_direct"), ("FLOAT", "rim"),
+                       ("FLOAT", "glass_rim"), ("FLOAT", "contrast"), ("INT", "mode")):
         info.push_constant(kind, name)
     info.sampler(0, "FLOAT_2D", "palette")
     info.vertex_in(0, "VEC3", "pos")
     info.vertex_in(1, "VEC3", "nrm")
     info.vertex_in(2, "FLOAT", "pal")
     info.vertex_in(3, "FLOAT", "sulc")
+    info.vertex_in(4, "FLOAT", "ao")
     info.vertex_out(iface)
     info.fragment_out(0, "VEC4", "fragColor")
     info.vertex_source(_VERTEX)

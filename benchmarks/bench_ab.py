@@ -1,0 +1,78 @@
+"""Per-image cost of two installs of brainpainter, interleaved in one run (e.g. a release and a branch).
+
+Each round starts one fresh process per Python and times ``Painter.paint_colors``
+(render + read-back, default settings, 1200x900, random colours per image) for
+the lateral-left, medial-left and subcortical views; rounds alternate, so load
+on the machine falls on both alike. Prints the median per view and overall,
+and B over A::
+
+    python benchmarks/bench_ab.py --a /path/to/release/python --b /path/to/branch/python [--rounds 4]
+
+(On the development machine: ``--a python3`` is main's editable install and
+``--b /work/venvs/picture/bin/python`` this branch's.)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import subprocess
+import tempfile
+
+CHILD = r"""
+import json, sys, time
+import numpy as np
+from brainpainter.rendering.painter import Painter
+from brainpainter.rendering.scene import RenderSettings
+from brainpainter.rendering.views import get_view
+args = json.loads(sys.argv[1])
+painter = Painter("dk", settings=RenderSettings(args["width"], args["height"]))
+keys = [r.key for r in painter.atlas.regions]
+rng = np.random.default_rng(0)
+out = {}
+for name in args["views"]:
+    view = get_view(name)
+    times = []
+    for i in range(args["n"] + 2):
+        colors = {k: tuple(rng.random(3)) for k in keys}
+        t = time.perf_counter()
+        painter.paint_colors(colors, view)
+        times.append(time.perf_counter() - t)
+    out[name] = times[2:]
+painter.close()
+print(json.dumps(out))
+"""
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--a", required=True, help="Python of install A (the reference)")
+    parser.add_argument("--b", required=True, help="Python of install B")
+    parser.add_argument("--rounds", type=int, default=4)
+    parser.add_argument("--n", type=int, default=10, help="images per view per round")
+    parser.add_argument("--size", default="1200x900")
+    args = parser.parse_args()
+    w, h = (int(x) for x in args.size.split("x"))
+    cfg = json.dumps({"width": w, "height": h, "n": args.n,
+                      "views": ["lateral-left", "medial-left", "subcortical"]})
+    got: dict[str, dict[str, list[float]]] = {"A": {}, "B": {}}
+    with tempfile.TemporaryDirectory() as cwd:  # not the repository: its checkout would shadow an install
+        for _ in range(args.rounds):
+            for key, py in (("A", args.a), ("B", args.b)):
+                proc = subprocess.run([py, "-c", CHILD, cfg], capture_output=True, text=True, check=True,
+                                      cwd=cwd)
+                line = [x for x in proc.stdout.splitlines() if x.startswith("{")][-1]
+                for view, times in json.loads(line).items():
+                    got[key].setdefault(view, []).extend(times)
+    for view in got["A"]:
+        a, b = statistics.median(got["A"][view]), statistics.median(got["B"][view])
+        print(f"{view:14s} A {a * 1000:6.1f} ms  B {b * 1000:6.1f} ms  B/A {b / a:.3f}")
+    a = statistics.median(t for v in got["A"].values() for t in v)
+    b = statistics.median(t for v in got["B"].values() for t in v)
+    print(f"{'all views':14s} A {a * 1000:6.1f} ms  B {b * 1000:6.1f} ms  B/A {b / a:.3f}")
+
+
+if __name__ == "__main__":
+    main()
