@@ -15,11 +15,11 @@ from brainpainter.rendering.geometry import (
     NEUTRAL_GREY,
     NEUTRAL_SLOT,
     Palette,
-    convexity,
     split_by_label,
     vertex_normals,
 )
 from brainpainter.rendering.scene import Scene
+from brainpainter.rendering.sulc import convexity
 from brainpainter.rendering.views import PRESETS, View, get_view
 from brainpainter.testing import write_tiny_template
 

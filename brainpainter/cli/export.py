@@ -12,6 +12,7 @@ from typing import Any
 import click
 
 from brainpainter.cli.options import (
+    CONTEXT,
     OutPath,
     input_options,
     make_render_options,
@@ -21,8 +22,6 @@ from brainpainter.cli.options import (
 )
 from brainpainter.media.export import EXPORT_OPTIONS
 from brainpainter.media.export import export as run
-
-CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 
 
 @click.command(context_settings=CONTEXT)

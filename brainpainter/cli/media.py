@@ -12,6 +12,7 @@ from typing import Any
 import click
 
 from brainpainter.cli.options import (
+    CONTEXT,
     OutPath,
     input_options,
     make_render_options,
@@ -24,8 +25,6 @@ from brainpainter.cli.options import (
 )
 from brainpainter.media.layout import FigureOptions
 from brainpainter.media.movie import MovieOptions, make_movie
-
-CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 
 
 def _one_or_many(inputs: tuple[Path, ...]) -> Path | list[Path]:

@@ -12,6 +12,7 @@ No heavy package (bpy, matplotlib, pandas) is imported here.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable, Sequence
 from dataclasses import fields
 from typing import Any, TypeVar
@@ -42,6 +43,15 @@ RENDER_OPTION_NAMES = (
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
 MAP_OPTION_NAMES = ("lh", "rh", "underlay", "threshold", "outline", "outline_threshold")
+
+
+#: Click context of every command: -h as --help, help text up to 100 columns wide.
+CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
+
+
+def echo_json(obj: object) -> None:
+    """Print `obj` as indented JSON (the commands' ``--json`` output)."""
+    click.echo(json.dumps(obj, indent=2))
 
 
 class FiniteFloat(click.ParamType):  # type: ignore[type-arg]

@@ -37,7 +37,6 @@ across each triangle.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
@@ -46,12 +45,33 @@ from numpy.typing import NDArray
 from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.rendering import framing
+from brainpainter.rendering.parts import (
+    GLASS_COLOR,
+    GLASS_SLOT,
+    MAX_SLOTS,
+    MEDIAL_SLOT,
+    N_FIXED_SLOTS,
+    NEUTRAL_GREY,
+    NEUTRAL_SLOT,
+    PartGeometry,
+    build_part,
+    check_slots,
+    split_by_label,
+)
 from brainpainter.rendering.settings import RGB, SULC_LIGHTINGS, RenderSettings
+from brainpainter.rendering.sulc import convexity, template_sulc
+from brainpainter.rendering.tract_parts import tract_parts
 from brainpainter.rendering.views import View
 
 if TYPE_CHECKING:
     from brainpainter.atlas.template import Template
     from brainpainter.tracts.model import Tracts
+
+
+# The parts and slots are defined in parts.py; named here for renderers and older imports.
+__all__ = ["GLASS_COLOR", "GLASS_SLOT", "MAX_SLOTS", "MEDIAL_SLOT", "NEUTRAL_GREY", "NEUTRAL_SLOT",
+           "N_FIXED_SLOTS", "Palette", "PartGeometry", "SceneGeometry", "SceneParts", "VertexColors",
+           "split_by_label", "vertex_normals"]
 
 
 class SceneParts(Protocol):
@@ -81,230 +101,6 @@ class SceneParts(Protocol):
     def tract_radius(self) -> float | None: ...
     @property
     def coloring(self) -> str: ...
-
-#: Colour of subcortical structures that have no colour in the mapping (sRGB).
-NEUTRAL_GREY = (0.8, 0.8, 0.8)
-#: Colour of the glass brain (sRGB).
-GLASS_COLOR = (0.78, 0.80, 0.84)
-MEDIAL_SLOT, NEUTRAL_SLOT, GLASS_SLOT = 0, 1, 2
-N_FIXED_SLOTS = 3
-
-
-@dataclass(frozen=True)
-class PartGeometry:
-    """One drawable part of a scene, indexed, ready for a vertex buffer.
-
-    Renderers upload it once, when the scene loads.
-
-    Attributes
-    ----------
-    name : str
-        ``cortex-lh``, ``cortex-rh``, ``subcortical``, ``glass-lh``, ``glass-rh``,
-        ``tracts-lh``, ``tracts-rh``, ``tracts``.
-    kind : {"cortex", "subcortical", "glass", "tract"}
-    hemi : {"lh", "rh"} or None
-    vertices : ndarray of float32, shape (n_vertices, 3)
-        RAS millimetres.
-    normals : ndarray of float32, shape (n_vertices, 3)
-        Unit, outward, area-weighted over the surface's faces.
-    triangles : ndarray of uint32, shape (n_triangles, 3)
-        Counter-clockwise seen from outside.
-    palette_index : ndarray of int32, shape (n_vertices,)
-        Palette slot of each vertex (equal on the three vertices of a triangle).
-    sulc : ndarray of float32, shape (n_vertices,)
-        Sulcal depth 0 (crown of a gyrus) to 1 (deep in a sulcus), for
-        optional darkening; zeros where unknown, off the cortex, and when the
-        scene's lighting does not use it (:data:`brainpainter.rendering.scene.SULC_LIGHTINGS`).
-    hull : ndarray of float, shape (n_points, 3)
-        Points whose projections bound the part (here its vertices: projecting
-        them costs about a millisecond, less than a convex hull, whose import
-        alone costs a second at start-up).
-    occlusion : ndarray of float32, shape (n_vertices,), or None
-        Ambient occlusion baked into the template (1 = open sky, towards 0
-        deep in a fold; :mod:`brainpainter.atlas.occlusion`), for the
-        renderer's shading; None when the template has none (old templates,
-        the glass) or the shading is flat.
-    """
-
-    name: str
-    kind: str
-    hemi: str | None
-    vertices: NDArray[Any]
-    normals: NDArray[Any]
-    triangles: NDArray[Any]
-    palette_index: NDArray[Any]
-    sulc: NDArray[Any]
-    hull: NDArray[Any]
-    occlusion: NDArray[Any] | None = None
-
-
-def convexity(vertices: NDArray[Any], faces: NDArray[Any], iterations: int = 60) -> NDArray[Any]:
-    """Sulcal depth from the mesh alone: how far each vertex lies inside a smoothed copy.
-
-    The surface is smoothed by `iterations` steps of uniform Laplacian
-    averaging (a few millimetres on a template mesh, about a gyrus wide); the
-    displacement of each vertex from its smoothed position along the normal
-    is positive on gyral crowns and negative in sulci, like FreeSurfer's
-    ``sulc`` with the opposite sign.
-
-    Parameters
-    ----------
-    vertices : ndarray of float, shape (n_vertices, 3)
-    faces : ndarray of int, shape (n_faces, 3)
-    iterations : int
-
-    Returns
-    -------
-    ndarray of float32, shape (n_vertices,)
-        0 on the outer 30 % (crowns), rising to 1 at the deepest 3 % of sulci.
-    """
-    from scipy import sparse
-
-    v = np.asarray(vertices, dtype=np.float64)
-    f = np.asarray(faces, dtype=np.int64)
-    n = len(v)
-    if not len(f):
-        return np.zeros(n, np.float32)
-    rows = np.concatenate([f[:, 0], f[:, 1], f[:, 2], f[:, 1], f[:, 2], f[:, 0]])
-    cols = np.concatenate([f[:, 1], f[:, 2], f[:, 0], f[:, 0], f[:, 1], f[:, 2]])
-    adj = sparse.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
-    adj.data[:] = 1.0
-    degree = np.asarray(adj.sum(axis=1)).ravel()
-    step = sparse.diags(1.0 / np.maximum(degree, 1)) @ adj
-    smooth = v.copy()
-    for _ in range(iterations):
-        smooth = step @ smooth
-    d = np.einsum("ij,ij->i", v - smooth, vertex_normals(v, f).astype(np.float64))
-    return _depth_0_1(-d)
-
-
-def _depth_0_1(depth: NDArray[Any]) -> NDArray[Any]:
-    """Map a sulcal-depth measure (larger = deeper) to 0-1 by its 30th and 97th percentiles."""
-    lo, hi = np.percentile(depth, [30, 97])
-    out: NDArray[Any] = np.clip((depth - lo) / max(hi - lo, 1e-9), 0.0, 1.0).astype(np.float32)
-    return out
-
-
-def split_by_label(vertices: NDArray[Any], faces: NDArray[Any], face_slot: NDArray[Any],
-                   extra: tuple[NDArray[Any], ...] = ()) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any],
-                                                              tuple[NDArray[Any], ...]]:
-    """One vertex per (vertex, slot) pair used by `faces`: the indexed mesh a renderer draws.
-
-    Parameters
-    ----------
-    vertices : ndarray of float, shape (n_vertices, 3)
-    faces : ndarray of int, shape (n_faces, 3)
-    face_slot : ndarray of int, shape (n_faces,)
-        Palette slot of each face.
-    extra : tuple of ndarray, each shape (n_vertices, ...)
-        Per-vertex arrays (normals, sulc) carried to the new vertices.
-
-    Returns
-    -------
-    vertices : ndarray, shape (n_new, 3)
-    triangles : ndarray of uint32, shape (n_faces, 3)
-    palette_index : ndarray of int32, shape (n_new,)
-    extra : tuple of ndarray, each shape (n_new, ...)
-    """
-    f = np.asarray(faces, dtype=np.int64)
-    slot = np.asarray(face_slot, dtype=np.int64)
-    n_slots = int(slot.max()) + 1 if len(slot) else 1
-    pair = f * n_slots + slot[:, None]
-    unique, inverse = np.unique(pair.ravel(), return_inverse=True)
-    src, pal = unique // n_slots, unique % n_slots
-    return (np.asarray(vertices)[src], inverse.reshape(-1, 3).astype(np.uint32),
-            pal.astype(np.int32), tuple(np.asarray(e)[src] for e in extra))
-
-
-def _template_sulc(template: Template, labels: str, hemi: str, cm: Any) -> NDArray[Any] | None:
-    """A per-vertex ``sulc`` (or ``curv``) array the template ships, if any (normalised to 0-1 depth)."""
-    raw = getattr(cm, "sulc", None)
-    if raw is None:
-        entry = template.manifest["labels"][labels]["cortex"][hemi]
-        z = template._npz(entry["file"]) if "base" not in entry else {}
-        raw = z.get("sulc")
-    if raw is None or len(raw) != len(cm.source_vertex):
-        return None
-    return _depth_0_1(np.asarray(raw, dtype=np.float64))  # FreeSurfer's sulc: sulci positive
-
-
-#: Palette slots at most: a renderer's palette is a 2-D texture (the Blender renderer's: 4096 texels
-#: a row) whose rows GPUs limit to 16384 (llvmpipe included); a scene needing more is refused with advice.
-MAX_SLOTS = 4096 * 16_384
-#: Palette key prefix of the direction colours' slots.
-DIRECTION_KEY = "tract-direction:"
-
-
-def _rgb(c: NDArray[Any]) -> RGB:
-    return (float(c[0]), float(c[1]), float(c[2]))
-
-
-SlotsFor = Callable[[list[str], "int | RGB", frozenset[str]], NDArray[Any]]
-
-
-def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
-                radius: float | None = None) -> list[PartGeometry]:
-    """The tubes of `tracts`, one part per hemisphere (``tracts-lh``, ``tracts-rh``; ``tracts`` for the rest).
-
-    Parameters
-    ----------
-    tracts : Tracts
-    nodes : mapping of str to int
-        Bundle name -> 1 (one colour) or the number of nodes of its profile;
-        bundles absent are coloured by direction.
-    slots_for : callable
-        ``slots_for(keys, default_colour, hidden)``: the palette slot of each key, made on first use.
-    radius : float, optional
-        Of the tubes, millimetres; default :func:`brainpainter.tracts.tubes.auto_radius`.
-
-    Returns
-    -------
-    list of PartGeometry
-    """
-    from brainpainter.tracts.names import bundle_key, hemisphere
-    from brainpainter.tracts.streamlines import direction_bins, resample
-    from brainpainter.tracts.tubes import SIDES, auto_radius, points_for, tube_mesh
-
-    lines = tracts.lines
-    n_lines, n_points = lines.shape[:2]
-    radius = auto_radius(n_lines) if radius is None else radius
-    m = points_for(n_lines, n_points, SIDES)
-    if m < n_points:  # level of detail: fewer points per streamline for many streamlines
-        lines = resample(lines.reshape(-1, 3), np.arange(n_lines) * n_points, np.full(n_lines, n_points), m)
-        n_points = m
-    point_slot = np.zeros((n_lines, n_points), np.int64)
-    direction = [i for i, name in enumerate(tracts.names) if nodes.get(name, 0) < 1]
-    if direction:
-        pick = np.isin(tracts.bundle, direction)
-        bins, colors = direction_bins(lines[pick])
-        used = np.unique(bins)
-        slot = np.zeros(len(colors), np.int64)
-        for b in used:
-            slot[b] = slots_for([f"{DIRECTION_KEY}{b}"], _rgb(colors[b]), frozenset())[0]
-        point_slot[pick] = slot[bins]
-    for i, name in enumerate(tracts.names):
-        n = nodes.get(name, 0)
-        if n < 1:
-            continue
-        if n == 1:
-            node_slot = slots_for([bundle_key(name)], NEUTRAL_SLOT, frozenset())
-        else:
-            node_slot = slots_for([bundle_key(name, k) for k in range(n)], NEUTRAL_SLOT, frozenset())
-        # point j of n_points takes the node at the same fraction of the streamline's length
-        node_of_point = np.rint(np.arange(n_points) * (n - 1) / max(n_points - 1, 1)).astype(np.int64)
-        point_slot[tracts.bundle == i] = node_slot[node_of_point]
-    hemis = np.array([hemisphere(n) or "" for n in tracts.names])[tracts.bundle]
-    out = []
-    for hemi, part in (("lh", "tracts-lh"), ("rh", "tracts-rh"), ("", "tracts")):
-        pick = hemis == hemi
-        if not np.any(pick):
-            continue
-        verts, normals, tris = tube_mesh(lines[pick], radius, SIDES)
-        pal = np.repeat(point_slot[pick].ravel(), SIDES).astype(np.int32)
-        out.append(PartGeometry(part, "tract", hemi or None, verts, normals, tris, pal,
-                                np.zeros(len(verts), np.float32), lines[pick].reshape(-1, 3)))
-    return out
-
 
 class Palette(Mapping[str, RGB]):
     """The colours of one image: a mapping region key -> sRGB, and the slot array renderers draw.
@@ -443,26 +239,10 @@ class SceneGeometry:
                 out[i] = slot_of[key]
             return out
 
-        def add(name: str, kind: str, hemi: str | None, verts: NDArray[Any], faces: NDArray[Any],
-                face_slot: NDArray[Any], sulc: NDArray[Any], first_slot: int | None = None,
-                ao: NDArray[Any] | None = None) -> None:
-            keep = face_slot >= 0
-            faces, face_slot = np.asarray(faces)[keep], face_slot[keep]
-            if not len(faces):
-                return
-            normals = vertex_normals(verts, faces)
-            if settings.shading == "flat" or ao is None or len(ao) != len(verts):
-                ao = None  # flat colours stay exact; a template without occlusion draws without it
-            per_vertex: tuple[NDArray[Any], ...] = (normals, sulc) if ao is None else (normals, sulc, ao)
-            extra: tuple[NDArray[Any], ...]
-            if first_slot is not None:  # per vertex: the mesh as stored, one slot per vertex
-                v, tri, extra = verts, np.asarray(faces, np.uint32), per_vertex
-                pal = (first_slot + np.arange(len(verts))).astype(np.int32)
-            else:
-                v, tri, pal, extra = split_by_label(verts, faces, face_slot, per_vertex)
-            parts.append(PartGeometry(name, kind, hemi, v.astype(np.float32), extra[0].astype(np.float32),
-                                      tri, pal, extra[1].astype(np.float32), v,
-                                      None if ao is None else extra[2].astype(np.float32)))
+        def add(*args: Any, **kwargs: Any) -> None:
+            part = build_part(*args, occlusion=settings.shading != "flat", **kwargs)
+            if part is not None:
+                parts.append(part)
 
         for hemi in HEMIS:
             cm = meshes[hemi]
@@ -472,14 +252,14 @@ class SceneGeometry:
             names = [HEMI_PREFIX[hemi] + n for n in cm.label_names]
             face_slot = slots_for(names, MEDIAL_SLOT, hidden)[np.asarray(cm.face_label, np.int64)]
             verts = cm.vertices[scene.surface]
-            sulc = _template_sulc(template, scene.labels, hemi, cm) if with_sulc else None
+            sulc = template_sulc(template, scene.labels, hemi, cm) if with_sulc else None
             if sulc is None:
                 sulc = (convexity(cm.vertices.get("pial", verts), cm.faces) if with_sulc
                         else np.zeros(len(verts), np.float32))
             occlusion = getattr(cm, "occlusion", None)
             add(f"cortex-{hemi}", "cortex", hemi, verts, cm.faces, face_slot, sulc,
-                self.vertex_slots[hemi][0] if per_vertex else None,
-                None if occlusion is None else occlusion.get(scene.surface))
+                first_slot=self.vertex_slots[hemi][0] if per_vertex else None,
+                ao=None if occlusion is None else occlusion.get(scene.surface))
         if template.manifest.get("subcortical"):
             sub = template.subcortical()
             face_slot = slots_for(list(sub.label_names), NEUTRAL_SLOT, hidden)[
@@ -494,11 +274,7 @@ class SceneGeometry:
             verts, faces = template.glass(hemi)
             add(f"glass-{hemi}", "glass", hemi, verts, faces, np.full(len(faces), GLASS_SLOT),
                 np.zeros(len(verts), np.float32))
-        if len(defaults) > MAX_SLOTS:
-            raise BrainPainterError(
-                f"the scene needs {len(defaults):,} palette slots (regions, vertices, bundles and "
-                f"along-tract nodes); at most {MAX_SLOTS:,} fit a palette texture; give profiles with fewer "
-                "nodes or fewer bundles.")
+        check_slots(len(defaults))
         #: rotation from the template's coordinates to RAS (its anterior and superior axes)
         self.to_ras: NDArray[Any] = np.asarray(template.to_ras, dtype=float)
         self.parts: tuple[PartGeometry, ...] = tuple(parts)

@@ -1,0 +1,89 @@
+"""White-matter tubes as scene parts (kind ``tract``): one per hemisphere, coloured through palette slots."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from brainpainter.rendering.parts import NEUTRAL_SLOT, PartGeometry
+from brainpainter.rendering.settings import RGB
+
+if TYPE_CHECKING:
+    from brainpainter.tracts.model import Tracts
+
+#: Palette key prefix of the direction colours' slots.
+DIRECTION_KEY = "tract-direction:"
+
+
+def _rgb(c: NDArray[Any]) -> RGB:
+    return (float(c[0]), float(c[1]), float(c[2]))
+
+
+SlotsFor = Callable[[list[str], "int | RGB", frozenset[str]], NDArray[Any]]
+
+
+def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
+                radius: float | None = None) -> list[PartGeometry]:
+    """The tubes of `tracts`, one part per hemisphere (``tracts-lh``, ``tracts-rh``; ``tracts`` for the rest).
+
+    Parameters
+    ----------
+    tracts : Tracts
+    nodes : mapping of str to int
+        Bundle name -> 1 (one colour) or the number of nodes of its profile;
+        bundles absent are coloured by direction.
+    slots_for : callable
+        ``slots_for(keys, default_colour, hidden)``: the palette slot of each key, made on first use.
+    radius : float, optional
+        Of the tubes, millimetres; default :func:`brainpainter.tracts.tubes.auto_radius`.
+
+    Returns
+    -------
+    list of PartGeometry
+    """
+    from brainpainter.tracts.names import bundle_key, hemisphere
+    from brainpainter.tracts.streamlines import direction_bins, resample
+    from brainpainter.tracts.tubes import SIDES, auto_radius, points_for, tube_mesh
+
+    lines = tracts.lines
+    n_lines, n_points = lines.shape[:2]
+    radius = auto_radius(n_lines) if radius is None else radius
+    m = points_for(n_lines, n_points, SIDES)
+    if m < n_points:  # level of detail: fewer points per streamline for many streamlines
+        lines = resample(lines.reshape(-1, 3), np.arange(n_lines) * n_points, np.full(n_lines, n_points), m)
+        n_points = m
+    point_slot = np.zeros((n_lines, n_points), np.int64)
+    direction = [i for i, name in enumerate(tracts.names) if nodes.get(name, 0) < 1]
+    if direction:
+        pick = np.isin(tracts.bundle, direction)
+        bins, colors = direction_bins(lines[pick])
+        used = np.unique(bins)
+        slot = np.zeros(len(colors), np.int64)
+        for b in used:
+            slot[b] = slots_for([f"{DIRECTION_KEY}{b}"], _rgb(colors[b]), frozenset())[0]
+        point_slot[pick] = slot[bins]
+    for i, name in enumerate(tracts.names):
+        n = nodes.get(name, 0)
+        if n < 1:
+            continue
+        if n == 1:
+            node_slot = slots_for([bundle_key(name)], NEUTRAL_SLOT, frozenset())
+        else:
+            node_slot = slots_for([bundle_key(name, k) for k in range(n)], NEUTRAL_SLOT, frozenset())
+        # point j of n_points takes the node at the same fraction of the streamline's length
+        node_of_point = np.rint(np.arange(n_points) * (n - 1) / max(n_points - 1, 1)).astype(np.int64)
+        point_slot[tracts.bundle == i] = node_slot[node_of_point]
+    hemis = np.array([hemisphere(n) or "" for n in tracts.names])[tracts.bundle]
+    out = []
+    for hemi, part in (("lh", "tracts-lh"), ("rh", "tracts-rh"), ("", "tracts")):
+        pick = hemis == hemi
+        if not np.any(pick):
+            continue
+        verts, normals, tris = tube_mesh(lines[pick], radius, SIDES)
+        pal = np.repeat(point_slot[pick].ravel(), SIDES).astype(np.int32)
+        out.append(PartGeometry(part, "tract", hemi or None, verts, normals, tris, pal,
+                                np.zeros(len(verts), np.float32), lines[pick].reshape(-1, 3)))
+    return out
