@@ -17,7 +17,10 @@ META = {"Software": "brainpainter 0.1", "brainpainter:image": "Stage é/1",
 @pytest.mark.parametrize("use_fpng", [True, False])
 def test_png_is_lossless_and_keeps_metadata(monkeypatch, use_fpng):
     if not use_fpng:
-        monkeypatch.setattr("brainpainter.io.output._fpng", None)  # as if not installed: Pillow fallback
+        # as if fpng were not installed: the Pillow fallback
+        from brainpainter.io import output
+
+        monkeypatch.setitem(output._encoder, "fpng", None)
     rng = np.random.default_rng(3)
     img = rng.integers(0, 256, (37, 53, 4), dtype=np.uint8)
     img[:10] = (255, 255, 255, 0)  # transparent rows stay transparent

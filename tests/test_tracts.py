@@ -282,11 +282,13 @@ def test_valued_bundles_get_a_slot_or_a_slot_per_node(tiny, bundles):
     assert ring[0, -1, 0] == g.slot_of["tract:CST_right:4"]
 
 
-def test_too_many_slots_are_refused(tiny, bundles):
-    from brainpainter.rendering import geometry
+def test_too_many_slots_are_refused(tiny, bundles, monkeypatch):
+    from brainpainter.rendering import parts
 
+    # the real limit (4096 x 16384 slots of a 2-D palette) takes minutes to reach: a small one
+    monkeypatch.setattr(parts, "MAX_SLOTS", 1000)
     with pytest.raises(BrainPainterError, match="palette slots"):
-        _ = _scene(tiny, bundles, [("AF_left", geometry.MAX_SLOTS)]).geometry
+        _ = _scene(tiny, bundles, [("AF_left", 2000)]).geometry
 
 
 def test_a_bundle_table_alone_prepares_a_run(tmp_path, bundles):
