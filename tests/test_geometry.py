@@ -116,14 +116,3 @@ def test_sulcal_depth_only_when_the_lighting_uses_it(scene):
     sulc = lit.geometry.parts[0].sulc
     assert sulc.dtype == np.float32 and sulc.max() == 1.0 and sulc.min() == 0.0
 
-
-def test_a_view_builds_only_the_parts_it_shows(tmp_path):
-    """Palette slots come from the manifest; meshes load when a view first shows them (start-up)."""
-    tpl = load_template(write_tiny_template(tmp_path / "tiny"))
-    fresh = Scene(tpl, "dk").geometry
-    keys = fresh.keys
-    fresh.visible(get_view("lateral-left"))
-    assert set(fresh._built) == {"cortex-lh"}
-    assert fresh.keys == keys  # slots do not depend on what was built
-    assert [p.name for p in fresh.parts] == ["cortex-lh", "cortex-rh", "subcortical", "glass-lh", "glass-rh"]
-    assert fresh.keys == keys
