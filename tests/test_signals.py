@@ -24,7 +24,7 @@ from pathlib import Path
 import pytest
 from bad_inputs.corpus import GOOD
 
-from brainpainter.rendering import interrupts
+from brainpainter.io import interrupts
 
 DELAYS = (0.5, 1.5, 3.0, 5.0, 7.0, 10.0)
 CODES = {signal.SIGINT: (130, "interrupted"), signal.SIGTERM: (143, "terminated")}
@@ -115,3 +115,41 @@ def test_a_signal_in_a_held_section_is_delivered_after_it():
     finally:
         signal.signal(signal.SIGINT, old)
     assert seen == ["deferred", "section finished", "raised"]
+
+
+def test_a_signal_while_publishing_waits_and_the_run_reports_the_complete_output(tmp_path, monkeypatch):
+    """SIGTERM between two renames of the publish: the folder is published whole, exit 0, a true line.
+
+    (Found by --jobs 2 killed at 6 s: the output was complete on disk while the command said
+    "terminated: nothing was published".)
+    """
+    import click
+    from test_transaction import _png
+
+    from brainpainter.cli import guard
+    from brainpainter.io import transaction
+
+    real_replace = os.replace
+    calls: list[str] = []
+
+    def replace_then_signal(src, dst):
+        real_replace(src, dst)
+        calls.append(os.path.basename(dst))
+        if len(calls) == 1:
+            signal.raise_signal(signal.SIGTERM)  # in the middle of the publish
+
+    monkeypatch.setattr(transaction.os, "replace", replace_then_signal)
+    out = tmp_path / "out"
+
+    @click.command()
+    def publish() -> None:
+        with transaction.FolderTransaction(out) as tx:
+            for n in ("a.png", "b.png"):
+                tx.path(n).write_bytes(_png())
+                tx.expect(n, size=(8, 6))
+            tx.commit({"files": ["a.png", "b.png"]})
+
+    code = guard.run(publish, [])
+    assert code == 0
+    assert sorted(p.name for p in out.iterdir()) == ["a.png", "b.png", "manifest.json"]
+    assert calls == ["a.png", "b.png", "manifest.json"]

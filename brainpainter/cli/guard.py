@@ -35,7 +35,7 @@ from typing import Any
 import click
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.rendering.interrupts import defer
+from brainpainter.io.interrupts import defer, published
 
 EXIT_USER = 2
 EXIT_INTERNAL = 1
@@ -184,6 +184,7 @@ def warnings_on_stdout() -> Iterator[None]:
 
 def run(group: click.Group, argv: Sequence[str] | None = None, prog_name: str = "brainpainter") -> int:
     """Run `group` with `argv`; returns the exit code (see the module docstring)."""
+    before = len(published())  # outputs of earlier runs in this process (tests, notebooks) do not count
     with signals_as_exceptions(), private_temp(), warnings_on_stdout():
         try:
             group.main(args=list(argv) if argv is not None else None, prog_name=prog_name,
@@ -191,6 +192,10 @@ def run(group: click.Group, argv: Sequence[str] | None = None, prog_name: str = 
             sys.stdout.flush()
             return 0
         except Stopped as exc:
+            done = published()[before:]
+            if done:  # the signal came after the output was complete: it is kept, the run succeeded
+                _say(f"{exc.word} after the output was published: {done[-1]} is complete")
+                return 0
             _say(f"{exc.word}: nothing was published; partial output was removed")
             return exc.exit_code
         except (KeyboardInterrupt, click.exceptions.Abort):

@@ -49,6 +49,7 @@ from brainpainter.io.folders import (
     remove_empty,
     remove_stale_stages,
 )
+from brainpainter.io.interrupts import held, mark_published
 from brainpainter.io.verify import verify_file
 
 MANIFEST = "manifest.json"
@@ -155,7 +156,14 @@ class FolderTransaction(_Staged):
                                         "published. Run again.")
             verify_file(staged, size, frames)
         data = json_bytes(manifest) if manifest is not None else None
-        published = []
+        published: list[Path] = []
+        with held():  # a signal now would leave a half-published folder: it waits for the end
+            self._publish(data, published)
+        return published
+
+    def _publish(self, data: bytes | None, published: list[Path]) -> None:
+        """Rename the staged files (then the manifest) into the output folder; see :meth:`commit`."""
+        assert self.stage is not None
         try:
             if data is not None:
                 staged_manifest = self.stage / self.manifest
@@ -177,7 +185,7 @@ class FolderTransaction(_Staged):
         except OSError as exc:
             raise os_error(exc, f"cannot publish into {self.what}", self.out) from None
         self.committed = True
-        return published
+        mark_published(str(self.out))
 
 
 class FileTransaction(_Staged):
@@ -223,13 +231,15 @@ class FileTransaction(_Staged):
             raise BrainPainterError(f"writing {str(self.target)!r} failed: the encoder wrote nothing; "
                                     "nothing was published.")
         verify_file(self.tmp, size, frames)
-        try:
-            default_mode(self.tmp)
-            os.replace(self.tmp, self.target)
-            fsync_dir(self.target.parent)
-        except OSError as exc:
-            raise os_error(exc, "cannot write", self.target) from None
-        self.committed = True
+        with held():  # a signal waits until the file is in place (or not)
+            try:
+                default_mode(self.tmp)
+                os.replace(self.tmp, self.target)
+                fsync_dir(self.target.parent)
+            except OSError as exc:
+                raise os_error(exc, "cannot write", self.target) from None
+            self.committed = True
+            mark_published(str(self.target))
         return self.target
 
 

@@ -18,7 +18,7 @@ from types import ModuleType
 from typing import IO
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.rendering.interrupts import held
+from brainpainter.io.interrupts import held
 
 #: The bpy releases brainpainter is tested with, per Python (the same pins as pyproject.toml's
 #: dependencies; tests/test_renderer_blender.py checks they agree).

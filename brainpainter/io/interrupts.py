@@ -1,4 +1,4 @@
-"""Holding Ctrl-C and SIGTERM while a renderer is in a state it cannot be interrupted in.
+"""Holding Ctrl-C and SIGTERM while a renderer, or a publish, is in a state it cannot be interrupted in.
 
 The command line's guard turns SIGINT/SIGTERM into an exception so that
 output is cleaned up. Python raises it in the main thread at the next Python
@@ -7,6 +7,9 @@ start-up scripts, and an exception raised there left Blender half-made (a
 segmentation fault, or a later internal error). A renderer wraps such a
 section in :func:`held`; a signal that arrives meanwhile is kept and
 delivered again as soon as the section ends, so the run still stops, cleanly.
+Publishing an output (:mod:`brainpainter.io.transaction`) is such a section
+too, and :func:`published` then says whether this process's output is
+complete, so that a signal after it is never reported as "nothing was published".
 
 Blocking the signal (``pthread_sigmask``) is not enough: it only blocks it in
 the calling thread, and another thread (a writer, a progress bar) receives it
@@ -48,3 +51,16 @@ def defer(signum: int) -> bool:
             _pending.append(signum)
             return True
     return False
+
+
+_published: list[str] = []
+
+
+def mark_published(what: str) -> None:
+    """Record that `what` (a folder or file) was published whole by this process."""
+    _published.append(what)
+
+
+def published() -> list[str]:
+    """What this process has published whole (see :func:`mark_published`), oldest first."""
+    return list(_published)
