@@ -25,12 +25,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from brainpainter.atlas import registry
 from brainpainter.atlas.meshfiles import orientation_matrix, weld
 from brainpainter.atlas.meshfolder import RegionMesh, check_region, describe_frame
-from brainpainter.atlas.model import load_atlas_dir
-from brainpainter.atlas.registry import atlases_dir
-from brainpainter.atlas.user import check_name, check_syntax, staged_folder
+from brainpainter.atlas.user import store_built
 from brainpainter.errors import BrainPainterError, choice_error
 
 EXTRA_HINT = 'pip install "brainpainter[brainglobe]" (or: pip install brainglobe-atlasapi)'
@@ -188,12 +185,5 @@ def build_brainglobe_atlas(name: str, atlas_name: str, *, out: Path, brainglobe_
 def add_brainglobe_atlas(name: str, atlas_name: str, *, replace: bool = False, out: str | Path | None = None,
                          **kwargs: Any) -> tuple[Path, dict[str, Any]]:
     """``brainpainter atlas add NAME --brainglobe ATLAS_NAME``: build and store (or write to `out`)."""
-    if out is None:
-        check_name(name, replace=replace)
-    else:
-        check_syntax(name)
-    with staged_folder(name, Path(out) if out is not None else None) as stage:
-        meta = build_brainglobe_atlas(name, atlas_name, out=stage, **kwargs)
-        load_atlas_dir(stage)
-    registry.atlases.reset()
-    return (Path(out) if out is not None else atlases_dir() / name), meta
+    return store_built(name, lambda stage: build_brainglobe_atlas(name, atlas_name, out=stage, **kwargs),
+                       replace=replace, out=out)

@@ -60,12 +60,10 @@ from typing import Any, cast
 import numpy as np
 from numpy.typing import NDArray
 
-from brainpainter.atlas import registry
 from brainpainter.atlas.meshfiles import mesh_files, mesh_stem, orientation_matrix, read_mesh, weld
-from brainpainter.atlas.model import HEMI_PREFIX, Region, load_atlas_dir, write_regions_tsv
-from brainpainter.atlas.registry import atlases_dir
+from brainpainter.atlas.model import HEMI_PREFIX, Region, write_regions_tsv
 from brainpainter.atlas.template import FORMAT, FORMAT_VERSION
-from brainpainter.atlas.user import check_name, check_syntax, staged_folder
+from brainpainter.atlas.user import store_built
 from brainpainter.atlas.volumes import split_hemi
 from brainpainter.atlas.writer import save_npz
 from brainpainter.errors import BrainPainterError, choice_error
@@ -465,13 +463,6 @@ def add_mesh_atlas(name: str, meshes: list[Path], *, replace: bool = False, out:
 
     Returns the atlas folder and its ``atlas.json``.
     """
-    if out is None:
-        check_name(name, replace=replace)
-    else:
-        check_syntax(name)
-    with staged_folder(name, Path(out) if out is not None else None) as stage:
-        meta = build_mesh_atlas(name, meshes, out=stage, **kwargs)
-        load_atlas_dir(stage)  # validates what was written
-    registry.atlases.reset()
-    return (Path(out) if out is not None else atlases_dir() / name), meta
+    return store_built(name, lambda stage: build_mesh_atlas(name, meshes, out=stage, **kwargs),
+                       replace=replace, out=out)
 

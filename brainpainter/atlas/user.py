@@ -21,9 +21,10 @@ from __future__ import annotations
 import re
 import shutil
 import tempfile
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
+from typing import TypeVar
 
 from brainpainter.atlas import labelset, registry
 from brainpainter.atlas.model import load_atlas_dir
@@ -165,6 +166,27 @@ def add_label_map(name: str, annots: Mapping[str, str | Path], *, template: str 
         load_atlas_dir(stage)  # validates what was written
     registry.atlases.reset()
     return Path(out) if out is not None else atlases_dir() / name
+
+
+T = TypeVar("T")
+
+
+def store_built(name: str, build: Callable[[Path], T], *, replace: bool = False,
+                out: str | Path | None = None) -> tuple[Path, T]:
+    """Check `name`, run ``build(folder)`` into a staged folder, validate it and publish it.
+
+    The folder replaces ``atlases_dir()/name`` (the user's atlas), or becomes `out`
+    (an atlas plugin's data). Returns the atlas folder and what `build` returned.
+    """
+    if out is None:
+        check_name(name, replace=replace)
+    else:
+        check_syntax(name)
+    with staged_folder(name, Path(out) if out is not None else None) as stage:
+        result = build(stage)
+        load_atlas_dir(stage)  # validates what was written
+    registry.atlases.reset()
+    return (Path(out) if out is not None else atlases_dir() / name), result
 
 
 def add_config(name: str, config: str | Path, *, replace: bool = False) -> Path:

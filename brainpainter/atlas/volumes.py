@@ -62,12 +62,10 @@ from typing import Any, cast
 import numpy as np
 from numpy.typing import NDArray
 
-from brainpainter.atlas import registry
 from brainpainter.atlas.meshing import Structure, build_structures, merge_structures
-from brainpainter.atlas.model import HEMI_PREFIX, Region, load_atlas_dir, write_regions_tsv
-from brainpainter.atlas.registry import atlases_dir
+from brainpainter.atlas.model import HEMI_PREFIX, Region, write_regions_tsv
 from brainpainter.atlas.template import FORMAT, FORMAT_VERSION, Template, load_template
-from brainpainter.atlas.user import check_name, check_syntax, staged_folder
+from brainpainter.atlas.user import store_built
 from brainpainter.atlas.writer import save_npz
 from brainpainter.errors import BrainPainterError, choice_error
 
@@ -413,12 +411,6 @@ def build_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, space:
 def add_volume_atlas(name: str, volume: str | Path, lut: str | Path, *, replace: bool = False,
                      out: str | Path | None = None, **kwargs: Any) -> Path:
     """``brainpainter atlas add NAME --volume ... --lut ...``: build and store (or write to `out`)."""
-    if out is None:
-        check_name(name, replace=replace)
-    else:
-        check_syntax(name)
-    with staged_folder(name, Path(out) if out is not None else None) as stage:
-        build_volume_atlas(name, volume, lut, out=stage, **kwargs)
-        load_atlas_dir(stage)  # validates what was written
-    registry.atlases.reset()
-    return Path(out) if out is not None else atlases_dir() / name
+    folder, _ = store_built(name, lambda stage: build_volume_atlas(name, volume, lut, out=stage, **kwargs),
+                            replace=replace, out=out)
+    return folder
