@@ -23,7 +23,6 @@ from brainpainter.maps.inputs import VertexMaps
 from brainpainter.maps.outlines import OUTLINE_COLOR, border_vertices
 from brainpainter.maps.resolution import masks
 
-UNDERLAYS = ("sulc", "curv", "none")
 #: Underlay greys (sRGB): gyri, sulci, and the one grey of ``--underlay none``.
 GYRUS_GREY, SULCUS_GREY, PLAIN_GREY = 0.74, 0.52, 0.72
 #: Default colour maps of maps given no --cmap/--gradient: values of one sign, signed values.

@@ -91,7 +91,11 @@ class MapRun:
             m = self.options.maps
             cortex = vertex_colors(self.maps, image, self.source_vertex, self.scale, m.underlay, m.threshold,
                                    self.outline, self.cluster_edges)
-            self._cache[image] = VertexColors(region_colors({}, self.table.atlas, self.scale), cortex)
+            # a volume's subcortical means: below --threshold a structure shows no value, as the cortex does
+            means = {k: v for k, v in self.maps.region_values(image).items()
+                     if m.threshold is None or abs(v) >= m.threshold}
+            regions = region_colors(means, self.table.atlas, self.scale)
+            self._cache[image] = VertexColors(regions, cortex)
         return self._cache[image]
 
     def blend(self, a: int, b: int, weight: float) -> VertexColors:
@@ -106,13 +110,13 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     """Read the maps and check the options of a map run (as ``prepare_run`` does for a table)."""
     from brainpainter.atlas.registry import get_atlas
 
-    maps = read_maps(data, options.maps.lh, options.maps.rh)
+    maps = read_maps(data, options.maps.lh, options.maps.rh, options.maps.volume)
     outline = options.maps.outline
     # --outline ATLAS: the map is drawn on that atlas's mesh, whose vertices carry its labels
     atlas_obj = get_atlas(outline) if outline is not None else atlas if atlas is not None else get_atlas("dk")
     views = options.scene.views
-    if views is None or views == DEFAULT_VIEWS:
-        views = MAP_VIEWS
+    if views is None or views == DEFAULT_VIEWS:  # a volume also colours the subcortical structures
+        views = MAP_VIEWS + (",subcortical" if maps.regions else "")
     view_list = parse_views(views if isinstance(views, str) else list(views))
     template = options.scene.template
     tpl = template if isinstance(template, Template) else load_template(template)
