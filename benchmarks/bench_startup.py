@@ -1,6 +1,7 @@
 """Start-up cost of the command line, over a bare ``python -c pass`` (issue 25).
 
 Each of five rounds runs, interleaved, in fresh processes: ``python -c pass``,
+``python -c "import bpy"`` (Blender's own start-up: no first image can be cheaper),
 ``brainpainter --help``, and ``brainpainter render`` of a one-row table into
 one image (the first image of a cold process, default options, lateral-left).
 Prints the median of each and the two costs over ``python -c pass``
@@ -71,6 +72,7 @@ def main() -> None:
 def _commands(py: str, table: Path) -> dict[str, list[str]]:
     return {
         "python -c pass": [py, "-c", "pass"],
+        "import bpy": [py, "-c", "import bpy"],  # Blender's own start, the floor of any first image
         "brainpainter --help": [py, "-m", "brainpainter", "--help"],
         "first image": [py, "-m", "brainpainter", "render", str(table), "--atlas", "dk",
                         "--views", "lateral-left", "-q", "--out"],
