@@ -10,7 +10,7 @@ group                     options                                               
 :class:`ScaleOptions`     gradient, cmap, vmin, vmax, center, nan_color,              color.scale
                           missing_color
 :class:`RenderSettings`   width, height, background, quality, shading, lighting,     rendering.settings
-                          glass_opacity
+                          glass_opacity, outline_width
 :class:`TableOptions`     image_column, value, region_column, strict                  table.options
 :class:`MapOptions`       lh, rh, underlay, threshold                                 maps.options
 :class:`RunnerOptions`    jobs, client, scheduler                                     here
@@ -293,7 +293,7 @@ class Options:
     scene : SceneOptions
         views, template, surface, hide, renderer, atlas_config.
     settings : RenderSettings
-        width, height, background, quality, shading, lighting, glass_opacity.
+        width, height, background, quality, shading, lighting, glass_opacity, outline_width.
     table : TableOptions
         image_column, value, region_column, strict.
     maps : MapOptions
