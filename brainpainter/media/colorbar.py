@@ -4,10 +4,9 @@ The bar shows exactly the colours the renders use: it samples the scale
 itself (``scale(values)``), so a BrainPainter gradient appears with its
 control colours at its ticks and a matplotlib colour map as a smooth ramp.
 Ticks default to the gradient's control points (5 ticks for a colour map);
-NaN ("no data") and missing ("not measured") swatches are added when asked.
-
-:func:`draw_colorbar` draws into an existing Axes (figures);
-:func:`colorbar_image` returns an RGBA array of an exact pixel size (movie
+NaN and missing swatches are added when asked; a label map's scale draws a key of its
+categories (:mod:`brainpainter.media.category_key`). :func:`draw_colorbar` draws into an
+Axes (figures); :func:`colorbar_image` returns an RGBA array of an exact pixel size (movie
 frames). matplotlib is imported inside the functions only.
 """
 
@@ -23,6 +22,7 @@ from numpy.typing import NDArray
 
 from brainpainter.color.scale import ColourScale, between, fraction
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.media.category_key import draw_category_key
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -185,7 +185,7 @@ def draw_colorbar(
     if orientation not in ORIENTATIONS:
         raise choice_error("orientation", orientation, ORIENTATIONS)
     if scale.categories:
-        return _category_key(ax, scale, orientation == "horizontal", fontsize, color, label)
+        return draw_category_key(ax, scale, orientation == "horizontal", fontsize, color, label)
     tick_values = resolve_ticks(scale, ticks)
     # The bar is drawn in fractions of the scale (0..1), so any finite range (1e-320..1e-310,
     # -1e308..1e308) draws without overflow; ticks are placed at their fractions, one per label.
@@ -218,42 +218,6 @@ def draw_colorbar(
         if not horizontal:
             ax.yaxis.set_label_position("right")
     _swatches(ax, scale, nan, missing, nan_label, missing_label, fontsize, color, horizontal)
-    return ax
-
-
-def _category_key(ax: Axes, scale: ColourScale, horizontal: bool, fontsize: float, color: Any,
-                  label: str | None) -> Axes:
-    """A label map's key in the bar's place: one block per category in its colour, named."""
-    import numpy as np
-
-    names = [name for name, _ in scale.categories]
-    colors = np.array([rgb for _, rgb in scale.categories], dtype=float)
-    n = len(names)
-    where = (np.arange(n) + 0.5) / n
-    image = colors[None, :, :] if horizontal else colors[::-1, None, :]
-    ax.imshow(image, extent=(0.0, 1.0, 0.0, 1.0), aspect="auto", interpolation="nearest", origin="upper")
-    # names too many or too long to sit side by side stand upright
-    upright = horizontal and n * max(len(name) for name in names) > 60
-    if horizontal:
-        ax.set_xlim(0.0, 1.0)
-        ax.set_yticks([])
-        ax.set_xticks(where, names, rotation=90 if upright else 0)
-        axis: Axis = ax.xaxis
-    else:
-        ax.set_ylim(0.0, 1.0)
-        ax.set_xticks([])
-        ax.yaxis.tick_right()
-        ax.set_yticks(where[::-1], names)
-        axis = ax.yaxis
-    for edge in np.arange(1, n) / n:  # a thin line between blocks of similar colour
-        (ax.axvline if horizontal else ax.axhline)(edge, color=color, linewidth=0.4)
-    ax.tick_params(labelsize=max(fontsize - 1 - (2 if n > 20 else 0), 4), length=2.5, width=0.6, pad=1.5,
-                   colors=color)
-    for spine in ax.spines.values():
-        spine.set_linewidth(0.6)
-        spine.set_edgecolor(color)
-    if label:
-        axis.set_label_text(label, fontsize=fontsize, color=color)
     return ax
 
 

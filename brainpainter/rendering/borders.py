@@ -105,4 +105,5 @@ def _lift(points: NDArray[Any], normals: NDArray[Any], lift: float) -> NDArray[A
 def _segments(p: NDArray[Any], pn: NDArray[Any], q: NDArray[Any], qn: NDArray[Any],
               lift: float) -> NDArray[np.float32]:
     """Segments p -> q, each end lifted along its normal, float32 (m, 2, 3)."""
-    return np.stack([_lift(p, pn, lift), _lift(q, qn, lift)], axis=1).astype(np.float32)
+    out: NDArray[np.float32] = np.stack([_lift(p, pn, lift), _lift(q, qn, lift)], axis=1).astype(np.float32)
+    return out
