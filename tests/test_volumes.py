@@ -418,3 +418,12 @@ def test_a_volume_only_template_renders_in_dorsal_lateral_and_ventral_views(tmp_
         assert d[v][blue][0] < d[v][red][0]
     lateral = centre("subcortical-left", red)  # the left ball faces the camera; framed in the image
     assert 20 < lateral[0] < 100 and 20 < lateral[1] < 140
+
+
+def test_structures_and_bundles_read_the_hemisphere_by_one_rule():
+    from brainpainter.tracts.names import split_hemisphere
+
+    for name in ("Left-Putamen", "AF_L", "lh.AF", "Lobule_VI_R", "Vermis_VI", "Left--Putamen", "Arcuate right"):
+        hemi, rest = split_hemi(name)
+        assert split_hemisphere(name) == (rest, {"lh": "left", "rh": "right"}.get(hemi))
+    assert split_hemi(" Left--Putamen ") == ("lh", "Putamen")  # separators: one or more
