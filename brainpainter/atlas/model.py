@@ -21,6 +21,8 @@ from brainpainter.errors import BrainPainterError
 
 #: The cortical surfaces of a template (here, not in template.py: option parsing needs them cheaply).
 SURFACES = ("pial", "white", "inflated")
+#: Coordinate spaces of volumes and tractograms (:mod:`brainpainter.atlas.volumes` maps them onto a template).
+SPACES = ("MNI152NLin2009cAsym", "MNI152NLin6Asym", "fsaverage", "template")
 
 HEMIS = ("lh", "rh", "bilateral")
 HEMI_PREFIX = {"lh": "Left-", "rh": "Right-", "bilateral": ""}

@@ -63,13 +63,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.atlas.meshing import Structure, build_structures, merge_structures
-from brainpainter.atlas.model import HEMI_PREFIX, Region, hemisphere_in_name, write_regions_tsv
+from brainpainter.atlas.model import HEMI_PREFIX, SPACES, Region, hemisphere_in_name, write_regions_tsv
 from brainpainter.atlas.template import FORMAT, FORMAT_VERSION, Template, load_template
 from brainpainter.atlas.user import store_built
 from brainpainter.atlas.writer import save_npz
 from brainpainter.errors import BrainPainterError, choice_error
 
-SPACES = ("MNI152NLin2009cAsym", "MNI152NLin6Asym", "fsaverage", "template")
 #: MNI152 RAS -> MNI305 (fsaverage) RAS, FreeSurfer wiki CoordinateSystems, 8b.
 MNI152_TO_MNI305 = np.array([
     [1.0022, 0.0071, -0.0177, 0.0528],
