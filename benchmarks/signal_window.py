@@ -54,7 +54,8 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=5)
     args = ap.parse_args()
     script = Path(sys.executable).parent / "brainpainter"
-    cmd = [str(script), "--version"] if script.exists() else [sys.executable, "-m", "brainpainter", "--version"]
+    start = [str(script)] if script.exists() else [sys.executable, "-m", "brainpainter"]
+    cmd = [*start, "--version"]
     starts = []
     for _ in range(10):
         t0 = time.perf_counter()
