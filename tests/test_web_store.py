@@ -282,3 +282,34 @@ def test_a_job_killed_midway_shows_nothing_then_resumes_and_publishes_whole(tmp_
     assert job["status"] == "done"
     assert _visible(folder / "out") == sorted(f for f in job["files"] if not f.endswith(".zip"))
     assert not drawn.exists()
+
+
+def test_a_figure_job_publishes_one_file_and_a_cancelled_one_nothing(tmp_path):
+    """Figure (and movie) jobs write through the figure's file transaction: staged, then renamed."""
+    store = Store(tmp_path)
+    opts = RenderOptions(size="32x24", views="lateral-left").model_dump()
+
+    def figure_job() -> str:
+        params = {"format": "png", "dpi": 50}
+        return store.submit("c", "figure", opts, params, "ex.csv", EXAMPLE.read_bytes(), 4, **LIMITS)
+
+    done, cancelled = figure_job(), figure_job()
+    during: list[list[str]] = []
+
+    def cancel_second_job_at_its_second_image(n: int) -> None:
+        during.append(_visible(store.job_dir(done if n <= 4 else cancelled) / "out"))
+        if n == 6:
+            store.cancel(cancelled)
+
+    with stand_in("stand-in", StandInRenderer.with_(fail=cancel_second_job_at_its_second_image)) as name:
+        painters = PainterCache(name)
+        for _ in range(2):
+            run_job(store, store.claim("w"), painters, ttl_s=60, time_limit_s=60)
+        painters.close()
+    assert during and all(seen == [] for seen in during)  # nothing visible while rendering
+    assert store.get(done)["status"] == "done" and store.get(done)["files"] == ["figure.png"]
+    out = store.job_dir(done) / "out"
+    assert sorted(p.name for p in out.iterdir()) == ["figure.png"]  # no staging folder left
+    assert (out / "figure.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert store.get(cancelled)["status"] == "cancelled"
+    assert _visible(store.job_dir(cancelled)) == ["input.bin"]
