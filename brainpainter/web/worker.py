@@ -178,14 +178,14 @@ def run_job(store: Any, job: dict[str, Any], painters: PainterCache, *, ttl_s: f
         return
     except BrainPainterError as exc:
         line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        store.fail(job_id, attempt, _no_paths(line, store), ttl_s)
-        discard_outputs(folder, published=False)
+        if store.fail(job_id, attempt, _no_paths(line, store), ttl_s):  # (a stale attempt touches nothing)
+            discard_outputs(folder, published=False)
         return
     except Exception as exc:
         traceback.print_exc(file=sys.stderr)
         line = f"internal error: {type(exc).__name__}: {exc}".splitlines()[0]
-        store.fail(job_id, attempt, _no_paths(line, store), ttl_s)
-        discard_outputs(folder, published=False)
+        if store.fail(job_id, attempt, _no_paths(line, store), ttl_s):
+            discard_outputs(folder, published=False)
         return
     store.finish(job_id, attempt, files, ttl_s)
 
