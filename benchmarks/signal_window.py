@@ -4,9 +4,10 @@ Runs the installed console script (``brainpainter --version``, next to this
 Python) many times and sends SIGINT after 0, 2, 4... ms; each run ends in one
 of:
 
-- ``python``: Python's default handler was still in place (interpreter and
-  ``site`` start-up, before ``brainpainter/cli/entry.py`` ran): a
-  ``KeyboardInterrupt`` traceback, or no output and status -2;
+- ``python``: Python's defaults were still in place (interpreter and
+  ``site`` start-up, before ``brainpainter/cli/entry.py`` ran): no output
+  and status -2 (before Python's own handler), or a ``KeyboardInterrupt``
+  traceback (status 1 inside ``site``);
 - ``brainpainter``: exit 130 and the one line ``interrupted: nothing was published...``;
 - ``finished``: the command was done before the signal (exit 0).
 

@@ -20,11 +20,12 @@ What remains is Python's own start-up up to that import: the interpreter,
 ``site`` (which runs every ``.pth`` file of the installed packages: an
 editable install's finder, ``distutils-precedence.pth``...) and the console
 script's ``import re, sys``; tens of milliseconds, measured by
-``benchmarks/signal_window.py``. A SIGINT there raises Python's own
-``KeyboardInterrupt`` (a traceback, exit status -2); a SIGTERM kills the
-process (status -15, which a shell reports as 143). Nothing of brainpainter
-has run yet, so nothing was written either. No code of a package can run
-earlier than that.
+``benchmarks/signal_window.py``. A SIGINT there kills the process silently
+before Python has installed its own handler (status -2, 130 in a shell), and
+after that raises Python's ``KeyboardInterrupt``: a traceback (seen: exit
+status 1, inside ``site``'s imports). A SIGTERM kills the process (status
+-15, 143 in a shell). Nothing of brainpainter has run yet, so nothing was
+written either. No code of a package can run earlier than that.
 """
 
 import os
