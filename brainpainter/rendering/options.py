@@ -32,7 +32,7 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypedDict
 
-from brainpainter.atlas.model import SURFACES
+from brainpainter.atlas.model import SPACES, SURFACES
 from brainpainter.color.rgb import to_rgb
 from brainpainter.color.scale import ScaleKwargs, ScaleOptions
 from brainpainter.errors import BrainPainterError, choice_error
@@ -134,7 +134,7 @@ class SceneOptions:
         "help": "Tractograms (.trk, .tck, .trx) or folders of them, one file per bundle, drawn as tubes in "
                 "the views; see docs/tracts.md. Repeatable."})
     tracts_space: str = field(default=DEFAULT_SPACE, metadata={
-        "choices": ("MNI152NLin2009cAsym", "MNI152NLin6Asym", "fsaverage", "template"),
+        "choices": SPACES,
         "help": "Space of the tractograms' coordinates (MNI152 is mapped to the fsaverage template, "
                 "MNI305)."})
     tracts_affine: str | Path | None = field(default=None, metadata={

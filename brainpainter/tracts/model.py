@@ -52,7 +52,7 @@ class TractSpec:
         Tractogram files (.trk, .tck, .trx) or folders of them; one file per
         bundle (the file name is the bundle name), a .trx's groups are bundles.
     space : str
-        Coordinate space of the files (:data:`brainpainter.atlas.volumes.SPACES`):
+        Coordinate space of the files (:data:`brainpainter.atlas.model.SPACES`):
         MNI152 files are mapped to the fsaverage template (MNI305) by
         FreeSurfer's affine; ``template``: already in the template's coordinates.
     affine : path or None
@@ -75,7 +75,7 @@ class TractSpec:
     _files: tuple[Path, ...] = field(default=(), init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        from brainpainter.atlas.volumes import SPACES
+        from brainpainter.atlas.model import SPACES
         from brainpainter.errors import choice_error
 
         if self.space not in SPACES:
