@@ -26,7 +26,6 @@ import tempfile
 import time
 from pathlib import Path
 
-
 #: As a user's install runs: .pyc files written (the warm-up round writes them; pip writes them at
 #: install). Some shells and CI images set PYTHONDONTWRITEBYTECODE, which makes every start compile
 #: the sources again (~0.25 s of a first image here).

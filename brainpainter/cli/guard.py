@@ -35,7 +35,7 @@ from typing import Any
 import click
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.io.interrupts import defer, published
+from brainpainter.io.interrupts import defer, held, published
 
 EXIT_USER = 2
 EXIT_INTERNAL = 1
@@ -107,17 +107,18 @@ def private_temp() -> Iterator[str]:
         tempfile.tempdir = tmp
         yield root
     finally:
-        tempfile.tempdir = saved_tempdir
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
-        for _ in range(5):  # a library thread (Blender's shader cache) may still be writing there
-            shutil.rmtree(root, ignore_errors=True)
-            if not os.path.exists(root):
-                break
-            time.sleep(0.05)
+        with held():  # a signal now is raised once the folder is gone (run() reports it)
+            tempfile.tempdir = saved_tempdir
+            for k, v in saved.items():
+                if v is None:
+                    os.environ.pop(k, None)
+                else:
+                    os.environ[k] = v
+            for _ in range(5):  # a library thread (Blender's shader cache) may still be writing there
+                shutil.rmtree(root, ignore_errors=True)
+                if not os.path.exists(root):
+                    break
+                time.sleep(0.05)
 
 
 @contextmanager
@@ -185,6 +186,22 @@ def warnings_on_stdout() -> Iterator[None]:
 def run(group: click.Group, argv: Sequence[str] | None = None, prog_name: str = "brainpainter") -> int:
     """Run `group` with `argv`; returns the exit code (see the module docstring)."""
     before = len(published())  # outputs of earlier runs in this process (tests, notebooks) do not count
+    try:
+        return _run(group, argv, prog_name, before)
+    except Stopped as exc:  # the signal came while the run's temporary folder was being removed
+        return _stopped(exc, before)
+
+
+def _stopped(exc: Stopped, before: int) -> int:
+    done = published()[before:]
+    if done:  # the signal came after the output was complete: it is kept, the run succeeded
+        _say(f"{exc.word} after the output was published: {done[-1]} is complete")
+        return 0
+    _say(f"{exc.word}: nothing was published; partial output was removed")
+    return exc.exit_code
+
+
+def _run(group: click.Group, argv: Sequence[str] | None, prog_name: str, before: int) -> int:
     with signals_as_exceptions(), private_temp(), warnings_on_stdout():
         try:
             group.main(args=list(argv) if argv is not None else None, prog_name=prog_name,
@@ -192,12 +209,7 @@ def run(group: click.Group, argv: Sequence[str] | None = None, prog_name: str = 
             sys.stdout.flush()
             return 0
         except Stopped as exc:
-            done = published()[before:]
-            if done:  # the signal came after the output was complete: it is kept, the run succeeded
-                _say(f"{exc.word} after the output was published: {done[-1]} is complete")
-                return 0
-            _say(f"{exc.word}: nothing was published; partial output was removed")
-            return exc.exit_code
+            return _stopped(exc, before)
         except (KeyboardInterrupt, click.exceptions.Abort):
             _say("interrupted: nothing was published; partial output was removed")
             return EXIT_SIGINT

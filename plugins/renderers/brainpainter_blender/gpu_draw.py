@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from brainpainter.errors import BrainPainterError
+from brainpainter.io.interrupts import held
 from brainpainter.rendering.framing import view_projection
 from brainpainter.rendering.geometry import PartGeometry, SceneGeometry
 from brainpainter.rendering.scene import RenderSettings
@@ -177,13 +178,17 @@ def in_gpu_context(job):
         scene.camera = cam
         _engine["scene"] = scene.name
     _engine["job"] = job
-    with _bpy.quiet() as log:
+    # A signal during Blender's render operator is kept until it returns (io/interrupts.held): raised
+    # inside Blender's call stack it was swallowed or left the job queued, and a later call drew with a
+    # closed renderer. The draw takes a fraction of a second, so the run still stops at once.
+    with held(), _bpy.quiet() as log:
         try:
             bpy.ops.render.render(scene=_engine["scene"])
             failed = None
         except RuntimeError as exc:
             failed = exc
-    _engine.pop("job", None)
+        finally:
+            _engine.pop("job", None)
     if failed is not None:
         text = " ".join("".join(log).split())[-300:]
         raise BrainPainterError(f"Blender's GPU drawing failed to start: {failed} {text}".strip())
