@@ -91,6 +91,25 @@ def test_lit_tubes_are_shaded_and_glass_covers_them(tiny, bundles):
     assert np.ptp(img[reddish][:, 0].astype(int)) > 30  # lit: not one flat colour
 
 
+def test_a_cortex_view_shows_its_hemispheres_bundle_through_the_glass_cortex(tiny, bundles):
+    colors = {"tract:AF_left": RED, "tract:CST_right": BLUE}
+    nodes = (("AF_left", 1), ("CST_right", 1))
+    with _painter(tiny, bundles, nodes, glass_opacity=0.25) as p:  # cortex "auto": glass, as tracts are given
+        glass = p.paint_colors(colors, get_view("lateral-left"))
+    with _painter(tiny, bundles, nodes, glass_opacity=0.25, cortex="opaque") as p:
+        opaque = p.paint_colors(colors, get_view("lateral-left"))
+    rgb = glass[..., :3].astype(int)
+    reddish = (rgb[..., 0] > rgb[..., 1] + 60) & (rgb[..., 0] > rgb[..., 2] + 60)
+    bluish = (rgb[..., 2] > rgb[..., 0] + 60) & (rgb[..., 2] > rgb[..., 1] + 60)
+    assert reddish.sum() > 300  # the left bundle, seen through the left cortex
+    assert bluish.sum() == 0  # the right hemisphere's bundle is not drawn in a left view
+    # the glass cortex is drawn around it (more than the bundle is not background)
+    assert ((rgb < 250).any(axis=-1) & ~reddish).sum() > reddish.sum()
+    # under an opaque cortex the bundle is hidden
+    o = opaque[..., :3].astype(int)
+    assert ((o[..., 0] > o[..., 1] + 60) & (o[..., 0] > o[..., 2] + 60)).sum() == 0
+
+
 @pytest.fixture(scope="module")
 def minimal_bundles(tmp_path_factory) -> Path:
     """dipy's minimal bundles (AF_L, CST_R, CC_ForcepsMajor; BSD-3), read from dipy's wheel."""

@@ -37,8 +37,8 @@ DEFAULT_SIZE = RenderSettings().size
 RENDER_OPTION_NAMES = (
     "atlas", "views", "template", "surface", "gradient", "cmap", "vmin", "vmax", "center", "nan_color",
     "missing_color", "hide", "background", "transparent", "size", "quality", "shading", "lighting",
-    "glass_opacity", "renderer", "atlas_config", "tracts", "tracts_space", "tracts_affine", "max_streamlines",
-    "tract_values", "tract_value", "tract_radius",
+    "glass_opacity", "cortex", "renderer", "atlas_config", "tracts", "tracts_space", "tracts_affine",
+    "max_streamlines", "tract_values", "tract_value", "tract_radius",
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
@@ -157,7 +157,7 @@ def render_option_list(views: str | None = DEFAULT_VIEWS, size: str = DEFAULT_SI
         "size": click.option("--size", default=size, show_default=True,
                              help="Size of each rendered view, WIDTHxHEIGHT pixels."),
         **{name: field_option(settings, name)
-           for name in ("quality", "shading", "lighting", "glass_opacity")},
+           for name in ("quality", "shading", "lighting", "glass_opacity", "cortex")},
         "renderer": field_option(scene, "renderer"),
         "atlas_config": field_option(scene, "atlas_config", type=click.Path(dir_okay=False)),
         "tracts": field_option(scene, "tracts", multiple=True, default=(), show_default=False,

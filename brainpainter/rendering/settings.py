@@ -20,6 +20,9 @@ SHADINGS = ("default", "flat")
 LIGHTINGS = ("studio", "soft", "flat-studio", "sulc")
 #: Lighting presets that darken sulci (they need the cortex's sulcal depth).
 SULC_LIGHTINGS = ("flat-studio", "sulc")
+#: How the cortex views (lateral, medial, dorsal, ...) draw the cortex: ``auto`` is ``glass`` when the
+#: scene has white-matter tracts, else ``opaque``.
+CORTEX_MODES = ("auto", "opaque", "glass", "hidden")
 #: Smallest and largest width or height of one image, pixels.
 MIN_PIXELS, MAX_PIXELS = 16, 8192
 
@@ -43,6 +46,7 @@ class SettingsKwargs(TypedDict, total=False):
     shading: str
     lighting: str
     glass_opacity: float
+    cortex: str
 
 
 def check_pixels(what: str, n: Any) -> int:
@@ -80,6 +84,11 @@ class RenderSettings:
         ``flat-studio`` unlit colours darkened in sulci.
     glass_opacity : float
         Opacity of the glass brain, 0-1.
+    cortex : {"auto", "opaque", "glass", "hidden"}
+        How the cortex views draw the cortex: ``opaque``; ``glass``, transparent
+        in its colours (``glass_opacity``) with the white-matter tracts of the
+        view's hemispheres inside; ``hidden``, the tracts alone; ``auto``
+        (default): ``glass`` when the scene has tracts, else ``opaque``.
     """
 
     width: int = field(default=1200, metadata={"help": "Image width, pixels."})
@@ -93,9 +102,14 @@ class RenderSettings:
     lighting: str = field(default="studio", metadata={
         "choices": LIGHTINGS, "help": "sulc: studio light with sulci darkened slightly (sulcal depth)."})
     glass_opacity: float = field(default=0.12, metadata={"help": "Opacity of the glass brain, 0-1."})
+    cortex: str = field(default="auto", metadata={"choices": CORTEX_MODES, "help": (
+        "How cortex views (lateral, medial, dorsal, ...) draw the cortex: glass shows the --tracts inside "
+        "a transparent cortex in its colours, hidden the tracts alone; auto: glass with --tracts, else "
+        "opaque.")})
 
     def __post_init__(self) -> None:
-        for name, allowed in (("quality", QUALITIES), ("shading", SHADINGS), ("lighting", LIGHTINGS)):
+        for name, allowed in (("quality", QUALITIES), ("shading", SHADINGS), ("lighting", LIGHTINGS),
+                              ("cortex", CORTEX_MODES)):
             if getattr(self, name) not in allowed:
                 raise choice_error(name, getattr(self, name), allowed)
         object.__setattr__(self, "width", check_pixels("width", self.width))
@@ -121,5 +135,5 @@ class RenderSettings:
             "width": self.width, "height": self.height,
             "background": None if self.background is None else list(self.background),
             "quality": self.quality, "shading": self.shading,
-            "lighting": self.lighting, "glass_opacity": self.glass_opacity,
+            "lighting": self.lighting, "glass_opacity": self.glass_opacity, "cortex": self.cortex,
         }
