@@ -169,3 +169,30 @@ def test_render_command_with_a_bundle_table(tmp_path, bundles, tiny):
     assert os.path.exists(out / "manifest.json")
     assert "tracts: 2 bundle(s) (AF_left, CST_right), 60 streamlines drawn" in result.output
     assert "note: AF_left: 30 of 40 streamlines drawn" in result.output
+
+
+def test_render_command_with_jobs_2_draws_the_bundles_in_every_view(tmp_path, bundles, tiny):
+    from click.testing import CliRunner
+    from PIL import Image
+
+    from brainpainter.cli.main import cli
+
+    (tmp_path / "fa.csv").write_text("Image-name-unique,AF_L,CST_R\nctrl,3,0\npat,0,3\n")
+    out = tmp_path / "out"
+    result = CliRunner().invoke(cli, [
+        "render", str(tmp_path / "fa.csv"), "--tracts", str(bundles), "--tracts-space", "template",
+        "--template", str(tiny), "--views", "lateral-left,subcortical-dorsal", "--size", "240x180",
+        "--shading", "flat", "--glass-opacity", "0.2", "--vmin", "0", "--vmax", "3", "--gradient", "blue,red",
+        "--quality", "fast", "--tract-radius", "1", "--jobs", "2", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    def tinted(path: Path, channel: int) -> np.ndarray:  # pixels where red (0) or blue (2) dominates
+        img = np.asarray(Image.open(path).convert("RGB")).astype(int)
+        return (img[..., channel] > img[..., 2 - channel] + 60) & (img[..., channel] > img[..., 1] + 60)
+
+    for image, af in (("ctrl", 0), ("pat", 2)):
+        # AF_left through the glass cortex, in its colour on the scale (3: red, 0: blue); CST_right not drawn
+        assert tinted(out / f"{image}_lateral-left.png", af).sum() > 100, image
+        assert tinted(out / f"{image}_lateral-left.png", 2 - af).sum() == 0, image
+        # both bundles from above, through the glass brain
+        assert tinted(out / f"{image}_subcortical-dorsal.png", 0).sum() > 100
+        assert tinted(out / f"{image}_subcortical-dorsal.png", 2).sum() > 100
