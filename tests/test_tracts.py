@@ -434,3 +434,13 @@ def test_direction_colours_are_within_one_32nd_of_exact():
     exact = np.abs(d) / np.abs(d).max(axis=1, keepdims=True)
     assert np.abs(colors[bins[:, 0]] - exact).max() <= 1 / 32 + 1e-6
     assert len(np.unique(bins)) <= 817
+
+
+def test_a_table_of_regions_and_bundles_reports_no_bundle_as_unmatched(tmp_path, bundles):
+    from brainpainter.rendering.run import prepare_run
+
+    (tmp_path / "t.csv").write_text("Image-name-unique,Left-insula,AF_L,CST_R\nctrl,1,2,3\n")
+    run = prepare_run(str(tmp_path / "t.csv"), "dk", tracts=[str(bundles)], tracts_space="template",
+                      strict=True)  # a bundle column is no unknown region name
+    assert tuple(run.table.regions) == ("Left-insula",) and not run.table.unmatched
+    assert run.tract_values is not None and run.tract_values.row("ctrl")["tract:CST_right"] == 3.0
