@@ -185,6 +185,13 @@ class VertexColors(Mapping[str, RGB]):
         return len(self.regions)
 
 
+def cortex_mode(setting: str, parts: list[PartGeometry]) -> str:
+    """``RenderSettings.cortex`` resolved: ``auto`` is ``glass`` when `parts` hold tracts, else ``opaque``."""
+    if setting != "auto":
+        return setting
+    return "glass" if any(p.kind == "tract" for p in parts) else "opaque"
+
+
 class SceneGeometry:
     """Every drawable part of a scene, built once from its template.
 
@@ -279,11 +286,8 @@ class SceneGeometry:
             add(f"glass-{hemi}", "glass", hemi, verts, faces, np.full(len(faces), GLASS_SLOT),
                 np.zeros(len(verts), np.float32))
         check_slots(len(defaults))
-        mode = settings.cortex
-        if mode == "auto":
-            mode = "glass" if any(p.kind == "tract" for p in parts) else "opaque"
         #: how cortex views draw the cortex: "opaque", "glass" or "hidden" (``settings.cortex`` resolved)
-        self.cortex: str = mode
+        self.cortex: str = cortex_mode(settings.cortex, parts)
         #: rotation from the template's coordinates to RAS (its anterior and superior axes)
         self.to_ras: NDArray[Any] = np.asarray(template.to_ras, dtype=float)
         self.parts: tuple[PartGeometry, ...] = tuple(parts)
