@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import zipfile
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -141,6 +142,28 @@ def test_dipy_bundles_in_the_default_template(minimal_bundles, tmp_path):
     assert np.nonzero(af)[1].mean() < np.nonzero(cst)[1].mean()  # from above: AF_L left of CST_R
     rows, cols = np.nonzero(_mask(side, BLUE, 2))
     assert np.ptp(rows) > np.ptp(cols)  # from the side: CST_R taller than long
+
+
+@pytest.mark.integration
+def test_dipy_bundles_in_lateral_left_through_the_glass_cortex(minimal_bundles, tmp_path):
+    from brainpainter.rendering.painter import Painter
+
+    np.savetxt(tmp_path / "place.txt", [[1, 0, 0, 0], [0, 1, 0, -10], [0, 0, 1, 25], [0, 0, 0, 1]])
+    spec = TractSpec((str(minimal_bundles),), space="fsaverage", affine=str(tmp_path / "place.txt"))
+    settings = RenderSettings(width=400, height=300, shading="flat", quality="fast", glass_opacity=0.0)
+    colors = {"tract:AF_left": RED, "tract:CST_right": BLUE, "tract:CC_ForcepsMajor": (0.0, 1.0, 0.0),
+              "Left-superiortemporal": (1.0, 1.0, 0.0)}
+    nodes = (("AF_left", 1), ("CST_right", 1), ("CC_ForcepsMajor", 1))
+    with Painter("dk", settings=settings, tracts=spec, tract_nodes=nodes) as p:
+        img = p.paint_colors(colors, get_view("lateral-left"))  # --cortex auto: glass, as tracts are given
+    with Painter("dk", settings=replace(settings, cortex="opaque"), tracts=spec, tract_nodes=nodes) as p:
+        hidden = p.paint_colors(colors, get_view("lateral-left"))
+    af, cst, cc = _mask(img, RED, 2), _mask(img, BLUE, 2), _mask(img, (0.0, 1.0, 0.0), 2)
+    assert af.sum() > 100 and cc.sum() > 20  # the left arcuate and the forceps major (commissural)
+    assert cst.sum() == 0  # the right hemisphere's bundle is not drawn in a left view
+    # seen from the left, anterior is on the image's left: the forceps major (occipital) is right of AF
+    assert np.nonzero(cc)[1].mean() > np.nonzero(af)[1].mean()
+    assert _mask(hidden, RED, 2).sum() == 0 and _mask(hidden, (1.0, 1.0, 0.0), 2).sum() > 500
 
 
 def test_render_command_with_a_bundle_table(tmp_path, bundles, tiny):
