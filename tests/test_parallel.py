@@ -210,6 +210,36 @@ def test_killing_a_dask_worker_mid_run_loses_no_image(tmp_path, tiny, table, clu
 
 
 # -- the real renderer ---------------------------------------------------------------------
+def test_tracts_travel_to_jobs_and_dask_workers(tmp_path, tiny, cluster):
+    from test_tracts import bundle, write
+
+    folder = tmp_path / "bundles"
+    folder.mkdir()
+    write(folder / "AF_L.trk", bundle(-25.0))
+    write(folder / "CST_R.tck", bundle(25.0, seed=1))
+    table = tmp_path / "t.csv"
+    table.write_text("Image-name-unique,Left-insula,Right-insula,AF_L,CST_R\n"
+                     + "".join(f"S{i},{i},{4 - i},{(i * 3) % 5},{i % 2 * 4}\n" for i in range(4)))
+    kw = {**KW, "views": "lateral-left,subcortical", "tracts": [str(folder)], "tracts_space": "template",
+          "vmin": 0, "vmax": 4}
+    with stand_in() as renderer:
+        serial = render(table, "dk", out=tmp_path / "serial", template=str(tiny), renderer=renderer, **kw)
+        render(table, "dk", out=tmp_path / "jobs", template=str(tiny), renderer=renderer, jobs=2, **kw)
+        render(table, "dk", out=tmp_path / "dask", template=str(tiny), renderer=renderer, client=cluster,
+               **kw)
+        opaque = render(table, "dk", template=str(tiny), renderer=renderer, cortex="opaque", **kw)
+    assert same_files(tmp_path / "serial", tmp_path / "jobs") == []
+    assert same_files(tmp_path / "serial", tmp_path / "dask") == []
+    assert len(serial.files) == 8
+    # the workers drew the bundles: in the subcortical view and through the glass cortex of lateral-left
+    with Image.open(tmp_path / "jobs" / "S1_lateral-left.png") as png:
+        assert not np.array_equal(np.asarray(png), opaque.images[("S1", "lateral-left")])
+    with Image.open(tmp_path / "dask" / "S1_subcortical.png") as png:
+        drawn = {tuple(c) for c in np.asarray(png)[0, :, :3]}
+    af = tuple(round(255 * float(c)) for c in serial.scale(np.array([3.0]))[0][:3])
+    assert af in drawn  # AF_left's value 3 on the scale
+
+
 @pytest.mark.render
 @pytest.mark.integration
 def test_real_renderer_jobs_and_dask_are_byte_identical_to_serial(tmp_path, cluster):

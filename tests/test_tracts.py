@@ -251,13 +251,48 @@ def test_subcortical_views_show_the_tracts_cortex_views_hide_them():
         assert not shows(get_view(name), "tract", "lh") and not shows(get_view(name), "tract", None)
 
 
-def _scene(tiny, bundles, nodes=()):
+def test_cortex_views_show_their_hemispheres_tracts_through_a_glass_or_hidden_cortex():
+    lateral, dorsal = get_view("lateral-left"), get_view("dorsal")
+    for cortex in ("glass", "hidden"):
+        assert shows(lateral, "tract", "lh", cortex) and shows(lateral, "tract", None, cortex)
+        assert not shows(lateral, "tract", "rh", cortex)  # behind the left hemisphere (medial-left: in front)
+        assert shows(dorsal, "tract", "rh", cortex) and shows(dorsal, "tract", "lh", cortex)
+    assert shows(lateral, "cortex", "lh", "glass") and not shows(lateral, "cortex", "lh", "hidden")
+
+
+def _scene(tiny, bundles, nodes=(), **settings):
     from brainpainter.atlas.template import load_template
-    from brainpainter.rendering.scene import Scene
+    from brainpainter.rendering.scene import RenderSettings, Scene
 
     template = load_template(str(tiny))
-    tracts = TractSpec((str(bundles),), space="template").load(template)
-    return Scene(template, "dk", tracts=tracts, tract_nodes=tuple(nodes))
+    tracts = TractSpec((str(bundles),), space="template").load(template) if bundles else None
+    return Scene(template, "dk", tracts=tracts, tract_nodes=tuple(nodes), settings=RenderSettings(**settings))
+
+
+@pytest.mark.parametrize(("cortex", "visible"), [
+    ("auto", [("tracts-lh", "tract"), ("cortex-lh", "glass")]),  # auto: glass, as there are tracts
+    ("glass", [("tracts-lh", "tract"), ("cortex-lh", "glass")]),
+    ("opaque", [("cortex-lh", "cortex")]),
+    ("hidden", [("tracts-lh", "tract")]),
+])
+def test_the_cortex_option_decides_what_a_cortex_view_draws(tiny, bundles, cortex, visible):
+    g = _scene(tiny, bundles, cortex=cortex).geometry
+    assert [(p.name, p.kind) for p in g.visible(get_view("lateral-left"))] == visible
+    glass = next((p for p in g.visible(get_view("lateral-left")) if p.kind == "glass"), None)
+    if glass is not None:  # the cortex as glass keeps its regions' palette slots
+        cortex_lh = next(p for p in g.parts if p.name == "cortex-lh")
+        assert glass.palette_index is cortex_lh.palette_index and cortex_lh.kind == "cortex"
+    # the subcortical views are unchanged
+    assert {p.name for p in g.visible(get_view("subcortical"))} >= {"tracts-lh", "tracts-rh", "glass-rh"}
+
+
+def test_without_tracts_the_cortex_stays_opaque_and_hidden_explains_an_empty_view(tiny):
+    g = _scene(tiny, None).geometry
+    assert g.cortex == "opaque" and [p.kind for p in g.visible(get_view("lateral-left"))] == ["cortex"]
+    with pytest.raises(BrainPainterError, match="--cortex hidden draws no cortex"):
+        _scene(tiny, None, cortex="hidden").geometry.visible(get_view("lateral-left"))
+    with pytest.raises(BrainPainterError, match="cortex must be one of"):
+        _scene(tiny, None, cortex="clear")
 
 
 def test_tracts_are_parts_of_the_scene_geometry(tiny, bundles):
@@ -399,3 +434,13 @@ def test_direction_colours_are_within_one_32nd_of_exact():
     exact = np.abs(d) / np.abs(d).max(axis=1, keepdims=True)
     assert np.abs(colors[bins[:, 0]] - exact).max() <= 1 / 32 + 1e-6
     assert len(np.unique(bins)) <= 817
+
+
+def test_a_table_of_regions_and_bundles_reports_no_bundle_as_unmatched(tmp_path, bundles):
+    from brainpainter.rendering.run import prepare_run
+
+    (tmp_path / "t.csv").write_text("Image-name-unique,Left-insula,AF_L,CST_R\nctrl,1,2,3\n")
+    run = prepare_run(str(tmp_path / "t.csv"), "dk", tracts=[str(bundles)], tracts_space="template",
+                      strict=True)  # a bundle column is no unknown region name
+    assert tuple(run.table.regions) == ("Left-insula",) and not run.table.unmatched
+    assert run.tract_values is not None and run.tract_values.row("ctrl")["tract:CST_right"] == 3.0

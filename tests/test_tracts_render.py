@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import zipfile
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -91,6 +92,25 @@ def test_lit_tubes_are_shaded_and_glass_covers_them(tiny, bundles):
     assert np.ptp(img[reddish][:, 0].astype(int)) > 30  # lit: not one flat colour
 
 
+def test_a_cortex_view_shows_its_hemispheres_bundle_through_the_glass_cortex(tiny, bundles):
+    colors = {"tract:AF_left": RED, "tract:CST_right": BLUE}
+    nodes = (("AF_left", 1), ("CST_right", 1))
+    with _painter(tiny, bundles, nodes, glass_opacity=0.25) as p:  # cortex "auto": glass, as tracts are given
+        glass = p.paint_colors(colors, get_view("lateral-left"))
+    with _painter(tiny, bundles, nodes, glass_opacity=0.25, cortex="opaque") as p:
+        opaque = p.paint_colors(colors, get_view("lateral-left"))
+    rgb = glass[..., :3].astype(int)
+    reddish = (rgb[..., 0] > rgb[..., 1] + 60) & (rgb[..., 0] > rgb[..., 2] + 60)
+    bluish = (rgb[..., 2] > rgb[..., 0] + 60) & (rgb[..., 2] > rgb[..., 1] + 60)
+    assert reddish.sum() > 300  # the left bundle, seen through the left cortex
+    assert bluish.sum() == 0  # the right hemisphere's bundle is not drawn in a left view
+    # the glass cortex is drawn around it (more than the bundle is not background)
+    assert ((rgb < 250).any(axis=-1) & ~reddish).sum() > reddish.sum()
+    # under an opaque cortex the bundle is hidden
+    o = opaque[..., :3].astype(int)
+    assert ((o[..., 0] > o[..., 1] + 60) & (o[..., 0] > o[..., 2] + 60)).sum() == 0
+
+
 @pytest.fixture(scope="module")
 def minimal_bundles(tmp_path_factory) -> Path:
     """dipy's minimal bundles (AF_L, CST_R, CC_ForcepsMajor; BSD-3), read from dipy's wheel."""
@@ -124,6 +144,28 @@ def test_dipy_bundles_in_the_default_template(minimal_bundles, tmp_path):
     assert np.ptp(rows) > np.ptp(cols)  # from the side: CST_R taller than long
 
 
+@pytest.mark.integration
+def test_dipy_bundles_in_lateral_left_through_the_glass_cortex(minimal_bundles, tmp_path):
+    from brainpainter.rendering.painter import Painter
+
+    np.savetxt(tmp_path / "place.txt", [[1, 0, 0, 0], [0, 1, 0, -10], [0, 0, 1, 25], [0, 0, 0, 1]])
+    spec = TractSpec((str(minimal_bundles),), space="fsaverage", affine=str(tmp_path / "place.txt"))
+    settings = RenderSettings(width=400, height=300, shading="flat", quality="fast", glass_opacity=0.0)
+    colors = {"tract:AF_left": RED, "tract:CST_right": BLUE, "tract:CC_ForcepsMajor": (0.0, 1.0, 0.0),
+              "Left-superiortemporal": (1.0, 1.0, 0.0)}
+    nodes = (("AF_left", 1), ("CST_right", 1), ("CC_ForcepsMajor", 1))
+    with Painter("dk", settings=settings, tracts=spec, tract_nodes=nodes) as p:
+        img = p.paint_colors(colors, get_view("lateral-left"))  # --cortex auto: glass, as tracts are given
+    with Painter("dk", settings=replace(settings, cortex="opaque"), tracts=spec, tract_nodes=nodes) as p:
+        hidden = p.paint_colors(colors, get_view("lateral-left"))
+    af, cst, cc = _mask(img, RED, 2), _mask(img, BLUE, 2), _mask(img, (0.0, 1.0, 0.0), 2)
+    assert af.sum() > 100 and cc.sum() > 20  # the left arcuate and the forceps major (commissural)
+    assert cst.sum() == 0  # the right hemisphere's bundle is not drawn in a left view
+    # seen from the left, anterior is on the image's left: the forceps major (occipital) is right of AF
+    assert np.nonzero(cc)[1].mean() > np.nonzero(af)[1].mean()
+    assert _mask(hidden, RED, 2).sum() == 0 and _mask(hidden, (1.0, 1.0, 0.0), 2).sum() > 500
+
+
 def test_render_command_with_a_bundle_table(tmp_path, bundles, tiny):
     from click.testing import CliRunner
     from PIL import Image
@@ -150,3 +192,30 @@ def test_render_command_with_a_bundle_table(tmp_path, bundles, tiny):
     assert os.path.exists(out / "manifest.json")
     assert "tracts: 2 bundle(s) (AF_left, CST_right), 60 streamlines drawn" in result.output
     assert "note: AF_left: 30 of 40 streamlines drawn" in result.output
+
+
+def test_render_command_with_jobs_2_draws_the_bundles_in_every_view(tmp_path, bundles, tiny):
+    from click.testing import CliRunner
+    from PIL import Image
+
+    from brainpainter.cli.main import cli
+
+    (tmp_path / "fa.csv").write_text("Image-name-unique,AF_L,CST_R\nctrl,3,0\npat,0,3\n")
+    out = tmp_path / "out"
+    result = CliRunner().invoke(cli, [
+        "render", str(tmp_path / "fa.csv"), "--tracts", str(bundles), "--tracts-space", "template",
+        "--template", str(tiny), "--views", "lateral-left,subcortical-dorsal", "--size", "240x180",
+        "--shading", "flat", "--glass-opacity", "0.2", "--vmin", "0", "--vmax", "3", "--gradient", "blue,red",
+        "--quality", "fast", "--tract-radius", "1", "--jobs", "2", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    def tinted(path: Path, channel: int) -> np.ndarray:  # pixels where red (0) or blue (2) dominates
+        img = np.asarray(Image.open(path).convert("RGB")).astype(int)
+        return (img[..., channel] > img[..., 2 - channel] + 60) & (img[..., channel] > img[..., 1] + 60)
+
+    for image, af in (("ctrl", 0), ("pat", 2)):
+        # AF_left through the glass cortex, in its colour on the scale (3: red, 0: blue); CST_right not drawn
+        assert tinted(out / f"{image}_lateral-left.png", af).sum() > 100, image
+        assert tinted(out / f"{image}_lateral-left.png", 2 - af).sum() == 0, image
+        # both bundles from above, through the glass brain
+        assert tinted(out / f"{image}_subcortical-dorsal.png", 0).sum() > 100
+        assert tinted(out / f"{image}_subcortical-dorsal.png", 2).sum() > 100

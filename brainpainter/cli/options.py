@@ -37,9 +37,8 @@ DEFAULT_SIZE = RenderSettings().size
 RENDER_OPTION_NAMES = (
     "atlas", "views", "template", "surface", "gradient", "cmap", "vmin", "vmax", "center", "nan_color",
     "missing_color", "hide", "background", "transparent", "size", "quality", "shading", "lighting",
-    "glass_opacity", "outline_width", "outline_color", "renderer", "atlas_config", "tracts", "tracts_space",
-    "tracts_affine", "max_streamlines",
-    "tract_values", "tract_value", "tract_radius",
+    "glass_opacity", "cortex", "outline_width", "outline_color", "renderer", "atlas_config", "tracts",
+    "tracts_space", "tracts_affine", "max_streamlines", "tract_values", "tract_value", "tract_radius",
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
@@ -158,7 +157,7 @@ def render_option_list(views: str | None = DEFAULT_VIEWS, size: str = DEFAULT_SI
         "size": click.option("--size", default=size, show_default=True,
                              help="Size of each rendered view, WIDTHxHEIGHT pixels."),
         **{name: field_option(settings, name)
-           for name in ("quality", "shading", "lighting", "glass_opacity")},
+           for name in ("quality", "shading", "lighting", "glass_opacity", "cortex")},
         "outline_width": field_option(settings, "outline_width", metavar="PX", show_default=False),
         "outline_color": field_option(settings, "outline_color", metavar="COLOUR"),
         "renderer": field_option(scene, "renderer"),

@@ -37,7 +37,9 @@ from brainpainter.io.rawtable import (
 
 # -- entry point -----------------------------------------------------------------
 def read_raw(data: Any) -> RawTable:
-    """Read one input (path, bytes, binary file object, DataFrame, Series or dict)."""
+    """Read one input (path, bytes, binary file object, DataFrame, Series or dict; a RawTable as it is)."""
+    if isinstance(data, RawTable):
+        return data
     if isinstance(data, str | os.PathLike):
         return _read_path(Path(data))
     if isinstance(data, bytes | bytearray | memoryview):

@@ -29,14 +29,16 @@ _POLE_TOLERANCE = 1e-6
 PART_KINDS = ("cortex", "subcortical", "glass", "tract")
 
 
-def shows(view: View, kind: str, hemi: str | None) -> bool:
+def shows(view: View, kind: str, hemi: str | None, cortex: str = "opaque") -> bool:
     """Whether `view` draws the part of this kind (and hemisphere).
 
     ``cortex`` views draw the cortex of ``view.hemis``; ``subcortical`` views
     draw every subcortical structure; both draw the glass hulls of ``view.glass``.
     Tracts: ``subcortical`` views draw all of them (inside the glass brain);
-    ``cortex`` views none (the opaque cortex hides them, and a medial view would
-    put the other hemisphere's and the commissural ones in front of the medial wall).
+    ``cortex`` views draw those of ``view.hemis`` and the commissural ones
+    (`hemi` None) when the cortex is drawn as glass or hidden, and none under
+    an opaque cortex (it hides them; the other hemisphere's would stand in
+    front of a medial wall).
 
     Parameters
     ----------
@@ -44,14 +46,21 @@ def shows(view: View, kind: str, hemi: str | None) -> bool:
     kind : {"cortex", "subcortical", "glass", "tract"}
     hemi : {"lh", "rh"} or None
         None for the subcortical part and for commissural tracts.
+    cortex : {"opaque", "glass", "hidden"}
+        How cortex views draw the cortex (``RenderSettings.cortex``, resolved:
+        :attr:`brainpainter.rendering.geometry.SceneGeometry.cortex`); ``glass``
+        draws it (as glass: :meth:`~brainpainter.rendering.geometry.SceneGeometry.visible`),
+        ``hidden`` does not.
     """
     if kind == "glass":
         return hemi in view.glass
     if kind == "tract":
-        return view.content == "subcortical"
+        if view.content == "subcortical":
+            return True
+        return cortex != "opaque" and (hemi is None or hemi in view.hemis)
     if view.content == "subcortical":
         return kind == "subcortical"
-    return kind == "cortex" and hemi in view.hemis
+    return kind == "cortex" and hemi in view.hemis and cortex != "hidden"
 
 
 @dataclass(frozen=True)

@@ -37,6 +37,7 @@ across each triangle.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
@@ -184,6 +185,13 @@ class VertexColors(Mapping[str, RGB]):
         return len(self.regions)
 
 
+def cortex_mode(setting: str, parts: list[PartGeometry]) -> str:
+    """``RenderSettings.cortex`` resolved: ``auto`` is ``glass`` when `parts` hold tracts, else ``opaque``."""
+    if setting != "auto":
+        return setting
+    return "glass" if any(p.kind == "tract" for p in parts) else "opaque"
+
+
 class SceneGeometry:
     """Every drawable part of a scene, built once from its template.
 
@@ -194,6 +202,9 @@ class SceneGeometry:
     Attributes
     ----------
     parts : tuple of PartGeometry
+    cortex : {"opaque", "glass", "hidden"}
+        How cortex views draw the cortex (``settings.cortex``; ``auto`` resolved:
+        glass when the scene has tracts).
     keys : tuple of str
         Region key of palette slots 3, 4, ... (hidden regions are not drawn and have no slot).
     slot_of : dict of str to int
@@ -277,6 +288,8 @@ class SceneGeometry:
             add(f"glass-{hemi}", "glass", hemi, verts, faces, np.full(len(faces), GLASS_SLOT),
                 np.zeros(len(verts), np.float32))
         check_slots(len(defaults))
+        #: how cortex views draw the cortex: "opaque", "glass" or "hidden" (``settings.cortex`` resolved)
+        self.cortex: str = cortex_mode(settings.cortex, parts)
         #: rotation from the template's coordinates to RAS (its anterior and superior axes)
         self.to_ras: NDArray[Any] = np.asarray(template.to_ras, dtype=float)
         self.parts: tuple[PartGeometry, ...] = tuple(parts)
@@ -322,6 +335,10 @@ class SceneGeometry:
     def visible(self, view: View) -> list[PartGeometry]:
         """The parts `view` draws (:func:`brainpainter.rendering.framing.shows`), opaque parts first.
 
+        With :attr:`cortex` ``"glass"`` a cortex view's cortex parts come as
+        kind ``glass`` (same name and palette slots: drawn transparent in the
+        regions' colours) and the tracts of its hemispheres as opaque parts.
+
         A template that lacks the part a view is about (a brain of region
         meshes with structures only, or with an outer surface only) draws its
         other part instead, so every view shows it. Renderers draw exactly
@@ -332,18 +349,24 @@ class SceneGeometry:
         BrainPainterError
             If the view draws nothing (its parts are absent from the template or all hidden).
         """
-        parts = [p for p in self.parts if framing.shows(view, p.kind, p.hemi)]
+        parts = [p for p in self.parts if framing.shows(view, p.kind, p.hemi, self.cortex)]
         kinds = {p.kind for p in self.parts}
         if view.content == "cortex" and "cortex" not in kinds:
             # a brain of region meshes without an outer surface: its structures stand for it
-            parts = [p for p in self.parts if p.kind == "subcortical" or framing.shows(view, p.kind, p.hemi)]
+            parts = [p for p in self.parts
+                     if p.kind == "subcortical" or framing.shows(view, p.kind, p.hemi, self.cortex)]
+        elif view.content == "cortex" and self.cortex == "glass":
+            # the cortex as glass in its own colours (same name: a renderer's upload of it is reused)
+            parts = [replace(p, kind="glass") if p.kind == "cortex" else p for p in parts]
         elif view.content == "subcortical" and "subcortical" not in kinds:
             # ... and one without structures shows its surface (both hemispheres, no glass over it)
             parts = [p for p in self.parts if p.kind == "cortex"]
         if not parts:
             raise BrainPainterError(
                 f"view {view.name!r} shows nothing: content={view.content!r}, hemis={list(view.hemis)}, "
-                f"glass={list(view.glass)}; the template or the hidden regions leave no part to draw."
+                f"glass={list(view.glass)}; the template or the hidden regions leave no part to draw"
+                + (" (--cortex hidden draws no cortex: give --tracts, or --cortex opaque)."
+                   if self.cortex == "hidden" and view.content == "cortex" else ".")
             )
         return sorted(parts, key=lambda p: p.kind == "glass")
 

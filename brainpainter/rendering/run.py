@@ -119,6 +119,25 @@ def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, b
                         tuple(tv.nodes[j] for j in keep)), len(keep) == len(tv.nodes))
 
 
+def without_bundle_columns(data: Any, bundles: set[str]) -> Any:
+    """The main table without its bundle columns (drawn as tract values), read once, for the region table.
+
+    So that a table with region and bundle columns reports no bundle as an unmatched region name
+    (nor fails under ``--strict``). The image column and the region columns stay as they are.
+    """
+    from dataclasses import replace
+
+    from brainpainter.io.readers import read_raw
+    from brainpainter.tracts.names import canonical
+
+    raw = read_raw(data)
+    keep = [j for j, name in enumerate(raw.header) if canonical(name) not in bundles]
+    if len(keep) == len(raw.header):
+        return raw
+    return replace(raw, header=[raw.header[j] for j in keep],
+                   rows=[[row[j] if j < len(row) else None for j in keep] for row in raw.rows])
+
+
 def resolve_atlas(atlas: Atlas | str | None, atlas_config: str | Path | None) -> Atlas | None:
     """The atlas object of `atlas` (a name) or `atlas_config` (a region-group TOML file), if any."""
     if atlas_config is not None:
@@ -166,6 +185,8 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     if only_tracts and tract_values is not None:
         table = tracts_only_table(tract_values, atlas_obj, data)
     else:
+        if tract_values is not None and options.scene.tract_values is None:
+            data = without_bundle_columns(data, {name for name, _ in tract_values.nodes})
         table = read_table(data, atlas_obj, **options.table.kwargs())
     values = table.values if tract_values is None else np.concatenate(
         [np.ravel(table.values), np.ravel(tract_values.values)])

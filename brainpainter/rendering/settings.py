@@ -22,6 +22,9 @@ LIGHTINGS = ("studio", "soft", "flat-studio", "sulc")
 SULC_LIGHTINGS = ("flat-studio", "sulc")
 #: Width of region borders drawn by ``--outline`` when ``--outline-width`` is not given, and the most.
 DEFAULT_OUTLINE_WIDTH, MAX_OUTLINE_WIDTH = 1.5, 20.0
+#: How the cortex views (lateral, medial, dorsal, ...) draw the cortex: ``auto`` is ``glass`` when the
+#: scene has white-matter tracts, else ``opaque``.
+CORTEX_MODES = ("auto", "opaque", "glass", "hidden")
 #: Smallest and largest width or height of one image, pixels.
 MIN_PIXELS, MAX_PIXELS = 16, 8192
 
@@ -47,6 +50,7 @@ class SettingsKwargs(TypedDict, total=False):
     glass_opacity: float
     outline_width: float
     outline_color: ColorLike
+    cortex: str
 
 
 def check_pixels(what: str, n: Any) -> int:
@@ -89,6 +93,11 @@ class RenderSettings:
         every image size (``--outline``); 0: none.
     outline_color : colour
         Their colour, stored as sRGB 0-1 (default near-black; white reads well on dark maps).
+    cortex : {"auto", "opaque", "glass", "hidden"}
+        How the cortex views draw the cortex: ``opaque``; ``glass``, transparent
+        in its colours (``glass_opacity``) with the white-matter tracts of the
+        view's hemispheres inside; ``hidden``, the tracts alone; ``auto``
+        (default): ``glass`` when the scene has tracts, else ``opaque``.
     """
 
     width: int = field(default=1200, metadata={"help": "Image width, pixels."})
@@ -107,9 +116,14 @@ class RenderSettings:
         f"size (0: none; --outline ATLAS alone draws them {DEFAULT_OUTLINE_WIDTH:g} px wide).")})
     outline_color: RGB = field(default=(0.05, 0.05, 0.05), metadata={
         "help": "Colour of the region borders (--outline), e.g. black or white.", "cli_default": "#0d0d0d"})
+    cortex: str = field(default="auto", metadata={"choices": CORTEX_MODES, "help": (
+        "How cortex views (lateral, medial, dorsal, ...) draw the cortex: glass shows the --tracts inside "
+        "a transparent cortex in its colours, hidden the tracts alone; auto: glass with --tracts, else "
+        "opaque.")})
 
     def __post_init__(self) -> None:
-        for name, allowed in (("quality", QUALITIES), ("shading", SHADINGS), ("lighting", LIGHTINGS)):
+        for name, allowed in (("quality", QUALITIES), ("shading", SHADINGS), ("lighting", LIGHTINGS),
+                              ("cortex", CORTEX_MODES)):
             if getattr(self, name) not in allowed:
                 raise choice_error(name, getattr(self, name), allowed)
         object.__setattr__(self, "width", check_pixels("width", self.width))
@@ -144,7 +158,7 @@ class RenderSettings:
             "width": self.width, "height": self.height,
             "background": None if self.background is None else list(self.background),
             "quality": self.quality, "shading": self.shading,
-            "lighting": self.lighting, "glass_opacity": self.glass_opacity,
+            "lighting": self.lighting, "glass_opacity": self.glass_opacity, "cortex": self.cortex,
             **({"outline_width": self.outline_width, "outline_color": list(self.outline_color)}
                if self.outline_width else {}),
         }

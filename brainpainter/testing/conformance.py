@@ -292,7 +292,8 @@ def tiny_tracts() -> Any:
 
 
 def _tracts(run: _Run) -> None:
-    """Tubes of two value-coloured bundles: exact flat colour, where the camera projects them."""
+    """Tubes of two value-coloured bundles: exact flat colour, where the camera projects them (also
+    in a cortex view, through the cortex drawn as glass: only the view's hemisphere's bundle)."""
     from brainpainter.rendering import framing
     from brainpainter.rendering.scene import RenderSettings, Scene
     from brainpainter.rendering.views import get_view
@@ -304,12 +305,18 @@ def _tracts(run: _Run) -> None:
     renderer = run.cls(scene)
     worst = 0.0
     try:
-        for name in ("subcortical-dorsal", "subcortical"):
+        # lateral-left: the cortex is glass (default with tracts; clear here), AF_left inside, CST_right not
+        for name in ("subcortical-dorsal", "subcortical", "lateral-left"):
             view = get_view(name)
             img = run.paint(scene, renderer, {**COLORS, **TRACT_COLORS}, view)
             pose = scene.geometry.camera(view, run.width / run.height)
+            shown = {int(p.palette_index[0]) for p in scene.geometry.visible(view) if p.kind == "tract"}
             for key, rgb in TRACT_COLORS.items():
                 mask = near(img, rgb, 1)
+                if scene.geometry.slot_of[key] not in shown:
+                    if mask.sum() >= 30:
+                        run.problems.append(f"tracts: {name}: bundle {key} is drawn; the view hides it")
+                    continue
                 if mask.sum() < 30:
                     run.problems.append(f"tracts: {name}: bundle {key} is not drawn in its flat colour {rgb}")
                     continue

@@ -119,6 +119,10 @@ class StandInRenderer:
                 if name in scene.tracts.names:
                     keys = [bundle_key(name)] if n == 1 else [bundle_key(name, k) for k in range(n)]
                     self.tract_keys += [(hemisphere(name), k) for k in keys]
+        # how cortex views draw the cortex (scene.geometry.cortex, resolved without building the geometry)
+        cortex = getattr(getattr(scene, "settings", None), "cortex", "opaque")
+        self.cortex = ("glass" if getattr(scene, "tracts", None) is not None else "opaque") \
+            if cortex == "auto" else cortex
         type(self).scenes += 1
 
     def painted(self, colors: Mapping[str, Any], part: str) -> dict[str, Any]:
@@ -156,7 +160,7 @@ class StandInRenderer:
         default = {"subcortical": (0.8, 0.8, 0.8)}
         stripes = []
         for part, (kind, hemi) in kinds.items():
-            if not shows(view, kind, hemi):
+            if not shows(view, kind, hemi, self.cortex):
                 continue
             keys, labels = self.parts.get(part, ([], np.zeros(0, int)))
             slots = getattr(getattr(self.scene, "geometry", None), "vertex_slots", {}) if hemi else {}
@@ -167,7 +171,7 @@ class StandInRenderer:
             stripes += [colors.get(keys[i]) or default.get(part, self.scene.medial_wall_color)
                         for i in labels if keys[i] not in self.scene.hidden]
         stripes += [colors.get(key) or default["subcortical"] for hemi, key in self.tract_keys
-                    if shows(view, "tract", hemi)]
+                    if shows(view, "tract", hemi, self.cortex)]
         img = np.zeros((height, width, 4), np.uint8)
         if stripes:
             cols = np.asarray(stripes, dtype=float)[np.linspace(0, len(stripes) - 1, width).astype(int)]

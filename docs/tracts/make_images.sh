@@ -22,6 +22,11 @@ np.savetxt(work / "place.txt", [[1, 0, 0, 0], [0, 1, 0, -10], [0, 0, 1, 25], [0,
     "Left-Putamen,Right-Putamen\npatients,0.35,0.45,0.62,0.58,0.50,0.48\n")
 rows = [(b, k, v) for b, f in (("AF_L", 1.0), ("CST_R", 2.0), ("CC_ForcepsMajor", 3.0))
         for k, v in zip(range(100), 0.3 + 0.3 * (np.sin(np.linspace(0, f * np.pi, 100)) + 1) / 2)]
+# one table with region columns (the example's stage 3) and bundle columns, for the cortex views
+import csv
+dk_rows = list(csv.reader(open("../../examples/brainpainter_dk.csv")))
+(work / "cortex.csv").write_text(",".join([*dk_rows[0], "AF_L", "CST_R", "CC_ForcepsMajor"]) + "\n"
+                                 + ",".join(["patients", *dk_rows[3][1:], "1.2", "2.0", "2.8"]) + "\n")
 (work / "profiles.csv").write_text("bundle,node,fa\n" + "".join(f"{b},{k},{v:.3f}\n" for b, k, v in rows))
 PY
 common=(--tracts "$work/sub_1" --tracts-space fsaverage --tracts-affine "$work/place.txt" --tract-radius 0.4
@@ -46,9 +51,24 @@ brainpainter figure "$work/thickness.csv" "${common[@]}" --tract-values "$work/f
 # 3. along-tract profiles: 100 nodes per bundle
 brainpainter figure "$work/thickness.csv" "${common[@]}" --tract-values "$work/profiles.csv" --vmin 0.3 --vmax 0.6 \
     --cmap plasma --views subcortical,subcortical-left --label "FA along the bundle" --out profiles.png
+# 4. the cortex views: the bundles of the view's hemispheres through the cortex drawn as glass (--cortex auto)
+brainpainter render "$work/cortex.csv" --atlas dk "${common[@]}" --views lateral-left,medial-left,dorsal,subcortical \
+    --size 600x450 --out "$work/cortex"
+python - "$work" <<'PY'
+import sys
+from pathlib import Path
+from PIL import Image
+w = Path(sys.argv[1]) / "cortex"
+ims = [Image.open(w / f"patients_{v}.png").convert("RGB")
+       for v in ("lateral-left", "medial-left", "dorsal", "subcortical")]
+sheet = Image.new("RGB", (2 * ims[0].width, 2 * ims[0].height), "white")
+for k, im in enumerate(ims):
+    sheet.paste(im, ((k % 2) * ims[0].width, (k // 2) * ims[0].height))
+sheet.save("cortex.png", optimize=True)
+PY
 # a smaller file: a 256-colour palette (not for the figures: their colour bars would show bands)
 python - <<'PY'
 from PIL import Image
-for p in ("direction.png",):
+for p in ("direction.png", "cortex.png"):
     Image.open(p).convert("RGB").quantize(256, method=Image.Quantize.MEDIANCUT).save(p, optimize=True)
 PY
