@@ -37,7 +37,8 @@ def server(tmp_path_factory):
     from brainpainter.atlas import registry
     registry.reset_all()
     config = ServerConfig(data_dir=tmp_path_factory.mktemp("data"), workers=1, renderer=STANDIN,
-                          max_jobs_per_client=50, rate_per_minute=100_000, max_upload_mb=10, max_map_images=20)
+                          max_jobs_per_client=50, rate_per_minute=100_000, max_upload_mb=10,
+                          max_map_images=20)
     try:
         with TestClient(create_app(config)) as client:
             assert wait_for(lambda: client.get("/readyz").status_code == 200, 120), client.get("/readyz").text
@@ -210,6 +211,6 @@ def test_a_4d_volume_over_the_image_limit_is_refused(server):
 
 
 def test_sizes_must_add_up(server):
-    r = server.post("/api/uploads", params={"name": ["lh.a.npy", "rh.a.npy"], "size": [3, 4]}, content=b"12345",
-                    headers={"content-type": "application/octet-stream"})
+    r = server.post("/api/uploads", params={"name": ["lh.a.npy", "rh.a.npy"], "size": [3, 4]},
+                    content=b"12345", headers={"content-type": "application/octet-stream"})
     assert r.status_code == 400 and "sizes given are [3, 4]" in r.json()["error"]
