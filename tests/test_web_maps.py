@@ -7,6 +7,7 @@ a stripe: pixels show where the map has colour.
 
 from __future__ import annotations
 
+import gzip
 import io
 import sys
 
@@ -76,11 +77,7 @@ def mni_volume(n_volumes: int = 0, voxel: float = 4.0) -> bytes:
     data = vol if not n_volumes else np.repeat(vol[..., None], n_volumes, axis=3)
     img = nib.Nifti1Image(data, affine)
     img.header.set_sform(affine, 1)
-    raw = io.BytesIO()
-    import gzip
-
-    raw.write(gzip.compress(img.to_bytes(), compresslevel=1))
-    return raw.getvalue()
+    return gzip.compress(img.to_bytes(), compresslevel=1)
 
 
 def preview(client, uid: str, view: str, **options) -> np.ndarray:
@@ -214,3 +211,32 @@ def test_sizes_must_add_up(server):
     r = server.post("/api/uploads", params={"name": ["lh.a.npy", "rh.a.npy"], "size": [3, 4]},
                     content=b"12345", headers={"content-type": "application/octet-stream"})
     assert r.status_code == 400 and "sizes given are [3, 4]" in r.json()["error"]
+
+
+def test_label_map_and_hemi_given(server, tmp_path):
+    """An .annot is a label map (categories in their own colours); hemi= names a file's hemisphere."""
+    labels = (np.arange(N5) % 3).astype(np.int32)
+    ctab = np.array([[255, 0, 0, 0, 1], [0, 200, 0, 0, 2], [0, 0, 255, 0, 3]], np.int32)
+    nib.freesurfer.write_annot(str(tmp_path / "parc.annot"), labels, ctab, [b"red", b"green", b"blue"],
+                               fill_ctab=True)
+    r = post(server, [("parc.annot", (tmp_path / "parc.annot").read_bytes())], hemi=["rh"])
+    assert r.status_code == 200, r.text
+    rep = r.json()["report"]
+    assert rep["summary"] == "label map: parc.annot, fsaverage5, 3 labels" and rep["hemis"] == ["rh"]
+    assert rep["categories"] == ["red", "green", "blue"]
+    right = preview(server, r.json()["upload_id"], "lateral-right")
+    assert colourful(right) > 0.5
+
+
+def test_inflating_is_bounded(tmp_path, monkeypatch):
+    from brainpainter.errors import BrainPainterError
+    from brainpainter.web import maps
+
+    bomb = tmp_path / "lh.x.mgz"
+    bomb.write_bytes(gzip.compress(b"\0" * (1 << 22)))
+    monkeypatch.setattr(maps, "MAX_INFLATED", 1 << 20)
+    with pytest.raises(BrainPainterError, match="inflates to more than 1 MB"):
+        maps.inflate(bomb)
+    small = tmp_path / "rh.x.mgz"
+    small.write_bytes(gzip.compress(b"abc"))
+    assert maps.inflate(small).read_bytes() == b"abc" and not small.exists()
