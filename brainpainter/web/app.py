@@ -10,10 +10,8 @@ API (all JSON unless said; errors are ``{"error": "one line"}`` with the CLI's m
     POST /api/uploads?name=&atlas=&image_column=&value=&region_column=&strict=
                                    body: the table file (CSV/TSV/XLSX bytes, or pasted text)
                                    -> {"upload_id", "name", "report", "images"} (`check --json`'s report)
-                                   A map instead (brainpainter.web.maps): name=lh.thickness (one file),
-                                   or name=lh.x.mgh&name=rh.x.mgh&size=N1&size=N2 (two files, one after
-                                   the other in the body), or one NIfTI volume (name=stat.nii.gz);
-                                   report.kind is "map"
+                                   or a map (web/maps.py; report.kind "map"): name=lh.x.mgh[&name=rh.x.mgh
+                                   &size=N1&size=N2: both files in the body], or a volume name=v.nii.gz
     POST /api/check                {"upload_id", "options"} -> the check report for those options
     POST /api/preview              {"upload_id", "options", "row", "view"} -> image/png
     POST /api/jobs                 {"upload_id", "kind", "options", "figure"|"movie"} -> 202 {job}
@@ -29,7 +27,6 @@ logged as one JSON line on the ``brainpainter.web.access`` logger (both by
 from __future__ import annotations
 
 import logging
-import re
 import sqlite3
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
@@ -51,7 +48,7 @@ from starlette.requests import ClientDisconnect
 from brainpainter.errors import BrainPainterError
 from brainpainter.web.config import ServerConfig
 from brainpainter.web.guard import Guard
-from brainpainter.web.maps import file_name, is_bundle, is_map_upload, read_map_upload
+from brainpainter.web.maps import file_name, is_bundle, is_map_upload
 from brainpainter.web.options import (
     FigureParams,
     MovieParams,
@@ -61,9 +58,15 @@ from brainpainter.web.options import (
     prepare,
     upload_name,
 )
-from brainpainter.web.pool import MAX_PREVIEW_WAITING, Pool, PreviewBusy, PreviewUnavailable, preview_settings
+from brainpainter.web.pool import MAX_PREVIEW_WAITING, Pool, PreviewBusy, PreviewUnavailable, preview_request
 from brainpainter.web.store import LimitError, Store, valid_id
-from brainpainter.web.upload import check_table, content_type_allowed, new_incoming, read_and_check
+from brainpainter.web.upload import (
+    check_table,
+    content_type_allowed,
+    new_incoming,
+    read_and_check,
+    read_map_upload,
+)
 
 T = TypeVar("T")
 
@@ -150,6 +153,7 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
 
     _add_error_handlers(app, config)
     _add_page_and_probes(app, config, store, pool)
+    _add_upload_route(app, config, store)
     _add_table_routes(app, config, store, pool)
     _add_job_routes(app, config, store)
     return app
@@ -239,10 +243,9 @@ def _add_page_and_probes(app: FastAPI, config: ServerConfig, store: Store, pool:
         return await run_in_threadpool(_meta, config)
 
 
-def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Pool) -> None:
-    """Uploads, checks and previews of a table."""
+def _add_upload_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
+    """Uploads of a table or a map."""
     work: Work = app.state.work
-    previews = anyio.CapacityLimiter(MAX_PREVIEW_WAITING)
 
     @app.post("/api/uploads", tags=["api"], openapi_extra={"requestBody": {
         "required": True, "content": {"application/octet-stream": {"schema": {"type": "string",
@@ -298,6 +301,12 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
         return {"upload_id": upload_id, "name": shown, "size": size, "report": report,
                 "images": images[:MAX_LISTED_IMAGES]}
 
+
+def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Pool) -> None:
+    """Checks and previews of an upload."""
+    work: Work = app.state.work
+    previews = anyio.CapacityLimiter(MAX_PREVIEW_WAITING)
+
     @app.post("/api/check", tags=["api"])
     async def check(body: CheckRequest) -> dict[str, Any]:
         """The ``check`` report of an upload with these options (the colour scale included)."""
@@ -317,7 +326,8 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
     async def preview(body: PreviewRequest) -> Response:
         """One row from one view, small, rendered by the warm preview painter."""
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
-        req = await work.run(_preview_request, data, name, body, config, store.root / "incoming")
+        req = await work.run(preview_request, data, name, body.options, body.row, body.view, config,
+                             store.root / "incoming")
         if previews.borrowed_tokens >= previews.total_tokens:  # never queue without bound
             raise ApiError(503, f"{MAX_PREVIEW_WAITING} previews are waiting; try again in a moment",
                            {"retry-after": "2"})
@@ -453,30 +463,6 @@ def _public(job: dict[str, Any] | None) -> dict[str, Any]:
         "finished": job["finished"], "expires": job["expires"], "attempt": job["attempt"],
         "files": [{"name": f, "url": f"{base}/files/{f}"} for f in job["files"]], "url": base,
     }
-
-
-def _preview_request(data: bytes, name: str, body: PreviewRequest, config: ServerConfig,
-                     scratch: Any = None) -> dict[str, Any]:
-    from brainpainter.rendering.painter import region_colors
-    from brainpainter.rendering.views import parse_views
-
-    prep = prepare(data, name, body.options, max_pixels=config.max_pixels, scratch=scratch)
-    table = prep.run.table
-    if isinstance(body.row, int) or re.fullmatch(r"[0-9]{1,9}", body.row):
-        i = int(body.row)
-        if not 0 <= i < len(table.images):
-            raise BrainPainterError(f"row must be 0..{len(table.images) - 1}; {body.row} was given.")
-    elif body.row in table.images:
-        i = table.images.index(body.row)
-    else:
-        raise BrainPainterError(f"row {str(body.row)[:100]!r} is not an image of the table; it has "
-                                f"{list(table.images[:5])}{'...' if len(table.images) > 5 else ''}.")
-    views = parse_views(body.view)
-    colors = (prep.run.colors(i) if prep.coloring == "vertices"  # type: ignore[attr-defined]
-              else region_colors(table.row(i), table.atlas, prep.run.scale))
-    return {"atlas": table.atlas.name, "surface": body.options.surface, "hidden": prep.hidden,
-            "settings": preview_settings(prep.run.settings, config.preview_max_width),
-            "colors": colors, "view": views[0], "coloring": prep.coloring}
 
 
 def _meta(config: ServerConfig) -> dict[str, Any]:

@@ -7,7 +7,8 @@ An upload is a map when its file name says so
 :func:`brainpainter.maps.volume.project_volume`). Two files (lh and rh) travel in
 one request body, one after the other, with their names and sizes in the query.
 
-The files are read in a process of its own that is killed after the server's
+The files are read (:func:`build_bundle`) in a process of its own, started by
+:func:`brainpainter.web.upload.read_map_upload` and killed after the server's
 parse time limit, with its data memory bounded (:data:`MEMORY_LIMIT`);
 compressed files (``.gz``, ``.mgz``) are inflated to disk, at most
 :data:`MAX_INFLATED` bytes. What is kept is a *bundle* (:data:`MAGIC`, one JSON
@@ -23,7 +24,6 @@ from __future__ import annotations
 import contextlib
 import gzip
 import json
-import multiprocessing as mp
 import shutil
 import tempfile
 from collections.abc import Iterator
@@ -136,107 +136,7 @@ def hemispheres(parts: list[tuple[str, bytes]], hemis: list[str]) -> list[str | 
     return out
 
 
-def read_map_upload(path: Path, names: list[str], sizes: list[int], hemis: list[str], folder: Path, *,
-                    max_images: int, time_limit_s: float) -> tuple[bytes, tuple[dict[str, Any], list[str]]]:
-    """The received body at `path` (the files `names`) read as a map: ``(bundle, (report, images))``.
-
-    See :func:`split_body`, :func:`hemispheres` and :func:`read_upload`.
-    """
-    parts = split_body(path.read_bytes(), names, sizes)
-    sides = hemispheres(parts, hemis)
-    bundle, report, images = read_upload(parts, sides, folder, max_images=max_images,
-                                         time_limit_s=time_limit_s)
-    return bundle, (report, images)
-
-
-# -- reading, in a process of its own ----------------------------------------------------------
-def read_upload(parts: list[tuple[str, bytes]], hemis: list[str | None], folder: Path, *, max_images: int,
-                time_limit_s: float) -> tuple[bytes, dict[str, Any], list[str]]:
-    """Read map files into a bundle: ``(bundle bytes, report, image names)``; raises the first error.
-
-    Parameters
-    ----------
-    parts : list of (str, bytes)
-        The client's file names and contents.
-    hemis : list of str or None
-        From :func:`hemispheres`.
-    folder : Path
-        A private folder for the work (under the server's data folder; removed after).
-    max_images : int
-        Most images (volumes of a 4-D file, data arrays of a GIfTI) one upload may hold.
-    time_limit_s : float
-        The reading process is killed after this many seconds.
-    """
-    work = Path(tempfile.mkdtemp(prefix="maps-", dir=folder))
-    try:
-        entries = []
-        for k, ((name, data), hemi) in enumerate(zip(parts, hemis, strict=True)):
-            sub = work / f"in{k}"
-            sub.mkdir()
-            (sub / file_name(name)).write_bytes(data)
-            entries.append((hemi, str(sub / file_name(name))))
-        ctx = mp.get_context("spawn")
-        parent, child = ctx.Pipe(duplex=False)
-        proc = ctx.Process(target=_read_main, args=(child, str(work), entries, max_images), daemon=True,
-                           name="brainpainter-read-map")
-        proc.start()
-        child.close()
-        shown = " + ".join(file_name(n) for n, _ in parts)
-        try:
-            if not parent.poll(time_limit_s):
-                raise BrainPainterError(
-                    f"reading {shown!r} took longer than this server's limit of {time_limit_s:g} s; upload a "
-                    "smaller map (fewer images or volumes), or render it with 'brainpainter render' on your "
-                    "own computer.")
-            status, payload = parent.recv()
-        except (EOFError, OSError):
-            raise BrainPainterError(f"reading {shown!r} stopped unexpectedly (too large for this server?); "
-                                    "upload a smaller map.") from None
-        finally:
-            parent.close()
-            if proc.is_alive():
-                proc.kill()
-            proc.join(timeout=5)
-        if status != "ok":
-            raise BrainPainterError(payload)
-        report, images = payload
-        return (work / "bundle.bin").read_bytes(), report, images
-    finally:
-        shutil.rmtree(work, ignore_errors=True)
-
-
-def _read_main(conn: Any, work: str, entries: list[tuple[str | None, str]], max_images: int) -> None:
-    """Entry point of the reading process: send ``("ok", (report, images))`` or ``("error", line)``."""
-    from brainpainter.web.worker import die_with_parent
-
-    die_with_parent()
-    _limit_memory()
-    try:
-        conn.send(("ok", build_bundle(Path(work), [(h, Path(p)) for h, p in entries], max_images)))
-    except BrainPainterError as exc:
-        line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        conn.send(("error", line.replace(work + "/", "").replace(work, "")))
-    except MemoryError:
-        conn.send(("error", "the map needs more memory than this server gives one upload; upload a smaller "
-                            "map (fewer images or volumes, or a coarser volume)."))
-    except Exception as exc:
-        conn.send(("error", f"cannot read the map ({type(exc).__name__}); check that the file is what its "
-                            "name says (docs/maps.md lists the formats)."))
-    finally:
-        conn.close()
-
-
-def _limit_memory() -> None:
-    try:
-        import resource
-
-        _, hard = resource.getrlimit(resource.RLIMIT_DATA)
-        limit = MEMORY_LIMIT if hard == resource.RLIM_INFINITY else min(MEMORY_LIMIT, hard)
-        resource.setrlimit(resource.RLIMIT_DATA, (limit, hard))
-    except (ImportError, ValueError, OSError):  # not on this platform: the time limit remains
-        pass
-
-
+# -- reading (in the process that upload.read_map_upload starts) ------------------------------
 def inflate(path: Path) -> Path:
     """`path` itself, or for ``.gz``/``.mgz`` its inflated copy beside it (``.nii``/``.mgh``).
 
