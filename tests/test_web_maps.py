@@ -184,6 +184,8 @@ def test_volume_upload_is_projected_onto_the_cortex(server):
     ([("lh.a.npy", "npy10242"), ("lh.b.npy", "npy10242")], "are the lh hemisphere"),
     ([("lh.thickness", "junk")], "map file 'lh.thickness'"),
     ([("vol.nii.gz", "junk")], "not a readable gzip file"),
+    ([("a.csv", "junk"), ("b.csv", "junk")], "'a.csv' is not a map file"),
+    ([("lh.a.npy", "npy10242"), ("rh.a.npy", "npy10242"), ("lh.b.npy", "npy10242")], "or two"),
 ])
 def test_bad_map_uploads_are_one_line_4xx(server, files, message):
     def content(kind: str) -> bytes:
@@ -240,3 +242,12 @@ def test_inflating_is_bounded(tmp_path, monkeypatch):
     small = tmp_path / "rh.x.mgz"
     small.write_bytes(gzip.compress(b"abc"))
     assert maps.inflate(small).read_bytes() == b"abc" and not small.exists()
+
+
+def test_a_map_is_read_in_a_process_with_a_time_limit(tmp_path):
+    config = ServerConfig(data_dir=tmp_path / "data", workers=0, preview=False, parse_time_limit_s=0.05)
+    with TestClient(create_app(config)) as client:
+        r = post(client, [("zstat1.nii.gz", mni_volume())])
+        assert r.status_code == 400, r.text
+        assert "took longer than this server's limit of 0.05 s" in r.json()["error"]
+        assert not any((tmp_path / "data" / "incoming").glob("maps-*"))  # the work folder is gone

@@ -114,6 +114,10 @@ def hemispheres(parts: list[tuple[str, bytes]], hemis: list[str]) -> list[str | 
     out: list[str | None] = []
     for k, (name, _) in enumerate(parts):
         safe = file_name(name)
+        if not is_map_upload([safe]):
+            raise BrainPainterError(
+                f"{safe!r} is not a map file (maps are lh.thickness, .mgh/.mgz, .func.gii, .npy, .annot, "
+                ".label.gii, or one .nii/.nii.gz volume); upload one table at a time, or one or two maps.")
         if hemis:
             if hemis[k] not in ("lh", "rh"):
                 raise BrainPainterError(f"hemi must be lh or rh; {hemis[k][:20]!r} was given.")

@@ -6,6 +6,7 @@ const $ = (id) => document.getElementById(id);
 const state = { uploadId: null, files: null, name: null, report: null, meta: null, isMap: false,
                 previewCtl: null, previewTimer: null, previewUrl: null, seq: 0, scale: null };
 const DEFAULT_VIEWS = ["lateral-left", "medial-left", "subcortical"];
+const MAP_VIEWS = ["lateral-left", "medial-left", "lateral-right", "medial-right"];  // a map's default
 
 function el(tag, attrs = {}, ...children) {
   const node = document.createElement(tag);
@@ -179,6 +180,7 @@ async function upload(files) {
     // a map's own default colours (viridis, RdBu_r for signed values) unless the user chose a gradient
     if (state.isMap && $("gradient").value === GRADIENT && $("use-gradient").checked) $("gradient").value = "";
     if (!state.isMap && $("gradient").value === "") $("gradient").value = GRADIENT;
+    setDefaultViews(state.isMap ? MAP_VIEWS : DEFAULT_VIEWS);
     showReport(j.report);
     fillRows(j.images, j.report.n_images);
     setReady(true);
@@ -188,6 +190,14 @@ async function upload(files) {
     $("report").textContent = "";
     showError(e.message);
   }
+}
+
+// the default views of a map (both hemispheres) or a table, unless the user chose others
+function setDefaultViews(wanted) {
+  const boxes = [...document.querySelectorAll('input[name="views"]')];
+  const now = boxes.filter((b) => b.checked).map((b) => b.value).join(",");
+  if (now !== DEFAULT_VIEWS.join(",") && now !== MAP_VIEWS.join(",")) return;
+  for (const b of boxes) b.checked = wanted.includes(b.value);
 }
 
 function showReport(r) {
@@ -367,7 +377,7 @@ function wire() {
   drop.addEventListener("keydown", (e) => { if (e.key === "Enter" || e.key === " ") { e.preventDefault(); file.click(); } });
   drop.addEventListener("dragover", (e) => { e.preventDefault(); drop.classList.add("over"); });
   drop.addEventListener("dragleave", () => drop.classList.remove("over"));
-  const picked = (list) => [...list].slice(0, 2).map((f) => ({ blob: f, name: f.name, size: f.size }));
+  const picked = (list) => [...list].map((f) => ({ blob: f, name: f.name, size: f.size }));
   drop.addEventListener("drop", (e) => {
     e.preventDefault(); drop.classList.remove("over");
     if (e.dataTransfer.files.length) upload(picked(e.dataTransfer.files));
