@@ -98,6 +98,9 @@ class RenderOptions(TableOptions):
     threshold: FiniteFloat | None = core(MapOptions, "threshold")
     outline: str | None = core(MapOptions, "outline")
     outline_threshold: bool = core(MapOptions, "outline_threshold")
+    outline_width: FiniteFloat = Field(core(RenderSettings, "outline_width").default, ge=0, le=20,
+                                       description=core(RenderSettings, "outline_width").description)
+    outline_color: str = core(RenderSettings, "outline_color")
 
     def table_kwargs(self) -> dict[str, Any]:
         return {name: getattr(self, name) for name in option_names(ReadOptions)}

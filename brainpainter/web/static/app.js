@@ -148,7 +148,8 @@ function options() {
     size: $("size").value.trim(), quality: $("quality").value, shading: $("shading").value,
     lighting: $("lighting").value, glass_opacity: Number($("glass_opacity").value || 0),
     underlay: $("underlay").value, threshold: numberOrNull("threshold"), outline: textOrNull("outline"),
-    outline_threshold: $("outline_threshold").checked,
+    outline_threshold: $("outline_threshold").checked, outline_width: Number($("outline_width").value || 0),
+    outline_color: $("outline_color").value,
   };
 }
 
