@@ -209,6 +209,14 @@ def test_a_4d_volume_over_the_image_limit_is_refused(server):
     assert "holds 500 volumes" in err and "at most 20 images" in err, err
 
 
+def test_a_table_cannot_pose_as_a_stored_map(server):
+    from brainpainter.web.maps import MAGIC
+
+    r = server.post("/api/uploads", params={"name": "t.csv"}, content=MAGIC + b'{"files": []}\n',
+                    headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 400 and "is not a table" in r.json()["error"]
+
+
 def test_sizes_must_add_up(server):
     r = server.post("/api/uploads", params={"name": ["lh.a.npy", "rh.a.npy"], "size": [3, 4]},
                     content=b"12345", headers={"content-type": "application/octet-stream"})

@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from brainpainter.errors import BrainPainterError
+from brainpainter.web.maps import MAGIC
 
 #: Form encodings a browser may send cross-origin without asking first (a CORS "simple" request);
 #: uploads must come with another content type, which only the page itself (same origin) can send.
@@ -77,6 +78,9 @@ def check_upload(data: bytes, name: str, options: dict[str, Any], *, max_rows: i
     spreadsheets in a spawned process that is killed after `time_limit_s` seconds.
     """
     check_rows(data, name, max_rows)
+    if data.startswith(MAGIC):  # only the server writes map bundles
+        raise BrainPainterError(f"{name!r} is not a table (it starts as a stored map upload); upload the "
+                                "table or map files themselves.")
     if not is_spreadsheet(data):
         return check_table(data, name, options, max_rows)
     ctx = mp.get_context("spawn")
