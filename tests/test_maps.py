@@ -452,3 +452,13 @@ def test_map_files_are_recognised_by_name():
     for name in ("table.csv", "lh.stats.tsv", "regions.xlsx", "lh.values.txt", "lh.aparc.thickness.table"):
         assert not is_map_input(name), name
     assert is_map_input({"lh": np.zeros(3)}) and not is_map_input({"Left-insula": 1.0})
+
+
+def test_mesh_edges_are_the_unique_sorted_edges():
+    from brainpainter.maps.outlines import mesh_edges
+
+    faces = np.random.default_rng(0).integers(0, 50, size=(200, 3))
+    e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    e.sort(axis=1)
+    assert np.array_equal(mesh_edges(faces), np.unique(e, axis=0))
+    assert mesh_edges(np.zeros((0, 3), int)).shape == (0, 2)

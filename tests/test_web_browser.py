@@ -189,3 +189,42 @@ def test_page_as_a_new_user_finds_it(served, tmp_path):
             assert errors == []
         finally:
             context.close()
+
+
+def test_page_takes_a_map_pair(served, tmp_path):
+    """Two files chosen at once (lh and rh) are one map: the report says what was understood, and the
+    preview (real renderer) shows the left cortex red and the right blue (signed map: RdBu_r about 0)."""
+    import nibabel as nib
+    from playwright.sync_api import expect, sync_playwright
+
+    for hemi, value in (("lh", 2.0), ("rh", -2.0)):
+        nib.freesurfer.write_morph_data(str(tmp_path / f"{hemi}.thickness"),
+                                        np.full(10242, value, np.float32))
+    with sync_playwright() as p:
+        context = p.chromium.launch_persistent_context(
+            str(tmp_path / "profile"), executable_path=str(CHROMIUM), headless=True, args=FLAGS,
+            viewport={"width": 1440, "height": 1000})
+        try:
+            page = context.pages[0] if context.pages else context.new_page()
+            errors: list[str] = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(served.url + "/")
+            expect(page.locator("#atlas option[value=dk]")).to_have_count(1)
+            page.locator("#size").fill("320x240")
+            page.locator("#file").set_input_files([str(tmp_path / f"{h}.thickness") for h in ("lh", "rh")])
+            report = page.locator("#report")
+            expect(report).to_contain_text("OK: map: lh.thickness + rh.thickness, fsaverage5, 1 image")
+            expect(page.locator("#preview-status")).to_contain_text("rendered in", timeout=120_000)
+            expect(report).to_contain_text("RdBu_r")
+            left = png_pixels(page.locator("#preview").screenshot())
+            brain = _brain(left)
+            assert brain.mean() > 0.1
+            rgb = left[brain][:, :3].astype(float)
+            assert rgb[:, 0].mean() - rgb[:, 2].mean() > 40  # lh is +2: red
+            shot = tmp_path / "map.png"
+            page.screenshot(path=str(shot))
+            if os.environ.get("BRAINPAINTER_SCREENSHOT"):
+                shutil.copy(shot, Path(os.environ["BRAINPAINTER_SCREENSHOT"]).with_name("map-page.png"))
+            assert errors == []
+        finally:
+            context.close()

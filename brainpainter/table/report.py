@@ -35,7 +35,7 @@ def _closest(name: str, table: RegionTable) -> dict[str, Any]:
     return {"closest": resolver.suggest(name), "region_of_atlas": elsewhere}
 
 
-def _bar(scale: Any) -> dict[str, Any]:
+def colour_bar(scale: Any) -> dict[str, Any]:
     """A colour bar of `scale` for a page: ``ramp`` (32 hex colours, vmin to vmax) and ``ticks``."""
     from brainpainter.color.rgb import to_hex
     from brainpainter.color.scale import between, fraction
@@ -64,7 +64,7 @@ def _scale_check(values: NDArray[Any], scale_options: dict[str, Any]) -> dict[st
     return {
         "range": [float(finite.min()), float(finite.max())] if finite.size else None,
         "scale": {"name": scale.name, "vmin": scale.vmin, "vmax": scale.vmax, "center": scale.center,
-                  **_bar(scale)},
+                  **colour_bar(scale)},
         "n_below_vmin": below,
         "n_above_vmax": above,
         "hints": hints,

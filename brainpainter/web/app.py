@@ -10,6 +10,8 @@ API (all JSON unless said; errors are ``{"error": "one line"}`` with the CLI's m
     POST /api/uploads?name=&atlas=&image_column=&value=&region_column=&strict=
                                    body: the table file (CSV/TSV/XLSX bytes, or pasted text)
                                    -> {"upload_id", "name", "report", "images"} (`check --json`'s report)
+                                   or a map (web/maps.py; report.kind "map"): name=lh.x.mgh[&name=rh.x.mgh
+                                   &size=N1&size=N2: both files in the body], or a volume name=v.nii.gz
     POST /api/check                {"upload_id", "options"} -> the check report for those options
     POST /api/preview              {"upload_id", "options", "row", "view"} -> image/png
     POST /api/jobs                 {"upload_id", "kind", "options", "figure"|"movie"} -> 202 {job}
@@ -25,13 +27,12 @@ logged as one JSON line on the ``brainpainter.web.access`` logger (both by
 from __future__ import annotations
 
 import logging
-import re
 import sqlite3
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from functools import partial
 from importlib import resources
-from typing import Any, Literal, TypeVar
+from typing import Annotated, Any, Literal, TypeVar
 
 import anyio
 import anyio.to_thread
@@ -47,17 +48,25 @@ from starlette.requests import ClientDisconnect
 from brainpainter.errors import BrainPainterError
 from brainpainter.web.config import ServerConfig
 from brainpainter.web.guard import Guard
+from brainpainter.web.maps import file_name, is_bundle, is_map_upload
 from brainpainter.web.options import (
     FigureParams,
     MovieParams,
     RenderOptions,
     TableOptions,
+    map_check,
     prepare,
     upload_name,
 )
-from brainpainter.web.pool import MAX_PREVIEW_WAITING, Pool, PreviewBusy, PreviewUnavailable, preview_settings
+from brainpainter.web.pool import MAX_PREVIEW_WAITING, Pool, PreviewBusy, PreviewUnavailable, preview_request
 from brainpainter.web.store import LimitError, Store, valid_id
-from brainpainter.web.upload import check_table, content_type_allowed, new_incoming, read_and_check
+from brainpainter.web.upload import (
+    check_table,
+    content_type_allowed,
+    new_incoming,
+    read_and_check,
+    read_map_upload,
+)
 
 T = TypeVar("T")
 
@@ -135,7 +144,8 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
             pool.stop()
 
     app = FastAPI(title="brainpainter", version=_version(), lifespan=lifespan, docs_url=None, redoc_url=None,
-                  description="Upload a table of values per brain region, check it, preview and render it.",
+                  description="Upload a table of values per brain region, or a per-vertex map or MNI152 "
+                              "volume; check it, preview and render it.",
                   redirect_slashes=False)  # a redirect would build its Location from the Host header
     app.state.config, app.state.store, app.state.pool = config, store, pool
     app.state.work = Work(config.work_threads, config.max_waiting_work)
@@ -143,6 +153,7 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
 
     _add_error_handlers(app, config)
     _add_page_and_probes(app, config, store, pool)
+    _add_upload_route(app, config, store)
     _add_table_routes(app, config, store, pool)
     _add_job_routes(app, config, store)
     return app
@@ -232,28 +243,39 @@ def _add_page_and_probes(app: FastAPI, config: ServerConfig, store: Store, pool:
         return await run_in_threadpool(_meta, config)
 
 
-def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Pool) -> None:
-    """Uploads, checks and previews of a table."""
+def _add_upload_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
+    """Uploads of a table or a map."""
     work: Work = app.state.work
-    previews = anyio.CapacityLimiter(MAX_PREVIEW_WAITING)
 
     @app.post("/api/uploads", tags=["api"], openapi_extra={"requestBody": {
         "required": True, "content": {"application/octet-stream": {"schema": {"type": "string",
                                                                               "format": "binary"}}}}})
-    async def upload(request: Request, name: str = Query("table.csv", max_length=200),
+    async def upload(request: Request,
+                     name: Annotated[list[str] | None, Query(description=(
+                         "File name (its ending says the format; default table.csv). A map pair: two "
+                         "names (lh, rh)."))] = None,
+                     sizes: Annotated[list[int] | None, Query(alias="size", description=(
+                         "With two names: the bytes of each file, in the body's order."))] = None,
+                     hemi: Annotated[list[str] | None, Query(description=(
+                         "lh or rh per map file (default: from its name)."))] = None,
                      atlas: str | None = Query(None, max_length=100),
                      image_column: str | None = Query(None, max_length=200),
                      value: str | None = Query(None, max_length=200),
                      region_column: str | None = Query(None, max_length=200),
                      strict: bool = False) -> dict[str, Any]:
-        """Upload a table (the raw file as the body) and get the ``check`` report; nothing is kept
-        when the table would not render."""
+        """Upload a table or a map (the raw file(s) as the body) and get the ``check`` report; nothing
+        is kept when it would not render."""
         if not content_type_allowed(request.headers.get("content-type")):
             raise ApiError(415, "send the table as the request body with 'Content-Type: "
                                 "application/octet-stream' (form and text/plain bodies are refused, so that "
                                 "other web sites cannot upload into this server).")
+        names, sizes, hemi = name or ["table.csv"], sizes or [], hemi or []
+        if len(names) > 2 or any(len(n) > 200 for n in names) or len(hemi) > 2 or len(sizes) > 2:
+            raise ApiError(422, "give one name (a table, a map or a volume) or two (an lh and an rh map), "
+                                "each at most 200 characters.")
         await _disk_budget(store, config)
-        shown = upload_name(name)
+        is_map = len(names) > 1 or is_map_upload(names)
+        shown = " + ".join(file_name(n) for n in names) if is_map else upload_name(names[0])
         fh, path = await run_in_threadpool(new_incoming, store.root)
         opts = {"atlas": atlas or None, "image_column": image_column or None, "value": value or None,
                 "region_column": region_column or None, "strict": strict}
@@ -264,9 +286,14 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
                     size += len(chunk)
                     fh.write(chunk)
             # read into memory only on a work thread: at most a few bodies are in memory at once
-            data, (report, images) = await work.run(read_and_check, path, shown, opts,
-                                                    max_rows=config.max_rows,
-                                                    time_limit_s=config.parse_time_limit_s)
+            if is_map:
+                data, (report, images) = await work.run(
+                    read_map_upload, path, names, sizes, hemi, store.root / "incoming",
+                    max_images=config.max_map_images, time_limit_s=config.parse_time_limit_s)
+            else:
+                data, (report, images) = await work.run(read_and_check, path, shown, opts,
+                                                        max_rows=config.max_rows,
+                                                        time_limit_s=config.parse_time_limit_s)
         finally:
             path.unlink(missing_ok=True)
         upload_id = await run_in_threadpool(store.add_upload, _client(request), shown, data,
@@ -274,11 +301,19 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
         return {"upload_id": upload_id, "name": shown, "size": size, "report": report,
                 "images": images[:MAX_LISTED_IMAGES]}
 
+
+def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Pool) -> None:
+    """Checks and previews of an upload."""
+    work: Work = app.state.work
+    previews = anyio.CapacityLimiter(MAX_PREVIEW_WAITING)
+
     @app.post("/api/check", tags=["api"])
     async def check(body: CheckRequest) -> dict[str, Any]:
         """The ``check`` report of an upload with these options (the colour scale included)."""
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
         o = body.options
+        if is_bundle(data):
+            return await work.run(map_check, data, name, o, scratch=store.root / "incoming")
         opts = {**o.model_dump(include=set(TableOptions.model_fields)),
                 "scale": {"gradient": o.gradient, "cmap": o.cmap, "vmin": o.vmin, "vmax": o.vmax,
                           "center": o.center}}
@@ -291,7 +326,8 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
     async def preview(body: PreviewRequest) -> Response:
         """One row from one view, small, rendered by the warm preview painter."""
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
-        req = await work.run(_preview_request, data, name, body, config)
+        req = await work.run(preview_request, data, name, body.options, body.row, body.view, config,
+                             store.root / "incoming")
         if previews.borrowed_tokens >= previews.total_tokens:  # never queue without bound
             raise ApiError(503, f"{MAX_PREVIEW_WAITING} previews are waiting; try again in a moment",
                            {"retry-after": "2"})
@@ -315,7 +351,7 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
         await _disk_budget(store, config)
         prep = await work.run(prepare, data, name, body.options, max_images=config.max_images,
-                              max_pixels=config.max_pixels)
+                              max_pixels=config.max_pixels, scratch=store.root / "incoming")
         n_rows, n_views = len(prep.run.table.images), len(prep.run.views)
         if body.kind == "movie" and n_rows < 2:
             raise BrainPainterError(f"a movie needs at least 2 rows (key frames); the table has {n_rows}.")
@@ -429,27 +465,6 @@ def _public(job: dict[str, Any] | None) -> dict[str, Any]:
     }
 
 
-def _preview_request(data: bytes, name: str, body: PreviewRequest, config: ServerConfig) -> dict[str, Any]:
-    from brainpainter.rendering.painter import region_colors
-    from brainpainter.rendering.views import parse_views
-
-    prep = prepare(data, name, body.options, max_pixels=config.max_pixels)
-    table = prep.run.table
-    if isinstance(body.row, int) or re.fullmatch(r"[0-9]{1,9}", body.row):
-        i = int(body.row)
-        if not 0 <= i < len(table.images):
-            raise BrainPainterError(f"row must be 0..{len(table.images) - 1}; {body.row} was given.")
-    elif body.row in table.images:
-        i = table.images.index(body.row)
-    else:
-        raise BrainPainterError(f"row {str(body.row)[:100]!r} is not an image of the table; it has "
-                                f"{list(table.images[:5])}{'...' if len(table.images) > 5 else ''}.")
-    views = parse_views(body.view)
-    return {"atlas": table.atlas.name, "surface": body.options.surface, "hidden": prep.hidden,
-            "settings": preview_settings(prep.run.settings, config.preview_max_width),
-            "colors": region_colors(table.row(i), table.atlas, prep.run.scale), "view": views[0]}
-
-
 def _meta(config: ServerConfig) -> dict[str, Any]:
     import matplotlib
 
@@ -466,7 +481,8 @@ def _meta(config: ServerConfig) -> dict[str, Any]:
         "defaults": RenderOptions().model_dump(),
         "limits": {"max_upload_mb": config.max_upload_mb, "max_images": config.max_images,
                    "max_pixels": config.max_pixels, "max_jobs_per_client": config.max_jobs_per_client,
-                   "result_ttl_s": config.result_ttl_s, "job_time_limit_s": config.job_time_limit_s},
+                   "result_ttl_s": config.result_ttl_s, "job_time_limit_s": config.job_time_limit_s,
+                   "max_map_images": config.max_map_images},
         "renderer": config.renderer,
     }
 

@@ -54,6 +54,9 @@ class ServerConfig:
     max_rows : int
         Largest number of table rows in one upload (like the readers' column limit: every request
         that reads the table stays bounded).
+    max_map_images : int
+        Largest number of images in one map upload (volumes of a 4-D NIfTI, data arrays of a GIfTI);
+        each costs about 1.3 MB on fsaverage.
     max_disk_gb : float
         Disk the data folder may use (uploads and results); beyond it new uploads and jobs get 507.
         0 = no budget.
@@ -86,6 +89,7 @@ class ServerConfig:
     threads_per_worker: int = 0
     preview_max_width: int = 480
     max_rows: int = 20_000
+    max_map_images: int = 100
     max_disk_gb: float = 0.0
     work_threads: int = 2
     max_waiting_work: int = 16

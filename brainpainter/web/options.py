@@ -14,12 +14,14 @@ from __future__ import annotations
 import io
 from collections import Counter
 from dataclasses import dataclass, fields
+from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, FiniteFloat
 
 from brainpainter.color.scale import ScaleOptions
 from brainpainter.errors import BrainPainterError
+from brainpainter.maps.options import MapOptions
 from brainpainter.rendering.options import SceneOptions, option_names
 from brainpainter.rendering.settings import RenderSettings, parse_size
 from brainpainter.table.options import TableOptions as ReadOptions
@@ -92,6 +94,13 @@ class RenderOptions(TableOptions):
     shading: Annotated[str, one_of(RenderSettings, "shading")] = core(RenderSettings, "shading")
     lighting: Annotated[str, one_of(RenderSettings, "lighting")] = core(RenderSettings, "lighting")
     glass_opacity: FiniteFloat = core(RenderSettings, "glass_opacity")
+    underlay: Annotated[str, one_of(MapOptions, "underlay")] = core(MapOptions, "underlay")
+    threshold: FiniteFloat | None = core(MapOptions, "threshold")
+    outline: str | None = core(MapOptions, "outline")
+    outline_threshold: bool = core(MapOptions, "outline_threshold")
+    outline_width: FiniteFloat = Field(core(RenderSettings, "outline_width").default, ge=0, le=20,
+                                       description=core(RenderSettings, "outline_width").description)
+    outline_color: str = core(RenderSettings, "outline_color")
 
     def table_kwargs(self) -> dict[str, Any]:
         return {name: getattr(self, name) for name in option_names(ReadOptions)}
@@ -137,15 +146,20 @@ class Prepared:
     hidden: list[str]
     file_names: list[str]
 
+    @property
+    def coloring(self) -> str:
+        """``"vertices"`` for a map run (its painter draws a per-vertex scene), else ``"regions"``."""
+        return "vertices" if hasattr(self.run, "source_vertex") else "regions"
+
 
 def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int | None = None,
-            max_pixels: int | None = None) -> Prepared:
-    """Check `options` against the uploaded table exactly as ``brainpainter render`` would.
+            max_pixels: int | None = None, scratch: Path | None = None) -> Prepared:
+    """Check `options` against the uploaded table (or map) exactly as ``brainpainter render`` would.
 
     Parameters
     ----------
     data : bytes
-        The uploaded table file.
+        The uploaded table file, or a map bundle (:mod:`brainpainter.web.maps`).
     name : str
         Its display name (from :func:`upload_name`).
     options : RenderOptions
@@ -153,6 +167,8 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
         Largest rows x views.
     max_pixels : int, optional
         Largest width x height of one view.
+    scratch : Path, optional
+        Where a map bundle's files are written while they are read (removed after).
 
     Raises
     ------
@@ -162,6 +178,7 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     from brainpainter.io.output import file_key, safe_name
     from brainpainter.rendering.painter import resolve_hidden
     from brainpainter.rendering.run import prepare_run
+    from brainpainter.web.maps import extracted, is_bundle
 
     kwargs = options.run_kwargs()
     if max_pixels is not None and kwargs["width"] * kwargs["height"] > max_pixels:
@@ -169,7 +186,11 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
             f"size {options.size} is {kwargs['width'] * kwargs['height']} pixels; this server renders at "
             f"most {max_pixels} pixels per view. Choose a smaller size."
         )
-    run = prepare_run(table_stream(data, name), options.atlas, **kwargs)
+    if is_bundle(data):  # a map: its files, read as the CLI reads --lh/--rh
+        with extracted(data, scratch) as files:
+            run = prepare_run(files, options.atlas, **kwargs)
+    else:
+        run = prepare_run(table_stream(data, name), options.atlas, **kwargs)
     hidden = options.hide_tokens()
     resolve_hidden(hidden, run.table.atlas)
     n = len(run.table.images) * len(run.views)
@@ -237,3 +258,18 @@ class MovieParams(BaseModel):
         from brainpainter.media.timeline import plan_frames
 
         return len(plan_frames(list(range(n_keys)), self.frames_per_step, self.easing, self.hold))
+
+
+def map_check(data: bytes, name: str, options: RenderOptions, *,
+              scratch: Path | None = None) -> dict[str, Any]:
+    """The report of a map upload (:func:`brainpainter.web.maps.base_report`) with the colour scale of
+    `options` (the page's colour bar; the threshold band is marked by ``threshold``)."""
+    from brainpainter.table.report import colour_bar
+    from brainpainter.web.maps import base_of
+
+    report = base_of(data)
+    scale = prepare(data, name, options, scratch=scratch).run.scale
+    report["values"]["scale"] = {"name": scale.name, "vmin": scale.vmin, "vmax": scale.vmax,
+                                 "center": scale.center, "threshold": getattr(scale, "threshold", None),
+                                 **colour_bar(scale)}
+    return report

@@ -241,3 +241,36 @@ def preview_settings(settings: Any, max_width: int) -> Any:
         w, h = max_width, max(16, round(h * max_width / w))
     return replace(settings, width=w, height=h, quality="default" if settings.quality == "high" else
                    settings.quality)
+
+
+def preview_request(data: bytes, name: str, options: Any, row: int | str, view: str, config: ServerConfig,
+                    scratch: Any = None) -> dict[str, Any]:
+    """The preview process's request for `row` (index or image name) of an upload from `view`.
+
+    `options` is a :class:`brainpainter.web.options.RenderOptions`; a map's colours are per vertex
+    (``coloring`` ``"vertices"``). Raises the CLI's one-line errors.
+    """
+    import re
+
+    from brainpainter.errors import BrainPainterError
+    from brainpainter.rendering.painter import region_colors
+    from brainpainter.rendering.views import parse_views
+    from brainpainter.web.options import prepare
+
+    prep = prepare(data, name, options, max_pixels=config.max_pixels, scratch=scratch)
+    table = prep.run.table
+    if isinstance(row, int) or re.fullmatch(r"[0-9]{1,9}", row):
+        i = int(row)
+        if not 0 <= i < len(table.images):
+            raise BrainPainterError(f"row must be 0..{len(table.images) - 1}; {row} was given.")
+    elif row in table.images:
+        i = table.images.index(row)
+    else:
+        raise BrainPainterError(f"row {str(row)[:100]!r} is not an image of the table; it has "
+                                f"{list(table.images[:5])}{'...' if len(table.images) > 5 else ''}.")
+    views = parse_views(view)
+    colors = (prep.run.colors(i) if prep.coloring == "vertices"  # type: ignore[attr-defined]
+              else region_colors(table.row(i), table.atlas, prep.run.scale))
+    return {"atlas": table.atlas.name, "surface": options.surface, "hidden": prep.hidden,
+            "settings": preview_settings(prep.run.settings, config.preview_max_width),
+            "colors": colors, "view": views[0], "coloring": prep.coloring}

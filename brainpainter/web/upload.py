@@ -6,18 +6,22 @@ enforces the size limit and the deadline). The table is then checked as
 ``brainpainter check`` does, with the server's row limit; a spreadsheet
 (``.xlsx``, a zip file) is read in a process of its own that is killed after
 ``parse_time_limit_s``, because reading a large sheet costs seconds of CPU
-that a thread could not be stopped from spending.
+that a thread could not be stopped from spending. A map upload (one or two
+hemisphere files, or a NIfTI volume: :mod:`brainpainter.web.maps`) is read the
+same way, in a process whose data memory is bounded too.
 """
 
 from __future__ import annotations
 
 import multiprocessing as mp
 import os
+import shutil
 import tempfile
 from pathlib import Path
 from typing import Any
 
 from brainpainter.errors import BrainPainterError
+from brainpainter.web.maps import MAGIC
 
 #: Form encodings a browser may send cross-origin without asking first (a CORS "simple" request);
 #: uploads must come with another content type, which only the page itself (same origin) can send.
@@ -74,6 +78,9 @@ def check_upload(data: bytes, name: str, options: dict[str, Any], *, max_rows: i
     spreadsheets in a spawned process that is killed after `time_limit_s` seconds.
     """
     check_rows(data, name, max_rows)
+    if data.startswith(MAGIC):  # only the server writes map bundles
+        raise BrainPainterError(f"{name!r} is not a table (it starts as a stored map upload); upload the "
+                                "table or map files themselves.")
     if not is_spreadsheet(data):
         return check_table(data, name, options, max_rows)
     ctx = mp.get_context("spawn")
@@ -143,3 +150,112 @@ def _check_main(conn: Any, data: bytes, name: str, options: dict[str, Any], max_
                             "again."))
     finally:
         conn.close()
+
+
+# -- maps (brainpainter.web.maps): read in a process of their own, bounded in time and memory -------
+def read_map_upload(path: Path, names: list[str], sizes: list[int], hemis: list[str], folder: Path, *,
+                    max_images: int, time_limit_s: float) -> tuple[bytes, tuple[dict[str, Any], list[str]]]:
+    """The received body at `path` (the files `names`) read as a map: ``(bundle, (report, images))``.
+
+    See :func:`brainpainter.web.maps.split_body`, :func:`~brainpainter.web.maps.hemispheres` and
+    :func:`read_map_files`.
+    """
+    from brainpainter.web.maps import hemispheres, split_body
+
+    parts = split_body(path.read_bytes(), names, sizes)
+    sides = hemispheres(parts, hemis)
+    bundle, report, images = read_map_files(parts, sides, folder, max_images=max_images,
+                                            time_limit_s=time_limit_s)
+    return bundle, (report, images)
+
+
+def read_map_files(parts: list[tuple[str, bytes]], hemis: list[str | None], folder: Path, *,
+                   max_images: int, time_limit_s: float) -> tuple[bytes, dict[str, Any], list[str]]:
+    """Read map files into a bundle: ``(bundle bytes, report, image names)``; raises the first error.
+
+    Parameters
+    ----------
+    parts : list of (str, bytes)
+        The client's file names and contents.
+    hemis : list of str or None
+        From :func:`brainpainter.web.maps.hemispheres`.
+    folder : Path
+        A private folder for the work (under the server's data folder; removed after).
+    max_images : int
+        Most images (volumes of a 4-D file, data arrays of a GIfTI) one upload may hold.
+    time_limit_s : float
+        The reading process is killed after this many seconds.
+    """
+    from brainpainter.web.maps import file_name
+
+    work = Path(tempfile.mkdtemp(prefix="maps-", dir=folder))
+    try:
+        entries = []
+        for k, ((name, data), hemi) in enumerate(zip(parts, hemis, strict=True)):
+            sub = work / f"in{k}"
+            sub.mkdir()
+            (sub / file_name(name)).write_bytes(data)
+            entries.append((hemi, str(sub / file_name(name))))
+        ctx = mp.get_context("spawn")
+        parent, child = ctx.Pipe(duplex=False)
+        proc = ctx.Process(target=_map_main, args=(child, str(work), entries, max_images), daemon=True,
+                           name="brainpainter-read-map")
+        proc.start()
+        child.close()
+        shown = " + ".join(file_name(n) for n, _ in parts)
+        try:
+            if not parent.poll(time_limit_s):
+                raise BrainPainterError(
+                    f"reading {shown!r} took longer than this server's limit of {time_limit_s:g} s; upload a "
+                    "smaller map (fewer images or volumes), or render it with 'brainpainter render' on your "
+                    "own computer.")
+            status, payload = parent.recv()
+        except (EOFError, OSError):
+            raise BrainPainterError(f"reading {shown!r} stopped unexpectedly (too large for this server?); "
+                                    "upload a smaller map.") from None
+        finally:
+            parent.close()
+            if proc.is_alive():
+                proc.kill()
+            proc.join(timeout=5)
+        if status != "ok":
+            raise BrainPainterError(payload)
+        report, images = payload
+        return (work / "bundle.bin").read_bytes(), report, images
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+def _map_main(conn: Any, work: str, entries: list[tuple[str | None, str]], max_images: int) -> None:
+    """Entry point of the map reading process: send ``("ok", (report, images))`` or ``("error", line)``."""
+    from brainpainter.web.maps import build_bundle
+    from brainpainter.web.worker import die_with_parent
+
+    die_with_parent()
+    _limit_memory()
+    try:
+        conn.send(("ok", build_bundle(Path(work), [(h, Path(p)) for h, p in entries], max_images)))
+    except BrainPainterError as exc:
+        line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        conn.send(("error", line.replace(work + "/", "").replace(work, "")))
+    except MemoryError:
+        conn.send(("error", "the map needs more memory than this server gives one upload; upload a smaller "
+                            "map (fewer images or volumes, or a coarser volume)."))
+    except Exception as exc:
+        conn.send(("error", f"cannot read the map ({type(exc).__name__}); check that the file is what its "
+                            "name says (docs/maps.md lists the formats)."))
+    finally:
+        conn.close()
+
+
+def _limit_memory() -> None:
+    try:
+        import resource
+
+        _, hard = resource.getrlimit(resource.RLIMIT_DATA)
+        from brainpainter.web.maps import MEMORY_LIMIT
+
+        limit = MEMORY_LIMIT if hard == resource.RLIM_INFINITY else min(MEMORY_LIMIT, hard)
+        resource.setrlimit(resource.RLIMIT_DATA, (limit, hard))
+    except (ImportError, ValueError, OSError):  # not on this platform: the time limit remains
+        pass

@@ -47,13 +47,15 @@ class PainterCache:
         self.size = size
         self._painters: OrderedDict[tuple[Any, ...], Any] = OrderedDict()
 
-    def get(self, atlas: Any, surface: str, hidden: list[str], settings: Any) -> Any:
+    def get(self, atlas: Any, surface: str, hidden: list[str], settings: Any,
+            coloring: str = "regions") -> Any:
+        """A loaded painter; `coloring` ``"vertices"`` for a map run (a per-vertex scene)."""
         from brainpainter.rendering.painter import Painter
 
-        key = (atlas.name, surface, tuple(sorted(hidden)), settings)
+        key = (atlas.name, surface, tuple(sorted(hidden)), settings, coloring)
         painter = self._painters.get(key)
         if painter is None:
-            painter = Painter(atlas, "fsaverage", surface, hidden, settings, self.renderer)
+            painter = Painter(atlas, "fsaverage", surface, hidden, settings, self.renderer, coloring=coloring)
             painter.load()
             self._painters[key] = painter
             while len(self._painters) > self.size:
@@ -202,7 +204,20 @@ def _prepared(folder: Path, job: dict[str, Any]) -> Any:
     from brainpainter.web.options import RenderOptions, prepare
 
     data = (folder / "input.bin").read_bytes()
-    return data, prepare(data, job["input_name"], RenderOptions(**job["options"]))
+    return data, prepare(data, job["input_name"], RenderOptions(**job["options"]), scratch=folder)
+
+
+def _media_input(folder: Path, data: bytes, name: str) -> Any:
+    """What figure and movie read: the table as a named stream, or a map's files (kept in the job's
+    folder while the job runs)."""
+    from brainpainter.web.maps import extract, is_bundle
+    from brainpainter.web.options import table_stream
+
+    if not is_bundle(data):
+        return table_stream(data, name)
+    target = folder / "maps"
+    shutil.rmtree(target, ignore_errors=True)
+    return extract(data, target)
 
 
 def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
@@ -215,7 +230,7 @@ def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
     _, prep = _prepared(folder, job)
     run = prep.run
     table = run.table
-    painter = painters.get(table.atlas, prep.options.surface, prep.hidden, run.settings)
+    painter = painters.get(table.atlas, prep.options.surface, prep.hidden, run.settings, prep.coloring)
     settings = run_settings(run, painter)
     plan = run.items(range(len(table.images)))
     names = [f"{prep.file_names[i]}_{view.name}.png" for i, view in plan]
@@ -336,14 +351,14 @@ def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
 
 def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
     from brainpainter.media.figure import make_figure
-    from brainpainter.web.options import FigureParams, table_stream
+    from brainpainter.web.options import FigureParams
 
     data, prep = _prepared(folder, job)
     p = job["params"]
     name = f"figure.{p.get('format', 'pdf')}"
     tick(0)
     params = FigureParams(**p)  # the CLI's defaults for what the job did not give
-    make_figure(table_stream(data, job["input_name"]), out=folder / "out" / name, grid=params.grid,
+    make_figure(_media_input(folder, data, job["input_name"]), out=folder / "out" / name, grid=params.grid,
                 title=params.title or None, label=params.label or None, dpi=params.dpi,
                 fig_width=params.fig_width, font_size=params.font_size, on_progress=tick,
                 **_media_kwargs(prep, painters.renderer))
@@ -352,7 +367,7 @@ def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
 
 def _run_movie(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
     from brainpainter.media.movie import make_movie
-    from brainpainter.web.options import MovieParams, table_stream
+    from brainpainter.web.options import MovieParams
 
     data, prep = _prepared(folder, job)
     p = job["params"]
@@ -360,7 +375,7 @@ def _run_movie(folder: Path, job: dict[str, Any], painters: PainterCache, tick: 
     tick(0)
     params = MovieParams(**p)  # the CLI's defaults for what the job did not give
     kwargs = _media_kwargs(prep, painters.renderer)  # progress: per frame (on_progress), not 0/1
-    make_movie(table_stream(data, job["input_name"]), out=folder / "out" / name,
+    make_movie(_media_input(folder, data, job["input_name"]), out=folder / "out" / name,
                frames_per_step=params.frames_per_step, easing=params.easing, hold=params.hold, fps=params.fps,
                title=params.title or None, label=params.label or None, on_progress=tick, **kwargs)
     return [name]
@@ -373,7 +388,9 @@ _KIND_RUNNERS = {"images": _run_images, "figure": _run_figure, "movie": _run_mov
 def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int, int]) -> None:
     """Entry point of the preview process: answer render requests on `conn` until the parent is gone.
 
-    A request is ``{"atlas", "surface", "hidden", "settings", "colors", "view"}``; the answer is
+    A request is ``{"atlas", "surface", "hidden", "settings", "colors", "view", "coloring"}``
+    (``colors`` a :class:`~brainpainter.rendering.geometry.VertexColors` when ``coloring`` is
+    ``"vertices"``); the answer is
     ``("ok", png_bytes, milliseconds)`` or ``("error", one_line_message, 0)``.
     """
     _set_threads(lp_threads)
@@ -397,7 +414,8 @@ def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int
             t0 = time.perf_counter()
             try:
                 atlas = get_atlas(req["atlas"])
-                painter = painters.get(atlas, req["surface"], req["hidden"], req["settings"])
+                painter = painters.get(atlas, req["surface"], req["hidden"], req["settings"],
+                                       req.get("coloring", "regions"))
                 pixels = painter.paint_colors(req["colors"], req["view"])
                 conn.send(("ok", png_bytes(pixels), int((time.perf_counter() - t0) * 1000)))
             except BrainPainterError as exc:

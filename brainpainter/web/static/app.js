@@ -3,9 +3,10 @@
 "use strict";
 
 const $ = (id) => document.getElementById(id);
-const state = { uploadId: null, file: null, name: null, report: null, meta: null,
+const state = { uploadId: null, files: null, name: null, report: null, meta: null, isMap: false,
                 previewCtl: null, previewTimer: null, previewUrl: null, seq: 0, scale: null };
 const DEFAULT_VIEWS = ["lateral-left", "medial-left", "subcortical"];
+const MAP_VIEWS = ["lateral-left", "medial-left", "lateral-right", "medial-right"];  // a map's default
 
 function el(tag, attrs = {}, ...children) {
   const node = document.createElement(tag);
@@ -105,6 +106,7 @@ function viewIcon(name) {
 
 function fillForm(meta) {
   for (const a of meta.atlases) $("atlas").append(el("option", { value: a, text: a }));
+  for (const a of meta.atlases) $("outline").append(el("option", { value: a, text: a }));
   for (const c of meta.cmaps) $("cmap").append(el("option", { value: c, text: c, selected: c === "viridis" }));
   const views = $("views");
   for (const v of meta.views) {
@@ -145,25 +147,41 @@ function options() {
     hide: [...hide, ...more], background: $("background").value, transparent: $("transparent").checked,
     size: $("size").value.trim(), quality: $("quality").value, shading: $("shading").value,
     lighting: $("lighting").value, glass_opacity: Number($("glass_opacity").value || 0),
+    underlay: $("underlay").value, threshold: numberOrNull("threshold"), outline: textOrNull("outline"),
+    outline_threshold: $("outline_threshold").checked, outline_width: Number($("outline_width").value || 0),
+    outline_color: $("outline_color").value,
   };
 }
 
 // -- upload and the check report ----------------------------------------------------------
-async function upload(blob, name) {
-  state.file = blob; state.name = name;
-  $("file-name").textContent = name;
-  showError("");
+// `files`: one table, or a map (one or two files: lh and rh, or one volume), sent one after the
+// other in one body with their names and sizes; the server tells a map from a table by the names.
+const GRADIENT = "white,yellow,orange,red";
+
+async function upload(files) {
+  state.files = files;
+  const names = files.map((f) => f.name);
+  state.name = names.join(" + ");
+  $("file-name").textContent = state.name;
+  showError(""); fieldError("");
   const o = options();
-  const q = new URLSearchParams({ name });
+  const q = new URLSearchParams();
+  for (const n of names) q.append("name", n);
+  if (files.length > 1) for (const f of files) q.append("size", String(f.size));
   for (const k of ["atlas", "image_column", "value", "region_column"]) if (o[k]) q.set(k, o[k]);
   if (o.strict) q.set("strict", "true");
   setReady(false);
   $("report").textContent = "Checking…";
   try {
-    const res = await api(`/api/uploads?${q}`, { method: "POST", body: blob,
+    const res = await api(`/api/uploads?${q}`, { method: "POST", body: new Blob(files.map((f) => f.blob)),
                                                  headers: { "content-type": "application/octet-stream" } });
     const j = await res.json();
     state.uploadId = j.upload_id; state.report = j.report;
+    state.isMap = j.report.kind === "map";
+    // a map's own default colours (viridis, RdBu_r for signed values) unless the user chose a gradient
+    if (state.isMap && $("gradient").value === GRADIENT && $("use-gradient").checked) $("gradient").value = "";
+    if (!state.isMap && $("gradient").value === "") $("gradient").value = GRADIENT;
+    setDefaultViews(state.isMap ? MAP_VIEWS : DEFAULT_VIEWS);
     showReport(j.report);
     fillRows(j.images, j.report.n_images);
     setReady(true);
@@ -175,6 +193,14 @@ async function upload(blob, name) {
   }
 }
 
+// the default views of a map (both hemispheres) or a table, unless the user chose others
+function setDefaultViews(wanted) {
+  const boxes = [...document.querySelectorAll('input[name="views"]')];
+  const now = boxes.filter((b) => b.checked).map((b) => b.value).join(",");
+  if (now !== DEFAULT_VIEWS.join(",") && now !== MAP_VIEWS.join(",")) return;
+  for (const b of boxes) b.checked = wanted.includes(b.value);
+}
+
 function showReport(r) {
   const box = $("report");
   box.replaceChildren();
@@ -183,6 +209,7 @@ function showReport(r) {
   box.append(el("p", { class: "ok", text: `OK: ${r.summary}` }));
   const dl = el("dl");
   const add = (k, v) => dl.append(el("dt", { text: k }), el("dd", { text: v }));
+  if (r.kind === "map") { showMapReport(r, box, dl, add); return; }
   for (const i of r.inputs) { add("format", i.format); add("shape", i.shape.description); }
   add("atlas", r.atlas.name + (r.atlas.inferred ? ` (inferred: ${r.atlas.reason})` : " (given)"));
   add("images", `${r.n_images}: ${r.images.slice(0, 6).join(", ")}${r.n_images > 6 ? ", …" : ""}`);
@@ -205,6 +232,20 @@ function showReport(r) {
       + (n.region_of_atlas && n.region_of_atlas.length ? ` (a region of ${n.region_of_atlas.join(", ")})` : "")));
   list("Set aside (not regions)", r.names.filter((n) => n.status === "ignored").map((n) => `${n.name}: ${n.reason}`));
   list("Notes", [...r.values.hints, ...r.notes]);
+}
+
+function showMapReport(r, box, dl, add) {
+  add("files", r.files.join(" + "));
+  add("surface", Object.entries(r.surfaces).map(([h, s]) => `${h}: ${s}`).join(", "));
+  add("images", `${r.n_images}: ${r.images.slice(0, 6).join(", ")}${r.n_images > 6 ? ", …" : ""}`);
+  if (r.categories) add("labels", `${r.categories.length}: ${r.categories.slice(0, 8).join(", ")}…`);
+  if (r.values.range) add("values", `${r.values.range[0].toPrecision(4)} .. ${r.values.range[1].toPrecision(4)}`);
+  if (r.values.scale) {
+    const t = r.values.scale.threshold;
+    add("scale", `${r.values.scale.name}: ${r.values.scale.vmin} .. ${r.values.scale.vmax}` +
+        (t ? ` (|value| < ${t} shows the underlay)` : ""));
+  }
+  box.append(dl);
 }
 
 function fillRows(images, total) {
@@ -337,23 +378,25 @@ function wire() {
   drop.addEventListener("keydown", (e) => { if (e.key === "Enter" || e.key === " ") { e.preventDefault(); file.click(); } });
   drop.addEventListener("dragover", (e) => { e.preventDefault(); drop.classList.add("over"); });
   drop.addEventListener("dragleave", () => drop.classList.remove("over"));
+  const picked = (list) => [...list].map((f) => ({ blob: f, name: f.name, size: f.size }));
   drop.addEventListener("drop", (e) => {
     e.preventDefault(); drop.classList.remove("over");
-    const f = e.dataTransfer.files[0];
-    if (f) upload(f, f.name);
+    if (e.dataTransfer.files.length) upload(picked(e.dataTransfer.files));
   });
-  file.addEventListener("change", () => { if (file.files[0]) upload(file.files[0], file.files[0].name); });
+  file.addEventListener("change", () => { if (file.files.length) upload(picked(file.files)); });
   $("paste-go").addEventListener("click", () => {
     const text = $("paste").value;
-    upload(new Blob([text], { type: "text/plain" }), text.includes("\t") ? "pasted.tsv" : "pasted.csv");
+    const blob = new Blob([text], { type: "text/plain" });
+    upload([{ blob, name: text.includes("\t") ? "pasted.tsv" : "pasted.csv", size: blob.size }]);
   });
   $("example").addEventListener("click", async () => {
     const res = await api("/static/brainpainter_dk.csv");
-    upload(await res.blob(), "brainpainter_dk.csv");
+    const blob = await res.blob();
+    upload([{ blob, name: "brainpainter_dk.csv", size: blob.size }]);
   });
   // table options: upload again (the check report changes); other options: new preview
   for (const node of document.querySelectorAll("[data-table]")) {
-    node.addEventListener("change", () => { if (state.file) upload(state.file, state.name); });
+    node.addEventListener("change", () => { if (state.files && !state.isMap) upload(state.files); });
   }
   for (const r of document.querySelectorAll('input[name="scale"]')) {
     r.addEventListener("change", () => {

@@ -1,0 +1,354 @@
+"""Map uploads of the web API: per-vertex maps (one file per hemisphere) and MNI152 volumes.
+
+An upload is a map when its file name says so
+(:func:`brainpainter.maps.inputs.is_map_input`: ``lh.thickness``, ``.mgh``/``.mgz``,
+``.func.gii``, ``.npy``, ``.annot``...) or when it is a NIfTI volume (``.nii``,
+``.nii.gz``, 3-D or 4-D, projected onto fsaverage by
+:func:`brainpainter.maps.volume.project_volume`). Two files (lh and rh) travel in
+one request body, one after the other, with their names and sizes in the query.
+
+The files are read (:func:`build_bundle`) in a process of its own, started by
+:func:`brainpainter.web.upload.read_map_upload` and killed after the server's
+parse time limit, with its data memory bounded (:data:`MEMORY_LIMIT`);
+compressed files (``.gz``, ``.mgz``) are inflated to disk, at most
+:data:`MAX_INFLATED` bytes. What is kept is a *bundle* (:data:`MAGIC`, one JSON
+line, then the files): the map files as read (a volume: its projection, one
+``.npy`` per hemisphere), so that previews and jobs read them again with
+:func:`brainpainter.maps.inputs.read_maps`, as the CLI reads ``--lh``/``--rh``.
+Client file names are only labels: they are made safe (:func:`file_name`) and
+every file is written into a fresh private folder.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import gzip
+import json
+import shutil
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path, PurePosixPath
+from typing import Any
+
+from brainpainter.errors import BrainPainterError
+
+#: The first bytes of a stored map upload.
+MAGIC = b"BRAINPAINTER-MAPS/1\n"
+#: NIfTI volumes (one file, MNI152 space), projected onto the cortex.
+VOLUME_SUFFIXES = (".nii", ".nii.gz")
+#: Compound endings kept when a client's file name is made safe.
+_ENDINGS = (".func.gii", ".shape.gii", ".label.gii", ".nii.gz")
+#: Largest size a compressed file may inflate to (bytes).
+MAX_INFLATED = 1 << 30
+#: Largest number of voxels of one volume of a NIfTI file (e.g. 512 x 512 x 512).
+MAX_VOXELS = 1 << 27
+#: Data memory (bytes) of the process that reads a map upload.
+MEMORY_LIMIT = 4 << 30
+_HEADER_LIMIT = 1 << 16
+
+
+def is_map_upload(names: list[str]) -> bool:
+    """Whether an upload of files named `names` is a map (or volume) rather than a region table."""
+    from brainpainter.maps.inputs import is_map_input
+
+    return any(is_map_input(n) or n.lower().endswith(VOLUME_SUFFIXES) for n in names)
+
+
+def is_bundle(data: bytes) -> bool:
+    """Whether stored upload bytes are a map bundle (else a table)."""
+    return data.startswith(MAGIC)
+
+
+def file_name(name: str) -> str:
+    """A client's file name made safe for a file in a private folder: no path, no leading dot.
+
+    ``../x/lh.thickness`` -> ``lh.thickness``; ``my map.func.gii`` -> ``my_map.func.gii``.
+    """
+    from brainpainter.io.output import safe_name
+
+    base = PurePosixPath(name.replace("\\", "/")).name
+    lower = base.lower()
+    ending = next((e for e in _ENDINGS if lower.endswith(e)), PurePosixPath(base).suffix.lower())
+    stem = base[: len(base) - len(ending)] if ending else base
+    stem = safe_name(stem).lstrip("._")[:80] or "map"
+    return stem + ("".join(ch for ch in ending if ch.isalnum() or ch == ".") if ending else "")
+
+
+def split_body(data: bytes, names: list[str], sizes: list[int]) -> list[tuple[str, bytes]]:
+    """The files of a request body: `names` with `sizes` bytes each, one after the other.
+
+    Raises
+    ------
+    BrainPainterError
+        When the sizes do not add up to the body, or more than two files are given.
+    """
+    if len(names) > 2:
+        raise BrainPainterError(f"{len(names)} files were sent; a map upload is one file, or two (lh and "
+                                "rh). Upload one map (or one volume) at a time.")
+    if len(names) == 1 and not sizes:
+        return [(names[0], data)]
+    if len(sizes) != len(names) or any(s < 0 for s in sizes) or sum(sizes) != len(data):
+        raise BrainPainterError(
+            f"the body has {len(data)} bytes but the sizes given are {sizes} for files {names}; give one "
+            "size per name (size=...), in the order of the files in the body.")
+    parts, start = [], 0
+    for n, s in zip(names, sizes, strict=True):
+        parts.append((n, data[start:start + s]))
+        start += s
+    return parts
+
+
+def hemispheres(parts: list[tuple[str, bytes]], hemis: list[str]) -> list[str | None]:
+    """The hemisphere of each file: given (``hemi=lh``), else from its name; None for one volume.
+
+    Raises
+    ------
+    BrainPainterError
+        A name that says no hemisphere, or two files of the same hemisphere.
+    """
+    from brainpainter.maps.inputs import pair_of
+
+    if hemis and len(hemis) != len(parts):
+        raise BrainPainterError(f"hemi was given {len(hemis)} time(s) for {len(parts)} file(s); give one "
+                                "hemi (lh or rh) per file, or none.")
+    out: list[str | None] = []
+    for k, (name, _) in enumerate(parts):
+        safe = file_name(name)
+        if not is_map_upload([safe]):
+            raise BrainPainterError(
+                f"{safe!r} is not a map file (maps are lh.thickness, .mgh/.mgz, .func.gii, .npy, .annot, "
+                ".label.gii, or one .nii/.nii.gz volume); upload one table at a time, or one or two maps.")
+        if hemis:
+            if hemis[k] not in ("lh", "rh"):
+                raise BrainPainterError(f"hemi must be lh or rh; {hemis[k][:20]!r} was given.")
+            out.append(hemis[k])
+            continue
+        if len(parts) == 1 and safe.lower().endswith(VOLUME_SUFFIXES):
+            out.append(None)  # a volume, or a per-vertex NIfTI with lh/rh in its name: decided by its shape
+            continue
+        try:
+            found = pair_of(Path("/nonexistent-brainpainter-upload") / safe)
+        except BrainPainterError:
+            raise BrainPainterError(
+                f"cannot tell the hemisphere of {safe!r}: its name has no lh./rh., hemi-L/hemi-R or .L./.R.; "
+                "rename the file (e.g. lh." + safe + ") and upload it again.") from None
+        out.append(next(h for h, p in found.items() if p.name == safe))
+    given = [h for h in out if h is not None]
+    if len(set(given)) < len(given):
+        raise BrainPainterError(f"both files ({', '.join(file_name(n) for n, _ in parts)}) are the "
+                                f"{given[0]} hemisphere; upload one lh and one rh file.")
+    return out
+
+
+# -- reading (in the process that upload.read_map_upload starts) ------------------------------
+def inflate(path: Path) -> Path:
+    """`path` itself, or for ``.gz``/``.mgz`` its inflated copy beside it (``.nii``/``.mgh``).
+
+    Raises
+    ------
+    BrainPainterError
+        When it inflates to more than :data:`MAX_INFLATED` bytes, or is not gzip.
+    """
+    name = path.name
+    lower = name.lower()
+    if lower.endswith(".mgz"):
+        out = path.with_name(name[:-4] + ".mgh")
+    elif lower.endswith(".gz"):
+        out = path.with_name(name[:-3])
+    else:
+        return path
+    total = 0
+    try:
+        with gzip.open(path, "rb") as src, out.open("wb") as dst:
+            while block := src.read(1 << 20):
+                total += len(block)
+                if total > MAX_INFLATED:
+                    raise BrainPainterError(
+                        f"{name!r} inflates to more than {MAX_INFLATED >> 20} MB; this server reads at most "
+                        "that much. Upload a smaller map.")
+                dst.write(block)
+    except (OSError, EOFError, gzip.BadGzipFile) as exc:
+        raise BrainPainterError(f"{name!r} is not a readable gzip file ({type(exc).__name__}); upload the "
+                                "file as written by your software.") from None
+    path.unlink()
+    return out
+
+
+def build_bundle(work: Path, entries: list[tuple[str | None, Path]],
+                 max_images: int) -> tuple[dict[str, Any], list[str]]:
+    """Read the map files `entries` (hemisphere, path) and write ``work/bundle.bin``.
+
+    Returns
+    -------
+    (dict, list of str)
+        The upload's report (:func:`base_report`) and its image names.
+    """
+    names = [p.name for _, p in entries]
+    files = [(hemi, inflate(p)) for hemi, p in entries]
+    if len(files) == 1 and files[0][0] is None:
+        path = files[0][1]
+        shape = _nifti_shape(path)
+        if sum(s > 1 for s in shape[:3]) >= 3:
+            return _volume_bundle(work, path, names[0], shape, max_images)
+        try:  # a per-vertex NIfTI (N x 1 x 1): its hemisphere from its name
+            from brainpainter.maps.inputs import pair_of
+
+            files = [(next(iter(pair_of(path))), path)]
+        except BrainPainterError:
+            raise BrainPainterError(
+                f"{names[0]!r} holds one value per vertex (shape {list(shape)}) but its name says no "
+                "hemisphere; rename it (e.g. lh." + names[0] + ") and upload it again.") from None
+    return _surface_bundle(work, [(str(h), p) for h, p in files], names, max_images)
+
+
+def _nifti_shape(path: Path) -> tuple[int, ...]:
+    import nibabel as nib
+
+    try:
+        img = nib.Nifti1Image.from_filename(str(path))  # the header only: the data stay on disk
+    except Exception as exc:
+        raise BrainPainterError(f"cannot read {path.name!r} as NIfTI ({type(exc).__name__}); upload a .nii "
+                                "or .nii.gz volume in MNI152 space.") from None
+    return tuple(int(s) for s in img.shape)
+
+
+def _volume_bundle(work: Path, path: Path, shown: str, shape: tuple[int, ...],
+                   max_images: int) -> tuple[dict[str, Any], list[str]]:
+    import numpy as np
+
+    from brainpainter.maps.inputs import read_maps
+    from brainpainter.maps.volume import load_volume, project_volume
+
+    volume = load_volume(path)
+    n = volume.n_volumes
+    if n > max_images:
+        raise BrainPainterError(
+            f"{shown!r} holds {n} volumes; this server draws at most {max_images} images per upload. Upload "
+            "fewer volumes (e.g. split it with fslsplit), or render it with 'brainpainter render' on your "
+            "own computer.")
+    voxels = int(np.prod(volume.shape[:3]))
+    if voxels > MAX_VOXELS:
+        raise BrainPainterError(f"{shown!r} has {voxels} voxels per volume; this server reads at most "
+                                f"{MAX_VOXELS}. Resample it to 1 or 2 mm MNI152.")
+    projected = project_volume(path)
+    out = work / "out"
+    out.mkdir()
+    stored = []
+    for hemi, values in projected.items():
+        target = out / f"{hemi}.{file_name(volume.name)}.npy"
+        np.save(target, np.asarray(values, np.float32).reshape(n, -1), allow_pickle=False)
+        stored.append((hemi, target))
+    maps = read_maps({h: p for h, p in stored})
+    report = base_report(maps, "volume", [shown], f"volume: {shown} (MNI152, {'x'.join(map(str, shape))}) "
+                         f"projected onto fsaverage, {_images(maps.n_images)}")
+    _write_bundle(work / "bundle.bin", "volume", stored, report)
+    return report, list(maps.images)
+
+
+def _surface_bundle(work: Path, files: list[tuple[str, Path]], names: list[str],
+                    max_images: int) -> tuple[dict[str, Any], list[str]]:
+    from brainpainter.maps.inputs import read_maps
+    from brainpainter.maps.resolution import surface_of
+
+    order = sorted(files, key=lambda f: f[0])  # lh first
+    maps = read_maps({h: p for h, p in order})
+    if maps.n_images > max_images:
+        raise BrainPainterError(
+            f"the map holds {maps.n_images} images; this server draws at most {max_images} images per "
+            "upload. Upload fewer images, or render it with 'brainpainter render' on your own computer.")
+    surfaces = sorted({surface_of(v.shape[1]) for v in maps.values.values()})
+    kind = "label map" if maps.categories is not None else "map"
+    what = f"{len(maps.categories)} labels" if maps.categories is not None else _images(maps.n_images)
+    shown = [n for _, n in sorted(zip([h for h, _ in files], names, strict=True))]
+    report = base_report(maps, kind, shown, f"{kind}: {' + '.join(shown)}, {', '.join(surfaces)}, {what}")
+    _write_bundle(work / "bundle.bin", "surface", order, report)
+    return report, list(maps.images)
+
+
+def _images(n: int) -> str:
+    return f"{n} image{'s' if n != 1 else ''}"
+
+
+def base_report(maps: Any, kind: str, names: list[str], summary: str) -> dict[str, Any]:
+    """The report of a map upload (the page shows ``summary``: what was understood)."""
+    import numpy as np
+
+    from brainpainter.maps.resolution import surface_of
+
+    finite = maps.finite()
+    return {
+        "ok": True, "kind": "map", "map_kind": kind, "summary": summary, "files": names,
+        "hemis": sorted(maps.values), "surfaces": {h: surface_of(v.shape[1]) for h, v in maps.values.items()},
+        "n_images": maps.n_images, "images": list(maps.images[:20]),
+        "categories": None if maps.categories is None else list(maps.categories[:50]),
+        "values": {"range": [float(np.min(finite)), float(np.max(finite))] if finite.size else None,
+                   "scale": None, "hints": []},
+        "notes": [], "errors": [],
+    }
+
+
+def _write_bundle(target: Path, kind: str, files: list[tuple[str, Path]], report: dict[str, Any]) -> None:
+    header = {"kind": kind, "report": report,
+              "files": [{"hemi": h, "name": p.name, "size": p.stat().st_size} for h, p in files]}
+    with target.open("wb") as fh:
+        fh.write(MAGIC + json.dumps(header).encode() + b"\n")
+        for _, p in files:
+            with p.open("rb") as src:
+                shutil.copyfileobj(src, fh)
+
+
+# -- reading a stored bundle -----------------------------------------------------------------
+def bundle_header(data: bytes) -> tuple[dict[str, Any], int]:
+    """The JSON header of a bundle and where its files start."""
+    end = data.find(b"\n", len(MAGIC), len(MAGIC) + _HEADER_LIMIT)
+    try:
+        if end < 0:
+            raise ValueError("no header")
+        header = json.loads(data[len(MAGIC):end])
+        files = header["files"]
+        if sum(int(f["size"]) for f in files) != len(data) - end - 1 or not all(
+                f["hemi"] in ("lh", "rh") for f in files):
+            raise ValueError("sizes")
+    except (ValueError, KeyError, TypeError):
+        raise BrainPainterError("the stored map upload is damaged; upload the map again.") from None
+    return header, end + 1
+
+
+def base_of(data: bytes) -> dict[str, Any]:
+    """The report stored with a bundle."""
+    report: dict[str, Any] = bundle_header(data)[0]["report"]
+    return report
+
+
+@contextlib.contextmanager
+def extracted(data: bytes, where: Path | None = None) -> Iterator[dict[str, Path]]:
+    """The files of bundle `data` in a fresh private folder (under `where`), removed afterwards.
+
+    Yields
+    ------
+    dict
+        ``{"lh": path, "rh": path}`` (the hemispheres given), for
+        :func:`brainpainter.maps.inputs.read_maps`.
+    """
+    if where is not None:
+        where.mkdir(parents=True, exist_ok=True)
+    folder = Path(tempfile.mkdtemp(prefix="maps-", dir=where))
+    try:
+        yield extract(data, folder)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def extract(data: bytes, folder: Path) -> dict[str, Path]:
+    """Write the files of bundle `data` into `folder` (``folder/lh/NAME``...); their paths by hemisphere."""
+    header, start = bundle_header(data)
+    out: dict[str, Path] = {}
+    for f in header["files"]:
+        size = int(f["size"])
+        sub = folder / f["hemi"]
+        sub.mkdir(parents=True, exist_ok=True)
+        path = sub / file_name(str(f["name"]))
+        path.write_bytes(data[start:start + size])
+        start += size
+        out[f["hemi"]] = path
+    return out
