@@ -175,6 +175,9 @@ def test_volume_upload_is_projected_onto_the_cortex(server):
     left = colourful(preview(server, uid, "lateral-left", threshold=1))
     right = colourful(preview(server, uid, "lateral-right", threshold=1))
     assert left > 0.01 and right < 0.005, (left, right)
+    # the subcortical structures take the volume's mean inside each (0 here: the scale's first colour),
+    # as with --volume on the command line; without it they would be the neutral grey
+    assert colourful(preview(server, uid, "subcortical")) > 0.02
 
 
 # -- errors and limits ----------------------------------------------------------------------------

@@ -162,6 +162,8 @@ def is_map_input(data: Any) -> bool:
     if isinstance(data, Mapping):
         keys = {str(k).lower() for k in data}
         return bool(keys) and keys <= {"lh", "rh", "left", "right"}
+    if isinstance(data, VertexMaps):
+        return True
     return hasattr(data, "data") and hasattr(data.data, "parts")  # nilearn SurfaceImage
 
 
@@ -170,10 +172,11 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
 
     Parameters
     ----------
-    data : path, dict or nilearn SurfaceImage, optional
+    data : path, dict, nilearn SurfaceImage or VertexMaps, optional
         One file whose name says its hemisphere (its partner is found beside
         it), ``{"lh": ..., "rh": ...}`` (``left``/``right``) of arrays or paths,
-        or an MNI152 volume (a 3-D/4-D NIfTI file or nibabel image).
+        an MNI152 volume (a 3-D/4-D NIfTI file or nibabel image), or maps
+        already read (returned as they are).
     lh, rh : path or ndarray, optional
         One hemisphere each (``--lh FILE --rh FILE``).
     volume : path or nibabel image, optional
@@ -182,6 +185,8 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
     """
     from brainpainter.maps import volume as volumes
 
+    if isinstance(data, VertexMaps) and lh is None and rh is None and volume is None:
+        return data  # already read (e.g. kept by the web server)
     if volume is None and data is not None and volumes.is_volume(data):
         volume, data = data, None
     if volume is not None:

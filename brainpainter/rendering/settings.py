@@ -92,7 +92,7 @@ class RenderSettings:
         Width in pixels of the region borders drawn over the cortex as lines, the same in
         every image size (``--outline``); 0: none.
     outline_color : colour
-        Their colour, stored as sRGB 0-1 (default near-black; white reads well on dark maps).
+        Their colour, stored as sRGB 0-1 (default black; white reads well on dark maps).
     cortex : {"auto", "opaque", "glass", "hidden"}
         How the cortex views draw the cortex: ``opaque``; ``glass``, transparent
         in its colours (``glass_opacity``) with the white-matter tracts of the
@@ -114,8 +114,8 @@ class RenderSettings:
     outline_width: float = field(default=0.0, metadata={"help": (
         "Draw the atlas's region borders over the cortex as lines this many pixels wide, at any image "
         f"size (0: none; --outline ATLAS alone draws them {DEFAULT_OUTLINE_WIDTH:g} px wide).")})
-    outline_color: RGB = field(default=(0.05, 0.05, 0.05), metadata={
-        "help": "Colour of the region borders (--outline), e.g. black or white.", "cli_default": "#0d0d0d"})
+    outline_color: RGB = field(default=(0.0, 0.0, 0.0), metadata={
+        "help": "Colour of the region borders (--outline), e.g. black or white.", "cli_default": "black"})
     cortex: str = field(default="auto", metadata={"choices": CORTEX_MODES, "help": (
         "How cortex views (lateral, medial, dorsal, ...) draw the cortex: glass shows the --tracts inside "
         "a transparent cortex in its colours, hidden the tracts alone; auto: glass with --tracts, else "

@@ -216,8 +216,8 @@ def _volume_bundle(work: Path, path: Path, shown: str, shape: tuple[int, ...],
                    max_images: int) -> tuple[dict[str, Any], list[str]]:
     import numpy as np
 
-    from brainpainter.maps.inputs import read_maps
-    from brainpainter.maps.volume import load_volume, project_volume
+    from brainpainter.maps.inputs import read_volume
+    from brainpainter.maps.volume import load_volume
 
     volume = load_volume(path)
     n = volume.n_volumes
@@ -230,18 +230,19 @@ def _volume_bundle(work: Path, path: Path, shown: str, shape: tuple[int, ...],
     if voxels > MAX_VOXELS:
         raise BrainPainterError(f"{shown!r} has {voxels} voxels per volume; this server reads at most "
                                 f"{MAX_VOXELS}. Resample it to 1 or 2 mm MNI152.")
-    projected = project_volume(path)
+    maps = read_volume(path)  # the cortex by registration fusion, the structures by their means
     out = work / "out"
     out.mkdir()
     stored = []
-    for hemi, values in projected.items():
+    for hemi, values in maps.values.items():
         target = out / f"{hemi}.{file_name(volume.name)}.npy"
-        np.save(target, np.asarray(values, np.float32).reshape(n, -1), allow_pickle=False)
+        np.save(target, np.asarray(values, np.float32), allow_pickle=False)
         stored.append((hemi, target))
-    maps = read_maps({h: p for h, p in stored})
     report = base_report(maps, "volume", [shown], f"volume: {shown} (MNI152, {'x'.join(map(str, shape))}) "
                          f"projected onto fsaverage, {_images(maps.n_images)}")
-    _write_bundle(work / "bundle.bin", "volume", stored, report)
+    extra = {"images": list(maps.images),
+             "regions": {k: [float(x) for x in v] for k, v in (maps.regions or {}).items()}}
+    _write_bundle(work / "bundle.bin", "volume", stored, report, extra)
     return report, list(maps.images)
 
 
@@ -287,8 +288,9 @@ def base_report(maps: Any, kind: str, names: list[str], summary: str) -> dict[st
     }
 
 
-def _write_bundle(target: Path, kind: str, files: list[tuple[str, Path]], report: dict[str, Any]) -> None:
-    header = {"kind": kind, "report": report,
+def _write_bundle(target: Path, kind: str, files: list[tuple[str, Path]], report: dict[str, Any],
+                  extra: dict[str, Any] | None = None) -> None:
+    header = {"kind": kind, "report": report, **(extra or {}),
               "files": [{"hemi": h, "name": p.name, "size": p.stat().st_size} for h, p in files]}
     with target.open("wb") as fh:
         fh.write(MAGIC + json.dumps(header).encode() + b"\n")
@@ -352,3 +354,26 @@ def extract(data: bytes, folder: Path) -> dict[str, Path]:
         start += size
         out[f["hemi"]] = path
     return out
+
+
+def read_bundle(data: bytes, where: Path | None = None) -> Any:
+    """The maps of bundle `data`, read as the CLI reads them (a volume's image names and subcortical
+    means come from the bundle's header). The files are extracted under `where` and removed.
+
+    Returns
+    -------
+    brainpainter.maps.inputs.VertexMaps
+    """
+    import dataclasses
+
+    import numpy as np
+
+    from brainpainter.maps.inputs import read_maps
+
+    header, _ = bundle_header(data)
+    with extracted(data, where) as files:
+        maps = read_maps(files)
+    if "images" in header and len(header["images"]) == maps.n_images:
+        regions = {k: np.asarray(v, float) for k, v in header.get("regions", {}).items()}
+        maps = dataclasses.replace(maps, images=tuple(header["images"]), regions=regions or None)
+    return maps

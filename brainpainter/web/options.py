@@ -178,7 +178,7 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     from brainpainter.io.output import file_key, safe_name
     from brainpainter.rendering.painter import resolve_hidden
     from brainpainter.rendering.run import prepare_run
-    from brainpainter.web.maps import extracted, is_bundle
+    from brainpainter.web.maps import is_bundle, read_bundle
 
     kwargs = options.run_kwargs()
     if max_pixels is not None and kwargs["width"] * kwargs["height"] > max_pixels:
@@ -187,8 +187,7 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
             f"most {max_pixels} pixels per view. Choose a smaller size."
         )
     if is_bundle(data):  # a map: its files, read as the CLI reads --lh/--rh
-        with extracted(data, scratch) as files:
-            run = prepare_run(files, options.atlas, **kwargs)
+        run = prepare_run(read_bundle(data, scratch), options.atlas, **kwargs)
     else:
         run = prepare_run(table_stream(data, name), options.atlas, **kwargs)
     hidden = options.hide_tokens()

@@ -208,16 +208,13 @@ def _prepared(folder: Path, job: dict[str, Any]) -> Any:
 
 
 def _media_input(folder: Path, data: bytes, name: str) -> Any:
-    """What figure and movie read: the table as a named stream, or a map's files (kept in the job's
-    folder while the job runs)."""
-    from brainpainter.web.maps import extract, is_bundle
+    """What figure and movie read: the table as a named stream, or a map's maps (read from its files)."""
+    from brainpainter.web.maps import is_bundle, read_bundle
     from brainpainter.web.options import table_stream
 
     if not is_bundle(data):
         return table_stream(data, name)
-    target = folder / "maps"
-    shutil.rmtree(target, ignore_errors=True)
-    return extract(data, target)
+    return read_bundle(data, folder)
 
 
 def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
