@@ -197,6 +197,8 @@ class SceneGeometry:
     keys : tuple of str
         Region key of palette slots 3, 4, ... (hidden regions are not drawn and have no slot).
     slot_of : dict of str to int
+    part_keys : dict of str to tuple of str
+        Region keys each region-coloured part draws (``cortex-lh``: its regions), by part name.
     default_rgb : ndarray of float32, shape (n_slots, 3)
         Colour of each slot when the palette gives none.
     vertex_slots : dict of str to (int, int)
@@ -239,10 +241,14 @@ class SceneGeometry:
                 out[i] = slot_of[key]
             return out
 
+        region_slots: dict[str, frozenset[int]] = {}
+
         def add(*args: Any, **kwargs: Any) -> None:
             part = build_part(*args, occlusion=settings.shading != "flat", **kwargs)
             if part is not None:
                 parts.append(part)
+                # the region slots of its faces (args: name, kind, hemi, vertices, faces, face_slot, ...)
+                region_slots[part.name] = frozenset(int(i) for i in np.unique(args[5]) if i >= first_key)
 
         for hemi in HEMIS:
             cm = meshes[hemi]
@@ -280,6 +286,11 @@ class SceneGeometry:
         self.parts: tuple[PartGeometry, ...] = tuple(parts)
         self.keys: tuple[str, ...] = tuple(keys)
         self.slot_of = slot_of
+        key_of = {slot: key for key, slot in slot_of.items()}
+        #: region keys each (cortex, subcortical or glass) part draws, by part name, in slot order
+        self.part_keys: dict[str, tuple[str, ...]] = {
+            name: tuple(key_of[i] for i in sorted(slots) if i in key_of)
+            for name, slots in region_slots.items()}
         self.default_rgb = np.asarray(defaults, dtype=np.float32)
 
     @staticmethod
