@@ -85,6 +85,23 @@ def test_without_the_package_one_line_says_how_to_get_it(monkeypatch):
         open_local_atlas("allen_mouse_25um")
 
 
+def test_without_the_package_the_command_fails_with_one_line_and_adds_nothing(monkeypatch, tmp_path):
+    """Runs everywhere (CI does not install brainglobe-atlasapi: see docs/atlases.md for why)."""
+    from brainpainter.atlas.registry import atlases_dir
+    from brainpainter.cli.main import main
+
+    monkeypatch.setitem(sys.modules, "brainglobe_atlasapi", None)
+    runner = CliRunner()
+    with runner.isolation() as (out, err, _):
+        with pytest.raises(SystemExit) as exc:
+            main(["atlas", "add", "allen", "--brainglobe", "allen_mouse_25um", "--brainglobe-dir",
+                  str(tmp_path)])
+    text = (err.getvalue() if err else out.getvalue()).decode()
+    assert exc.value.code == 2 and len(text.strip().splitlines()) == 1 and "Traceback" not in text, text
+    assert "brainglobe-atlasapi" in text and "pip install" in text, text
+    assert not (atlases_dir() / "allen").exists() and "allen" not in registry.atlases.names()
+
+
 def test_an_atlas_not_on_this_machine_is_not_downloaded(tmp_path):
     pytest.importorskip("brainglobe_atlasapi")
     with pytest.raises(BrainPainterError, match="brainglobe install -a allen_mouse_25um"):

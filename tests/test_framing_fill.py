@@ -47,7 +47,8 @@ def test_the_binding_side_fills_the_image_less_the_margin_and_the_brain_is_centr
     w, h = size
     fill = 1 / (1 + 2 * framing.MARGIN)
     for view in PRESETS.values():
-        px = framing.to_pixels(np.vstack([p.hull for p in human.visible(view)]), human.camera(view, w / h), w, h)
+        hull = np.vstack([p.hull for p in human.visible(view)])
+        px = framing.to_pixels(hull, human.camera(view, w / h), w, h)
         fw, fh = np.ptp(px[:, 0]) / w, np.ptp(px[:, 1]) / h
         assert max(fw, fh) == pytest.approx(fill, abs=1e-6), view.name  # whichever binds
         assert fw <= fill + 1e-6 and fh <= fill + 1e-6, view.name
