@@ -130,6 +130,11 @@ def build_brainglobe_atlas(name: str, atlas_name: str, *, out: Path, brainglobe_
     flip = np.linalg.det(to_ras) < 0
 
     def load(acronym: str) -> tuple[NDArray[Any], NDArray[Any]] | None:
+        file = bg.structures[acronym].get("mesh_filename")
+        if file is not None and not Path(file).is_file():
+            # format 3 fetches a mesh from BrainGlobe's server when first asked for it: never here
+            not_here.append(acronym)
+            return None
         try:
             v, f = _mesh_arrays(bg.mesh_from_structure(acronym))
         except Exception:  # no mesh for this structure
@@ -138,17 +143,27 @@ def build_brainglobe_atlas(name: str, atlas_name: str, *, out: Path, brainglobe_
         return v, (f[:, ::-1] if flip else f)
 
     regions: list[RegionMesh] = []
-    skipped = []
+    skipped: list[str] = []
+    not_here: list[str] = []
     for s in chosen:
         if progress is not None:
             progress(s["acronym"])
         got = load(s["acronym"])
         if got is None or not len(got[1]):
-            skipped.append(s["acronym"])
+            if s["acronym"] not in not_here:
+                skipped.append(s["acronym"])
             continue
         regions.append(RegionMesh(Path(f"{s['id']}.obj"), s["acronym"], "bilateral", "structure", got[0],
                                   got[1], (s["name"],) if s["name"] != s["acronym"] else ()))
+    # brainglobe-atlasapi 3 installs an atlas without meshes and fetches each on first use
+    fetch = (f"on a machine with internet, BrainGlobeAtlas({atlas_name!r}).mesh_from_structure(ACRONYM) "
+             "fetches each one (brainglobe-atlasapi); then copy the BrainGlobe folder here")
     if not regions:
+        if not_here:
+            raise BrainPainterError(
+                f"none of the chosen structures of {atlas_name!r} has its mesh on this machine "
+                f"({len(not_here)} not fetched: {', '.join(not_here[:5])}); brainpainter does not download; "
+                + fetch)
         raise BrainPainterError(f"none of the chosen structures of {atlas_name!r} has a mesh; choose others "
                                 "with --structures or --depth")
     every = np.concatenate([r.vertices for r in regions])
@@ -173,6 +188,9 @@ def build_brainglobe_atlas(name: str, atlas_name: str, *, out: Path, brainglobe_
     report[1] = f"orientation: BrainGlobe {origin!r} (axes increase towards {letters}) turned into RAS"
     if skipped:
         report.append(f"no mesh for {len(skipped)} structure(s): {', '.join(skipped[:10])}")
+    if not_here:
+        report.append(f"mesh not on this machine for {len(not_here)} structure(s), not drawn: "
+                      f"{', '.join(not_here[:10])}; " + fetch)
     source = {"brainglobe_atlas": atlas_name, "units": "um", "orientation": f"{origin} (BrainGlobe)",
               "selection": {"structures": structures, "depth": depth}}
     return write_mesh_atlas(
