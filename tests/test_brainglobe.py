@@ -4,7 +4,6 @@ temporary folder, read back without network; a parent's value colours its childr
 
 from __future__ import annotations
 
-import json
 import sys
 import warnings
 from pathlib import Path
@@ -55,56 +54,12 @@ def tiny_volume() -> tuple[np.ndarray, dict[int, np.ndarray]]:
     return ann, meshes
 
 
-def write_format3_atlas(folder: Path, name: str, resolution: float = 100.0) -> Path:
-    """Write a BrainGlobe format-3 atlas as brainglobe-atlasapi 3 reads it, with its own libraries.
+def write_format3_atlas(folder: Path, name: str) -> Path:
+    """The tiny atlas in BrainGlobe's format 3 (brainpainter.testing.brainglobe)."""
+    from brainpainter.testing.brainglobe import write_format3_atlas as write
 
-    ``folder/brainglobe-atlasapi/``: ``atlases/NAME/1_0/manifest.json``; the terminology
-    (``terminologies/NAME/1_0/terminology.csv``); the template and the annotation as OME-Zarr; one
-    Draco mesh per structure (``annotations.precomputed/mesh/ID``, nanometres, xyz).
-    """
-    import DracoPy
-    import zarr
-
-    root = folder / "brainglobe-atlasapi"
     ann, meshes = tiny_volume()
-    where = {"terminology": f"terminologies/{name}/1_0", "annotation": f"annotation-sets/{name}/1_0",
-             "template": f"templates/{name}/1_0"}
-    for rel in where.values():
-        (root / rel).mkdir(parents=True)
-    rows = ["identifier,parent_identifier,abbreviation,name,root_identifier_path,color_hex_triplet"]
-    for s in STRUCTURES:
-        parent = s["structure_id_path"][-2] if len(s["structure_id_path"]) > 1 else ""
-        path = "[" + ",".join(str(i) for i in s["structure_id_path"]) + "]"
-        rows.append(f'{s["id"]},{parent},{s["acronym"]},{s["name"]},"{path}",#'
-                    + "".join(f"{c:02x}" for c in s["rgb_triplet"]))
-    (root / where["terminology"] / "terminology.csv").write_text("\n".join(rows) + "\n")
-    for arr, rel, file in ((ann, where["annotation"], "annotations_compressed.ome.zarr"),
-                           ((ann > 0).astype(np.uint16) * 100, where["template"], "template.ome.zarr")):
-        # OME-NGFF 0.4 written with zarr itself (ngff-zarr's own writer needs numpy >= 2.1: DLPack)
-        group = zarr.open_group(str(root / rel / file), mode="w", zarr_format=2)
-        group.attrs["multiscales"] = [{
-            "version": "0.4", "name": "image",
-            "axes": [{"name": d, "type": "space", "unit": "millimeter"} for d in "zyx"],
-            "datasets": [{"path": "0", "coordinateTransformations": [
-                {"type": "scale", "scale": [resolution / 1000] * 3}]}]}]
-        group.create_array("0", shape=arr.shape, dtype=arr.dtype, chunks=arr.shape)[:] = arr
-    mesh_dir = root / where["annotation"] / "annotations.precomputed" / "mesh"
-    mesh_dir.mkdir(parents=True)
-    for sid, (v, f) in meshes.items():  # atlasapi reads nm xyz back into um zyx (asr)
-        (mesh_dir / str(sid)).write_bytes(DracoPy.encode((v[:, ::-1] * 1000).astype(np.float32),
-                                                         f[:, ::-1].astype(np.uint32)))
-    manifest = {
-        "name": name, "version": "1.0", "species": "Mouse (Mus musculus)", "citation": "unpublished",
-        "atlas_link": "https://example.org", "orientation": "asr", "symmetric": True,
-        "resolution": [resolution] * 3, "shape": list(ann.shape),
-        "terminology": {"location": "/" + where["terminology"]},
-        "annotation_set": {"location": "/" + where["annotation"],
-                           "template": {"location": "/" + where["template"]}},
-    }
-    atlas = root / "atlases" / name / "1_0"
-    atlas.mkdir(parents=True)
-    (atlas / "manifest.json").write_text(json.dumps(manifest))
-    return folder
+    return write(folder, name, STRUCTURES, meshes, ann)
 
 
 @pytest.fixture(scope="module", params=["format3", "atlasgen"])

@@ -37,6 +37,7 @@ across each triangle.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
+from functools import cached_property
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
@@ -241,13 +242,11 @@ class SceneGeometry:
                 out[i] = slot_of[key]
             return out
 
-        region_slots: dict[str, frozenset[int]] = {}
-
-        def add(*args: Any, **kwargs: Any) -> None:
+        region_slots: dict[str, frozenset[int]] = {}  # part name -> the region slots of its faces
+        def add(*args: Any, **kwargs: Any) -> None:  # args: name, kind, hemi, vertices, faces, face_slot, ...
             part = build_part(*args, occlusion=settings.shading != "flat", **kwargs)
             if part is not None:
                 parts.append(part)
-                # the region slots of its faces (args: name, kind, hemi, vertices, faces, face_slot, ...)
                 region_slots[part.name] = frozenset(int(i) for i in np.unique(args[5]) if i >= first_key)
 
         for hemi in HEMIS:
@@ -286,12 +285,15 @@ class SceneGeometry:
         self.parts: tuple[PartGeometry, ...] = tuple(parts)
         self.keys: tuple[str, ...] = tuple(keys)
         self.slot_of = slot_of
-        key_of = {slot: key for key, slot in slot_of.items()}
-        #: region keys each (cortex, subcortical or glass) part draws, by part name, in slot order
-        self.part_keys: dict[str, tuple[str, ...]] = {
-            name: tuple(key_of[i] for i in sorted(slots) if i in key_of)
-            for name, slots in region_slots.items()}
+        self._region_slots = region_slots
         self.default_rgb = np.asarray(defaults, dtype=np.float32)
+
+    @cached_property
+    def part_keys(self) -> dict[str, tuple[str, ...]]:
+        """Region keys each cortex, subcortical or glass part draws (its faces' regions), by part name."""
+        key_of = {slot: key for key, slot in self.slot_of.items()}
+        return {name: tuple(key_of[i] for i in sorted(slots) if i in key_of)
+                for name, slots in self._region_slots.items()}
 
     @staticmethod
     def _cortex_mesh(scene: SceneParts, hemi: str, per_vertex: bool) -> Any:
