@@ -102,9 +102,9 @@ def heatmap_image(values: dict[str, float], out: Path) -> float:
 
     t = time.perf_counter()
     # a slab holding the whole brain (its 3-D heatmap draws what lies between two planes)
-    hm = bgh.Heatmap(values, position=0, thickness=20_000, orientation="horizontal", format="3D", atlas_name=NAME,
-                     check_latest=False, interactive=False, cmap="Reds", vmin=VMIN, vmax=VMAX,
-                     zoom=ZOOM)
+    hm = bgh.Heatmap(values, position=0, thickness=20_000, orientation="horizontal", format="3D",
+                     atlas_name=NAME, check_latest=False, interactive=False, cmap="Reds", vmin=VMIN,
+                     vmax=VMAX, zoom=ZOOM)
     scene = hm.show()
     scene.screenshot(name=str(out))
     seconds = time.perf_counter() - t
