@@ -21,53 +21,19 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import signal
-import socket
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import httpx
+from serve_process import Serve
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLE = REPO / "examples" / "brainpainter_dk.csv"
 GRADIENTS = ["white,yellow,orange,red", "white,blue", "#ffffff,#00aa00", "yellow,red"]
 VIEWS = ["lateral-left", "medial-left", "subcortical"]
-
-
-def _port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-class Serve:
-    def __init__(self, data: Path, *options: str) -> None:
-        self.url = f"http://127.0.0.1:{(port := _port())}"
-        self.log = (data.parent / f"serve-{port}.log").open("w")
-        self.proc = subprocess.Popen([sys.executable, "-m", "brainpainter", "serve", "--port", str(port),
-                                      "--data-dir", str(data), "--log-level", "warning",
-                                      "--max-jobs-per-client", "1000", "--rate", "100000", *options],
-                                     stdout=self.log, stderr=subprocess.STDOUT)
-        t0 = time.perf_counter()
-        for _ in range(1200):
-            try:
-                if httpx.get(f"{self.url}/readyz", timeout=2).status_code == 200:
-                    break
-            except httpx.HTTPError:
-                pass
-            if self.proc.poll() is not None:
-                raise SystemExit(f"server exited; see {self.log.name}")
-            time.sleep(0.25)
-        self.ready_s = time.perf_counter() - t0
-
-    def close(self) -> None:
-        self.proc.send_signal(signal.SIGINT)
-        self.proc.wait(timeout=60)
-        self.log.close()
+LIMITS_OFF = ("--max-jobs-per-client", "1000", "--rate", "100000")
 
 
 def _upload(client: httpx.Client) -> str:
@@ -78,7 +44,7 @@ def _upload(client: httpx.Client) -> str:
 
 
 def bench_preview(tmp: Path, n: int) -> dict:
-    server = Serve(tmp / "preview", "--workers", "1")
+    server = Serve(tmp / "preview", "--workers", "1", *LIMITS_OFF)
     try:
         with httpx.Client(base_url=server.url, timeout=120) as client:
             uid = _upload(client)
@@ -104,7 +70,7 @@ def bench_preview(tmp: Path, n: int) -> dict:
 
 
 def bench_jobs(tmp: Path, workers: int, n_jobs: int) -> dict:
-    server = Serve(tmp / f"jobs{workers}", "--workers", str(workers), "--no-preview")
+    server = Serve(tmp / f"jobs{workers}", "--workers", str(workers), "--no-preview", *LIMITS_OFF)
     try:
         with httpx.Client(base_url=server.url, timeout=120) as client:
             uid = _upload(client)

@@ -26,13 +26,13 @@ import socket
 import sqlite3
 import stat
 import subprocess
-import sys
 import tempfile
 import threading
 import time
 from pathlib import Path
 
 import httpx
+from serve_process import Serve
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLE = REPO / "examples" / "brainpainter_dk.csv"
@@ -42,12 +42,6 @@ OCTET = {"content-type": "application/octet-stream"}
 
 def rows_table(n: int) -> bytes:
     return (HEADER + "".join(f"img{k},{k % 4},1,2\n" for k in range(n))).encode()
-
-
-def _port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def _rss_mb(pid: int) -> float:
@@ -62,40 +56,6 @@ def _alive(pid: int) -> bool:
         return Path(f"/proc/{pid}/stat").read_text().split(") ")[1][0] != "Z"
     except OSError:
         return False
-
-
-class Serve:
-    def __init__(self, data: Path, *options: str, port: int | None = None) -> None:
-        self.data, self.options = data, options
-        self.port = port or _port()
-        self.url = f"http://127.0.0.1:{self.port}"
-        self.start()
-
-    def start(self) -> None:
-        self.log = (self.data.parent / f"serve-{self.port}.log").open("a")
-        self.proc = subprocess.Popen([sys.executable, "-m", "brainpainter", "serve", "--port", str(self.port),
-                                      "--data-dir", str(self.data), "--log-level", "warning", *self.options],
-                                     stdout=self.log, stderr=subprocess.STDOUT)
-        for _ in range(2400):
-            try:
-                if httpx.get(f"{self.url}/readyz", timeout=2).status_code == 200:
-                    return
-            except httpx.HTTPError:
-                pass
-            if self.proc.poll() is not None:
-                raise SystemExit(f"server exited; see {self.log.name}")
-            time.sleep(0.25)
-        raise SystemExit("server not ready in 10 minutes")
-
-    def close(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(timeout=60)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-        self.log.close()
 
 
 def bench_rows(tmp: Path, renderer: str) -> dict:

@@ -1,6 +1,7 @@
 """Start-up cost of the command line, over a bare ``python -c pass`` (issue 25).
 
 Each of five rounds runs, interleaved, in fresh processes: ``python -c pass``,
+``python -c "import bpy"`` (Blender's own start-up: no first image can be cheaper),
 ``brainpainter --help``, and ``brainpainter render`` of a one-row table into
 one image (the first image of a cold process, default options, lateral-left).
 Prints the median of each and the two costs over ``python -c pass``
@@ -17,6 +18,7 @@ For where the time goes: ``python -X importtime -m brainpainter --help 2> import
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import subprocess
 import sys
@@ -25,11 +27,17 @@ import time
 from pathlib import Path
 
 
+#: As a user's install runs: .pyc files written (the warm-up round writes them; pip writes them at
+#: install). Some shells and CI images set PYTHONDONTWRITEBYTECODE, which makes every start compile
+#: the sources again (~0.25 s of a first image here).
+_ENV = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+
+
 def _time(cmd: list[str]) -> float:
     t0 = time.perf_counter()
     # run outside any checkout: ``-m`` puts the working directory first on sys.path
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                   cwd=tempfile.gettempdir())
+                   cwd=tempfile.gettempdir(), env=_ENV)
     return time.perf_counter() - t0
 
 
@@ -64,6 +72,7 @@ def main() -> None:
 def _commands(py: str, table: Path) -> dict[str, list[str]]:
     return {
         "python -c pass": [py, "-c", "pass"],
+        "import bpy": [py, "-c", "import bpy"],  # Blender's own start, the floor of any first image
         "brainpainter --help": [py, "-m", "brainpainter", "--help"],
         "first image": [py, "-m", "brainpainter", "render", str(table), "--atlas", "dk",
                         "--views", "lateral-left", "-q", "--out"],

@@ -10,7 +10,9 @@ and templates are loaded on first use through entry-point registries.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+# not typing's TYPE_CHECKING: importing typing (with re, enum, functools: ~20 ms on a bare Python) runs
+# before the console command installs its signal handlers (brainpainter/cli/entry.py)
+TYPE_CHECKING = False
 
 __all__ = [
     "BrainPainterError",
@@ -33,6 +35,8 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
+    from typing import Any
+
     __version__: str
     from brainpainter.atlas.registry import get_atlas, list_atlases
     from brainpainter.atlas.template import load_template

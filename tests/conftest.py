@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import shutil
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -38,6 +39,29 @@ def without_root_powers() -> list[str]:
     if shutil.which("setpriv") is None:
         pytest.skip("running as root without setpriv (util-linux) to drop root's capabilities")
     return ["setpriv", "--inh-caps=-all", "--bounding-set=-all", "--"]
+
+
+@pytest.fixture
+def fresh_registry() -> Iterator[None]:
+    """Atlases, renderers and templates are found anew before the test and forgotten after it.
+
+    For tests that install plugins or add atlases (into their own temporary home); a module of
+    them says ``pytestmark = pytest.mark.usefixtures("fresh_registry")``.
+    """
+    from brainpainter.atlas import registry
+
+    registry.reset_all()
+    yield
+    registry.reset_all()
+
+
+@pytest.fixture(scope="module")
+def site(request, tmp_path_factory) -> Path:
+    """The test module's plugin distribution (its ``PLUGIN`` folder) as pip installs it, into a
+    throw-away site-packages folder; made once per module (use it with ``installed(site)``)."""
+    from brainpainter.testing import pip_install
+
+    return pip_install(request.module.PLUGIN, tmp_path_factory.mktemp("site"), tmp_path_factory.mktemp("src"))
 
 
 @pytest.fixture

@@ -26,7 +26,6 @@ from brainpainter.testing import (
     StandInRenderer,
     check_atlas,
     installed,
-    pip_install,
     stand_in,
 )
 
@@ -35,12 +34,6 @@ PLUGIN = REPO / "plugins" / "atlases" / "brainpainter-atlas-yeo7"
 DATA = PLUGIN / "bp_atlas_yeo7" / "data" / "yeo7"
 FSAVERAGE = REPO.parent / "shared" / "data" / "freesurfer" / "subjects" / "fsaverage"
 NETWORKS = [f"7Networks_{i}" for i in range(1, 8)]
-
-
-@pytest.fixture(scope="module")
-def site(tmp_path_factory) -> Path:
-    """The plugin as pip installs it, into a throw-away site-packages folder."""
-    return pip_install(PLUGIN, tmp_path_factory.mktemp("site"), tmp_path_factory.mktemp("src"))
 
 
 def test_pip_installed_plugin_is_listed_and_renders(site, tmp_path):

@@ -29,11 +29,7 @@ STRUCTURES = [
 ]
 
 
-@pytest.fixture(autouse=True)
-def _fresh_registry():
-    registry.reset_all()
-    yield
-    registry.reset_all()
+pytestmark = pytest.mark.usefixtures("fresh_registry")
 
 
 def tiny_volume() -> tuple[np.ndarray, dict[int, np.ndarray]]:

@@ -63,11 +63,7 @@ def needs_fsaverage():
         pytest.skip(f"shared data not found at {FSAVERAGE}")
 
 
-@pytest.fixture(autouse=True)
-def _fresh_registry():
-    registry.reset_all()
-    yield
-    registry.reset_all()
+pytestmark = pytest.mark.usefixtures("fresh_registry")
 
 
 @pytest.fixture

@@ -199,3 +199,18 @@ def test_html_renders_in_headless_chromium(exported, browser, tmp_path):
     assert tip.is_displayed() and tip.text == "Left-superiortemporal"
     errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
     assert not errors, errors
+
+
+def test_html_of_a_map_shows_its_vertex_colours_in_headless_chromium(browser, tmp_path):
+    from brainpainter.maps.regfusion import fsaverage_mni152
+
+    # fsaverage5's left hemisphere: anterior vertices +1 (red), posterior -1 (blue)
+    y = fsaverage_mni152()["lh"][:10242, 1]
+    values = np.where(y > np.median(y), 1.0, -1.0)
+    page = brainpainter.export({"lh": values}, tmp_path / "map.html", gradient="blue,red", vmin=-1, vmax=1)
+    _load(browser, page.as_uri() + "#flat")
+    flat = _screenshot(browser, tmp_path / "map.png")
+    red, blue = _count(flat, (255, 0, 0), 3), _count(flat, (0, 0, 255), 3)
+    assert red > 1000 and blue > 1000, (red, blue)  # per-vertex colours, unlit: exactly the scale's
+    errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+    assert not errors, errors

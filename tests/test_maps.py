@@ -377,7 +377,8 @@ def test_outline_draws_dark_lines_over_a_map():
     brain = _brain(plain) & _brain(lined)
     darker = (plain[..., :3].astype(int) - lined[..., :3].astype(int)).sum(-1) > 60
     assert 0.01 < darker[brain].mean() < 0.15  # thin lines, not areas
-    assert not ((lined[..., :3].astype(int) - plain[..., :3].astype(int)).max(-1) > 10)[brain].any()
+    brighter = ((lined[..., :3].astype(int) - plain[..., :3].astype(int)).max(-1) > 10)[brain]
+    assert brighter.sum() <= 5  # lines only darken (but for a pixel or two of the silhouette's edge)
 
 
 @pytest.mark.render
@@ -386,12 +387,22 @@ def test_region_render_with_outline():
     import brainpainter
 
     table = {"Left-precentral": 1.0, "Left-postcentral": 2.0, "Left-superiorfrontal": 3.0}
-    kw = {"views": "lateral-left", "width": 400, "height": 300, "progress": False, "shading": "flat"}
-    plain = next(iter(brainpainter.render(table, "dk", **kw).images.values()))
-    lined = next(iter(brainpainter.render(table, "dk", outline="dk", **kw).images.values()))
-    brain = _brain(plain) & _brain(lined)
-    darker = (plain[..., :3].astype(int) - lined[..., :3].astype(int)).sum(-1) > 60
-    assert 0.01 < darker[brain].mean() < 0.15
+    kw = {"views": "lateral-left", "progress": False, "shading": "flat"}
+    darker = {}
+    for width, height in ((400, 300), (1200, 900)):
+        plain = next(iter(brainpainter.render(table, "dk", width=width, height=height, **kw).images.values()))
+        lined = next(iter(brainpainter.render(table, "dk", outline="dk", width=width, height=height,
+                                              **kw).images.values()))
+        brain = _brain(plain) & _brain(lined)
+        dark = (plain[..., :3].astype(int) - lined[..., :3].astype(int)).sum(-1) > 60
+        darker[width] = dark[brain].mean()
+        assert 0.005 < darker[width] < 0.15  # thin lines, not areas
+    # lines of constant pixel width: 3x the image, 3x the line length but the same width, so the
+    # share of the brain's pixels they cover falls about 3-fold (a border coloured into the mesh keeps it)
+    assert 2.2 < darker[400] / darker[1200] < 3.8, darker
+    white = next(iter(brainpainter.render(table, "dk", outline="dk", outline_color="white", outline_width=3,
+                                          width=400, height=300, **kw).images.values()))
+    assert (np.all(white[..., :3] == 255, axis=-1) & (white[..., 3] == 255)).sum() > 400
     with pytest.raises(BrainPainterError, match="outlines its own atlas"):
         brainpainter.render(table, "dk", outline="destrieux", **kw)
 

@@ -20,12 +20,7 @@ from brainpainter.cli.main import cli, main
 from brainpainter.errors import BrainPainterError
 from brainpainter.testing import StandInRenderer, stand_in
 
-
-@pytest.fixture(autouse=True)
-def _fresh_registry():
-    registry.reset_all()
-    yield
-    registry.reset_all()
+pytestmark = pytest.mark.usefixtures("fresh_registry")
 
 
 def ball(centre, radius=1.0, subdivisions=2) -> trimesh.Trimesh:

@@ -15,7 +15,7 @@ from click.testing import CliRunner
 
 from brainpainter.atlas import registry
 from brainpainter.cli.main import cli
-from brainpainter.testing import StandInRenderer, installed, pip_install, stand_in
+from brainpainter.testing import StandInRenderer, installed, stand_in
 
 REPO = Path(__file__).resolve().parents[1]
 PLUGIN = REPO / "plugins" / "atlases" / "brainpainter-atlas-mouse"
@@ -28,16 +28,7 @@ DIST = "brainpainter-atlas-mouse"
 needs_source = pytest.mark.skipif(not TEMPLATE_CSV.is_file(), reason="needs ../shared/data/mouse")
 
 
-@pytest.fixture(autouse=True)
-def _fresh_registry():
-    registry.reset_all()
-    yield
-    registry.reset_all()
-
-
-@pytest.fixture(scope="module")
-def site(tmp_path_factory) -> Path:
-    return pip_install(PLUGIN, tmp_path_factory.mktemp("site"), tmp_path_factory.mktemp("src"))
+pytestmark = pytest.mark.usefixtures("fresh_registry")
 
 
 def test_installed_atlas_is_listed_with_its_own_brain_and_attribution(site):

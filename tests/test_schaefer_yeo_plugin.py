@@ -19,7 +19,7 @@ from brainpainter.atlas.mesh import labels_at_vertices
 from brainpainter.atlas.template import CortexMesh, load_template
 from brainpainter.cli.main import cli
 from brainpainter.table.region_table import inspect_table
-from brainpainter.testing import StandInRenderer, installed, pip_install, stand_in
+from brainpainter.testing import StandInRenderer, installed, stand_in
 
 REPO = Path(__file__).resolve().parents[1]
 PLUGIN = REPO / "plugins" / "atlases" / "brainpainter-atlas-schaefer-yeo"
@@ -31,18 +31,7 @@ DIST = "brainpainter-atlas-schaefer-yeo"
 
 
 
-@pytest.fixture(autouse=True)
-def _fresh_registry():
-    """Atlases added by a test (into its own temporary home) are forgotten after it."""
-    registry.reset_all()
-    yield
-    registry.reset_all()
-
-@pytest.fixture(scope="module")
-def site(tmp_path_factory) -> Path:
-    """The distribution as pip installs it, into a throw-away site-packages folder."""
-    return pip_install(PLUGIN, tmp_path_factory.mktemp("site"), tmp_path_factory.mktemp("src"))
-
+pytestmark = pytest.mark.usefixtures("fresh_registry")
 
 def schaefer400_names() -> list[str]:
     """The 400 region names of the Schaefer-400 7-network atlas as its annotation spells them."""

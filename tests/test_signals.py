@@ -153,3 +153,41 @@ def test_a_signal_while_publishing_waits_and_the_run_reports_the_complete_output
     assert code == 0
     assert sorted(p.name for p in out.iterdir()) == ["a.png", "b.png", "manifest.json"]
     assert calls == ["a.png", "b.png", "manifest.json"]
+
+
+def test_a_signal_while_held_takes_its_lock_does_not_deadlock():
+    """A handler's defer() can run while the main thread is inside held()'s own locked block."""
+    code = (
+        "import signal\n"
+        "from brainpainter.io import interrupts\n"
+        "seen = []\n"
+        "def handler(signum, frame):\n"
+        "    seen.append('deferred' if interrupts.defer(signum) else 'not held')\n"
+        "signal.signal(signal.SIGINT, handler)\n"
+        "with interrupts._LOCK:  # where held() counts: the handler runs inside this block\n"
+        "    signal.raise_signal(signal.SIGINT)\n"
+        "with interrupts.held():\n"
+        "    with interrupts._LOCK:\n"
+        "        signal.raise_signal(signal.SIGINT)\n"
+        "    seen.append('section finished')\n"
+        "print(seen)\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "['not held', 'deferred', 'section finished', 'not held']"
+
+
+def test_the_entry_module_installs_its_handlers_before_any_import():
+    """The console script's first import installs the handlers, importing nothing before (not even signal)."""
+    code = (
+        "import os, sys\n"
+        "before = set(sys.modules)\n"
+        "import brainpainter.cli.entry\n"
+        "print(sorted(set(sys.modules) - before), flush=True)\n"
+        "os.kill(os.getpid(), 2)  # SIGINT, as soon as the entry module is imported\n"
+        "import time; time.sleep(30)\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert proc.stdout.strip() == "['brainpainter', 'brainpainter.cli', 'brainpainter.cli.entry']"
+    assert proc.returncode == 130 and "Traceback" not in proc.stderr
+    assert proc.stderr.strip() == "interrupted: nothing was published; partial output was removed"

@@ -32,12 +32,7 @@ ASEG = REPO.parent / "shared" / "data" / "freesurfer" / "subjects" / "fsaverage"
 
 
 
-@pytest.fixture(autouse=True)
-def _fresh_registry():
-    """Atlases added by a test (into its own temporary home) are forgotten after it."""
-    registry.reset_all()
-    yield
-    registry.reset_all()
+pytestmark = pytest.mark.usefixtures("fresh_registry")
 
 def write_volume(path: Path, voxel: float = 2.0) -> Path:
     """A 3-label volume in MNI305 millimetres: a left and a right ball and a midline box."""
@@ -418,3 +413,12 @@ def test_a_volume_only_template_renders_in_dorsal_lateral_and_ventral_views(tmp_
         assert d[v][blue][0] < d[v][red][0]
     lateral = centre("subcortical-left", red)  # the left ball faces the camera; framed in the image
     assert 20 < lateral[0] < 100 and 20 < lateral[1] < 140
+
+
+def test_structures_and_bundles_read_the_hemisphere_by_one_rule():
+    from brainpainter.tracts.names import split_hemisphere
+
+    for name in ("Left-Putamen", "AF_L", "lh.AF", "Lobule_VI_R", "Vermis_VI", "Left--Putamen", "Arcuate r"):
+        hemi, rest = split_hemi(name)
+        assert split_hemisphere(name) == (rest, {"lh": "left", "rh": "right"}.get(hemi))
+    assert split_hemi(" Left--Putamen ") == ("lh", "Putamen")  # separators: one or more

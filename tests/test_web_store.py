@@ -11,7 +11,7 @@ from web_support import EXAMPLE
 from brainpainter.testing import StandInRenderer, stand_in
 from brainpainter.web.options import RenderOptions
 from brainpainter.web.store import LimitError, Store, valid_id
-from brainpainter.web.worker import PainterCache, run_job
+from brainpainter.web.worker import PainterCache, drawn_folder, run_job
 
 LIMITS = {"max_per_client": 10, "max_queued": 10}
 
@@ -97,14 +97,15 @@ def test_worker_resumes_a_requeued_job_without_redrawing_what_exists(tmp_path):
         painters = PainterCache(name)
         job = store.claim("w")
         out = store.job_dir(job_id) / "out"
-        # a previous attempt wrote 3 of 8 images before its server died
+        # a previous attempt drew 3 of 8 images before its server died
         done_before = ["stage-1_lateral-left.png", "stage-1_subcortical.png", "stage-2_lateral-left.png"]
         import numpy as np
 
         from brainpainter.io.output import png_bytes
 
+        drawn = drawn_folder(store.job_dir(job_id))
         for n in done_before:
-            (out / n).write_bytes(png_bytes(np.zeros((24, 32, 4), np.uint8)))
+            (drawn / n).write_bytes(png_bytes(np.zeros((24, 32, 4), np.uint8)))
         StandInRenderer.calls = []
         run_job(store, job, painters, ttl_s=60, time_limit_s=60)
         painters.close()
@@ -112,6 +113,7 @@ def test_worker_resumes_a_requeued_job_without_redrawing_what_exists(tmp_path):
     assert job["status"] == "done" and len(StandInRenderer.calls) == 5
     assert sorted(p.name for p in out.glob("*.png")) == sorted(f for f in job["files"] if f.endswith(".png"))
     assert len([f for f in job["files"] if f.endswith(".png")]) == 8
+    assert not drawn.exists()  # published: the drawn folder went
 
 
 def test_worker_reports_bad_jobs_as_one_line_and_honours_the_time_limit(tmp_path):
@@ -174,3 +176,140 @@ def test_uploads_per_client_and_old_rows_are_bounded(tmp_path):
     assert store.get(job_id)["status"] == "expired"
     store.expire(time.time() + 31 * 24 * 3600)
     assert store.get(job_id) is None and store.events(job_id) == []
+
+
+def _visible(folder) -> list[str]:
+    """What a listing of `folder` shows (hidden staging folders aside)."""
+    return sorted(p.name for p in folder.iterdir() if not p.name.startswith(".")) if folder.exists() else []
+
+
+def test_an_images_job_publishes_its_folder_whole_through_the_transaction(tmp_path, monkeypatch):
+    """The PNGs and the manifest go into out/ together, manifest last, while signals are held."""
+    import json
+
+    import numpy as np
+    from web_support import png_pixels
+
+    from brainpainter.io import transaction
+
+    store = Store(tmp_path)
+    job_id = submit(store)
+    out = store.job_dir(job_id) / "out"
+    seen: list[list[str]] = []
+    real_replace = transaction.os.replace
+
+    def replace(src, dst):  # what out/ holds at each rename into it (the publish)
+        if os.path.dirname(dst) == str(out):
+            seen.append(_visible(out))
+        real_replace(src, dst)
+
+    monkeypatch.setattr(transaction.os, "replace", replace)
+    with stand_in() as name:
+        painters = PainterCache(name)
+        run_job(store, store.claim("w"), painters, ttl_s=60, time_limit_s=60)
+        painters.close()
+    job = store.get(job_id)
+    pngs = sorted(f for f in job["files"] if f.endswith(".png"))
+    assert job["status"] == "done" and len(pngs) == 8
+    assert _visible(out) == sorted([*pngs, "manifest.json"])  # complete, nothing else
+    assert [p.name for p in out.iterdir() if p.name.startswith(".")] == []  # no staging folder left
+    assert not (store.job_dir(job_id) / "drawn").exists()
+    assert len(seen) == 9 and seen[0] == [] and all("manifest.json" not in s for s in seen)  # manifest last
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert sorted(e["file"] for e in manifest["files"]) == pngs
+    for f in pngs:  # every image drawn: opaque pixels of the stand-in's stripes
+        pixels = png_pixels((out / f).read_bytes())
+        assert pixels.shape == (24, 32, 4) and (pixels[..., 3] > 0).mean() > 0.5
+        assert len(np.unique(pixels.reshape(-1, 4), axis=0)) > 1
+
+
+def test_a_job_cancelled_midway_leaves_no_output(tmp_path):
+    store = Store(tmp_path)
+    job_id = submit(store)
+    folder = store.job_dir(job_id)
+
+    def cancel_at_third(n: int) -> None:  # the user cancels while the third image is drawn
+        if n == 3:
+            assert _visible(folder / "out") == []  # nothing is published before the end
+            store.cancel(job_id)
+
+    with stand_in("stand-in", StandInRenderer.with_(fail=cancel_at_third)) as name:
+        painters = PainterCache(name)
+        run_job(store, store.claim("w"), painters, ttl_s=60, time_limit_s=60)
+        painters.close()
+    assert store.get(job_id)["status"] == "cancelled"
+    assert _visible(folder) == ["input.bin"]  # neither out/ nor drawn/
+
+
+def test_a_job_killed_midway_shows_nothing_then_resumes_and_publishes_whole(tmp_path):
+    """kill -9 of the worker while it draws: out/ stays empty; the re-queued job draws only the rest."""
+    import signal
+    import subprocess
+    import sys
+
+    store = Store(tmp_path)
+    job_id = submit(store)
+    folder = store.job_dir(job_id)
+    code = (
+        "import sys\n"
+        "from brainpainter.testing import StandInRenderer, stand_in\n"
+        "from brainpainter.web.store import Store\n"
+        "from brainpainter.web.worker import PainterCache, run_job\n"
+        "store = Store(sys.argv[1])\n"
+        "with stand_in('slow', StandInRenderer.with_(delay=0.4)) as name:\n"
+        "    run_job(store, store.claim('w'), PainterCache(name), ttl_s=60, time_limit_s=600)\n"
+    )
+    proc = subprocess.Popen([sys.executable, "-c", code, str(tmp_path)])
+    try:
+        drawn = folder / "drawn"
+        end = time.monotonic() + 120
+        while len(list(drawn.glob("*.png"))) < 3 and time.monotonic() < end and proc.poll() is None:
+            time.sleep(0.05)
+        assert _visible(folder / "out") == []
+        os.kill(proc.pid, signal.SIGKILL)
+    finally:
+        proc.wait(timeout=60)
+    before = len(list(drawn.glob("*.png")))
+    assert 3 <= before < 8 and _visible(folder / "out") == []  # a partial set is never in out/
+    assert store.get(job_id)["files"] == []
+    assert store.requeue(max_attempts=3, ttl_s=60) == [job_id]  # the next server's start
+    with stand_in() as name:
+        painters = PainterCache(name)
+        run_job(store, store.claim("w"), painters, ttl_s=60, time_limit_s=60)
+        painters.close()
+        assert len(StandInRenderer.calls) == 8 - before
+    job = store.get(job_id)
+    assert job["status"] == "done"
+    assert _visible(folder / "out") == sorted(f for f in job["files"] if not f.endswith(".zip"))
+    assert not drawn.exists()
+
+
+def test_a_figure_job_publishes_one_file_and_a_cancelled_one_nothing(tmp_path):
+    """Figure (and movie) jobs write through the figure's file transaction: staged, then renamed."""
+    store = Store(tmp_path)
+    opts = RenderOptions(size="32x24", views="lateral-left").model_dump()
+
+    def figure_job() -> str:
+        params = {"format": "png", "dpi": 50}
+        return store.submit("c", "figure", opts, params, "ex.csv", EXAMPLE.read_bytes(), 4, **LIMITS)
+
+    done, cancelled = figure_job(), figure_job()
+    during: list[list[str]] = []
+
+    def cancel_second_job_at_its_second_image(n: int) -> None:
+        during.append(_visible(store.job_dir(done if n <= 4 else cancelled) / "out"))
+        if n == 6:
+            store.cancel(cancelled)
+
+    with stand_in("stand-in", StandInRenderer.with_(fail=cancel_second_job_at_its_second_image)) as name:
+        painters = PainterCache(name)
+        for _ in range(2):
+            run_job(store, store.claim("w"), painters, ttl_s=60, time_limit_s=60)
+        painters.close()
+    assert during and all(seen == [] for seen in during)  # nothing visible while rendering
+    assert store.get(done)["status"] == "done" and store.get(done)["files"] == ["figure.png"]
+    out = store.job_dir(done) / "out"
+    assert sorted(p.name for p in out.iterdir()) == ["figure.png"]  # no staging folder left
+    assert (out / "figure.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert store.get(cancelled)["status"] == "cancelled"
+    assert _visible(store.job_dir(cancelled)) == ["input.bin"]

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -20,9 +21,19 @@ from brainpainter.errors import BrainPainterError
 
 #: The cortical surfaces of a template (here, not in template.py: option parsing needs them cheaply).
 SURFACES = ("pial", "white", "inflated")
+#: Coordinate spaces of volumes and tractograms (:mod:`brainpainter.atlas.volumes` maps them onto a template).
+SPACES = ("MNI152NLin2009cAsym", "MNI152NLin6Asym", "fsaverage", "template")
 
 HEMIS = ("lh", "rh", "bilateral")
 HEMI_PREFIX = {"lh": "Left-", "rh": "Right-", "bilateral": ""}
+#: A hemisphere spelled at the start or the end of a name, apart from the rest by ``-``, ``_``, ``.``
+#: or spaces: ``Left-Putamen``, ``lh.AF``, ``CnF_l``, ``Lobule_VI_R``, ``Arcuate right``.
+_HEMI_IN_NAME = (
+    ("lh", re.compile(r"^(?:left|lh|l)[-_. ]+(?P<rest>.+)$", re.IGNORECASE)),
+    ("rh", re.compile(r"^(?:right|rh|r)[-_. ]+(?P<rest>.+)$", re.IGNORECASE)),
+    ("lh", re.compile(r"^(?P<rest>.+?)[-_. ]+(?:left|lh|l)$", re.IGNORECASE)),
+    ("rh", re.compile(r"^(?P<rest>.+?)[-_. ]+(?:right|rh|r)$", re.IGNORECASE)),
+)
 KINDS = ("cortical", "subcortical")
 REGION_COLUMNS = ("index", "name", "hemi", "kind", "color", "aliases")
 T = TypeVar("T")
@@ -57,6 +68,20 @@ class Region:
     def key(self) -> str:
         """The BrainPainter column name: ``Left-insula``, ``Brain-Stem``."""
         return HEMI_PREFIX[self.hemi] + self.name
+
+
+def hemisphere_in_name(name: str) -> tuple[str | None, str]:
+    """The hemisphere a name spells and the rest of it: ``("lh", "Putamen")`` for ``Left-Putamen``,
+    ``Putamen_L`` or ``lh.Putamen``; ``(None, name)`` when it spells none.
+
+    The one rule for the names of volume structures, mesh files and bundles.
+    """
+    text = name.strip()
+    for hemi, pattern in _HEMI_IN_NAME:
+        m = pattern.match(text)
+        if m:
+            return hemi, m.group("rest").strip()
+    return None, text
 
 
 @dataclass(frozen=True)

@@ -63,13 +63,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.atlas.meshing import Structure, build_structures, merge_structures
-from brainpainter.atlas.model import HEMI_PREFIX, Region, write_regions_tsv
+from brainpainter.atlas.model import HEMI_PREFIX, SPACES, Region, hemisphere_in_name, write_regions_tsv
 from brainpainter.atlas.template import FORMAT, FORMAT_VERSION, Template, load_template
 from brainpainter.atlas.user import store_built
 from brainpainter.atlas.writer import save_npz
 from brainpainter.errors import BrainPainterError, choice_error
 
-SPACES = ("MNI152NLin2009cAsym", "MNI152NLin6Asym", "fsaverage", "template")
 #: MNI152 RAS -> MNI305 (fsaverage) RAS, FreeSurfer wiki CoordinateSystems, 8b.
 MNI152_TO_MNI305 = np.array([
     [1.0022, 0.0071, -0.0177, 0.0528],
@@ -80,14 +79,6 @@ MNI152_TO_MNI305 = np.array([
 #: Templates whose coordinates are MNI305 (FreeSurfer's fsaverage family: tkr-RAS = scanner RAS = MNI305).
 MNI305_SUBJECTS = ("fsaverage", "fsaverage6", "fsaverage5", "fsaverage4", "fsaverage3")
 VOLUME_FILE = "subcortical.npz"
-
-_HEMI_PATTERNS = (
-    ("lh", re.compile(r"^(?:left|lh|l)[-_. ](?P<rest>.+)$", re.IGNORECASE)),
-    ("rh", re.compile(r"^(?:right|rh|r)[-_. ](?P<rest>.+)$", re.IGNORECASE)),
-    ("lh", re.compile(r"^(?P<rest>.+?)[-_. ](?:left|lh|l)$", re.IGNORECASE)),
-    ("rh", re.compile(r"^(?P<rest>.+?)[-_. ](?:right|rh|r)$", re.IGNORECASE)),
-)
-
 
 @dataclass(frozen=True)
 class LutEntry:
@@ -100,11 +91,8 @@ class LutEntry:
 
 def split_hemi(name: str) -> tuple[str, str]:
     """``("lh", "hippocampus_anterior")`` for ``hippocampus_anterior-lh``; ``("bilateral", name)`` else."""
-    for hemi, pattern in _HEMI_PATTERNS:
-        m = pattern.match(name.strip())
-        if m:
-            return hemi, m.group("rest")
-    return "bilateral", name.strip()
+    hemi, rest = hemisphere_in_name(name)
+    return hemi or "bilateral", rest
 
 
 def _hex_color(text: str) -> tuple[int, int, int] | None:

@@ -7,6 +7,7 @@ from typing import Any
 
 import click
 
+from brainpainter.atlas.model import SPACES
 from brainpainter.cli.options import CONTEXT, OutPath, echo_json, option_group, parse_size
 from brainpainter.errors import BrainPainterError
 from brainpainter.rendering.options import SceneOptions
@@ -110,7 +111,7 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, 
 @click.option("--lut", "lut", type=click.Path(path_type=Path, dir_okay=False), default=None,
               help="Look-up table for --volume: FreeSurfer LUT, BIDS dseg.tsv or CSV of index,name.")
 @click.option("--space", default="MNI152NLin2009cAsym", show_default=True,
-              type=click.Choice(["MNI152NLin2009cAsym", "MNI152NLin6Asym", "fsaverage", "template"]),
+              type=click.Choice(SPACES),
               help="Space of --volume (mapped into the template's; see docs/atlases.md).")
 @click.option("--own-template", is_flag=True,
               help="With --volume: the volume is a brain of its own (e.g. a mouse atlas): make a template of "

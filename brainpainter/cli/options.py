@@ -37,12 +37,13 @@ DEFAULT_SIZE = RenderSettings().size
 RENDER_OPTION_NAMES = (
     "atlas", "views", "template", "surface", "gradient", "cmap", "vmin", "vmax", "center", "nan_color",
     "missing_color", "hide", "background", "transparent", "size", "quality", "shading", "lighting",
-    "glass_opacity", "renderer", "atlas_config", "tracts", "tracts_space", "tracts_affine", "max_streamlines",
+    "glass_opacity", "outline_width", "outline_color", "renderer", "atlas_config", "tracts", "tracts_space",
+    "tracts_affine", "max_streamlines",
     "tract_values", "tract_value", "tract_radius",
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
-MAP_OPTION_NAMES = ("lh", "rh", "underlay", "threshold", "outline", "outline_threshold")
+MAP_OPTION_NAMES = ("lh", "rh", "volume", "underlay", "threshold", "outline", "outline_threshold")
 
 
 #: Click context of every command: -h as --help, help text up to 100 columns wide.
@@ -158,6 +159,8 @@ def render_option_list(views: str | None = DEFAULT_VIEWS, size: str = DEFAULT_SI
                              help="Size of each rendered view, WIDTHxHEIGHT pixels."),
         **{name: field_option(settings, name)
            for name in ("quality", "shading", "lighting", "glass_opacity")},
+        "outline_width": field_option(settings, "outline_width", metavar="PX", show_default=False),
+        "outline_color": field_option(settings, "outline_color", metavar="COLOUR"),
         "renderer": field_option(scene, "renderer"),
         "atlas_config": field_option(scene, "atlas_config", type=click.Path(dir_okay=False)),
         "tracts": field_option(scene, "tracts", multiple=True, default=(), show_default=False,
@@ -187,10 +190,11 @@ render_options = make_render_options()
 #: ``@input_options``: how INPUT tables are read (as for ``render`` and ``check``).
 input_options = option_group(TableOptions)
 
-#: ``@map_options``: ``--lh``, ``--rh``, ``--underlay``, ``--threshold`` (per-vertex maps, docs/maps.md).
+#: ``@map_options``: ``--lh``, ``--rh``, ``--volume``, ``--underlay``, ... (per-vertex maps, docs/maps.md).
 map_options = stack([
     field_option(MapOptions, "lh", type=click.Path(dir_okay=False), metavar="FILE"),
     field_option(MapOptions, "rh", type=click.Path(dir_okay=False), metavar="FILE"),
+    field_option(MapOptions, "volume", type=click.Path(dir_okay=False), metavar="FILE"),
     field_option(MapOptions, "underlay"),
     field_option(MapOptions, "threshold"),
     field_option(MapOptions, "outline", metavar="ATLAS"),
@@ -205,7 +209,7 @@ parallel_options = stack([
 
 
 def tables_or_maps(inputs: Sequence[Any], kwargs: dict[str, Any]) -> Any:
-    """The data of a command: INPUT tables (one, or a list), or None when maps come by ``--lh/--rh``.
+    """The data of a command: INPUT tables (one, or a list), or None when maps come by ``--lh/--rh/--volume``.
 
     Raises
     ------
@@ -214,11 +218,11 @@ def tables_or_maps(inputs: Sequence[Any], kwargs: dict[str, Any]) -> Any:
     """
     from brainpainter.errors import BrainPainterError
 
-    maps = kwargs.get("lh") is not None or kwargs.get("rh") is not None
+    maps = any(kwargs.get(name) is not None for name in ("lh", "rh", "volume"))
     if not inputs and not maps:
-        raise BrainPainterError("give INPUT tables, or maps with --lh FILE and/or --rh FILE.")
+        raise BrainPainterError("give INPUT tables, or maps: --lh FILE and/or --rh FILE, or --volume FILE.")
     if inputs and maps:
-        raise BrainPainterError("give INPUT tables or maps (--lh/--rh), not both in one command.")
+        raise BrainPainterError("give INPUT tables or maps (--lh/--rh, --volume), not both in one command.")
     if not inputs:
         return None
     return inputs[0] if len(inputs) == 1 else list(inputs)

@@ -81,6 +81,9 @@ class ColourScale:
     threshold : float or None
         A map's ``--threshold``: values with ``|v|`` below it are not coloured
         (the colour bar greys that band out).
+    categories : tuple of (str, (r, g, b))
+        A label map's categories in their own colours: the colour bar becomes a key of
+        these (one block and name each) instead of a gradient of values.
     """
 
     colors: NDArray[Any]
@@ -93,6 +96,7 @@ class ColourScale:
     )
     name: str = ""
     threshold: float | None = None
+    categories: tuple[tuple[str, tuple[float, float, float]], ...] = ()
 
     def __repr__(self) -> str:
         """One short line (the control colours are many)."""
@@ -188,6 +192,7 @@ class ColourScale:
             "nan_color": to_hex(self.nan_color),
             "missing_color": to_hex(self.missing_color),
             **({} if self.threshold is None else {"threshold": self.threshold}),
+            **({"categories": {n: to_hex(c) for n, c in self.categories}} if self.categories else {}),
         }
 
 

@@ -14,6 +14,13 @@ complete, so that a signal after it is never reported as "nothing was published"
 Blocking the signal (``pthread_sigmask``) is not enough: it only blocks it in
 the calling thread, and another thread (a writer, a progress bar) receives it
 and sets Python's flag all the same.
+
+The state is guarded by a *re-entrant* lock: Python runs signal handlers in
+the main thread between two instructions, so :func:`defer` (called by a
+handler) can run while the main thread itself is inside :func:`held`'s
+``with _LOCK`` block; with a plain lock it would wait for itself for ever.
+Every value the handler can see there is consistent: the count changes in one
+store, and a signal that finds the count at 0 is simply not deferred.
 """
 
 from __future__ import annotations
@@ -23,7 +30,7 @@ import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-_LOCK = threading.Lock()
+_LOCK = threading.RLock()  # re-entrant: see the module's docstring
 _state = {"held": 0}
 _pending: list[int] = []
 
@@ -39,7 +46,8 @@ def held() -> Iterator[None]:
         with _LOCK:
             _state["held"] -= 1
             again = _pending[:1] if _state["held"] == 0 else []
-            _pending.clear() if again else None
+            if again:  # the first is delivered; a handler running now finds the count at 0 and raises
+                _pending.clear()
         for signum in again:
             signal.raise_signal(signum)  # the handler runs now, outside the section
 

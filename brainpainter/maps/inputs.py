@@ -20,13 +20,16 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.maps.resolution import FAMILY, N_FSAVERAGE, native, to_fsaverage
+
+if TYPE_CHECKING:
+    from brainpainter.maps.volume import Method
 
 HEMIS = ("lh", "rh")
 #: File endings read as text, as arrays, as surface images, as label maps.
@@ -64,6 +67,9 @@ class VertexMaps:
     category_colors : ndarray of float, shape (n_categories, 3), optional
     source : str
         What was read, for messages and the manifest.
+    regions : dict of str to ndarray of float64, shape (k,), optional
+        Values of whole regions beside the map, per image (a volume's mean in each
+        subcortical structure, keyed as the atlases' regions: ``"Left-Hippocampus"``).
     """
 
     values: dict[str, NDArray[Any]]
@@ -71,6 +77,7 @@ class VertexMaps:
     categories: tuple[str, ...] | None = None
     category_colors: NDArray[Any] | None = None
     source: str = ""
+    regions: dict[str, NDArray[Any]] | None = None
 
     @property
     def n_images(self) -> int:
@@ -84,12 +91,28 @@ class VertexMaps:
     def finite(self) -> NDArray[Any]:
         """Every finite value of every image and hemisphere, shape (m,) (for the colour scale)."""
         parts = [v[np.isfinite(v)] for v in self.values.values()]
+        parts += [np.asarray(v, np.float32)[np.isfinite(v)] for v in (self.regions or {}).values()]
         return np.concatenate(parts) if parts else np.zeros(0, np.float32)
+
+    def region_values(self, image: float | tuple[int, int, float]) -> dict[str, float]:
+        """The region values of image `image` (a blend of two as in the map; NaN left out)."""
+        out: dict[str, float] = {}
+        for key, v in (self.regions or {}).items():
+            if isinstance(image, tuple):
+                lo, hi, t = int(image[0]), int(image[1]), float(image[2])
+            else:
+                lo = int(np.floor(image))
+                hi, t = min(lo + 1, len(v) - 1), float(image) - lo
+            x = float(v[lo]) if t == 0.0 or hi == lo else (1.0 - t) * float(v[lo]) + t * float(v[hi])
+            if np.isfinite(x):
+                out[key] = x
+        return out
 
     def summary(self) -> dict[str, Any]:
         return {"kind": "vertex map", "source": self.source, "n_images": self.n_images,
                 "images": list(self.images), "hemis": sorted(self.values),
-                "categories": None if self.categories is None else len(self.categories)}
+                "categories": None if self.categories is None else len(self.categories),
+                "regions": sorted(self.regions or {})}
 
 
 def pair_of(path: str | Path) -> dict[str, Path]:
@@ -142,17 +165,30 @@ def is_map_input(data: Any) -> bool:
     return hasattr(data, "data") and hasattr(data.data, "parts")  # nilearn SurfaceImage
 
 
-def read_maps(data: Any = None, lh: Any = None, rh: Any = None) -> VertexMaps:
+def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = None) -> VertexMaps:
     """Any map input to :class:`VertexMaps` on fsaverage (the hook every command calls).
 
     Parameters
     ----------
     data : path, dict or nilearn SurfaceImage, optional
         One file whose name says its hemisphere (its partner is found beside
-        it), or ``{"lh": ..., "rh": ...}`` (``left``/``right``) of arrays or paths.
+        it), ``{"lh": ..., "rh": ...}`` (``left``/``right``) of arrays or paths,
+        or an MNI152 volume (a 3-D/4-D NIfTI file or nibabel image).
     lh, rh : path or ndarray, optional
         One hemisphere each (``--lh FILE --rh FILE``).
+    volume : path or nibabel image, optional
+        An MNI152 volume (``--volume FILE``), projected by
+        :func:`read_volume`.
     """
+    from brainpainter.maps import volume as volumes
+
+    if volume is None and data is not None and volumes.is_volume(data):
+        volume, data = data, None
+    if volume is not None:
+        if data is not None or lh is not None or rh is not None:
+            raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "
+                                    "volume is projected onto both hemispheres.")
+        return read_volume(volume)
     given: dict[str, Any] = {}
     if data is not None:
         if hasattr(data, "data") and hasattr(data.data, "parts"):
@@ -176,6 +212,40 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None) -> VertexMaps:
         raise BrainPainterError("no map given: give --lh FILE and/or --rh FILE (or a dict of arrays).")
     hemis = {h: read_hemi(v, h) for h, v in given.items()}
     return _combine(hemis, given)
+
+
+def read_volume(img: Any, *, method: Method = "linear") -> VertexMaps:
+    """A volume as maps on fsaverage, with its subcortical means: what ``--volume FILE`` draws.
+
+    Parameters
+    ----------
+    img : path or nibabel image
+        An MNI152 volume, 3-D or 4-D (one image per volume).
+    method : {"linear", "nearest"}
+        As in :func:`brainpainter.maps.volume.project_volume`.
+
+    Returns
+    -------
+    brainpainter.maps.inputs.VertexMaps
+        ``values`` of shape (n_volumes, 163842) per hemisphere, images named as in
+        :func:`~brainpainter.maps.volume.volume_images`, and ``regions``: the mean inside each
+        subcortical structure (:func:`~brainpainter.maps.volume.subcortical_means`), shape
+        (n_volumes,) each.
+    """
+    from brainpainter.maps.volume import load_volume, project_volume, subcortical_means
+
+    volume = load_volume(img)
+    projected = project_volume(img, method=method)
+    means = subcortical_means(img, method=method)
+    k = volume.n_volumes
+    if len(volume.shape) == 3:
+        images: tuple[str, ...] = (volume.name,)
+    else:
+        width = len(str(k - 1))
+        images = tuple(f"{volume.name}_{i:0{width}d}" for i in range(k))
+    values = {hemi: np.asarray(v, np.float32).reshape(k, -1) for hemi, v in projected.items()}
+    regions = {key: np.asarray(v, np.float64).reshape(k) for key, v in means.items()}
+    return VertexMaps(values, images, source=f"volume={volume.name}", regions=regions)
 
 
 def _combine(hemis: dict[str, Hemi], given: dict[str, Any]) -> VertexMaps:

@@ -23,7 +23,6 @@ from brainpainter.maps.inputs import VertexMaps
 from brainpainter.maps.outlines import OUTLINE_COLOR, border_vertices
 from brainpainter.maps.resolution import masks
 
-UNDERLAYS = ("sulc", "curv", "none")
 #: Underlay greys (sRGB): gyri, sulci, and the one grey of ``--underlay none``.
 GYRUS_GREY, SULCUS_GREY, PLAIN_GREY = 0.74, 0.52, 0.72
 #: Default colour maps of maps given no --cmap/--gradient: values of one sign, signed values.
@@ -36,14 +35,32 @@ def map_scale(options: ScaleOptions, maps: VertexMaps, threshold: float | None =
     No ``cmap``/``gradient``: ``viridis``, or ``RdBu_r`` for signed data. Signed
     data and no ``vmin``/``vmax``/``center``: symmetric about 0. The scale
     carries `threshold`, so that its colour bar greys out ``|v| < threshold``.
+    A label map's scale carries its categories (the colour bar is their key).
     """
     data = maps.finite()
+    if maps.categories is not None and maps.category_colors is not None:  # a key of the categories
+        if options.cmap is None and options.gradient is None:
+            options = replace(options, cmap=DEFAULT_CMAP)
+        return replace(options.scale(data), categories=_drawn_categories(maps))
     signed = bool(data.size) and float(data.min()) < 0 < float(data.max())
     if options.cmap is None and options.gradient is None:
         options = replace(options, cmap=DEFAULT_SIGNED_CMAP if signed else DEFAULT_CMAP)
     if signed and options.vmin is None and options.vmax is None and options.center is None:
         options = replace(options, center=0.0)
     return replace(options.scale(data), threshold=threshold)
+
+
+def _drawn_categories(maps: VertexMaps) -> tuple[tuple[str, tuple[float, float, float]], ...]:
+    """The categories of a label map that some cortex vertex shows (the medial wall's are not drawn)."""
+    assert maps.categories is not None and maps.category_colors is not None
+    used: set[int] = set()
+    for hemi, values in maps.values.items():
+        cortex = masks(hemi)["cortex"][: values.shape[1]]  # coarser maps: the first n vertices are shared
+        shown = values[:, cortex]
+        used.update(int(c) for c in np.unique(shown[np.isfinite(shown)]))
+    return tuple((name, (float(c[0]), float(c[1]), float(c[2])))
+                 for i, (name, c) in enumerate(zip(maps.categories, maps.category_colors, strict=True))
+                 if i in used)
 
 
 def underlay(hemi: str, source_vertex: NDArray[Any], kind: str) -> NDArray[Any]:

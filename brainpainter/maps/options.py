@@ -1,4 +1,4 @@
-"""The map options of a run (``--lh``, ``--rh``, ``--underlay``, ``--threshold``), defined once.
+"""The map options of a run (``--lh``, ``--rh``, ``--volume``, ``--underlay``, ...), defined once.
 
 The CLI's click options and the keywords of ``brainpainter.render`` (and of
 figure, movie, plot, export) are made from these fields
@@ -12,7 +12,9 @@ from dataclasses import dataclass, field
 from typing import Any, TypedDict
 
 from brainpainter.errors import BrainPainterError, choice_error
-from brainpainter.maps.layers import UNDERLAYS
+
+#: What shows where a map has no value: sulcal-depth greys, curvature greys, or one grey.
+UNDERLAYS = ("sulc", "curv", "none")
 
 
 class MapKwargs(TypedDict, total=False):
@@ -20,6 +22,7 @@ class MapKwargs(TypedDict, total=False):
 
     lh: Any
     rh: Any
+    volume: Any
     underlay: str
     threshold: float | None
     outline: str | None
@@ -34,6 +37,9 @@ class MapOptions:
     ----------
     lh, rh : path or ndarray, optional
         One hemisphere's map (a file of any map format, or values per vertex).
+    volume : path or nibabel image, optional
+        An MNI152 volume (3-D, or 4-D: one image per volume) projected onto the cortex by
+        registration fusion; the subcortical structures take its mean inside each.
     underlay : {"sulc", "curv", "none"}
         What shows where the map has no value.
     threshold : float, optional
@@ -48,6 +54,10 @@ class MapOptions:
         "help": "Left-hemisphere map: lh.thickness, .mgh/.mgz, .func.gii/.shape.gii, .nii (N x 1 x 1), .npy, "
                 ".txt, .annot, .label.gii, .label; any fsaverage resolution. See docs/maps.md."})
     rh: Any = field(default=None, metadata={"help": "Right-hemisphere map (as --lh)."})
+    volume: Any = field(default=None, metadata={
+        "help": "An MNI152 volume (.nii/.nii.gz, 3-D or 4-D = one image per volume: an SPM/FSL/AFNI stat "
+                "map, a PET image) projected onto the cortex; the subcortical structures show its mean "
+                "inside each. See docs/maps.md."})
     underlay: str = field(default="sulc", metadata={
         "choices": UNDERLAYS, "help": "Map underlay: sulcal-depth or curvature greys, or one grey."})
     threshold: float | None = field(default=None, metadata={
@@ -63,8 +73,11 @@ class MapOptions:
         t = self.threshold
         if t is not None and (not isinstance(t, int | float) or not math.isfinite(t) or t < 0):
             raise BrainPainterError(f"--threshold must be a number >= 0; {t!r} was given.")
+        if self.volume is not None and (self.lh is not None or self.rh is not None):
+            raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "
+                                    "volume is projected onto both hemispheres.")
 
     @property
     def given(self) -> bool:
-        """Whether a map was given through --lh/--rh."""
-        return self.lh is not None or self.rh is not None
+        """Whether a map was given through --lh/--rh or --volume."""
+        return self.lh is not None or self.rh is not None or self.volume is not None

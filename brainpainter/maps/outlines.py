@@ -1,14 +1,12 @@
-"""Outlines over a map: an atlas's region borders (``--outline``), cluster borders (``--outline-threshold``).
+"""Outlines over a map: cluster borders (``--outline-threshold``) and the label lookups of ``--outline``.
 
-Drawn per vertex, in the map's own colours (no second drawing path): a
-vertex on a border takes the outline colour and the renderer's interpolation
-across triangles turns the marked vertices into a line about one mesh edge
-wide (about 1.4 mm on the default template; 6-8 pixels at 1200x900). Only one
-side of each border is marked (the vertex whose label is the smaller), so the
-line is one edge wide, not two. A screen-space outline (a label pass and an
-edge pass in the resolve shader) would give lines of constant pixel width;
-it needs a second render target in every renderer and is left for later
-(docs/maps.md).
+An atlas's region borders (``--outline ATLAS``) are drawn as lines of constant pixel
+width through the scene model (:mod:`brainpainter.rendering.borders`,
+``PartGeometry.outline``). The borders of the supra-threshold areas change with
+every image, so they are drawn per vertex, in the map's own colours: a vertex on
+the border takes the outline colour and the renderer's interpolation across
+triangles turns the marked vertices into a line about one mesh edge wide. Only one
+side of each border is marked (the vertex whose label is the smaller).
 """
 
 from __future__ import annotations

@@ -427,3 +427,28 @@ def subcortical_table(img: ImageLike, *, method: Method = "linear") -> dict[str,
     return {f"{volume.name}_{i:0{width}d}": {k: float(np.asarray(v)[i]) for k, v in means.items()
                                               if np.isfinite(np.asarray(v)[i])}
             for i in range(volume.n_volumes)}
+
+
+#: File endings that may hold a volume (``.mgz``/``.mgh`` and NIfTI also hold per-vertex maps,
+#: ``n x 1 x 1``: the header's shape tells them apart).
+VOLUME_SUFFIXES = (".nii", ".nii.gz", ".mgz", ".mgh")
+
+
+def is_volume(data: Any) -> bool:
+    """Whether `data` is a volume (a NIfTI/MGH file or nibabel image with two or more spatial
+    axes of more than one voxel) rather than a per-vertex map stored in the same format."""
+    import nibabel as nib
+
+    image: Any = data
+    if isinstance(data, (str, os.PathLike)):
+        path = Path(data)
+        if not path.name.lower().endswith(VOLUME_SUFFIXES) or not path.is_file():
+            return False
+        try:
+            image = nib.load(str(path))
+        except Exception:  # not readable: the map readers say why
+            return False
+    if not (hasattr(image, "dataobj") and hasattr(image, "affine") and hasattr(image, "shape")):
+        return False
+    return sum(int(s) > 1 for s in tuple(image.shape)[:3]) >= 2
+

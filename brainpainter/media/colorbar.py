@@ -4,10 +4,9 @@ The bar shows exactly the colours the renders use: it samples the scale
 itself (``scale(values)``), so a BrainPainter gradient appears with its
 control colours at its ticks and a matplotlib colour map as a smooth ramp.
 Ticks default to the gradient's control points (5 ticks for a colour map);
-NaN ("no data") and missing ("not measured") swatches are added when asked.
-
-:func:`draw_colorbar` draws into an existing Axes (figures);
-:func:`colorbar_image` returns an RGBA array of an exact pixel size (movie
+NaN and missing swatches are added when asked; a label map's scale draws a key of its
+categories (:mod:`brainpainter.media.category_key`). :func:`draw_colorbar` draws into an
+Axes (figures); :func:`colorbar_image` returns an RGBA array of an exact pixel size (movie
 frames). matplotlib is imported inside the functions only.
 """
 
@@ -23,6 +22,7 @@ from numpy.typing import NDArray
 
 from brainpainter.color.scale import ColourScale, between, fraction
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.media.category_key import draw_category_key
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -184,6 +184,8 @@ def draw_colorbar(
     """
     if orientation not in ORIENTATIONS:
         raise choice_error("orientation", orientation, ORIENTATIONS)
+    if scale.categories:
+        return draw_category_key(ax, scale, orientation == "horizontal", fontsize, color, label)
     tick_values = resolve_ticks(scale, ticks)
     # The bar is drawn in fractions of the scale (0..1), so any finite range (1e-320..1e-310,
     # -1e308..1e308) draws without overflow; ticks are placed at their fractions, one per label.

@@ -262,9 +262,11 @@ class SceneGeometry:
                 sulc = (convexity(cm.vertices.get("pial", verts), cm.faces) if with_sulc
                         else np.zeros(len(verts), np.float32))
             occlusion = getattr(cm, "occlusion", None)
+            outline = (self._borders(scene, hemi, cm, verts, face_slot, per_vertex)
+                       if settings.outline_width > 0 else None)
             add(f"cortex-{hemi}", "cortex", hemi, verts, cm.faces, face_slot, sulc,
                 first_slot=self.vertex_slots[hemi][0] if per_vertex else None,
-                ao=None if occlusion is None else occlusion.get(scene.surface))
+                ao=None if occlusion is None else occlusion.get(scene.surface), outline=outline)
         if template.manifest.get("subcortical"):
             sub = template.subcortical()
             face_slot = slots_for(list(sub.label_names), NEUTRAL_SLOT, hidden)[
@@ -294,6 +296,28 @@ class SceneGeometry:
         key_of = {slot: key for key, slot in self.slot_of.items()}
         return {name: tuple(key_of[i] for i in sorted(slots) if i in key_of)
                 for name, slots in self._region_slots.items()}
+
+    @staticmethod
+    def _borders(scene: SceneParts, hemi: str, cm: Any, verts: NDArray[Any], face_slot: NDArray[Any],
+                 per_vertex: bool) -> NDArray[Any] | None:
+        """The region borders of a cortex part as segments (:mod:`brainpainter.rendering.borders`).
+
+        Per region, the edges between faces of two regions (hidden regions included: their
+        border with what is drawn is drawn); per vertex, the lines through the midpoints of the
+        edges between vertices of two labels of the scene's label set.
+        """
+        from brainpainter.rendering.borders import face_borders, vertex_borders
+
+        normals = vertex_normals(verts, cm.faces)
+        if not per_vertex:
+            return face_borders(verts, cm.faces, np.asarray(cm.face_label), normals)
+        from brainpainter.maps.outlines import mesh_labels
+
+        labels = mesh_labels(scene.template, scene.labels, hemi, cm)
+        if labels is None:
+            raise BrainPainterError(f"template {scene.template.name!r} has no per-vertex labels for "
+                                    f"{scene.labels!r}, so its region borders cannot be drawn.")
+        return vertex_borders(verts, cm.faces, labels, normals)
 
     @staticmethod
     def _cortex_mesh(scene: SceneParts, hemi: str, per_vertex: bool) -> Any:

@@ -17,15 +17,15 @@ from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.template import Template, load_template
-from brainpainter.color.rgb import to_rgb
 from brainpainter.maps.inputs import VertexMaps, read_maps
 from brainpainter.maps.layers import map_scale, vertex_colors
-from brainpainter.maps.outlines import border_vertices, mesh_edges, mesh_labels
+from brainpainter.maps.outlines import mesh_edges
 from brainpainter.maps.resolution import map_mesh
 from brainpainter.rendering.geometry import VertexColors
 from brainpainter.rendering.options import DEFAULT_VIEWS, Options
 from brainpainter.rendering.painter import Painter, region_colors
 from brainpainter.rendering.parallel import Item
+from brainpainter.rendering.settings import outlined
 from brainpainter.rendering.views import View, parse_views
 
 #: Default views of a map run: both hemispheres, outside and inside.
@@ -67,7 +67,6 @@ class MapRun:
     settings: Any
     options: Options
     source_vertex: dict[str, NDArray[Any]]
-    outline: dict[str, NDArray[Any]] | None = None
     cluster_edges: dict[str, NDArray[Any]] | None = None
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
@@ -90,8 +89,12 @@ class MapRun:
             self._cache.clear()  # one image at a time: the views of a row share it
             m = self.options.maps
             cortex = vertex_colors(self.maps, image, self.source_vertex, self.scale, m.underlay, m.threshold,
-                                   self.outline, self.cluster_edges)
-            self._cache[image] = VertexColors(region_colors({}, self.table.atlas, self.scale), cortex)
+                                   cluster_edges=self.cluster_edges)
+            # a volume's subcortical means: below --threshold a structure shows no value, as the cortex does
+            means = {k: v for k, v in self.maps.region_values(image).items()
+                     if m.threshold is None or abs(v) >= m.threshold}
+            regions = region_colors(means, self.table.atlas, self.scale)
+            self._cache[image] = VertexColors(regions, cortex)
         return self._cache[image]
 
     def blend(self, a: int, b: int, weight: float) -> VertexColors:
@@ -106,99 +109,22 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     """Read the maps and check the options of a map run (as ``prepare_run`` does for a table)."""
     from brainpainter.atlas.registry import get_atlas
 
-    maps = read_maps(data, options.maps.lh, options.maps.rh)
+    maps = read_maps(data, options.maps.lh, options.maps.rh, options.maps.volume)
     outline = options.maps.outline
     # --outline ATLAS: the map is drawn on that atlas's mesh, whose vertices carry its labels
     atlas_obj = get_atlas(outline) if outline is not None else atlas if atlas is not None else get_atlas("dk")
     views = options.scene.views
-    if views is None or views == DEFAULT_VIEWS:
-        views = MAP_VIEWS
+    if views is None or views == DEFAULT_VIEWS:  # a volume also colours the subcortical structures
+        views = MAP_VIEWS + (",subcortical" if maps.regions else "")
     view_list = parse_views(views if isinstance(views, str) else list(views))
     template = options.scene.template
     tpl = template if isinstance(template, Template) else load_template(template)
     labels = atlas_obj.template_labels if atlas_obj.template_labels in tpl.label_sets else "dk"
     meshes = {hemi: map_mesh(tpl, labels, hemi) for hemi in ("lh", "rh")}
     source_vertex = {hemi: np.asarray(m.source_vertex) for hemi, m in meshes.items()}
-    edges = {hemi: mesh_edges(m.faces) for hemi, m in meshes.items()}
-    borders: dict[str, NDArray[Any]] | None = None
-    if outline is not None:
-        borders = {}
-        for hemi, m in meshes.items():
-            vertex_label = mesh_labels(tpl, labels, hemi, m)
-            if vertex_label is not None:
-                borders[hemi] = border_vertices(vertex_label, edges[hemi])
+    edges = ({hemi: mesh_edges(m.faces) for hemi, m in meshes.items()} if options.maps.outline_threshold
+             else None)
     scale = map_scale(options.scale, maps, options.maps.threshold)
-    return MapRun(MapTable(maps, atlas_obj), scale, view_list, options.settings, options, source_vertex,
-                  borders, edges if options.maps.outline_threshold else None)
+    return MapRun(MapTable(maps, atlas_obj), scale, view_list, outlined(options.settings, outline),
+                  options, source_vertex, edges)
 
-
-@dataclass
-class OutlinedRegionRun(MapRun):
-    """A region table drawn per vertex, so that its regions can be outlined (``render t.csv --outline dk``).
-
-    Each vertex takes its region's colour; border vertices take the outline
-    colour (:mod:`brainpainter.maps.outlines`). ``table`` is the region table.
-    """
-
-    vertex_keys: dict[str, list[str]] = field(default_factory=dict)
-    vertex_label: dict[str, NDArray[Any]] = field(default_factory=dict)
-
-    def colors(self, image: float | tuple[int, int, float]) -> VertexColors:
-        from brainpainter.maps.outlines import OUTLINE_COLOR
-
-        if image in self._cache:
-            return self._cache[image]
-        table: Any = self.table
-        if isinstance(image, tuple):
-            a, b, w = table.values[image[0]], table.values[image[1]], image[2]
-            values = a if w == 0 else b if w == 1 else (1.0 - w) * a + w * b  # NaN in either: NaN between
-        else:
-            values = table.values[int(image)]
-        regions = region_colors(dict(zip(table.regions, values.tolist(), strict=True)), table.atlas,
-                                self.scale)
-        medial = np.asarray(to_rgb(Painter.medial_wall_color), np.float32)  # cortex labels without a colour
-        cortex: dict[str, NDArray[Any]] = {}
-        for hemi, keys in self.vertex_keys.items():
-            lut = np.array([regions.get(k, medial) for k in keys], np.float32).reshape(-1, 3)
-            rgb = lut[self.vertex_label[hemi]] if len(lut) else np.zeros((0, 3), np.float32)
-            if self.outline is not None and hemi in self.outline:
-                rgb[self.outline[hemi]] = OUTLINE_COLOR
-            cortex[hemi] = rgb
-        self._cache.clear()
-        self._cache[image] = VertexColors(regions, cortex)
-        return self._cache[image]
-
-
-def outlined_region_run(run: Any, options: Options) -> OutlinedRegionRun:
-    """`run` (a region table's) drawn per vertex with its atlas's region borders outlined.
-
-    Raises
-    ------
-    BrainPainterError
-        When ``--outline`` names another atlas than the table's.
-    """
-    from brainpainter.atlas.model import HEMI_PREFIX
-    from brainpainter.errors import BrainPainterError
-
-    atlas = run.table.atlas
-    if options.maps.outline not in (atlas.name, atlas.template_labels):
-        raise BrainPainterError(
-            f"a region render outlines its own atlas's regions ({atlas.name!r}); --outline "
-            f"{options.maps.outline!r} was given. Give --outline {atlas.name}, or draw a map (--lh/--rh).")
-    template = options.scene.template
-    tpl = template if isinstance(template, Template) else load_template(template)
-    labels = atlas.template_labels
-    out = OutlinedRegionRun(run.table, run.scale, run.views, run.settings, options, {}, {})
-    for hemi in ("lh", "rh"):
-        mesh = map_mesh(tpl, labels, hemi)
-        vertex_label = mesh_labels(tpl, labels, hemi, mesh)
-        if vertex_label is None:
-            raise BrainPainterError(f"template {tpl.name!r} has no per-vertex labels for {labels!r}, so its "
-                                    "regions cannot be outlined.")
-        names = tpl.manifest["labels"][labels]["cortex"][hemi]["names"]
-        out.source_vertex[hemi] = np.asarray(mesh.source_vertex)
-        out.vertex_keys[hemi] = [HEMI_PREFIX[hemi] + n for n in names]
-        out.vertex_label[hemi] = np.asarray(vertex_label, np.int64)
-        out.outline = out.outline or {}
-        out.outline[hemi] = border_vertices(vertex_label, mesh_edges(mesh.faces))
-    return out

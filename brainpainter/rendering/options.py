@@ -10,7 +10,7 @@ group                     options                                               
 :class:`ScaleOptions`     gradient, cmap, vmin, vmax, center, nan_color,              color.scale
                           missing_color
 :class:`RenderSettings`   width, height, background, quality, shading, lighting,     rendering.settings
-                          glass_opacity
+                          glass_opacity, outline_width
 :class:`TableOptions`     image_column, value, region_column, strict                  table.options
 :class:`MapOptions`       lh, rh, underlay, threshold                                 maps.options
 :class:`RunnerOptions`    jobs, client, scheduler                                     here
@@ -32,7 +32,7 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypedDict
 
-from brainpainter.atlas.model import SURFACES
+from brainpainter.atlas.model import SPACES, SURFACES
 from brainpainter.color.rgb import to_rgb
 from brainpainter.color.scale import ScaleKwargs, ScaleOptions
 from brainpainter.errors import BrainPainterError, choice_error
@@ -134,7 +134,7 @@ class SceneOptions:
         "help": "Tractograms (.trk, .tck, .trx) or folders of them, one file per bundle, drawn as tubes in "
                 "the views; see docs/tracts.md. Repeatable."})
     tracts_space: str = field(default=DEFAULT_SPACE, metadata={
-        "choices": ("MNI152NLin2009cAsym", "MNI152NLin6Asym", "fsaverage", "template"),
+        "choices": SPACES,
         "help": "Space of the tractograms' coordinates (MNI152 is mapped to the fsaverage template, "
                 "MNI305)."})
     tracts_affine: str | Path | None = field(default=None, metadata={
@@ -293,7 +293,7 @@ class Options:
     scene : SceneOptions
         views, template, surface, hide, renderer, atlas_config.
     settings : RenderSettings
-        width, height, background, quality, shading, lighting, glass_opacity.
+        width, height, background, quality, shading, lighting, glass_opacity, outline_width.
     table : TableOptions
         image_column, value, region_column, strict.
     maps : MapOptions

@@ -57,6 +57,10 @@ class PartGeometry:
         deep in a fold; :mod:`brainpainter.atlas.occlusion`), for the
         renderer's shading; None when the template has none (old templates,
         the glass) or the shading is flat.
+    outline : ndarray of float32, shape (m, 2, 3), or None
+        Region borders on the part as line segments (RAS millimetres, lifted off the
+        surface; :mod:`brainpainter.rendering.borders`), drawn as lines
+        ``RenderSettings.outline_width`` pixels wide in the outline colour; None: no outline.
     """
 
     name: str
@@ -69,6 +73,7 @@ class PartGeometry:
     sulc: NDArray[Any]
     hull: NDArray[Any]
     occlusion: NDArray[Any] | None = None
+    outline: NDArray[Any] | None = None
 
 
 def split_by_label(vertices: NDArray[Any], faces: NDArray[Any], face_slot: NDArray[Any],
@@ -109,12 +114,14 @@ MAX_SLOTS = 4096 * 16_384
 
 def build_part(name: str, kind: str, hemi: str | None, verts: NDArray[Any], faces: NDArray[Any],
           face_slot: NDArray[Any], sulc: NDArray[Any], *, first_slot: int | None = None,
-          ao: NDArray[Any] | None = None, occlusion: bool = True) -> PartGeometry | None:
+          ao: NDArray[Any] | None = None, occlusion: bool = True,
+          outline: NDArray[Any] | None = None) -> PartGeometry | None:
     """One part from its mesh and per-face slots (faces of slot -1 are hidden); None when nothing is left.
 
     With `first_slot` (a per-vertex scene) the mesh is kept as stored and vertex ``i`` gets slot
     ``first_slot + i``; else it is split by slot (:func:`split_by_label`). `ao` (baked occlusion per
     vertex) is dropped when `occlusion` is false (flat shading) or its length does not fit.
+    `outline` (border segments, shape (m, 2, 3)) is kept as given.
     """
     keep = face_slot >= 0
     faces, face_slot = np.asarray(faces)[keep], face_slot[keep]
@@ -132,7 +139,7 @@ def build_part(name: str, kind: str, hemi: str | None, verts: NDArray[Any], face
         v, tri, pal, extra = split_by_label(verts, faces, face_slot, per_vertex)
     return PartGeometry(name, kind, hemi, v.astype(np.float32), extra[0].astype(np.float32),
                         tri, pal, extra[1].astype(np.float32), v,
-                        None if ao is None else extra[2].astype(np.float32))
+                        None if ao is None else extra[2].astype(np.float32), outline)
 
 
 def check_slots(n: int) -> None:

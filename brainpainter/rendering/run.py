@@ -27,7 +27,7 @@ from brainpainter.maps.inputs import is_map_input
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
 from brainpainter.rendering.painter import VOLUME_VIEWS, Painter, RenderResult, region_colors, resolve_hidden
 from brainpainter.rendering.parallel import Item, LocalRunner, PainterSpec, Runner, SerialRunner, chunked
-from brainpainter.rendering.settings import RGB, RenderSettings
+from brainpainter.rendering.settings import RGB, RenderSettings, outlined
 from brainpainter.rendering.views import ImagesByView, View, parse_views
 from brainpainter.table.region_table import RegionTable, read_table
 from brainpainter.table.rows import select_rows
@@ -169,12 +169,13 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
         table = read_table(data, atlas_obj, **options.table.kwargs())
     values = table.values if tract_values is None else np.concatenate(
         [np.ravel(table.values), np.ravel(tract_values.values)])
-    run = Run(table, options.scale.scale(values), view_list, options.settings, options, tract_values)
-    if options.maps.outline is not None:  # region borders: the table drawn per vertex, borders outlined
-        from brainpainter.rendering.maprun import outlined_region_run
-
-        return outlined_region_run(run, options)  # type: ignore[return-value]
-    return run
+    outline = options.maps.outline
+    if outline is not None and outline not in (table.atlas.name, table.atlas.template_labels):
+        raise BrainPainterError(
+            f"a region render outlines its own atlas's regions ({table.atlas.name!r}); --outline "
+            f"{outline!r} was given. Give --outline {table.atlas.name}, or draw a map (--lh/--rh).")
+    return Run(table, options.scale.scale(values), view_list, outlined(options.settings, outline), options,
+               tract_values)
 
 
 def make_runner(painter: Painter, template: Any = None, options: RunnerOptions | None = None,

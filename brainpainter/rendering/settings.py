@@ -20,6 +20,8 @@ SHADINGS = ("default", "flat")
 LIGHTINGS = ("studio", "soft", "flat-studio", "sulc")
 #: Lighting presets that darken sulci (they need the cortex's sulcal depth).
 SULC_LIGHTINGS = ("flat-studio", "sulc")
+#: Width of region borders drawn by ``--outline`` when ``--outline-width`` is not given, and the most.
+DEFAULT_OUTLINE_WIDTH, MAX_OUTLINE_WIDTH = 1.5, 20.0
 #: Smallest and largest width or height of one image, pixels.
 MIN_PIXELS, MAX_PIXELS = 16, 8192
 
@@ -43,6 +45,8 @@ class SettingsKwargs(TypedDict, total=False):
     shading: str
     lighting: str
     glass_opacity: float
+    outline_width: float
+    outline_color: ColorLike
 
 
 def check_pixels(what: str, n: Any) -> int:
@@ -80,6 +84,11 @@ class RenderSettings:
         ``flat-studio`` unlit colours darkened in sulci.
     glass_opacity : float
         Opacity of the glass brain, 0-1.
+    outline_width : float
+        Width in pixels of the region borders drawn over the cortex as lines, the same in
+        every image size (``--outline``); 0: none.
+    outline_color : colour
+        Their colour, stored as sRGB 0-1 (default near-black; white reads well on dark maps).
     """
 
     width: int = field(default=1200, metadata={"help": "Image width, pixels."})
@@ -93,6 +102,11 @@ class RenderSettings:
     lighting: str = field(default="studio", metadata={
         "choices": LIGHTINGS, "help": "sulc: studio light with sulci darkened slightly (sulcal depth)."})
     glass_opacity: float = field(default=0.12, metadata={"help": "Opacity of the glass brain, 0-1."})
+    outline_width: float = field(default=0.0, metadata={"help": (
+        "Draw the atlas's region borders over the cortex as lines this many pixels wide, at any image "
+        f"size (0: none; --outline ATLAS alone draws them {DEFAULT_OUTLINE_WIDTH:g} px wide).")})
+    outline_color: RGB = field(default=(0.05, 0.05, 0.05), metadata={
+        "help": "Colour of the region borders (--outline), e.g. black or white.", "cli_default": "#0d0d0d"})
 
     def __post_init__(self) -> None:
         for name, allowed in (("quality", QUALITIES), ("shading", SHADINGS), ("lighting", LIGHTINGS)):
@@ -107,6 +121,15 @@ class RenderSettings:
         if not 0.0 <= opacity <= 1.0:
             raise BrainPainterError(f"glass opacity must be in [0, 1]; {self.glass_opacity} was given.")
         object.__setattr__(self, "glass_opacity", opacity)
+        try:
+            width = float(self.outline_width)
+        except (TypeError, ValueError):
+            width = float("nan")
+        if not 0.0 <= width <= MAX_OUTLINE_WIDTH:
+            raise BrainPainterError(f"outline width must be 0 (none) to {MAX_OUTLINE_WIDTH:g} pixels; "
+                                    f"{self.outline_width!r} was given.")
+        object.__setattr__(self, "outline_width", width)
+        object.__setattr__(self, "outline_color", to_rgb(self.outline_color))
         if self.background is not None:
             object.__setattr__(self, "background", to_rgb(self.background))
 
@@ -122,4 +145,16 @@ class RenderSettings:
             "background": None if self.background is None else list(self.background),
             "quality": self.quality, "shading": self.shading,
             "lighting": self.lighting, "glass_opacity": self.glass_opacity,
+            **({"outline_width": self.outline_width, "outline_color": list(self.outline_color)}
+               if self.outline_width else {}),
         }
+
+
+def outlined(settings: RenderSettings, outline: str | None) -> RenderSettings:
+    """`settings` drawing region borders when ``--outline ATLAS`` is given: its ``--outline-width``,
+    or :data:`DEFAULT_OUTLINE_WIDTH` pixels."""
+    from dataclasses import replace
+
+    if outline is None or settings.outline_width > 0:
+        return settings
+    return replace(settings, outline_width=DEFAULT_OUTLINE_WIDTH)

@@ -31,6 +31,10 @@ the renderer needs none:
     a per-vertex scene (``Scene(coloring="vertices")``, a map) draws each
     vertex's palette slot and interpolates between vertices: a colour ramp
     along the front-back axis is drawn as a smooth ramp, in the right direction.
+``outlines``
+    with ``outline_width`` set, each cortex part's border segments
+    (``PartGeometry.outline``) are drawn in ``outline_color`` as lines of constant
+    pixel width: twice the image size, about twice the outline pixels (not four times).
 """
 
 from __future__ import annotations
@@ -56,7 +60,7 @@ COLORS: dict[str, RGB] = {
     "Left-Hippocampus": (0.60, 0.05, 0.05), "Right-Hippocampus": (0.05, 0.35, 0.60),
 }
 CONFORMANCE_CHECKS = ("orientation", "flat_colors", "nan_missing", "transparent", "glass", "no_holes",
-                      "repeatable", "tracts", "memory", "vertex_colors")
+                      "repeatable", "tracts", "memory", "vertex_colors", "outlines")
 #: Colours of the tracts check's two bundles (not among :data:`COLORS`).
 TRACT_COLORS: dict[str, RGB] = {"tract:AF_left": (1.0, 0.0, 0.5), "tract:CST_right": (0.0, 0.5, 1.0)}
 WHITE: RGB = (1.0, 1.0, 1.0)
@@ -361,6 +365,39 @@ def _vertex_colors(run: _Run) -> None:
                             f"{corr:.2f})")
 
 
+def _outlines(run: _Run) -> None:
+    """Region borders as lines of constant pixel width, in the outline colour, where the regions meet."""
+    from brainpainter.rendering.geometry import Palette
+    from brainpainter.rendering.scene import RenderSettings, Scene
+    from brainpainter.rendering.views import get_view
+
+    black: RGB = (0.0, 0.0, 0.0)
+    counts = []
+    for scale in (1, 2):
+        settings = RenderSettings(width=run.width * scale, height=run.height * scale, quality="fast",
+                                  shading="flat", glass_opacity=0.0, background=WHITE, outline_width=2.0,
+                                  outline_color=black)
+        scene = Scene(run.template, "dk", settings=settings)
+        geometry = scene.geometry
+        if not any(p.outline is not None and len(p.outline) for p in geometry.parts):
+            run.problems.append("outlines: core gave the tiny template's cortex no border segments")
+            return
+        renderer = run.cls(scene)
+        try:
+            img = np.asarray(renderer.render(Palette(COLORS, geometry), get_view("lateral-left")))
+        finally:
+            renderer.close()
+        counts.append(int(near(img, black, 40).sum()))
+    run.report["outline_pixels"] = counts
+    if counts[0] < 10:
+        run.problems.append(f"outlines: {counts[0]} pixels in the outline colour at "
+                            f"{run.width}x{run.height}; the borders between regions must be drawn as lines")
+    elif not 1.3 <= counts[1] / counts[0] <= 3.0:
+        run.problems.append(f"outlines: twice the image size gave {counts[1] / counts[0]:.1f}x the outline "
+                            "pixels; lines of constant pixel width give about 2x (a border painted "
+                            "into the mesh gives 4x)")
+
+
 def _memory(run: _Run, n_memory: int) -> None:
     """Resident memory does not grow per image over `n_memory` renders (after 20 to warm up)."""
     from brainpainter.rendering.views import get_view
@@ -420,7 +457,7 @@ def check_renderer(renderer: str | type, size: tuple[int, int] = (160, 120),
             _views(run)
         for check, step in (("flat_colors", _antialiased), ("nan_missing", _nan_missing),
                             ("transparent", _transparent), ("glass", _glass), ("tracts", _tracts),
-                            ("vertex_colors", _vertex_colors)):
+                            ("vertex_colors", _vertex_colors), ("outlines", _outlines)):
             if check in checks:
                 step(run)
         if "memory" in checks and can_measure():

@@ -11,17 +11,25 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-from numpy.typing import NDArray
-
 from brainpainter.errors import BrainPainterError
-from brainpainter.tracts.bundles import Tracts
 
 __all__ = ["DEFAULT_SPACE", "MAX_STREAMLINES", "N_POINTS", "SUFFIXES", "TractSpec", "Tracts", "bundle_files",
            "read_affine"]
 
 if TYPE_CHECKING:
+    from numpy.typing import NDArray
+
     from brainpainter.atlas.template import Template
+    from brainpainter.tracts.bundles import Tracts
+
+
+def __getattr__(name: str) -> Any:
+    # numpy-free at import (the CLI's options import this module): Tracts comes on first use
+    if name == "Tracts":
+        from brainpainter.tracts.bundles import Tracts
+
+        return Tracts
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 #: Tractogram file suffixes read (.trx needs the optional trx-python).
 SUFFIXES = (".trk", ".tck", ".trx")
@@ -44,7 +52,7 @@ class TractSpec:
         Tractogram files (.trk, .tck, .trx) or folders of them; one file per
         bundle (the file name is the bundle name), a .trx's groups are bundles.
     space : str
-        Coordinate space of the files (:data:`brainpainter.atlas.volumes.SPACES`):
+        Coordinate space of the files (:data:`brainpainter.atlas.model.SPACES`):
         MNI152 files are mapped to the fsaverage template (MNI305) by
         FreeSurfer's affine; ``template``: already in the template's coordinates.
     affine : path or None
@@ -67,7 +75,7 @@ class TractSpec:
     _files: tuple[Path, ...] = field(default=(), init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        from brainpainter.atlas.volumes import SPACES
+        from brainpainter.atlas.model import SPACES
         from brainpainter.errors import choice_error
 
         if self.space not in SPACES:
@@ -136,6 +144,8 @@ def read_affine(path: str | Path) -> NDArray[Any]:
     BrainPainterError
         The file is missing or does not hold a 4x4 / 3x4 matrix of numbers with last row 0 0 0 1.
     """
+    import numpy as np
+
     try:
         m = np.loadtxt(Path(path).expanduser(), dtype=float, ndmin=2)
     except (OSError, ValueError) as exc:

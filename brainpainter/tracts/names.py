@@ -12,15 +12,12 @@ import re
 from functools import cache
 from importlib import resources
 
+from brainpainter.atlas.model import hemisphere_in_name
+
 #: Prefix of a bundle's palette keys (``tract:AF_left``), apart from region keys.
 KEY_PREFIX = "tract:"
 
-_HEMI = (
-    ("left", re.compile(r"^(?:left|lh|l)[-_. ]+(?P<rest>.+)$", re.IGNORECASE)),
-    ("right", re.compile(r"^(?:right|rh|r)[-_. ]+(?P<rest>.+)$", re.IGNORECASE)),
-    ("left", re.compile(r"^(?P<rest>.+?)[-_. ]+(?:left|lh|l)$", re.IGNORECASE)),
-    ("right", re.compile(r"^(?P<rest>.+?)[-_. ]+(?:right|rh|r)$", re.IGNORECASE)),
-)
+_HEMI = {"lh": "left", "rh": "right"}
 
 
 def _fold(text: str) -> str:
@@ -41,12 +38,8 @@ def _aliases() -> dict[str, str]:
 
 def split_hemisphere(name: str) -> tuple[str, str | None]:
     """``("AF", "left")`` for ``AF_L``, ``Left Arcuate``, ``lh.AF``; ``(name, None)`` without one."""
-    text = name.strip()
-    for hemi, pattern in _HEMI:
-        m = pattern.match(text)
-        if m:
-            return m.group("rest").strip(), hemi
-    return text, None
+    hemi, rest = hemisphere_in_name(name)  # the atlases' rule
+    return rest, _HEMI.get(hemi or "")
 
 
 def canonical(name: str) -> str:

@@ -7,10 +7,15 @@ when the atlas, surface, hidden structures or image settings change) and
 stops by itself when the server process that started it is gone.
 
 A job worker takes queued jobs from the :class:`~brainpainter.web.store.Store`
-one at a time. An ``images`` job writes ``{image}_{view}.png`` files
-atomically and skips those already there, so a job re-queued after a crash or
-a server restart resumes where it stopped; the zip and the manifest are made
-last, then the job is marked done (at most once: see the store).
+one at a time. Outputs are published into ``jobs/<id>/out/`` through the
+command line's transaction (:mod:`brainpainter.io.transaction`: staged,
+verified, renamed into place with the manifest last, signals held meanwhile),
+so a job killed or cancelled midway leaves nothing in ``out/`` and a finished
+job's folder is complete. An ``images`` job first draws its
+``{image}_{view}.png`` files into ``jobs/<id>/drawn/`` (each written
+atomically; never served) and skips those already there, so a job re-queued
+after a crash or a server restart resumes where it stopped; then the job is
+marked done (at most once: see the store).
 """
 
 from __future__ import annotations
@@ -169,16 +174,18 @@ def run_job(store: Any, job: dict[str, Any], painters: PainterCache, *, ttl_s: f
     except _Stop:
         now = store.get(job_id)
         if now is not None and now["status"] == "cancelled":  # cancelled: what was made goes now
-            shutil.rmtree(folder / "out", ignore_errors=True)
+            discard_outputs(folder)
         return
     except BrainPainterError as exc:
         line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        store.fail(job_id, attempt, _no_paths(line, store), ttl_s)
+        if store.fail(job_id, attempt, _no_paths(line, store), ttl_s):  # (a stale attempt touches nothing)
+            discard_outputs(folder, published=False)
         return
     except Exception as exc:
         traceback.print_exc(file=sys.stderr)
         line = f"internal error: {type(exc).__name__}: {exc}".splitlines()[0]
-        store.fail(job_id, attempt, _no_paths(line, store), ttl_s)
+        if store.fail(job_id, attempt, _no_paths(line, store), ttl_s):
+            discard_outputs(folder, published=False)
         return
     store.finish(job_id, attempt, files, ttl_s)
 
@@ -200,7 +207,8 @@ def _prepared(folder: Path, job: dict[str, Any]) -> Any:
 
 def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
     from brainpainter import __version__
-    from brainpainter.io.output import PngWriter, write_json
+    from brainpainter.io.output import PngWriter
+    from brainpainter.io.transaction import MANIFEST
     from brainpainter.rendering.parallel import SerialRunner
     from brainpainter.rendering.run import paint, png_metadata, run_settings
 
@@ -208,28 +216,71 @@ def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
     run = prep.run
     table = run.table
     painter = painters.get(table.atlas, prep.options.surface, prep.hidden, run.settings)
-    out = folder / "out"
     settings = run_settings(run, painter)
     plan = run.items(range(len(table.images)))
-    files = [out / f"{prep.file_names[i]}_{view.name}.png" for i, view in plan]
+    names = [f"{prep.file_names[i]}_{view.name}.png" for i, view in plan]
+    drawn = drawn_folder(folder)
     # written atomically: a file present is complete (a resumed job)
-    todo = [(k, item) for k, (item, path) in enumerate(zip(plan, files, strict=True)) if not path.exists()]
+    todo = [(k, item) for k, item in enumerate(plan) if not (drawn / names[k]).exists()]
     done = len(plan) - len(todo)
     with PngWriter() as writer:
         # the painter stays in the cache: the runner is not closed
         painted = paint(run, SerialRunner(painter=painter), [item for _, item in todo])
         for (k, _), ((i, view), pixels) in zip(todo, painted, strict=True):
-            writer.submit(files[k], pixels, png_metadata(table.images[i], view, settings))
+            writer.submit(drawn / names[k], pixels, png_metadata(table.images[i], view, settings))
             done += 1
             tick(done)
-    entries = [{"file": path.name, "image": table.images[i], "row": i, "view": view.name}
-               for path, (i, view) in zip(files, plan, strict=True)]
+    entries = [{"file": name, "image": table.images[i], "row": i, "view": view.name}
+               for name, (i, view) in zip(names, plan, strict=True)]
     manifest = {"software": {"brainpainter": __version__}, "input": table.summary(), "settings": settings,
                 "files": entries}
-    write_json(out / "manifest.json", manifest)
-    names = [e["file"] for e in entries] + ["manifest.json"]
+    publish_drawn(folder, names, manifest, (run.settings.width, run.settings.height))
     # the zip is not stored (it would copy every PNG): it is made while it is downloaded
-    return [*names, zip_name(job["id"])]
+    return [*names, MANIFEST, zip_name(job["id"])]
+
+
+# -- writing outputs: the command line's transaction ---------------------------------------------
+DRAWN = "drawn"
+
+
+def drawn_folder(folder: Path) -> Path:
+    """``folder/drawn``, made if needed: an ``images`` job's PNGs until they are published.
+
+    It outlives an attempt (a re-queued job resumes from it) and is never served.
+    """
+    path = folder / DRAWN
+    path.mkdir(mode=0o700, exist_ok=True)
+    return path
+
+
+def publish_drawn(folder: Path, names: list[str], manifest: object, size: tuple[int, int]) -> None:
+    """Publish the PNGs `names` of ``folder/drawn`` and `manifest` into ``folder/out``, all or nothing.
+
+    Through :class:`~brainpainter.io.transaction.FolderTransaction`, as ``render --out``: the
+    PNGs move (a rename, same file system) into its staging folder, every one is verified (a PNG
+    of `size` (width, height)), then they are renamed into ``out`` with the manifest last while
+    signals wait. ``drawn`` goes once they are published.
+    """
+    from brainpainter.io.transaction import FolderTransaction
+
+    drawn = folder / DRAWN
+    with FolderTransaction(folder / "out") as tx:
+        for name in names:
+            try:
+                os.replace(drawn / name, tx.path(name))
+            except OSError as exc:
+                from brainpainter.io.folders import os_error
+
+                raise os_error(exc, "cannot stage", drawn / name) from None
+            tx.expect(name, size=size)
+        tx.commit(manifest)
+    shutil.rmtree(drawn, ignore_errors=True)
+
+
+def discard_outputs(folder: Path, published: bool = True) -> None:
+    """Remove what a job drew (``drawn``) and, when `published`, what it published (``out``)."""
+    for sub in (DRAWN, "out") if published else (DRAWN,):
+        shutil.rmtree(folder / sub, ignore_errors=True)
 
 
 def zip_name(job_id: str) -> str:

@@ -42,6 +42,14 @@ def main() -> None:
     # 4. DK borders over the thresholded map
     save(brainpainter.render(None, lh=fs5 / "surf" / "lh.sulc", views=views, threshold=0.5, outline="dk",
                              **SIZE), "outline_dk")
+    # 4b. a region render with DK borders: 1.5 px black (the default) and 3 px white, 600x450 each
+    table = {"Left-precentral": 1.0, "Left-superiorfrontal": 2.0, "Left-insula": 3.0}
+    sheet = Image.new("RGB", (1200, 450), "white")
+    for k, extra in enumerate(({}, {"outline_color": "white", "outline_width": 3})):
+        img = next(iter(brainpainter.render(table, "dk", views="lateral-left", outline="dk", width=600,
+                                            height=450, progress=False, **extra).images.values()))
+        sheet.paste(Image.fromarray(img[..., :3]), (600 * k, 0))
+    sheet.save(HERE / "outline_region.png", optimize=True)
     # 5. a single fsaverage5 vertex, on the inflated surface
     one = np.zeros(10242)
     xyz = nib.freesurfer.read_geometry(str(fs5 / "surf" / "lh.inflated"))[0]

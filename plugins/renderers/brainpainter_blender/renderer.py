@@ -64,6 +64,10 @@ class BlenderRenderer:
             raise BrainPainterError(
                 "per-vertex maps are drawn by the gpu path, not by Cycles (--quality high with smooth "
                 "shading); use --quality default, or --quality high --shading flat.")
+        if self.cycles and scene.settings.outline_width > 0:
+            raise BrainPainterError(
+                "region outlines (--outline) are drawn by the gpu path, not by Cycles (--quality high with "
+                "smooth shading); use --quality default, or --quality high --shading flat.")
         with _bpy.LOCK:
             try:
                 if self.cycles:

@@ -1,0 +1,109 @@
+"""Region borders on a surface as line segments: what ``--outline`` draws at constant pixel width.
+
+A renderer draws a part's :attr:`~brainpainter.rendering.parts.PartGeometry.outline`
+segments as lines ``RenderSettings.outline_width`` pixels wide in every image, however
+large the image and however near the camera (a border coloured into the mesh would be
+one mesh edge wide: thin from afar, thick up close). The segments sit on the surface,
+lifted a little along its normals so that the surface in front of them hides them and the
+surface under them does not.
+
+Two ways a border runs, as the colours run:
+
+- a scene coloured per region (faces take their region's colour): the borders are the
+  mesh edges between faces of two regions (:func:`face_borders`);
+- a scene coloured per vertex (a map over an atlas): the colours change halfway along the
+  edges between vertices of two labels, so the border joins those midpoints across each
+  triangle (:func:`vertex_borders`, marching triangles).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+#: How far a border is lifted off the surface along its normals, millimetres (a fraction of a
+#: voxel: enough to win the depth test against the surface it lies on, never to show through a fold).
+LIFT_MM = 0.15
+
+
+def face_borders(vertices: NDArray[Any], faces: NDArray[Any], face_label: NDArray[Any],
+                 normals: NDArray[Any], lift: float = LIFT_MM) -> NDArray[np.float32]:
+    """The mesh edges between faces of different labels, shape (m, 2, 3).
+
+    Parameters
+    ----------
+    vertices : ndarray of float, shape (n, 3)
+    faces : ndarray of int, shape (f, 3)
+    face_label : ndarray, shape (f,)
+        A label per face (faces of label -1 are not drawn; their borders with drawn faces are).
+    normals : ndarray of float, shape (n, 3)
+        Unit vertex normals.
+    lift : float
+        Millimetres off the surface.
+    """
+    f = np.asarray(faces, np.int64)
+    label = np.asarray(face_label)
+    edges = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    owner = np.tile(np.arange(len(f)), 3)
+    edges.sort(axis=1)
+    order = np.lexsort((edges[:, 1], edges[:, 0]))
+    edges, owner = edges[order], owner[order]
+    # an interior edge appears twice in a row (its two faces); keep those whose faces differ
+    pair = np.all(edges[1:] == edges[:-1], axis=1)
+    first = np.nonzero(pair)[0]
+    differ = label[owner[first]] != label[owner[first + 1]]
+    both = (label[owner[first]] >= 0) | (label[owner[first + 1]] >= 0)
+    chosen = edges[first[differ & both]]
+    v, n = np.asarray(vertices, float), np.asarray(normals, float)
+    return _segments(v[chosen[:, 0]], n[chosen[:, 0]], v[chosen[:, 1]], n[chosen[:, 1]], lift)
+
+
+def vertex_borders(vertices: NDArray[Any], faces: NDArray[Any], vertex_label: NDArray[Any],
+                   normals: NDArray[Any], lift: float = LIFT_MM) -> NDArray[np.float32]:
+    """The lines between vertices of different labels, through the midpoints of the edges, (m, 2, 3).
+
+    A triangle with two labels gets the segment joining the midpoints of its two mixed
+    edges; one with three labels gets three, from its centre to each edge's midpoint.
+
+    Parameters
+    ----------
+    vertices : ndarray of float, shape (n, 3)
+    faces : ndarray of int, shape (f, 3)
+    vertex_label : ndarray, shape (n,)
+    normals : ndarray of float, shape (n, 3)
+    lift : float
+        Millimetres off the surface.
+    """
+    v, n = np.asarray(vertices, float), np.asarray(normals, float)
+    f = np.asarray(faces, np.int64)
+    lab = np.asarray(vertex_label)[f]
+    same = np.stack([lab[:, 1] == lab[:, 2], lab[:, 2] == lab[:, 0], lab[:, 0] == lab[:, 1]], axis=1)
+    n_same = same.sum(axis=1)
+    # two labels: exactly one edge is uniform; the corner opposite it is the odd one
+    two = np.nonzero(n_same == 1)[0]
+    odd = np.argmax(same[two], axis=1)                       # edge k is opposite corner k
+    c, b0, b1 = f[two, odd], f[two, (odd + 1) % 3], f[two, (odd + 2) % 3]
+    seg_two = _segments((v[c] + v[b0]) / 2, n[c] + n[b0], (v[c] + v[b1]) / 2, n[c] + n[b1], lift)
+    # three labels: centre to each edge's midpoint
+    three = f[n_same == 0]
+    centre = v[three].mean(axis=1)
+    centre_n = n[three].mean(axis=1)
+    seg_three = [_segments(centre, centre_n, (v[three[:, a]] + v[three[:, b]]) / 2,
+                           n[three[:, a]] + n[three[:, b]], lift) for a, b in ((0, 1), (1, 2), (2, 0))]
+    out: NDArray[np.float32] = np.concatenate([seg_two, *seg_three])
+    return out
+
+
+def _lift(points: NDArray[Any], normals: NDArray[Any], lift: float) -> NDArray[Any]:
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    out: NDArray[Any] = points + lift * normals / np.where(length > 0, length, 1.0)
+    return out
+
+
+def _segments(p: NDArray[Any], pn: NDArray[Any], q: NDArray[Any], qn: NDArray[Any],
+              lift: float) -> NDArray[np.float32]:
+    """Segments p -> q, each end lifted along its normal, float32 (m, 2, 3)."""
+    out: NDArray[np.float32] = np.stack([_lift(p, pn, lift), _lift(q, qn, lift)], axis=1).astype(np.float32)
+    return out
