@@ -242,12 +242,12 @@ class SceneGeometry:
                 out[i] = slot_of[key]
             return out
 
-        region_slots: dict[str, frozenset[int]] = {}  # part name -> the region slots of its faces
+        self._region_slots: dict[str, frozenset[int]] = {}  # part name -> the region slots of its faces
         def add(*args: Any, **kwargs: Any) -> None:  # args: name, kind, hemi, vertices, faces, face_slot, ...
             part = build_part(*args, occlusion=settings.shading != "flat", **kwargs)
             if part is not None:
                 parts.append(part)
-                region_slots[part.name] = frozenset(int(i) for i in np.unique(args[5]) if i >= first_key)
+                self._region_slots[part.name] = frozenset(int(i) for i in np.unique(args[5]) if i >= first_key)
 
         for hemi in HEMIS:
             cm = meshes[hemi]
@@ -287,7 +287,6 @@ class SceneGeometry:
         self.parts: tuple[PartGeometry, ...] = tuple(parts)
         self.keys: tuple[str, ...] = tuple(keys)
         self.slot_of = slot_of
-        self._region_slots = region_slots
         self.default_rgb = np.asarray(defaults, dtype=np.float32)
 
     @cached_property
