@@ -242,12 +242,12 @@ class SceneGeometry:
                 out[i] = slot_of[key]
             return out
 
-        self._region_slots: dict[str, frozenset[int]] = {}  # part name -> the region slots of its faces
+        self._part_slots: dict[str, frozenset[int]] = {}  # part name -> the region slots of its faces
         def add(*args: Any, **kwargs: Any) -> None:  # args: name, kind, hemi, vertices, faces, face_slot, ...
             part = build_part(*args, occlusion=settings.shading != "flat", **kwargs)
             if part is not None:
                 parts.append(part)
-                self._region_slots[part.name] = frozenset(int(i) for i in np.unique(args[5]) if i >= first_key)
+                self._part_slots[part.name] = frozenset(int(i) for i in np.unique(args[5]) if i >= first_key)
 
         for hemi in HEMIS:
             cm = meshes[hemi]
@@ -294,7 +294,7 @@ class SceneGeometry:
         """Region keys each cortex, subcortical or glass part draws (its faces' regions), by part name."""
         key_of = {slot: key for key, slot in self.slot_of.items()}
         return {name: tuple(key_of[i] for i in sorted(slots) if i in key_of)
-                for name, slots in self._region_slots.items()}
+                for name, slots in self._part_slots.items()}
 
     @staticmethod
     def _borders(scene: SceneParts, hemi: str, cm: Any, verts: NDArray[Any], face_slot: NDArray[Any],
