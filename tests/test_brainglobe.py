@@ -32,17 +32,12 @@ STRUCTURES = [
 pytestmark = pytest.mark.usefixtures("fresh_registry")
 
 
-@pytest.fixture(scope="module")
-def bg_dir(tmp_path_factory) -> Path:
-    """A 3-structure mouse atlas (100 um, BrainGlobe orientation asr) made by brainglobe-atlasapi itself."""
-    pytest.importorskip("brainglobe_atlasapi")
-    wrapup = pytest.importorskip("brainglobe_atlasapi.atlas_generation.wrapup",
-                                 reason="brainglobe-atlasapi's atlas generation needs its atlasgen extra")
-    import trimesh
+def tiny_volume() -> tuple[np.ndarray, dict[int, np.ndarray]]:
+    """A 100 um annotation volume (axes: from anterior, from superior, from right: BrainGlobe's asr) and the
+    marching-cubes mesh of every structure (its own voxels and its descendants'), in micrometres, asr."""
     from skimage.measure import marching_cubes
 
-    work = tmp_path_factory.mktemp("bg")
-    ann = np.zeros((20, 16, 24), np.uint32)  # axes: from anterior, from superior, from right
+    ann = np.zeros((20, 16, 24), np.uint32)
     ann[2:18, 2:14, 2:22] = 997
     ann[3:9, 3:8, 3:21] = 11  # CA: anterior, dorsal
     ann[11:17, 6:12, 6:18] = 12  # CB: posterior
@@ -51,9 +46,36 @@ def bg_dir(tmp_path_factory) -> Path:
         mask = np.isin(ann, [x["id"] for x in STRUCTURES if s["id"] in x["structure_id_path"]])
         if mask.any():
             v, f, _, _ = marching_cubes(np.pad(mask, 1).astype(float), 0.5)
-            path = work / f"{s['id']}.obj"
-            trimesh.Trimesh((v - 1) * 100.0, f).export(path)
-            meshes[s["id"]] = path
+            meshes[s["id"]] = ((v - 1) * 100.0, f)
+    return ann, meshes
+
+
+def write_format3_atlas(folder: Path, name: str) -> Path:
+    """The tiny atlas in BrainGlobe's format 3 (brainpainter.testing.brainglobe)."""
+    from brainpainter.testing.brainglobe import write_format3_atlas as write
+
+    ann, meshes = tiny_volume()
+    return write(folder, name, STRUCTURES, meshes, ann)
+
+
+@pytest.fixture(scope="module", params=["format3", "atlasgen"])
+def bg_dir(request, tmp_path_factory) -> Path:
+    """A 3-structure mouse atlas (100 um, BrainGlobe orientation asr) named tiny_mouse_100.0um: written in
+    BrainGlobe's format 3 here (with brainglobe-atlasapi's own libraries: zarr, DracoPy), or by
+    brainglobe-atlasapi's atlas-generation code (its atlasgen extra)."""
+    pytest.importorskip("brainglobe_atlasapi")
+    work = tmp_path_factory.mktemp("bg")
+    if request.param == "format3":
+        return write_format3_atlas(work, "tiny_mouse_100.0um")
+    wrapup = pytest.importorskip("brainglobe_atlasapi.atlas_generation.wrapup",
+                                 reason="brainglobe-atlasapi's atlas generation needs its atlasgen extra")
+    import trimesh
+
+    ann, arrays = tiny_volume()
+    meshes = {}
+    for sid, (v, f) in arrays.items():
+        meshes[sid] = work / f"{sid}.obj"
+        trimesh.Trimesh(v, f).export(meshes[sid])
     with warnings.catch_warnings():  # the generation code's own dependencies warn about their deprecations
         warnings.simplefilter("ignore")
         wrapup.wrapup_atlas_from_data(
@@ -79,6 +101,29 @@ def test_without_the_package_one_line_says_how_to_get_it(monkeypatch):
     monkeypatch.setitem(sys.modules, "brainglobe_atlasapi", None)
     with pytest.raises(BrainPainterError, match="brainglobe-atlasapi"):
         open_local_atlas("allen_mouse_25um")
+
+
+def fails(*args: str) -> str:
+    """Run ``brainpainter atlas add ARGS`` as the command line does; assert exit code 2 and one line."""
+    from brainpainter.cli.main import main
+
+    runner = CliRunner()
+    with runner.isolation() as (out, err, _):
+        with pytest.raises(SystemExit) as exc:
+            main(["atlas", "add", *args])
+    text = (err.getvalue() if err else out.getvalue()).decode()
+    assert exc.value.code == 2 and len(text.strip().splitlines()) == 1 and "Traceback" not in text, text
+    return text
+
+
+def test_without_the_package_the_command_fails_with_one_line_and_adds_nothing(monkeypatch, tmp_path):
+    """Runs everywhere, with or without brainglobe-atlasapi."""
+    from brainpainter.atlas.registry import atlases_dir
+
+    monkeypatch.setitem(sys.modules, "brainglobe_atlasapi", None)
+    text = fails("allen", "--brainglobe", "allen_mouse_25um", "--brainglobe-dir", str(tmp_path))
+    assert "brainglobe-atlasapi" in text and "pip install" in text, text
+    assert not (atlases_dir() / "allen").exists() and "allen" not in registry.atlases.names()
 
 
 def test_an_atlas_not_on_this_machine_is_not_downloaded(tmp_path):
@@ -116,3 +161,25 @@ def test_a_parent_value_renders_on_its_child(bg_dir, tmp_path):
     blue = np.nonzero(np.abs(img - (0, 0, 255)).max(-1) <= 3)[0]
     assert len(red) > 300 and len(blue) > 300  # CA drawn in CTX's colour
     assert red.mean() < blue.mean()  # CA anterior (top of the dorsal view), CB posterior
+
+
+def test_a_mesh_not_on_this_machine_is_reported_never_fetched(tmp_path, monkeypatch):
+    """brainglobe-atlasapi 3 fetches a structure's mesh from BrainGlobe's server on first use: not here."""
+    pytest.importorskip("brainglobe_atlasapi")
+    from brainglobe_atlasapi import structure_class
+
+    fetched: list[object] = []
+    monkeypatch.setattr(structure_class.Structure, "_download_mesh", lambda self, f: fetched.append(f))
+    folder = write_format3_atlas(tmp_path / "bg", "tiny_mouse_100.0um")
+    mesh_dir = next(folder.glob("brainglobe-atlasapi/annotation-sets/*/*/annotations.precomputed/mesh"))
+    (mesh_dir / "12").unlink()  # CB
+    result = CliRunner().invoke(cli, ["atlas", "add", "tiny", "--brainglobe", "tiny_mouse_100.0um",
+                                      "--brainglobe-dir", str(folder)])
+    assert result.exit_code == 0, result.output
+    assert "mesh not on this machine for 1 structure(s), not drawn: CB" in result.output, result.output
+    assert "CA" in registry.atlases.get("tiny").keys and "CB" not in registry.atlases.get("tiny").keys
+    for sid in ("10", "11", "997"):
+        (mesh_dir / sid).unlink()
+    text = fails("tiny2", "--brainglobe", "tiny_mouse_100.0um", "--brainglobe-dir", str(folder))
+    assert "has its mesh on this machine (2 not fetched: CA, CB)" in text and "mesh_from_structure" in text
+    assert fetched == []

@@ -106,3 +106,28 @@ def test_dorsal_view_has_olfactory_anterior_cerebellum_posterior_left_on_the_lef
     brain = np.nonzero((np.abs(img - 255).max(-1) > 8).any(0))[0]
     width = (brain.max() - brain.min() + 1) / img.shape[1]
     assert 0.6 <= width <= 0.95, width  # framed (a square image: the mouse brain is longer than wide)
+
+
+@needs_source
+@pytest.mark.render
+def test_views_at_the_default_size_fill_the_side_that_binds(site, tmp_path):
+    """1200x900 (the default): the lateral and subcortical views fill 60-95 % of the width; the dorsal view,
+    anterior up, is bound by the brain's length (its height fills ~90 %) and its width is what a brain
+    0.8 times as wide as long leaves in a 4:3 image (~56 %; the 60 % bar would need anterior to the side)."""
+    from PIL import Image
+
+    from brainpainter.rendering.run import render
+
+    with installed(site):
+        render({"Left-Olfactory": 1.0}, "mouse", out=tmp_path, views="top,cortical-outer,subcortical",
+               shading="flat", quality="fast", progress=False)
+    fills = {}
+    for view in ("dorsal", "lateral-left", "subcortical"):
+        img = np.asarray(Image.open(tmp_path / f"1_{view}.png").convert("RGB")).astype(int)
+        assert img.shape == (900, 1200, 3)
+        brain = np.abs(img - 255).max(-1) > 8
+        cols, rows = np.nonzero(brain.any(0))[0], np.nonzero(brain.any(1))[0]
+        fills[view] = ((cols.max() - cols.min() + 1) / 1200, (rows.max() - rows.min() + 1) / 900)
+    assert 0.85 <= fills["lateral-left"][0] <= 0.95, fills
+    assert 0.6 <= fills["subcortical"][0] <= 0.95, fills
+    assert 0.85 <= fills["dorsal"][1] <= 0.95 and 0.5 <= fills["dorsal"][0] < 0.6, fills

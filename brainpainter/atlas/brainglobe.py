@@ -110,6 +110,31 @@ def _mesh_arrays(mesh: Any) -> tuple[NDArray[Any], NDArray[Any]]:
     return np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int64)
 
 
+def _fetch_hint(atlas_name: str) -> str:
+    """How to get meshes (brainglobe-atlasapi 3 installs an atlas without them, fetches each on first use)."""
+    return (f"on a machine with internet, BrainGlobeAtlas({atlas_name!r}).mesh_from_structure(ACRONYM) "
+            "fetches each one (brainglobe-atlasapi); then copy the BrainGlobe folder here")
+
+
+def _local_mesh(bg: Any, acronym: str, to_ras: NDArray[Any],
+                not_here: list[str]) -> tuple[NDArray[Any], NDArray[Any]] | None:
+    """The structure's mesh in RAS millimetres (welded, outward), or None; never downloads it.
+
+    A format-3 mesh file that is not on disk is added to `not_here` (``mesh_from_structure`` would fetch
+    it from BrainGlobe's server).
+    """
+    file = bg.structures[acronym].get("mesh_filename")
+    if file is not None and not Path(file).is_file():
+        not_here.append(acronym)
+        return None
+    try:
+        v, f = _mesh_arrays(bg.mesh_from_structure(acronym))
+    except Exception:  # no mesh for this structure
+        return None
+    v, f = weld(v @ to_ras.T, f)
+    return v, (f[:, ::-1] if np.linalg.det(to_ras) < 0 else f)
+
+
 def build_brainglobe_atlas(name: str, atlas_name: str, *, out: Path, brainglobe_dir: str | Path | None = None,
                            structures: list[str] | None = None, depth: int | None = None, title: str = "",
                            description: str = "", citation: str = "",
@@ -127,28 +152,29 @@ def build_brainglobe_atlas(name: str, atlas_name: str, *, out: Path, brainglobe_
     origin = str(bg.metadata.get("orientation", "asr"))
     letters = increasing_axes(origin)
     to_ras = orientation_matrix(letters) * 1e-3  # micrometres -> mm
-    flip = np.linalg.det(to_ras) < 0
 
     def load(acronym: str) -> tuple[NDArray[Any], NDArray[Any]] | None:
-        try:
-            v, f = _mesh_arrays(bg.mesh_from_structure(acronym))
-        except Exception:  # no mesh for this structure
-            return None
-        v, f = weld(v @ to_ras.T, f)
-        return v, (f[:, ::-1] if flip else f)
+        return _local_mesh(bg, acronym, to_ras, not_here)
 
     regions: list[RegionMesh] = []
-    skipped = []
+    skipped: list[str] = []
+    not_here: list[str] = []
     for s in chosen:
         if progress is not None:
             progress(s["acronym"])
         got = load(s["acronym"])
         if got is None or not len(got[1]):
-            skipped.append(s["acronym"])
+            if s["acronym"] not in not_here:
+                skipped.append(s["acronym"])
             continue
         regions.append(RegionMesh(Path(f"{s['id']}.obj"), s["acronym"], "bilateral", "structure", got[0],
                                   got[1], (s["name"],) if s["name"] != s["acronym"] else ()))
     if not regions:
+        if not_here:
+            raise BrainPainterError(
+                f"none of the chosen structures of {atlas_name!r} has its mesh on this machine "
+                f"({len(not_here)} not fetched: {', '.join(not_here[:5])}); brainpainter does not download; "
+                + _fetch_hint(atlas_name))
         raise BrainPainterError(f"none of the chosen structures of {atlas_name!r} has a mesh; choose others "
                                 "with --structures or --depth")
     every = np.concatenate([r.vertices for r in regions])
@@ -173,6 +199,9 @@ def build_brainglobe_atlas(name: str, atlas_name: str, *, out: Path, brainglobe_
     report[1] = f"orientation: BrainGlobe {origin!r} (axes increase towards {letters}) turned into RAS"
     if skipped:
         report.append(f"no mesh for {len(skipped)} structure(s): {', '.join(skipped[:10])}")
+    if not_here:
+        report.append(f"mesh not on this machine for {len(not_here)} structure(s), not drawn: "
+                      f"{', '.join(not_here[:10])}; " + _fetch_hint(atlas_name))
     source = {"brainglobe_atlas": atlas_name, "units": "um", "orientation": f"{origin} (BrainGlobe)",
               "selection": {"structures": structures, "depth": depth}}
     return write_mesh_atlas(

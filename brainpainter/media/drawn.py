@@ -2,37 +2,62 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
-from typing import Any
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from brainpainter.atlas.model import Atlas
 from brainpainter.color.rgb import ColorLike, to_rgb
 from brainpainter.rendering.views import View
 from brainpainter.table.region_table import RegionTable
 
+if TYPE_CHECKING:
+    from brainpainter.rendering.geometry import SceneGeometry
 
-def drawn_keys(atlas: Atlas, views: Sequence[View], hidden: Iterable[str] = ()) -> list[str]:
-    """Region keys that some view draws: its hemispheres' cortex, or the subcortical structures."""
-    from brainpainter.rendering.framing import shows
 
-    hidden = set(hidden)
-    return [r.key for r in atlas.regions if r.key not in hidden and any(
-        shows(v, "cortex", r.hemi) if r.kind == "cortical" else shows(v, "subcortical", None)
-        for v in views)]
+def drawn_keys(geometry: SceneGeometry, views: Sequence[View]) -> list[str]:
+    """Region keys that some view draws, in the scene's slot order.
+
+    The rule is the renderer's: the parts :meth:`SceneGeometry.visible
+    <brainpainter.rendering.geometry.SceneGeometry.visible>` gives a view (so a
+    brain of structures only, with no cortex, shows its structures in the
+    cortex views too), and the regions those parts' faces belong to
+    (:attr:`~brainpainter.rendering.geometry.SceneGeometry.part_keys`).
+    Hidden regions have no slot and are never drawn; template labels
+    outside the atlas (``Left-unknown``) are drawn and listed.
+
+    Parameters
+    ----------
+    geometry : SceneGeometry
+        The scene's geometry (``scene.geometry``).
+    views : sequence of View
+    """
+    drawn: set[str] = set()
+    for view in views:
+        drawn.update(k for part in geometry.visible(view) for k in geometry.part_keys.get(part.name, ()))
+    return [k for k in geometry.keys if k in drawn]
 
 
 def swatches_needed(table: RegionTable, rows: Sequence[int], views: Sequence[View],
-                    hidden: Iterable[str] = ()) -> tuple[bool, bool]:
+                    geometry: SceneGeometry) -> tuple[bool, bool]:
     """Whether the NaN colour and the missing colour appear in the drawn regions of `rows`.
+
+    Parameters
+    ----------
+    table : RegionTable
+    rows : sequence of int
+        Rows of `table` drawn.
+    views : sequence of View
+    geometry : SceneGeometry
+        The geometry the renderer draws (``painter.scene.geometry``): which
+        regions a view shows is decided there (:func:`drawn_keys`).
 
     Returns
     -------
     nan, missing : bool
     """
-    keys = set(drawn_keys(table.atlas, views, hidden))
+    keys = set(drawn_keys(geometry, views)) & {r.key for r in table.atlas.regions}  # not 'Left-unknown'
     cols = [j for j, k in enumerate(table.regions) if k in keys]
     values = table.values[np.ix_(list(rows), cols)] if cols else np.zeros((0, 0))
     nan = bool(np.isnan(values).any())

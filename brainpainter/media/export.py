@@ -489,7 +489,7 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
         from brainpainter.rendering.views import parse_views
 
         nan, missing = swatches_needed(table, [i], parse_views("lateral-left,medial-right,subcortical"),
-                                       scene.hidden)
+                                       scene.geometry)
         bar = colorbar_image(run.scale, (420, 64 if label else 48), background=run.settings.background,
                              label=label, nan=nan, missing=missing, fontsize=9.0)
         payload = html_page(glb, title=title or table.images[i], meshes=meshes,

@@ -177,7 +177,7 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     table = run.table
     chosen = select_rows(table.images, rows)
     painter = run.painter()
-    nan, missing = swatches_needed(table, chosen, run.views, painter.scene.hidden)
+    nan, missing = swatches_needed(table, chosen, run.views, painter.scene.geometry)
     plan = run.items(chosen)
     background = run.settings.background
     # the output folder is locked from before the first render until the figure is published

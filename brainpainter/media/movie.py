@@ -325,7 +325,7 @@ class MovieFrames:
     @classmethod
     def of(cls, run: Run, keys: MovieKeys, plan: list[FramePlan], movie: MovieOptions) -> MovieFrames:
         painter = run.painter()
-        nan, missing = swatches_needed(run.table, keys.rows, run.views, painter.scene.hidden)
+        nan, missing = swatches_needed(run.table, keys.rows, run.views, painter.scene.geometry)
         w, h = run.settings.width, run.settings.height
         assert run.settings.background is not None
         composer = FrameComposer(len(run.views), (w, h), run.scale, keys.times,

@@ -137,12 +137,14 @@ def plot(values: Any, view: str = "lateral-left", *, ax: Axes | None = None, row
     artist = ax.imshow(image, interpolation="antialiased")
     ax.set_axis_off()
     ax.set_aspect("equal")
-    cax = _colorbar(ax, result, row, view_name, label, ticks, orientation) if colorbar else None
+    cax = (_colorbar(ax, result, row, view_name, label, ticks, orientation, painter, options.get("template"))
+           if colorbar else None)
     return PlotResult(ax, artist, cax, image, scale)
 
 
 def _colorbar(ax: Axes, result: RenderResult, row: str | int, view_name: str, label: str | None,
-              ticks: Sequence[float] | str | None, orientation: str) -> Axes:
+              ticks: Sequence[float] | str | None, orientation: str, painter: Painter | None,
+              template: Any) -> Axes:
     """The colour bar of a plot in an inset of `ax`, with the swatches of the colours it draws."""
     from brainpainter.media.colorbar import draw_colorbar
     from brainpainter.media.drawn import swatches_needed
@@ -155,7 +157,14 @@ def _colorbar(ax: Axes, result: RenderResult, row: str | int, view_name: str, la
         cax = ax.inset_axes((0.15, -0.09, 0.7, 0.05))
     table, scale = result.table, result.scale
     assert table is not None and scale is not None
+    if painter is not None:
+        scene = painter.scene
+    else:  # the regions the renderer drew (the scene only: its geometry decides, no renderer is started)
+        from brainpainter.rendering.painter import load_scene
+
+        settings = result.manifest["settings"]
+        _, scene = load_scene(table.atlas, template or "fsaverage", settings["surface"], settings["hidden"])
     nan, missing = swatches_needed(table, select_rows(table.images, [row]), parse_views([view_name]),
-                                   result.manifest["settings"]["hidden"])
+                                   scene.geometry)
     draw_colorbar(cax, scale, label=label, ticks=ticks, orientation=orientation, nan=nan, missing=missing)
     return cax

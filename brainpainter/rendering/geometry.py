@@ -38,6 +38,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import replace
+from functools import cached_property
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
@@ -208,6 +209,8 @@ class SceneGeometry:
     keys : tuple of str
         Region key of palette slots 3, 4, ... (hidden regions are not drawn and have no slot).
     slot_of : dict of str to int
+    part_keys : dict of str to tuple of str
+        Region keys each region-coloured part draws (``cortex-lh``: its regions), by part name.
     default_rgb : ndarray of float32, shape (n_slots, 3)
         Colour of each slot when the palette gives none.
     vertex_slots : dict of str to (int, int)
@@ -250,10 +253,12 @@ class SceneGeometry:
                 out[i] = slot_of[key]
             return out
 
-        def add(*args: Any, **kwargs: Any) -> None:
+        self._part_slots: dict[str, frozenset[int]] = {}  # part name -> the region slots of its faces
+        def add(*args: Any, **kwargs: Any) -> None:  # args: name, kind, hemi, vertices, faces, face_slot, ...
             part = build_part(*args, occlusion=settings.shading != "flat", **kwargs)
             if part is not None:
                 parts.append(part)
+                self._part_slots[part.name] = frozenset(int(i) for i in np.unique(args[5]) if i >= first_key)
 
         for hemi in HEMIS:
             cm = meshes[hemi]
@@ -296,6 +301,13 @@ class SceneGeometry:
         self.keys: tuple[str, ...] = tuple(keys)
         self.slot_of = slot_of
         self.default_rgb = np.asarray(defaults, dtype=np.float32)
+
+    @cached_property
+    def part_keys(self) -> dict[str, tuple[str, ...]]:
+        """Region keys each cortex, subcortical or glass part draws (its faces' regions), by part name."""
+        key_of = {slot: key for key, slot in self.slot_of.items()}
+        return {name: tuple(key_of[i] for i in sorted(slots) if i in key_of)
+                for name, slots in self._part_slots.items()}
 
     @staticmethod
     def _borders(scene: SceneParts, hemi: str, cm: Any, verts: NDArray[Any], face_slot: NDArray[Any],

@@ -10,6 +10,9 @@
 * :func:`check_atlas` (``atlas_check.py``) and :func:`check_renderer`
   (``conformance.py``): the checks an atlas or renderer plugin must pass.
 * :func:`growth_per_image` (``memory.py``): resident memory growth per image.
+* ``brainglobe.write_format3_atlas``: a BrainGlobe atlas in format 3 (as
+  brainglobe-atlasapi 3 reads it) in a folder, without network (import it from
+  :mod:`brainpainter.testing.brainglobe`; it needs zarr and DracoPy).
 
 For atlas plugin authors: :func:`check_atlas` runs every check brainpainter
 makes of an atlas using :class:`StandInRenderer`. In a plugin's
