@@ -268,10 +268,7 @@ class SceneGeometry:
             names = [HEMI_PREFIX[hemi] + n for n in cm.label_names]
             face_slot = slots_for(names, MEDIAL_SLOT, hidden)[np.asarray(cm.face_label, np.int64)]
             verts = cm.vertices[scene.surface]
-            sulc = template_sulc(template, scene.labels, hemi, cm) if with_sulc else None
-            if sulc is None:
-                sulc = (convexity(cm.vertices.get("pial", verts), cm.faces) if with_sulc
-                        else np.zeros(len(verts), np.float32))
+            sulc = self._sulc(scene, hemi, cm, verts, with_sulc)
             occlusion = getattr(cm, "occlusion", None)
             outline = (self._borders(scene, hemi, cm, verts, face_slot, per_vertex)
                        if settings.outline_width > 0 else None)
@@ -308,6 +305,14 @@ class SceneGeometry:
         key_of = {slot: key for key, slot in self.slot_of.items()}
         return {name: tuple(key_of[i] for i in sorted(slots) if i in key_of)
                 for name, slots in self._part_slots.items()}
+
+    @staticmethod
+    def _sulc(scene: SceneParts, hemi: str, cm: Any, verts: NDArray[Any], with_sulc: bool) -> NDArray[Any]:
+        """Sulcal depth per vertex of a cortex part: the template's, else convexity; zeros unused."""
+        if not with_sulc:
+            return np.zeros(len(verts), np.float32)
+        sulc = template_sulc(scene.template, scene.labels, hemi, cm)
+        return sulc if sulc is not None else convexity(cm.vertices.get("pial", verts), cm.faces)
 
     @staticmethod
     def _borders(scene: SceneParts, hemi: str, cm: Any, verts: NDArray[Any], face_slot: NDArray[Any],
