@@ -56,17 +56,19 @@ class CommandsFromPlugins(click.Group):
     an entry point is imported only when its command runs (or ``--help`` lists it).
     """
 
-    def _entry_points(self) -> dict[str, Any]:
-        # Scanning every installed distribution's metadata costs ~70 ms in a full environment: once.
-        found = getattr(self, "_found_entry_points", None)
-        if found is None:
+    def _entry_points(self, ctx: click.Context) -> dict[str, Any]:
+        # Scanning every installed distribution's metadata costs ~50 ms in a full environment: once a
+        # command line (``--help`` lists the commands, then loads the plugins' ones).
+        meta = ctx.find_root().meta
+        if "brainpainter.entry_points" not in meta:
             from importlib.metadata import entry_points
 
-            found = self._found_entry_points = {ep.name: ep for ep in entry_points(group=COMMANDS_GROUP)}
+            meta["brainpainter.entry_points"] = {ep.name: ep for ep in entry_points(group=COMMANDS_GROUP)}
+        found: dict[str, Any] = meta["brainpainter.entry_points"]
         return {name: ep for name, ep in found.items() if name not in self.commands}
 
     def list_commands(self, ctx: click.Context) -> list[str]:
-        return sorted({*super().list_commands(ctx), *LAZY_COMMANDS, *self._entry_points()})
+        return sorted({*super().list_commands(ctx), *LAZY_COMMANDS, *self._entry_points(ctx)})
 
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
         """The command list of ``--help``, without importing the lazy built-in commands."""
@@ -91,7 +93,7 @@ class CommandsFromPlugins(click.Group):
             module, _, attr = LAZY_COMMANDS[cmd_name][0].partition(":")
             command = getattr(importlib.import_module(module), attr)
             self.add_command(command, cmd_name)
-        entry = None if command is not None else self._entry_points().get(cmd_name)
+        entry = None if command is not None else self._entry_points(ctx).get(cmd_name)
         if entry is None:
             return command
         try:
