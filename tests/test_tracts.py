@@ -236,6 +236,7 @@ def test_pyafq_profiles_with_several_measures_need_a_value_column():
         read_tract_values(df)
     tv = read_tract_values(df, "dti_md")
     assert tv.images == ("s1",) and tv.row("s1")["tract:UF_left:2"] == 3.0
+    assert tv.row("stage-3")["tract:UF_left:2"] == 3.0  # one row (a group's profile) colours every image
 
 
 def test_wide_profiles_have_a_node_column():

@@ -61,8 +61,9 @@ class TractValues:
     nodes: tuple[tuple[str, int], ...]
 
     def row(self, image: str) -> dict[str, float]:
-        """Values of `image` by palette key (all NaN for an image the table lacks)."""
-        if self.images is None:
+        """Values of `image` by palette key (all NaN for an image the table lacks; a table of one row
+        colours every image, whatever its row is named)."""
+        if self.images is None or len(self.images) == 1:
             i: int | None = 0
         else:
             i = self.images.index(image) if image in self.images else None
