@@ -70,6 +70,34 @@ def too_many_rows(name: str, rows: int, max_rows: int) -> BrainPainterError:
     )
 
 
+def _in_child(target: Any, args: tuple[Any, ...], name: str, time_limit_s: float, too_slow: str,
+              stopped: str) -> Any:
+    """``target(pipe, *args)`` in a spawned process killed after `time_limit_s`; what it sent back.
+
+    The child sends ``("ok", payload)`` or ``("error", message)``; a message, a child too slow
+    (`too_slow`) or one that died (`stopped`) is raised as one line.
+    """
+    ctx = mp.get_context("spawn")
+    parent, child = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=target, args=(child, *args), daemon=True, name=name)
+    proc.start()
+    child.close()
+    try:
+        if not parent.poll(time_limit_s):
+            raise BrainPainterError(too_slow)
+        status, payload = parent.recv()
+    except (EOFError, OSError):
+        raise BrainPainterError(stopped) from None
+    finally:
+        parent.close()
+        if proc.is_alive():
+            proc.kill()
+        proc.join(timeout=5)
+    if status != "ok":
+        raise BrainPainterError(payload)
+    return payload
+
+
 def check_upload(data: bytes, name: str, options: dict[str, Any], *, max_rows: int,
                  time_limit_s: float) -> tuple[dict[str, Any], list[str]]:
     """``check --json``'s report and the image names of an uploaded table; raises its first error.
@@ -83,31 +111,11 @@ def check_upload(data: bytes, name: str, options: dict[str, Any], *, max_rows: i
                                 "table or map files themselves.")
     if not is_spreadsheet(data):
         return check_table(data, name, options, max_rows)
-    ctx = mp.get_context("spawn")
-    parent, child = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_check_main, args=(child, data, name, options, max_rows), daemon=True,
-                       name="brainpainter-read-upload")
-    proc.start()
-    child.close()
-    try:
-        if not parent.poll(time_limit_s):
-            raise BrainPainterError(
-                f"reading {name!r} took longer than this server's limit of {time_limit_s:g} s; save the "
-                "sheet as CSV (or remove unused rows and columns) and upload it again."
-            )
-        status, payload = parent.recv()
-    except (EOFError, OSError):
-        raise BrainPainterError(f"reading {name!r} stopped unexpectedly; save the sheet as CSV and upload "
-                                "it again.") from None
-    finally:
-        parent.close()
-        if proc.is_alive():
-            proc.kill()
-        proc.join(timeout=5)
-    if status != "ok":
-        raise BrainPainterError(payload)
-    report, images = payload
-    return report, images
+    return _in_child(  # type: ignore[no-any-return]
+        _check_main, (data, name, options, max_rows), "brainpainter-read-upload", time_limit_s,
+        f"reading {name!r} took longer than this server's limit of {time_limit_s:g} s; save the sheet as "
+        "CSV (or remove unused rows and columns) and upload it again.",
+        f"reading {name!r} stopped unexpectedly; save the sheet as CSV and upload it again.")
 
 
 def read_and_check(path: Path, name: str, options: dict[str, Any], *, max_rows: int,
@@ -196,31 +204,12 @@ def read_map_files(parts: list[tuple[str, bytes]], hemis: list[str | None], fold
             sub.mkdir()
             (sub / file_name(name)).write_bytes(data)
             entries.append((hemi, str(sub / file_name(name))))
-        ctx = mp.get_context("spawn")
-        parent, child = ctx.Pipe(duplex=False)
-        proc = ctx.Process(target=_map_main, args=(child, str(work), entries, max_images), daemon=True,
-                           name="brainpainter-read-map")
-        proc.start()
-        child.close()
         shown = " + ".join(file_name(n) for n, _ in parts)
-        try:
-            if not parent.poll(time_limit_s):
-                raise BrainPainterError(
-                    f"reading {shown!r} took longer than this server's limit of {time_limit_s:g} s; upload a "
-                    "smaller map (fewer images or volumes), or render it with 'brainpainter render' on your "
-                    "own computer.")
-            status, payload = parent.recv()
-        except (EOFError, OSError):
-            raise BrainPainterError(f"reading {shown!r} stopped unexpectedly (too large for this server?); "
-                                    "upload a smaller map.") from None
-        finally:
-            parent.close()
-            if proc.is_alive():
-                proc.kill()
-            proc.join(timeout=5)
-        if status != "ok":
-            raise BrainPainterError(payload)
-        report, images = payload
+        report, images = _in_child(
+            _map_main, (str(work), entries, max_images), "brainpainter-read-map", time_limit_s,
+            f"reading {shown!r} took longer than this server's limit of {time_limit_s:g} s; upload a smaller "
+            "map (fewer images or volumes), or render it with 'brainpainter render' on your own computer.",
+            f"reading {shown!r} stopped unexpectedly (too large for this server?); upload a smaller map.")
         return (work / "bundle.bin").read_bytes(), report, images
     finally:
         shutil.rmtree(work, ignore_errors=True)
