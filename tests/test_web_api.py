@@ -9,13 +9,12 @@ from __future__ import annotations
 import json
 import logging
 import re
-import sys
 from html.parser import HTMLParser
 
 import numpy as np
 import pytest
 from bad_inputs import corpus
-from web_support import EXAMPLE, STANDIN, env_with_site, png_pixels, standin_site, wait_for, zip_pngs
+from web_support import EXAMPLE, png_pixels, standin_app, standin_site, wait_for, zip_pngs
 
 pytest.importorskip("fastapi")
 from fastapi.testclient import TestClient
@@ -35,22 +34,9 @@ def site(tmp_path_factory):
 @pytest.fixture(scope="module")
 def server(tmp_path_factory, site):
     """A running app (1 worker, preview process) with the stand-in renderer."""
-    mp = pytest.MonkeyPatch()
-    for k, v in env_with_site(site).items():
-        mp.setenv(k, v)
-    sys.path.insert(0, str(site))
-    from brainpainter.atlas import registry
-    registry.reset_all()
-    config = ServerConfig(data_dir=tmp_path_factory.mktemp("data"), workers=1, renderer=STANDIN,
-                          max_jobs_per_client=50, rate_per_minute=100_000, max_upload_mb=10)
-    try:
-        with TestClient(create_app(config)) as client:
-            assert wait_for(lambda: client.get("/readyz").status_code == 200, 120), client.get("/readyz").text
-            yield client
-    finally:
-        sys.path.remove(str(site))
-        registry.reset_all()
-        mp.undo()
+    with standin_app(site, tmp_path_factory.mktemp("data"), workers=1, max_jobs_per_client=50,
+                     rate_per_minute=100_000, max_upload_mb=10) as client:
+        yield client
 
 
 def upload(client, data: bytes, name: str = "table.csv", **params) -> dict:

@@ -18,7 +18,7 @@ import threading
 import time
 
 import pytest
-from web_support import EXAMPLE, STANDIN, env_with_site, standin_site, wait_for
+from web_support import EXAMPLE, standin_app, standin_site, wait_for
 
 pytest.importorskip("fastapi")
 from fastapi.testclient import TestClient
@@ -281,23 +281,9 @@ def test_serve_refuses_non_finite_limits_and_warns_on_every_interface(tmp_path, 
 @pytest.fixture(scope="module")
 def rendering(tmp_path_factory):
     """An app with one job worker and the stand-in renderer."""
-    site = standin_site(tmp_path_factory.mktemp("site"))
-    mp = pytest.MonkeyPatch()
-    for k, v in env_with_site(site).items():
-        mp.setenv(k, v)
-    sys.path.insert(0, str(site))
-    from brainpainter.atlas import registry
-    registry.reset_all()
-    config = ServerConfig(data_dir=tmp_path_factory.mktemp("data"), workers=1, preview=False,
-                          renderer=STANDIN, rate_per_minute=100_000, max_jobs_per_client=50)
-    try:
-        with TestClient(create_app(config)) as client:
-            assert wait_for(lambda: client.get("/readyz").status_code == 200, 120), client.get("/readyz").text
-            yield client
-    finally:
-        sys.path.remove(str(site))
-        registry.reset_all()
-        mp.undo()
+    with standin_app(standin_site(tmp_path_factory.mktemp("site")), tmp_path_factory.mktemp("data"),
+                     workers=1, preview=False, rate_per_minute=100_000, max_jobs_per_client=50) as client:
+        yield client
 
 
 def _long_movie(client) -> str:

@@ -9,12 +9,11 @@ from __future__ import annotations
 
 import gzip
 import io
-import sys
 
 import nibabel as nib
 import numpy as np
 import pytest
-from web_support import STANDIN, env_with_site, png_pixels, standin_site, wait_for, zip_pngs
+from web_support import png_pixels, standin_app, standin_site, wait_for, zip_pngs
 
 pytest.importorskip("fastapi")
 from fastapi.testclient import TestClient
@@ -30,24 +29,10 @@ SMALL = {"size": "64x48", "views": "lateral-left,lateral-right"}
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     """A running app (1 worker, preview process) with the stand-in renderer."""
-    site = standin_site(tmp_path_factory.mktemp("site"))
-    mp = pytest.MonkeyPatch()
-    for k, v in env_with_site(site).items():
-        mp.setenv(k, v)
-    sys.path.insert(0, str(site))
-    from brainpainter.atlas import registry
-    registry.reset_all()
-    config = ServerConfig(data_dir=tmp_path_factory.mktemp("data"), workers=1, renderer=STANDIN,
-                          max_jobs_per_client=50, rate_per_minute=100_000, max_upload_mb=10,
-                          max_map_images=20)
-    try:
-        with TestClient(create_app(config)) as client:
-            assert wait_for(lambda: client.get("/readyz").status_code == 200, 120), client.get("/readyz").text
-            yield client
-    finally:
-        sys.path.remove(str(site))
-        registry.reset_all()
-        mp.undo()
+    with standin_app(standin_site(tmp_path_factory.mktemp("site")), tmp_path_factory.mktemp("data"),
+                     workers=1, max_jobs_per_client=50, rate_per_minute=100_000, max_upload_mb=10,
+                     max_map_images=20) as client:
+        yield client
 
 
 def morph(values, tmp_path, name: str) -> bytes:

@@ -10,7 +10,10 @@ import subprocess
 import sys
 import time
 import zipfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from PIL import Image
@@ -36,6 +39,36 @@ def env_with_site(site: Path) -> dict[str, str]:
     env = {k: v for k, v in os.environ.items() if k != "BRAINPAINTER_DEBUG"}
     env["PYTHONPATH"] = os.pathsep.join([str(site), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
     return env
+
+
+@contextmanager
+def standin_app(site: Path, data_dir: Path, **config: Any) -> Iterator[Any]:
+    """A running app (a ``TestClient``, ready) drawing with the stand-in renderer of `site`.
+
+    The server's processes find the renderer through ``PYTHONPATH``; `config` are
+    :class:`~brainpainter.web.config.ServerConfig` fields (``renderer`` defaults to the stand-in).
+    """
+    import pytest
+    from fastapi.testclient import TestClient
+
+    from brainpainter.atlas import registry
+    from brainpainter.web.app import create_app
+    from brainpainter.web.config import ServerConfig
+
+    mp = pytest.MonkeyPatch()
+    for k, v in env_with_site(site).items():
+        mp.setenv(k, v)
+    sys.path.insert(0, str(site))
+    registry.reset_all()
+    try:
+        app = create_app(ServerConfig(data_dir=data_dir, **{"renderer": STANDIN, **config}))
+        with TestClient(app) as client:
+            assert wait_for(lambda: client.get("/readyz").status_code == 200, 120), client.get("/readyz").text
+            yield client
+    finally:
+        sys.path.remove(str(site))
+        registry.reset_all()
+        mp.undo()
 
 
 def png_pixels(data: bytes) -> np.ndarray:
