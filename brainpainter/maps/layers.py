@@ -79,7 +79,6 @@ Image = float | tuple[int, int, float]
 
 def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArray[Any]], scale: ColourScale,
                   underlay_kind: str = "sulc", threshold: float | None = None,
-                  outline: dict[str, NDArray[Any]] | None = None,
                   cluster_edges: dict[str, NDArray[Any]] | None = None) -> dict[str, NDArray[Any]]:
     """The colours of one image of `maps` at the drawn vertices.
 
@@ -96,8 +95,6 @@ def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArr
     underlay_kind : {"sulc", "curv", "none"}
     threshold : float, optional
         ``|v| < threshold`` shows the underlay.
-    outline : dict of str to ndarray of bool, shape (n_hemi,), optional
-        Vertices drawn in the outline colour (region borders, :mod:`brainpainter.maps.outlines`).
     cluster_edges : dict of str to ndarray of int, shape (m, 2), optional
         The mesh's edges: the borders of the coloured (supra-threshold) areas are outlined too.
 
@@ -121,8 +118,6 @@ def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArr
                 rgb[show] = scale(v[show])[:, :3]
             if cluster_edges is not None and hemi in cluster_edges:
                 rgb[border_vertices(~show, cluster_edges[hemi])] = OUTLINE_COLOR  # the cluster's edge
-        if outline is not None and hemi in outline:
-            rgb[outline[hemi]] = OUTLINE_COLOR
         out[hemi] = np.clip(rgb, 0.0, 1.0).astype(np.float32)
     return out
 
