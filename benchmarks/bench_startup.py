@@ -69,11 +69,15 @@ def main() -> None:
 
 
 def _commands(py: str, table: Path) -> dict[str, list[str]]:
+    # as a user types it: the console script that pip wrote next to this Python (``python -m
+    # brainpainter`` where there is none, e.g. an install that put its scripts elsewhere)
+    script = Path(py).parent / "brainpainter"
+    command = [str(script)] if script.is_file() else [py, "-m", "brainpainter"]
     return {
         "python -c pass": [py, "-c", "pass"],
         "import bpy": [py, "-c", "import bpy"],  # Blender's own start, the floor of any first image
-        "brainpainter --help": [py, "-m", "brainpainter", "--help"],
-        "first image": [py, "-m", "brainpainter", "render", str(table), "--atlas", "dk",
+        "brainpainter --help": [*command, "--help"],
+        "first image": [*command, "render", str(table), "--atlas", "dk",
                         "--views", "lateral-left", "-q", "--out"],
     }
 

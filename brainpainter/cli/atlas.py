@@ -8,7 +8,8 @@ from typing import Any
 import click
 
 from brainpainter.atlas.model import SPACES
-from brainpainter.cli.options import CONTEXT, OutPath, echo_json, option_group, parse_size
+from brainpainter.cli.options import option_group, parse_size
+from brainpainter.cli.params import CONTEXT, OutPath, echo_json
 from brainpainter.errors import BrainPainterError
 from brainpainter.rendering.options import SceneOptions
 from brainpainter.rendering.settings import RenderSettings

@@ -12,14 +12,13 @@ from typing import Any
 import click
 
 from brainpainter.cli.options import (
-    CONTEXT,
-    OutPath,
     input_options,
     make_render_options,
     map_options,
     render_kwargs,
     tables_or_maps,
 )
+from brainpainter.cli.params import CONTEXT, OutPath
 from brainpainter.media.export import EXPORT_OPTIONS
 from brainpainter.media.export import export as run
 

@@ -12,40 +12,36 @@ import os
 import signal
 import sys
 import threading
-from pathlib import Path
 from typing import Any
 
 import click
 
-from brainpainter.cli.atlas import atlas
-from brainpainter.cli.options import (
-    CONTEXT,
-    OutPath,
-    echo_json,
-    input_options,
-    map_options,
-    option_group,
-    parallel_options,
-    render_kwargs,
-    render_options,
-    tables_or_maps,
-)
-from brainpainter.color.scale import ScaleOptions
+from brainpainter.cli.params import CONTEXT
 from brainpainter.errors import BrainPainterError
 
 COMMANDS_GROUP = "brainpainter.commands"
 
-#: Built-in commands loaded only when they run or their help is asked for (their options pull in
-#: the media stack: numpy, matplotlib), with the short help that ``brainpainter --help`` lists.
+#: The built-in commands, each loaded only when it runs or its help is asked for (their options
+#: pull in the option classes of core, the media stack: numpy, matplotlib), with the short help that
+#: ``brainpainter --help`` lists (``tests/test_cli_lazy.py`` checks it against the command's own).
 LAZY_COMMANDS = {
+    "atlas": ("brainpainter.cli.atlas:atlas", "List, inspect, add and remove atlases."),
+    "check": ("brainpainter.cli.render:check",
+              "Read INPUT tables exactly as render would and report how, without rendering."),
+    "plugins": ("brainpainter.cli.plugins:plugins", "Installed plugins, and which failed to load and why."),
+    "render": ("brainpainter.cli.render:render",
+               "Render every image of INPUT tables (CSV, TSV, .xlsx; see \"check\") or maps (--lh/--rh), "
+               "from every view."),
     "figure": ("brainpainter.cli.media:figure",
-               "A publication figure of INPUT rows: renders, titles and one colour bar."),
+               "A publication figure of INPUT rows (or maps, --lh/--rh): renders, titles and one "
+               "colour bar."),
     "movie": ("brainpainter.cli.media:movie",
-              "A movie through the rows of INPUT: each row a key frame, eased in between."),
+              "A movie through the rows of INPUT (or a map series, --lh/--rh): key frames, values "
+              "interpolated."),
     "export": ("brainpainter.cli.export:export",
-               "One row of INPUT as an interactive 3D brain: a .glb, or an HTML page."),
+               "One row of INPUT as an interactive 3D brain: a .glb, or an .html to rotate in a browser."),
     "serve": ("brainpainter.web.command:serve",
-              "Serve the web page and JSON API: upload a table, check it, render it."),
+              "Serve the web page and JSON API: upload a table, check it, preview it, render it."),
 }
 
 
@@ -57,13 +53,13 @@ class CommandsFromPlugins(click.Group):
     """
 
     def _entry_points(self, ctx: click.Context) -> dict[str, Any]:
-        # Scanning every installed distribution's metadata costs ~50 ms in a full environment: once a
-        # command line (``--help`` lists the commands, then loads the plugins' ones).
+        # Scanning every installed distribution's metadata: once a command line (``--help`` lists the
+        # commands, then loads the plugins' ones).
         meta = ctx.find_root().meta
         if "brainpainter.entry_points" not in meta:
-            from importlib.metadata import entry_points
+            from brainpainter.cli.entry_points import entry_points
 
-            meta["brainpainter.entry_points"] = {ep.name: ep for ep in entry_points(group=COMMANDS_GROUP)}
+            meta["brainpainter.entry_points"] = entry_points(COMMANDS_GROUP)
         found: dict[str, Any] = meta["brainpainter.entry_points"]
         return {name: ep for name, ep in found.items() if name not in self.commands}
 
@@ -119,156 +115,6 @@ def cli() -> None:
       brainpainter atlas list
       brainpainter atlas show dk
     """
-
-
-cli.add_command(atlas)
-
-
-# -- plugins ------------------------------------------------------------------
-@cli.command(context_settings=CONTEXT)
-@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
-def plugins(as_json: bool) -> None:
-    """Installed plugins, and which failed to load and why."""
-    from brainpainter.atlas import registry
-    report = []
-    for reg in (registry.atlases, registry.renderers, registry.templates):
-        for entry in reg.entries():
-            status, error = "ok", None
-            try:
-                reg.get(entry.name)
-            except BrainPainterError as exc:
-                status, error = "failed", str(exc)
-            report.append({"group": reg.group, "name": entry.name, "aliases": list(entry.aliases),
-                           "target": entry.target, "distribution": entry.distribution,
-                           "status": status, "error": error})
-        for name, error in reg.errors().items():
-            if not any(r["group"] == reg.group and r["name"] == name for r in report):
-                report.append({"group": reg.group, "name": name, "aliases": [], "target": None,
-                               "distribution": None, "status": "failed", "error": error})
-    report.extend(_command_plugins())
-    if as_json:
-        echo_json(report)
-        return
-    for r in report:
-        line = f"{r['group']:<24} {r['name']:<12} {r['status']:<7} {r['distribution'] or ''}"
-        click.echo(line + (f"\n    {r['error']}" if r["error"] else ""))
-
-
-def _command_plugins() -> list[dict[str, Any]]:
-    """Rows of ``brainpainter plugins`` for the commands added through ``brainpainter.commands``."""
-    from importlib.metadata import entry_points
-
-    rows: list[dict[str, Any]] = []
-    ctx = click.Context(cli)
-    for entry in entry_points(group=COMMANDS_GROUP):
-        status, error = "ok", None
-        try:
-            cli.get_command(ctx, entry.name)
-        except BrainPainterError as exc:
-            status, error = "failed", str(exc)
-        dist = entry.dist.name if entry.dist is not None else None
-        rows.append({"group": COMMANDS_GROUP, "name": entry.name, "aliases": [], "target": entry.value,
-                     "distribution": dist, "status": status, "error": error})
-    return rows
-
-
-def _one_or_many(inputs: tuple[Path, ...]) -> Path | list[Path]:
-    return inputs[0] if len(inputs) == 1 else list(inputs)
-
-
-# -- check --------------------------------------------------------------------
-@cli.command(context_settings=CONTEXT)
-@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
-                type=click.Path(path_type=Path, dir_okay=False))
-@click.option("--atlas", "-a", default=None,
-              help="Atlas: dk, destrieux, dkt (alias tourville) or a plugin atlas. "
-                   "Default: inferred from the region names.")
-@input_options
-@option_group(ScaleOptions, ("gradient", "cmap", "vmin", "vmax", "center"),
-              gradient={"help": "Colour scale to compare the values with (as for render)."},
-              cmap={"help": "Colour map to compare the values with (as for render)."})
-@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
-def check(inputs: tuple[Path, ...], atlas: str | None, image_column: str | None, value: str | None,
-          region_column: str | None, strict: bool, gradient: str | None, cmap: str | None,
-          vmin: float | None, vmax: float | None, center: float | None, as_json: bool) -> None:
-    """Read INPUT tables exactly as render would and report how, without rendering.
-
-    \b
-    Shows the shape detected, the atlas (inferred when --atlas is not given),
-    what each column or name resolved to (or the closest names), regions
-    without a value, bad cells and the value range against the colour scale.
-    Several INPUTs (e.g. lh and rh aparcstats2table files) are merged by image
-    name. Exit code 0: render would accept the table; 2: it would not.
-    """
-    from brainpainter.table.region_table import inspect_table
-    from brainpainter.table.report import check_report, format_report
-
-    table = inspect_table(_one_or_many(inputs), atlas, image_column=image_column, value=value,
-                          region_column=region_column, strict=strict)
-    report = check_report(table, gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center)
-    if as_json:
-        echo_json(report)
-    else:
-        click.echo(format_report(report))
-    if report["errors"]:
-        raise BrainPainterError(report["errors"][0])
-
-
-# -- render -------------------------------------------------------------------
-@cli.command(context_settings=CONTEXT)
-@click.argument("inputs", nargs=-1, required=False, metavar="[INPUT...]",
-                type=click.Path(path_type=Path, dir_okay=False))
-@click.option("--out", "-o", required=True, type=OutPath(path_type=Path, file_okay=False),
-              help="Output folder for {image}_{view}.png and manifest.json.")
-@click.option("--rows", default=None,
-              help="Image names to render, comma-separated, in this order (default: all rows).")
-@render_options
-@map_options
-@input_options
-@parallel_options
-@click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
-def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, **options: Any) -> None:
-    """Render every image of INPUT tables (CSV, TSV, .xlsx; see "check") or maps (--lh/--rh), from every view.
-
-    Several INPUTs (e.g. lh and rh aparcstats2table files) are merged by image name.
-    Per-vertex maps (thickness, .mgh, .gii, ...) are given with --lh FILE --rh FILE (docs/maps.md).
-    """
-    from brainpainter.rendering.run import render as run
-
-    kwargs = render_kwargs(options)
-    result = run(tables_or_maps(inputs, kwargs), out=out, progress=not quiet, rows=rows, **kwargs)
-    if result.manifest["input"].get("kind") == "vertex map":
-        m = result.manifest["input"]
-        click.echo(f"{len(result.files)} image(s) written to {out} ({m['n_images']} map image(s), "
-                   f"hemispheres {', '.join(m['hemis'])})")
-        return
-    from brainpainter.table.region_table import summary_line
-    from brainpainter.table.report import input_warnings
-
-    s = result.manifest["input"]
-    click.echo(f"input: {summary_line(s)}")
-    for line in input_warnings(s):
-        click.echo(f"warning: {line}")
-    rendered = len({f["row"] for f in result.manifest["files"]})  # --rows may choose some of the rows
-    of = f" of {s['n_images']}" if rendered != s["n_images"] else ""
-    click.echo(
-        f"{len(result.files)} image(s) written to {out} "
-        f"({rendered} row(s){of}; {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
-        f"{len(s['unmatched_columns'])} unmatched column(s))"
-    )
-    tracts = result.manifest.get("tracts")
-    if tracts:
-        drawn = sum(b["drawn"] for b in tracts["bundles"])
-        click.echo(f"tracts: {len(tracts['bundles'])} bundle(s) "
-                   f"({', '.join(b['name'] for b in tracts['bundles'])}), {drawn:,} streamlines drawn")
-        for note in tracts["notes"]:
-            click.echo(f"note: {note}")
-    w = result.workers
-    if w.get("backend") in ("LocalRunner", "DaskRunner"):
-        where = "processes" if w["backend"] == "LocalRunner" else "Dask workers"
-        click.echo(f"rendered by {w['workers']} {where} (painter start-up {max(w['startup_seconds']):.1f} s"
-                   + (f"; {len(w['retried'])} task(s) retried" if w["retried"] else "") + ")")
-
 
 
 

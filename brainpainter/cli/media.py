@@ -12,8 +12,6 @@ from typing import Any
 import click
 
 from brainpainter.cli.options import (
-    CONTEXT,
-    OutPath,
     input_options,
     make_render_options,
     map_options,
@@ -23,6 +21,7 @@ from brainpainter.cli.options import (
     render_options,
     tables_or_maps,
 )
+from brainpainter.cli.params import CONTEXT, OutPath
 from brainpainter.media.layout import FigureOptions
 from brainpainter.media.movie import MovieOptions, make_movie
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import click
 
-from brainpainter.cli.options import OutPath, split_commas
+from brainpainter.cli.params import OutPath, split_commas
 from brainpainter.errors import BrainPainterError
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}

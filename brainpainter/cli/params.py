@@ -1,0 +1,61 @@
+"""Click settings, parameter types and callbacks shared by every command (imports only click).
+
+Kept apart from :mod:`brainpainter.cli.options` (the options generated from core's option classes,
+which import numpy-free but sizeable modules) so that ``brainpainter --help`` and plugin commands
+such as the template builder's load only this.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import click
+
+#: Settings of every command: ``-h`` as well as ``--help``, help text up to 100 columns wide.
+CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
+
+
+def echo_json(obj: object) -> None:
+    """Print `obj` as indented JSON (the commands' ``--json`` output)."""
+    click.echo(json.dumps(obj, indent=2))
+
+
+class FiniteFloat(click.ParamType):  # type: ignore[type-arg]
+    """A float option that refuses NaN and infinities (``--vmin nan``) before anything runs."""
+
+    name = "number"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> float:
+        import math
+
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            self.fail(f"{value!r} is not a number.", param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value!r} is not a finite number; give a number such as 1.5.", param, ctx)
+        return number
+
+
+class OutPath(click.Path):
+    """``click.Path`` for ``--out`` that refuses an empty value.
+
+    ``--out ''`` (often an unset shell variable, ``--out "$DIR"``) would
+    otherwise become ``Path('')``, the current folder.
+    """
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        if isinstance(value, str) and not value.strip():
+            self.fail(f"{value!r} is empty, which would mean the current folder; give a folder or file name "
+                      "(use '.' for the current folder if that is meant).", param, ctx)
+        return super().convert(value, param, ctx)
+
+
+#: Click type of every float option: finite numbers only.
+FINITE = FiniteFloat()
+
+
+def split_commas(ctx: click.Context, param: click.Parameter, value: tuple[str, ...]) -> list[str]:
+    """Callback for repeatable options that also take comma-separated lists."""
+    return [v.strip() for item in value for v in item.split(",") if v.strip()]

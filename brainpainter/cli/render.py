@@ -1,0 +1,119 @@
+"""``brainpainter check`` and ``brainpainter render``: read INPUT tables or maps, and render them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import click
+
+from brainpainter.cli.options import (
+    input_options,
+    map_options,
+    option_group,
+    parallel_options,
+    render_kwargs,
+    render_options,
+    tables_or_maps,
+)
+from brainpainter.cli.params import CONTEXT, OutPath, echo_json
+from brainpainter.color.scale import ScaleOptions
+from brainpainter.errors import BrainPainterError
+
+
+def _one_or_many(inputs: tuple[Path, ...]) -> Path | list[Path]:
+    return inputs[0] if len(inputs) == 1 else list(inputs)
+
+
+# -- check --------------------------------------------------------------------
+@click.command(context_settings=CONTEXT)
+@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
+                type=click.Path(path_type=Path, dir_okay=False))
+@click.option("--atlas", "-a", default=None,
+              help="Atlas: dk, destrieux, dkt (alias tourville) or a plugin atlas. "
+                   "Default: inferred from the region names.")
+@input_options
+@option_group(ScaleOptions, ("gradient", "cmap", "vmin", "vmax", "center"),
+              gradient={"help": "Colour scale to compare the values with (as for render)."},
+              cmap={"help": "Colour map to compare the values with (as for render)."})
+@click.option("--json", "as_json", is_flag=True, help="Machine-readable output.")
+def check(inputs: tuple[Path, ...], atlas: str | None, image_column: str | None, value: str | None,
+          region_column: str | None, strict: bool, gradient: str | None, cmap: str | None,
+          vmin: float | None, vmax: float | None, center: float | None, as_json: bool) -> None:
+    """Read INPUT tables exactly as render would and report how, without rendering.
+
+    \b
+    Shows the shape detected, the atlas (inferred when --atlas is not given),
+    what each column or name resolved to (or the closest names), regions
+    without a value, bad cells and the value range against the colour scale.
+    Several INPUTs (e.g. lh and rh aparcstats2table files) are merged by image
+    name. Exit code 0: render would accept the table; 2: it would not.
+    """
+    from brainpainter.table.region_table import inspect_table
+    from brainpainter.table.report import check_report, format_report
+
+    table = inspect_table(_one_or_many(inputs), atlas, image_column=image_column, value=value,
+                          region_column=region_column, strict=strict)
+    report = check_report(table, gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center)
+    if as_json:
+        echo_json(report)
+    else:
+        click.echo(format_report(report))
+    if report["errors"]:
+        raise BrainPainterError(report["errors"][0])
+
+
+# -- render -------------------------------------------------------------------
+@click.command(context_settings=CONTEXT)
+@click.argument("inputs", nargs=-1, required=False, metavar="[INPUT...]",
+                type=click.Path(path_type=Path, dir_okay=False))
+@click.option("--out", "-o", required=True, type=OutPath(path_type=Path, file_okay=False),
+              help="Output folder for {image}_{view}.png and manifest.json.")
+@click.option("--rows", default=None,
+              help="Image names to render, comma-separated, in this order (default: all rows).")
+@render_options
+@map_options
+@input_options
+@parallel_options
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
+def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, **options: Any) -> None:
+    """Render every image of INPUT tables (CSV, TSV, .xlsx; see "check") or maps (--lh/--rh), from every view.
+
+    Several INPUTs (e.g. lh and rh aparcstats2table files) are merged by image name.
+    Per-vertex maps (thickness, .mgh, .gii, ...) are given with --lh FILE --rh FILE (docs/maps.md).
+    """
+    from brainpainter.rendering.run import render as run
+
+    kwargs = render_kwargs(options)
+    result = run(tables_or_maps(inputs, kwargs), out=out, progress=not quiet, rows=rows, **kwargs)
+    if result.manifest["input"].get("kind") == "vertex map":
+        m = result.manifest["input"]
+        click.echo(f"{len(result.files)} image(s) written to {out} ({m['n_images']} map image(s), "
+                   f"hemispheres {', '.join(m['hemis'])})")
+        return
+    from brainpainter.table.region_table import summary_line
+    from brainpainter.table.report import input_warnings
+
+    s = result.manifest["input"]
+    click.echo(f"input: {summary_line(s)}")
+    for line in input_warnings(s):
+        click.echo(f"warning: {line}")
+    rendered = len({f["row"] for f in result.manifest["files"]})  # --rows may choose some of the rows
+    of = f" of {s['n_images']}" if rendered != s["n_images"] else ""
+    click.echo(
+        f"{len(result.files)} image(s) written to {out} "
+        f"({rendered} row(s){of}; {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
+        f"{len(s['unmatched_columns'])} unmatched column(s))"
+    )
+    tracts = result.manifest.get("tracts")
+    if tracts:
+        drawn = sum(b["drawn"] for b in tracts["bundles"])
+        click.echo(f"tracts: {len(tracts['bundles'])} bundle(s) "
+                   f"({', '.join(b['name'] for b in tracts['bundles'])}), {drawn:,} streamlines drawn")
+        for note in tracts["notes"]:
+            click.echo(f"note: {note}")
+    w = result.workers
+    if w.get("backend") in ("LocalRunner", "DaskRunner"):
+        where = "processes" if w["backend"] == "LocalRunner" else "Dask workers"
+        click.echo(f"rendered by {w['workers']} {where} (painter start-up {max(w['startup_seconds']):.1f} s"
+                   + (f"; {len(w['retried'])} task(s) retried" if w["retried"] else "") + ")")
