@@ -134,7 +134,7 @@ def test_pasted_tab_separated_text_and_options(server):
 
 
 def _check_params(args: list[str]) -> tuple[list[str], dict]:
-    from brainpainter.cli.main import check
+    from brainpainter.cli.render import check
 
     ctx = check.make_context("check", list(args), resilient_parsing=False)
     p = ctx.params
