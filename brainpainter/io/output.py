@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import sys
 import tempfile
 import unicodedata
 from collections import deque
@@ -131,20 +132,49 @@ _encoder: dict[str, Any] = {}
 
 
 def load_encoder() -> Any:
-    """The ``fpng`` module (None when missing: Pillow encodes), imported once.
+    """fpng's encoder, ``encode_ndarray(pixels) -> bytes`` (None when missing: Pillow encodes), loaded once.
 
-    Call it on the caller's thread before PNG worker threads encode (``PngWriter``
-    does): fpng's import walks the interpreter stack (lazy_loader), which takes
-    seconds on a worker thread once bpy is loaded. Not imported with this module,
-    whose names ``brainpainter --help`` needs (fpng and Pillow cost ~0.1 s).
+    The compiled module ``fpng.fpng_ext`` is loaded from its file without running
+    ``fpng/__init__.py``, which only wraps it and imports ``lazy_loader``, whose
+    ``lazy.load('cv2')`` walks the interpreter stack with ``inspect.stack()``: 0.15 s
+    of a cold first image once bpy is loaded, seconds on a worker thread. Where
+    that fails (another layout of the package), ``import fpng`` as usual. Call it
+    on the caller's thread before PNG worker threads encode (``PngWriter`` does).
+    Not imported with this module, whose names ``brainpainter --help`` needs.
     """
     if "fpng" not in _encoder:
-        try:
-            import fpng
-        except ImportError:  # pragma: no cover - fpng is a dependency; Pillow is the fallback
-            fpng = None
-        _encoder["fpng"] = fpng
+        _encoder["fpng"] = _fpng_extension()
     return _encoder["fpng"]
+
+
+def _fpng_extension() -> Any:
+    import importlib.machinery
+    import importlib.util
+
+    try:
+        spec = importlib.util.find_spec("fpng")  # finds the package without importing it
+    except (ImportError, ValueError):
+        spec = None
+    if spec is None:  # pragma: no cover - fpng is a dependency; Pillow is the fallback
+        return None
+    if "fpng" not in sys.modules:
+        for folder in spec.submodule_search_locations or ():
+            for suffix in importlib.machinery.EXTENSION_SUFFIXES:
+                path = os.path.join(folder, "fpng_ext" + suffix)
+                if not os.path.isfile(path):
+                    continue
+                try:
+                    ext_spec = importlib.util.spec_from_file_location("fpng.fpng_ext", path)
+                    assert ext_spec is not None and ext_spec.loader is not None
+                    module = importlib.util.module_from_spec(ext_spec)
+                    ext_spec.loader.exec_module(module)
+                    module.init()  # what fpng/__init__.py does once
+                    return module
+                except Exception:  # pragma: no cover - fall back to the package's own import
+                    break
+    import fpng
+
+    return fpng.fpng_ext
 
 
 def _png_chunk(kind: bytes, data: bytes) -> bytes:
@@ -164,7 +194,7 @@ def png_bytes(image: NDArray[Any], metadata: dict[str, str] | None = None) -> by
     pixels = np.ascontiguousarray(image, dtype=np.uint8)
     fpng = load_encoder()
     if fpng is not None and pixels.ndim == 3 and pixels.shape[2] in (3, 4):
-        data = fpng.from_ndarray(pixels)
+        data = fpng.encode_ndarray(pixels)
         chunks = b"".join(
             _png_chunk(b"iTXt", k.encode("latin-1") + b"\0\0\0\0\0" + str(v).encode("utf-8"))
             for k, v in (metadata or {}).items())
