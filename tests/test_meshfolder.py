@@ -283,3 +283,32 @@ def test_views_follow_the_template_axes_not_its_coordinates(tmp_path):
                                  ).geometry.camera(PRESETS[name], 4 / 3), 400, 300)
               for t, p in ((ras, point), (rot, point @ m.T))]
         np.testing.assert_allclose(px[0], px[1], atol=1e-6, err_msg=name)
+
+
+def test_a_brain_longer_than_wide_gets_a_square_image_unless_a_size_is_given(tmp_path):
+    """The atlas's ``image_aspect`` reshapes the default size (as many pixels); ``--size`` is kept."""
+    from brainpainter.rendering.options import Options
+    from brainpainter.rendering.settings import RenderSettings, with_aspect
+
+    assert with_aspect(RenderSettings(), 1.0).size == "1040x1040"
+    assert with_aspect(RenderSettings(width=800, height=600), 0.75).size == "600x800"
+    assert not Options.of({}).size_given and Options.of({"width": 300}).size_given
+    folder = tmp_path / "long"
+    folder.mkdir()
+    for name, centre in (("lh.Front", (-1, 4, 0)), ("rh.Front", (1, 4, 0)),
+                         ("lh.Back", (-1, -4, 0)), ("rh.Back", (1, -4, 0))):
+        ball(centre).export(folder / f"{name}.ply")
+    assert add("long", "--meshes", str(folder)).exit_code == 0
+    meta = json.loads((registry.atlases.get("long").template_dir.parent / "atlas.json").read_text())
+    assert meta["image_aspect"] == 0.75  # 4 x 10: a portrait image, the narrowest allowed
+    with stand_in() as renderer:
+        for size, expected in ((None, (900, 1200)), ("400x300", (400, 300))):
+            out = tmp_path / f"out-{size}"
+            args = ["render", "--atlas", "long", "--views", "dorsal", "--renderer", renderer, "-q",
+                    "--out", str(out), *(["--size", size] if size else [])]
+            table = tmp_path / "t.csv"
+            table.write_text("image,Left-Front\nA,1\n")
+            result = CliRunner().invoke(cli, [args[0], str(table), *args[1:]])
+            assert result.exit_code == 0, result.output
+            manifest = json.loads((out / "manifest.json").read_text())
+            assert (manifest["settings"]["width"], manifest["settings"]["height"]) == expected, manifest

@@ -110,24 +110,27 @@ def test_dorsal_view_has_olfactory_anterior_cerebellum_posterior_left_on_the_lef
 
 @needs_source
 @pytest.mark.render
-def test_views_at_the_default_size_fill_the_side_that_binds(site, tmp_path):
-    """1200x900 (the default): the lateral and subcortical views fill 60-95 % of the width; the dorsal view,
-    anterior up, is bound by the brain's length (its height fills ~90 %) and its width is what a brain
-    0.8 times as wide as long leaves in a 4:3 image (~56 %; the 60 % bar would need anterior to the side)."""
+def test_views_at_the_default_size_are_framed(site, tmp_path):
+    """No size given: the mouse atlas's own shape (``image_aspect`` 1.0: square, as many pixels as 1200x900,
+    1040x1040), in which every view fills 60-95 % of the width, the dorsal view (anterior up, left on the
+    left) too: at 4:3 a brain 0.8 as wide as long left it 56 %. A size the user gives is kept."""
     from PIL import Image
 
     from brainpainter.rendering.run import render
 
     with installed(site):
-        render({"Left-Olfactory": 1.0}, "mouse", out=tmp_path, views="top,cortical-outer,subcortical",
+        render({"Left-Olfactory": 1.0}, "mouse", out=tmp_path / "auto",
+               views="top,cortical-outer,subcortical", shading="flat", quality="fast", progress=False)
+        render({"Left-Olfactory": 1.0}, "mouse", out=tmp_path / "given", views="top", width=400, height=300,
                shading="flat", quality="fast", progress=False)
     fills = {}
     for view in ("dorsal", "lateral-left", "subcortical"):
-        img = np.asarray(Image.open(tmp_path / f"1_{view}.png").convert("RGB")).astype(int)
-        assert img.shape == (900, 1200, 3)
+        img = np.asarray(Image.open(tmp_path / "auto" / f"1_{view}.png").convert("RGB")).astype(int)
+        assert img.shape == (1040, 1040, 3)
         brain = np.abs(img - 255).max(-1) > 8
         cols, rows = np.nonzero(brain.any(0))[0], np.nonzero(brain.any(1))[0]
-        fills[view] = ((cols.max() - cols.min() + 1) / 1200, (rows.max() - rows.min() + 1) / 900)
-    assert 0.85 <= fills["lateral-left"][0] <= 0.95, fills
-    assert 0.6 <= fills["subcortical"][0] <= 0.95, fills
-    assert 0.85 <= fills["dorsal"][1] <= 0.95 and 0.5 <= fills["dorsal"][0] < 0.6, fills
+        fills[view] = ((cols.max() - cols.min() + 1) / 1040, (rows.max() - rows.min() + 1) / 1040)
+    assert all(0.6 <= w <= 0.95 for w, _ in fills.values()), fills
+    assert 0.85 <= fills["dorsal"][1] <= 0.95, fills  # the brain's length binds, anterior up
+    with Image.open(tmp_path / "given" / "1_dorsal.png") as im:
+        assert im.size == (400, 300)

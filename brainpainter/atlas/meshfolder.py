@@ -312,6 +312,21 @@ def describe_frame(regions: list[RegionMesh], units: str | None, orientation: st
 
 
 # -- writing --------------------------------------------------------------------------
+def image_aspect(regions: list[RegionMesh]) -> float | None:
+    """Width / height of the images of a brain with this extent when the user gives no size.
+
+    Seen from above (anterior up), a brain fills ``0.926 * 0.75 * LR / AP`` of a 4:3 image's
+    width; one longer than wide (a mouse, 0.81; a rat) gets an image as much narrower as brings
+    that to about 75 %, between 3:4 and 4:3 (a mouse: square). None: 4:3 is right (a brain about
+    as wide as long; the human templates keep their 1200 x 900).
+    """
+    pts = np.concatenate([r.vertices for r in regions])
+    lr, ap = np.ptp(pts[:, 0]), np.ptp(pts[:, 1])
+    if ap <= 0 or lr / ap >= 0.9:
+        return None
+    return float(round(min(max(0.926 * (lr / ap) / 0.75, 0.75), 4 / 3), 2))
+
+
 def _concat(meshes: list[RegionMesh]) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any]]:
     verts, faces, labels, base = [], [], [], 0
     for i, r in enumerate(meshes):
@@ -448,6 +463,7 @@ def write_mesh_atlas(name: str, regions: list[RegionMesh], report: list[str], *,
     meta = {
         "name": name, "title": title or name, "kind": "meshes", "template_labels": name, "template": name,
         "description": description, "citation": citation, "aliases": [], "source": source, "report": report,
+        "image_aspect": image_aspect(regions),
         "groups": {k: list(m) for k, (_, m) in (groups or {}).items()},
         "regions": [{"key": r.key, "file": r.file.name, "part": r.part, "n_vertices": len(r.vertices),
                      "n_faces": len(r.faces), "n_read_vertices": r.n_read_vertices, "notes": r.notes}

@@ -122,6 +122,9 @@ class Atlas:
     template_dir : Path or None
         A template of the atlas's own (a volume atlas of a brain without
         cortical surfaces, e.g. a mouse), used unless another template is named.
+    image_aspect : float or None
+        Width / height of the images when the user gives no size (a mouse brain, longer
+        than wide, is framed in a square); None: the command's own size (1200 x 900).
     """
 
     name: str
@@ -136,6 +139,7 @@ class Atlas:
     volume_dirs: tuple[Path, ...] = ()
     sources: tuple[tuple[str, str], ...] = ()
     template_dir: Path | None = None
+    image_aspect: float | None = None
     _by_key: dict[str, Region] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -291,6 +295,7 @@ def load_atlas_dir(path: str | Path) -> Atlas:
         volume_dirs=(path,) if (path / "subcortical.npz").is_file() else (),
         template_dir=path / "template" if (path / "template" / "manifest.json").is_file() else None,
         members=tuple((str(k), tuple(str(m) for m in v)) for k, v in meta.get("groups", {}).items()),
+        image_aspect=float(meta["image_aspect"]) if meta.get("image_aspect") else None,
     )
 
 

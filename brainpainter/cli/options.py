@@ -105,8 +105,9 @@ def render_option_list(views: str | None = DEFAULT_VIEWS, size: str = DEFAULT_SI
                              show_default=False),
         "background": field_option(settings, "background"),
         "transparent": click.option("--transparent", is_flag=True, help="Transparent background."),
-        "size": click.option("--size", default=size, show_default=True,
-                             help="Size of each rendered view, WIDTHxHEIGHT pixels."),
+        "size": click.option("--size", default=None, metavar="WIDTHxHEIGHT", help=(
+            f"Size of each rendered view in pixels [default: {size}; an atlas of another shape, such "
+            "as the mouse, reshapes it to as many pixels]."), callback=_check_size),
         **{name: field_option(settings, name)
            for name in ("quality", "shading", "lighting", "glass_opacity", "cortex")},
         "outline_width": field_option(settings, "outline_width", metavar="PX", show_default=False),
@@ -122,6 +123,11 @@ def render_option_list(views: str | None = DEFAULT_VIEWS, size: str = DEFAULT_SI
         "tract_value": field_option(scene, "tract_value"),
         "tract_radius": field_option(scene, "tract_radius"),
     }
+
+
+def _check_size(ctx: click.Context, param: click.Parameter, value: str | None) -> tuple[int, int] | None:
+    """``--size`` parsed and checked before anything runs (None when not given)."""
+    return None if value is None else parse_size(value)
 
 
 def make_render_options(views: str = DEFAULT_VIEWS, size: str = DEFAULT_SIZE,
@@ -186,8 +192,9 @@ def render_kwargs(options: dict[str, Any]) -> dict[str, Any]:
     """
     names = (*RENDER_OPTION_NAMES, *INPUT_OPTION_NAMES, *PARALLEL_OPTION_NAMES, *MAP_OPTION_NAMES)
     out = {name: options.pop(name) for name in names if name in options}
-    if "size" in out:
-        out["width"], out["height"] = parse_size(out.pop("size"))
+    size = out.pop("size", None)
+    if size is not None:  # not given: the API's own default, reshaped by an atlas of another shape
+        out["width"], out["height"] = size
     if out.pop("transparent", False):
         out["background"] = None
     if "hide" in out:

@@ -298,6 +298,9 @@ class Options:
         image_column, value, region_column, strict.
     maps : MapOptions
         lh, rh, underlay, threshold (per-vertex maps, :mod:`brainpainter.maps`).
+    size_given : bool
+        Whether the user gave ``width`` or ``height``; if not, an atlas with its own
+        :attr:`~brainpainter.atlas.model.Atlas.image_aspect` reshapes the default size.
     """
 
     runner: RunnerOptions = field(default_factory=RunnerOptions)
@@ -306,6 +309,7 @@ class Options:
     settings: RenderSettings = field(default_factory=RenderSettings)
     table: TableOptions = field(default_factory=TableOptions)
     maps: MapOptions = field(default_factory=MapOptions)
+    size_given: bool = True
 
     @classmethod
     def of(cls, options: Mapping[str, Any], caller: str = "render", **defaults: Any) -> Options:
@@ -335,7 +339,7 @@ class Options:
             given["background"] = to_rgb(given["background"])
         made = {key: group(**{n: given[n] for n in option_names(group) if n in given})
                 for key, group in GROUPS.items()}
-        return cls(**made)
+        return cls(**made, size_given="width" in options or "height" in options)
 
     def flat(self) -> dict[str, Any]:
         """The options as flat keywords again (``Options.of(o.flat()) == o``)."""

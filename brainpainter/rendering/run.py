@@ -27,7 +27,7 @@ from brainpainter.maps.inputs import is_map_input
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
 from brainpainter.rendering.painter import VOLUME_VIEWS, Painter, RenderResult, region_colors, resolve_hidden
 from brainpainter.rendering.parallel import Item, LocalRunner, PainterSpec, Runner, SerialRunner, chunked
-from brainpainter.rendering.settings import RGB, RenderSettings, outlined
+from brainpainter.rendering.settings import RGB, RenderSettings, outlined, with_aspect
 from brainpainter.rendering.views import ImagesByView, View, parse_views
 from brainpainter.table.region_table import RegionTable, read_table
 from brainpainter.table.rows import select_rows
@@ -195,8 +195,10 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
         raise BrainPainterError(
             f"a region render outlines its own atlas's regions ({table.atlas.name!r}); --outline "
             f"{outline!r} was given. Give --outline {table.atlas.name}, or draw a map (--lh/--rh).")
-    return Run(table, options.scale.scale(values), view_list, outlined(options.settings, outline), options,
-               tract_values)
+    settings = outlined(options.settings, outline)
+    if not options.size_given and table.atlas.image_aspect:
+        settings = with_aspect(settings, table.atlas.image_aspect)
+    return Run(table, options.scale.scale(values), view_list, settings, options, tract_values)
 
 
 def make_runner(painter: Painter, template: Any = None, options: RunnerOptions | None = None,
@@ -322,7 +324,7 @@ def painter_options(painter: Painter, options: Options) -> Options:
         )
     scene = replace(options.scene, template=painter.scene.template, surface=painter.surface,
                     renderer=painter.renderer)
-    return replace(options, scene=scene, settings=painter.scene.settings)
+    return replace(options, scene=scene, settings=painter.scene.settings, size_given=True)
 
 
 def run_settings(run: Run, painter: Painter) -> dict[str, Any]:

@@ -172,3 +172,18 @@ def outlined(settings: RenderSettings, outline: str | None) -> RenderSettings:
     if outline is None or settings.outline_width > 0:
         return settings
     return replace(settings, outline_width=DEFAULT_OUTLINE_WIDTH)
+
+
+def with_aspect(settings: RenderSettings, aspect: float) -> RenderSettings:
+    """`settings` with width / height = `aspect` and about as many pixels (even numbers).
+
+    A size the user did not give follows the atlas's shape (:attr:`Atlas.image_aspect`): the
+    mouse brain, 0.8 as wide as long, fills 56 % of a 1200 x 900 image seen from above but
+    75 % of a 1040 x 1040 one, while its side views still fill the width.
+    """
+    from dataclasses import replace
+
+    pixels = settings.width * settings.height
+    width = max(16, 2 * round((pixels * aspect) ** 0.5 / 2))
+    height = max(16, 2 * round((pixels / aspect) ** 0.5 / 2))
+    return replace(settings, width=width, height=height)
