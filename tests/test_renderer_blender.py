@@ -606,3 +606,24 @@ def test_a_draw_that_leaves_only_background_is_an_error(flat, monkeypatch):
         flat.render(_quadrant_colors(), get_view("lateral-left"))
     monkeypatch.undo()
     assert flat.render(_quadrant_colors(), get_view("lateral-left"))[..., 3].any()
+
+
+@pytest.mark.render
+def test_cycles_draws_a_glass_cortex_in_its_colours(template):
+    """``--cortex glass`` with ``--quality high``: the cortex see-through in its regions' colours (as the
+    draw path does), not the plain grey hull; opaque again in the next view that asks for it."""
+    glass = _renderer(template, quality="high", width=96, height=72, cortex="glass", glass_opacity=0.4)
+    opaque = _renderer(template, quality="high", width=96, height=72)
+    try:
+        seen = glass.render({"Left-antsup": RED, "Left-postsup": BLUE}, get_view("lateral-left")).astype(int)
+        solid = opaque.render({"Left-antsup": RED, "Left-postsup": BLUE}, get_view("lateral-left")).astype(int)
+    finally:
+        glass.close()
+        opaque.close()
+    bg = 255 * np.asarray(BACKGROUND)
+    red = seen[..., 0] - seen[..., 1:3].max(-1) > 25
+    blue = seen[..., 2] - seen[..., 0:2].max(-1) > 25
+    assert red.sum() > 50 and blue.sum() > 50  # the regions' colours, tinted
+    # see-through: paler than the opaque cortex, nearer the background
+    solid_red = solid[..., 0] - solid[..., 1:3].max(-1) > 60
+    assert np.abs(seen[red][:, :3] - bg).sum(-1).mean() < np.abs(solid[solid_red][:, :3] - bg).sum(-1).mean()

@@ -84,14 +84,22 @@ def new_glass_material(bpy, name: str, opacity: float):
     opacity = float(np.clip(opacity, 0.0, 1.0))
     mat.diffuse_color = (*linear, opacity)
     tree = _node_tree(mat)
-    nodes, links = tree.nodes, tree.links
-    nodes.clear()
-    out = nodes.new("ShaderNodeOutputMaterial")
-    emission = nodes.new("ShaderNodeEmission")
+    tree.nodes.clear()
+    out = tree.nodes.new("ShaderNodeOutputMaterial")
+    mix, emission = _glass_nodes(tree, opacity)
     emission.inputs["Color"].default_value = (*(c * _GLASS_CYCLES_SHADE for c in linear), 1.0)
+    tree.links.new(mix.outputs["Shader"], out.inputs["Surface"])
+    return mat
+
+
+def _glass_nodes(tree, opacity: float):
+    """Unlit colour (an emission) mixed with transparency: `opacity` facing the camera, up to 2.5 x
+    `opacity` at grazing angles. Returns the mix node and the emission node (whose colour is set)."""
+    nodes, links = tree.nodes, tree.links
+    emission = nodes.new("ShaderNodeEmission")
+    emission.name = "bp_glass_emission"
     emission.inputs["Strength"].default_value = 1.0
     clear = nodes.new("ShaderNodeBsdfTransparent")
-    # opacity at the centre, up to 2.5 x opacity at grazing angles
     facing = nodes.new("ShaderNodeLayerWeight")
     facing.inputs["Blend"].default_value = 0.5
     edge = nodes.new("ShaderNodeMapRange")
@@ -100,11 +108,36 @@ def new_glass_material(bpy, name: str, opacity: float):
     edge.inputs["To Max"].default_value = min(1.0, 2.5 * opacity)
     links.new(facing.outputs["Facing"], edge.inputs["Value"])
     mix = nodes.new("ShaderNodeMixShader")
+    mix.name = "bp_glass"
     links.new(edge.outputs["Result"], mix.inputs["Fac"])
     links.new(clear.outputs["BSDF"], mix.inputs[1])
     links.new(emission.outputs["Emission"], mix.inputs[2])
-    links.new(mix.outputs["Shader"], out.inputs["Surface"])
-    return mat
+    return mix, emission
+
+
+def set_glass(material, opacity: float | None) -> None:
+    """Draw a region material as glass in its own colour (`opacity`: the cortex of a cortex view
+    with ``--cortex glass``, as the default draw path does), or lit and opaque again (None).
+
+    The glass is the glass brain's recipe (:func:`new_glass_material`) in the region's colour:
+    unlit, so path tracing adds no noise to it.
+    """
+    tree = _node_tree(material)
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    if opacity is None:
+        tree.links.new(_principled(material).outputs["BSDF"], out.inputs["Surface"])
+        return
+    if tree.nodes.get("bp_glass") is None:
+        _glass_nodes(tree, float(np.clip(opacity, 0.0, 1.0)))
+        _set_glass_color(material, material.diffuse_color[:3])
+    tree.links.new(tree.nodes["bp_glass"].outputs["Shader"], out.inputs["Surface"])
+
+
+def _set_glass_color(material, linear: Sequence[float]) -> None:
+    emission = _node_tree(material).nodes.get("bp_glass_emission")
+    if emission is not None:
+        # the region's own colour (the grey glass brain is shaded down; a colour would turn muddy)
+        emission.inputs["Color"].default_value = (*linear[:3], 1.0)
 
 
 def set_color(material, rgb: Sequence[float]) -> None:
@@ -112,3 +145,4 @@ def set_color(material, rgb: Sequence[float]) -> None:
     value = (*srgb_to_linear(rgb), 1.0)
     material.diffuse_color = value
     _principled(material).inputs["Base Color"].default_value = value
+    _set_glass_color(material, value)

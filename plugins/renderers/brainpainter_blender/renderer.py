@@ -58,6 +58,7 @@ class BlenderRenderer:
         self._tag = f"bp{next(_ids)}"
         self._closed = False
         self._colors: dict[int, tuple[float, ...]] = {}
+        self._as_glass: dict[str, bool] = {}  # Cycles: the cortex parts drawn as glass (--cortex glass)
         self._gpu = None
         self.cycles = lighting.uses_cycles(scene.settings)
         if self.cycles and getattr(scene, "coloring", "regions") == "vertices":
@@ -140,11 +141,20 @@ class BlenderRenderer:
         return pixels
 
     def _show(self, view: View) -> None:
-        shown = {(p.kind, p.hemi) for p in self.scene.geometry.visible(view)}  # nothing shown: an error
+        shown = {p.name: p.kind for p in self.scene.geometry.visible(view)}  # nothing shown: an error
+        glass = self.scene.settings.glass_opacity
         for part in self._parts:
-            on = (part.kind, part.hemi) in shown
+            on = part.name in shown
             if part.obj.hide_render == on:
                 part.obj.hide_render = not on
+            if part.kind == "cortex":  # a cortex view with --cortex glass: see-through, in its colours
+                as_glass = shown.get(part.name) == "glass"
+                if self._as_glass.get(part.name, False) != as_glass:
+                    for _, mat in part.slots:
+                        materials.set_glass(mat, glass if as_glass else None)
+                    obj = part.obj  # as glass, it neither shadows nor reflects onto the tracts inside
+                    obj.visible_shadow = obj.visible_diffuse = obj.visible_glossy = not as_glass
+                    self._as_glass[part.name] = as_glass
 
     def _recolor(self, palette: Palette) -> None:
         rgb = palette.rgb

@@ -25,16 +25,19 @@ class Part:
     Attributes
     ----------
     obj : bpy.types.Object
-    kind : {"cortex", "subcortical", "glass"}
+    kind : {"cortex", "subcortical", "glass", "tract"}
     hemi : str or None
     slots : list of (int, bpy.types.Material)
         Palette slot of every material slot, in slot order (empty for glass).
+    name : str
+        The geometry part's name (``PartGeometry.name``).
     """
 
     obj: object
     kind: str
     hemi: str | None
     slots: list[tuple[int, object]] = field(default_factory=list)
+    name: str = ""
 
 
 def mesh_object(bpy, name: str, vertices: np.ndarray, faces: np.ndarray,
@@ -86,13 +89,13 @@ def _part_object(bpy, tag: str, part: PartGeometry, glass_mat, collection) -> Pa
         obj = mesh_object(bpy, name, part.vertices, tri, None, [glass_mat], collection, part.normals)
         # In Cycles the glass neither shadows nor reflects onto the structures inside.
         obj.visible_shadow = obj.visible_diffuse = obj.visible_glossy = False
-        return Part(obj, part.kind, part.hemi, [])
+        return Part(obj, part.kind, part.hemi, [], part.name)
     face_slot = part.palette_index[tri[:, 0]]
     used, index = np.unique(face_slot, return_inverse=True)
     slots = [(int(s), materials.new_region_material(bpy, f"{tag}:slot{int(s)}")) for s in used]
     obj = mesh_object(bpy, name, part.vertices, tri, index, [m for _, m in slots], collection,
                       part.normals)
-    return Part(obj, part.kind, part.hemi, slots)
+    return Part(obj, part.kind, part.hemi, slots, part.name)
 
 
 def build(bpy, scene: Scene, tag: str, collection) -> list[Part]:
