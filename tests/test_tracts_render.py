@@ -166,6 +166,18 @@ def test_dipy_bundles_in_lateral_left_through_the_glass_cortex(minimal_bundles, 
     assert _mask(hidden, RED, 2).sum() == 0 and _mask(hidden, (1.0, 1.0, 0.0), 2).sum() > 500
 
 
+def test_region_borders_are_drawn_on_the_glass_cortex(tiny, bundles):
+    """``--outline`` with a glass cortex: the borders of its near side, as lines over the glass."""
+    colors = {"tract:AF_left": RED, "Left-antsup": (1.0, 0.8, 0.0)}
+    nodes = (("AF_left", 1), ("CST_right", 1))
+    dark = {}
+    for width in (0.0, 2.0):
+        with _painter(tiny, bundles, nodes, glass_opacity=0.25, outline_width=width) as p:
+            img = p.paint_colors(colors, get_view("lateral-left"))[..., :3].astype(int)
+        dark[width] = int((img.max(axis=-1) < 60).sum())
+    assert dark[0.0] == 0 and dark[2.0] > 100, dark
+
+
 def test_render_command_with_a_bundle_table(tmp_path, bundles, tiny):
     from click.testing import CliRunner
     from PIL import Image

@@ -439,6 +439,19 @@ class GpuDraw:
             mark("glass")
             gpu.state.blend_set("NONE")
             gpu.state.depth_mask_set(True)
+        outlined = [p for p in glass if p.outline is not None and len(p.outline)]
+        if outlined and s.outline_width > 0:
+            # A cortex drawn as glass (``--cortex glass``) keeps its borders, on its near side only:
+            # its front faces go into the depth buffer alone, then the lines are depth-tested on them.
+            gpu.state.color_mask_set(False, False, False, False)
+            gpu.state.face_culling_set("BACK")
+            for p in outlined:
+                self._batch(p).draw(shader)
+            gpu.state.color_mask_set(True, True, True, True)
+            self._draw_outlines(aim, outlined)
+            shader.bind()
+            shader.uniform_sampler("palette", tex)
+            mark("glass outlines")
         gpu.state.face_culling_set("NONE")
         gpu.state.depth_test_set("NONE")
 
