@@ -615,8 +615,9 @@ def test_cycles_draws_a_glass_cortex_in_its_colours(template):
     glass = _renderer(template, quality="high", width=96, height=72, cortex="glass", glass_opacity=0.4)
     opaque = _renderer(template, quality="high", width=96, height=72)
     try:
-        seen = glass.render({"Left-antsup": RED, "Left-postsup": BLUE}, get_view("lateral-left")).astype(int)
-        solid = opaque.render({"Left-antsup": RED, "Left-postsup": BLUE}, get_view("lateral-left")).astype(int)
+        colours = {"Left-antsup": RED, "Left-postsup": BLUE}
+        seen = glass.render(colours, get_view("lateral-left")).astype(int)
+        solid = opaque.render(colours, get_view("lateral-left")).astype(int)
     finally:
         glass.close()
         opaque.close()
