@@ -49,7 +49,7 @@ from brainpainter.rendering.framing import view_projection
 from brainpainter.rendering.geometry import PartGeometry, SceneGeometry
 from brainpainter.rendering.scene import RenderSettings
 from brainpainter.rendering.views import View
-from brainpainter_blender import _bpy, gpu_shaders, meshorder
+from brainpainter_blender import _bpy, gpu_shaders, meshorder, outlines
 
 
 @dataclass(frozen=True)
@@ -418,11 +418,7 @@ class GpuDraw:
                 shader.uniform_float("rim", light.rim if p.kind == "subcortical" else 0.0)
                 self._batch(p).draw(shader)
                 mark(f"draw {p.name}")
-        outlined = [p for p in aim.visible if p.kind != "glass" and p.outline is not None and len(p.outline)]
-        if outlined and s.outline_width > 0:
-            self._draw_outlines(aim, outlined)
-            shader.bind()
-            shader.uniform_sampler("palette", tex)  # bound again, before any integer constant (see above)
+        if self._draw_outlines(aim, [p for p in aim.visible if p.kind != "glass"], shader, tex):
             mark("outlines")
         glass = [p for p in aim.visible if p.kind == "glass"]
         if glass and s.glass_opacity > 0:
@@ -439,56 +435,30 @@ class GpuDraw:
             mark("glass")
             gpu.state.blend_set("NONE")
             gpu.state.depth_mask_set(True)
-        outlined = [p for p in glass if p.outline is not None and len(p.outline)]
-        if outlined and s.outline_width > 0:
+        if any(p.outline is not None for p in glass) and s.outline_width > 0:
             # A cortex drawn as glass (``--cortex glass``) keeps its borders, on its near side only:
             # its front faces go into the depth buffer alone, then the lines are depth-tested on them.
             gpu.state.color_mask_set(False, False, False, False)
             gpu.state.face_culling_set("BACK")
-            for p in outlined:
+            for p in glass:
                 self._batch(p).draw(shader)
             gpu.state.color_mask_set(True, True, True, True)
-            self._draw_outlines(aim, outlined)
-            shader.bind()
-            shader.uniform_sampler("palette", tex)
+            self._draw_outlines(aim, glass, shader, tex)
             mark("glass outlines")
         gpu.state.face_culling_set("NONE")
         gpu.state.depth_test_set("NONE")
 
-    def _draw_outlines(self, aim: _Aim, parts: list[PartGeometry]) -> None:
-        """The parts' border segments as lines ``outline_width`` output pixels wide.
-
-        Blender's polyline shader widens each segment to a quad in screen space, so the
-        width is constant in pixels (times the supersampling factor here, so the resolve
-        keeps it); the depth test hides the borders behind the surface in front of them.
-        """
+    def _draw_outlines(self, aim: _Aim, parts: list[PartGeometry], part_shader: Any, tex: Any) -> bool:
+        """The parts' region borders (:func:`brainpainter_blender.outlines.draw_outlines`), then
+        `part_shader` bound again with its palette texture; False: none to draw."""
         import gpu
-        from mathutils import Matrix
 
-        s = self.settings
-        shader = gpu.shader.from_builtin("POLYLINE_UNIFORM_COLOR")
-        shader.bind()
-        shader.uniform_float("viewportSize", (s.width * self.factor, s.height * self.factor))
-        shader.uniform_float("lineWidth", s.outline_width * self.factor)
-        shader.uniform_float("color", (*srgb_to_linear(np.asarray(s.outline_color)).tolist(), 1.0))
-        gpu.state.face_culling_set("NONE")
-        with gpu.matrix.push_pop(), gpu.matrix.push_pop_projection():
-            gpu.matrix.load_matrix(Matrix.Identity(4))
-            gpu.matrix.load_projection_matrix(aim.mvp)
-            for p in parts:
-                self._outline_batch(p, shader).draw(shader)
+        if not outlines.draw_outlines(self._batches, parts, aim.mvp, self.settings, self.factor):
+            return False
         gpu.state.face_culling_set(CULL_OPAQUE)
-
-    def _outline_batch(self, part: PartGeometry, shader: Any) -> Any:
-        key = f"outline:{part.name}"
-        batch = self._batches.get(key)
-        if batch is None:
-            from gpu_extras.batch import batch_for_shader
-
-            assert part.outline is not None
-            batch = self._batches[key] = batch_for_shader(
-                shader, "LINES", {"pos": np.ascontiguousarray(part.outline.reshape(-1, 3), np.float32)})
-        return batch
+        part_shader.bind()
+        part_shader.uniform_sampler("palette", tex)  # bound again, before any integer constant
+        return True
 
     def close(self) -> None:
         """Free the batches, textures and offscreen buffers (in a GPU context)."""
