@@ -12,6 +12,11 @@ API (all JSON unless said; errors are ``{"error": "one line"}`` with the CLI's m
                                    -> {"upload_id", "name", "report", "images"} (`check --json`'s report)
                                    or a map (web/maps.py; report.kind "map"): name=lh.x.mgh[&name=rh.x.mgh
                                    &size=N1&size=N2: both files in the body], or a volume name=v.nii.gz
+    POST /api/tracts?name=&size=   body: tractograms (.trk/.tck/.trx, one per bundle, or a .zip of them;
+                                   one .csv/.tsv/.xlsx of bundle values may come with them), sizes in
+                                   the query -> {"upload_id", "name", "report"} (web/tracts.py); the id is
+                                   option "tracts" of a table's renders, or an upload_id itself (the tracts
+                                   alone, coloured by their values table)
     POST /api/check                {"upload_id", "options"} -> the check report for those options
     POST /api/preview              {"upload_id", "options", "row", "view"} -> image/png
     POST /api/jobs                 {"upload_id", "kind", "options", "figure"|"movie"} -> 202 {job}
@@ -56,16 +61,19 @@ from brainpainter.web.options import (
     TableOptions,
     map_check,
     prepare,
+    tract_check,
     upload_name,
 )
 from brainpainter.web.pool import MAX_PREVIEW_WAITING, Pool, PreviewBusy, PreviewUnavailable, preview_request
 from brainpainter.web.store import LimitError, Store, valid_id
+from brainpainter.web.tracts import is_tract_bundle, is_tract_upload
 from brainpainter.web.upload import (
     check_table,
     content_type_allowed,
     new_incoming,
     read_and_check,
     read_map_upload,
+    read_tract_upload,
 )
 
 T = TypeVar("T")
@@ -154,6 +162,7 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
     _add_error_handlers(app, config)
     _add_page_and_probes(app, config, store, pool)
     _add_upload_route(app, config, store)
+    _add_tracts_route(app, config, store)
     _add_table_routes(app, config, store, pool)
     _add_job_routes(app, config, store)
     return app
@@ -270,6 +279,10 @@ def _add_upload_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
                                 "application/octet-stream' (form and text/plain bodies are refused, so that "
                                 "other web sites cannot upload into this server).")
         names, sizes, hemi = name or ["table.csv"], sizes or [], hemi or []
+        if is_tract_upload(names):
+            raise ApiError(422, f"{file_name(names[0])!r} is a tractogram; upload tractograms with POST "
+                                "/api/tracts (the page's 'Tracts' field) and give their upload_id as option "
+                                "tracts.")
         if len(names) > 2 or any(len(n) > 200 for n in names) or len(hemi) > 2 or len(sizes) > 2:
             raise ApiError(422, "give one name (a table, a map or a volume) or two (an lh and an rh map), "
                                 "each at most 200 characters.")
@@ -302,6 +315,57 @@ def _add_upload_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
                 "images": images[:MAX_LISTED_IMAGES]}
 
 
+def _add_tracts_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
+    """Uploads of tractograms (web/tracts.py)."""
+    work: Work = app.state.work
+
+    @app.post("/api/tracts", tags=["api"], openapi_extra={"requestBody": {
+        "required": True, "content": {"application/octet-stream": {"schema": {"type": "string",
+                                                                              "format": "binary"}}}}})
+    async def upload_tracts(request: Request,
+                            name: Annotated[list[str] | None, Query(description=(
+                                "File names, in the body's order: .trk, .tck, .trx (one bundle each, named "
+                                "after it), a .zip of them, and at most one .csv/.tsv/.xlsx of bundle "
+                                "values."))] = None,
+                            sizes: Annotated[list[int] | None, Query(alias="size", description=(
+                                "With several names: the bytes of each file, in the body's order."))] = None,
+                            ) -> dict[str, Any]:
+        """Upload tractograms and get their report (bundles, streamlines); nothing is kept when they cannot
+        be drawn."""
+        from brainpainter.web.tracts import member_name
+
+        if not content_type_allowed(request.headers.get("content-type")):
+            raise ApiError(415, "send the files as the request body with 'Content-Type: "
+                                "application/octet-stream' (form and text/plain bodies are refused, so that "
+                                "other web sites cannot upload into this server).")
+        names, sizes = name or [], sizes or []
+        if not names or len(names) > config.max_tract_files or len(sizes) > config.max_tract_files or any(
+                len(n) > 200 for n in names):
+            raise ApiError(422, f"give 1 to {config.max_tract_files} file names (name=AF_left.trk&name=..., "
+                                "or one .zip), each at most 200 characters.")
+        if not is_tract_upload(names):
+            raise ApiError(422, f"{member_name(names[0])!r} is not a tractogram; upload .trk, .tck or .trx "
+                                "files (one per bundle) or a .zip of them.")
+        await _disk_budget(store, config)
+        shown = " + ".join(member_name(n) for n in names[:5]) + (" + ..." if len(names) > 5 else "")
+        fh, path = await run_in_threadpool(new_incoming, store.root)
+        try:
+            size = 0
+            with fh:
+                async for chunk in request.stream():
+                    size += len(chunk)
+                    fh.write(chunk)
+            data, report = await work.run(
+                read_tract_upload, path, names, sizes, store.root / "incoming",
+                max_files=config.max_tract_files, max_streamlines=config.max_tract_streamlines,
+                time_limit_s=config.parse_time_limit_s)
+        finally:
+            path.unlink(missing_ok=True)
+        upload_id = await run_in_threadpool(store.add_upload, _client(request), shown, data,
+                                            config.result_ttl_s, config.max_uploads_per_client)
+        return {"upload_id": upload_id, "name": shown, "size": size, "report": report}
+
+
 def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Pool) -> None:
     """Checks and previews of an upload."""
     work: Work = app.state.work
@@ -312,6 +376,8 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
         """The ``check`` report of an upload with these options (the colour scale included)."""
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
         o = body.options
+        if is_tract_bundle(data):  # the tracts alone: their report, with the colour scale of `o`
+            return await work.run(tract_check, data, name, o, data_dir=store.root)
         if is_bundle(data):
             return await work.run(map_check, data, name, o, scratch=store.root / "incoming")
         opts = {**o.model_dump(include=set(TableOptions.model_fields)),
@@ -326,8 +392,9 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
     async def preview(body: PreviewRequest) -> Response:
         """One row from one view, small, rendered by the warm preview painter."""
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
+        tracts = await run_in_threadpool(_tracts, store, body.options)
         req = await work.run(preview_request, data, name, body.options, body.row, body.view, config,
-                             store.root / "incoming")
+                             store.root / "incoming", tracts, store.root)
         if previews.borrowed_tokens >= previews.total_tokens:  # never queue without bound
             raise ApiError(503, f"{MAX_PREVIEW_WAITING} previews are waiting; try again in a moment",
                            {"retry-after": "2"})
@@ -348,10 +415,14 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
     async def submit(body: JobRequest, request: Request) -> dict[str, Any]:
         """Queue a job: ``images`` (every row from every view, as PNGs plus a zip), ``figure`` (PDF/PNG)
         or ``movie`` (MP4/GIF)."""
+        from brainpainter.web.worker import TRACTS
+
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
         await _disk_budget(store, config)
+        tracts = await run_in_threadpool(_tracts, store, body.options)
         prep = await work.run(prepare, data, name, body.options, max_images=config.max_images,
-                              max_pixels=config.max_pixels, scratch=store.root / "incoming")
+                              max_pixels=config.max_pixels, scratch=store.root / "incoming", tracts=tracts,
+                              data_dir=store.root)
         n_rows, n_views = len(prep.run.table.images), len(prep.run.views)
         if body.kind == "movie" and n_rows < 2:
             raise BrainPainterError(f"a movie needs at least 2 rows (key frames); the table has {n_rows}.")
@@ -362,7 +433,8 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
         try:
             job_id = await run_in_threadpool(
                 store.submit, _client(request), body.kind, body.options.model_dump(), params, name, data,
-                total, max_per_client=config.max_jobs_per_client, max_queued=config.max_queued)
+                total, max_per_client=config.max_jobs_per_client, max_queued=config.max_queued,
+                extra={TRACTS: tracts} if tracts is not None else None)
         except LimitError as exc:
             raise ApiError(exc.status, str(exc), {"retry-after": str(exc.retry_after)}) from None
         return _public(await run_in_threadpool(store.get, job_id))
@@ -421,6 +493,17 @@ def _upload(store: Store, upload_id: str) -> tuple[str, bytes]:
     return got
 
 
+def _tracts(store: Store, options: RenderOptions) -> bytes | None:
+    """The tract upload that option ``tracts`` names (None without it)."""
+    if options.tracts is None:
+        return None
+    got = store.get_upload(options.tracts)
+    if got is None or not is_tract_bundle(got[1]):
+        raise ApiError(404, "the tract upload of option tracts was not found (it expired, or the id is "
+                            "wrong); upload the tractograms again.")
+    return got[1]
+
+
 async def _disk_budget(store: Store, config: ServerConfig) -> None:
     """507 when the data folder uses its ``--max-disk-gb`` budget."""
     if config.max_disk_bytes <= 0:
@@ -469,8 +552,11 @@ def _meta(config: ServerConfig) -> dict[str, Any]:
     import matplotlib
 
     from brainpainter.atlas import registry
+    from brainpainter.atlas.model import SPACES
     from brainpainter.rendering.painter import HIDE_GROUPS
+    from brainpainter.rendering.settings import CORTEX_MODES
     from brainpainter.rendering.views import PRESETS
+    from brainpainter.web.options import MAX_WEB_STREAMLINES
 
     return {
         "version": _version(),
@@ -482,7 +568,10 @@ def _meta(config: ServerConfig) -> dict[str, Any]:
         "limits": {"max_upload_mb": config.max_upload_mb, "max_images": config.max_images,
                    "max_pixels": config.max_pixels, "max_jobs_per_client": config.max_jobs_per_client,
                    "result_ttl_s": config.result_ttl_s, "job_time_limit_s": config.job_time_limit_s,
-                   "max_map_images": config.max_map_images},
+                   "max_map_images": config.max_map_images, "max_tract_files": config.max_tract_files,
+                   "max_tract_streamlines": config.max_tract_streamlines,
+                   "max_streamlines": MAX_WEB_STREAMLINES},
+        "tract_spaces": list(SPACES), "cortex_modes": list(CORTEX_MODES),
         "renderer": config.renderer,
     }
 
