@@ -275,7 +275,7 @@ def read_tract_upload(path: Path, names: list[str], sizes: list[int], folder: Pa
                                 "upload. Upload fewer bundles, or a .zip of them.")
     data = path.read_bytes()
     parts = split_body(data, names, sizes, max_files=max_files)
-    work = Path(tempfile.mkdtemp(prefix="tracts-", dir=folder))
+    work = Path(tempfile.mkdtemp(prefix="tract-upload-", dir=folder))
     try:
         (work / "in").mkdir()
         written = []
