@@ -212,7 +212,7 @@ def test_a_tractogram_sent_as_a_table_and_bad_options(server, files):
         return r.status_code, r.json()["error"]
 
     code, msg = err(tracts_affine="1 0 0 0 0 1 0 0 0 0 1 0 5 5 5 5")
-    assert code == 400 and msg.startswith("tracts_affine holds") and "last row 0 0 0 1" in msg, msg
+    assert code == 400 and msg.startswith("--tracts-affine holds") and "last row 0 0 0 1" in msg, msg
     assert err(tracts=table)[0] == 404  # a table is not a tract upload
     assert err(tracts="0" * 32)[0] == 404
     assert err(cortex="see-through")[0] == 422

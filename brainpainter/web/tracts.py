@@ -207,9 +207,10 @@ def _values_report(table: Path, notes: list[str]) -> dict[str, Any]:
         if "value columns" not in str(exc):
             raise
         notes.append(f"{table.name}: several value columns; choose one with the option tract_value")
-        return {"file": table.name, "bundles": [], "nodes": None}
+        return {"file": table.name, "bundles": [], "nodes": None, "images": ["1"]}
     nodes = max((n for _, n in tv.nodes), default=1)
-    return {"file": table.name, "bundles": list(tv.bundles), "nodes": nodes if nodes > 1 else None}
+    return {"file": table.name, "bundles": list(tv.bundles), "nodes": nodes if nodes > 1 else None,
+            "images": list(tv.images or ("1",))[:5000]}
 
 
 def tract_report(summary: dict[str, Any], names: list[str], values: dict[str, Any] | None,
@@ -289,7 +290,7 @@ class TractFiles:
             read_affine(path)
         except BrainPainterError as exc:
             path.unlink(missing_ok=True)
-            message = str(exc).splitlines()[0].replace(f"--tracts-affine {str(path)!r}", "tracts_affine")
+            message = str(exc).splitlines()[0].replace(f"--tracts-affine {str(path)!r}", "--tracts-affine")
             raise BrainPainterError(message) from None
         return path
 
