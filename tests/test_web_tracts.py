@@ -85,13 +85,15 @@ def test_tract_upload_reports_what_is_drawn(server, files):
 
 def test_a_zip_with_a_folder_and_a_values_table(server, files):
     data = zipped({"bundles/AF_L.trk": files["AF_L.trk"], "bundles/CST_R.tck": files["CST_R.tck"],
-                   "bundles/fa.csv": files["fa.csv"], "__MACOSX/._AF_L.trk": b"junk"})
+                   "bundles/fa.csv": files["fa.csv"], "__MACOSX/._AF_L.trk": b"junk",
+                   "README.md": np.random.default_rng(0).bytes(100_000)})  # > 64 KiB: an upload's limits
     r = post(server, [("bundles.zip", data)])
     assert r.status_code == 200, r.text
     rep = r.json()["report"]
     assert rep["summary"] == ("tracts: AF_left, CST_right (80 streamlines of 80); values: fa.csv (one value "
                               "per bundle)")
     assert rep["values"]["bundles"] == ["AF_left", "CST_right"]
+    assert rep["notes"] == ["ignored (not a tractogram or a table): README.md"]
 
 
 # -- with a table, through the worker and preview processes (stand-in renderer) -------------------------
