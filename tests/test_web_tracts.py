@@ -223,6 +223,14 @@ def test_a_tractogram_sent_as_a_table_and_bad_options(server, files):
     assert code == 400 and "--tract-radius must be 0.01 to 10" in msg
 
 
+def test_a_table_cannot_pose_as_a_stored_tract_upload(server):
+    from brainpainter.web.tracts import MAGIC
+
+    r = server.post("/api/uploads", params={"name": "t.csv"}, content=MAGIC + b'{"files": []}\n',
+                    headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 400 and "is not a table" in r.json()["error"]
+
+
 def test_zip_inflation_is_bounded(tmp_path, monkeypatch):
     from brainpainter.errors import BrainPainterError
     from brainpainter.web import tracts

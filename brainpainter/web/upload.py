@@ -106,9 +106,11 @@ def check_upload(data: bytes, name: str, options: dict[str, Any], *, max_rows: i
     spreadsheets in a spawned process that is killed after `time_limit_s` seconds.
     """
     check_rows(data, name, max_rows)
-    if data.startswith(MAGIC):  # only the server writes map bundles
-        raise BrainPainterError(f"{name!r} is not a table (it starts as a stored map upload); upload the "
-                                "table or map files themselves.")
+    from brainpainter.web.tracts import MAGIC as TRACTS_MAGIC
+
+    if data.startswith((MAGIC, TRACTS_MAGIC)):  # only the server writes map and tract bundles
+        raise BrainPainterError(f"{name!r} is not a table (it starts as a stored map or tract upload); "
+                                "upload the table, map or tractogram files themselves.")
     if not is_spreadsheet(data):
         return check_table(data, name, options, max_rows)
     return _in_child(  # type: ignore[no-any-return]
