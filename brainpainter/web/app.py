@@ -33,11 +33,10 @@ from __future__ import annotations
 
 import logging
 import sqlite3
-from collections.abc import AsyncIterator, Callable
+from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
-from functools import partial
 from importlib import resources
-from typing import Annotated, Any, Literal, TypeVar
+from typing import Annotated, Any, Literal
 
 import anyio
 import anyio.to_thread
@@ -53,6 +52,7 @@ from starlette.requests import ClientDisconnect
 from brainpainter.errors import BrainPainterError
 from brainpainter.web.config import ServerConfig
 from brainpainter.web.guard import Guard
+from brainpainter.web.http import ApiError, Work, client_of, disk_budget, one_line
 from brainpainter.web.maps import file_name, is_bundle, is_map_upload
 from brainpainter.web.options import (
     FigureParams,
@@ -66,6 +66,7 @@ from brainpainter.web.options import (
 )
 from brainpainter.web.pool import MAX_PREVIEW_WAITING, Pool, PreviewBusy, PreviewUnavailable, preview_request
 from brainpainter.web.store import LimitError, Store, valid_id
+from brainpainter.web.tract_routes import add_tracts_route, tracts_of
 from brainpainter.web.tracts import is_tract_bundle, is_tract_upload
 from brainpainter.web.upload import (
     check_table,
@@ -73,45 +74,11 @@ from brainpainter.web.upload import (
     new_incoming,
     read_and_check,
     read_map_upload,
-    read_tract_upload,
 )
-
-T = TypeVar("T")
 
 log = logging.getLogger("brainpainter.web")
 
 MAX_LISTED_IMAGES = 5000  # image names sent to the page for its row chooser
-
-
-class Work:
-    """Threads for work that grows with the table (reading it, checking options), apart from the threads
-    that answer status reads: at most `threads` run and `max_waiting` wait; more get 503 at once."""
-
-    def __init__(self, threads: int, max_waiting: int) -> None:
-        self.limiter = anyio.CapacityLimiter(max(1, threads))
-        self.max_waiting = max_waiting
-        self.pending = 0
-
-    async def run(self, func: Callable[..., T], *args: Any, **kwargs: Any) -> T:
-        if self.pending >= self.limiter.total_tokens + self.max_waiting:
-            raise ApiError(503, f"the server is reading {self.pending} tables already; try again in a few "
-                                "seconds.", {"retry-after": "5"})
-        self.pending += 1
-        try:
-            return await anyio.to_thread.run_sync(partial(func, *args, **kwargs), limiter=self.limiter)
-        finally:
-            self.pending -= 1
-
-
-class ApiError(Exception):
-    def __init__(self, status: int, message: str, headers: dict[str, str] | None = None) -> None:
-        super().__init__(message)
-        self.status, self.headers = status, headers or {}
-
-
-def _one_line(exc: BaseException) -> str:
-    text = str(exc)
-    return text.splitlines()[0] if text else type(exc).__name__
 
 
 # -- request bodies -------------------------------------------------------------------------
@@ -162,7 +129,7 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
     _add_error_handlers(app, config)
     _add_page_and_probes(app, config, store, pool)
     _add_upload_route(app, config, store)
-    _add_tracts_route(app, config, store)
+    add_tracts_route(app, config, store)
     _add_table_routes(app, config, store, pool)
     _add_job_routes(app, config, store)
     return app
@@ -173,7 +140,7 @@ def _add_error_handlers(app: FastAPI, config: ServerConfig) -> None:
     root = str(config.data_dir.resolve())
 
     def line(exc: BaseException) -> str:
-        return _one_line(exc).replace(root, "DATA_DIR").replace(str(config.data_dir), "DATA_DIR")
+        return one_line(exc).replace(root, "DATA_DIR").replace(str(config.data_dir), "DATA_DIR")
 
     @app.exception_handler(BrainPainterError)
     async def _bp_error(request: Request, exc: BrainPainterError) -> JSONResponse:
@@ -286,7 +253,7 @@ def _add_upload_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
         if len(names) > 2 or any(len(n) > 200 for n in names) or len(hemi) > 2 or len(sizes) > 2:
             raise ApiError(422, "give one name (a table, a map or a volume) or two (an lh and an rh map), "
                                 "each at most 200 characters.")
-        await _disk_budget(store, config)
+        await disk_budget(store, config)
         is_map = len(names) > 1 or is_map_upload(names)
         shown = " + ".join(file_name(n) for n in names) if is_map else upload_name(names[0])
         fh, path = await run_in_threadpool(new_incoming, store.root)
@@ -309,61 +276,10 @@ def _add_upload_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
                                                         time_limit_s=config.parse_time_limit_s)
         finally:
             path.unlink(missing_ok=True)
-        upload_id = await run_in_threadpool(store.add_upload, _client(request), shown, data,
+        upload_id = await run_in_threadpool(store.add_upload, client_of(request), shown, data,
                                             config.result_ttl_s, config.max_uploads_per_client)
         return {"upload_id": upload_id, "name": shown, "size": size, "report": report,
                 "images": images[:MAX_LISTED_IMAGES]}
-
-
-def _add_tracts_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
-    """Uploads of tractograms (web/tracts.py)."""
-    work: Work = app.state.work
-
-    @app.post("/api/tracts", tags=["api"], openapi_extra={"requestBody": {
-        "required": True, "content": {"application/octet-stream": {"schema": {"type": "string",
-                                                                              "format": "binary"}}}}})
-    async def upload_tracts(request: Request,
-                            name: Annotated[list[str] | None, Query(description=(
-                                "File names, in the body's order: .trk, .tck, .trx (one bundle each, named "
-                                "after it), a .zip of them, and at most one .csv/.tsv/.xlsx of bundle "
-                                "values."))] = None,
-                            sizes: Annotated[list[int] | None, Query(alias="size", description=(
-                                "With several names: the bytes of each file, in the body's order."))] = None,
-                            ) -> dict[str, Any]:
-        """Upload tractograms and get their report (bundles, streamlines); nothing is kept when they cannot
-        be drawn."""
-        from brainpainter.web.tracts import member_name
-
-        if not content_type_allowed(request.headers.get("content-type")):
-            raise ApiError(415, "send the files as the request body with 'Content-Type: "
-                                "application/octet-stream' (form and text/plain bodies are refused, so that "
-                                "other web sites cannot upload into this server).")
-        names, sizes = name or [], sizes or []
-        if not names or len(names) > config.max_tract_files or len(sizes) > config.max_tract_files or any(
-                len(n) > 200 for n in names):
-            raise ApiError(422, f"give 1 to {config.max_tract_files} file names (name=AF_left.trk&name=..., "
-                                "or one .zip), each at most 200 characters.")
-        if not is_tract_upload(names):
-            raise ApiError(422, f"{member_name(names[0])!r} is not a tractogram; upload .trk, .tck or .trx "
-                                "files (one per bundle) or a .zip of them.")
-        await _disk_budget(store, config)
-        shown = " + ".join(member_name(n) for n in names[:5]) + (" + ..." if len(names) > 5 else "")
-        fh, path = await run_in_threadpool(new_incoming, store.root)
-        try:
-            size = 0
-            with fh:
-                async for chunk in request.stream():
-                    size += len(chunk)
-                    fh.write(chunk)
-            data, report = await work.run(
-                read_tract_upload, path, names, sizes, store.root / "incoming",
-                max_files=config.max_tract_files, max_streamlines=config.max_tract_streamlines,
-                time_limit_s=config.parse_time_limit_s)
-        finally:
-            path.unlink(missing_ok=True)
-        upload_id = await run_in_threadpool(store.add_upload, _client(request), shown, data,
-                                            config.result_ttl_s, config.max_uploads_per_client)
-        return {"upload_id": upload_id, "name": shown, "size": size, "report": report}
 
 
 def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Pool) -> None:
@@ -392,7 +308,7 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
     async def preview(body: PreviewRequest) -> Response:
         """One row from one view, small, rendered by the warm preview painter."""
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
-        tracts = await run_in_threadpool(_tracts, store, body.options)
+        tracts = await run_in_threadpool(tracts_of, store, body.options)
         req = await work.run(preview_request, data, name, body.options, body.row, body.view, config,
                              store.root / "incoming", tracts, store.root)
         if previews.borrowed_tokens >= previews.total_tokens:  # never queue without bound
@@ -418,8 +334,8 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
         from brainpainter.web.worker import TRACTS
 
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
-        await _disk_budget(store, config)
-        tracts = await run_in_threadpool(_tracts, store, body.options)
+        await disk_budget(store, config)
+        tracts = await run_in_threadpool(tracts_of, store, body.options)
         prep = await work.run(prepare, data, name, body.options, max_images=config.max_images,
                               max_pixels=config.max_pixels, scratch=store.root / "incoming", tracts=tracts,
                               data_dir=store.root)
@@ -432,7 +348,7 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
                  body.movie.n_frames(n_rows) if body.kind == "movie" else 1)  # movie: progress per frame
         try:
             job_id = await run_in_threadpool(
-                store.submit, _client(request), body.kind, body.options.model_dump(), params, name, data,
+                store.submit, client_of(request), body.kind, body.options.model_dump(), params, name, data,
                 total, max_per_client=config.max_jobs_per_client, max_queued=config.max_queued,
                 extra={TRACTS: tracts} if tracts is not None else None)
         except LimitError as exc:
@@ -482,10 +398,6 @@ def _version() -> str:
     return __version__
 
 
-def _client(request: Request) -> str:
-    return request.client.host if request.client else "-"
-
-
 def _upload(store: Store, upload_id: str) -> tuple[str, bytes]:
     got = store.get_upload(upload_id) if valid_id(upload_id) else None
     if got is None:
@@ -493,29 +405,8 @@ def _upload(store: Store, upload_id: str) -> tuple[str, bytes]:
     return got
 
 
-def _tracts(store: Store, options: RenderOptions) -> bytes | None:
-    """The tract upload that option ``tracts`` names (None without it)."""
-    if options.tracts is None:
-        return None
-    got = store.get_upload(options.tracts)
-    if got is None or not is_tract_bundle(got[1]):
-        raise ApiError(404, "the tract upload of option tracts was not found (it expired, or the id is "
-                            "wrong); upload the tractograms again.")
-    return got[1]
-
-
-async def _disk_budget(store: Store, config: ServerConfig) -> None:
-    """507 when the data folder uses its ``--max-disk-gb`` budget."""
-    if config.max_disk_bytes <= 0:
-        return
-    used = await run_in_threadpool(store.disk_usage)
-    if used >= config.max_disk_bytes:
-        raise ApiError(507, f"this server's storage budget ({config.max_disk_gb:g} GB) is used up; try "
-                            "again after older results expire.", {"retry-after": "600"})
-
-
 def _full(request: Request, exc: BaseException) -> JSONResponse:
-    log.warning("disk full during %s %s: %s", request.method, request.url.path, _one_line(exc))
+    log.warning("disk full during %s %s: %s", request.method, request.url.path, one_line(exc))
     return JSONResponse({"error": "the server's disk is full; nothing was changed. Try again later (the "
                                   "operator must free space)."}, status_code=507,
                         headers={"retry-after": "600"})

@@ -221,25 +221,14 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     BrainPainterError
         The CLI's one-line message for the first problem.
     """
-    import tempfile
-
     from brainpainter.io.output import file_key, safe_name
     from brainpainter.rendering.painter import resolve_hidden
     from brainpainter.rendering.run import prepare_run
     from brainpainter.web.maps import is_bundle, read_bundle
-    from brainpainter.web.tracts import is_tract_bundle, materialise
+    from brainpainter.web.tracts import is_tract_bundle
 
     alone = is_tract_bundle(data)
-    if alone:
-        if tracts is not None and tracts != data:
-            raise BrainPainterError("the upload is tractograms already; give option tracts only with a "
-                                    "region table (or leave it out to draw the tracts alone).")
-        tracts = data
-    elif options.tracts is not None and (tracts is None or not is_tract_bundle(tracts)):
-        raise BrainPainterError("option tracts names no tract upload (it expired, or is a table); upload the "
-                                "tractograms again (POST /api/tracts) and give its upload_id.")
-    root = data_dir if data_dir is not None else Path(tempfile.gettempdir()) / "brainpainter-web"
-    files = None if tracts is None else materialise(tracts, root)
+    files = _tract_files(data, options, tracts, data_dir)
     kwargs = options.run_kwargs(files)
     if max_pixels is not None and kwargs["width"] * kwargs["height"] > max_pixels:
         raise BrainPainterError(
@@ -279,6 +268,25 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
             "make the image names differ in letters or digits."
         )
     return Prepared(run, options, hidden, names, kwargs, tract_table)
+
+
+def _tract_files(data: bytes, options: RenderOptions, tracts: bytes | None,
+                 data_dir: Path | None) -> TractFiles | None:
+    """The files on disk of the tracts of a run: the upload itself (tracts alone) or option ``tracts``."""
+    import tempfile
+
+    from brainpainter.web.tracts import is_tract_bundle, materialise
+
+    if is_tract_bundle(data):
+        if tracts is not None and tracts != data:
+            raise BrainPainterError("the upload is tractograms already; give option tracts only with a "
+                                    "region table (or leave it out to draw the tracts alone).")
+        tracts = data
+    elif options.tracts is not None and (tracts is None or not is_tract_bundle(tracts)):
+        raise BrainPainterError("option tracts names no tract upload (it expired, or is a table); upload the "
+                                "tractograms again (POST /api/tracts) and give its upload_id.")
+    root = data_dir if data_dir is not None else Path(tempfile.gettempdir()) / "brainpainter-web"
+    return None if tracts is None else materialise(tracts, root)
 
 
 # -- figure and movie options of a job: the CLI's defaults (core option classes) ----------------------
