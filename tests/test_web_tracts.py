@@ -146,6 +146,35 @@ def test_tracts_alone_with_their_values_and_a_figure(server, files):
     assert r.status_code == 400 and "table of bundle values" in r.json()["error"]
 
 
+def test_profiles_and_a_movie_of_two_rows(server, files):
+    """An along-tract profile table (long: subject, bundle, node, value) in the upload: the report says
+    so, and a movie goes through its two rows (key frames) with the tracts alone."""
+    rows = ["subject,bundle,node,fa"] + [f"{s},{b},{k},{k / 9 if s == 'a' else 1 - k / 9:.3f}"
+                                         for s in "ab" for b in ("AF_L", "CST_R") for k in range(10)]
+    data = zipped({"AF_L.trk": files["AF_L.trk"], "CST_R.tck": files["CST_R.tck"],
+                   "profiles.csv": "\n".join(rows).encode()})
+    r = post(server, [("b.zip", data)])
+    assert r.status_code == 200, r.text
+    rep = r.json()["report"]
+    assert rep["summary"].endswith("values: profiles.csv (profiles of 10 nodes)")
+    assert rep["values"]["images"] == ["a", "b"]
+    uid = r.json()["upload_id"]
+    r = server.post("/api/preview", json={"upload_id": uid, "row": "b", "view": "lateral-left",
+                                          "options": {**OPTS, "cortex": "hidden"}})
+    assert r.status_code == 200, r.text
+    img = png_pixels(r.content)  # the stand-in: one stripe per node of AF_left, 1 (blue) to 0 (red)
+    assert near(img[:, 0], BLUE).all() and near(img[:, -1], RED).all()
+    assert not near(img[:, img.shape[1] // 2], RED, 40).any()  # in between: neither end's colour
+    r = server.post("/api/jobs", json={"upload_id": uid, "kind": "movie",
+                                       "movie": {"format": "gif", "frames_per_step": 2, "fps": 4},
+                                       "options": {**OPTS, "views": "subcortical", "size": "80x60"}})
+    assert r.status_code == 202, r.text
+    url = r.json()["url"]
+    job = wait_for(lambda: (j := server.get(url).json())["status"] in ("done", "failed") and j, 180)
+    assert job and job["status"] == "done", job
+    assert server.get(job["files"][0]["url"]).content.startswith(b"GIF8")
+
+
 # -- the painter cache ------------------------------------------------------------------------------
 def test_two_tract_uploads_never_share_a_painter(server, files):
     from brainpainter.web.config import ServerConfig
