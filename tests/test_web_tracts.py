@@ -102,6 +102,12 @@ def test_a_table_with_tracts_previews_and_renders_them(server, files):
                       ("fa.csv", files["fa.csv"])]).json()["upload_id"]
     table = server.post("/api/uploads", params={"name": "t.csv"}, content=TABLE,
                         headers={"content-type": "application/octet-stream"}).json()["upload_id"]
+    # the check report's colour bar is the scale over the regions and the bundles (0.5, and 0 and 1)
+    free = {**OPTS, "gradient": None, "cmap": "viridis", "vmin": None, "vmax": None}
+    c = server.post("/api/check", json={"upload_id": table, "options": {**free, "tracts": t}}).json()
+    assert (c["values"]["scale"]["vmin"], c["values"]["scale"]["vmax"]) == (0, 1)
+    c = server.post("/api/check", json={"upload_id": table, "options": free}).json()
+    assert c["values"]["scale"]["vmin"] != 0  # the regions alone: 0.5
     # the cortex hidden: a cortex view draws its hemisphere's bundles alone (the stand-in: their stripes)
     opts = {**OPTS, "tracts": t, "views": "lateral-left", "cortex": "hidden"}
     for view, rgb in (("lateral-left", RED), ("lateral-right", BLUE)):  # AF_left = 0, CST_right = 1

@@ -61,6 +61,7 @@ from brainpainter.web.options import (
     TableOptions,
     map_check,
     prepare,
+    table_tract_scale,
     tract_check,
     upload_name,
 )
@@ -301,7 +302,11 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
                           "center": o.center}}
         # read on a work thread: the upload was read within the time limit already (as preview and
         # job submission read it)
-        return (await work.run(check_table, data, name, opts, config.max_rows))[0]
+        report = (await work.run(check_table, data, name, opts, config.max_rows))[0]
+        tracts = await run_in_threadpool(tracts_of, store, o)
+        if tracts is not None:  # one scale over the regions' and the bundles' values, as drawn
+            report["values"]["scale"] = await work.run(table_tract_scale, data, name, o, tracts, store.root)
+        return report
 
     # -- preview -------------------------------------------------------------------------------
     @app.post("/api/preview", tags=["api"], responses={200: {"content": {"image/png": {}}}})

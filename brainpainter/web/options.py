@@ -343,26 +343,34 @@ def map_check(data: bytes, name: str, options: RenderOptions, *,
               scratch: Path | None = None) -> dict[str, Any]:
     """The report of a map upload (:func:`brainpainter.web.maps.base_report`) with the colour scale of
     `options` (the page's colour bar; the threshold band is marked by ``threshold``)."""
-    from brainpainter.table.report import colour_bar
     from brainpainter.web.maps import base_of
 
     report = base_of(data)
     scale = prepare(data, name, options, scratch=scratch).run.scale
-    report["values"]["scale"] = {"name": scale.name, "vmin": scale.vmin, "vmax": scale.vmax,
-                                 "center": scale.center, "threshold": getattr(scale, "threshold", None),
-                                 **colour_bar(scale)}
+    report["values"]["scale"] = scale_report(scale)
     return report
+
+
+def scale_report(scale: Any) -> dict[str, Any]:
+    """A run's colour scale as the check report gives it (the page's colour bar: ``ramp``, ``ticks``)."""
+    from brainpainter.table.report import colour_bar
+
+    return {"name": scale.name, "vmin": scale.vmin, "vmax": scale.vmax, "center": scale.center,
+            "threshold": getattr(scale, "threshold", None), **colour_bar(scale)}
+
+
+def table_tract_scale(data: bytes, name: str, options: RenderOptions, tracts: bytes,
+                      data_dir: Path | None = None) -> dict[str, Any]:
+    """The colour scale of a table drawn with tracts: over the region and the bundle values together."""
+    return scale_report(prepare(data, name, options, tracts=tracts, data_dir=data_dir).run.scale)
 
 
 def tract_check(data: bytes, name: str, options: RenderOptions, *,
                 data_dir: Path | None = None) -> dict[str, Any]:
     """The report of a tract upload drawn alone (:func:`brainpainter.web.tracts.tract_report`) with the
     colour scale of `options` over its values (the page's colour bar)."""
-    from brainpainter.table.report import colour_bar
     from brainpainter.web.tracts import report_of
 
     report = report_of(data)
-    scale = prepare(data, name, options, data_dir=data_dir).run.scale
-    report["scale"] = {"name": scale.name, "vmin": scale.vmin, "vmax": scale.vmax, "center": scale.center,
-                       **colour_bar(scale)}
+    report["scale"] = scale_report(prepare(data, name, options, data_dir=data_dir).run.scale)
     return report
