@@ -224,3 +224,42 @@ def test_page_takes_a_map_pair(served, tmp_path):
         if os.environ.get("BRAINPAINTER_SCREENSHOT"):
             shutil.copy(shot, Path(os.environ["BRAINPAINTER_SCREENSHOT"]).with_name("map-page.png"))
         assert errors == []
+
+
+def test_page_takes_tracts_alone(served, tmp_path):
+    """Tractograms and their values table chosen in the Tracts field (no region table): the report says
+    what is drawn, and the preview (real renderer, from above) shows AF_left red left of CST_right blue."""
+    from playwright.sync_api import expect
+    from test_tracts import bundle, write
+
+    write(tmp_path / "AF_L.trk", bundle(-30.0, n=40, z=30.0, length=60.0))
+    write(tmp_path / "CST_R.tck", bundle(30.0, n=40, seed=1, z=30.0, length=60.0))
+    (tmp_path / "fa.csv").write_text("AF_left,CST_right\n0,1\n")
+    with _page(tmp_path) as (page, errors):
+        page.goto(served.url + "/")
+        expect(page.locator("#tracts_space option[value=template]")).to_have_count(1)
+        page.locator("#size").fill("320x240")
+        page.locator("#gradient").fill("red,blue")
+        page.locator("#vmin").fill("0")
+        page.locator("#vmax").fill("1")
+        page.locator("#shading").select_option("flat")
+        page.locator("#glass_opacity").fill("0")
+        page.locator("#tract_radius").fill("1")
+        page.locator("#tracts_space").select_option("template")
+        page.locator("#pview").select_option("subcortical-dorsal")
+        page.locator("#tract-files").set_input_files([str(tmp_path / n) for n in ("AF_L.trk", "CST_R.tck",
+                                                                                  "fa.csv")])
+        expect(page.locator("#tract-status")).to_contain_text(
+            "OK: tracts: AF_left, CST_right (80 streamlines of 80); values: fa.csv")
+        expect(page.locator("#preview-status")).to_contain_text("subcortical-dorsal · rendered in",
+                                                                timeout=120_000)
+        img = png_pixels(page.locator("#preview").screenshot())
+        red = np.abs(img[..., :3].astype(int) - [255, 0, 0]).max(-1) < 40
+        blue = np.abs(img[..., :3].astype(int) - [0, 0, 255]).max(-1) < 40
+        assert red.sum() > 50 and blue.sum() > 50, (red.sum(), blue.sum())
+        assert np.nonzero(red)[1].mean() < np.nonzero(blue)[1].mean()
+        shot = tmp_path / "tracts.png"
+        page.screenshot(path=str(shot))
+        if os.environ.get("BRAINPAINTER_SCREENSHOT"):
+            shutil.copy(shot, Path(os.environ["BRAINPAINTER_SCREENSHOT"]).with_name("tracts-page.png"))
+        assert errors == []

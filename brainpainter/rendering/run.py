@@ -106,10 +106,15 @@ def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, b
     from brainpainter.tracts.names import canonical
 
     known = {canonical(f.name[: -len(f.suffix)]) for f in spec.files}
+    # a stream (the web API's upload) is read again for the region table: back to where it was
+    pos = data.tell() if hasattr(data, "seek") and hasattr(data, "tell") else None
     try:
         tv = read_tract_values(data)
     except BrainPainterError:
         return None, False
+    finally:
+        if pos is not None:
+            data.seek(pos)
     keep = [j for j, (name, _) in enumerate(tv.nodes) if name in known]
     if not keep:
         return None, False

@@ -12,6 +12,11 @@ API (all JSON unless said; errors are ``{"error": "one line"}`` with the CLI's m
                                    -> {"upload_id", "name", "report", "images"} (`check --json`'s report)
                                    or a map (web/maps.py; report.kind "map"): name=lh.x.mgh[&name=rh.x.mgh
                                    &size=N1&size=N2: both files in the body], or a volume name=v.nii.gz
+    POST /api/tracts?name=&size=   body: tractograms (.trk/.tck/.trx, one per bundle, or a .zip of them;
+                                   one .csv/.tsv/.xlsx of bundle values may come with them), sizes in
+                                   the query -> {"upload_id", "name", "report"} (web/tracts.py); the id is
+                                   option "tracts" of a table's renders, or an upload_id itself (the tracts
+                                   alone, coloured by their values table)
     POST /api/check                {"upload_id", "options"} -> the check report for those options
     POST /api/preview              {"upload_id", "options", "row", "view"} -> image/png
     POST /api/jobs                 {"upload_id", "kind", "options", "figure"|"movie"} -> 202 {job}
@@ -28,11 +33,10 @@ from __future__ import annotations
 
 import logging
 import sqlite3
-from collections.abc import AsyncIterator, Callable
+from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
-from functools import partial
 from importlib import resources
-from typing import Annotated, Any, Literal, TypeVar
+from typing import Annotated, Any, Literal
 
 import anyio
 import anyio.to_thread
@@ -48,6 +52,7 @@ from starlette.requests import ClientDisconnect
 from brainpainter.errors import BrainPainterError
 from brainpainter.web.config import ServerConfig
 from brainpainter.web.guard import Guard
+from brainpainter.web.http import ApiError, Work, client_of, disk_budget, one_line
 from brainpainter.web.maps import file_name, is_bundle, is_map_upload
 from brainpainter.web.options import (
     FigureParams,
@@ -56,10 +61,14 @@ from brainpainter.web.options import (
     TableOptions,
     map_check,
     prepare,
+    table_tract_scale,
+    tract_check,
     upload_name,
 )
 from brainpainter.web.pool import MAX_PREVIEW_WAITING, Pool, PreviewBusy, PreviewUnavailable, preview_request
 from brainpainter.web.store import LimitError, Store, valid_id
+from brainpainter.web.tract_routes import add_tracts_route, tracts_of
+from brainpainter.web.tracts import is_tract_bundle, is_tract_upload
 from brainpainter.web.upload import (
     check_table,
     content_type_allowed,
@@ -68,42 +77,9 @@ from brainpainter.web.upload import (
     read_map_upload,
 )
 
-T = TypeVar("T")
-
 log = logging.getLogger("brainpainter.web")
 
 MAX_LISTED_IMAGES = 5000  # image names sent to the page for its row chooser
-
-
-class Work:
-    """Threads for work that grows with the table (reading it, checking options), apart from the threads
-    that answer status reads: at most `threads` run and `max_waiting` wait; more get 503 at once."""
-
-    def __init__(self, threads: int, max_waiting: int) -> None:
-        self.limiter = anyio.CapacityLimiter(max(1, threads))
-        self.max_waiting = max_waiting
-        self.pending = 0
-
-    async def run(self, func: Callable[..., T], *args: Any, **kwargs: Any) -> T:
-        if self.pending >= self.limiter.total_tokens + self.max_waiting:
-            raise ApiError(503, f"the server is reading {self.pending} tables already; try again in a few "
-                                "seconds.", {"retry-after": "5"})
-        self.pending += 1
-        try:
-            return await anyio.to_thread.run_sync(partial(func, *args, **kwargs), limiter=self.limiter)
-        finally:
-            self.pending -= 1
-
-
-class ApiError(Exception):
-    def __init__(self, status: int, message: str, headers: dict[str, str] | None = None) -> None:
-        super().__init__(message)
-        self.status, self.headers = status, headers or {}
-
-
-def _one_line(exc: BaseException) -> str:
-    text = str(exc)
-    return text.splitlines()[0] if text else type(exc).__name__
 
 
 # -- request bodies -------------------------------------------------------------------------
@@ -154,6 +130,7 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
     _add_error_handlers(app, config)
     _add_page_and_probes(app, config, store, pool)
     _add_upload_route(app, config, store)
+    add_tracts_route(app, config, store)
     _add_table_routes(app, config, store, pool)
     _add_job_routes(app, config, store)
     return app
@@ -164,7 +141,7 @@ def _add_error_handlers(app: FastAPI, config: ServerConfig) -> None:
     root = str(config.data_dir.resolve())
 
     def line(exc: BaseException) -> str:
-        return _one_line(exc).replace(root, "DATA_DIR").replace(str(config.data_dir), "DATA_DIR")
+        return one_line(exc).replace(root, "DATA_DIR").replace(str(config.data_dir), "DATA_DIR")
 
     @app.exception_handler(BrainPainterError)
     async def _bp_error(request: Request, exc: BrainPainterError) -> JSONResponse:
@@ -270,10 +247,14 @@ def _add_upload_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
                                 "application/octet-stream' (form and text/plain bodies are refused, so that "
                                 "other web sites cannot upload into this server).")
         names, sizes, hemi = name or ["table.csv"], sizes or [], hemi or []
+        if is_tract_upload(names):
+            raise ApiError(422, f"{file_name(names[0])!r} is a tractogram; upload tractograms with POST "
+                                "/api/tracts (the page's 'Tracts' field) and give their upload_id as option "
+                                "tracts.")
         if len(names) > 2 or any(len(n) > 200 for n in names) or len(hemi) > 2 or len(sizes) > 2:
             raise ApiError(422, "give one name (a table, a map or a volume) or two (an lh and an rh map), "
                                 "each at most 200 characters.")
-        await _disk_budget(store, config)
+        await disk_budget(store, config)
         is_map = len(names) > 1 or is_map_upload(names)
         shown = " + ".join(file_name(n) for n in names) if is_map else upload_name(names[0])
         fh, path = await run_in_threadpool(new_incoming, store.root)
@@ -296,7 +277,7 @@ def _add_upload_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
                                                         time_limit_s=config.parse_time_limit_s)
         finally:
             path.unlink(missing_ok=True)
-        upload_id = await run_in_threadpool(store.add_upload, _client(request), shown, data,
+        upload_id = await run_in_threadpool(store.add_upload, client_of(request), shown, data,
                                             config.result_ttl_s, config.max_uploads_per_client)
         return {"upload_id": upload_id, "name": shown, "size": size, "report": report,
                 "images": images[:MAX_LISTED_IMAGES]}
@@ -312,6 +293,8 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
         """The ``check`` report of an upload with these options (the colour scale included)."""
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
         o = body.options
+        if is_tract_bundle(data):  # the tracts alone: their report, with the colour scale of `o`
+            return await work.run(tract_check, data, name, o, data_dir=store.root)
         if is_bundle(data):
             return await work.run(map_check, data, name, o, scratch=store.root / "incoming")
         opts = {**o.model_dump(include=set(TableOptions.model_fields)),
@@ -319,15 +302,20 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
                           "center": o.center}}
         # read on a work thread: the upload was read within the time limit already (as preview and
         # job submission read it)
-        return (await work.run(check_table, data, name, opts, config.max_rows))[0]
+        report = (await work.run(check_table, data, name, opts, config.max_rows))[0]
+        tracts = await run_in_threadpool(tracts_of, store, o)
+        if tracts is not None:  # one scale over the regions' and the bundles' values, as drawn
+            report["values"]["scale"] = await work.run(table_tract_scale, data, name, o, tracts, store.root)
+        return report
 
     # -- preview -------------------------------------------------------------------------------
     @app.post("/api/preview", tags=["api"], responses={200: {"content": {"image/png": {}}}})
     async def preview(body: PreviewRequest) -> Response:
         """One row from one view, small, rendered by the warm preview painter."""
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
+        tracts = await run_in_threadpool(tracts_of, store, body.options)
         req = await work.run(preview_request, data, name, body.options, body.row, body.view, config,
-                             store.root / "incoming")
+                             store.root / "incoming", tracts, store.root)
         if previews.borrowed_tokens >= previews.total_tokens:  # never queue without bound
             raise ApiError(503, f"{MAX_PREVIEW_WAITING} previews are waiting; try again in a moment",
                            {"retry-after": "2"})
@@ -348,10 +336,14 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
     async def submit(body: JobRequest, request: Request) -> dict[str, Any]:
         """Queue a job: ``images`` (every row from every view, as PNGs plus a zip), ``figure`` (PDF/PNG)
         or ``movie`` (MP4/GIF)."""
+        from brainpainter.web.worker import TRACTS
+
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
-        await _disk_budget(store, config)
+        await disk_budget(store, config)
+        tracts = await run_in_threadpool(tracts_of, store, body.options)
         prep = await work.run(prepare, data, name, body.options, max_images=config.max_images,
-                              max_pixels=config.max_pixels, scratch=store.root / "incoming")
+                              max_pixels=config.max_pixels, scratch=store.root / "incoming", tracts=tracts,
+                              data_dir=store.root)
         n_rows, n_views = len(prep.run.table.images), len(prep.run.views)
         if body.kind == "movie" and n_rows < 2:
             raise BrainPainterError(f"a movie needs at least 2 rows (key frames); the table has {n_rows}.")
@@ -361,8 +353,9 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
                  body.movie.n_frames(n_rows) if body.kind == "movie" else 1)  # movie: progress per frame
         try:
             job_id = await run_in_threadpool(
-                store.submit, _client(request), body.kind, body.options.model_dump(), params, name, data,
-                total, max_per_client=config.max_jobs_per_client, max_queued=config.max_queued)
+                store.submit, client_of(request), body.kind, body.options.model_dump(), params, name, data,
+                total, max_per_client=config.max_jobs_per_client, max_queued=config.max_queued,
+                extra={TRACTS: tracts} if tracts is not None else None)
         except LimitError as exc:
             raise ApiError(exc.status, str(exc), {"retry-after": str(exc.retry_after)}) from None
         return _public(await run_in_threadpool(store.get, job_id))
@@ -410,10 +403,6 @@ def _version() -> str:
     return __version__
 
 
-def _client(request: Request) -> str:
-    return request.client.host if request.client else "-"
-
-
 def _upload(store: Store, upload_id: str) -> tuple[str, bytes]:
     got = store.get_upload(upload_id) if valid_id(upload_id) else None
     if got is None:
@@ -421,18 +410,8 @@ def _upload(store: Store, upload_id: str) -> tuple[str, bytes]:
     return got
 
 
-async def _disk_budget(store: Store, config: ServerConfig) -> None:
-    """507 when the data folder uses its ``--max-disk-gb`` budget."""
-    if config.max_disk_bytes <= 0:
-        return
-    used = await run_in_threadpool(store.disk_usage)
-    if used >= config.max_disk_bytes:
-        raise ApiError(507, f"this server's storage budget ({config.max_disk_gb:g} GB) is used up; try "
-                            "again after older results expire.", {"retry-after": "600"})
-
-
 def _full(request: Request, exc: BaseException) -> JSONResponse:
-    log.warning("disk full during %s %s: %s", request.method, request.url.path, _one_line(exc))
+    log.warning("disk full during %s %s: %s", request.method, request.url.path, one_line(exc))
     return JSONResponse({"error": "the server's disk is full; nothing was changed. Try again later (the "
                                   "operator must free space)."}, status_code=507,
                         headers={"retry-after": "600"})
@@ -469,8 +448,11 @@ def _meta(config: ServerConfig) -> dict[str, Any]:
     import matplotlib
 
     from brainpainter.atlas import registry
+    from brainpainter.atlas.model import SPACES
     from brainpainter.rendering.painter import HIDE_GROUPS
+    from brainpainter.rendering.settings import CORTEX_MODES
     from brainpainter.rendering.views import PRESETS
+    from brainpainter.web.options import MAX_WEB_STREAMLINES
 
     return {
         "version": _version(),
@@ -482,7 +464,10 @@ def _meta(config: ServerConfig) -> dict[str, Any]:
         "limits": {"max_upload_mb": config.max_upload_mb, "max_images": config.max_images,
                    "max_pixels": config.max_pixels, "max_jobs_per_client": config.max_jobs_per_client,
                    "result_ttl_s": config.result_ttl_s, "job_time_limit_s": config.job_time_limit_s,
-                   "max_map_images": config.max_map_images},
+                   "max_map_images": config.max_map_images, "max_tract_files": config.max_tract_files,
+                   "max_tract_streamlines": config.max_tract_streamlines,
+                   "max_streamlines": MAX_WEB_STREAMLINES},
+        "tract_spaces": list(SPACES), "cortex_modes": list(CORTEX_MODES),
         "renderer": config.renderer,
     }
 

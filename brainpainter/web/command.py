@@ -40,6 +40,10 @@ CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
               help="Largest number of table rows in one upload.")
 @click.option("--max-map-images", type=int, default=100, show_default=True,
               help="Largest number of images in one map upload (volumes of a 4-D NIfTI, GIfTI arrays).")
+@click.option("--max-tract-streamlines", type=int, default=1_000_000, show_default=True,
+              help="Largest number of streamlines in one tract upload (a hard cap; fewer are drawn).")
+@click.option("--max-tract-files", type=int, default=100, show_default=True,
+              help="Largest number of files (bundles) in one tract upload.")
 @click.option("--max-disk-gb", type=float, default=0.0, show_default=True,
               help="Disk the data folder may use; beyond it new uploads and jobs get 507 (0: no budget).")
 @click.option("--max-connections", type=click.IntRange(1, 100_000), default=500, show_default=True,
@@ -73,7 +77,7 @@ def serve(host: str, port: int, data_dir: Path | None, workers: int, no_preview:
         raise BrainPainterError(f"serve needs FastAPI and uvicorn ({exc}); "
                                 "pip install fastapi uvicorn") from None
     for key in ("max_images", "max_jobs_per_client", "max_queued", "rate_per_minute", "max_rows",
-                "max_map_images"):
+                "max_map_images", "max_tract_streamlines", "max_tract_files"):
         if limits[key] < 1:
             raise BrainPainterError(f"--{key.replace('_', '-')} must be at least 1; {limits[key]} was given.")
     for key in ("max_upload_mb", "job_time_limit_s", "result_ttl_s", "max_disk_gb"):

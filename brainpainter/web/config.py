@@ -57,6 +57,11 @@ class ServerConfig:
     max_map_images : int
         Largest number of images in one map upload (volumes of a 4-D NIfTI, data arrays of a GIfTI);
         each costs about 1.3 MB on fsaverage.
+    max_tract_streamlines : int
+        Largest number of streamlines the tractograms of one tract upload may hold together (a hard
+        cap: the files are refused; fewer are drawn, ``max_streamlines``).
+    max_tract_files : int
+        Largest number of files (bundles, a values table; a zip's members counted) of one tract upload.
     max_disk_gb : float
         Disk the data folder may use (uploads and results); beyond it new uploads and jobs get 507.
         0 = no budget.
@@ -90,6 +95,8 @@ class ServerConfig:
     preview_max_width: int = 480
     max_rows: int = 20_000
     max_map_images: int = 100
+    max_tract_streamlines: int = 1_000_000
+    max_tract_files: int = 100
     max_disk_gb: float = 0.0
     work_threads: int = 2
     max_waiting_work: int = 16

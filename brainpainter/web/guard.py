@@ -34,6 +34,8 @@ SECURITY_HEADERS = [
 ]
 JSON_BODY_LIMIT = 64 * 1024
 JSON_BODY_TIME_LIMIT_S = 30.0
+#: Requests whose body is an upload (the upload size and time limits, and upload slots, apply).
+UPLOAD_PATHS = ("/api/uploads", "/api/tracts")
 MAX_UPLOADS_IN_FLIGHT = 64  # uploads being received from all clients together
 UPLOAD_SLOT_WAIT_S = 5.0  # an upload beyond a client's slots waits this long for one, then gets 429
 STATE_CHANGING = ("POST", "PUT", "DELETE", "PATCH")
@@ -132,7 +134,7 @@ class Guard:
             if wait:
                 return (429, f"too many requests from {client}; at most {self.config.rate_per_minute} a "
                              f"minute. Retry in {wait:.0f} s.", {"retry-after": str(max(1, round(wait)))})
-        if path == "/api/uploads" and method == "POST" and not await self._upload_slot(client):
+        if path in UPLOAD_PATHS and method == "POST" and not await self._upload_slot(client):
             mine = self._uploading.get(client, 0)
             busy = (f"{mine} upload(s) from {client} are still being received; wait for them to finish, then "
                     "upload again." if mine >= self.config.max_uploads_in_flight else
@@ -149,7 +151,7 @@ class Guard:
         rid = secrets.token_hex(6)
         client = (scope.get("client") or ("-", 0))[0]
         method, path = scope["method"], scope["path"]
-        is_upload = path == "/api/uploads"
+        is_upload = path in UPLOAD_PATHS
         limit = self.config.max_upload_bytes if is_upload else JSON_BODY_LIMIT
         what = "upload" if is_upload else "request body"
         seconds = self.config.upload_time_limit_s if is_upload else JSON_BODY_TIME_LIMIT_S

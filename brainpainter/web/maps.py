@@ -74,15 +74,17 @@ def file_name(name: str) -> str:
     return stem + ("".join(ch for ch in ending if ch.isalnum() or ch == ".") if ending else "")
 
 
-def split_body(data: bytes, names: list[str], sizes: list[int]) -> list[tuple[str, bytes]]:
+def split_body(data: bytes, names: list[str], sizes: list[int],
+               max_files: int = 2) -> list[tuple[str, bytes]]:
     """The files of a request body: `names` with `sizes` bytes each, one after the other.
 
     Raises
     ------
     BrainPainterError
-        When the sizes do not add up to the body, or more than two files are given.
+        When the sizes do not add up to the body, or more than `max_files` files are given
+        (a map: two, lh and rh).
     """
-    if len(names) > 2:
+    if len(names) > max_files:
         raise BrainPainterError(f"{len(names)} files were sent; a map upload is one file, or two (lh and "
                                 "rh). Upload one map (or one volume) at a time.")
     if len(names) == 1 and not sizes:

@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import io
 from collections import Counter
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, FiniteFloat
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, FiniteFloat, PositiveFloat
 
 from brainpainter.color.scale import ScaleOptions
 from brainpainter.errors import BrainPainterError
@@ -28,6 +28,12 @@ from brainpainter.table.options import TableOptions as ReadOptions
 
 if TYPE_CHECKING:
     from brainpainter.rendering.run import Run
+    from brainpainter.web.tracts import TractFiles
+
+#: Streamlines a web render draws at most (option ``max_streamlines``).
+MAX_WEB_STREAMLINES = 20_000
+#: The options of tracts (given to a run only with tractograms).
+TRACT_FIELDS = ("tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_radius", "tract_value")
 
 #: Suffixes an uploaded file name may have (only used to sniff the format; never a path).
 UPLOAD_SUFFIXES = (".csv", ".tsv", ".tab", ".txt", ".dat", ".xlsx", ".xlsm", ".xls")
@@ -101,16 +107,41 @@ class RenderOptions(TableOptions):
     outline_width: FiniteFloat = Field(core(RenderSettings, "outline_width").default, ge=0, le=20,
                                        description=core(RenderSettings, "outline_width").description)
     outline_color: str = core(RenderSettings, "outline_color")
+    cortex: Annotated[str, one_of(RenderSettings, "cortex")] = core(RenderSettings, "cortex")
+    tracts: str | None = Field(None, pattern="^[0-9a-f]{32}$", description=(
+        "Upload id of tractograms (POST /api/tracts) drawn with the table, as --tracts (with the upload's "
+        "table of bundle values, if it had one, as --tract-values)."))
+    tracts_space: Annotated[str, one_of(SceneOptions, "tracts_space")] = core(SceneOptions, "tracts_space")
+    tracts_affine: str | None = Field(None, max_length=2000, description=(
+        "A 4x4 matrix applied to the tractograms' coordinates first, as --tracts-affine: 16 numbers, row "
+        "after row (or 4 lines of 4; 12 numbers: the first 3 rows)."))
+    max_streamlines: int = Field(core(SceneOptions, "max_streamlines").default, ge=1, le=MAX_WEB_STREAMLINES,
+                                 description=core(SceneOptions, "max_streamlines").description)
+    tract_radius: PositiveFloat | None = core(SceneOptions, "tract_radius")
+    tract_value: str | None = Field(None, max_length=200,
+                                    description=core(SceneOptions, "tract_value").description)
 
     def table_kwargs(self) -> dict[str, Any]:
         return {name: getattr(self, name) for name in option_names(ReadOptions)}
 
-    def run_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of ``prepare_run`` (without `data`, `atlas` and `hide`)."""
-        values = self.model_dump(exclude={"atlas", "size", "transparent", "hide"})
+    def run_kwargs(self, tracts: TractFiles | None = None) -> dict[str, Any]:
+        """Keyword arguments of ``prepare_run`` (without `data`, `atlas` and `hide`).
+
+        `tracts`: the files of the ``tracts`` upload on disk (:func:`brainpainter.web.tracts.materialise`),
+        given as the CLI's ``--tracts``, ``--tract-values`` and ``--tracts-affine``.
+        """
+        values = self.model_dump(exclude={"atlas", "size", "transparent", "hide", *TRACT_FIELDS})
         values["width"], values["height"] = parse_size(self.size)
         if self.transparent:
             values["background"] = None
+        if tracts is not None:
+            values.update(
+                tracts=[str(tracts.bundles)], tracts_space=self.tracts_space,
+                max_streamlines=self.max_streamlines,
+                tract_radius=self.tract_radius, tract_value=self.tract_value or None,
+                tract_values=None if tracts.values is None else str(tracts.values),
+                tracts_affine=None if not (self.tracts_affine or "").strip() else str(
+                    tracts.affine_file(self.tracts_affine or "")))
         return values
 
     def hide_tokens(self) -> list[str]:
@@ -145,21 +176,32 @@ class Prepared:
     options: RenderOptions
     hidden: list[str]
     file_names: list[str]
+    kwargs: dict[str, Any] = field(default_factory=dict)
+    tract_table: Path | None = None
 
     @property
     def coloring(self) -> str:
         """``"vertices"`` for a map run (its painter draws a per-vertex scene), else ``"regions"``."""
         return "vertices" if hasattr(self.run, "source_vertex") else "regions"
 
+    def painter_args(self) -> dict[str, Any]:
+        """The tract arguments of the run's painter (:meth:`brainpainter.rendering.run.Run.painter`)."""
+        scene = self.run.options.scene
+        tv = getattr(self.run, "tract_values", None)
+        return {"tracts": scene.tract_spec(), "tract_nodes": tv.nodes if tv is not None else (),
+                "tract_radius": scene.tract_radius}
+
 
 def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int | None = None,
-            max_pixels: int | None = None, scratch: Path | None = None) -> Prepared:
+            max_pixels: int | None = None, scratch: Path | None = None, tracts: bytes | None = None,
+            data_dir: Path | None = None) -> Prepared:
     """Check `options` against the uploaded table (or map) exactly as ``brainpainter render`` would.
 
     Parameters
     ----------
     data : bytes
-        The uploaded table file, or a map bundle (:mod:`brainpainter.web.maps`).
+        The uploaded table file, a map bundle (:mod:`brainpainter.web.maps`), or a tract bundle
+        (:mod:`brainpainter.web.tracts`) with a table of bundle values: the tracts alone.
     name : str
         Its display name (from :func:`upload_name`).
     options : RenderOptions
@@ -169,6 +211,10 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
         Largest width x height of one view.
     scratch : Path, optional
         Where a map bundle's files are written while they are read (removed after).
+    tracts : bytes, optional
+        The tract bundle that option ``tracts`` names (drawn with the table).
+    data_dir : Path, optional
+        The server's data folder: a tract bundle's files are written under it (``incoming/``).
 
     Raises
     ------
@@ -179,14 +225,29 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     from brainpainter.rendering.painter import resolve_hidden
     from brainpainter.rendering.run import prepare_run
     from brainpainter.web.maps import is_bundle, read_bundle
+    from brainpainter.web.tracts import is_tract_bundle
 
-    kwargs = options.run_kwargs()
+    alone = is_tract_bundle(data)
+    files = _tract_files(data, options, tracts, data_dir)
+    kwargs = options.run_kwargs(files)
     if max_pixels is not None and kwargs["width"] * kwargs["height"] > max_pixels:
         raise BrainPainterError(
             f"size {options.size} is {kwargs['width'] * kwargs['height']} pixels; this server renders at "
             f"most {max_pixels} pixels per view. Choose a smaller size."
         )
-    if is_bundle(data):  # a map: its files, read as the CLI reads --lh/--rh
+    tract_table = None
+    if files is not None and alone:  # the tracts alone: their values table is the main table, as on the CLI
+        if files.values is None:
+            raise BrainPainterError(
+                "tractograms alone are drawn with their table of bundle values; upload a region table and "
+                "give the tractograms as option tracts, or upload them again with a values table (.csv).")
+        tract_table = files.values
+        kwargs["tract_values"] = None
+        run = prepare_run(str(tract_table), options.atlas, **kwargs)
+    elif is_bundle(data):  # a map: its files, read as the CLI reads --lh/--rh
+        if files is not None:
+            raise BrainPainterError("tracts are drawn with a region table, not with a map; upload a region "
+                                    "table, or leave option tracts out.")
         run = prepare_run(read_bundle(data, scratch), options.atlas, **kwargs)
     else:
         run = prepare_run(table_stream(data, name), options.atlas, **kwargs)
@@ -206,7 +267,26 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
             f"image names {clash[:3]} become the same file name after removing unsafe characters; "
             "make the image names differ in letters or digits."
         )
-    return Prepared(run, options, hidden, names)
+    return Prepared(run, options, hidden, names, kwargs, tract_table)
+
+
+def _tract_files(data: bytes, options: RenderOptions, tracts: bytes | None,
+                 data_dir: Path | None) -> TractFiles | None:
+    """The files on disk of the tracts of a run: the upload itself (tracts alone) or option ``tracts``."""
+    import tempfile
+
+    from brainpainter.web.tracts import is_tract_bundle, materialise
+
+    if is_tract_bundle(data):
+        if tracts is not None and tracts != data:
+            raise BrainPainterError("the upload is tractograms already; give option tracts only with a "
+                                    "region table (or leave it out to draw the tracts alone).")
+        tracts = data
+    elif options.tracts is not None and (tracts is None or not is_tract_bundle(tracts)):
+        raise BrainPainterError("option tracts names no tract upload (it expired, or is a table); upload the "
+                                "tractograms again (POST /api/tracts) and give its upload_id.")
+    root = data_dir if data_dir is not None else Path(tempfile.gettempdir()) / "brainpainter-web"
+    return None if tracts is None else materialise(tracts, root)
 
 
 # -- figure and movie options of a job: the CLI's defaults (core option classes) ----------------------
@@ -263,12 +343,34 @@ def map_check(data: bytes, name: str, options: RenderOptions, *,
               scratch: Path | None = None) -> dict[str, Any]:
     """The report of a map upload (:func:`brainpainter.web.maps.base_report`) with the colour scale of
     `options` (the page's colour bar; the threshold band is marked by ``threshold``)."""
-    from brainpainter.table.report import colour_bar
     from brainpainter.web.maps import base_of
 
     report = base_of(data)
     scale = prepare(data, name, options, scratch=scratch).run.scale
-    report["values"]["scale"] = {"name": scale.name, "vmin": scale.vmin, "vmax": scale.vmax,
-                                 "center": scale.center, "threshold": getattr(scale, "threshold", None),
-                                 **colour_bar(scale)}
+    report["values"]["scale"] = scale_report(scale)
+    return report
+
+
+def scale_report(scale: Any) -> dict[str, Any]:
+    """A run's colour scale as the check report gives it (the page's colour bar: ``ramp``, ``ticks``)."""
+    from brainpainter.table.report import colour_bar
+
+    return {"name": scale.name, "vmin": scale.vmin, "vmax": scale.vmax, "center": scale.center,
+            "threshold": getattr(scale, "threshold", None), **colour_bar(scale)}
+
+
+def table_tract_scale(data: bytes, name: str, options: RenderOptions, tracts: bytes,
+                      data_dir: Path | None = None) -> dict[str, Any]:
+    """The colour scale of a table drawn with tracts: over the region and the bundle values together."""
+    return scale_report(prepare(data, name, options, tracts=tracts, data_dir=data_dir).run.scale)
+
+
+def tract_check(data: bytes, name: str, options: RenderOptions, *,
+                data_dir: Path | None = None) -> dict[str, Any]:
+    """The report of a tract upload drawn alone (:func:`brainpainter.web.tracts.tract_report`) with the
+    colour scale of `options` over its values (the page's colour bar)."""
+    from brainpainter.web.tracts import report_of
+
+    report = report_of(data)
+    report["scale"] = scale_report(prepare(data, name, options, data_dir=data_dir).run.scale)
     return report

@@ -244,20 +244,21 @@ def preview_settings(settings: Any, max_width: int) -> Any:
 
 
 def preview_request(data: bytes, name: str, options: Any, row: int | str, view: str, config: ServerConfig,
-                    scratch: Any = None) -> dict[str, Any]:
+                    scratch: Any = None, tracts: bytes | None = None, data_dir: Any = None) -> dict[str, Any]:
     """The preview process's request for `row` (index or image name) of an upload from `view`.
 
     `options` is a :class:`brainpainter.web.options.RenderOptions`; a map's colours are per vertex
-    (``coloring`` ``"vertices"``). Raises the CLI's one-line errors.
+    (``coloring`` ``"vertices"``); `tracts` is the tract upload option ``tracts`` names (its spec, nodes
+    and radius go with the request: the preview painter's scene). Raises the CLI's one-line errors.
     """
     import re
 
     from brainpainter.errors import BrainPainterError
-    from brainpainter.rendering.painter import region_colors
     from brainpainter.rendering.views import parse_views
     from brainpainter.web.options import prepare
 
-    prep = prepare(data, name, options, max_pixels=config.max_pixels, scratch=scratch)
+    prep = prepare(data, name, options, max_pixels=config.max_pixels, scratch=scratch, tracts=tracts,
+                   data_dir=data_dir)
     table = prep.run.table
     if isinstance(row, int) or re.fullmatch(r"[0-9]{1,9}", row):
         i = int(row)
@@ -270,7 +271,7 @@ def preview_request(data: bytes, name: str, options: Any, row: int | str, view: 
                                 f"{list(table.images[:5])}{'...' if len(table.images) > 5 else ''}.")
     views = parse_views(view)
     colors = (prep.run.colors(i) if prep.coloring == "vertices"  # type: ignore[attr-defined]
-              else region_colors(table.row(i), table.atlas, prep.run.scale))
+              else prep.run.item(i, views[0]).colors)  # regions and bundles, as render colours them
     return {"atlas": table.atlas.name, "surface": options.surface, "hidden": prep.hidden,
             "settings": preview_settings(prep.run.settings, config.preview_max_width),
-            "colors": colors, "view": views[0], "coloring": prep.coloring}
+            "colors": colors, "view": views[0], "coloring": prep.coloring, **prep.painter_args()}

@@ -5,6 +5,8 @@ Layout of the data folder::
     jobs.sqlite3            uploads, jobs, job events, workers
     uploads/<id>.bin        an uploaded table, as sent
     jobs/<id>/input.bin     the job's table (a copy: the job does not depend on the upload)
+    jobs/<id>/tracts.bin    the tract upload its options name, if any (a copy too)
+    incoming/tracts-<sha>/  a tract upload's files, written for the painters (deleted unused after an hour)
     jobs/<id>/out/          what the job made
 
 Ids are 32 random hex digits (:func:`secrets.token_hex`); they are the only
@@ -247,14 +249,17 @@ class Store:
 
     # -- jobs: the server's side -----------------------------------------------------------
     def submit(self, client: str, kind: str, options: dict[str, Any], params: dict[str, Any],
-               input_name: str, data: bytes, total: int, *, max_per_client: int, max_queued: int) -> str:
-        """Queue a job, or raise :class:`LimitError` (nothing stored then)."""
+               input_name: str, data: bytes, total: int, *, max_per_client: int, max_queued: int,
+               extra: dict[str, bytes] | None = None) -> str:
+        """Queue a job, or raise :class:`LimitError` (nothing stored then); `extra`: more input files
+        (name -> bytes, e.g. the tract upload the options name) kept beside ``input.bin``."""
         job_id = new_id()
         folder = self.job_dir(job_id)
         (folder / "out").mkdir(mode=0o700, parents=True)
         _private(folder)
-        atomic_write_bytes(folder / "input.bin", data)
-        _private(folder / "input.bin")
+        for name, content in {"input.bin": data, **(extra or {})}.items():
+            atomic_write_bytes(folder / name, content)
+            _private(folder / name)
         try:
             with self.transaction() as db:
                 mine = db.execute("SELECT count(*) FROM jobs WHERE client = ? AND status IN (?, ?)",

@@ -106,9 +106,11 @@ def check_upload(data: bytes, name: str, options: dict[str, Any], *, max_rows: i
     spreadsheets in a spawned process that is killed after `time_limit_s` seconds.
     """
     check_rows(data, name, max_rows)
-    if data.startswith(MAGIC):  # only the server writes map bundles
-        raise BrainPainterError(f"{name!r} is not a table (it starts as a stored map upload); upload the "
-                                "table or map files themselves.")
+    from brainpainter.web.tracts import MAGIC as TRACTS_MAGIC
+
+    if data.startswith((MAGIC, TRACTS_MAGIC)):  # only the server writes map and tract bundles
+        raise BrainPainterError(f"{name!r} is not a table (it starts as a stored map or tract upload); "
+                                "upload the table, map or tractogram files themselves.")
     if not is_spreadsheet(data):
         return check_table(data, name, options, max_rows)
     return _in_child(  # type: ignore[no-any-return]
@@ -248,3 +250,76 @@ def _limit_memory() -> None:
         resource.setrlimit(resource.RLIMIT_DATA, (limit, hard))
     except (ImportError, ValueError, OSError):  # not on this platform: the time limit remains
         pass
+
+
+# -- tractograms (brainpainter.web.tracts): read in a process of their own, bounded in time and memory ---
+def read_tract_upload(path: Path, names: list[str], sizes: list[int], folder: Path, *, max_files: int,
+                      max_streamlines: int, time_limit_s: float) -> tuple[bytes, dict[str, Any]]:
+    """The received body at `path` (the files `names`, `sizes` bytes each) read as tractograms:
+    ``(tract bundle, report)``; raises the first error as one line.
+
+    Parameters
+    ----------
+    folder : Path
+        A private folder for the work (under the server's data folder; removed after).
+    max_files : int
+        Most files (bundles and a values table, a zip's members counted) one upload may hold.
+    max_streamlines : int
+        Most streamlines the files may hold together (the hard cap; fewer are drawn).
+    time_limit_s : float
+        The reading process is killed after this many seconds.
+    """
+    from brainpainter.web.maps import split_body
+    from brainpainter.web.tracts import member_name
+
+    if len(names) > max_files:
+        raise BrainPainterError(f"{len(names)} files were sent; this server reads at most {max_files} per "
+                                "upload. Upload fewer bundles, or a .zip of them.")
+    data = path.read_bytes()
+    parts = split_body(data, names, sizes, max_files=max_files)
+    work = Path(tempfile.mkdtemp(prefix="tract-upload-", dir=folder))
+    try:
+        (work / "in").mkdir()
+        written = []
+        for name, body in parts:
+            target = work / "in" / member_name(name)
+            if target.exists():
+                raise BrainPainterError(f"two files are named {target.name!r}; give each bundle once.")
+            target.write_bytes(body)
+            written.append(str(target))
+        shown = " + ".join(member_name(n) for n in names)[:200]
+        report = _in_child(
+            _tracts_main, (str(work), written, max_files, max_streamlines), "brainpainter-read-tracts",
+            time_limit_s,
+            f"reading {shown!r} took longer than this server's limit of {time_limit_s:g} s; upload fewer "
+            "streamlines (a subsample), or render them with 'brainpainter render --tracts' on your own "
+            "computer.",
+            f"reading {shown!r} stopped unexpectedly (too large for this server?); upload fewer streamlines.")
+        return (work / "bundle.bin").read_bytes(), report
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+def _tracts_main(conn: Any, work: str, files: list[str], max_files: int, max_streamlines: int) -> None:
+    """Entry point of the tract reading process: send ``("ok", report)`` or ``("error", line)``."""
+    from brainpainter.web.tracts import build_tract_bundle
+    from brainpainter.web.worker import die_with_parent
+
+    die_with_parent()
+    _limit_memory()
+    try:
+        report = build_tract_bundle(Path(work), [Path(f) for f in files], max_files, max_streamlines)
+        conn.send(("ok", report))
+    except BrainPainterError as exc:
+        line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        for prefix in (work + "/in/", work + "/given/", work + "/", work):
+            line = line.replace(prefix, "")
+        conn.send(("error", line))
+    except MemoryError:
+        conn.send(("error", "the tractograms need more memory than this server gives one upload; upload "
+                            "fewer streamlines."))
+    except Exception as exc:
+        conn.send(("error", f"cannot read the tractograms ({type(exc).__name__}); check that each file is a "
+                            ".trk, .tck or .trx file (docs/tracts.md)."))
+    finally:
+        conn.close()

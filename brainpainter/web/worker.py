@@ -48,14 +48,19 @@ class PainterCache:
         self._painters: OrderedDict[tuple[Any, ...], Any] = OrderedDict()
 
     def get(self, atlas: Any, surface: str, hidden: list[str], settings: Any,
-            coloring: str = "regions") -> Any:
-        """A loaded painter; `coloring` ``"vertices"`` for a map run (a per-vertex scene)."""
+            coloring: str = "regions", tracts: Any = None, tract_nodes: Any = (),
+            tract_radius: float | None = None) -> Any:
+        """A loaded painter; `coloring` ``"vertices"`` for a map run (a per-vertex scene); `tracts` (a
+        :class:`~brainpainter.tracts.model.TractSpec`), `tract_nodes` and `tract_radius` as
+        :class:`~brainpainter.rendering.painter.Painter` takes them (part of the key: the spec names
+        content-addressed files, so two tract uploads never share a painter)."""
         from brainpainter.rendering.painter import Painter
 
-        key = (atlas.name, surface, tuple(sorted(hidden)), settings, coloring)
+        key = painter_key(atlas.name, surface, hidden, settings, coloring, tracts, tract_nodes, tract_radius)
         painter = self._painters.get(key)
         if painter is None:
-            painter = Painter(atlas, "fsaverage", surface, hidden, settings, self.renderer, coloring=coloring)
+            painter = Painter(atlas, "fsaverage", surface, hidden, settings, self.renderer, coloring=coloring,
+                              tracts=tracts, tract_nodes=tract_nodes, tract_radius=tract_radius)
             painter.load()
             self._painters[key] = painter
             while len(self._painters) > self.size:
@@ -75,6 +80,14 @@ class PainterCache:
     def close(self) -> None:
         while self._painters:
             self._painters.popitem()[1].close()
+
+
+def painter_key(atlas: str, surface: str, hidden: list[str], settings: Any, coloring: str = "regions",
+                tracts: Any = None, tract_nodes: Any = (),
+                tract_radius: float | None = None) -> tuple[Any, ...]:
+    """What makes a painter's scene: a cached painter is reused only for the same key."""
+    return (atlas, surface, tuple(sorted(hidden)), settings, coloring, tracts,
+            tuple((str(n), int(k)) for n, k in tract_nodes), tract_radius)
 
 
 def _orphaned(parent: int) -> bool:
@@ -204,14 +217,23 @@ def _prepared(folder: Path, job: dict[str, Any]) -> Any:
     from brainpainter.web.options import RenderOptions, prepare
 
     data = (folder / "input.bin").read_bytes()
-    return data, prepare(data, job["input_name"], RenderOptions(**job["options"]), scratch=folder)
+    tracts = (folder / TRACTS).read_bytes() if (folder / TRACTS).is_file() else None
+    return data, prepare(data, job["input_name"], RenderOptions(**job["options"]), scratch=folder,
+                         tracts=tracts, data_dir=folder.parent.parent)
 
 
-def _media_input(folder: Path, data: bytes, name: str) -> Any:
-    """What figure and movie read: the table as a named stream, or a map's maps (read from its files)."""
+#: A job's copy of the tract upload its options name (beside ``input.bin``).
+TRACTS = "tracts.bin"
+
+
+def _media_input(folder: Path, data: bytes, name: str, prep: Any) -> Any:
+    """What figure and movie read: the table as a named stream, a map's maps (read from its files), or
+    the table of bundle values of tracts drawn alone."""
     from brainpainter.web.maps import is_bundle, read_bundle
     from brainpainter.web.options import table_stream
 
+    if prep.tract_table is not None:
+        return str(prep.tract_table)
     if not is_bundle(data):
         return table_stream(data, name)
     return read_bundle(data, folder)
@@ -227,7 +249,8 @@ def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
     _, prep = _prepared(folder, job)
     run = prep.run
     table = run.table
-    painter = painters.get(table.atlas, prep.options.surface, prep.hidden, run.settings, prep.coloring)
+    painter = painters.get(table.atlas, prep.options.surface, prep.hidden, run.settings, prep.coloring,
+                           **prep.painter_args())
     settings = run_settings(run, painter)
     plan = run.items(range(len(table.images)))
     names = [f"{prep.file_names[i]}_{view.name}.png" for i, view in plan]
@@ -246,6 +269,8 @@ def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
                for name, (i, view) in zip(names, plan, strict=True)]
     manifest = {"software": {"brainpainter": __version__}, "input": table.summary(), "settings": settings,
                 "files": entries}
+    if painter.scene.tracts is not None:  # what was drawn of the tractograms, as render's manifest says
+        manifest["tracts"] = painter.scene.tracts.summary()
     publish_drawn(folder, names, manifest, (run.settings.width, run.settings.height))
     # the zip is not stored (it would copy every PNG): it is made while it is downloaded
     return [*names, MANIFEST, zip_name(job["id"])]
@@ -340,7 +365,7 @@ def zip_stream(out: Path, names: list[str], chunk: int = 1 << 20) -> Iterator[by
 
 
 def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
-    kwargs: dict[str, Any] = prep.options.run_kwargs()
+    kwargs: dict[str, Any] = dict(prep.kwargs)  # the run's options (tract files included)
     kwargs.update(atlas=prep.run.table.atlas, hide=prep.hidden, surface=prep.options.surface,
                   renderer=renderer, progress=False)
     return kwargs
@@ -355,7 +380,8 @@ def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
     name = f"figure.{p.get('format', 'pdf')}"
     tick(0)
     params = FigureParams(**p)  # the CLI's defaults for what the job did not give
-    make_figure(_media_input(folder, data, job["input_name"]), out=folder / "out" / name, grid=params.grid,
+    make_figure(_media_input(folder, data, job["input_name"], prep), out=folder / "out" / name,
+                grid=params.grid,
                 title=params.title or None, label=params.label or None, dpi=params.dpi,
                 fig_width=params.fig_width, font_size=params.font_size, on_progress=tick,
                 **_media_kwargs(prep, painters.renderer))
@@ -372,7 +398,7 @@ def _run_movie(folder: Path, job: dict[str, Any], painters: PainterCache, tick: 
     tick(0)
     params = MovieParams(**p)  # the CLI's defaults for what the job did not give
     kwargs = _media_kwargs(prep, painters.renderer)  # progress: per frame (on_progress), not 0/1
-    make_movie(_media_input(folder, data, job["input_name"]), out=folder / "out" / name,
+    make_movie(_media_input(folder, data, job["input_name"], prep), out=folder / "out" / name,
                frames_per_step=params.frames_per_step, easing=params.easing, hold=params.hold, fps=params.fps,
                title=params.title or None, label=params.label or None, on_progress=tick, **kwargs)
     return [name]
@@ -412,7 +438,8 @@ def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int
             try:
                 atlas = get_atlas(req["atlas"])
                 painter = painters.get(atlas, req["surface"], req["hidden"], req["settings"],
-                                       req.get("coloring", "regions"))
+                                       req.get("coloring", "regions"), req.get("tracts"),
+                                       req.get("tract_nodes", ()), req.get("tract_radius"))
                 pixels = painter.paint_colors(req["colors"], req["view"])
                 conn.send(("ok", png_bytes(pixels), int((time.perf_counter() - t0) * 1000)))
             except BrainPainterError as exc:

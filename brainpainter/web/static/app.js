@@ -4,9 +4,11 @@
 
 const $ = (id) => document.getElementById(id);
 const state = { uploadId: null, files: null, name: null, report: null, meta: null, isMap: false,
-                previewCtl: null, previewTimer: null, previewUrl: null, seq: 0, scale: null };
+                previewCtl: null, previewTimer: null, previewUrl: null, seq: 0, scale: null,
+                tractsId: null, tractReport: null };
 const DEFAULT_VIEWS = ["lateral-left", "medial-left", "subcortical"];
 const MAP_VIEWS = ["lateral-left", "medial-left", "lateral-right", "medial-right"];  // a map's default
+const TRACT_VIEWS = ["subcortical", "subcortical-dorsal"];  // tracts alone: the views that show them
 
 function el(tag, attrs = {}, ...children) {
   const node = document.createElement(tag);
@@ -118,8 +120,14 @@ function fillForm(meta) {
       el("input", { type: "checkbox", name: "hide-group", value: g }), g));
   }
   for (const v of meta.views) $("pview").append(el("option", { value: v, text: v }));
+  for (const s of meta.tract_spaces || []) $("tracts_space").append(el("option", { value: s, text: s }));
+  for (const c of meta.cortex_modes || []) $("cortex").append(el("option", { value: c, text: c }));
   const d = meta.defaults;
   $("size").value = d.size; $("glass_opacity").value = d.glass_opacity;
+  if (d.tracts_space) $("tracts_space").value = d.tracts_space;
+  if (d.cortex) $("cortex").value = d.cortex;
+  if (d.max_streamlines) $("max_streamlines").value = d.max_streamlines;
+  if (meta.limits.max_streamlines) $("max_streamlines").max = meta.limits.max_streamlines;
 }
 
 function numberOrNull(id) {
@@ -150,6 +158,11 @@ function options() {
     underlay: $("underlay").value, threshold: numberOrNull("threshold"), outline: textOrNull("outline"),
     outline_threshold: $("outline_threshold").checked, outline_width: Number($("outline_width").value || 0),
     outline_color: $("outline_color").value,
+    // tracts: drawn with the table (the table is the upload), or alone (the tract upload is the upload)
+    tracts: state.tractsId && state.tractsId !== state.uploadId ? state.tractsId : null,
+    tracts_space: $("tracts_space").value || undefined, cortex: $("cortex").value || undefined,
+    tracts_affine: textOrNull("tracts_affine"), max_streamlines: numberOrNull("max_streamlines") ?? undefined,
+    tract_radius: numberOrNull("tract_radius"), tract_value: textOrNull("tract_value"),
   };
 }
 
@@ -197,7 +210,7 @@ async function upload(files) {
 function setDefaultViews(wanted) {
   const boxes = [...document.querySelectorAll('input[name="views"]')];
   const now = boxes.filter((b) => b.checked).map((b) => b.value).join(",");
-  if (now !== DEFAULT_VIEWS.join(",") && now !== MAP_VIEWS.join(",")) return;
+  if (![DEFAULT_VIEWS, MAP_VIEWS, TRACT_VIEWS].some((v) => now === v.join(","))) return;
   for (const b of boxes) b.checked = wanted.includes(b.value);
 }
 
@@ -210,6 +223,7 @@ function showReport(r) {
   const dl = el("dl");
   const add = (k, v) => dl.append(el("dt", { text: k }), el("dd", { text: v }));
   if (r.kind === "map") { showMapReport(r, box, dl, add); return; }
+  if (r.kind === "tracts") { showTractReport(r, box, dl, add); return; }
   for (const i of r.inputs) { add("format", i.format); add("shape", i.shape.description); }
   add("atlas", r.atlas.name + (r.atlas.inferred ? ` (inferred: ${r.atlas.reason})` : " (given)"));
   add("images", `${r.n_images}: ${r.images.slice(0, 6).join(", ")}${r.n_images > 6 ? ", …" : ""}`);
@@ -246,6 +260,62 @@ function showMapReport(r, box, dl, add) {
         (t ? ` (|value| < ${t} shows the underlay)` : ""));
   }
   box.append(dl);
+}
+
+function showTractReport(r, box, dl, add) {
+  state.scale = r.scale || null;
+  showBar(state.scale);
+  add("bundles", r.bundles.map((b) => `${b.name} (${b.drawn} of ${b.streamlines})`).join(", "));
+  if (r.values) add("values", `${r.values.file}: ${r.values.nodes ? `profiles of ${r.values.nodes} nodes` : "one value per bundle"}`);
+  if (r.scale) add("scale", `${r.scale.name}: ${r.scale.vmin} .. ${r.scale.vmax}`);
+  box.append(dl);
+  if (r.notes.length) {
+    box.append(el("h3", { text: "Notes" }));
+    const ul = el("ul");
+    for (const t of r.notes) ul.append(el("li", { text: t }));
+    box.append(ul);
+  }
+}
+
+// -- tracts: their own upload, drawn with the table (option tracts) or alone --------------------
+async function uploadTracts(files) {
+  const q = new URLSearchParams();
+  for (const f of files) q.append("name", f.name);
+  if (files.length > 1) for (const f of files) q.append("size", String(f.size));
+  showError("");
+  $("tract-status").textContent = "Reading the tractograms…";
+  try {
+    const res = await api(`/api/tracts?${q}`, { method: "POST", body: new Blob(files.map((f) => f.blob)),
+                                                headers: { "content-type": "application/octet-stream" } });
+    const j = await res.json();
+    const alone = !state.uploadId || state.uploadId === state.tractsId;
+    state.tractsId = j.upload_id; state.tractReport = j.report;
+    $("tract-status").textContent = `OK: ${j.report.summary}`;
+    $("tract-clear").disabled = false;
+    if (alone && j.report.values) {  // no table: the tracts alone, coloured by their values table
+      state.uploadId = j.upload_id; state.files = null; state.isMap = false;
+      if ($("gradient").value === "") $("gradient").value = GRADIENT;
+      setDefaultViews(TRACT_VIEWS);
+      showReport(j.report);
+      fillRows(j.report.values.images, j.report.values.images.length);
+      setReady(true);
+    } else if (alone) {
+      $("tract-status").textContent += " — now upload a table (or add a table of bundle values to the tracts).";
+    }
+    schedulePreview(0);
+  } catch (e) {
+    $("tract-status").textContent = "";
+    showError(e.message);
+  }
+}
+
+function clearTracts() {
+  if (state.uploadId && state.uploadId === state.tractsId) {
+    state.uploadId = null; setReady(false); $("report").textContent = "";
+  }
+  state.tractsId = null; state.tractReport = null;
+  $("tract-status").textContent = ""; $("tract-clear").disabled = true; $("tract-files").value = "";
+  schedulePreview(0);
 }
 
 function fillRows(images, total) {
@@ -408,6 +478,18 @@ function wire() {
   $("options").addEventListener("submit", (e) => e.preventDefault());
   $("row").addEventListener("change", () => schedulePreview(0));
   $("pview").addEventListener("change", () => schedulePreview(0));
+  $("tract-files").addEventListener("change", () => {
+    const list = $("tract-files").files;
+    if (list.length) uploadTracts(picked(list));
+  });
+  $("tract-clear").addEventListener("click", clearTracts);
+  $("affine-file").addEventListener("change", async () => {
+    const f = $("affine-file").files[0];
+    if (!f) return;
+    if (f.size > 2000) { showError(`${f.name} is ${f.size} bytes; an affine is 4 rows of 4 numbers.`); return; }
+    $("tracts_affine").value = (await f.text()).trim();
+    schedulePreview(0);
+  });
   $("render-all").addEventListener("click", () => submit("images"));
   for (const b of document.querySelectorAll("button[data-kind]")) {
     b.addEventListener("click", () => submit(b.dataset.kind, b.dataset.format));

@@ -1,0 +1,68 @@
+"""What the routes of the web API share: their error, the work threads, who the client is, the disk budget."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from functools import partial
+from typing import TYPE_CHECKING, Any, TypeVar
+
+import anyio
+import anyio.to_thread
+from starlette.concurrency import run_in_threadpool
+
+if TYPE_CHECKING:
+    from fastapi import Request
+
+    from brainpainter.web.config import ServerConfig
+    from brainpainter.web.store import Store
+
+T = TypeVar("T")
+
+
+class Work:
+    """Threads for work that grows with the table (reading it, checking options), apart from the threads
+    that answer status reads: at most `threads` run and `max_waiting` wait; more get 503 at once."""
+
+    def __init__(self, threads: int, max_waiting: int) -> None:
+        self.limiter = anyio.CapacityLimiter(max(1, threads))
+        self.max_waiting = max_waiting
+        self.pending = 0
+
+    async def run(self, func: Callable[..., T], *args: Any, **kwargs: Any) -> T:
+        if self.pending >= self.limiter.total_tokens + self.max_waiting:
+            raise ApiError(503, f"the server is reading {self.pending} tables already; try again in a few "
+                                "seconds.", {"retry-after": "5"})
+        self.pending += 1
+        try:
+            return await anyio.to_thread.run_sync(partial(func, *args, **kwargs), limiter=self.limiter)
+        finally:
+            self.pending -= 1
+
+
+class ApiError(Exception):
+    """An answer other than 200: `status`, a one-line message and headers (``{"error": message}``)."""
+
+    def __init__(self, status: int, message: str, headers: dict[str, str] | None = None) -> None:
+        super().__init__(message)
+        self.status, self.headers = status, headers or {}
+
+
+def one_line(exc: BaseException) -> str:
+    """The first line of an error's message (its type's name when it has none)."""
+    text = str(exc)
+    return text.splitlines()[0] if text else type(exc).__name__
+
+
+def client_of(request: Request) -> str:
+    """The client's address (the connection's, or the proxy's X-Forwarded-For where trusted)."""
+    return request.client.host if request.client else "-"
+
+
+async def disk_budget(store: Store, config: ServerConfig) -> None:
+    """507 when the data folder uses its ``--max-disk-gb`` budget."""
+    if config.max_disk_bytes <= 0:
+        return
+    used = await run_in_threadpool(store.disk_usage)
+    if used >= config.max_disk_bytes:
+        raise ApiError(507, f"this server's storage budget ({config.max_disk_gb:g} GB) is used up; try "
+                            "again after older results expire.", {"retry-after": "600"})

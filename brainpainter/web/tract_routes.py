@@ -1,0 +1,77 @@
+"""The route of tractogram uploads (``POST /api/tracts``) and the tract upload a render's options name."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import FastAPI, Query, Request
+from starlette.concurrency import run_in_threadpool
+
+from brainpainter.web.config import ServerConfig
+from brainpainter.web.http import ApiError, Work, client_of, disk_budget
+from brainpainter.web.options import RenderOptions
+from brainpainter.web.store import Store
+from brainpainter.web.tracts import is_tract_bundle, is_tract_upload
+from brainpainter.web.upload import content_type_allowed, new_incoming, read_tract_upload
+
+
+def add_tracts_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
+    """Uploads of tractograms (web/tracts.py)."""
+    work: Work = app.state.work
+
+    @app.post("/api/tracts", tags=["api"], openapi_extra={"requestBody": {
+        "required": True, "content": {"application/octet-stream": {"schema": {"type": "string",
+                                                                              "format": "binary"}}}}})
+    async def upload_tracts(request: Request,
+                            name: Annotated[list[str] | None, Query(description=(
+                                "File names, in the body's order: .trk, .tck, .trx (one bundle each, named "
+                                "after it), a .zip of them, and at most one .csv/.tsv/.xlsx of bundle "
+                                "values."))] = None,
+                            sizes: Annotated[list[int] | None, Query(alias="size", description=(
+                                "With several names: the bytes of each file, in the body's order."))] = None,
+                            ) -> dict[str, Any]:
+        """Upload tractograms and get their report (bundles, streamlines); nothing is kept when they cannot
+        be drawn."""
+        from brainpainter.web.tracts import member_name
+
+        if not content_type_allowed(request.headers.get("content-type")):
+            raise ApiError(415, "send the files as the request body with 'Content-Type: "
+                                "application/octet-stream' (form and text/plain bodies are refused, so that "
+                                "other web sites cannot upload into this server).")
+        names, sizes = name or [], sizes or []
+        if not names or len(names) > config.max_tract_files or len(sizes) > config.max_tract_files or any(
+                len(n) > 200 for n in names):
+            raise ApiError(422, f"give 1 to {config.max_tract_files} file names (name=AF_left.trk&name=..., "
+                                "or one .zip), each at most 200 characters.")
+        if not is_tract_upload(names):
+            raise ApiError(422, f"{member_name(names[0])!r} is not a tractogram; upload .trk, .tck or .trx "
+                                "files (one per bundle) or a .zip of them.")
+        await disk_budget(store, config)
+        shown = " + ".join(member_name(n) for n in names[:5]) + (" + ..." if len(names) > 5 else "")
+        fh, path = await run_in_threadpool(new_incoming, store.root)
+        try:
+            size = 0
+            with fh:
+                async for chunk in request.stream():
+                    size += len(chunk)
+                    fh.write(chunk)
+            data, report = await work.run(
+                read_tract_upload, path, names, sizes, store.root / "incoming",
+                max_files=config.max_tract_files, max_streamlines=config.max_tract_streamlines,
+                time_limit_s=config.parse_time_limit_s)
+        finally:
+            path.unlink(missing_ok=True)
+        upload_id = await run_in_threadpool(store.add_upload, client_of(request), shown, data,
+                                            config.result_ttl_s, config.max_uploads_per_client)
+        return {"upload_id": upload_id, "name": shown, "size": size, "report": report}
+
+
+def tracts_of(store: Store, options: RenderOptions) -> bytes | None:
+    """The tract upload that option ``tracts`` names (None without it)."""
+    if options.tracts is None:
+        return None
+    got = store.get_upload(options.tracts)
+    if got is None or not is_tract_bundle(got[1]):
+        raise ApiError(404, "the tract upload of option tracts was not found (it expired, or the id is "
+                            "wrong); upload the tractograms again.")
+    return got[1]

@@ -1,0 +1,324 @@
+"""Tractogram uploads of the web API: bundles (.trk, .tck, .trx, or a .zip of them) drawn with a table.
+
+A tract upload is one or several tractogram files (one bundle each, the file
+name is the bundle name, as ``--tracts FOLDER``), or a ``.zip`` of them, plus
+at most one table of bundle values or along-tract profiles (``.csv``,
+``.tsv``, ``.xlsx``: ``--tract-values``). The files are read in a process of
+their own (:func:`brainpainter.web.upload.read_tract_upload`, killed after the
+server's parse time limit, its data memory bounded) by the CLI's reader
+(:func:`brainpainter.tracts.read.read_bundles`), after the streamline counts
+in the files' headers were checked against the server's hard cap. A zip is
+unpacked there too: members with ``..`` or an absolute path are refused,
+folders inside it are flattened, its files and their inflated size are
+capped.
+
+What is kept is a *tract bundle* (:data:`MAGIC`, one JSON line, then the files
+as read). A render names it by its upload id (option ``tracts``); its files are
+then written once into ``DATA_DIR/incoming/tracts-<sha256>/`` (content
+addressed: two different uploads never share a folder, so never a cached
+painter), and the run gets the paths exactly as the CLI's ``--tracts``,
+``--tract-values`` and ``--tracts-affine`` give them
+(:meth:`TractFiles.run_kwargs`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import re
+import shutil
+import tempfile
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path, PurePosixPath
+from typing import Any
+
+from brainpainter.errors import BrainPainterError
+from brainpainter.tracts.model import SUFFIXES
+
+#: The first bytes of a stored tract upload.
+MAGIC = b"BRAINPAINTER-TRACTS/1\n"
+#: Table files of an upload read as tract values (one at most).
+VALUE_SUFFIXES = (".csv", ".tsv", ".xlsx")
+#: Largest total size the members of an uploaded zip may inflate to (bytes).
+MAX_UNZIPPED = 1 << 30
+#: Data memory (bytes) of the process that reads a tract upload.
+MEMORY_LIMIT = 4 << 30
+_HEADER_LIMIT = 1 << 16
+
+
+def is_tract_upload(names: list[str]) -> bool:
+    """Whether an upload of files named `names` is tractograms (a .trk/.tck/.trx or a .zip among them)."""
+    return any(n.lower().endswith((*SUFFIXES, ".zip")) for n in names)
+
+
+def is_tract_bundle(data: bytes) -> bool:
+    """Whether stored upload bytes are a tract bundle."""
+    return data.startswith(MAGIC)
+
+
+def member_name(name: str) -> str:
+    """A client's (or a zip member's) file name made safe: no folder, no leading dot, suffix kept.
+
+    ``AF L.trk`` -> ``AF_L.trk``; ``../x/CST_R.tck`` -> ``CST_R.tck``.
+    """
+    from brainpainter.io.output import safe_name
+
+    base = PurePosixPath(name.replace("\\", "/")).name
+    suffix = PurePosixPath(base).suffix.lower()
+    stem = base[: len(base) - len(suffix)] if suffix else base
+    stem = safe_name(stem).lstrip("._")[:80] or "bundle"
+    return stem + "".join(ch for ch in suffix if ch.isalnum() or ch == ".")
+
+
+# -- reading (in the process that upload.read_tract_upload starts) ------------------------------
+def unzip(path: Path, into: Path, max_files: int) -> list[Path]:
+    """The members of zip `path` written into `into` (flattened); ``__MACOSX`` and dot files skipped.
+
+    Raises
+    ------
+    BrainPainterError
+        A member named with ``..`` or an absolute path, two members of the same name, more than
+        `max_files` files, more than :data:`MAX_UNZIPPED` bytes inflated, or not a zip.
+    """
+    shown = path.name
+    out: list[Path] = []
+    total = 0
+    try:
+        with zipfile.ZipFile(path) as zf:
+            infos = [i for i in zf.infolist() if not i.is_dir()]
+            for info in infos:
+                parts = PurePosixPath(info.filename.replace("\\", "/")).parts
+                if info.filename.startswith(("/", "\\")) or ".." in parts or (parts and ":" in parts[0]):
+                    raise BrainPainterError(
+                        f"{shown!r} holds {info.filename[:100]!r}, a path outside the zip; zip the bundle "
+                        "files themselves (no '..' or absolute paths) and upload it again.")
+            infos = [i for i in infos if not any(p.startswith(".") or p == "__MACOSX"
+                                                 for p in PurePosixPath(i.filename).parts)]
+            if len(infos) > max_files:
+                raise BrainPainterError(f"{shown!r} holds {len(infos)} files; this server reads at most "
+                                        f"{max_files} per upload. Upload fewer bundles.")
+            for info in infos:
+                target = into / member_name(info.filename)
+                if target.exists():
+                    raise BrainPainterError(
+                        f"{shown!r} holds two files named {target.name!r} (in different folders); give each "
+                        "bundle once.")
+                with zf.open(info) as src, target.open("wb") as dst:
+                    while block := src.read(1 << 20):
+                        total += len(block)
+                        if total > MAX_UNZIPPED:
+                            raise BrainPainterError(
+                                f"{shown!r} inflates to more than {MAX_UNZIPPED >> 20} MB; this server reads "
+                                "at most that much. Upload fewer or smaller bundles.")
+                        dst.write(block)
+                out.append(target)
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, NotImplementedError, EOFError) as exc:
+        raise BrainPainterError(f"{shown!r} is not a readable zip file ({type(exc).__name__}); zip the "
+                                "bundle files (.trk, .tck, .trx) and upload it again.") from None
+    return out
+
+
+def header_count(path: Path) -> int | None:
+    """Streamlines a tractogram's header says it holds (None when it does not say)."""
+    if path.suffix.lower() == ".trx":
+        return None  # counted by the reader (memory-mapped)
+    import nibabel as nib
+
+    load: Any = nib.streamlines.load
+    try:
+        header = load(str(path), lazy_load=True).header
+        count = int(header.get("nb_streamlines" if path.suffix.lower() == ".trk" else "count", 0))
+    except Exception:
+        return None  # the reader says what is wrong
+    return count if count > 0 else None
+
+
+def build_tract_bundle(work: Path, files: list[Path], max_files: int,
+                       max_streamlines: int) -> dict[str, Any]:
+    """Read the uploaded `files` (tractograms, zips, one values table) and write ``work/bundle.bin``.
+
+    Returns
+    -------
+    dict
+        The upload's report (``summary``: what was understood and drawn by default).
+    """
+    import numpy as np
+
+    from brainpainter.tracts.model import MAX_STREAMLINES, N_POINTS
+    from brainpainter.tracts.read import read_bundles
+
+    given = work / "given"
+    given.mkdir(exist_ok=True)
+    found: list[Path] = []
+    for f in files:
+        found += unzip(f, given, max_files) if f.suffix.lower() == ".zip" else [f]
+    tracts = [f for f in found if f.suffix.lower() in SUFFIXES]
+    tables = [f for f in found if f.suffix.lower() in VALUE_SUFFIXES]
+    ignored = sorted(f.name for f in found if f not in tracts and f not in tables)
+    if not tracts:
+        raise BrainPainterError(
+            f"the upload holds no tractogram ({', '.join(SUFFIXES)}); upload one file per bundle "
+            "(AF_left.trk, ...) or a .zip of them.")
+    if len(tracts) + len(tables) > max_files:
+        raise BrainPainterError(f"the upload holds {len(tracts) + len(tables)} files; this server reads at "
+                                f"most {max_files} per upload. Upload fewer bundles.")
+    if len(tables) > 1:
+        listed = ", ".join(f.name for f in tables)
+        raise BrainPainterError(f"the upload holds {len(tables)} tables ({listed}); "
+                                "give at most one table of bundle values or along-tract profiles.")
+    counted = [header_count(f) or 0 for f in tracts]
+    if sum(counted) > max_streamlines:
+        raise BrainPainterError(
+            f"the tractograms hold {sum(counted):,} streamlines; this server reads at most "
+            f"{max_streamlines:,} per upload. Upload a subsample (e.g. MRtrix's tckedit -number), or "
+            "render it with 'brainpainter render --tracts' on your own computer.")
+    read = read_bundles(sorted(tracts), np.eye(4), MAX_STREAMLINES, N_POINTS)
+    if sum(read.counts) > max_streamlines:  # files whose headers did not say
+        raise BrainPainterError(
+            f"the tractograms hold {sum(read.counts):,} streamlines; this server reads at most "
+            f"{max_streamlines:,} per upload. Upload a subsample, or render it on your own computer.")
+    values: dict[str, Any] | None = None
+    notes = list(read.notes)
+    if tables:
+        values = _values_report(tables[0], notes)
+    if ignored:
+        notes.append(f"ignored (not a tractogram or a table): {', '.join(ignored[:10])}")
+    report = tract_report(read.summary(), [f.name for f in files], values, notes)
+    stored = [("bundles", f) for f in sorted(tracts)] + [("values", f) for f in tables]
+    header = {"report": report,
+              "files": [{"role": r, "name": f.name, "size": f.stat().st_size} for r, f in stored]}
+    with (work / "bundle.bin").open("wb") as fh:
+        fh.write(MAGIC + json.dumps(header).encode() + b"\n")
+        for _, f in stored:
+            with f.open("rb") as src:
+                shutil.copyfileobj(src, fh)
+    return report
+
+
+def _values_report(table: Path, notes: list[str]) -> dict[str, Any]:
+    from brainpainter.tracts.values import read_tract_values
+
+    try:
+        tv = read_tract_values(table)
+    except BrainPainterError as exc:
+        if "value columns" not in str(exc):
+            raise
+        notes.append(f"{table.name}: several value columns; choose one with the option tract_value")
+        return {"file": table.name, "bundles": [], "nodes": None, "images": ["1"]}
+    nodes = max((n for _, n in tv.nodes), default=1)
+    return {"file": table.name, "bundles": list(tv.bundles), "nodes": nodes if nodes > 1 else None,
+            "images": list(tv.images or ("1",))[:5000]}
+
+
+def tract_report(summary: dict[str, Any], names: list[str], values: dict[str, Any] | None,
+                 notes: list[str]) -> dict[str, Any]:
+    """The report of a tract upload; ``summary`` is the line the page shows (what is drawn by default)."""
+    bundles = summary["bundles"]
+    drawn = sum(b["drawn"] for b in bundles)
+    total = sum(b["streamlines"] for b in bundles)
+    line = f"tracts: {', '.join(b['name'] for b in bundles)} ({drawn:,} streamlines of {total:,})"
+    if values is not None:
+        what = f"profiles of {values['nodes']} nodes" if values["nodes"] else "one value per bundle"
+        line += f"; values: {values['file']} ({what})"
+    return {"ok": True, "kind": "tracts", "summary": line, "files": names, "bundles": bundles,
+            "values": values, "notes": notes + list(summary["notes"]), "errors": []}
+
+
+# -- a stored tract bundle -----------------------------------------------------------------------
+def bundle_header(data: bytes) -> tuple[dict[str, Any], int]:
+    """The JSON header of a tract bundle and where its files start."""
+    end = data.find(b"\n", len(MAGIC), len(MAGIC) + _HEADER_LIMIT)
+    try:
+        if end < 0:
+            raise ValueError("no header")
+        header = json.loads(data[len(MAGIC):end])
+        if sum(int(f["size"]) for f in header["files"]) != len(data) - end - 1 or not all(
+                f["role"] in ("bundles", "values") for f in header["files"]):
+            raise ValueError("sizes")
+    except (ValueError, KeyError, TypeError):
+        raise BrainPainterError("the stored tract upload is damaged; upload the tractograms again.") from None
+    return header, end + 1
+
+
+def report_of(data: bytes) -> dict[str, Any]:
+    """The report stored with a tract bundle."""
+    report: dict[str, Any] = bundle_header(data)[0]["report"]
+    return report
+
+
+@dataclass(frozen=True)
+class TractFiles:
+    """A tract bundle's files on disk: what ``--tracts`` and ``--tract-values`` name.
+
+    Attributes
+    ----------
+    folder : Path
+        ``DATA_DIR/incoming/tracts-<sha256>``.
+    bundles : Path
+        The folder of tractograms (``--tracts``).
+    values : Path or None
+        The table of bundle values (``--tract-values``), if the upload had one.
+    """
+
+    folder: Path
+    bundles: Path
+    values: Path | None
+
+    def affine_file(self, text: str) -> Path:
+        """`text` (4 rows of 4 numbers, or 16 or 12 numbers; commas allowed) as a matrix file.
+
+        Raises
+        ------
+        BrainPainterError
+            Not a finite 4x4 (or 3x4) affine with last row 0 0 0 1.
+        """
+        from brainpainter.tracts.model import read_affine
+
+        numbers = [t for t in re.split(r"[\s,;\[\]]+", text) if t]
+        rows = [numbers[i:i + 4] for i in range(0, len(numbers), 4)] if len(numbers) % 4 == 0 else [numbers]
+        body = "\n".join(" ".join(r) for r in rows) + "\n"
+        path = self.folder / f"affine-{hashlib.sha256(body.encode()).hexdigest()[:24]}.txt"
+        if not path.exists():
+            fd, tmp = tempfile.mkstemp(dir=self.folder, prefix=".affine-")
+            with os.fdopen(fd, "w") as fh:
+                fh.write(body)
+            os.replace(tmp, path)
+        try:
+            read_affine(path)
+        except BrainPainterError as exc:
+            path.unlink(missing_ok=True)
+            message = str(exc).splitlines()[0].replace(f"--tracts-affine {str(path)!r}", "--tracts-affine")
+            raise BrainPainterError(message) from None
+        return path
+
+
+def materialise(data: bytes, root: Path) -> TractFiles:
+    """The files of tract bundle `data` in ``root/incoming/tracts-<sha256>`` (written once, then reused).
+
+    The folder's time is renewed on every use: the store deletes folders of ``incoming`` unused for an
+    hour (a later use writes them again).
+    """
+    header, start = bundle_header(data)
+    digest = hashlib.sha256(data).hexdigest()[:32]
+    folder = root / "incoming" / f"tracts-{digest}"
+    if not folder.is_dir():
+        (root / "incoming").mkdir(mode=0o700, parents=True, exist_ok=True)
+        work = Path(tempfile.mkdtemp(prefix=".tracts-", dir=root / "incoming"))
+        for f in header["files"]:
+            size = int(f["size"])
+            sub = work / str(f["role"])
+            sub.mkdir(exist_ok=True)
+            (sub / member_name(str(f["name"]))).write_bytes(data[start:start + size])
+            start += size
+        (work / "bundles").mkdir(exist_ok=True)
+        try:
+            os.rename(work, folder)
+        except OSError:  # another process wrote it first: the same content
+            shutil.rmtree(work, ignore_errors=True)
+    with contextlib.suppress(OSError):
+        os.utime(folder)
+    tables = sorted((folder / "values").glob("*")) if (folder / "values").is_dir() else []
+    return TractFiles(folder, folder / "bundles", tables[0] if tables else None)
