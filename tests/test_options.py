@@ -114,6 +114,9 @@ def test_web_options_use_the_core_definitions():
     assert RenderOptions(lighting="sulc").lighting == "sulc"  # every choice of the core, none re-typed
     kwargs = RenderOptions(size="320x240", transparent=True).run_kwargs()
     assert Options.of(kwargs).settings == RenderSettings(width=320, height=240, background=None)
+    for no_size in (None, ""):  # the page's empty field: the default, reshaped by an atlas of another shape
+        checked = Options.of(RenderOptions(size=no_size).run_kwargs())
+        assert not checked.size_given and checked.settings.size == RenderSettings().size
 
 
 def test_column_errors_are_types(tmp_path):

@@ -95,7 +95,9 @@ class RenderOptions(TableOptions):
     hide: list[str] = core(SceneOptions, "hide")
     background: str = core(RenderSettings, "background")
     transparent: bool = Field(False, description="Transparent background.")
-    size: str = Field(RenderSettings().size, description="Size of each rendered view, WIDTHxHEIGHT pixels.")
+    size: str | None = Field(None, max_length=40, description=(
+        f"Size of each rendered view, WIDTHxHEIGHT pixels (default {RenderSettings().size}; an atlas of "
+        "another shape, such as the mouse, reshapes it to as many pixels)."))
     quality: Annotated[str, one_of(RenderSettings, "quality")] = core(RenderSettings, "quality")
     shading: Annotated[str, one_of(RenderSettings, "shading")] = core(RenderSettings, "shading")
     lighting: Annotated[str, one_of(RenderSettings, "lighting")] = core(RenderSettings, "lighting")
@@ -131,7 +133,8 @@ class RenderOptions(TableOptions):
         given as the CLI's ``--tracts``, ``--tract-values`` and ``--tracts-affine``.
         """
         values = self.model_dump(exclude={"atlas", "size", "transparent", "hide", *TRACT_FIELDS})
-        values["width"], values["height"] = parse_size(self.size)
+        if self.size:  # none: the default size, which an atlas of another shape reshapes (as on the CLI)
+            values["width"], values["height"] = parse_size(self.size)
         if self.transparent:
             values["background"] = None
         if tracts is not None:
@@ -230,9 +233,11 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     alone = is_tract_bundle(data)
     files = _tract_files(data, options, tracts, data_dir)
     kwargs = options.run_kwargs(files)
-    if max_pixels is not None and kwargs["width"] * kwargs["height"] > max_pixels:
+    default = RenderSettings()
+    pixels = kwargs.get("width", default.width) * kwargs.get("height", default.height)
+    if max_pixels is not None and pixels > max_pixels:
         raise BrainPainterError(
-            f"size {options.size} is {kwargs['width'] * kwargs['height']} pixels; this server renders at "
+            f"size {options.size or default.size} is {pixels} pixels; this server renders at "
             f"most {max_pixels} pixels per view. Choose a smaller size."
         )
     tract_table = None

@@ -123,7 +123,7 @@ function fillForm(meta) {
   for (const s of meta.tract_spaces || []) $("tracts_space").append(el("option", { value: s, text: s }));
   for (const c of meta.cortex_modes || []) $("cortex").append(el("option", { value: c, text: c }));
   const d = meta.defaults;
-  $("size").value = d.size; $("glass_opacity").value = d.glass_opacity;
+  $("size").value = d.size ?? ""; $("glass_opacity").value = d.glass_opacity;
   if (d.tracts_space) $("tracts_space").value = d.tracts_space;
   if (d.cortex) $("cortex").value = d.cortex;
   if (d.max_streamlines) $("max_streamlines").value = d.max_streamlines;
