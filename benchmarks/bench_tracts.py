@@ -18,6 +18,7 @@ by 2x from run to run, the CPU ones much less.
 
     python benchmarks/bench_tracts.py                          # 3,000 and 10,000 streamlines, 1200x900
     python benchmarks/bench_tracts.py --streamlines 2000 --size 800x600 --repeats 3
+    python benchmarks/bench_tracts.py --cpu --streamlines 10000 --tract-quality fast   # no supersampling
 
 Timings depend on the machine (llvmpipe without a GPU); say which one in docs/benchmarks.md.
 """
@@ -28,6 +29,7 @@ import argparse
 import statistics
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -79,6 +81,8 @@ def main() -> None:
     p.add_argument("--size", default="1200x900")
     p.add_argument("--repeats", type=int, default=5)
     p.add_argument("--cpu", action="store_true", help="CPU seconds per image (all threads), not wall clock.")
+    p.add_argument("--tract-quality", default="default", choices=("fast", "default"),
+                   help="Quality of the images with tracts (the DK references stay default).")
     args = p.parse_args()
     if args.cpu:
         global CLOCK
@@ -112,7 +116,8 @@ def main() -> None:
             for label, nodes in (("direction colours", ()), ("one colour per bundle",
                                                              tuple((b, 1) for b in BUNDLES))):
                 t0 = time.perf_counter()
-                with Painter("dk", settings=settings, tracts=spec, tract_nodes=nodes) as painter:
+                with Painter("dk", settings=replace(settings, quality=args.tract_quality), tracts=spec,
+                             tract_nodes=nodes) as painter:
                     colors = region_colors(table.row(0), painter.atlas, scale)
                     colors.update({f"tract:{b}": (0.9, 0.2, 0.1) for b in BUNDLES})
                     painter.load()
