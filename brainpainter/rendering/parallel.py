@@ -291,12 +291,23 @@ def prepare_worker(threads: int) -> None:
     them back when it loads). The PNG encoder is imported now, before Blender.
     """
     os.environ.setdefault("LP_NUM_THREADS", str(threads))
-    if "bpy" not in sys.modules:
-        marker = f"{os.sep}bpy{os.sep}"
-        sys.path[:] = [p for p in sys.path if marker not in os.path.join(str(p), "")]
+    forget_blender_paths()
     from brainpainter.io.output import load_encoder
 
     load_encoder()  # the PNG encoder imports slowly once bpy is loaded
+
+
+def forget_blender_paths() -> None:
+    """Remove Blender's script folders from ``sys.path`` in a process that has not loaded bpy.
+
+    ``import bpy`` puts ``bpy/<version>/scripts/startup`` and ``.../modules`` first on
+    ``sys.path``, and a process spawned by one that had imported it starts with that path
+    (multiprocessing passes it on), where the ``bpy`` package of the scripts shadows the ``bpy``
+    module: ``No module named '_bpy'``. Blender adds them back when it loads.
+    """
+    if "bpy" not in sys.modules:
+        marker = f"{os.sep}bpy{os.sep}"
+        sys.path[:] = [p for p in sys.path if marker not in os.path.join(str(p), "")]
 
 
 def worker_temp(base: str) -> None:

@@ -124,7 +124,12 @@ def die_with_parent() -> None:
 
 
 def _set_threads(lp_threads: int) -> None:
+    """Ready a server process for Blender: llvmpipe's thread count, and no Blender script folders
+    inherited on ``sys.path`` (:func:`brainpainter.rendering.parallel.forget_blender_paths`)."""
+    from brainpainter.rendering.parallel import forget_blender_paths
+
     os.environ["LP_NUM_THREADS"] = str(max(1, int(lp_threads)))
+    forget_blender_paths()
 
 
 # -- job worker -------------------------------------------------------------------------
