@@ -309,7 +309,7 @@ class Options:
     settings: RenderSettings = field(default_factory=RenderSettings)
     table: TableOptions = field(default_factory=TableOptions)
     maps: MapOptions = field(default_factory=MapOptions)
-    size_given: bool = True
+    size_given: bool = field(default=True, compare=False)  # not an option: how the settings were made
 
     @classmethod
     def of(cls, options: Mapping[str, Any], caller: str = "render", **defaults: Any) -> Options:
@@ -342,6 +342,7 @@ class Options:
         return cls(**made, size_given="width" in options or "height" in options)
 
     def flat(self) -> dict[str, Any]:
-        """The options as flat keywords again (``Options.of(o.flat()) == o``)."""
+        """The options as flat keywords again (``Options.of(o.flat()) == o``; the keywords always give
+        the size, so the result has ``size_given``)."""
         return {name: getattr(getattr(self, key), name)
                 for key, group in GROUPS.items() for name in option_names(group)}
