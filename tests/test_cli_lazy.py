@@ -9,7 +9,6 @@ import sys
 import click
 import click.testing
 import pytest
-from click.utils import make_default_short_help
 
 from brainpainter.cli.main import LAZY_COMMANDS, cli
 
@@ -20,7 +19,7 @@ def test_listed_help_is_the_commands_own(name):
     module, _, attr = target.partition(":")
     command = getattr(importlib.import_module(module), attr)
     assert isinstance(command, click.Command)
-    assert make_default_short_help(listed, 300) == command.get_short_help_str(300)
+    assert click.Command(name, help=listed).get_short_help_str(300) == command.get_short_help_str(300)
 
 
 def test_every_lazy_command_runs_its_help():

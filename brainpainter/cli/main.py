@@ -68,15 +68,14 @@ class CommandsFromPlugins(click.Group):
 
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
         """The command list of ``--help``, without importing the lazy built-in commands."""
-        from click.utils import make_default_short_help
-
         rows = []
         for name in self.list_commands(ctx):
+            command: click.Command | None
             if name in LAZY_COMMANDS and name not in self.commands:
-                rows.append((name, make_default_short_help(LAZY_COMMANDS[name][1],
-                                                           formatter.width - 6 - len(name))))
-                continue
-            command = self.get_command(ctx, name)
+                # a stand-in with the listed help: click shortens it as it would the command's own
+                command = click.Command(name, help=LAZY_COMMANDS[name][1])
+            else:
+                command = self.get_command(ctx, name)
             if command is not None and not command.hidden:
                 rows.append((name, command.get_short_help_str(formatter.width - 6 - len(name))))
         if rows:
