@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import contextlib
 import gzip
-import json
 import shutil
 import tempfile
 from collections.abc import Iterator
@@ -31,6 +30,8 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 from brainpainter.errors import BrainPainterError
+from brainpainter.web.bundle import bundle_header as read_header
+from brainpainter.web.bundle import members, write_bundle
 
 #: The first bytes of a stored map upload.
 MAGIC = b"BRAINPAINTER-MAPS/1\n"
@@ -44,7 +45,6 @@ MAX_INFLATED = 1 << 30
 MAX_VOXELS = 1 << 27
 #: Data memory (bytes) of the process that reads a map upload.
 MEMORY_LIMIT = 4 << 30
-_HEADER_LIMIT = 1 << 16
 
 
 def is_map_upload(names: list[str]) -> bool:
@@ -292,30 +292,14 @@ def base_report(maps: Any, kind: str, names: list[str], summary: str) -> dict[st
 
 def _write_bundle(target: Path, kind: str, files: list[tuple[str, Path]], report: dict[str, Any],
                   extra: dict[str, Any] | None = None) -> None:
-    header = {"kind": kind, "report": report, **(extra or {}),
-              "files": [{"hemi": h, "name": p.name, "size": p.stat().st_size} for h, p in files]}
-    with target.open("wb") as fh:
-        fh.write(MAGIC + json.dumps(header).encode() + b"\n")
-        for _, p in files:
-            with p.open("rb") as src:
-                shutil.copyfileobj(src, fh)
+    write_bundle(target, MAGIC, {"kind": kind, "report": report, **(extra or {})}, "hemi", list(files))
 
 
 # -- reading a stored bundle -----------------------------------------------------------------
 def bundle_header(data: bytes) -> tuple[dict[str, Any], int]:
     """The JSON header of a bundle and where its files start."""
-    end = data.find(b"\n", len(MAGIC), len(MAGIC) + _HEADER_LIMIT)
-    try:
-        if end < 0:
-            raise ValueError("no header")
-        header = json.loads(data[len(MAGIC):end])
-        files = header["files"]
-        if sum(int(f["size"]) for f in files) != len(data) - end - 1 or not all(
-                f["hemi"] in ("lh", "rh") for f in files):
-            raise ValueError("sizes")
-    except (ValueError, KeyError, TypeError):
-        raise BrainPainterError("the stored map upload is damaged; upload the map again.") from None
-    return header, end + 1
+    return read_header(data, MAGIC, "hemi", ("lh", "rh"),
+                       "the stored map upload is damaged; upload the map again.")
 
 
 def base_of(data: bytes) -> dict[str, Any]:
@@ -345,15 +329,12 @@ def extracted(data: bytes, where: Path | None = None) -> Iterator[dict[str, Path
 
 def extract(data: bytes, folder: Path) -> dict[str, Path]:
     """Write the files of bundle `data` into `folder` (``folder/lh/NAME``...); their paths by hemisphere."""
-    header, start = bundle_header(data)
     out: dict[str, Path] = {}
-    for f in header["files"]:
-        size = int(f["size"])
+    for f, content in members(data, *bundle_header(data)):
         sub = folder / f["hemi"]
         sub.mkdir(parents=True, exist_ok=True)
         path = sub / file_name(str(f["name"]))
-        path.write_bytes(data[start:start + size])
-        start += size
+        path.write_bytes(content)
         out[f["hemi"]] = path
     return out
 

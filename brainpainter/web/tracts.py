@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import json
 import os
 import re
 import shutil
@@ -37,6 +36,8 @@ from typing import Any
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.tracts.model import SUFFIXES
+from brainpainter.web.bundle import bundle_header as read_header
+from brainpainter.web.bundle import members, write_bundle
 
 #: The first bytes of a stored tract upload.
 MAGIC = b"BRAINPAINTER-TRACTS/1\n"
@@ -46,7 +47,6 @@ VALUE_SUFFIXES = (".csv", ".tsv", ".xlsx")
 MAX_UNZIPPED = 1 << 30
 #: Data memory (bytes) of the process that reads a tract upload.
 MEMORY_LIMIT = 4 << 30
-_HEADER_LIMIT = 1 << 16
 
 
 def is_tract_upload(names: list[str]) -> bool:
@@ -188,13 +188,7 @@ def build_tract_bundle(work: Path, files: list[Path], max_files: int,
         notes.append(f"ignored (not a tractogram or a table): {', '.join(ignored[:10])}")
     report = tract_report(read.summary(), [f.name for f in files], values, notes)
     stored = [("bundles", f) for f in sorted(tracts)] + [("values", f) for f in tables]
-    header = {"report": report,
-              "files": [{"role": r, "name": f.name, "size": f.stat().st_size} for r, f in stored]}
-    with (work / "bundle.bin").open("wb") as fh:
-        fh.write(MAGIC + json.dumps(header).encode() + b"\n")
-        for _, f in stored:
-            with f.open("rb") as src:
-                shutil.copyfileobj(src, fh)
+    write_bundle(work / "bundle.bin", MAGIC, {"report": report}, "role", list(stored))
     return report
 
 
@@ -230,17 +224,8 @@ def tract_report(summary: dict[str, Any], names: list[str], values: dict[str, An
 # -- a stored tract bundle -----------------------------------------------------------------------
 def bundle_header(data: bytes) -> tuple[dict[str, Any], int]:
     """The JSON header of a tract bundle and where its files start."""
-    end = data.find(b"\n", len(MAGIC), len(MAGIC) + _HEADER_LIMIT)
-    try:
-        if end < 0:
-            raise ValueError("no header")
-        header = json.loads(data[len(MAGIC):end])
-        if sum(int(f["size"]) for f in header["files"]) != len(data) - end - 1 or not all(
-                f["role"] in ("bundles", "values") for f in header["files"]):
-            raise ValueError("sizes")
-    except (ValueError, KeyError, TypeError):
-        raise BrainPainterError("the stored tract upload is damaged; upload the tractograms again.") from None
-    return header, end + 1
+    return read_header(data, MAGIC, "role", ("bundles", "values"),
+                       "the stored tract upload is damaged; upload the tractograms again.")
 
 
 def report_of(data: bytes) -> dict[str, Any]:
@@ -307,12 +292,10 @@ def materialise(data: bytes, root: Path) -> TractFiles:
     if not folder.is_dir():
         (root / "incoming").mkdir(mode=0o700, parents=True, exist_ok=True)
         work = Path(tempfile.mkdtemp(prefix=".tracts-", dir=root / "incoming"))
-        for f in header["files"]:
-            size = int(f["size"])
+        for f, content in members(data, header, start):
             sub = work / str(f["role"])
             sub.mkdir(exist_ok=True)
-            (sub / member_name(str(f["name"]))).write_bytes(data[start:start + size])
-            start += size
+            (sub / member_name(str(f["name"]))).write_bytes(content)
         (work / "bundles").mkdir(exist_ok=True)
         try:
             os.rename(work, folder)

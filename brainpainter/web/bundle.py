@@ -1,0 +1,63 @@
+"""The stored form of a file upload (a map pair, a volume, tractograms): one blob in the store.
+
+A bundle is its kind's magic line, one line of JSON (the header: the upload's report and a
+``files`` list of ``{tag: ..., "name": ..., "size": ...}``), then the files' bytes one after the
+other. :mod:`brainpainter.web.maps` tags each file with its hemisphere (``hemi``),
+:mod:`brainpainter.web.tracts` with its role (``role``: ``bundles`` or ``values``).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+from brainpainter.errors import BrainPainterError
+
+#: Largest header line (bytes).
+HEADER_LIMIT = 1 << 16
+
+
+def write_bundle(target: Path, magic: bytes, header: dict[str, Any], tag: str,
+                 files: list[tuple[str | None, Path]]) -> None:
+    """Write `header` (with its ``files`` list added last) and `files`, ``(tag value, path)``, to `target`."""
+    header = {**header, "files": [{tag: t, "name": p.name, "size": p.stat().st_size} for t, p in files]}
+    with target.open("wb") as fh:
+        fh.write(magic + json.dumps(header).encode() + b"\n")
+        for _, p in files:
+            with p.open("rb") as src:
+                shutil.copyfileobj(src, fh)
+
+
+def bundle_header(data: bytes, magic: bytes, tag: str, allowed: tuple[str, ...],
+                  damaged: str) -> tuple[dict[str, Any], int]:
+    """The JSON header of bundle `data` and where its files start.
+
+    Raises
+    ------
+    BrainPainterError
+        `damaged` (one line) when the header is unreadable, a file's `tag` is not `allowed`, or the
+        sizes do not add up to the data.
+    """
+    end = data.find(b"\n", len(magic), len(magic) + HEADER_LIMIT)
+    try:
+        if end < 0:
+            raise ValueError("no header")
+        header = json.loads(data[len(magic):end])
+        files = header["files"]
+        if sum(int(f["size"]) for f in files) != len(data) - end - 1 or not all(
+                f[tag] in allowed for f in files):
+            raise ValueError("sizes")
+    except (ValueError, KeyError, TypeError):
+        raise BrainPainterError(damaged) from None
+    return header, end + 1
+
+
+def members(data: bytes, header: dict[str, Any], start: int) -> Iterator[tuple[dict[str, Any], bytes]]:
+    """Each file of a bundle: its header entry and its bytes (`start` from :func:`bundle_header`)."""
+    for f in header["files"]:
+        size = int(f["size"])
+        yield f, data[start:start + size]
+        start += size
