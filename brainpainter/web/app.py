@@ -52,7 +52,15 @@ from starlette.requests import ClientDisconnect
 from brainpainter.errors import BrainPainterError
 from brainpainter.web.config import ServerConfig
 from brainpainter.web.guard import Guard
-from brainpainter.web.http import ApiError, Work, client_of, disk_budget, one_line
+from brainpainter.web.http import (
+    ApiError,
+    Work,
+    client_of,
+    disk_budget,
+    one_line,
+    receive_body,
+    require_octet_stream,
+)
 from brainpainter.web.maps import file_name, is_bundle, is_map_upload
 from brainpainter.web.options import (
     FigureParams,
@@ -71,8 +79,6 @@ from brainpainter.web.tract_routes import add_tracts_route, tracts_of
 from brainpainter.web.tracts import is_tract_bundle, is_tract_upload
 from brainpainter.web.upload import (
     check_table,
-    content_type_allowed,
-    new_incoming,
     read_and_check,
     read_map_upload,
 )
@@ -242,10 +248,7 @@ def _add_upload_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
                      strict: bool = False) -> dict[str, Any]:
         """Upload a table or a map (the raw file(s) as the body) and get the ``check`` report; nothing
         is kept when it would not render."""
-        if not content_type_allowed(request.headers.get("content-type")):
-            raise ApiError(415, "send the table as the request body with 'Content-Type: "
-                                "application/octet-stream' (form and text/plain bodies are refused, so that "
-                                "other web sites cannot upload into this server).")
+        require_octet_stream(request, "the table")
         names, sizes, hemi = name or ["table.csv"], sizes or [], hemi or []
         if is_tract_upload(names):
             raise ApiError(422, f"{file_name(names[0])!r} is a tractogram; upload tractograms with POST "
@@ -257,15 +260,10 @@ def _add_upload_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
         await disk_budget(store, config)
         is_map = len(names) > 1 or is_map_upload(names)
         shown = " + ".join(file_name(n) for n in names) if is_map else upload_name(names[0])
-        fh, path = await run_in_threadpool(new_incoming, store.root)
         opts = {"atlas": atlas or None, "image_column": image_column or None, "value": value or None,
                 "region_column": region_column or None, "strict": strict}
+        path, size = await receive_body(request, store.root)
         try:
-            size = 0
-            with fh:
-                async for chunk in request.stream():
-                    size += len(chunk)
-                    fh.write(chunk)
             # read into memory only on a work thread: at most a few bodies are in memory at once
             if is_map:
                 data, (report, images) = await work.run(

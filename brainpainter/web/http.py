@@ -1,4 +1,5 @@
-"""What the routes of the web API share: their error, the work threads, who the client is, the disk budget."""
+"""What the routes of the web API share: their error, the work threads, who the client is, the disk budget,
+receiving an upload's body."""
 
 from __future__ import annotations
 
@@ -11,6 +12,8 @@ import anyio.to_thread
 from starlette.concurrency import run_in_threadpool
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
     from fastapi import Request
 
     from brainpainter.web.config import ServerConfig
@@ -66,3 +69,33 @@ async def disk_budget(store: Store, config: ServerConfig) -> None:
     if used >= config.max_disk_bytes:
         raise ApiError(507, f"this server's storage budget ({config.max_disk_gb:g} GB) is used up; try "
                             "again after older results expire.", {"retry-after": "600"})
+
+
+def require_octet_stream(request: Request, what: str) -> None:
+    """415 unless the body comes as ``application/octet-stream`` (`what`: "the table", "the files")."""
+    from brainpainter.web.upload import content_type_allowed
+
+    if not content_type_allowed(request.headers.get("content-type")):
+        raise ApiError(415, f"send {what} as the request body with 'Content-Type: "
+                            "application/octet-stream' (form and text/plain bodies are refused, so that "
+                            "other web sites cannot upload into this server).")
+
+
+async def receive_body(request: Request, root: Path) -> tuple[Path, int]:
+    """The request body streamed into a new file of ``root/incoming``, and its size in bytes.
+
+    The caller removes the file; if the body breaks off, it is removed here.
+    """
+    from brainpainter.web.upload import new_incoming
+
+    fh, path = await run_in_threadpool(new_incoming, root)
+    size = 0
+    try:
+        with fh:
+            async for chunk in request.stream():
+                size += len(chunk)
+                fh.write(chunk)
+    except BaseException:
+        path.unlink(missing_ok=True)
+        raise
+    return path, size

@@ -8,11 +8,11 @@ from fastapi import FastAPI, Query, Request
 from starlette.concurrency import run_in_threadpool
 
 from brainpainter.web.config import ServerConfig
-from brainpainter.web.http import ApiError, Work, client_of, disk_budget
+from brainpainter.web.http import ApiError, Work, client_of, disk_budget, receive_body, require_octet_stream
 from brainpainter.web.options import RenderOptions
 from brainpainter.web.store import Store
 from brainpainter.web.tracts import is_tract_bundle, is_tract_upload
-from brainpainter.web.upload import content_type_allowed, new_incoming, read_tract_upload
+from brainpainter.web.upload import read_tract_upload
 
 
 def add_tracts_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
@@ -34,10 +34,7 @@ def add_tracts_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
         be drawn."""
         from brainpainter.web.tracts import member_name
 
-        if not content_type_allowed(request.headers.get("content-type")):
-            raise ApiError(415, "send the files as the request body with 'Content-Type: "
-                                "application/octet-stream' (form and text/plain bodies are refused, so that "
-                                "other web sites cannot upload into this server).")
+        require_octet_stream(request, "the files")
         names, sizes = name or [], sizes or []
         if not names or len(names) > config.max_tract_files or len(sizes) > config.max_tract_files or any(
                 len(n) > 200 for n in names):
@@ -48,13 +45,8 @@ def add_tracts_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
                                 "files (one per bundle) or a .zip of them.")
         await disk_budget(store, config)
         shown = " + ".join(member_name(n) for n in names[:5]) + (" + ..." if len(names) > 5 else "")
-        fh, path = await run_in_threadpool(new_incoming, store.root)
+        path, size = await receive_body(request, store.root)
         try:
-            size = 0
-            with fh:
-                async for chunk in request.stream():
-                    size += len(chunk)
-                    fh.write(chunk)
             data, report = await work.run(
                 read_tract_upload, path, names, sizes, store.root / "incoming",
                 max_files=config.max_tract_files, max_streamlines=config.max_tract_streamlines,
