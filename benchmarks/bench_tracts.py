@@ -9,6 +9,11 @@ bundles (read, subsample, resample, orient, tubes), then times per image at
 * the same row from ``subcortical`` with each tractogram, in direction colours
   and in one colour per bundle, and from ``lateral-left`` (the left bundles
   through the cortex drawn as glass, ``--cortex auto``);
+* with one colour per bundle, also images whose bundle colours change every
+  time (a table of bundle values, row by row): the Blender renderer keeps the
+  tracts' layer of a view while their colours stay
+  (:mod:`brainpainter_blender.tract_lines`), so this is the cost of drawing
+  the lines again;
 
 and prints the median seconds per image, the ratios (the issue's bar: 10,000
 streamlines <= 2x a DK region render), the tube triangles and the scene load time.
@@ -65,12 +70,16 @@ def write_tractogram(folder: Path, n: int, seed: int = 0) -> Path:
 CLOCK = time.perf_counter
 
 
-def _time(painter, colors, view, repeats: int) -> float:
+def _time(painter, colors, view, repeats: int, recolour: bool = False) -> float:
+    """Median seconds per image; `recolour`: every image gives the bundles colours not seen before."""
     painter.paint_colors(colors, view)  # the first image of a view uploads its parts
     per = []
-    for _ in range(repeats):
+    for i in range(repeats):
+        use = colors
+        if recolour:
+            use = {**colors, **{f"tract:{b}": ((i + 1) / (repeats + 1), 0.3, 0.9) for b in BUNDLES}}
         t = CLOCK()
-        painter.paint_colors(colors, view)
+        painter.paint_colors(use, view)
         per.append(CLOCK() - t)
     return statistics.median(per)
 
@@ -124,6 +133,9 @@ def main() -> None:
                     load = time.perf_counter() - t0
                     per = _time(painter, colors, sub, args.repeats)
                     glass = _time(painter, colors, lateral, args.repeats)
+                    # the bundles' colours change with every image (a table of bundle values, row
+                    # by row): the renderer cannot keep the tracts' layer and draws the lines again
+                    new = _time(painter, colors, sub, args.repeats, recolour=True) if nodes else None
                     tris = sum(len(q.triangles) for q in painter.scene.geometry.parts if q.kind == "tract")
                 print(f"{n:6d} streamlines, {label:22s}: subcortical {per * 1000:6.0f} {unit}/image = "
                       f"{per / ref['lateral-left']:.2f} x a DK lateral-left render, "
@@ -131,6 +143,10 @@ def main() -> None:
                       f"{tris:,} tube triangles; scene load {load:.1f} s")
                 print(f"{'':46s}lateral-left through the glass cortex {glass * 1000:6.0f} {unit}/image = "
                       f"{glass / ref['lateral-left']:.2f} x a DK lateral-left render")
+                if new is not None:
+                    print(f"{'':46s}subcortical, bundles recoloured each image "
+                          f"{new * 1000:6.0f} {unit}/image = "
+                          f"{new / ref['lateral-left']:.2f} x a DK lateral-left render")
 
 
 if __name__ == "__main__":

@@ -120,7 +120,8 @@ def main() -> None:
     from brainpainter.rendering.views import get_view
     from brainpainter.tracts.model import TractSpec
     from brainpainter_blender import _bpy, gpu_shaders, meshorder
-    from brainpainter_blender.gpu_draw import GpuDraw, in_gpu_context
+    from brainpainter_blender.gpu_context import in_gpu_context
+    from brainpainter_blender.gpu_draw import GpuDraw
 
     settings = RenderSettings(width=width, height=height)
     views = [get_view(v) for v in args.views.split(",")]

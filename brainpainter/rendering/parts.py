@@ -24,6 +24,25 @@ N_FIXED_SLOTS = 3
 
 
 @dataclass(frozen=True)
+class Centrelines:
+    """The streamlines a ``tract`` part's tubes are built around, for renderers that draw lines.
+
+    Attributes
+    ----------
+    points : ndarray of float32, shape (n_streamlines, n_points, 3)
+        RAS millimetres, the tubes' centres.
+    slots : ndarray of int32, shape (n_streamlines, n_points)
+        Palette slot of each point (the tube's ring around it has the same).
+    radius : float
+        Of the tubes, millimetres: a line is drawn ``2 * radius`` wide.
+    """
+
+    points: NDArray[Any]
+    slots: NDArray[Any]
+    radius: float
+
+
+@dataclass(frozen=True)
 class PartGeometry:
     """One drawable part of a scene, indexed, ready for a vertex buffer.
 
@@ -61,6 +80,9 @@ class PartGeometry:
         Region borders on the part as line segments (RAS millimetres, lifted off the
         surface; :mod:`brainpainter.rendering.borders`), drawn as lines
         ``RenderSettings.outline_width`` pixels wide in the outline colour; None: no outline.
+    centrelines : Centrelines or None
+        A ``tract`` part's streamlines; a renderer draws either them, as lines of the
+        tubes' width, or the tubes (the triangles); None for every other kind.
     """
 
     name: str
@@ -74,6 +96,7 @@ class PartGeometry:
     hull: NDArray[Any]
     occlusion: NDArray[Any] | None = None
     outline: NDArray[Any] | None = None
+    centrelines: Centrelines | None = None
 
 
 def split_by_label(vertices: NDArray[Any], faces: NDArray[Any], face_slot: NDArray[Any],

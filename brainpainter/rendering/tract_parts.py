@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from brainpainter.rendering.parts import NEUTRAL_SLOT, PartGeometry
+from brainpainter.rendering.parts import NEUTRAL_SLOT, Centrelines, PartGeometry
 from brainpainter.rendering.settings import RGB
 
 if TYPE_CHECKING:
@@ -84,6 +84,8 @@ def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
             continue
         verts, normals, tris = tube_mesh(lines[pick], radius, SIDES)
         pal = np.repeat(point_slot[pick].ravel(), SIDES).astype(np.int32)
+        centres = Centrelines(lines[pick].astype(np.float32), point_slot[pick].astype(np.int32), radius)
         out.append(PartGeometry(part, "tract", hemi or None, verts, normals, tris, pal,
-                                np.zeros(len(verts), np.float32), lines[pick].reshape(-1, 3)))
+                                np.zeros(len(verts), np.float32), lines[pick].reshape(-1, 3),
+                                centrelines=centres))
     return out

@@ -1,12 +1,8 @@
 """The default draw path: Blender's ``gpu`` module, indexed batches and a palette texture.
 
-In background mode (``bpy`` as a Python module) Blender refuses ``gpu``
-drawing ("GPU functions for drawing are not available in background mode")
-except inside a ``RenderEngine`` whose ``bl_use_gpu_context`` is true. So a
-tiny render engine is registered once per process and started with
-``bpy.ops.render.render()`` on a 4x4-pixel dummy scene (about 0.3 ms); each
-call runs one Python function with a GPU context current. Shaders, batches
-and offscreen buffers survive between calls.
+Everything runs inside :func:`brainpainter_blender.gpu_context.in_gpu_context`
+(background mode allows ``gpu`` drawing only there). Shaders, batches and
+offscreen buffers survive between calls.
 
 Per renderer, every part of ``scene.geometry`` becomes one indexed batch
 (uploaded once, in an order that suits a software rasteriser's vertex
@@ -19,7 +15,9 @@ into a supersampled buffer of 16-bit linear light (opaque parts with depth,
 then the glass: back faces, then front faces, blended, no depth writes) and
 averages each SxS block in a second pass (S a compile-time constant) that
 also un-premultiplies alpha and flips rows into an sRGB target, which encodes
-linear light to sRGB as it is written. So the read-back (into a flat
+linear light to sRGB as it is written. Tract parts are drawn as lines at
+output resolution between the glass's far and near sides
+(:mod:`brainpainter_blender.tract_lines`). So the read-back (into a flat
 ``gpu.types.Buffer``; ``np.array`` of a multi-dimensional Buffer gives wrong
 strides) is already the image. The GLSL sources are in
 :mod:`brainpainter_blender.gpu_shaders`; :meth:`GpuDraw.profile` times the
@@ -43,13 +41,12 @@ from typing import Any
 
 import numpy as np
 
-from brainpainter.errors import BrainPainterError
-from brainpainter.io.interrupts import held
 from brainpainter.rendering.framing import view_projection
 from brainpainter.rendering.geometry import PartGeometry, SceneGeometry
 from brainpainter.rendering.scene import RenderSettings
 from brainpainter.rendering.views import View
-from brainpainter_blender import _bpy, gpu_shaders, meshorder, outlines
+from brainpainter_blender import gpu_shaders, meshorder, outlines, tract_lines
+from brainpainter_blender.gpu_context import in_gpu_context
 
 
 @dataclass(frozen=True)
@@ -133,70 +130,6 @@ def srgb_to_linear(rgb: np.ndarray) -> np.ndarray:
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
-# -- the render engine that lends us a GPU context -------------------------------------------
-_engine: dict[str, Any] = {}
-
-
-def _engine_class():
-    import bpy
-
-    class BrainPainterGpuEngine(bpy.types.RenderEngine):
-        """Runs queued Python functions while Blender holds a GPU context (background mode)."""
-
-        bl_idname = "BRAINPAINTER_GPU"
-        bl_label = "brainpainter gpu"
-        bl_use_gpu_context = True
-
-        def render(self, depsgraph):
-            job = _engine.pop("job", None)
-            if job is None:
-                return
-            try:
-                _engine["result"] = job()
-            except BaseException as exc:  # re-raised outside Blender's call
-                _engine["error"] = exc
-
-    return BrainPainterGpuEngine
-
-
-def in_gpu_context(job):
-    """Run ``job()`` with Blender's GPU context current and return its result.
-
-    Call with :data:`brainpainter_blender._bpy.LOCK` held.
-    """
-    bpy = _bpy.import_bpy()
-    if "scene" not in _engine:
-        cls = _engine_class()
-        bpy.utils.register_class(cls)
-        scene = bpy.data.scenes.new("brainpainter:gpu")
-        scene.render.engine = cls.bl_idname
-        scene.render.resolution_x = scene.render.resolution_y = 4
-        scene.render.resolution_percentage = 100
-        scene.render.use_compositing = scene.render.use_sequencer = False
-        cam = bpy.data.objects.new("brainpainter:gpu-camera", bpy.data.cameras.new("brainpainter:gpu-camera"))
-        scene.collection.objects.link(cam)
-        scene.camera = cam
-        _engine["scene"] = scene.name
-    _engine["job"] = job
-    # A signal during Blender's render operator is kept until it returns (io/interrupts.held): raised
-    # inside Blender's call stack it was swallowed or left the job queued, and a later call drew with a
-    # closed renderer. The draw takes a fraction of a second, so the run still stops at once.
-    with held(), _bpy.quiet() as log:
-        try:
-            bpy.ops.render.render(scene=_engine["scene"])
-            failed = None
-        except RuntimeError as exc:
-            failed = exc
-        finally:
-            _engine.pop("job", None)
-    if failed is not None:
-        text = " ".join("".join(log).split())[-300:]
-        raise BrainPainterError(f"Blender's GPU drawing failed to start: {failed} {text}".strip())
-    if "error" in _engine:
-        raise _engine.pop("error")
-    return _engine.pop("result", None)
-
-
 @dataclass(frozen=True)
 class _Aim:
     """A view's parts and camera uniforms (``mathutils`` values, world space)."""
@@ -242,6 +175,9 @@ class GpuDraw:
         self._palette_key: bytes | None = None
         self._palette_tex: Any = None
         self._hi: Any = None
+        self._hi_color: Any = None
+        self._hi_depth: Any = None
+        self._lines = tract_lines.TractLines(settings.width, settings.height)
         self._lo: Any = None
         self._lo_tex: Any = None
         self._resolve: Any = None
@@ -267,7 +203,10 @@ class GpuDraw:
         self._resolve = gpu_shaders.resolve_shader(f)
         self._quad = batch_for_shader(self._resolve, "TRIS", {"pos": [(-1, -1), (3, -1), (-1, 3)]})
         # Linear light in 16-bit integers: as exact as half floats for 0-1 and cheaper to write.
-        self._hi = gpu.types.GPUOffScreen(s.width * f, s.height * f, format=HI_FORMAT)
+        size = (int(s.width * f), int(s.height * f))
+        self._hi_color = gpu.types.GPUTexture(size, format=HI_FORMAT)
+        self._hi_depth = gpu.types.GPUTexture(size, format="DEPTH_COMPONENT32F")  # read by tract_lines
+        self._hi = gpu.types.GPUFrameBuffer(depth_slot=self._hi_depth, color_slots=self._hi_color)
         # The resolve writes linear light; the sRGB target encodes it (cheaper than pow() per pixel).
         self._lo_tex = gpu.types.GPUTexture((s.width, s.height), format="SRGB8_A8")
         self._lo = gpu.types.GPUFrameBuffer(color_slots=self._lo_tex)
@@ -300,7 +239,7 @@ class GpuDraw:
     def render(self, palette_rgb: np.ndarray, view: View) -> np.ndarray:
         """Draw one image; `palette_rgb` is sRGB 0-1, shape (n_slots, 3). Returns RGBA uint8 (h, w, 4)."""
         aim = self._aim(view)
-        return in_gpu_context(lambda: self._draw(np.asarray(palette_rgb, np.float32), aim))
+        return in_gpu_context(lambda: self._draw(np.asarray(palette_rgb, np.float32), aim, view))
 
     def _aim(self, view: View) -> _Aim:
         """What `view` draws and its camera uniforms, computed once per view.
@@ -355,25 +294,34 @@ class GpuDraw:
 
         def job() -> None:
             times["_t"] = time.perf_counter()
-            self._draw(np.asarray(palette_rgb, np.float32), aim, mark)
+            self._draw(np.asarray(palette_rgb, np.float32), aim, view, mark)
 
         in_gpu_context(job)
         times.pop("_t")
         return times
 
-    def _draw(self, rgb: np.ndarray, aim: _Aim, mark: Callable[[str], None] | None = None) -> np.ndarray:
+    def _draw(self, rgb: np.ndarray, aim: _Aim, view: View,
+              mark: Callable[[str], None] | None = None) -> np.ndarray:
         import gpu
 
         mark = mark or (lambda step: None)
         tex = self._palette(rgb)
         mark("palette")
+        # tract parts are drawn as lines at output resolution (tract_lines), between the glass's sides
+        tracts = [p for p in aim.visible if p.kind == "tract" and p.centrelines is not None]
         with self._hi.bind():
-            self._draw_parts(aim, tex, mark)
+            self._draw_parts(aim, tex, mark, tracts)
+        if tracts:
+            self._lines.draw_over(tracts, view, aim, (tex, rgb), self.lighting, self._hi,
+                                  lambda: self._draw_opaque(aim, tex, tracts), mark)
+            with self._hi.bind():
+                self._bind_part_shader(aim, tex)
+                self._draw_glass(aim, tex, ("BACK",), mark)
         with self._lo.bind():
             # the resolve writes every pixel: no clear
             resolve, s = self._resolve, self.settings
             resolve.bind()
-            resolve.uniform_sampler("image", self._hi.texture_color)  # samplers first: see _draw_parts
+            resolve.uniform_sampler("image", self._hi_color)  # samplers first: see _bind_part_shader
             resolve.uniform_int("out_height", s.height)
             self._quad.draw(resolve)
             mark("resolve")
@@ -383,15 +331,51 @@ class GpuDraw:
         # a view of the Buffer's memory (kept alive by the array), no copy
         return np.frombuffer(buf, dtype=np.uint8).reshape(s.height, s.width, 4)
 
-    def _draw_parts(self, aim: _Aim, tex: Any, mark: Callable[[str], None]) -> None:
-        """Clear the supersampled buffer and draw the opaque parts, then the glass."""
+    def _draw_parts(self, aim: _Aim, tex: Any, mark: Callable[[str], None],
+                    tracts: list[PartGeometry]) -> None:
+        """Clear the supersampled buffer, draw the opaque parts, then the glass.
+
+        With `tracts` (drawn afterwards as lines), only the far side of the glass.
+        """
         import gpu
 
-        s, light = self.settings, self.lighting
+        s = self.settings
         bg = s.background
         clear = (0.0, 0.0, 0.0, 0.0) if bg is None else (*srgb_to_linear(np.asarray(bg)).tolist(), 1.0)
         gpu.state.active_framebuffer_get().clear(color=clear, depth=1.0)
         mark("clear")
+        shader = self._draw_opaque(aim, tex, tracts, mark)
+        if self._draw_outlines(aim, [p for p in aim.visible if p.kind != "glass"], shader, tex):
+            mark("outlines")
+        # the far side first, then the near side over it (after the tracts, when there are)
+        self._draw_glass(aim, tex, ("FRONT",) if tracts else ("FRONT", "BACK"), mark)
+
+    def _draw_opaque(self, aim: _Aim, tex: Any, tracts: list[PartGeometry],
+                     mark: Callable[[str], None] | None = None) -> Any:
+        """The visible parts but the glass and `tracts`, lit, with depth; returns the bound shader."""
+        import gpu
+
+        light = self.lighting
+        shader = self._bind_part_shader(aim, tex)
+        gpu.state.depth_test_set("LESS_EQUAL")
+        gpu.state.depth_mask_set(True)
+        gpu.state.blend_set("NONE")
+        # Parts are closed surfaces: faces turned away are always hidden behind others.
+        gpu.state.face_culling_set(CULL_OPAQUE)
+        shader.uniform_int("mode", gpu_shaders.MODE_LIT)
+        for p in aim.visible:
+            if p.kind != "glass" and p not in tracts:
+                shader.uniform_float("sulc_strength", light.sulc if p.kind == "cortex" else 0.0)
+                shader.uniform_float("ao_strength", light.occlusion)
+                shader.uniform_float("rim", light.rim if p.kind == "subcortical" else 0.0)
+                self._batch(p).draw(shader)
+                if mark is not None:
+                    mark(f"draw {p.name}")
+        return shader
+
+    def _bind_part_shader(self, aim: _Aim, tex: Any) -> Any:
+        """Bind the part shader with the view's and the lighting's constants; returns it."""
+        s, light = self.settings, self.lighting
         shader = gpu_shaders.part_shader()
         shader.bind()
         # Samplers before push constants: bpy 5.3 drops an integer push constant set before a
@@ -405,37 +389,34 @@ class GpuDraw:
                             ("glass_rim", GLASS_RIM if light.lit else 0.0),
                             ("ao_direct", light.occlusion_direct), ("contrast", light.contrast)):
             shader.uniform_float(name, value)
-        gpu.state.depth_test_set("LESS_EQUAL")
-        gpu.state.depth_mask_set(True)
-        gpu.state.blend_set("NONE")
-        # Parts are closed surfaces: faces turned away are always hidden behind others.
-        gpu.state.face_culling_set(CULL_OPAQUE)
-        shader.uniform_int("mode", gpu_shaders.MODE_LIT)
-        for p in aim.visible:
-            if p.kind != "glass":
-                shader.uniform_float("sulc_strength", light.sulc if p.kind == "cortex" else 0.0)
-                shader.uniform_float("ao_strength", light.occlusion)
-                shader.uniform_float("rim", light.rim if p.kind == "subcortical" else 0.0)
-                self._batch(p).draw(shader)
-                mark(f"draw {p.name}")
-        if self._draw_outlines(aim, [p for p in aim.visible if p.kind != "glass"], shader, tex):
-            mark("outlines")
+        return shader
+
+    def _draw_glass(self, aim: _Aim, tex: Any, culled: tuple[str, ...], mark: Callable[[str], None]) -> None:
+        """The glass parts, blended, with each face culling of `culled` in turn, and their borders.
+
+        Culling ``FRONT`` draws the far side, ``BACK`` the near side (and the borders, on it).
+        """
+        import gpu
+
+        s = self.settings
+        shader = gpu_shaders.part_shader()
         glass = [p for p in aim.visible if p.kind == "glass"]
         if glass and s.glass_opacity > 0:
+            gpu.state.depth_test_set("LESS_EQUAL")
             gpu.state.depth_mask_set(False)
             gpu.state.blend_set("ALPHA_PREMULT")
             shader.uniform_int("mode", gpu_shaders.MODE_GLASS)
             shader.uniform_float("sulc_strength", 0.0)
             shader.uniform_float("ao_strength", 0.0)
             shader.uniform_float("rim", 0.0)
-            for cull in ("FRONT", "BACK"):  # far side first, then the near side over it
+            for cull in culled:
                 gpu.state.face_culling_set(cull)
                 for p in glass:
                     self._batch(p).draw(shader)
-            mark("glass")
+            mark({"FRONT": "glass, far side", "BACK": "glass, near side"}.get("".join(culled), "glass"))
             gpu.state.blend_set("NONE")
             gpu.state.depth_mask_set(True)
-        if any(p.outline is not None for p in glass) and s.outline_width > 0:
+        if "BACK" in culled and any(p.outline is not None for p in glass) and s.outline_width > 0:
             # A cortex drawn as glass (``--cortex glass``) keeps its borders, on its near side only:
             # its front faces go into the depth buffer alone, then the lines are depth-tested on them.
             gpu.state.color_mask_set(False, False, False, False)
@@ -466,9 +447,9 @@ class GpuDraw:
             return
 
         def drop() -> None:
-            if self._hi is not None:
-                self._hi.free()
-            self._hi = self._lo = self._lo_tex = self._quad = self._palette_tex = None
+            self._hi = self._hi_color = self._hi_depth = None
+            self._lo = self._lo_tex = self._quad = self._palette_tex = None
+            self._lines.close()
             self._batches.clear()
 
         in_gpu_context(drop)

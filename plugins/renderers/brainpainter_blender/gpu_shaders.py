@@ -84,6 +84,60 @@ void main()
 """
 
 
+_BOX_VERTEX = """
+void main()
+{
+  /* a unit square stretched over `box` (x0, y0, x1, y1 in normalised device coordinates) */
+  gl_Position = vec4(mix(box.xy, box.zw, pos), 0.0, 1.0);
+}
+"""
+
+_OVER_FRAGMENT = """
+void main()
+{
+  /* each supersample takes its output pixel of the (premultiplied) layer, blended over it */
+  fragColor = texelFetch(layer, ivec2(gl_FragCoord.xy) / FACTOR, 0);
+}
+"""
+
+_LINE_VERTEX = """
+void main()
+{
+  int slot = int(pal + 0.5);
+  color = texelFetch(palette, ivec2(slot % PALETTE_WIDTH, slot / PALETTE_WIDTH), 0).rgb;
+  vec4 c = mvp * vec4(pos, 1.0);
+  /* the direction in framebuffer pixels (gl_FragCoord's units) */
+  vec2 t = (mvp * vec4(tang, 0.0)).xy * viewport;
+  float l = length(t);
+  dir = l > 1e-6 ? t / l : vec2(1.0, 0.0);
+  /* a streamline's ends reach out by the line's half width (square caps), so a streamline seen
+     end-on is a dot as wide as its tube, not nothing */
+  c.xy += cap * (half_width + 0.5) * dir * 2.0 / viewport * c.w;
+  centre = (c.xy / c.w * 0.5 + 0.5) * viewport;
+  gl_Position = c;
+}
+"""
+
+_LINE_FRAGMENT = """
+void main()
+{
+  /* signed distance from the centreline in pixels: coverage of a line 2 * half_width wide
+     (box-filtered, so a line thinner than a pixel fades instead of breaking up) and, lit,
+     the normal of a round tube at that point (camera space: x right, y up, z to the viewer) */
+  vec2 dn = normalize(dir);
+  vec2 off = gl_FragCoord.xy - centre;
+  float d = dn.x * off.y - dn.y * off.x;
+  float cov = clamp(min(half_width + 0.5 - abs(d), 2.0 * half_width), 0.0, 1.0);
+  float u = clamp(d / max(half_width, 0.5), -1.0, 1.0);
+  vec3 n = vec3(vec2(-dn.y, dn.x) * u, sqrt(1.0 - u * u));
+  float shade = ambient + key * max(dot(n, key_dir), 0.0) + fill * max(dot(n, fill_dir), 0.0);
+  float s = clamp(shade, 0.0, 1.0);
+  shade = mix(shade, s * s * (3.0 - 2.0 * s), contrast);
+  fragColor = vec4(color * shade * cov, cov);
+}
+"""
+
+
 _shaders: dict[Any, Any] = {}
 
 
@@ -132,6 +186,52 @@ def resolve_shader(factor: int) -> Any:
     info.vertex_source(_RESOLVE_VERTEX)
     info.fragment_source(_RESOLVE_FRAGMENT)
     return _keep(key, gpu.shader.create_from_info(info))
+
+
+def over_shader(factor: int) -> Any:
+    """Puts an output-sized layer over the supersampled buffer, within a box (per factor)."""
+    key = ("over", factor)
+    if key in _shaders:
+        return _shaders[key]
+    import gpu
+
+    info = gpu.types.GPUShaderCreateInfo()
+    info.define("FACTOR", str(int(factor)))
+    info.push_constant("VEC4", "box")
+    info.sampler(0, "FLOAT_2D", "layer")
+    info.vertex_in(0, "VEC2", "pos")
+    info.fragment_out(0, "VEC4", "fragColor")
+    info.vertex_source(_BOX_VERTEX)
+    info.fragment_source(_OVER_FRAGMENT)
+    return _keep(key, gpu.shader.create_from_info(info))
+
+
+def line_shader() -> Any:
+    """Tract centrelines as anti-aliased, lit lines (compiled once per process)."""
+    if "line" in _shaders:
+        return _shaders["line"]
+    import gpu
+
+    iface = gpu.types.GPUStageInterfaceInfo("brainpainter_line")
+    iface.smooth("VEC3", "color")
+    iface.no_perspective("VEC2", "centre")
+    iface.no_perspective("VEC2", "dir")
+    info = gpu.types.GPUShaderCreateInfo()
+    info.define("PALETTE_WIDTH", str(PALETTE_WIDTH))
+    for kind, name in (("MAT4", "mvp"), ("VEC2", "viewport"), ("FLOAT", "half_width"),
+                       ("VEC3", "key_dir"), ("VEC3", "fill_dir"), ("FLOAT", "ambient"), ("FLOAT", "key"),
+                       ("FLOAT", "fill"), ("FLOAT", "contrast")):
+        info.push_constant(kind, name)
+    info.sampler(0, "FLOAT_2D", "palette")
+    info.vertex_in(0, "VEC3", "pos")
+    info.vertex_in(1, "VEC3", "tang")
+    info.vertex_in(2, "FLOAT", "pal")
+    info.vertex_in(3, "FLOAT", "cap")
+    info.vertex_out(iface)
+    info.fragment_out(0, "VEC4", "fragColor")
+    info.vertex_source(_LINE_VERTEX)
+    info.fragment_source(_LINE_FRAGMENT)
+    return _keep("line", gpu.shader.create_from_info(info), iface)
 
 
 def _keep(key: Any, shader: Any, *extra: Any) -> Any:
