@@ -312,7 +312,7 @@ class GpuDraw:
         with self._hi.bind():
             self._draw_parts(aim, tex, mark, tracts)
         if tracts:
-            self._lines.draw_over(tracts, view, aim, (tex, rgb), self.lighting, self._hi,
+            self._lines.draw_over(tracts, view, aim, tex, self.lighting, self._hi,
                                   lambda: self._draw_opaque(aim, tex, tracts), mark)
             with self._hi.bind():
                 self._bind_part_shader(aim, tex)

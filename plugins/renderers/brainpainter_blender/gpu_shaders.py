@@ -92,6 +92,44 @@ void main()
 }
 """
 
+_FILL_FRAGMENT = """
+void main()
+{
+  /* a pixel that only lines' fringes reach takes the slots of a neighbouring line's core */
+  ivec2 q = ivec2(gl_FragCoord.xy);
+  vec4 at = texelFetch(slots, q, 0);
+  if (at.a < 0.5) {
+    ivec2 last = textureSize(slots, 0) - 1;
+    for (int j = -1; j <= 1; j++) {
+      for (int i = -1; i <= 1; i++) {
+        vec4 n = texelFetch(slots, clamp(q + ivec2(i, j), ivec2(0), last), 0);
+        if (n.a > at.a) {
+          at = n;
+        }
+      }
+    }
+  }
+  fragColor = at;
+}
+"""
+
+_COLOUR_FRAGMENT = """
+vec3 slot_rgb(float slot)
+{
+  int i = int(slot + 0.5);
+  return texelFetch(palette, ivec2(i % PALETTE_WIDTH, i / PALETTE_WIDTH), 0).rgb;
+}
+
+void main()
+{
+  /* the tracts' layer in this image's colours: the slots' colours times the light (premultiplied) */
+  ivec2 q = ivec2(gl_FragCoord.xy);
+  vec4 lum = texelFetch(shade, q, 0);
+  vec4 at = texelFetch(slots, q, 0);
+  fragColor = vec4(mix(slot_rgb(at.r), slot_rgb(at.g), at.b) * lum.r, lum.a);
+}
+"""
+
 _OVER_FRAGMENT = """
 void main()
 {
@@ -103,8 +141,11 @@ void main()
 _LINE_VERTEX = """
 void main()
 {
-  int slot = int(pal + 0.5);
-  color = texelFetch(palette, ivec2(slot % PALETTE_WIDTH, slot / PALETTE_WIDTH), 0).rgb;
+  /* a segment joins an even and an odd point: each point puts its slot in its parity's channel,
+     so a fragment can tell both slots and how far along it is (see _LINE_FRAGMENT) */
+  even_slot = pal * (1.0 - odd);
+  odd_slot = pal * odd;
+  towards_odd = odd;
   vec4 c = mvp * vec4(pos, 1.0);
   /* the direction in framebuffer pixels (gl_FragCoord's units) */
   vec2 t = (mvp * vec4(tang, 0.0)).xy * viewport;
@@ -133,7 +174,14 @@ void main()
   float shade = ambient + key * max(dot(n, key_dir), 0.0) + fill * max(dot(n, fill_dir), 0.0);
   float s = clamp(shade, 0.0, 1.0);
   shade = mix(shade, s * s * (3.0 - 2.0 * s), contrast);
-  fragColor = vec4(color * shade * cov, cov);
+  /* colourless: the light and coverage, blended (premultiplied) */
+  lit = vec4(shade * cov, 0.0, 0.0, cov);
+  /* the colour's slots, replaced by each line that covers half the pixel (the nearest such
+     line wins: the farthest streamline is drawn first); alpha 0 leaves them as they are */
+  float w_even = 1.0 - towards_odd;
+  float even = w_even > 1e-4 ? even_slot / w_even : odd_slot / towards_odd;
+  float odd = towards_odd > 1e-4 ? odd_slot / towards_odd : even;
+  slot = cov >= 0.5 ? vec4(even, odd, towards_odd, 1.0) : vec4(0.0);
 }
 """
 
@@ -188,47 +236,54 @@ def resolve_shader(factor: int) -> Any:
     return _keep(key, gpu.shader.create_from_info(info))
 
 
-def over_shader(factor: int) -> Any:
-    """Puts an output-sized layer over the supersampled buffer, within a box (per factor)."""
-    key = ("over", factor)
+def box_shader(step: str, factor: int = 1) -> Any:
+    """A pass over the tracts' box: ``fill`` and ``colour`` (output-sized), ``over`` (supersampled)."""
+    key = ("box", step, factor)
     if key in _shaders:
         return _shaders[key]
     import gpu
 
+    samplers, source = {"fill": (("slots",), _FILL_FRAGMENT),
+                        "colour": (("shade", "slots", "palette"), _COLOUR_FRAGMENT),
+                        "over": (("layer",), _OVER_FRAGMENT)}[step]
     info = gpu.types.GPUShaderCreateInfo()
     info.define("FACTOR", str(int(factor)))
+    info.define("PALETTE_WIDTH", str(PALETTE_WIDTH))
     info.push_constant("VEC4", "box")
-    info.sampler(0, "FLOAT_2D", "layer")
+    for i, name in enumerate(samplers):
+        info.sampler(i, "FLOAT_2D", name)
     info.vertex_in(0, "VEC2", "pos")
     info.fragment_out(0, "VEC4", "fragColor")
     info.vertex_source(_BOX_VERTEX)
-    info.fragment_source(_OVER_FRAGMENT)
+    info.fragment_source(source)
     return _keep(key, gpu.shader.create_from_info(info))
 
 
 def line_shader() -> Any:
-    """Tract centrelines as anti-aliased, lit lines (compiled once per process)."""
+    """Tract centrelines as anti-aliased, lit lines: their light and their slots (compiled once)."""
     if "line" in _shaders:
         return _shaders["line"]
     import gpu
 
     iface = gpu.types.GPUStageInterfaceInfo("brainpainter_line")
-    iface.smooth("VEC3", "color")
     iface.no_perspective("VEC2", "centre")
     iface.no_perspective("VEC2", "dir")
+    iface.no_perspective("FLOAT", "even_slot")
+    iface.no_perspective("FLOAT", "odd_slot")
+    iface.no_perspective("FLOAT", "towards_odd")
     info = gpu.types.GPUShaderCreateInfo()
-    info.define("PALETTE_WIDTH", str(PALETTE_WIDTH))
     for kind, name in (("MAT4", "mvp"), ("VEC2", "viewport"), ("FLOAT", "half_width"),
                        ("VEC3", "key_dir"), ("VEC3", "fill_dir"), ("FLOAT", "ambient"), ("FLOAT", "key"),
                        ("FLOAT", "fill"), ("FLOAT", "contrast")):
         info.push_constant(kind, name)
-    info.sampler(0, "FLOAT_2D", "palette")
     info.vertex_in(0, "VEC3", "pos")
     info.vertex_in(1, "VEC3", "tang")
     info.vertex_in(2, "FLOAT", "pal")
     info.vertex_in(3, "FLOAT", "cap")
+    info.vertex_in(4, "FLOAT", "odd")
     info.vertex_out(iface)
-    info.fragment_out(0, "VEC4", "fragColor")
+    info.fragment_out(0, "VEC4", "lit")
+    info.fragment_out(1, "VEC4", "slot")
     info.vertex_source(_LINE_VERTEX)
     info.fragment_source(_LINE_FRAGMENT)
     return _keep("line", gpu.shader.create_from_info(info), iface)

@@ -9,20 +9,20 @@ GL line per segment, at output resolution, as wide as the tube plus a pixel of
 fringe. The fragment shader finds each pixel's distance from the centreline,
 which gives both its coverage (anti-aliasing without supersampling) and the
 normal of a round tube at that point, lit by the same camera-fixed lights as
-the tubes were. Per image with tracts (:meth:`GpuDraw._draw`):
+the tubes were.
 
-1. the opaque parts and the far side of the glass are drawn supersampled, as
-   without tracts;
-2. the tracts' layer: an output-sized buffer, transparent, holding the lines
-   drawn farthest streamline first (sorted once per view), blended, and
-   depth-tested against the opaque parts (drawn again, into its depth alone);
-3. that layer is put over the supersampled buffer, within the tracts' box,
-   then the near side of the glass is drawn over both, and the resolve follows.
-
-The layer depends only on the view and the tracts' colours, so it is kept
-(up to :data:`MAX_LAYER_PIXELS`): the rows of a table that change the regions'
-colours and not the bundles' (direction colours, a cortical table with the
-tracts) draw the lines once per view.
+The lines are drawn once per view, without their colours, into the view's
+tracts' layer (:data:`MAX_LAYER_PIXELS` of them are kept): farthest streamline
+first (sorted), blended, depth-tested against the opaque parts (drawn again,
+into the layer's depth alone). The layer holds, per output pixel, the light
+and coverage of all the lines there (premultiplied) and the palette slots of
+the nearest line covering half of it (the two ends of its segment and how far
+along). Each image then colours the layer from its own palette and puts it
+over the supersampled buffer, between the glass's far and near sides
+(:meth:`GpuDraw._draw`): a table whose rows change the bundles' values draws
+no line again, only a view not seen before does. Where lines of different
+colours share a pixel, its colour is the nearer line's (the coverage stays
+exact).
 """
 
 from __future__ import annotations
@@ -30,19 +30,21 @@ from __future__ import annotations
 import math
 from collections import OrderedDict
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from brainpainter.errors import BrainPainterError
 from brainpainter.rendering.geometry import PartGeometry
 from brainpainter.tracts.tubes import tangents
 
-#: Views whose sorted line order is kept (a movie's orbit has one per frame).
-MAX_CACHED_VIEWS = 64
-#: Pixels of the tract layers kept (views x tract colourings; 8 bytes a pixel): 8 of 1200x900.
-MAX_LAYER_PIXELS = 8 * 1200 * 900
+#: Pixels of the tract layers kept (one per view; 24 bytes a pixel): 4 views of 1200x900.
+MAX_LAYER_PIXELS = 4 * 1200 * 900
 #: Margin of the tracts' box beyond their projected points, in pixels (the line's fringe and more).
 BOX_MARGIN_PX = 4.0
+#: Palette slots a layer can hold exactly (float32 integers).
+MAX_SLOT = 2**24
 
 
 def raster_width(half_width: float) -> int:
@@ -52,6 +54,15 @@ def raster_width(half_width: float) -> int:
     ``cos(45 degrees)`` as wide; the fringe ends half a pixel beyond the line.
     """
     return max(1, math.ceil(2.0 * math.sqrt(2.0) * (half_width + 0.5)))
+
+
+@dataclass(frozen=True)
+class _Layer:
+    """A view's tracts' layer: light and coverage (RGBA16), slots (RGBA32F), box (NDC)."""
+
+    shade: Any
+    slots: Any
+    box: tuple[float, float, float, float]
 
 
 class TractLines:
@@ -66,11 +77,10 @@ class TractLines:
     def __init__(self, width: int, height: int) -> None:
         self.width, self.height = int(width), int(height)
         self._depth: Any = None
-        self._layers: OrderedDict[Any, tuple[Any, Any]] = OrderedDict()
+        self._layers: OrderedDict[Any, _Layer] = OrderedDict()
         self._buffers: dict[str, Any] = {}
-        self._slots: dict[str, np.ndarray] = {}
-        self._batches: dict[Any, dict[str, Any]] = {}
-        self._boxes: dict[Any, tuple[float, float, float, float]] = {}
+        self._framebuffers: dict[str, Any] = {}
+        self._textures: dict[str, Any] = {}
 
     def _vertices(self, part: PartGeometry) -> Any:
         """The part's centreline points as a vertex buffer (uploaded once)."""
@@ -82,42 +92,26 @@ class TractLines:
 
             c = part.centrelines
             assert c is not None
+            if c.slots.size and int(c.slots.max()) >= MAX_SLOT:
+                raise BrainPainterError(f"tracts: palette slot {int(c.slots.max())} is beyond "
+                                        f"{MAX_SLOT}; use fewer regions or vertices in the scene")
             fmt = gpu.types.GPUVertFormat()
             for name, _ in gpu_shaders.line_shader().attrs_info_get():
                 fmt.attr_add(id=name, comp_type="F32", len=3 if name in ("pos", "tang") else 1,
                              fetch_mode="FLOAT")
-            vbo = self._buffers[part.name] = gpu.types.GPUVertBuf(fmt, c.slots.size)
+            n, m = c.slots.shape
+            vbo = self._buffers[part.name] = gpu.types.GPUVertBuf(fmt, n * m)
             vbo.attr_fill("pos", np.ascontiguousarray(c.points.reshape(-1, 3), np.float32))
             vbo.attr_fill("tang", tangents(c.points).reshape(-1, 3).astype(np.float32))
             vbo.attr_fill("pal", c.slots.reshape(-1).astype(np.float32))
-            cap = np.zeros(c.slots.shape, np.float32)
+            cap = np.zeros((n, m), np.float32)
             cap[:, 0], cap[:, -1] = -1.0, 1.0  # the ends reach out (see gpu_shaders)
             vbo.attr_fill("cap", cap.reshape(-1))
+            vbo.attr_fill("odd", (np.arange(n * m) % 2).astype(np.float32))
         return vbo
 
-    def _view(self, parts: list[PartGeometry], view: Any, aim: Any) -> dict[str, Any]:
-        """Each part's segments, farthest streamline first from `view`, and the tracts' box (once a view)."""
-        per_view = self._batches.get(view)
-        if per_view is None:
-            if len(self._batches) >= MAX_CACHED_VIEWS:
-                self._batches.clear()
-                self._boxes.clear()
-            per_view = self._batches[view] = {}
-            mvp = np.asarray(aim.mvp, np.float64)
-            back = np.asarray(aim.back, np.float64)
-            lo, hi = np.full(2, np.inf), np.full(2, -np.inf)
-            for p in parts:
-                per_view[p.name] = self._sorted(p, back)
-                assert p.centrelines is not None
-                ndc = p.centrelines.points.reshape(-1, 3) @ mvp[:2, :3].T + mvp[:2, 3]
-                lo, hi = np.minimum(lo, ndc.min(axis=0)), np.maximum(hi, ndc.max(axis=0))
-            pixels = BOX_MARGIN_PX + self._half_width(parts, aim)
-            margin = 2.0 * pixels / np.array([self.width, self.height])
-            lo, hi = np.clip(lo - margin, -1.0, 1.0), np.clip(hi + margin, -1.0, 1.0)
-            self._boxes[view] = (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
-        return per_view
-
     def _sorted(self, part: PartGeometry, back: np.ndarray) -> Any:
+        """The part's segments as a line batch, farthest streamline first (`back`: towards the viewer)."""
         import gpu
 
         c = part.centrelines
@@ -130,38 +124,39 @@ class TractLines:
         ibo = gpu.types.GPUIndexBuf(type="LINES", seq=pairs)
         return gpu.types.GPUBatch(type="LINES", buf=self._vertices(part), elem=ibo)
 
+    def _box(self, parts: list[PartGeometry], aim: Any) -> tuple[float, float, float, float]:
+        """The tracts' extent in normalised device coordinates (x0, y0, x1, y1), with a margin."""
+        mvp = np.asarray(aim.mvp, np.float64)
+        lo, hi = np.full(2, np.inf), np.full(2, -np.inf)
+        for p in parts:
+            assert p.centrelines is not None
+            ndc = p.centrelines.points.reshape(-1, 3) @ mvp[:2, :3].T + mvp[:2, 3]
+            lo, hi = np.minimum(lo, ndc.min(axis=0)), np.maximum(hi, ndc.max(axis=0))
+        pixels = BOX_MARGIN_PX + self._half_width(parts, aim)
+        margin = 2.0 * pixels / np.array([self.width, self.height])
+        lo, hi = np.clip(lo - margin, -1.0, 1.0), np.clip(hi + margin, -1.0, 1.0)
+        return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
+
     def _half_width(self, parts: list[PartGeometry], aim: Any) -> float:
         """Half the lines' width in output pixels: the tubes' radius at the view's scale."""
         scale = np.asarray(aim.mvp, np.float64)[0, :3]  # NDC per millimetre along the image's x
         radius = max(float(p.centrelines.radius) for p in parts if p.centrelines is not None)
         return radius * float(np.linalg.norm(scale)) * self.width / 2.0
 
-    def _colour_key(self, parts: list[PartGeometry], palette_rgb: np.ndarray) -> bytes:
-        """The palette colours the tracts use (their layer is drawn again when these change)."""
-        keys = []
-        for p in parts:
-            slots = self._slots.get(p.name)
-            if slots is None:
-                assert p.centrelines is not None
-                slots = self._slots[p.name] = np.unique(p.centrelines.slots)
-            keys.append(np.asarray(palette_rgb)[slots].tobytes())
-        return b"|".join(keys)
-
-    def draw_over(self, parts: list[PartGeometry], view: Any, aim: Any, palette: tuple[Any, np.ndarray],
-                  lighting: Any, supersampled: Any, draw_opaque: Callable[[], None],
-                  mark: Callable[[str], None]) -> None:
-        """Put the tracts' layer over the framebuffer `supersampled` (drawn first when not kept).
+    def draw_over(self, parts: list[PartGeometry], view: Any, aim: Any, palette: Any, lighting: Any,
+                  supersampled: Any, draw_opaque: Callable[[], None], mark: Callable[[str], None]) -> None:
+        """Colour the view's tracts' layer (drawn first when not kept) and put it over `supersampled`.
 
         Parameters
         ----------
         parts : list of PartGeometry
             Tract parts (with :attr:`~PartGeometry.centrelines`).
         view : View
-            Key of the sorted line order and of the kept layers.
+            Key of the kept layers.
         aim : brainpainter_blender.gpu_draw._Aim
             The view's matrix and camera axes.
-        palette : tuple
-            The palette texture and its sRGB colours, shape (n_slots, 3).
+        palette : gpu.types.GPUTexture
+            The image's palette (linear colours, as the part shader reads it).
         lighting : brainpainter_blender.gpu_draw.Lighting
         supersampled : gpu.types.GPUFrameBuffer
             The supersampled buffer (its size a multiple of the output's).
@@ -173,43 +168,67 @@ class TractLines:
         """
         import gpu
 
-        from brainpainter_blender import gpu_shaders
-
-        batches = self._view(parts, view, aim)
-        key = (view, self._colour_key(parts, palette[1]))
-        layer = self._layers.get(key)
+        layer = self._layers.get(view)
         if layer is None:
-            layer = self._draw_layer(parts, [batches[p.name] for p in parts], aim, palette[0], lighting,
-                                     draw_opaque, mark)
+            layer = self._draw_layer(parts, aim, lighting, draw_opaque, mark)
             while len(self._layers) >= max(1, MAX_LAYER_PIXELS // (self.width * self.height)):
                 self._layers.popitem(last=False)
-            self._layers[key] = layer
-        self._layers.move_to_end(key)
+            self._layers[view] = layer
+        self._layers.move_to_end(view)
+        with self._scratch("coloured").bind():
+            self._box_pass("colour", layer.box, {"shade": layer.shade, "slots": layer.slots,
+                                                 "palette": palette})
         with supersampled.bind():
             factor = supersampled.viewport_get()[2] // self.width
-            over = gpu_shaders.over_shader(factor)
-            over.bind()
-            over.uniform_sampler("layer", layer[1])
-            over.uniform_float("box", self._boxes[view])
             gpu.state.blend_set("ALPHA_PREMULT")
-            gpu.state.depth_test_set("NONE")
-            gpu.state.face_culling_set("NONE")
-            _unit_square().draw(over)
+            self._box_pass("over", layer.box, {"layer": self._textures["coloured"]}, factor)
             gpu.state.blend_set("NONE")
             mark("tract layer")
 
-    def _draw_layer(self, parts: list[PartGeometry], batches: list[Any], aim: Any, palette: Any,
-                    lighting: Any, draw_opaque: Callable[[], None],
-                    mark: Callable[[str], None]) -> tuple[Any, Any]:
-        """A new layer: transparent, the opaque parts' depth, then the lines."""
+    def _scratch(self, name: str) -> Any:
+        """An output-sized framebuffer shared by all views: ``coloured`` (RGBA16) or ``slots`` (RGBA32F)."""
+        fb = self._framebuffers.get(name)
+        if fb is None:
+            import gpu
+
+            fmt = {"coloured": "RGBA16", "slots": "RGBA32F"}[name]
+            tex = self._textures[name] = gpu.types.GPUTexture((self.width, self.height), format=fmt)
+            fb = self._framebuffers[name] = gpu.types.GPUFrameBuffer(color_slots=tex)
+        return fb
+
+    @staticmethod
+    def _box_pass(step: str, box: tuple[float, float, float, float], samplers: dict[str, Any],
+                  factor: int = 1) -> None:
+        """Run :func:`~brainpainter_blender.gpu_shaders.box_shader` `step` over `box` (NDC)."""
         import gpu
 
         from brainpainter_blender import gpu_shaders
 
+        shader = gpu_shaders.box_shader(step, factor)
+        shader.bind()
+        for name, texture in samplers.items():
+            shader.uniform_sampler(name, texture)
+        shader.uniform_float("box", box)
+        gpu.state.depth_test_set("NONE")
+        gpu.state.face_culling_set("NONE")
+        _unit_square(shader).draw(shader)
+
+    def _draw_layer(self, parts: list[PartGeometry], aim: Any, lighting: Any,
+                    draw_opaque: Callable[[], None], mark: Callable[[str], None]) -> _Layer:
+        """A view's layer: cleared, the opaque parts' depth, then the lines, farthest first."""
+        import gpu
+
+        from brainpainter_blender import gpu_shaders
+
+        size = (self.width, self.height)
         if self._depth is None:
-            self._depth = gpu.types.GPUTexture((self.width, self.height), format="DEPTH_COMPONENT32F")
-        color = gpu.types.GPUTexture((self.width, self.height), format="RGBA16")
-        fb = gpu.types.GPUFrameBuffer(depth_slot=self._depth, color_slots=color)
+            self._depth = gpu.types.GPUTexture(size, format="DEPTH_COMPONENT32F")
+        shade = gpu.types.GPUTexture(size, format="RGBA16")
+        slots = gpu.types.GPUTexture(size, format="RGBA32F")
+        self._scratch("slots")
+        fb = gpu.types.GPUFrameBuffer(depth_slot=self._depth, color_slots=(shade, self._textures["slots"]))
+        back = np.asarray(aim.back, np.float64)
+        batches = [self._sorted(p, back) for p in parts]
         with fb.bind():
             fb.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
             gpu.state.color_mask_set(False, False, False, False)
@@ -218,7 +237,6 @@ class TractLines:
             mark("tract depth")
             shader = gpu_shaders.line_shader()
             shader.bind()
-            shader.uniform_sampler("palette", palette)  # samplers before push constants (see GpuDraw)
             half = self._half_width(parts, aim)
             for name, value in (("mvp", aim.mvp), ("viewport", (float(self.width), float(self.height))),
                                 ("half_width", half), ("key_dir", _unit(lighting.key_dir)),
@@ -239,27 +257,28 @@ class TractLines:
             gpu.state.depth_mask_set(True)
             gpu.state.depth_test_set("NONE")
             mark("tracts")
-        return fb, color
+        box = self._box(parts, aim)
+        with gpu.types.GPUFrameBuffer(color_slots=slots).bind():
+            self._box_pass("fill", box, {"slots": self._textures["slots"]})
+        return _Layer(shade, slots, box)
 
     def close(self) -> None:
         """Drop the buffers and batches (call in a GPU context)."""
         self._depth = None
-        for cache in (self._layers, self._buffers, self._slots, self._batches, self._boxes):
+        for cache in (self._layers, self._buffers, self._framebuffers, self._textures):
             cache.clear()
 
 
 _square: dict[str, Any] = {}
 
 
-def _unit_square() -> Any:
+def _unit_square(shader: Any) -> Any:
     """Two triangles over the unit square (``pos``), made once per process."""
     if "batch" not in _square:
         from gpu_extras.batch import batch_for_shader
 
-        from brainpainter_blender import gpu_shaders
-
-        _square["batch"] = batch_for_shader(gpu_shaders.over_shader(1), "TRIS",
-                                            {"pos": [(0, 0), (1, 0), (1, 1), (0, 0), (1, 1), (0, 1)]})
+        corners = [(0, 0), (1, 0), (1, 1), (0, 0), (1, 1), (0, 1)]
+        _square["batch"] = batch_for_shader(shader, "TRIS", {"pos": corners})
     return _square["batch"]
 
 
