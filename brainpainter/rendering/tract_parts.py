@@ -27,7 +27,12 @@ SlotsFor = Callable[[list[str], "int | RGB", frozenset[str]], NDArray[Any]]
 
 def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
                 radius: float | None = None) -> list[PartGeometry]:
-    """The tubes of `tracts`, one part per hemisphere (``tracts-lh``, ``tracts-rh``; ``tracts`` for the rest).
+    """The tubes and centrelines of `tracts`, a part per hemisphere (``tracts-lh``, ``-rh``, ``tracts``).
+
+    The tubes keep to :data:`~brainpainter.tracts.tubes.TRIANGLE_BUDGET`; the
+    centrelines (:class:`~brainpainter.rendering.parts.Centrelines`, which the
+    default renderer draws as lines) to the finer
+    :data:`~brainpainter.tracts.tubes.LINE_SEGMENT_BUDGET`.
 
     Parameters
     ----------
@@ -44,15 +49,44 @@ def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
     -------
     list of PartGeometry
     """
-    from brainpainter.tracts.names import bundle_key, hemisphere
+    from brainpainter.tracts.names import hemisphere
+    from brainpainter.tracts.tubes import SIDES, auto_radius, line_points_for, points_for, tube_mesh
+
+    n_lines, n_points = tracts.lines.shape[:2]
+    radius = auto_radius(n_lines) if radius is None else radius
+    # the tubes (for mesh renderers and export) within a triangle budget; the centrelines finer
+    lines, point_slot = _points(tracts, nodes, slots_for, points_for(n_lines, n_points, SIDES))
+    centres, centre_slot = _points(tracts, nodes, slots_for, line_points_for(n_lines, n_points))
+    hemis = np.array([hemisphere(n) or "" for n in tracts.names])[tracts.bundle]
+    out = []
+    for hemi, part in (("lh", "tracts-lh"), ("rh", "tracts-rh"), ("", "tracts")):
+        pick = hemis == hemi
+        if not np.any(pick):
+            continue
+        verts, normals, tris = tube_mesh(lines[pick], radius, SIDES)
+        pal = np.repeat(point_slot[pick].ravel(), SIDES).astype(np.int32)
+        centre = Centrelines(centres[pick].astype(np.float32), centre_slot[pick].astype(np.int32), radius)
+        out.append(PartGeometry(part, "tract", hemi or None, verts, normals, tris, pal,
+                                np.zeros(len(verts), np.float32), lines[pick].reshape(-1, 3),
+                                centrelines=centre))
+    return out
+
+
+def _points(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
+            m: int) -> tuple[NDArray[Any], NDArray[Any]]:
+    """The streamlines at `m` points each (fewer than read: level of detail) and each point's palette slot.
+
+    Returns
+    -------
+    lines : ndarray of float, shape (n_streamlines, m, 3)
+    slots : ndarray of int64, shape (n_streamlines, m)
+    """
+    from brainpainter.tracts.names import bundle_key
     from brainpainter.tracts.streamlines import direction_bins, resample
-    from brainpainter.tracts.tubes import SIDES, auto_radius, points_for, tube_mesh
 
     lines = tracts.lines
     n_lines, n_points = lines.shape[:2]
-    radius = auto_radius(n_lines) if radius is None else radius
-    m = points_for(n_lines, n_points, SIDES)
-    if m < n_points:  # level of detail: fewer points per streamline for many streamlines
+    if m < n_points:
         lines = resample(lines.reshape(-1, 3), np.arange(n_lines) * n_points, np.full(n_lines, n_points), m)
         n_points = m
     point_slot = np.zeros((n_lines, n_points), np.int64)
@@ -76,16 +110,4 @@ def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
         # point j of n_points takes the node at the same fraction of the streamline's length
         node_of_point = np.rint(np.arange(n_points) * (n - 1) / max(n_points - 1, 1)).astype(np.int64)
         point_slot[tracts.bundle == i] = node_slot[node_of_point]
-    hemis = np.array([hemisphere(n) or "" for n in tracts.names])[tracts.bundle]
-    out = []
-    for hemi, part in (("lh", "tracts-lh"), ("rh", "tracts-rh"), ("", "tracts")):
-        pick = hemis == hemi
-        if not np.any(pick):
-            continue
-        verts, normals, tris = tube_mesh(lines[pick], radius, SIDES)
-        pal = np.repeat(point_slot[pick].ravel(), SIDES).astype(np.int32)
-        centres = Centrelines(lines[pick].astype(np.float32), point_slot[pick].astype(np.int32), radius)
-        out.append(PartGeometry(part, "tract", hemi or None, verts, normals, tris, pal,
-                                np.zeros(len(verts), np.float32), lines[pick].reshape(-1, 3),
-                                centrelines=centres))
-    return out
+    return lines, point_slot

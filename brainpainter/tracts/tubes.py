@@ -20,6 +20,9 @@ SIDES = 3
 #: Triangles of all tubes together, roughly: beyond it streamlines get fewer points (level of detail;
 #: a software rasteriser's time per image grows with the triangles).
 TRIANGLE_BUDGET = 250_000
+#: Segments of all centrelines together, roughly (drawn as lines once per view): 10,000 streamlines
+#: keep 21 points, where their tubes get 5.
+LINE_SEGMENT_BUDGET = 200_000
 #: Fewest points per streamline the level of detail leaves.
 MIN_POINTS = 5
 #: Tube radius in millimetres.
@@ -51,6 +54,12 @@ def points_for(n_streamlines: int, n_points: int, sides: int = SIDES,
     a long association bundle: visibly polygonal up close, the price of the speed bar).
     """
     m = int(budget // max(1, n_streamlines * sides * 2)) + 1
+    return max(min(MIN_POINTS, n_points), min(n_points, m))
+
+
+def line_points_for(n_streamlines: int, n_points: int, budget: int = LINE_SEGMENT_BUDGET) -> int:
+    """Points per streamline so that all centrelines keep near `budget` segments (at least ``MIN_POINTS``)."""
+    m = int(budget // max(1, n_streamlines)) + 1
     return max(min(MIN_POINTS, n_points), min(n_points, m))
 
 
