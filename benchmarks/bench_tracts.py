@@ -1,8 +1,8 @@
-"""Benchmark: streamlines as tubes against a DK region render, per image, in the same process.
+"""Benchmark: images with streamlines against a DK region render, per image, in the same process.
 
 Writes a synthetic whole-brain-like tractogram (``--streamlines`` smooth arcs
 inside the fsaverage brain, 40 points each, as .tck with nibabel), loads it as
-bundles (read, subsample, resample, orient, tubes), then times per image at
+bundles (read, subsample, resample, orient, tubes and centrelines), then times per image at
 ``--size``:
 
 * the DK table's first row from ``lateral-left`` and ``subcortical`` without tracts (the references);
@@ -10,10 +10,11 @@ bundles (read, subsample, resample, orient, tubes), then times per image at
   and in one colour per bundle, and from ``lateral-left`` (the left bundles
   through the cortex drawn as glass, ``--cortex auto``);
 * with one colour per bundle, also images whose bundle colours change every
-  time (a table of bundle values, row by row): the Blender renderer keeps the
-  tracts' layer of a view while their colours stay
-  (:mod:`brainpainter_blender.tract_lines`), so this is the cost of drawing
-  the lines again;
+  time (a table of bundle values, row by row): the Blender renderer keeps
+  each view's lines, uncoloured (:mod:`brainpainter_blender.tract_lines`),
+  so this is the cost of colouring them again;
+* a movie's orbit: every image a view not drawn before, where the lines
+  themselves are drawn again;
 
 and prints the median seconds per image, the ratios (the issue's bar: 10,000
 streamlines <= 2x a DK region render), the tube triangles and the scene load time.
@@ -84,6 +85,18 @@ def _time(painter, colors, view, repeats: int, recolour: bool = False) -> float:
     return statistics.median(per)
 
 
+def _orbit(painter, colors, view, repeats: int) -> float:
+    """Median seconds per image of a movie's orbit: every image a view not drawn before (a 5-degree step)."""
+    painter.paint_colors(colors, view)
+    per = []
+    for i in range(repeats):
+        turned = replace(view, azimuth=(view.azimuth + 5.0 * (i + 1)) % 360.0)
+        t = CLOCK()
+        painter.paint_colors(colors, turned)
+        per.append(CLOCK() - t)
+    return statistics.median(per)
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--streamlines", default="3000,10000", help="Comma-separated counts.")
@@ -136,6 +149,7 @@ def main() -> None:
                     # the bundles' colours change with every image (a table of bundle values, row
                     # by row): the renderer cannot keep the tracts' layer and draws the lines again
                     new = _time(painter, colors, sub, args.repeats, recolour=True) if nodes else None
+                    orbit = _orbit(painter, colors, sub, args.repeats)
                     tris = sum(len(q.triangles) for q in painter.scene.geometry.parts if q.kind == "tract")
                 print(f"{n:6d} streamlines, {label:22s}: subcortical {per * 1000:6.0f} {unit}/image = "
                       f"{per / ref['lateral-left']:.2f} x a DK lateral-left render, "
@@ -143,6 +157,8 @@ def main() -> None:
                       f"{tris:,} tube triangles; scene load {load:.1f} s")
                 print(f"{'':46s}lateral-left through the glass cortex {glass * 1000:6.0f} {unit}/image = "
                       f"{glass / ref['lateral-left']:.2f} x a DK lateral-left render")
+                print(f"{'':46s}subcortical orbit, a new view each image {orbit * 1000:6.0f} {unit}/image = "
+                      f"{orbit / ref['lateral-left']:.2f} x a DK lateral-left render")
                 if new is not None:
                     print(f"{'':46s}subcortical, bundles recoloured each image "
                           f"{new * 1000:6.0f} {unit}/image = "

@@ -232,3 +232,33 @@ def test_render_command_with_jobs_2_draws_the_bundles_in_every_view(tmp_path, bu
         # both bundles from above, through the glass brain
         assert tinted(out / f"{image}_subcortical-dorsal.png", 0).sum() > 100
         assert tinted(out / f"{image}_subcortical-dorsal.png", 2).sum() > 100
+
+
+def test_a_new_colour_in_the_same_view_recolours_the_kept_lines(tiny, bundles):
+    # the renderer draws a view's lines once and colours them for each image (tract_lines)
+    view = get_view("subcortical-dorsal")
+    with _painter(tiny, bundles, (("AF_left", 1), ("CST_right", 1))) as p:
+        first = p.paint_colors({"tract:AF_left": RED, "tract:CST_right": BLUE}, view)
+        swapped = p.paint_colors({"tract:AF_left": BLUE, "tract:CST_right": RED}, view)
+    assert _mask(first, RED).sum() > 200 and _mask(swapped, RED).sum() > 200
+    middle = first.shape[1] / 2
+    assert np.nonzero(_mask(first, RED))[1].mean() < middle < np.nonzero(_mask(swapped, RED))[1].mean()
+    # the same lines, coloured the other way round
+    drawn = [_mask(img, RED) | _mask(img, BLUE) for img in (first, swapped)]
+    assert (drawn[0] != drawn[1]).sum() <= 0.01 * drawn[0].sum()
+
+
+@pytest.mark.parametrize("z", [-20.0, 20.0])
+def test_a_bundle_below_a_structure_is_hidden_by_it_from_above(tiny, tmp_path, z):
+    # the tiny template's structures: boxes within |x| <= 25, |y| <= 10, |z| <= 5
+    folder = tmp_path / "under"
+    folder.mkdir()
+    write(folder / "AF_L.trk", bundle(-17.0, n=20, z=z, length=60.0))
+    with _painter(tiny, folder, (("AF_left", 1),)) as p:
+        img = p.paint_colors({"tract:AF_left": RED}, get_view("subcortical-dorsal"))
+    rows = np.nonzero(_mask(img, RED).any(axis=1))[0]
+    assert len(rows) > 40
+    # the box spans a third of the bundle's length, in the middle of its rows (anterior up)
+    middle = (rows.min() + rows.max()) / 2
+    through = np.abs(rows - middle) < 0.1 * np.ptp(rows)
+    assert through.any() == (z > 0)

@@ -100,13 +100,12 @@ void main()
   vec4 at = texelFetch(slots, q, 0);
   if (at.a < 0.5) {
     ivec2 last = textureSize(slots, 0) - 1;
-    for (int j = -1; j <= 1; j++) {
-      for (int i = -1; i <= 1; i++) {
-        vec4 n = texelFetch(slots, clamp(q + ivec2(i, j), ivec2(0), last), 0);
-        if (n.a > at.a) {
-          at = n;
-        }
-      }
+    vec4 n[4] = vec4[4](texelFetch(slots, clamp(q + ivec2(1, 0), ivec2(0), last), 0),
+                        texelFetch(slots, clamp(q - ivec2(1, 0), ivec2(0), last), 0),
+                        texelFetch(slots, clamp(q + ivec2(0, 1), ivec2(0), last), 0),
+                        texelFetch(slots, clamp(q - ivec2(0, 1), ivec2(0), last), 0));
+    for (int i = 0; i < 4; i++) {
+      at = n[i].a > at.a ? n[i] : at;
     }
   }
   fragColor = at;

@@ -170,10 +170,10 @@ class TractLines:
 
         layer = self._layers.get(view)
         if layer is None:
-            layer = self._draw_layer(parts, aim, lighting, draw_opaque, mark)
+            spare = None
             while len(self._layers) >= max(1, MAX_LAYER_PIXELS // (self.width * self.height)):
-                self._layers.popitem(last=False)
-            self._layers[view] = layer
+                spare = self._layers.popitem(last=False)[1]  # its textures are drawn over
+            layer = self._layers[view] = self._draw_layer(parts, aim, lighting, draw_opaque, mark, spare)
         self._layers.move_to_end(view)
         with self._scratch("coloured").bind():
             self._box_pass("colour", layer.box, {"shade": layer.shade, "slots": layer.slots,
@@ -214,8 +214,9 @@ class TractLines:
         _unit_square(shader).draw(shader)
 
     def _draw_layer(self, parts: list[PartGeometry], aim: Any, lighting: Any,
-                    draw_opaque: Callable[[], None], mark: Callable[[str], None]) -> _Layer:
-        """A view's layer: cleared, the opaque parts' depth, then the lines, farthest first."""
+                    draw_opaque: Callable[[], None], mark: Callable[[str], None],
+                    spare: _Layer | None = None) -> _Layer:
+        """A view's layer (in `spare`'s textures): cleared, the opaque parts' depth, then the lines."""
         import gpu
 
         from brainpainter_blender import gpu_shaders
@@ -223,8 +224,11 @@ class TractLines:
         size = (self.width, self.height)
         if self._depth is None:
             self._depth = gpu.types.GPUTexture(size, format="DEPTH_COMPONENT32F")
-        shade = gpu.types.GPUTexture(size, format="RGBA16")
-        slots = gpu.types.GPUTexture(size, format="RGBA32F")
+        if spare is None:
+            shade = gpu.types.GPUTexture(size, format="RGBA16")
+            slots = gpu.types.GPUTexture(size, format="RGBA32F")
+        else:
+            shade, slots = spare.shade, spare.slots
         self._scratch("slots")
         fb = gpu.types.GPUFrameBuffer(depth_slot=self._depth, color_slots=(shade, self._textures["slots"]))
         back = np.asarray(aim.back, np.float64)
@@ -258,8 +262,10 @@ class TractLines:
             gpu.state.depth_test_set("NONE")
             mark("tracts")
         box = self._box(parts, aim)
-        with gpu.types.GPUFrameBuffer(color_slots=slots).bind():
+        fill = gpu.types.GPUFrameBuffer(color_slots=slots)
+        with fill.bind():
             self._box_pass("fill", box, {"slots": self._textures["slots"]})
+            mark("tract fill")
         return _Layer(shade, slots, box)
 
     def close(self) -> None:
