@@ -16,8 +16,10 @@ bundles (read, subsample, resample, orient, tubes and centrelines), then times p
 * a movie's orbit: every image a view not drawn before, where the lines
   themselves are drawn again;
 
-and prints the median seconds per image, the ratios (the issue's bar: 10,000
-streamlines <= 2x a DK region render), the tube triangles and the scene load time.
+and, with ``--peer``, PyVista (VTK) drawing the same centrelines alone as tubes
+recoloured each image, in another process; then prints the median seconds per
+image, the ratios (the issue's bar: 10,000 streamlines <= 2x a DK region
+render), the tube triangles and the scene load time.
 ``--cpu`` times the process's CPU seconds per image (all threads) instead of
 the wall clock: on a machine loaded by other jobs the wall-clock ratios swing
 by 2x from run to run, the CPU ones much less.
@@ -97,12 +99,81 @@ def _orbit(painter, colors, view, repeats: int) -> float:
     return statistics.median(per)
 
 
+PEER = r"""
+# PyVista (VTK) drawing the same centrelines as lit tubes (render_lines_as_tubes), 4x MSAA, a new
+# colour per bundle every image, a real render before each read-back (as bench_render.py's peer)
+import json, sys, time
+import numpy as np
+import pyvista as pv
+args = json.loads(sys.argv[1])
+data = np.load(args["npz"])
+points, bundle, pose = data["points"], data["bundle"], data["pose"]
+n, m = points.shape[:2]
+cells = np.hstack([np.full((n, 1), m), np.arange(n * m).reshape(n, m)]).ravel()
+lines = pv.PolyData(points.reshape(-1, 3).astype(np.float64), lines=cells)
+lines.point_data["rgb"] = np.zeros((n * m, 3), np.uint8)
+pl = pv.Plotter(off_screen=True, window_size=(args["width"], args["height"]))
+pl.set_background("white")
+pl.add_mesh(lines, scalars="rgb", rgb=True, render_lines_as_tubes=True, line_width=args["line_px"])
+pl.enable_anti_aliasing("msaa", multi_samples=4)
+location, back, up, scale = pose[0], pose[1], pose[2], pose[3][0]
+pl.camera.SetParallelProjection(True)
+pl.camera.position = tuple(location)
+pl.camera.focal_point = tuple(location - 100 * back)
+pl.camera.up = tuple(up)
+pl.camera.parallel_scale = scale
+pl.renderer.ResetCameraClippingRange()
+pl.camera_set = True
+pl.render()
+pl.screenshot(return_img=True)
+per = []
+rng = np.random.default_rng(0)
+for i in range(args["repeats"]):
+    t = time.perf_counter()
+    colours = rng.integers(0, 256, (bundle.max() + 1, 3), dtype=np.uint8)
+    lines.point_data["rgb"][:] = np.repeat(colours[bundle], m, axis=0)
+    lines.point_data["rgb"] = lines.point_data["rgb"]
+    pl.render()
+    img = pl.screenshot(return_img=True)
+    per.append(time.perf_counter() - t)
+if args.get("png"):
+    pl.screenshot(args["png"])
+pl.close()
+print(json.dumps(sorted(per)[len(per) // 2]))
+"""
+
+
+def _peer(painter, view, args, width: int, height: int, png: str = "") -> float:
+    """PyVista's median seconds per image of the same centrelines (tubes as wide), in another process."""
+    import json
+    import subprocess
+    import sys
+
+    parts = [q for q in painter.scene.geometry.parts if q.kind == "tract"]
+    points = np.concatenate([q.centrelines.points for q in parts])
+    bundle = np.concatenate([np.full(len(q.centrelines.points), i) for i, q in enumerate(parts)])
+    pose = painter.scene.geometry.camera(view, width / height)
+    scale = pose.ortho_scale / width * height / 2
+    line_px = 2 * parts[0].centrelines.radius * width / pose.ortho_scale
+    with tempfile.TemporaryDirectory() as tmp:
+        npz = Path(tmp) / "lines.npz"
+        np.savez(npz, points=points, bundle=bundle,
+                 pose=np.array([pose.location, pose.back, pose.up, [scale, 0, 0]], np.float64))
+        out = subprocess.run([sys.executable, "-c", PEER, json.dumps(
+            {"npz": str(npz), "width": width, "height": height, "repeats": args.repeats,
+             "line_px": max(1.0, float(line_px)), "png": png})], capture_output=True, text=True, check=True)
+    return float(json.loads(out.stdout.strip().splitlines()[-1]))
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--streamlines", default="3000,10000", help="Comma-separated counts.")
     p.add_argument("--size", default="1200x900")
     p.add_argument("--repeats", type=int, default=5)
     p.add_argument("--cpu", action="store_true", help="CPU seconds per image (all threads), not wall clock.")
+    p.add_argument("--peer", action="store_true",
+                   help="Also time PyVista drawing the same centrelines as tubes (needs pyvista).")
+    p.add_argument("--peer-png", default="", help="Write PyVista's last image here (to look at it).")
     p.add_argument("--tract-quality", default="default", choices=("fast", "default"),
                    help="Quality of the images with tracts (the DK references stay default).")
     args = p.parse_args()
@@ -159,6 +230,11 @@ def main() -> None:
                       f"{glass / ref['lateral-left']:.2f} x a DK lateral-left render")
                 print(f"{'':46s}subcortical orbit, a new view each image {orbit * 1000:6.0f} {unit}/image = "
                       f"{orbit / ref['lateral-left']:.2f} x a DK lateral-left render")
+                if args.peer and nodes:
+                    with Painter("dk", settings=settings, tracts=spec, tract_nodes=nodes) as painter:
+                        peer = _peer(painter, sub, args, width, height, args.peer_png)
+                    print(f"{'':46s}PyVista, the same streamlines alone, recoloured each image "
+                          f"{peer * 1000:6.0f} ms/image = {peer / new:.2f} x ours (wall clock)")
                 if new is not None:
                     print(f"{'':46s}subcortical, bundles recoloured each image "
                           f"{new * 1000:6.0f} {unit}/image = "

@@ -262,3 +262,40 @@ def test_a_bundle_below_a_structure_is_hidden_by_it_from_above(tiny, tmp_path, z
     middle = (rows.min() + rows.max()) / 2
     through = np.abs(rows - middle) < 0.1 * np.ptp(rows)
     assert through.any() == (z > 0)
+
+
+def test_an_image_does_not_depend_on_the_views_drawn_before(tiny, bundles):
+    # the tracts' output-sized buffers are shared between views (tract_lines): nothing of a view
+    # drawn before may show in the next (a stale column at the tracts' box edge did once)
+    colours = {"tract:AF_left": RED, "tract:CST_right": BLUE}
+    dorsal = get_view("subcortical-dorsal")
+    nodes = (("AF_left", 1), ("CST_right", 1))
+    with _painter(tiny, bundles, nodes, quality="default") as p:  # supersampled
+        fresh = p.paint_colors(colours, dorsal)
+    with _painter(tiny, bundles, nodes, quality="default") as p:
+        for name in ("subcortical", "subcortical-left", "subcortical-ventral"):
+            p.paint_colors({"tract:AF_left": BLUE, "tract:CST_right": RED}, get_view(name))
+        after = p.paint_colors(colours, dorsal)
+    assert np.array_equal(fresh, after)
+
+
+def test_the_tracts_box_lies_on_whole_output_pixels():
+    # a supersampled pass over the box must read only output pixels the output-sized passes wrote
+    from types import SimpleNamespace
+
+    from brainpainter.rendering.parts import Centrelines, PartGeometry
+    from brainpainter_blender.tract_lines import TractLines
+
+    rng = np.random.default_rng(0)
+    points = rng.uniform(-40, 40, (30, 8, 3)).astype(np.float32)
+    empty = np.zeros((0, 3), np.float32)
+    part = PartGeometry("tracts", "tract", None, empty, empty, np.zeros((0, 3), np.uint32),
+                        np.zeros(0, np.int32), np.zeros(0, np.float32), points.reshape(-1, 3),
+                        centrelines=Centrelines(points, np.zeros((30, 8), np.int32), 0.37))
+    mvp = np.diag([1 / 97.3, 1 / 73.1, 1 / 100.0, 1.0])
+    mvp[:2, 3] = (0.013, -0.021)
+    width, height = 317, 239
+    box = np.asarray(TractLines(width, height)._box([part], SimpleNamespace(mvp=mvp)))
+    pixels = (box + 1.0) / 2.0 * np.array([width, height, width, height])
+    assert np.allclose(pixels, np.round(pixels), atol=1e-6)
+    assert 0 <= pixels[0] < pixels[2] <= width and 0 <= pixels[1] < pixels[3] <= height

@@ -132,9 +132,12 @@ class TractLines:
             assert p.centrelines is not None
             ndc = p.centrelines.points.reshape(-1, 3) @ mvp[:2, :3].T + mvp[:2, 3]
             lo, hi = np.minimum(lo, ndc.min(axis=0)), np.maximum(hi, ndc.max(axis=0))
-        pixels = BOX_MARGIN_PX + self._half_width(parts, aim)
-        margin = 2.0 * pixels / np.array([self.width, self.height])
-        lo, hi = np.clip(lo - margin, -1.0, 1.0), np.clip(hi + margin, -1.0, 1.0)
+        size = np.array([self.width, self.height])
+        margin = BOX_MARGIN_PX + self._half_width(parts, aim)
+        # on whole output pixels, so a supersampled pass over the box reads only pixels the
+        # output-sized passes over it wrote
+        lo = np.clip(np.floor((lo + 1.0) / 2.0 * size - margin), 0, size) / size * 2.0 - 1.0
+        hi = np.clip(np.ceil((hi + 1.0) / 2.0 * size + margin), 0, size) / size * 2.0 - 1.0
         return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
 
     def _half_width(self, parts: list[PartGeometry], aim: Any) -> float:
