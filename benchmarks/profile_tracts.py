@@ -9,7 +9,9 @@ threads; steadier than the wall clock) and then the steps of one image
 (``GpuDraw.profile``, wall clock, each step waited for). Variants:
 
 * ``no tracts``: the reference;
-* ``tubes``: as drawn;
+* ``lines``: as drawn (the centrelines as lines, ``brainpainter_blender.tract_lines``);
+* ``tubes``: the tubes drawn as opaque parts into the supersampled buffer (the drawing up to session 6;
+  every ``tubes`` variant drops the parts' centrelines, so the renderer draws their triangles);
 * ``tubes, no fill``: the same triangles with a radius of 0.001 mm (almost no pixels);
 * ``tubes, natural order``: the tubes' vertices and triangles in the order built, not Morton-sorted;
 * ``tubes, half points``: every other ring;
@@ -68,6 +70,7 @@ KEEP_ORDER = {"tubes, natural order", "tubes, front to back", "tubes, back to fr
 
 VARIANTS: dict[str, Callable[[Any], Any] | None] = {
     "no tracts": None,
+    "lines": lambda p: p,
     "tubes": lambda p: p,
     "tubes, no fill": _no_fill,
     "tubes, natural order": lambda p: p,
@@ -148,6 +151,8 @@ def main() -> None:
                     g.parts = tuple(q for q in geometry.parts if q.kind != "tract" or change is not None)
                     if change is not None:
                         g.parts = tuple(change(q) if q.kind == "tract" else q for q in g.parts)
+                    if name.startswith("tubes"):
+                        g.parts = tuple(replace(q, centrelines=None) for q in g.parts)
                     original = meshorder.cache_friendly
                     if name in KEEP_ORDER:
                         meshorder.cache_friendly = lambda v, t: (np.arange(len(v)), t.astype(np.int32))
