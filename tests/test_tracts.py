@@ -16,7 +16,7 @@ from brainpainter.tracts.model import TractSpec, bundle_files, read_affine
 from brainpainter.tracts.names import canonical, hemisphere
 from brainpainter.tracts.read import read_bundles
 from brainpainter.tracts.streamlines import direction_bins, orient, resample
-from brainpainter.tracts.tubes import SIDES, TRIANGLE_BUDGET, points_for, tube_mesh
+from brainpainter.tracts.tubes import SIDES, TRIANGLE_BUDGET, auto_radius, points_for, tube_mesh
 from brainpainter.tracts.values import read_tract_values
 
 
@@ -209,6 +209,35 @@ def test_many_streamlines_get_fewer_points_to_stay_near_the_triangle_budget():
     assert points_for(1_000_000, 32) == 5  # never fewer than MIN_POINTS
     m = points_for(10_000, 32)
     assert 10_000 * (m - 1) * SIDES * 2 <= TRIANGLE_BUDGET
+
+
+def test_centrelines_keep_more_points_than_tubes_and_the_same_colours_at_the_ends():
+    from brainpainter.rendering.tract_parts import tract_parts
+    from brainpainter.tracts.model import Tracts
+    from brainpainter.tracts.tubes import LINE_SEGMENT_BUDGET, line_points_for
+
+    assert line_points_for(10_000, 32) == 11 and line_points_for(3_000, 32) == 32
+    assert 10_000 * (line_points_for(10_000, 32) - 1) <= LINE_SEGMENT_BUDGET
+    rng = np.random.default_rng(0)
+    t = np.linspace(0.0, 1.0, 32)[:, None]
+    start = np.array([-30.0, -40.0, 0.0])
+    lines = np.array([start + t * [0.0, 80.0, 10.0] + rng.normal(0, 1, 3) for _ in range(3_000)])
+    tracts = Tracts(("AF_left",), lines.astype(np.float32), np.zeros(3_000, np.int32), (3_000,))
+    slots: dict[str, int] = {}
+
+    def slots_for(keys, default, hidden):
+        return np.array([slots.setdefault(k, len(slots) + 10) for k in keys])
+
+    (part,) = tract_parts(tracts, {"AF_left": 4}, slots_for)
+    c = part.centrelines
+    assert c is not None and c.points.shape == (3_000, 32, 3) and c.slots.shape == (3_000, 32)
+    assert len(part.hull) == 3_000 * 14  # the tubes' points
+    # node 0 at one end, node 3 at the other, in both
+    tube_slots = part.palette_index.reshape(3_000, 14, SIDES)[:, :, 0]
+    for end in (0, -1):
+        assert np.array_equal(c.slots[:, end], tube_slots[:, end])
+    np.testing.assert_allclose(c.points[:, [0, -1]], lines[:, [0, -1]], atol=1e-3)
+    assert c.radius == pytest.approx(auto_radius(3_000))
 
 
 # -- values ---------------------------------------------------------------------------------

@@ -25,14 +25,14 @@ N_FIXED_SLOTS = 3
 
 @dataclass(frozen=True)
 class Centrelines:
-    """The streamlines a ``tract`` part's tubes are built around, for renderers that draw lines.
+    """A ``tract`` part's streamlines, for renderers that draw lines (often finer than its tubes).
 
     Attributes
     ----------
     points : ndarray of float32, shape (n_streamlines, n_points, 3)
-        RAS millimetres, the tubes' centres.
+        RAS millimetres, along the tubes' centres.
     slots : ndarray of int32, shape (n_streamlines, n_points)
-        Palette slot of each point (the tube's ring around it has the same).
+        Palette slot of each point (the colour is interpolated between points).
     radius : float
         Of the tubes, millimetres: a line is drawn ``2 * radius`` wide.
     """

@@ -21,7 +21,7 @@ SIDES = 3
 #: a software rasteriser's time per image grows with the triangles).
 TRIANGLE_BUDGET = 250_000
 #: Segments of all centrelines together, roughly (drawn as lines once per view: a movie's orbit pays
-#: them every frame): 10,000 streamlines keep 11 points, where their tubes get 5; 3,000 keep 34.
+#: them every frame): 10,000 streamlines keep 11 points, where their tubes get 5; 3,000 keep all 32.
 LINE_SEGMENT_BUDGET = 100_000
 #: Fewest points per streamline the level of detail leaves.
 MIN_POINTS = 5

@@ -363,8 +363,9 @@ class GpuDraw:
         # Parts are closed surfaces: faces turned away are always hidden behind others.
         gpu.state.face_culling_set(CULL_OPAQUE)
         shader.uniform_int("mode", gpu_shaders.MODE_LIT)
+        drawn_as_lines = {t.name for t in tracts}
         for p in aim.visible:
-            if p.kind != "glass" and p not in tracts:
+            if p.kind != "glass" and p.name not in drawn_as_lines:
                 shader.uniform_float("sulc_strength", light.sulc if p.kind == "cortex" else 0.0)
                 shader.uniform_float("ao_strength", light.occlusion)
                 shader.uniform_float("rim", light.rim if p.kind == "subcortical" else 0.0)

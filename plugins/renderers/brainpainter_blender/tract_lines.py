@@ -66,7 +66,7 @@ class _Layer:
 
 
 class TractLines:
-    """The output-sized buffer the tracts are drawn into, and their line batches.
+    """The tracts' layers of the views last drawn, the output-sized buffers they share, the lines' vertices.
 
     Parameters
     ----------
@@ -93,8 +93,9 @@ class TractLines:
             c = part.centrelines
             assert c is not None
             if c.slots.size and int(c.slots.max()) >= MAX_SLOT:
-                raise BrainPainterError(f"tracts: palette slot {int(c.slots.max())} is beyond "
-                                        f"{MAX_SLOT}; use fewer regions or vertices in the scene")
+                raise BrainPainterError(f"tracts: the scene has {int(c.slots.max()) + 1:,} palette slots, "
+                                        f"the tract lines hold at most {MAX_SLOT:,}; colour the cortex by "
+                                        "region (no vertex map) or draw fewer bundle nodes")
             fmt = gpu.types.GPUVertFormat()
             for name, _ in gpu_shaders.line_shader().attrs_info_get():
                 fmt.attr_add(id=name, comp_type="F32", len=3 if name in ("pos", "tang") else 1,
