@@ -79,6 +79,7 @@ class TractLines:
         self._depth: Any = None
         self._layers: OrderedDict[Any, _Layer] = OrderedDict()
         self._buffers: dict[str, Any] = {}
+        self._square: Any = None
         self._framebuffers: dict[str, Any] = {}
         self._textures: dict[str, Any] = {}
 
@@ -200,8 +201,7 @@ class TractLines:
             fb = self._framebuffers[name] = gpu.types.GPUFrameBuffer(color_slots=tex)
         return fb
 
-    @staticmethod
-    def _box_pass(step: str, box: tuple[float, float, float, float], samplers: dict[str, Any],
+    def _box_pass(self, step: str, box: tuple[float, float, float, float], samplers: dict[str, Any],
                   factor: int = 1) -> None:
         """Run :func:`~brainpainter_blender.gpu_shaders.box_shader` `step` over `box` (NDC)."""
         import gpu
@@ -215,7 +215,12 @@ class TractLines:
         shader.uniform_float("box", box)
         gpu.state.depth_test_set("NONE")
         gpu.state.face_culling_set("NONE")
-        _unit_square(shader).draw(shader)
+        if self._square is None:  # two triangles over the unit square
+            from gpu_extras.batch import batch_for_shader
+
+            corners = [(0, 0), (1, 0), (1, 1), (0, 0), (1, 1), (0, 1)]
+            self._square = batch_for_shader(shader, "TRIS", {"pos": corners})
+        self._square.draw(shader)
 
     def _draw_layer(self, parts: list[PartGeometry], aim: Any, lighting: Any,
                     draw_opaque: Callable[[], None], mark: Callable[[str], None],
@@ -274,22 +279,9 @@ class TractLines:
 
     def close(self) -> None:
         """Drop the buffers and batches (call in a GPU context)."""
-        self._depth = None
+        self._depth = self._square = None
         for cache in (self._layers, self._buffers, self._framebuffers, self._textures):
             cache.clear()
-
-
-_square: dict[str, Any] = {}
-
-
-def _unit_square(shader: Any) -> Any:
-    """Two triangles over the unit square (``pos``), made once per process."""
-    if "batch" not in _square:
-        from gpu_extras.batch import batch_for_shader
-
-        corners = [(0, 0), (1, 0), (1, 1), (0, 0), (1, 1), (0, 1)]
-        _square["batch"] = batch_for_shader(shader, "TRIS", {"pos": corners})
-    return _square["batch"]
 
 
 def _unit(d: tuple[float, float, float]) -> tuple[float, float, float]:
