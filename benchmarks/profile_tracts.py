@@ -83,29 +83,13 @@ VARIANTS: dict[str, Callable[[Any], Any] | None] = {
 
 def _no_perspective_shader() -> Any:
     """The part shader with ``no_perspective`` colour interpolation (in a GPU context)."""
-    import gpu
-
     from brainpainter_blender import gpu_shaders
 
-    iface = gpu.types.GPUStageInterfaceInfo("brainpainter_part_linear")
-    iface.no_perspective("VEC4", "color")
-    info = gpu.types.GPUShaderCreateInfo()
-    info.define("PALETTE_WIDTH", str(gpu_shaders.PALETTE_WIDTH))
-    for kind, name in (("MAT4", "mvp"), ("VEC3", "back"), ("VEC3", "key_dir"), ("VEC3", "fill_dir"),
-                       ("FLOAT", "ambient"), ("FLOAT", "key"), ("FLOAT", "fill"),
-                       ("FLOAT", "sulc_strength"), ("FLOAT", "glass_alpha"), ("FLOAT", "glass_edge"),
-                       ("FLOAT", "ao_strength"), ("FLOAT", "ao_direct"), ("FLOAT", "rim"),
-                       ("FLOAT", "glass_rim"), ("FLOAT", "contrast"), ("INT", "mode")):
-        info.push_constant(kind, name)
-    info.sampler(0, "FLOAT_2D", "palette")
-    for i, (kind, name) in enumerate((("VEC3", "pos"), ("VEC3", "nrm"), ("FLOAT", "pal"), ("FLOAT", "sulc"),
-                                      ("FLOAT", "ao"))):
-        info.vertex_in(i, kind, name)
-    info.vertex_out(iface)
-    info.fragment_out(0, "VEC4", "fragColor")
-    info.vertex_source(gpu_shaders._VERTEX)
-    info.fragment_source(gpu_shaders._FRAGMENT)
-    return gpu.shader.create_from_info(info), iface
+    return gpu_shaders._build("part_linear", gpu_shaders._VERTEX, gpu_shaders._FRAGMENT,
+                              defines={"PALETTE_WIDTH": gpu_shaders.PALETTE_WIDTH},
+                              constants=gpu_shaders._PART_CONSTANTS, samplers=("palette",),
+                              inputs=gpu_shaders._PART_INPUTS,
+                              varyings=(("no_perspective", "VEC4", "color"),))
 
 
 def main() -> None:
@@ -167,8 +151,7 @@ def main() -> None:
                     usual = gpu_shaders.part_shader()
                     shader = {name: usual for name in names}
                     if "tubes, no perspective" in names:
-                        linear = in_gpu_context(_no_perspective_shader)
-                        shader["tubes, no perspective"] = linear[0]
+                        shader["tubes, no perspective"] = in_gpu_context(_no_perspective_shader)
                     for _ in range(args.repeats):  # interleaved: the machine's load hits every variant alike
                         for name in names:
                             gpu_shaders._shaders["part"] = shader[name]

@@ -188,104 +188,99 @@ void main()
 _shaders: dict[Any, Any] = {}
 
 
+#: Push constants of the part shader (GLSL type, name).
+_PART_CONSTANTS = (("MAT4", "mvp"), ("VEC3", "back"), ("VEC3", "key_dir"), ("VEC3", "fill_dir"),
+                   ("FLOAT", "ambient"), ("FLOAT", "key"), ("FLOAT", "fill"),
+                   ("FLOAT", "sulc_strength"), ("FLOAT", "glass_alpha"), ("FLOAT", "glass_edge"),
+                   ("FLOAT", "ao_strength"), ("FLOAT", "ao_direct"), ("FLOAT", "rim"),
+                   ("FLOAT", "glass_rim"), ("FLOAT", "contrast"), ("INT", "mode"))
+#: Vertex attributes of the part shader (GLSL type, name), in their locations' order.
+_PART_INPUTS = (("VEC3", "pos"), ("VEC3", "nrm"), ("FLOAT", "pal"), ("FLOAT", "sulc"), ("FLOAT", "ao"))
+
+
 def part_shader() -> Any:
     """The shader of every part (compiled once per process, in a GPU context)."""
-    if "part" in _shaders:
-        return _shaders["part"]
-    import gpu
-
-    iface = gpu.types.GPUStageInterfaceInfo("brainpainter_part")
-    iface.smooth("VEC4", "color")
-    info = gpu.types.GPUShaderCreateInfo()
-    info.define("PALETTE_WIDTH", str(PALETTE_WIDTH))
-    for kind, name in (("MAT4", "mvp"), ("VEC3", "back"), ("VEC3", "key_dir"), ("VEC3", "fill_dir"),
-                       ("FLOAT", "ambient"), ("FLOAT", "key"), ("FLOAT", "fill"),
-                       ("FLOAT", "sulc_strength"), ("FLOAT", "glass_alpha"), ("FLOAT", "glass_edge"),
-                       ("FLOAT", "ao_strength"), ("FLOAT", "ao_direct"), ("FLOAT", "rim"),
-                       ("FLOAT", "glass_rim"), ("FLOAT", "contrast"), ("INT", "mode")):
-        info.push_constant(kind, name)
-    info.sampler(0, "FLOAT_2D", "palette")
-    info.vertex_in(0, "VEC3", "pos")
-    info.vertex_in(1, "VEC3", "nrm")
-    info.vertex_in(2, "FLOAT", "pal")
-    info.vertex_in(3, "FLOAT", "sulc")
-    info.vertex_in(4, "FLOAT", "ao")
-    info.vertex_out(iface)
-    info.fragment_out(0, "VEC4", "fragColor")
-    info.vertex_source(_VERTEX)
-    info.fragment_source(_FRAGMENT)
-    return _keep("part", gpu.shader.create_from_info(info), iface)
+    return _build("part", _VERTEX, _FRAGMENT, defines={"PALETTE_WIDTH": PALETTE_WIDTH},
+                  constants=_PART_CONSTANTS, samplers=("palette",), inputs=_PART_INPUTS,
+                  varyings=(("smooth", "VEC4", "color"),))
 
 
 def resolve_shader(factor: int) -> Any:
     """The resolve shader for one supersampling factor (compiled once per process and factor)."""
-    key = ("resolve", factor)
-    if key in _shaders:
-        return _shaders[key]
-    import gpu
-
-    info = gpu.types.GPUShaderCreateInfo()
-    info.define("FACTOR", str(int(factor)))
-    info.push_constant("INT", "out_height")
-    info.sampler(0, "FLOAT_2D", "image")
-    info.vertex_in(0, "VEC2", "pos")
-    info.fragment_out(0, "VEC4", "fragColor")
-    info.vertex_source(_RESOLVE_VERTEX)
-    info.fragment_source(_RESOLVE_FRAGMENT)
-    return _keep(key, gpu.shader.create_from_info(info))
+    return _build(("resolve", factor), _RESOLVE_VERTEX, _RESOLVE_FRAGMENT, defines={"FACTOR": factor},
+                  constants=(("INT", "out_height"),), samplers=("image",), inputs=(("VEC2", "pos"),))
 
 
 def box_shader(step: str, factor: int = 1) -> Any:
     """A pass over the tracts' box: ``fill`` and ``colour`` (output-sized), ``over`` (supersampled)."""
-    key = ("box", step, factor)
-    if key in _shaders:
-        return _shaders[key]
-    import gpu
-
     samplers, source = {"fill": (("slots",), _FILL_FRAGMENT),
                         "colour": (("shade", "slots", "palette"), _COLOUR_FRAGMENT),
                         "over": (("layer",), _OVER_FRAGMENT)}[step]
-    info = gpu.types.GPUShaderCreateInfo()
-    info.define("FACTOR", str(int(factor)))
-    info.define("PALETTE_WIDTH", str(PALETTE_WIDTH))
-    info.push_constant("VEC4", "box")
-    for i, name in enumerate(samplers):
-        info.sampler(i, "FLOAT_2D", name)
-    info.vertex_in(0, "VEC2", "pos")
-    info.fragment_out(0, "VEC4", "fragColor")
-    info.vertex_source(_BOX_VERTEX)
-    info.fragment_source(source)
-    return _keep(key, gpu.shader.create_from_info(info))
+    return _build(("box", step, factor), _BOX_VERTEX, source,
+                  defines={"FACTOR": factor, "PALETTE_WIDTH": PALETTE_WIDTH},
+                  constants=(("VEC4", "box"),), samplers=samplers, inputs=(("VEC2", "pos"),))
 
 
 def line_shader() -> Any:
     """Tract centrelines as anti-aliased, lit lines: their light and their slots (compiled once)."""
-    if "line" in _shaders:
-        return _shaders["line"]
+    return _build("line", _LINE_VERTEX, _LINE_FRAGMENT,
+                  constants=(("MAT4", "mvp"), ("VEC2", "viewport"), ("FLOAT", "half_width"),
+                             ("VEC3", "key_dir"), ("VEC3", "fill_dir"), ("FLOAT", "ambient"),
+                             ("FLOAT", "key"), ("FLOAT", "fill"), ("FLOAT", "contrast")),
+                  inputs=(("VEC3", "pos"), ("VEC3", "tang"), ("FLOAT", "pal"), ("FLOAT", "cap"),
+                          ("FLOAT", "odd")),
+                  varyings=tuple(("no_perspective", kind, name) for kind, name in (
+                      ("VEC2", "centre"), ("VEC2", "dir"), ("FLOAT", "even_slot"), ("FLOAT", "odd_slot"),
+                      ("FLOAT", "towards_odd"))),
+                  outputs=(("VEC4", "lit"), ("VEC4", "slot")))
+
+
+def _build(key: Any, vertex: str, fragment: str, *, defines: dict[str, int] | None = None,
+           constants: tuple[tuple[str, str], ...] = (), samplers: tuple[str, ...] = (),
+           inputs: tuple[tuple[str, str], ...] = (), varyings: tuple[tuple[str, str, str], ...] = (),
+           outputs: tuple[tuple[str, str], ...] = (("VEC4", "fragColor"),)) -> Any:
+    """The shader `key`, compiled on first use (in a GPU context) and kept for the process.
+
+    Parameters
+    ----------
+    key : hashable
+        Its name in the cache (``str`` for those with `varyings`: it names their interface).
+    vertex, fragment : str
+        GLSL sources (``main`` only: Blender declares what the create-info lists).
+    defines : dict of str to int, optional
+        Compile-time constants.
+    constants, inputs, outputs : tuple of (type, name)
+        Push constants; vertex attributes and fragment outputs, in their locations' order.
+    samplers : tuple of str
+        2-D float samplers, in their slots' order.
+    varyings : tuple of (interpolation, type, name)
+        Vertex-to-fragment values; interpolation ``smooth`` or ``no_perspective``.
+    """
+    if key in _shaders:
+        return _shaders[key]
     import gpu
 
-    iface = gpu.types.GPUStageInterfaceInfo("brainpainter_line")
-    iface.no_perspective("VEC2", "centre")
-    iface.no_perspective("VEC2", "dir")
-    iface.no_perspective("FLOAT", "even_slot")
-    iface.no_perspective("FLOAT", "odd_slot")
-    iface.no_perspective("FLOAT", "towards_odd")
     info = gpu.types.GPUShaderCreateInfo()
-    for kind, name in (("MAT4", "mvp"), ("VEC2", "viewport"), ("FLOAT", "half_width"),
-                       ("VEC3", "key_dir"), ("VEC3", "fill_dir"), ("FLOAT", "ambient"), ("FLOAT", "key"),
-                       ("FLOAT", "fill"), ("FLOAT", "contrast")):
+    for name, value in (defines or {}).items():
+        info.define(name, str(int(value)))
+    for kind, name in constants:
         info.push_constant(kind, name)
-    info.vertex_in(0, "VEC3", "pos")
-    info.vertex_in(1, "VEC3", "tang")
-    info.vertex_in(2, "FLOAT", "pal")
-    info.vertex_in(3, "FLOAT", "cap")
-    info.vertex_in(4, "FLOAT", "odd")
-    info.vertex_out(iface)
-    info.fragment_out(0, "VEC4", "lit")
-    info.fragment_out(1, "VEC4", "slot")
-    info.vertex_source(_LINE_VERTEX)
-    info.fragment_source(_LINE_FRAGMENT)
-    return _keep("line", gpu.shader.create_from_info(info), iface)
+    for slot, name in enumerate(samplers):
+        info.sampler(slot, "FLOAT_2D", name)
+    for location, (kind, name) in enumerate(inputs):
+        info.vertex_in(location, kind, name)
+    extra = ()
+    if varyings:
+        iface = gpu.types.GPUStageInterfaceInfo(f"brainpainter_{key}")
+        for interpolation, kind, name in varyings:
+            getattr(iface, interpolation)(kind, name)
+        info.vertex_out(iface)
+        extra = (iface,)  # kept: the compiled shader refers to it
+    for location, (kind, name) in enumerate(outputs):
+        info.fragment_out(location, kind, name)
+    info.vertex_source(vertex)
+    info.fragment_source(fragment)
+    return _keep(key, gpu.shader.create_from_info(info), *extra)
 
 
 def _keep(key: Any, shader: Any, *extra: Any) -> Any:
