@@ -73,30 +73,26 @@ def write_tractogram(folder: Path, n: int, seed: int = 0) -> Path:
 CLOCK = time.perf_counter
 
 
-def _time(painter, colors, view, repeats: int, recolour: bool = False) -> float:
-    """Median seconds per image; `recolour`: every image gives the bundles colours not seen before."""
-    painter.paint_colors(colors, view)  # the first image of a view uploads its parts
+def _time(painter, images: list) -> float:
+    """Median seconds per image of painting `images` (colours, view), the first one not timed."""
+    painter.paint_colors(*images[0])  # the first image of a view uploads its parts
     per = []
-    for i in range(repeats):
-        use = colors
-        if recolour:
-            use = {**colors, **{f"tract:{b}": ((i + 1) / (repeats + 1), 0.3, 0.9) for b in BUNDLES}}
+    for colors, view in images[1:]:
         t = CLOCK()
-        painter.paint_colors(use, view)
+        painter.paint_colors(colors, view)
         per.append(CLOCK() - t)
     return statistics.median(per)
 
 
-def _orbit(painter, colors, view, repeats: int) -> float:
-    """Median seconds per image of a movie's orbit: every image a view not drawn before (a 5-degree step)."""
-    painter.paint_colors(colors, view)
-    per = []
-    for i in range(repeats):
-        turned = replace(view, azimuth=(view.azimuth + 5.0 * (i + 1)) % 360.0)
-        t = CLOCK()
-        painter.paint_colors(colors, turned)
-        per.append(CLOCK() - t)
-    return statistics.median(per)
+def _recoloured(colors, view, repeats: int) -> list:
+    """Images whose bundles take colours not seen before, every one."""
+    return [({**colors, **{f"tract:{b}": (i / (repeats + 1), 0.3, 0.9) for b in BUNDLES}}, view)
+            for i in range(repeats + 1)]
+
+
+def _orbit(colors, view, repeats: int) -> list:
+    """Images of a movie's orbit: every one a view not drawn before (5-degree steps)."""
+    return [(colors, replace(view, azimuth=(view.azimuth + 5.0 * i) % 360.0)) for i in range(repeats + 1)]
 
 
 PEER = r"""
@@ -198,8 +194,8 @@ def main() -> None:
     lateral, sub = get_view("lateral-left"), get_view("subcortical")
     with Painter("dk", settings=settings) as painter:
         colors = region_colors(table.row(0), painter.atlas, scale)
-        ref = {"lateral-left": _time(painter, colors, lateral, args.repeats),
-               "subcortical": _time(painter, colors, sub, args.repeats)}
+        ref = {"lateral-left": _time(painter, [(colors, lateral)] * (args.repeats + 1)),
+               "subcortical": _time(painter, [(colors, sub)] * (args.repeats + 1))}
     print(f"DK regions, no tracts: lateral-left {ref['lateral-left'] * 1000:.0f} {unit}/image, subcortical "
           f"{ref['subcortical'] * 1000:.0f} {unit}/image")
     with tempfile.TemporaryDirectory() as tmp:
@@ -215,12 +211,15 @@ def main() -> None:
                     colors.update({f"tract:{b}": (0.9, 0.2, 0.1) for b in BUNDLES})
                     painter.load()
                     load = time.perf_counter() - t0
-                    per = _time(painter, colors, sub, args.repeats)
-                    glass = _time(painter, colors, lateral, args.repeats)
+                    per = _time(painter, [(colors, sub)] * (args.repeats + 1))
+                    glass = _time(painter, [(colors, lateral)] * (args.repeats + 1))
                     # the bundles' colours change with every image (a table of bundle values, row
-                    # by row): the renderer cannot keep the tracts' layer and draws the lines again
-                    new = _time(painter, colors, sub, args.repeats, recolour=True) if nodes else None
-                    orbit = _orbit(painter, colors, sub, args.repeats)
+                    # by row): the renderer colours the view's kept lines again, without drawing them
+                    new = _time(painter, _recoloured(colors, sub, args.repeats)) if nodes else None
+                    orbit = _time(painter, _orbit(colors, sub, args.repeats))
+                    peer = None
+                    if args.peer and nodes:
+                        peer = _peer(painter, sub, args, width, height, args.peer_png)
                     tris = sum(len(q.triangles) for q in painter.scene.geometry.parts if q.kind == "tract")
                 print(f"{n:6d} streamlines, {label:22s}: subcortical {per * 1000:6.0f} {unit}/image = "
                       f"{per / ref['lateral-left']:.2f} x a DK lateral-left render, "
@@ -230,9 +229,7 @@ def main() -> None:
                       f"{glass / ref['lateral-left']:.2f} x a DK lateral-left render")
                 print(f"{'':46s}subcortical orbit, a new view each image {orbit * 1000:6.0f} {unit}/image = "
                       f"{orbit / ref['lateral-left']:.2f} x a DK lateral-left render")
-                if args.peer and nodes:
-                    with Painter("dk", settings=settings, tracts=spec, tract_nodes=nodes) as painter:
-                        peer = _peer(painter, sub, args, width, height, args.peer_png)
+                if peer is not None and new is not None:
                     print(f"{'':46s}PyVista, the same streamlines alone, recoloured each image "
                           f"{peer * 1000:6.0f} ms/image = {peer / new:.2f} x ours (wall clock)")
                 if new is not None:
