@@ -83,7 +83,7 @@ class RenderOptions(TableOptions):
     ``WIDTHxHEIGHT`` and ``transparent`` replaces the background, as in the CLI.
     """
 
-    views: str = core(SceneOptions, "views")
+    views: str | None = core(SceneOptions, "views")  # None: the run's own (a table's, a map's)
     surface: Annotated[str, one_of(SceneOptions, "surface")] = core(SceneOptions, "surface")
     gradient: str | None = core(ScaleOptions, "gradient")
     cmap: str | None = core(ScaleOptions, "cmap")
