@@ -245,6 +245,28 @@ def test_a_compressed_trx_is_unpacked_in_the_scratch_folder_and_removed(tmp_path
     assert read_bundles([stored], np.eye(4), 100, 8, scratch=scratch, max_inflated=1).names == ("AF_left",)
 
 
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_the_cli_unpacks_a_trx_only_into_the_free_space(tmp_path, monkeypatch):
+    """Without a cap (the command line), a compressed .trx that needs more than the free space of the
+    temporary folder is refused before anything is written."""
+    import collections
+
+    from brainpainter.tracts import read
+
+    path = _trx(tmp_path / "b.trx", extra={"dpv/pad.float32": b"\0" * (4 << 20)})
+    usage = collections.namedtuple("usage", "total used free")
+    monkeypatch.setattr(read.shutil, "disk_usage", lambda p: usage(10 << 20, 8 << 20, 2 << 20))
+    monkeypatch.setenv("TMPDIR", str(tmp_path / "tmp"))
+    (tmp_path / "tmp").mkdir()
+    read.tempfile.tempdir = None  # TMPDIR is read again
+    try:
+        with pytest.raises(BrainPainterError, match="unpacks to 4 MB or more; the free space is 2 MB"):
+            read.read_bundles([path], np.eye(4), 100, 8)
+    finally:
+        read.tempfile.tempdir = None
+    assert not any((tmp_path / "tmp").iterdir())
+
+
 def declared(data: bytes, name: str, size: int) -> bytes:
     """Zip `data` with member `name` said to inflate to `size` bytes (its local and central headers)."""
     out, pos = bytearray(data), 0
