@@ -81,6 +81,20 @@ def test_a_padded_tractogram_is_stored_as_its_streamlines(api, tmp_path):
     assert np.abs(again.lines - sent.lines).max() < 0.05  # resampled once more: the same points
 
 
+def test_a_padded_values_table_is_refused_not_stored(api, tmp_path):
+    """A values table is kept as sent (option tract_value chooses its column later), so one inflated
+    from a zip past 16 MB (here a valid table plus 17 MB of blank lines) is refused in one line, before
+    it is parsed (before: parsed until the reader's 20 s limit; a faster-parsing one was kept)."""
+    trk = write(tmp_path / "AF_L.trk", bundle(-30.0, n=20)).read_bytes()
+    body = zipped({"AF_L.trk": trk, "fa.csv": b"AF_left\n0.5\n" + b"\n" * (17 << 20)})
+    assert len(body) < 100_000
+    r = post(api, [("af.zip", body)], "/api/tracts")
+    assert r.status_code == 400, r.text
+    assert r.json()["error"] == ("the table 'fa.csv' has 17 MB; this server keeps at most 16 MB of bundle "
+                                 "values per upload. Upload a smaller table.")
+    assert not any((api.app.state.store.root / "uploads").iterdir())
+
+
 def test_a_padded_mgz_is_stored_as_its_vertex_values(api, tmp_path):
     """An lh .mgz whose gzip stream is a valid fsaverage5 map followed by 24 MB of zeros: stored as the
     map's values (gzipped .npy), which read back equal."""
