@@ -281,6 +281,35 @@ def test_the_cli_unpacks_a_trx_only_into_the_free_space(tmp_path, monkeypatch):
     assert not any((tmp_path / "tmp").iterdir())
 
 
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_the_server_unpacks_a_trx_in_the_readers_folder(tmp_path, monkeypatch):
+    """The tract reader unpacks a compressed .trx inside its own work folder (the folder the server
+    removes however the reader ends), not in the temporary folder, and removes it when done."""
+    import trx.trx_file_memmap as tmm
+
+    from brainpainter.web.tracts import build_tract_bundle
+
+    work = tmp_path / "work"
+    (work / "in").mkdir(parents=True)
+    path = _trx(work / "in" / "b.trx")
+    seen = []
+    real = tmm.load_from_directory
+    monkeypatch.setattr(tmm, "load_from_directory", lambda d: seen.append(d) or real(d))
+    report = build_tract_bundle(work, [path], 10, 1000)
+    assert report["bundles"] == [{"name": "AF_left", "streamlines": 20, "drawn": 20}]
+    assert len(seen) == 1 and seen[0].startswith(str(work) + "/trx-")
+    assert sorted(p.name for p in work.iterdir()) == ["bundle.bin", "given", "in", "kept"]
+
+
+def test_a_tract_reader_killed_for_time_leaves_no_folder(tmp_path):
+    config = ServerConfig(data_dir=tmp_path / "data", workers=0, preview=False, parse_time_limit_s=0.05)
+    trk = write(tmp_path / "AF_L.trk", bundle(-30.0, n=20)).read_bytes()
+    with TestClient(create_app(config)) as client:
+        r = post(client, [("AF_L.trk", trk)], "/api/tracts")
+        assert r.status_code == 400 and "took longer than this server's limit of 0.05 s" in r.json()["error"]
+        assert not any((tmp_path / "data" / "incoming").iterdir())
+
+
 def declared(data: bytes, name: str, size: int) -> bytes:
     """Zip `data` with member `name` said to inflate to `size` bytes (its local and central headers)."""
     out, pos = bytearray(data), 0
