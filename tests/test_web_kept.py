@@ -282,6 +282,23 @@ def test_the_cli_unpacks_a_trx_only_into_the_free_space(tmp_path, monkeypatch):
 
 
 @pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_the_cli_unpacks_a_trx_where_trx_tmpdir_says(tmp_path, monkeypatch):
+    import trx.trx_file_memmap as tmm
+
+    from brainpainter.tracts.read import read_bundles
+
+    path = _trx(tmp_path / "b.trx")
+    (tmp_path / "big-disk").mkdir()
+    monkeypatch.setenv("TRX_TMPDIR", str(tmp_path / "big-disk"))
+    seen = []
+    real = tmm.load_from_directory
+    monkeypatch.setattr(tmm, "load_from_directory", lambda d: seen.append(d) or real(d))
+    assert read_bundles([path], np.eye(4), 100, 8).names == ("AF_left",)
+    assert seen[0].startswith(str(tmp_path / "big-disk" / "trx-"))
+    assert not any((tmp_path / "big-disk").iterdir())
+
+
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
 def test_the_server_unpacks_a_trx_in_the_readers_folder(tmp_path, monkeypatch):
     """The tract reader unpacks a compressed .trx inside its own work folder (the folder the server
     removes however the reader ends), not in the temporary folder, and removes it when done."""

@@ -17,6 +17,7 @@ Coordinates are the files' RAS millimetres (nibabel's ``RASMM`` space: for
 from __future__ import annotations
 
 import contextlib
+import os
 import shutil
 import tempfile
 import zipfile
@@ -102,8 +103,9 @@ def _open_trx(path: Path, scratch: Path | None, max_inflated: int | None) -> Ite
     """The ``TrxFile`` of `path`, closed (and its unpacked copy removed) on every exit.
 
     A stored (uncompressed) zip or a folder is memory-mapped where it is; a compressed zip is
-    unpacked into a fresh folder under `scratch` (the system's temporary folder when None) after its
-    members' sizes were checked against `max_inflated` bytes (None: the free space there).
+    unpacked into a fresh folder under `scratch` (when None: trx-python's ``TRX_TMPDIR`` if set, else
+    the system's temporary folder) after its members' sizes were checked against `max_inflated` bytes
+    (None: the free space there).
     """
     try:
         import trx.trx_file_memmap as tmm
@@ -121,7 +123,7 @@ def _open_trx(path: Path, scratch: Path | None, max_inflated: int | None) -> Ite
                     if all(i.compress_type == zipfile.ZIP_STORED for i in infos):
                         trx = tmm.load_from_zip(str(path))
                     else:
-                        folder = tempfile.mkdtemp(prefix="trx-", dir=scratch)
+                        folder = tempfile.mkdtemp(prefix="trx-", dir=scratch or _trx_tmpdir())
                         _unpack(path, zf, infos, Path(folder), max_inflated)
                         trx = tmm.load_from_directory(folder)
         except BrainPainterError:
@@ -136,6 +138,12 @@ def _open_trx(path: Path, scratch: Path | None, max_inflated: int | None) -> Ite
     finally:
         if folder is not None:
             shutil.rmtree(folder, ignore_errors=True)
+
+
+def _trx_tmpdir() -> Path | None:
+    """trx-python's ``TRX_TMPDIR`` (``use_working_dir``: the current folder); None when not set."""
+    given = os.environ.get("TRX_TMPDIR")
+    return None if given is None else Path.cwd() if given == "use_working_dir" else Path(given)
 
 
 def _unpack(path: Path, zf: zipfile.ZipFile, infos: list[zipfile.ZipInfo], folder: Path,
