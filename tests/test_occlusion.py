@@ -33,15 +33,21 @@ def test_vertex_normals_sum_corner_by_corner():
     assert np.array_equal(mesh.vertex_normals(v, m.faces, np.float64), expected)
 
 
-def test_an_enclosed_surface_is_occluded_and_an_open_one_is_not():
+def _nested_spheres() -> tuple[np.ndarray, np.ndarray, int, int]:
+    """A sphere of radius 5 mm inside one of 20 mm: vertices, faces, the outer one's vertices and faces."""
     outer = trimesh.creation.icosphere(subdivisions=3, radius=20.0)
     inner = trimesh.creation.icosphere(subdivisions=3, radius=5.0)
     v = np.vstack([outer.vertices, inner.vertices])
     f = np.vstack([outer.faces, inner.faces + len(outer.vertices)])
+    return v, f, len(outer.vertices), len(outer.faces)
+
+
+def test_an_enclosed_surface_is_occluded_and_an_open_one_is_not():
+    v, f, n, _ = _nested_spheres()
     ao = occlusion.ambient_occlusion(v, f, n_directions=64)
     assert ao.dtype == np.float32 and ao.shape == (len(v),)
-    assert np.percentile(ao[: len(outer.vertices)], 5) > 0.95  # a sphere sees the whole sky
-    assert ao[len(outer.vertices):].max() < 0.05  # inside another sphere: no sky at all
+    assert np.percentile(ao[:n], 5) > 0.95  # a sphere sees the whole sky
+    assert ao[n:].max() < 0.05  # inside another sphere: no sky at all
 
 
 def test_a_fold_is_darker_at_its_bottom():
@@ -61,14 +67,10 @@ def test_a_fold_is_darker_at_its_bottom():
 
 
 def test_a_hidden_surface_shades_nothing():
-    outer = trimesh.creation.icosphere(subdivisions=3, radius=20.0)
-    inner = trimesh.creation.icosphere(subdivisions=3, radius=5.0)
-    v = np.vstack([outer.vertices, inner.vertices])
-    f = np.vstack([outer.faces, inner.faces + len(outer.vertices)])
+    v, f, n, n_faces = _nested_spheres()
     baked = occlusion.ambient_occlusion(v, f, n_directions=64)
-    shown = np.arange(len(f)) >= len(outer.faces)  # the outer sphere hidden
+    shown = np.arange(len(f)) >= n_faces  # the outer sphere hidden
     ao = occlusion.occlusion_of_shown(v, f, shown, baked)
-    n = len(outer.vertices)
     assert np.percentile(ao[n:], 5) > 0.95  # the inner sphere alone sees the whole sky
     assert np.array_equal(ao[:n], baked[:n])  # the hidden one keeps what it had (never drawn)
     assert np.array_equal(occlusion.occlusion_of_shown(v, f, np.ones(len(f), bool), baked), baked)
