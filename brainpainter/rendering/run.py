@@ -25,7 +25,14 @@ from brainpainter.color.scale import ColourScale, ScaleOptions, widen
 from brainpainter.errors import BrainPainterError
 from brainpainter.maps.inputs import is_map_input
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
-from brainpainter.rendering.painter import VOLUME_VIEWS, Painter, RenderResult, region_colors, resolve_hidden
+from brainpainter.rendering.painter import (
+    VOLUME_VIEWS,
+    Painter,
+    RenderResult,
+    region_colors,
+    resolve_hidden,
+    shown_aspect,
+)
 from brainpainter.rendering.parallel import Item, LocalRunner, PainterSpec, Runner, SerialRunner, chunked
 from brainpainter.rendering.settings import RGB, RenderSettings, outlined, with_aspect
 from brainpainter.rendering.views import ImagesByView, View, parse_views
@@ -195,12 +202,9 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
 
         return prepare_map_run(data, atlas_obj, options)  # type: ignore[return-value]
     views = options.scene.views
-    if views is None and atlas_obj is not None and not atlas_obj.cortical():
-        views = VOLUME_VIEWS  # a volumetric atlas alone: its structures, not a grey cortex
+    if views is not None:  # a given option's errors before a big input file is read
+        view_list = parse_views(views if isinstance(views, str) else list(views))
     tract_values, only_tracts = run_tract_values(data, options)
-    if views is None and only_tracts:
-        views = VOLUME_VIEWS  # bundle values alone: the views that show tracts
-    view_list = parse_views(views if views is None or isinstance(views, str) else list(views))
     if only_tracts and tract_values is not None:
         source = data if data is not None else options.scene.tract_values
         table = tracts_only_table(tract_values, atlas_obj, source)
@@ -210,17 +214,28 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
         table = read_table(data, atlas_obj, **options.table.kwargs())
     values = table.values if tract_values is None else np.concatenate(
         [np.ravel(table.values), np.ravel(tract_values.values)])
+    if views is None:
+        view_list = parse_views(default_views(table.atlas, only_tracts))
     outline = options.maps.outline
     if outline is not None and outline not in (table.atlas.name, table.atlas.template_labels):
         raise BrainPainterError(
             f"a region render outlines its own atlas's regions ({table.atlas.name!r}); --outline "
             f"{outline!r} was given. Give --outline {table.atlas.name}, or draw a map (--lh/--rh).")
     settings = outlined(options.settings, outline)
-    if not options.size_given and table.atlas.image_aspect:
-        settings = with_aspect(settings, table.atlas.image_aspect)
+    if not options.size_given and table.atlas.image_aspect:  # a brain of another shape: frame the views
+        settings = with_aspect(settings, shown_aspect(table.atlas, options.scene.template, view_list))
     return Run(table, run_scale(options.scale, values, only_tracts and tract_values is not None
                                 and any(n > 1 for _, n in tract_values.nodes)),
                view_list, settings, options, tract_values)
+
+
+def default_views(atlas: Atlas, only_tracts: bool) -> tuple[str, ...] | None:
+    """The views of a run given none: the atlas's own (:attr:`Atlas.views`); the subcortical views for
+    a volumetric atlas (its structures, not a grey cortex) or bundle values alone (the views that show
+    tracts); else None (BrainPainter's three)."""
+    if atlas.views:
+        return atlas.views
+    return VOLUME_VIEWS if only_tracts or not atlas.cortical() else None
 
 
 def run_scale(options: ScaleOptions, values: NDArray[Any], measures: bool) -> ColourScale:
