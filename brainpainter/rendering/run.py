@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.registry import get_atlas, load_atlas_config
 from brainpainter.color.scale import ColourScale, ScaleOptions, widen
-from brainpainter.errors import BrainPainterError
+from brainpainter.errors import BrainPainterError, NoRegionColumnError
 from brainpainter.maps.inputs import is_map_input
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
 from brainpainter.rendering.painter import (
@@ -38,6 +38,7 @@ from brainpainter.rendering.settings import RGB, RenderSettings, outlined, with_
 from brainpainter.rendering.views import ImagesByView, View, parse_views
 from brainpainter.table.region_table import RegionTable, read_table
 from brainpainter.table.rows import select_rows
+from brainpainter.tracts.model import TractSpec
 from brainpainter.tracts.values import TractValues, is_profile, read_tract_values
 
 if TYPE_CHECKING:
@@ -114,9 +115,8 @@ def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, b
     if spec is None or data is None or isinstance(data, list):
         return None, False
     from brainpainter.io.readers import read_raw
-    from brainpainter.tracts.names import canonical
 
-    known = {canonical(f.name[: -len(f.suffix)]) for f in spec.files}
+    known = bundle_names(spec)
     # a stream (the web API's upload) is read again for the region table: back to where it was
     pos = data.tell() if hasattr(data, "seek") and hasattr(data, "tell") else None
     profile = False
@@ -143,6 +143,13 @@ def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, b
     cols = [j for j, key in enumerate(tv.keys) if key.split(":")[1] in names]
     return (TractValues(tv.images, tuple(tv.keys[j] for j in cols), tv.values[:, cols],
                         tuple(tv.nodes[j] for j in keep)), len(keep) == len(tv.nodes))
+
+
+def bundle_names(spec: TractSpec) -> set[str]:
+    """The bundles of the tractograms to draw: their files' names, canonical (``AF_L.trk``: ``AF_left``)."""
+    from brainpainter.tracts.names import canonical
+
+    return {canonical(f.name[: -len(f.suffix)]) for f in spec.files}
 
 
 def without_bundle_columns(data: Any, bundles: set[str]) -> Any:
@@ -211,7 +218,14 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     else:
         if tract_values is not None and options.scene.tract_values is None:
             data = without_bundle_columns(data, {name for name, _ in tract_values.nodes})
-        table = read_table(data, atlas_obj, **options.table.kwargs())
+        try:
+            table = read_table(data, atlas_obj, **options.table.kwargs())
+        except NoRegionColumnError as exc:
+            spec = options.scene.tract_spec()
+            if spec is None or tract_values is not None:
+                raise
+            raise NoRegionColumnError(f"{exc} Nor does any column name a bundle of --tracts "
+                                      f"{sorted(bundle_names(spec))[:6]}.") from None
     values = table.values if tract_values is None else np.concatenate(
         [np.ravel(table.values), np.ravel(tract_values.values)])
     if views is None:

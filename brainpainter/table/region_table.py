@@ -245,7 +245,7 @@ def inspect_table(data: Any, atlas: Atlas | str | None = None, *, image_column: 
         guess = infer_atlas(names, candidates)
         if guess is None:
             shown = [h for raw in raws for h in raw.header][:4]
-            raise BrainPainterError(
+            raise NoRegionColumnError(
                 f"{', '.join(r.source for r in raws)}: no column name or value names a region of any "
                 f"installed atlas ({', '.join(a.name for a in candidates)}); columns start {shown}. Use "
                 "names like 'Left-insula' or 'lh_insula_thickness' (see 'brainpainter atlas show dk')."
