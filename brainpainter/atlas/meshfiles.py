@@ -128,9 +128,9 @@ def read_mesh(path: str | Path) -> tuple[NDArray[Any], NDArray[Any]]:
     path = Path(path)
     try:
         if path.name.lower().endswith(".gii"):
-            import nibabel as nib
+            from brainpainter.io.gifti import read_gifti
 
-            img: Any = nib.load(str(path))
+            img: Any = read_gifti(path, what="mesh file")
             pts = [d.data for d in img.darrays if d.data.ndim == 2 and d.data.shape[1] == 3
                    and np.issubdtype(d.data.dtype, np.floating)]
             tri = [d.data for d in img.darrays if d.data.ndim == 2 and d.data.shape[1] == 3

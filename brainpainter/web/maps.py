@@ -16,7 +16,8 @@ line, then the files): the map files as read (a volume: its projection, one
 ``.npy`` per hemisphere), so that previews and jobs read them again with
 :func:`brainpainter.maps.inputs.read_maps`, as the CLI reads ``--lh``/``--rh``.
 Client file names are only labels: they are made safe (:func:`file_name`) and
-every file is written into a fresh private folder.
+every file is written into a fresh private folder. A GIfTI is read with
+``external="refuse"``: data it says is in another file is an error, never read.
 """
 
 from __future__ import annotations
@@ -38,7 +39,8 @@ MAGIC = b"BRAINPAINTER-MAPS/1\n"
 #: NIfTI volumes (one file, MNI152 space), projected onto the cortex.
 VOLUME_SUFFIXES = (".nii", ".nii.gz")
 #: Compound endings kept when a client's file name is made safe.
-_ENDINGS = (".func.gii", ".shape.gii", ".label.gii", ".nii.gz")
+_ENDINGS = (".func.gii.gz", ".shape.gii.gz", ".label.gii.gz", ".gii.gz", ".func.gii", ".shape.gii",
+            ".label.gii", ".nii.gz")
 #: Largest size a compressed file may inflate to (bytes).
 MAX_INFLATED = 1 << 30
 #: Largest number of voxels of one volume of a NIfTI file (e.g. 512 x 512 x 512).
@@ -254,7 +256,7 @@ def _surface_bundle(work: Path, files: list[tuple[str, Path]], names: list[str],
     from brainpainter.maps.resolution import surface_of
 
     order = sorted(files, key=lambda f: f[0])  # lh first
-    maps = read_maps({h: p for h, p in order})
+    maps = read_maps({h: p for h, p in order}, external="refuse")  # a GIfTI reads no other file
     if maps.n_images > max_images:
         raise BrainPainterError(
             f"the map holds {maps.n_images} images; this server draws at most {max_images} images per "
@@ -355,7 +357,7 @@ def read_bundle(data: bytes, where: Path | None = None) -> Any:
 
     header, _ = bundle_header(data)
     with extracted(data, where) as files:
-        maps = read_maps(files)
+        maps = read_maps(files, external="refuse")
     if "images" in header and len(header["images"]) == maps.n_images:
         regions = {k: np.asarray(v, float) for k, v in header.get("regions", {}).items()}
         maps = dataclasses.replace(maps, images=tuple(header["images"]), regions=regions or None)
