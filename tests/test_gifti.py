@@ -32,12 +32,17 @@ def gifti_xml(values: np.ndarray) -> bytes:
     return nib.gifti.GiftiImage(darrays=[da]).to_xml(enc="utf-8")
 
 
-def external_gifti(path: Path, external_name: str, n: int = N5) -> Path:
+def external_xml(external_name: str, n: int = N5) -> bytes:
     """A .func.gii whose one data array is in the file `external_name` (as the XML says it)."""
     xml = gifti_xml(np.zeros(n)).decode()
     xml = xml.replace('Encoding="GZipBase64Binary"', 'Encoding="ExternalFileBinary"')
     xml = xml.replace('ExternalFileName=""', f'ExternalFileName="{external_name}"')
-    path.write_text(re.sub(r"<Data>.*?</Data>", "<Data></Data>", xml, flags=re.S))
+    return re.sub(r"<Data>.*?</Data>", "<Data></Data>", xml, flags=re.S).encode()
+
+
+def external_gifti(path: Path, external_name: str, n: int = N5) -> Path:
+    """:func:`external_xml` written to `path`."""
+    path.write_bytes(external_xml(external_name, n))
     return path
 
 
