@@ -98,6 +98,27 @@ def test_entity_declarations_are_refused(tmp_path):
         read_maps(lh=path)
 
 
+def test_a_gzipped_array_larger_than_it_says_is_refused_before_it_inflates(tmp_path):
+    """A 90 KB GIfTI whose one array (Dim0 10242, float32: 40968 bytes) inflates to 64 MB."""
+    import base64
+    import tracemalloc
+    import zlib
+
+    xml = gifti_xml(np.zeros(N5)).decode()
+    bomb = base64.b64encode(zlib.compress(bytes(64 << 20), 9)).decode()
+    path = tmp_path / "lh.x.func.gii"
+    path.write_text(re.sub(r"<Data>.*?</Data>", f"<Data>{bomb}</Data>", xml, flags=re.S))
+    assert path.stat().st_size < 100_000
+    tracemalloc.start()
+    try:
+        with pytest.raises(BrainPainterError, match="inflates to more than the 40968 bytes its Dim"):
+            read_maps(lh=path, external="refuse")
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 8 << 20, peak
+
+
 def test_label_maps_and_surfaces_read_no_external_data_outside_their_folder(site):
     """The other GIfTI readers (atlas add --annot, --white/--pial surfaces) share the policy."""
     from brainpainter.atlas.labelset import read_label_map

@@ -7,14 +7,18 @@ nibabel parses it; entity declarations are refused): where external data is
 not allowed (``external="refuse"``: the web server) any is an error; else
 (``"folder"``: the command line and Python) the external file must lie inside
 the GIfTI's own folder (its resolved path: no ``..``, absolute path or
-symbolic link out of it). nibabel then parses the bytes already read, from
-memory: it can follow a reference only when the scan allowed it. Gzipped GIfTI
-(``.gii.gz``, as nilearn ships fsaverage5) is inflated in memory, bounded.
+symbolic link out of it). The same scan stops a gzipped data array that
+inflates to more than its ``Dim``s say. nibabel then parses the bytes already
+read, from memory: it can follow a reference only when the scan allowed it.
+Gzipped GIfTI (``.gii.gz``, as nilearn ships fsaverage5) is inflated in
+memory, bounded.
 """
 
 from __future__ import annotations
 
 import io
+import math
+import zlib
 from pathlib import Path
 from typing import Any, Literal
 
@@ -79,27 +83,50 @@ def read_gifti(path: str | Path, *, external: External = "folder", what: str = "
 def external_files(raw: bytes, what: str) -> list[str]:
     """The ``ExternalFileName`` of every ``DataArray`` whose data is in an external file.
 
+    Also checks, before nibabel inflates them whole, that no gzipped data
+    array (``GZipBase64Binary``) inflates to more than its ``Dim``s and
+    ``DataType`` say: a few kilobytes of XML cannot become gigabytes.
+
     Raises
     ------
     BrainPainterError
-        The XML declares entities (refused, as defusedxml does) or is not well formed.
+        The XML declares entities (refused, as defusedxml does), is not well
+        formed, or holds a gzipped array larger than it says.
     """
     from xml.parsers import expat
 
     from nibabel.gifti.util import gifti_encoding_codes
 
     names: list[str] = []
+    gz: dict[str, Any] = {}  # the gzipped array being read: its expected size and its text so far
 
     def start(tag: str, attrs: dict[str, str]) -> None:
-        if tag == "DataArray" and gifti_encoding_codes.label.get(attrs.get("Encoding")) == "External":
-            names.append(attrs.get("ExternalFileName", ""))  # nibabel's own table of the encodings' names
+        code = gifti_encoding_codes.label.get(attrs.get("Encoding"))  # nibabel's table of the encodings
+        if tag == "DataArray" and code == "External":
+            names.append(attrs.get("ExternalFileName", ""))
+        elif tag == "DataArray" and code == "B64GZ":
+            gz.update(size=_array_bytes(attrs), text=[])
+        elif tag == "Data" and "size" in gz:
+            gz["open"] = True
+
+    def text(data: str) -> None:
+        if gz.get("open"):
+            gz["text"].append(data)
+
+    def end(tag: str) -> None:
+        if tag == "Data" and gz.get("open"):
+            _check_inflated("".join(gz["text"]), gz["size"], what)
+            gz.clear()
 
     def entity(name: str, *_: object) -> None:
         raise BrainPainterError(f"{what} declares the XML entity {name[:40]!r}; GIfTI files declare none, "
                                 "and this reader refuses them. Give the file your software wrote.")
 
     parser = expat.ParserCreate()
+    parser.buffer_text = True
     parser.StartElementHandler = start
+    parser.CharacterDataHandler = text
+    parser.EndElementHandler = end
     parser.EntityDeclHandler = entity
     try:
         parser.Parse(raw, True)
@@ -107,6 +134,33 @@ def external_files(raw: bytes, what: str) -> list[str]:
         raise BrainPainterError(f"{what} is not well-formed XML ({exc}); give the file your software "
                                 "wrote.") from None
     return names
+
+
+def _array_bytes(attrs: dict[str, str]) -> int:
+    """Bytes a ``DataArray`` holds by its ``Dim0``... and ``DataType`` (0 when they are not valid)."""
+    from nibabel.nifti1 import data_type_codes
+
+    dtype: Any = data_type_codes.dtype.get(attrs.get("DataType"))
+    try:
+        dims = [int(attrs[f"Dim{i}"]) for i in range(int(attrs.get("Dimensionality", "0")))]
+    except (KeyError, ValueError):
+        return 0
+    return 0 if dtype is None or any(d < 0 for d in dims) else math.prod(dims) * int(dtype.itemsize)
+
+
+def _check_inflated(text: str, size: int, what: str) -> None:
+    """Refuse base64 gzip data `text` that inflates to more than `size` bytes (inflating stops there)."""
+    import base64
+    import binascii
+
+    try:
+        data = base64.b64decode(text.encode("ascii"))
+        out = zlib.decompressobj().decompress(data, size + 1)
+    except (binascii.Error, UnicodeEncodeError, zlib.error):
+        return  # nibabel says what is wrong
+    if len(out) > size:
+        raise BrainPainterError(f"{what} holds a gzipped data array that inflates to more than the {size} "
+                                "bytes its Dim and DataType say; give the file your software wrote.")
 
 
 def _inside(path: Path, names: list[str], what: str) -> None:
