@@ -146,3 +146,58 @@ def test_a_tract_zip_member_that_is_a_symbolic_link_is_only_a_file(tmp_path):
         assert out[0].read_bytes() == b"/etc/passwd"
         assert all(f.startswith(str(into)) for f, w in files if w), files
         assert json.dumps(sorted(os.listdir(into))) == '["AF_L.trk"]'
+
+
+def _minc2(path: Path, storage: str, secret: Path) -> Path:
+    """A MINC-2 volume (HDF5, as nibabel reads it) whose image is inside, or in `secret` by external
+    storage, a virtual dataset or an external link (`storage`)."""
+    h5py = pytest.importorskip("h5py")
+    shape = (10, 12, 14)
+    np.full(shape, 7, np.float32).tofile(secret)
+    if storage == "link":
+        with h5py.File(secret.with_suffix(".h5"), "w") as other:
+            other.create_dataset("image", data=np.full(shape, 7, np.float32))
+            other["image"].attrs["dimorder"] = np.bytes_(b"zspace,yspace,xspace")
+    with h5py.File(path, "w") as f:
+        for n, size, axis in zip(("xspace", "yspace", "zspace"), shape[::-1], np.eye(3), strict=True):
+            d = f.create_dataset(f"minc-2.0/dimensions/{n}", data=0)
+            d.attrs.update(length=size, step=1.0, start=0.0, direction_cosines=axis)
+        image = "minc-2.0/image/0/image"
+        if storage == "inside":
+            f.create_dataset(image, data=np.ones(shape, np.float32))
+        elif storage == "external":
+            f.create_dataset(image, shape=shape, dtype=np.float32, external=[(str(secret), 0, 6720)])
+        elif storage == "virtual":
+            layout = h5py.VirtualLayout(shape=shape, dtype=np.float32)
+            layout[:] = h5py.VirtualSource(str(secret.with_suffix(".h5")), "image", shape=shape)
+            f.create_virtual_dataset(image, layout)
+        else:
+            f[image] = h5py.ExternalLink(str(secret.with_suffix(".h5")), "image")
+        if storage != "link":
+            f[image].attrs["dimorder"] = np.bytes_(b"zspace,yspace,xspace")
+        f.create_dataset("minc-2.0/image/0/image-min", data=0.0)
+        f.create_dataset("minc-2.0/image/0/image-max", data=1.0)
+    return path
+
+
+@pytest.mark.parametrize("storage", ["external", "virtual", "link"])
+def test_a_minc2_volume_that_takes_data_from_another_file_is_refused(tmp_path, storage):
+    """MINC-2 is HDF5, whose datasets can be bytes of any file (``--volume x.mnc`` read /etc/passwd)."""
+    from brainpainter.atlas.volumes import read_volume
+    from brainpainter.maps.volume import load_volume
+
+    secret = tmp_path / "secret.bin"
+    path = _minc2(tmp_path / "v.mnc", storage, secret)
+    with opened() as files:
+        with pytest.raises(BrainPainterError, match="takes data from another file"):
+            np.asarray(load_volume(path).dataobj)
+        with pytest.raises(BrainPainterError, match="takes data from another file"):
+            read_volume(path)
+    assert not [f for f, _ in files if f.startswith(str(secret.with_suffix("")))], files
+
+
+def test_a_minc2_volume_with_its_data_inside_reads(tmp_path):
+    from brainpainter.maps.volume import load_volume
+
+    path = _minc2(tmp_path / "v.mnc", "inside", tmp_path / "secret.bin")
+    assert float(np.asarray(load_volume(path).dataobj).max()) == 1.0

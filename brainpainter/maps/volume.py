@@ -78,6 +78,8 @@ def load_volume(img: ImageLike) -> Volume:
     """
     import nibabel as nib
 
+    from brainpainter.io.hdf5 import check_hdf5
+
     name = "volume"
     image: Any = img
     if isinstance(img, (str, os.PathLike)):
@@ -86,6 +88,7 @@ def load_volume(img: ImageLike) -> Volume:
         if not path.is_file():
             raise BrainPainterError(f"volume file {path} does not exist; give a NIfTI (.nii, .nii.gz) "
                                     "or MGH (.mgz) volume in MNI152 space.")
+        check_hdf5(path, "volume file")  # MINC-2 can take its data from other files
         try:
             image = nib.load(str(path))
         except Exception as exc:  # nibabel raises ImageFileError, ValueError, OSError, ...
