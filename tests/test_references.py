@@ -201,3 +201,38 @@ def test_a_minc2_volume_with_its_data_inside_reads(tmp_path):
 
     path = _minc2(tmp_path / "v.mnc", "inside", tmp_path / "secret.bin")
     assert float(np.asarray(load_volume(path).dataobj).max()) == 1.0
+
+
+def _gltf(folder: Path, uri: str) -> Path:
+    """A one-triangle glTF whose buffer is the file `uri`; the triangle's bytes are also in
+    ``secret.bin`` beside `folder` and ``ok.bin`` inside it."""
+    blob = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32).tobytes() + np.uint16([0, 1, 2]).tobytes()
+    (folder.parent / "secret.bin").write_bytes(blob + b"\0\0")
+    (folder / "ok.bin").write_bytes(blob + b"\0\0")
+    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+           "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+           "buffers": [{"uri": uri, "byteLength": 44}],
+           "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                           {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+           "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                          "max": [1, 1, 0], "min": [0, 0, 0]},
+                         {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}]}
+    path = folder / "lh.region.gltf"
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def test_a_gltf_mesh_reads_buffers_only_from_its_folder(tmp_path):
+    """``atlas add --meshes DIR``: a glTF buffer named ``../secret.bin`` or by an absolute path is refused
+    whatever trimesh's release (trimesh 4, which the pins allow, read it)."""
+    from brainpainter.atlas.meshfiles import read_mesh
+
+    (tmp_path / "meshes").mkdir()
+    secret = str(tmp_path / "secret.bin")
+    for uri in ("../secret.bin", secret):
+        path = _gltf(tmp_path / "meshes", uri)
+        with opened() as files, pytest.raises(BrainPainterError, match="outside its own folder"):
+            read_mesh(path)
+        assert secret not in {f for f, _ in files}
+    vertices, faces = read_mesh(_gltf(tmp_path / "meshes", "ok.bin"))
+    assert vertices.shape == (3, 3) and faces.tolist() == [[0, 1, 2]]
