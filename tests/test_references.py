@@ -68,6 +68,22 @@ def test_a_gifti_never_opens_external_data_it_may_not(tmp_path):
     assert beside in {f for f, _ in files} and secret not in {f for f, _ in files}
 
 
+def test_a_gifti_given_as_a_volume_is_never_parsed(tmp_path):
+    """``--volume x.func.gii`` (or ``atlas add --volume``): ``nib.load`` reads GIfTI too, and followed its
+    external data before the volume reader found it was no volume (then an internal error, exit 1)."""
+    from brainpainter.atlas.volumes import read_volume
+    from brainpainter.maps.volume import load_volume
+
+    np.arange(N5, dtype=np.float32).tofile(tmp_path / "secret.bin")
+    path = external_gifti(tmp_path / "lh.x.func.gii", str(tmp_path / "secret.bin"))
+    with opened() as files:
+        with pytest.raises(BrainPainterError, match="looks like a GIfTI file, not a NIfTI or MGH"):
+            load_volume(path)
+        with pytest.raises(BrainPainterError, match="looks like a GIfTI file, not a volume"):
+            read_volume(path)
+    assert str(tmp_path / "secret.bin") not in {f for f, _ in files}
+
+
 def test_a_nii_with_a_pair_header_reads_only_itself(tmp_path):
     """A ``.nii`` whose magic says ``ni1`` (header of a ``.hdr``/``.img`` pair): the ``.img`` beside it
     is never read, by the map reader (from bytes) or the volume reader (``nib.load``)."""

@@ -4,6 +4,8 @@ instead of being parsed as the wrong format."""
 
 from __future__ import annotations
 
+import zlib
+
 #: Bytes :func:`what_is` needs: NIfTI-1 keeps its magic at byte 344, GIfTI's root may follow a long prolog.
 HEAD = 4096
 
@@ -64,3 +66,26 @@ def what_is(head: bytes) -> str | None:
     if text.startswith(b"<"):
         return GIFTI if b"<GIFTI" in head else XML
     return None
+
+
+def described(head: bytes) -> str | None:
+    """:func:`what_is`, and for gzip what its first inflated bytes are (``gzip-compressed data (a GIfTI
+    file inside)``), for messages."""
+    found = what_is(head)
+    if found == GZIP:
+        try:
+            inner = what_is(zlib.decompressobj(wbits=31).decompress(head, HEAD))
+        except zlib.error:
+            inner = None
+        found += f" ({inner} inside)" if inner else ""
+    return found
+
+
+#: Formats that are never a volume (nibabel would read a GIfTI by ``nib.load``, following its external data).
+NOT_VOLUMES = (GIFTI, XML, CURV, SURFACE, NPY, TRK, TCK, PNG, PDF, ZIP)
+
+
+def not_a_volume(head: bytes) -> str | None:
+    """What a file is (:func:`described`) when its first bytes say a format that is no volume, else None."""
+    found = described(head)
+    return found if found and any(kind in found for kind in NOT_VOLUMES) else None

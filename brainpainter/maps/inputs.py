@@ -16,7 +16,6 @@ turned into the same arrays by ``brainpainter.maps.volume`` and handed to
 from __future__ import annotations
 
 import re
-import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -28,7 +27,7 @@ from numpy.typing import NDArray
 from brainpainter.errors import BrainPainterError
 from brainpainter.io.files import MAX_DATA_FILE, inflated, read_input
 from brainpainter.io.gifti import External, read_gifti
-from brainpainter.io.sniff import CURV, GZIP, HEAD, MGH, NIFTI1, NIFTI2, NPY, what_is
+from brainpainter.io.sniff import CURV, GZIP, HEAD, MGH, NIFTI1, NIFTI2, NPY, described, what_is
 from brainpainter.maps.resolution import FAMILY, N_FSAVERAGE, native, to_fsaverage
 
 if TYPE_CHECKING:
@@ -406,13 +405,7 @@ def _is_format(head: bytes, name: str, what: str) -> str | None:
     if found is None:
         raise BrainPainterError(f"cannot read {what}: it is not {expected} (its first bytes match no format "
                                 f"known here); {hint}.")
-    if found == GZIP:
-        try:
-            inner = what_is(zlib.decompressobj(wbits=31).decompress(head, HEAD))
-        except zlib.error:
-            inner = None
-        found += f" ({inner} inside)" if inner else ""
-    raise BrainPainterError(f"{what} looks like {found}, not {expected}; {hint}.")
+    raise BrainPainterError(f"{what} looks like {described(head)}, not {expected}; {hint}.")
 
 
 #: Per file ending: the format it names and what its first bytes may be (None: no magic number).

@@ -602,6 +602,12 @@ INPROCESS: list[Case] = [
           ("parent", "../../secret.bin", {}, "keeps its data in '../../secret.bin', outside its own folder"),
           ("symlink-out", "in.bin", {"in.bin": _link_to("/etc/passwd")}, "'in.bin', outside its own folder"),
           ("missing", "gone.bin", {}, "keeps its data in 'gone.bin', which is not a file in its folder"))],
+    Case("volume-is-gifti-with-external-data", {"lh.x.func.gii": _gifti_external("/etc/passwd")},
+         ["--volume", "lh.x.func.gii", "--out", "o", *RENDER], "looks like a GIfTI file, not a NIfTI or MGH volume",
+         command="render"),
+    Case("volume-is-gzipped-gifti", {"thick_left.gii.gz": _gifti_external("x.bin", gz=True)},
+         ["--volume", "thick_left.gii.gz", "--out", "o", *RENDER],
+         "looks like gzip-compressed data (a GIfTI file inside), not a NIfTI or MGH volume", command="render"),
     Case("gifti-gz-external-absolute", {"lh.x.func.gii.gz": _gifti_external("/etc/hostname", gz=True)},
          ["--lh", "lh.x.func.gii.gz", "--out", "o", *RENDER], "outside its own folder", command="render"),
     Case("gifti-xml-entity", {"lh.x.func.gii": b'<?xml version="1.0"?><!DOCTYPE GIFTI [<!ENTITY a "b">]>'
