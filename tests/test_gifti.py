@@ -198,3 +198,21 @@ def test_a_gzip_bomb_named_gii_gz_is_refused_bounded(tmp_path, monkeypatch):
     with pytest.raises(BrainPainterError, match="inflates to more than 1 MB"):
         read_maps(lh=tmp_path / "lh.x.gii.gz")
     assert os.listdir(tmp_path) == ["lh.x.gii.gz"]
+
+
+def test_gzipped_gifti_surfaces_read_as_meshes(tmp_path):
+    """A region mesh (``atlas add --meshes``) and a white/pial surface may be ``.surf.gii.gz`` too."""
+    from brainpainter.atlas.meshfiles import mesh_files, mesh_stem, read_mesh
+    from brainpainter.maps.depth import read_surface
+
+    xyz = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], np.float32)
+    tri = np.array([[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]], np.int32)
+    img = nib.gifti.GiftiImage(darrays=[nib.gifti.GiftiDataArray(xyz, intent="NIFTI_INTENT_POINTSET"),
+                                        nib.gifti.GiftiDataArray(tri, intent="NIFTI_INTENT_TRIANGLE")])
+    path = tmp_path / "lh.region.surf.gii.gz"
+    path.write_bytes(gzip.compress(img.to_xml()))
+    assert mesh_files(tmp_path) == [path] and mesh_stem(path) == "lh.region"
+    vertices, faces = read_mesh(path)
+    np.testing.assert_array_equal(vertices, xyz)
+    np.testing.assert_array_equal(faces, tri)
+    np.testing.assert_array_equal(read_surface(path, "white"), xyz)

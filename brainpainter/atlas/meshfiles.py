@@ -17,7 +17,8 @@ from numpy.typing import NDArray
 from brainpainter.errors import BrainPainterError
 
 #: Mesh file endings read (longest first: ``.surf.gii`` before ``.gii``).
-MESH_SUFFIXES = (".surf.gii", ".gii", ".gltf", ".glb", ".ply", ".obj", ".stl", ".off")
+MESH_SUFFIXES = (".surf.gii.gz", ".gii.gz", ".surf.gii", ".gii", ".gltf", ".glb", ".ply", ".obj", ".stl",
+                 ".off")
 _AXIS = {"R": (0, 1.0), "L": (0, -1.0), "A": (1, 1.0), "P": (1, -1.0), "S": (2, 1.0), "I": (2, -1.0)}
 
 
@@ -127,7 +128,7 @@ def read_mesh(path: str | Path) -> tuple[NDArray[Any], NDArray[Any]]:
     """
     path = Path(path)
     try:
-        if path.name.lower().endswith(".gii"):
+        if path.name.lower().endswith((".gii", ".gii.gz")):
             from brainpainter.io.gifti import read_gifti
 
             img: Any = read_gifti(path, what="mesh file")
