@@ -29,9 +29,26 @@ def positions_along(pixels: np.ndarray, scale) -> np.ndarray:
 
 def test_default_ticks_are_the_gradient_control_points():
     assert resolve_ticks(make_scale(), None).tolist() == [0, 1, 2, 3]
-    assert len(resolve_ticks(make_scale(cmap="viridis", data=[0, 10]), None)) == 5
+    assert resolve_ticks(make_scale(cmap="viridis", data=[0, 10]), None).tolist() == [0, 2, 4, 6, 8, 10]
     diverging = make_scale(gradient="blue,white,red", center=0, data=[-2, 1])
     assert resolve_ticks(diverging, None).tolist() == [-2, 0, 2]
+
+
+@pytest.mark.parametrize(("spec", "ticks"), [
+    ({"cmap": "viridis", "vmin": 1.5, "vmax": 4}, [1.5, 2, 2.5, 3, 3.5, 4]),       # not 1.5, 2.12, 2.75
+    ({"cmap": "viridis", "vmin": 0, "vmax": 254}, [0, 50, 100, 150, 200, 250]),     # not 63.5, 127, 190.5
+    ({"cmap": "viridis", "vmin": 0, "vmax": 4.7}, [0, 1, 2, 3, 4]),                 # an end that is not round
+    ({"cmap": "RdBu_r", "center": 0, "data": [-7.94, 3]}, [-7.5, -5, -2.5, 0, 2.5, 5, 7.5]),
+    ({"cmap": "RdBu_r", "center": 1, "vmin": -3, "vmax": 5}, [-2, 1, 4]),           # the centre is a tick
+    ({"vmin": 1.5, "vmax": 4}, [1.5, 2, 2.5, 3, 3.5, 4]),     # a gradient's control colours at 1.5, 2.33, ...
+    ({"gradient": "white,yellow,orange,red,black", "vmin": 0, "vmax": 100}, [0, 25, 50, 75, 100]),
+])
+def test_default_ticks_fall_on_round_numbers(spec, ticks):
+    scale = make_scale(**spec)
+    got = resolve_ticks(scale, None)
+    np.testing.assert_allclose(got, ticks, atol=1e-12)
+    assert scale.vmin <= got[0] and got[-1] <= scale.vmax  # the bar still runs from vmin to vmax
+    assert scale.ticks().tolist() == got.tolist()          # the web page's bar has the same ticks
 
 
 def test_chosen_ticks_are_checked():

@@ -115,3 +115,37 @@ def test_render_volume_colours_cortex_and_subcortex(stat, tmp_path):
     blue = (b > 120) & (r < 100) & (b - r > 60)
     assert blue.sum() > 300                                   # the hippocampus's negative mean, in blue
     assert not ((r > 150) & (g < 90) & (b < 90)).any()        # nothing positive below the cortex
+
+
+# -- views given win over the defaults (issue 33, item 10) ---------------------------------------
+TABLE_VIEWS = "lateral-left,medial-left,subcortical"  # a table's default, and README's example for a volume
+
+
+def test_views_given_are_drawn_as_given_even_when_they_equal_a_default(stat):
+    from brainpainter.rendering.run import prepare_run
+    from brainpainter.web.options import RenderOptions
+
+    given = prepare_run(None, volume=stat, views=TABLE_VIEWS)
+    assert [v.name for v in given.views] == TABLE_VIEWS.split(",")
+    default = prepare_run(None, volume=stat)  # not given: both hemispheres, and the subcortical means
+    assert [v.name for v in default.views] == ["lateral-left", "medial-left", "lateral-right", "medial-right",
+                                               "subcortical"]
+    surface = prepare_run(None, lh=np.zeros(10242), views=["lateral-left", "medial-left", "subcortical"])
+    assert [v.name for v in surface.views] == TABLE_VIEWS.split(",")
+    # the web API: views left out are the run's own, views sent are the run's views
+    assert RenderOptions().run_kwargs()["views"] is None
+    assert RenderOptions(views=TABLE_VIEWS).run_kwargs()["views"] == TABLE_VIEWS
+
+
+def test_cli_figure_of_a_volume_draws_the_views_given(stat, tmp_path):
+    from click.testing import CliRunner
+
+    from brainpainter.cli.main import cli
+    from brainpainter.testing import StandInRenderer, stand_in
+
+    with stand_in("solid", StandInRenderer.with_(layout="solid")) as renderer:
+        result = CliRunner().invoke(cli, [
+            "figure", "--volume", str(stat), "--views", TABLE_VIEWS, "--size", "80x60",
+            "--renderer", renderer, "--out", str(tmp_path / "fig.png"), "-q"])
+    assert result.exit_code == 0, result.output
+    assert "1 row(s) x 3 view(s)" in result.output

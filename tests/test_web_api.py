@@ -107,7 +107,9 @@ def test_probes_schema_and_meta(server):
     assert props["nan_color"]["default"] == "#8c8c8c" and props["lighting"]["default"] == "studio"
     meta = server.get("/api/meta").json()
     assert "dk" in meta["atlases"] and "viridis" in meta["cmaps"] and "subcortical" in meta["views"]
-    assert meta["defaults"]["views"] == "lateral-left,medial-left,subcortical"
+    # no views: the run's own (a table's three, a map's both hemispheres), as on the CLI
+    assert meta["defaults"]["views"] is None
+    assert "lateral-left,medial-left,subcortical" in props["views"]["description"]
     assert server.get("/docs").status_code == 404  # Swagger UI would load scripts from a CDN
 
 

@@ -89,7 +89,7 @@ def stack(options: Sequence[Callable[[F], F]]) -> Callable[[F], F]:
     return decorate
 
 
-def render_option_list(views: str | None = DEFAULT_VIEWS, size: str = DEFAULT_SIZE) -> dict[str, Any]:
+def render_option_list(views: str | None = None, size: str = DEFAULT_SIZE) -> dict[str, Any]:
     """The render options by Python name (see :data:`RENDER_OPTION_NAMES`), as click options."""
     scene, scale, settings = SceneOptions, ScaleOptions, RenderSettings
     return {
@@ -130,9 +130,11 @@ def _check_size(ctx: click.Context, param: click.Parameter, value: str | None) -
     return None if value is None else parse_size(value)
 
 
-def make_render_options(views: str = DEFAULT_VIEWS, size: str = DEFAULT_SIZE,
+def make_render_options(views: str | None = None, size: str = DEFAULT_SIZE,
                         only: Sequence[str] | None = None) -> Callable[[F], F]:
     """A decorator adding the render options, with the given defaults for ``--views`` and ``--size``.
+
+    ``--views`` not given (None) leaves the views to the run (a table's, an atlas's or a map's own).
 
     `only` keeps just the options of those Python names (see :data:`RENDER_OPTION_NAMES`).
     """

@@ -21,6 +21,15 @@ def echo_json(obj: object) -> None:
     click.echo(json.dumps(obj, indent=2))
 
 
+def echo_scale(scale: Any) -> None:
+    """Say which colour scale was chosen and why (``scale: viridis 0-4.7 (values >= 0)``), when automatic.
+
+    `scale` is a :class:`~brainpainter.color.scale.ColourScale`; a scale whose limits were given says nothing.
+    """
+    if getattr(scale, "chosen", ""):
+        click.echo(f"scale: {scale.describe()}")
+
+
 class FiniteFloat(click.ParamType):  # type: ignore[type-arg]
     """A float option that refuses NaN and infinities (``--vmin nan``) before anything runs."""
 

@@ -16,7 +16,7 @@ from brainpainter.cli.options import (
     render_options,
     tables_or_maps,
 )
-from brainpainter.cli.params import CONTEXT, OutPath, echo_json
+from brainpainter.cli.params import CONTEXT, OutPath, echo_json, echo_scale
 from brainpainter.color.scale import ScaleOptions
 from brainpainter.errors import BrainPainterError
 
@@ -90,6 +90,7 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
         m = result.manifest["input"]
         click.echo(f"{len(result.files)} image(s) written to {out} ({m['n_images']} map image(s), "
                    f"hemispheres {', '.join(m['hemis'])})")
+        echo_scale(result.scale)
         return
     from brainpainter.table.region_table import summary_line
     from brainpainter.table.report import input_warnings

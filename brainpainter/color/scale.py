@@ -84,6 +84,8 @@ class ColourScale:
     categories : tuple of (str, (r, g, b))
         A label map's categories in their own colours: the colour bar becomes a key of
         these (one block and name each) instead of a gradient of values.
+    chosen : str
+        Why an automatic scale is what it is (a map's ``"values >= 0"``); empty when given.
     """
 
     colors: NDArray[Any]
@@ -97,6 +99,7 @@ class ColourScale:
     name: str = ""
     threshold: float | None = None
     categories: tuple[tuple[str, tuple[float, float, float]], ...] = ()
+    chosen: str = ""
 
     def __repr__(self) -> str:
         """One short line (the control colours are many)."""
@@ -171,11 +174,45 @@ class ColourScale:
         out[nan] = self.nan_color
         return out[0] if scalar else out
 
+    def describe(self) -> str:
+        """One line: the colour map, its range and why, e.g. ``viridis 0-4.7 (values >= 0)``."""
+        joint = " to " if self.vmin < 0 else "-"
+        why = f" ({self.chosen})" if self.chosen else ""
+        return f"{self.name or 'custom'} {self.vmin:.3g}{joint}{self.vmax:.3g}{why}"
+
     def ticks(self) -> NDArray[Any]:
-        """Values at the control colours of a gradient (or 5 ticks for a colour map)."""
+        """Default colour-bar ticks: round numbers inside ``[vmin, vmax]`` (and `center`).
+
+        A gradient's control colours are its ticks where they fall on round numbers (0, 1, 2, 3;
+        0, 25, 50); otherwise, and for a colour map, 4 to 7 round values (1.5, 2, 2.5; 0, 50,
+        100) from matplotlib's :class:`~matplotlib.ticker.MaxNLocator`. The ends are ticks
+        only where they are round; the bar itself always runs from vmin to vmax.
+
+        Returns
+        -------
+        ndarray of float, shape (n_ticks,), increasing, within ``[vmin, vmax]``.
+        """
         import numpy as np
-        n = self.n_colors if self.n_colors <= 12 else 5
-        pos = np.linspace(0.0, 1.0, n)
+        controls = self._control_values()
+        if self.n_colors <= 12 and round_steps(controls):
+            return controls
+        nice = nice_ticks(self.vmin, self.vmax)
+        if nice is None:  # no round numbers to show (ranges near the float limits): 5 even steps
+            steps: NDArray[Any] = np.unique(self._values_at(np.linspace(0.0, 1.0, 5)))
+            return steps
+        step = float(nice[1] - nice[0])
+        if self.center is not None and not (np.abs(nice - self.center) <= 1e-9 * step).any():
+            nice = np.sort(np.append(nice[np.abs(nice - self.center) > 0.5 * step], self.center))
+        return nice
+
+    def _control_values(self) -> NDArray[Any]:
+        """The values at the control colours (a colour map's 256 samples: at its 5 quarter points)."""
+        import numpy as np
+        return self._values_at(np.linspace(0.0, 1.0, self.n_colors if self.n_colors <= 12 else 5))
+
+    def _values_at(self, pos: NDArray[Any]) -> NDArray[Any]:
+        """The values at positions `pos` (0-1) along the colours (a diverging scale: each side on its own)."""
+        import numpy as np
         if self.center is None:
             return between(self.vmin, self.vmax, pos)
         c = self.center
@@ -194,6 +231,63 @@ class ColourScale:
             **({} if self.threshold is None else {"threshold": self.threshold}),
             **({"categories": {n: to_hex(c) for n, c in self.categories}} if self.categories else {}),
         }
+
+
+#: Round steps between ticks, times a power of ten (as matplotlib's MaxNLocator steps).
+ROUND_STEPS = (1.0, 2.0, 2.5, 5.0, 10.0)
+
+
+def round_steps(values: NDArray[Any]) -> bool:
+    """Whether `values` (shape (n,), increasing) are evenly spaced by a round step, each a multiple of it."""
+    import math
+
+    import numpy as np
+    if len(values) < 2:
+        return False
+    with np.errstate(all="ignore"):
+        steps = np.diff(values)
+        step = float(steps[0])
+        if not (math.isfinite(step) and step > 0 and np.allclose(steps, step, rtol=1e-9, atol=0)):
+            return False
+        mantissa = step / 10.0 ** math.floor(math.log10(step))
+        multiples = np.asarray(values) / step
+        return (any(math.isclose(mantissa, m, rel_tol=1e-9) for m in ROUND_STEPS)
+                and bool(np.all(np.abs(multiples - np.round(multiples)) < 1e-6)))
+
+
+def nice_ticks(vmin: float, vmax: float) -> NDArray[Any] | None:
+    """4 to 7 round values in ``[vmin, vmax]`` (matplotlib's MaxNLocator), or None where there are none.
+
+    Returns
+    -------
+    ndarray of float, shape (n,), or None (a range at the float limits, ``±1e308`` or subnormal).
+    """
+    import math
+    import warnings
+
+    import numpy as np
+    from matplotlib.ticker import MaxNLocator
+
+    try:
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            found = MaxNLocator(nbins=6, steps=list(ROUND_STEPS), min_n_ticks=4).tick_values(vmin, vmax)
+    except (ValueError, OverflowError, ZeroDivisionError):
+        return None
+    ticks: NDArray[Any] = np.asarray(found, dtype=float)
+    if not np.isfinite(ticks).all() or len(ticks) < 2:
+        return None
+    with np.errstate(over="ignore"):
+        step = float(ticks[1] - ticks[0])
+    if not (math.isfinite(step) and step > 0):
+        return None
+    slack = 1e-9 * step
+    inside = ticks[(ticks >= vmin - slack) & (ticks <= vmax + slack)]
+    inside = np.where(np.abs(inside) < slack, 0.0, inside)  # 0, not 1e-17
+    decimals = 1 - math.floor(math.log10(step))
+    if decimals <= 15:  # 0.4, not 0.4000000000000001
+        inside = np.round(inside, max(decimals, 0))
+    return np.clip(inside, vmin, vmax) if len(inside) >= 2 else None
 
 
 def gradient_colors(gradient: Sequence[ColorLike] | str) -> NDArray[Any]:

@@ -7,7 +7,8 @@ Layers, bottom first (the conventions of nilearn and surfplot):
 2. the data, through the run's colour scale, where it is finite, on the
    cortex (not on ``cortex.label``'s medial wall) and ``|v| >= threshold``.
 
-Signed data gets a symmetric diverging scale about 0 unless limits are given.
+The colour scale's defaults (diverging only for data of both signs) are chosen by
+:mod:`brainpainter.maps.autoscale`.
 """
 
 from __future__ import annotations
@@ -19,35 +20,31 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.color.scale import ColourScale, ScaleOptions
+from brainpainter.maps.autoscale import DEFAULT_CMAP, choose_scale
 from brainpainter.maps.inputs import VertexMaps
 from brainpainter.maps.outlines import OUTLINE_COLOR, border_vertices
 from brainpainter.maps.resolution import masks
 
 #: Underlay greys (sRGB): gyri, sulci, and the one grey of ``--underlay none``.
 GYRUS_GREY, SULCUS_GREY, PLAIN_GREY = 0.74, 0.52, 0.72
-#: Default colour maps of maps given no --cmap/--gradient: values of one sign, signed values.
-DEFAULT_CMAP, DEFAULT_SIGNED_CMAP = "viridis", "RdBu_r"
 
 
 def map_scale(options: ScaleOptions, maps: VertexMaps, threshold: float | None = None) -> ColourScale:
     """The colour scale of a map run: `options`, with defaults that suit maps.
 
-    No ``cmap``/``gradient``: ``viridis``, or ``RdBu_r`` for signed data. Signed
-    data and no ``vmin``/``vmax``/``center``: symmetric about 0. The scale
-    carries `threshold`, so that its colour bar greys out ``|v| < threshold``.
-    A label map's scale carries its categories (the colour bar is their key).
+    No ``cmap``/``gradient``: ``viridis``, or ``RdBu_r`` for data substantially of both
+    signs, which are then symmetric about 0 (:func:`brainpainter.maps.autoscale.choose_scale`;
+    the scale's ``chosen`` says why). The scale carries `threshold`, so that its colour bar
+    greys out ``|v| < threshold``. A label map's scale carries its categories (the colour bar
+    is their key).
     """
     data = maps.finite()
     if maps.categories is not None and maps.category_colors is not None:  # a key of the categories
         if options.cmap is None and options.gradient is None:
             options = replace(options, cmap=DEFAULT_CMAP)
         return replace(options.scale(data), categories=_drawn_categories(maps))
-    signed = bool(data.size) and float(data.min()) < 0 < float(data.max())
-    if options.cmap is None and options.gradient is None:
-        options = replace(options, cmap=DEFAULT_SIGNED_CMAP if signed else DEFAULT_CMAP)
-    if signed and options.vmin is None and options.vmax is None and options.center is None:
-        options = replace(options, center=0.0)
-    return replace(options.scale(data), threshold=threshold)
+    options, chosen = choose_scale(options, data)
+    return replace(options.scale(data), threshold=threshold, chosen=chosen)
 
 
 def _drawn_categories(maps: VertexMaps) -> tuple[tuple[str, tuple[float, float, float]], ...]:

@@ -3,7 +3,7 @@
 The bar shows exactly the colours the renders use: it samples the scale
 itself (``scale(values)``), so a BrainPainter gradient appears with its
 control colours at its ticks and a matplotlib colour map as a smooth ramp.
-Ticks default to the gradient's control points (5 ticks for a colour map);
+Ticks default to round numbers (:meth:`ColourScale.ticks`: a gradient's control points where round);
 NaN and missing swatches are added when asked; a label map's scale draws a key of its
 categories (:mod:`brainpainter.media.category_key`). :func:`draw_colorbar` draws into an
 Axes (figures); :func:`colorbar_image` returns an RGBA array of an exact pixel size (movie
@@ -61,7 +61,7 @@ def format_tick(value: float) -> str:
 
 
 def resolve_ticks(scale: ColourScale, ticks: Sequence[float] | str | None) -> NDArray[Any]:
-    """Tick values: the scale's control points by default, or `ticks` checked against the scale.
+    """Tick values: the scale's round ticks by default, or `ticks` checked against the scale.
 
     Parameters
     ----------
@@ -165,7 +165,7 @@ def draw_colorbar(
     label : str, optional
         Quantity and unit, e.g. ``"atrophy (SD from controls)"``.
     ticks : sequence of float or str, optional
-        Default: the control points of a gradient (5 ticks for a colour map).
+        Default: round numbers inside the scale (a gradient's control points where round).
     orientation : {"horizontal", "vertical"}
     nan, missing : bool
         Add a swatch for the NaN colour (empty cells) / the missing colour

@@ -68,7 +68,7 @@ class FigureOptions:
     label : str, optional
         Under the colour bar, e.g. ``"z-score"``.
     ticks : sequence of float or str, optional
-        Colour-bar ticks (default: the gradient's control points).
+        Colour-bar ticks (default: round numbers inside the scale).
     dpi : float
         Resolution of PNG/TIFF output (50 to 1200).
     fig_width : float, optional
@@ -86,7 +86,7 @@ class FigureOptions:
     label: str | None = field(default=None, metadata={
         "help": "Colour-bar label, e.g. 'z-score' or 'atrophy (SD from controls)'."})
     ticks: Sequence[float] | str | None = field(default=None, metadata={
-        "help": "Colour-bar ticks, e.g. 0,1.5,3 (default: the gradient's colours)."})
+        "help": "Colour-bar ticks, e.g. 0,1.5,3 (default: round numbers inside the scale)."})
     dpi: float = field(default=300.0, metadata={"help": "Resolution of PNG/TIFF output."})
     fig_width: float | None = field(default=None, metadata={
         "help": "Figure width in inches (default 7.2, two journal columns; 3.5 for 1-2 image columns)."})

@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
+from brainpainter.color.scale import ColourScale
 from brainpainter.errors import BrainPainterError
 from brainpainter.media.colorbar import quiet_glyphs
 from brainpainter.media.drawn import swatches_needed
@@ -157,6 +158,8 @@ class MovieResult:
         Their times (positions 0, 1, ... without a time column).
     seconds : float
         Wall time spent making the movie (rendering, composing, encoding).
+    scale : ColourScale, optional
+        The colour scale of every frame.
     """
 
     path: Path
@@ -166,6 +169,7 @@ class MovieResult:
     keys: list[str]
     key_times: list[float]
     seconds: float
+    scale: ColourScale | None = None
 
     def __repr__(self) -> str:
         """One short line."""
@@ -240,7 +244,7 @@ def make_movie(data: Any, atlas: Atlas | str | None = None, *, out: str | Path,
     runner = make_runner(frames.painter, checked.scene.template, checked.runner, n_items=len(frames.states))
     size = encode(path, frames, runner, float(movie.fps), progress, on_progress)
     return MovieResult(path, len(plan), size, float(movie.fps), keys.names, keys.times,
-                       time.perf_counter() - start)
+                       time.perf_counter() - start, run.scale)
 
 
 def check_frames(n: int, fmt: str, run: Run) -> None:

@@ -22,7 +22,7 @@ from brainpainter.maps.layers import map_scale, vertex_colors
 from brainpainter.maps.outlines import mesh_edges
 from brainpainter.maps.resolution import map_mesh
 from brainpainter.rendering.geometry import VertexColors
-from brainpainter.rendering.options import DEFAULT_VIEWS, Options
+from brainpainter.rendering.options import Options
 from brainpainter.rendering.painter import Painter, region_colors
 from brainpainter.rendering.parallel import Item
 from brainpainter.rendering.settings import outlined
@@ -114,7 +114,7 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     # --outline ATLAS: the map is drawn on that atlas's mesh, whose vertices carry its labels
     atlas_obj = get_atlas(outline) if outline is not None else atlas if atlas is not None else get_atlas("dk")
     views = options.scene.views
-    if views is None or views == DEFAULT_VIEWS:  # a volume also colours the subcortical structures
+    if views is None:  # not given: both hemispheres; a volume also colours the subcortical structures
         views = MAP_VIEWS + (",subcortical" if maps.regions else "")
     view_list = parse_views(views if isinstance(views, str) else list(views))
     template = options.scene.template

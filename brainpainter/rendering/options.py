@@ -89,8 +89,9 @@ class SceneOptions:
     Attributes
     ----------
     views : str or list of str, optional
-        Default: BrainPainter's ``lateral-left, medial-left, subcortical`` (for an
-        atlas without cortical regions ``subcortical, subcortical-dorsal``).
+        Default (None, not given): BrainPainter's ``lateral-left, medial-left, subcortical``
+        (for an atlas without cortical regions ``subcortical, subcortical-dorsal``; for maps
+        both hemispheres' lateral and medial views). Views given are drawn as given.
     template : str or Template
         Template name or folder.
     surface : {"pial", "white", "inflated"}
@@ -121,7 +122,8 @@ class SceneOptions:
     """
 
     views: str | Sequence[str] | None = field(default=None, metadata={
-        "help": "Comma-separated views, 'all', or camera:AZ:EL[:ZOOM].", "cli_default": DEFAULT_VIEWS})
+        "help": "Comma-separated views, 'all', or camera:AZ:EL[:ZOOM]. Default: " + DEFAULT_VIEWS
+                + "; maps: lateral and medial of both hemispheres (and subcortical for a volume)."})
     template: Template | str = field(default="fsaverage", metadata={"help": "Template name or folder."})
     surface: str = field(default="pial", metadata={"choices": SURFACES, "help": "Cortical surface to draw."})
     hide: tuple[str, ...] = field(default=(), metadata={

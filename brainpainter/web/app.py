@@ -114,7 +114,7 @@ def _static_dir() -> Any:
 def create_app(config: ServerConfig | None = None) -> FastAPI:
     """The application for `config` (its pool starts and stops with the app's lifespan)."""
     config = config or ServerConfig()
-    store = Store(config.data_dir)
+    store = Store(config.data_dir, config.max_disk_bytes)
     pool = Pool(config, store)
 
     @asynccontextmanager
@@ -158,6 +158,11 @@ def _add_error_handlers(app: FastAPI, config: ServerConfig) -> None:
     @app.exception_handler(ApiError)
     async def _api_error(request: Request, exc: ApiError) -> JSONResponse:
         return JSONResponse({"error": line(exc)}, status_code=exc.status, headers=exc.headers)
+
+    @app.exception_handler(LimitError)  # the disk budget, counted as an upload is stored
+    async def _limit(request: Request, exc: LimitError) -> JSONResponse:
+        return JSONResponse({"error": line(exc)}, status_code=exc.status,
+                            headers={"retry-after": str(exc.retry_after)})
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
@@ -294,7 +299,7 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
         if is_tract_bundle(data):  # the tracts alone: their report, with the colour scale of `o`
             return await work.run(tract_check, data, name, o, data_dir=store.root)
         if is_bundle(data):
-            return await work.run(map_check, data, name, o, scratch=store.root / "incoming")
+            return await work.run(map_check, data, name, o)
         opts = {**o.model_dump(include=set(TableOptions.model_fields)),
                 "scale": {"gradient": o.gradient, "cmap": o.cmap, "vmin": o.vmin, "vmax": o.vmax,
                           "center": o.center}}
@@ -313,7 +318,7 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
         tracts = await run_in_threadpool(tracts_of, store, body.options)
         req = await work.run(preview_request, data, name, body.options, body.row, body.view, config,
-                             store.root / "incoming", tracts, store.root)
+                             tracts, store.root)
         if previews.borrowed_tokens >= previews.total_tokens:  # never queue without bound
             raise ApiError(503, f"{MAX_PREVIEW_WAITING} previews are waiting; try again in a moment",
                            {"retry-after": "2"})
@@ -340,7 +345,7 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
         await disk_budget(store, config)
         tracts = await run_in_threadpool(tracts_of, store, body.options)
         prep = await work.run(prepare, data, name, body.options, max_images=config.max_images,
-                              max_pixels=config.max_pixels, scratch=store.root / "incoming", tracts=tracts,
+                              max_pixels=config.max_pixels, tracts=tracts,
                               data_dir=store.root)
         n_rows, n_views = len(prep.run.table.images), len(prep.run.views)
         if body.kind == "movie" and n_rows < 2:

@@ -83,7 +83,7 @@ class RenderOptions(TableOptions):
     ``WIDTHxHEIGHT`` and ``transparent`` replaces the background, as in the CLI.
     """
 
-    views: str = core(SceneOptions, "views")
+    views: str | None = core(SceneOptions, "views")  # None: the run's own (a table's, a map's)
     surface: Annotated[str, one_of(SceneOptions, "surface")] = core(SceneOptions, "surface")
     gradient: str | None = core(ScaleOptions, "gradient")
     cmap: str | None = core(ScaleOptions, "cmap")
@@ -196,7 +196,7 @@ class Prepared:
 
 
 def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int | None = None,
-            max_pixels: int | None = None, scratch: Path | None = None, tracts: bytes | None = None,
+            max_pixels: int | None = None, tracts: bytes | None = None,
             data_dir: Path | None = None) -> Prepared:
     """Check `options` against the uploaded table (or map) exactly as ``brainpainter render`` would.
 
@@ -212,8 +212,6 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
         Largest rows x views.
     max_pixels : int, optional
         Largest width x height of one view.
-    scratch : Path, optional
-        Where a map bundle's files are written while they are read (removed after).
     tracts : bytes, optional
         The tract bundle that option ``tracts`` names (drawn with the table).
     data_dir : Path, optional
@@ -253,7 +251,7 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
         if files is not None:
             raise BrainPainterError("tracts are drawn with a region table, not with a map; upload a region "
                                     "table, or leave option tracts out.")
-        run = prepare_run(read_bundle(data, scratch), options.atlas, **kwargs)
+        run = prepare_run(read_bundle(data), options.atlas, **kwargs)
     else:
         run = prepare_run(table_stream(data, name), options.atlas, **kwargs)
     hidden = options.hide_tokens()
@@ -344,14 +342,13 @@ class MovieParams(BaseModel):
         return len(plan_frames(list(range(n_keys)), self.frames_per_step, self.easing, self.hold))
 
 
-def map_check(data: bytes, name: str, options: RenderOptions, *,
-              scratch: Path | None = None) -> dict[str, Any]:
+def map_check(data: bytes, name: str, options: RenderOptions) -> dict[str, Any]:
     """The report of a map upload (:func:`brainpainter.web.maps.base_report`) with the colour scale of
     `options` (the page's colour bar; the threshold band is marked by ``threshold``)."""
     from brainpainter.web.maps import base_of
 
     report = base_of(data)
-    scale = prepare(data, name, options, scratch=scratch).run.scale
+    scale = prepare(data, name, options).run.scale
     report["values"]["scale"] = scale_report(scale)
     return report
 

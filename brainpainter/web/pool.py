@@ -244,7 +244,7 @@ def preview_settings(settings: Any, max_width: int) -> Any:
 
 
 def preview_request(data: bytes, name: str, options: Any, row: int | str, view: str, config: ServerConfig,
-                    scratch: Any = None, tracts: bytes | None = None, data_dir: Any = None) -> dict[str, Any]:
+                    tracts: bytes | None = None, data_dir: Any = None) -> dict[str, Any]:
     """The preview process's request for `row` (index or image name) of an upload from `view`.
 
     `options` is a :class:`brainpainter.web.options.RenderOptions`; a map's colours are per vertex
@@ -257,7 +257,7 @@ def preview_request(data: bytes, name: str, options: Any, row: int | str, view: 
     from brainpainter.rendering.views import parse_views
     from brainpainter.web.options import prepare
 
-    prep = prepare(data, name, options, max_pixels=config.max_pixels, scratch=scratch, tracts=tracts,
+    prep = prepare(data, name, options, max_pixels=config.max_pixels, tracts=tracts,
                    data_dir=data_dir)
     table = prep.run.table
     if isinstance(row, int) or re.fullmatch(r"[0-9]{1,9}", row):

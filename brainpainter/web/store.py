@@ -28,6 +28,7 @@ import re
 import secrets
 import shutil
 import sqlite3
+import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -135,12 +136,17 @@ class Store:
     ----------
     data_dir : path
         Created if needed.
+    max_disk_bytes : int
+        Disk the data folder may use (0: no budget); an upload or a job's input that would write past
+        it is refused (:class:`LimitError`, 507) before a byte is written.
     """
 
-    def __init__(self, data_dir: str | Path) -> None:
+    def __init__(self, data_dir: str | Path, max_disk_bytes: int = 0) -> None:
         from brainpainter.errors import BrainPainterError
 
         self.root = Path(data_dir)
+        self.max_disk_bytes = max_disk_bytes
+        self._usage_lock = threading.Lock()
         for folder in (self.root, self.root / "uploads", self.root / "jobs"):
             folder.mkdir(mode=0o700, parents=True, exist_ok=True)
             _private(folder)  # uploaded tables are readable by this user only
@@ -204,7 +210,8 @@ class Store:
         return True
 
     def disk_usage(self, max_age_s: float = 10.0) -> int:
-        """Bytes used by the data folder (walked at most every `max_age_s` seconds)."""
+        """Bytes used by the data folder (walked at most every `max_age_s` seconds; what this process
+        wrote since is added as it is written, :meth:`charge`)."""
         t, used = self._usage
         if time.monotonic() - t < max_age_s:
             return used
@@ -218,10 +225,29 @@ class Store:
         self._usage = (time.monotonic(), used)
         return used
 
+    def charge(self, nbytes: int) -> None:
+        """Count `nbytes` about to be written against the disk budget, or refuse them.
+
+        Raises
+        ------
+        LimitError
+            507 when the data folder would use more than its budget (nothing is counted then).
+        """
+        if self.max_disk_bytes <= 0:
+            return
+        with self._usage_lock:  # one check-and-count at a time: two writers cannot both fit the last bytes
+            used = self.disk_usage()
+            if used + nbytes > self.max_disk_bytes:
+                raise LimitError(f"this server's storage budget ({self.max_disk_bytes / 2**30:.3g} GB) is "
+                                 "used up; try again after older results expire.", 507, retry_after=600)
+            self._usage = (self._usage[0], used + _blocks(nbytes))
+
     # -- uploads -------------------------------------------------------------------------
     def add_upload(self, client: str, name: str, data: bytes, ttl_s: float, keep: int = 20) -> str:
         """Store an upload; the client's uploads beyond its newest `keep` are deleted (disk stays bounded;
-        jobs keep their own copy of their table)."""
+        jobs keep their own copy of their table). Its bytes count against the disk budget as they are
+        written (:meth:`charge`)."""
+        self.charge(len(data))
         upload_id = new_id()
         atomic_write_bytes(self.upload_path(upload_id), data)
         _private(self.upload_path(upload_id))
@@ -253,11 +279,13 @@ class Store:
                extra: dict[str, bytes] | None = None) -> str:
         """Queue a job, or raise :class:`LimitError` (nothing stored then); `extra`: more input files
         (name -> bytes, e.g. the tract upload the options name) kept beside ``input.bin``."""
+        inputs = {"input.bin": data, **(extra or {})}
+        self.charge(sum(len(c) for c in inputs.values()))
         job_id = new_id()
         folder = self.job_dir(job_id)
         (folder / "out").mkdir(mode=0o700, parents=True)
         _private(folder)
-        for name, content in {"input.bin": data, **(extra or {})}.items():
+        for name, content in inputs.items():
             atomic_write_bytes(folder / name, content)
             _private(folder / name)
         try:
@@ -473,6 +501,11 @@ class Store:
     def _event(db: sqlite3.Connection, job_id: str, attempt: int, event: str, detail: str | None) -> None:
         db.execute("INSERT INTO events (job_id, attempt, event, detail, t) VALUES (?, ?, ?, ?, ?)",
                    (job_id, attempt, event, detail, time.time()))
+
+
+def _blocks(nbytes: int) -> int:
+    """Disk bytes a file of `nbytes` takes (whole 4 KiB blocks, as :meth:`Store.disk_usage` counts)."""
+    return -(-nbytes // 4096) * 4096
 
 
 def _private(path: Path) -> None:

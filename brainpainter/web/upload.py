@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.web.maps import MAGIC
+from brainpainter.web.maps import is_bundle
 
 #: Form encodings a browser may send cross-origin without asking first (a CORS "simple" request);
 #: uploads must come with another content type, which only the page itself (same origin) can send.
@@ -106,9 +106,9 @@ def check_upload(data: bytes, name: str, options: dict[str, Any], *, max_rows: i
     spreadsheets in a spawned process that is killed after `time_limit_s` seconds.
     """
     check_rows(data, name, max_rows)
-    from brainpainter.web.tracts import MAGIC as TRACTS_MAGIC
+    from brainpainter.web.tracts import is_tract_bundle
 
-    if data.startswith((MAGIC, TRACTS_MAGIC)):  # only the server writes map and tract bundles
+    if is_bundle(data) or is_tract_bundle(data):  # only the server writes map and tract bundles
         raise BrainPainterError(f"{name!r} is not a table (it starts as a stored map or tract upload); "
                                 "upload the table, map or tractogram files themselves.")
     if not is_spreadsheet(data):
@@ -312,7 +312,7 @@ def _tracts_main(conn: Any, work: str, files: list[str], max_files: int, max_str
         conn.send(("ok", report))
     except BrainPainterError as exc:
         line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        for prefix in (work + "/in/", work + "/given/", work + "/", work):
+        for prefix in (work + "/in/", work + "/given/", work + "/kept/", work + "/", work):
             line = line.replace(prefix, "")
         conn.send(("error", line))
     except MemoryError:

@@ -223,7 +223,7 @@ def _prepared(folder: Path, job: dict[str, Any]) -> Any:
 
     data = (folder / "input.bin").read_bytes()
     tracts = (folder / TRACTS).read_bytes() if (folder / TRACTS).is_file() else None
-    return data, prepare(data, job["input_name"], RenderOptions(**job["options"]), scratch=folder,
+    return data, prepare(data, job["input_name"], RenderOptions(**job["options"]),
                          tracts=tracts, data_dir=folder.parent.parent)
 
 
@@ -231,7 +231,7 @@ def _prepared(folder: Path, job: dict[str, Any]) -> Any:
 TRACTS = "tracts.bin"
 
 
-def _media_input(folder: Path, data: bytes, name: str, prep: Any) -> Any:
+def _media_input(data: bytes, name: str, prep: Any) -> Any:
     """What figure and movie read: the table as a named stream, a map's maps (read from its files), or
     the table of bundle values of tracts drawn alone."""
     from brainpainter.web.maps import is_bundle, read_bundle
@@ -241,7 +241,7 @@ def _media_input(folder: Path, data: bytes, name: str, prep: Any) -> Any:
         return str(prep.tract_table)
     if not is_bundle(data):
         return table_stream(data, name)
-    return read_bundle(data, folder)
+    return read_bundle(data)
 
 
 def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
@@ -385,7 +385,7 @@ def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
     name = f"figure.{p.get('format', 'pdf')}"
     tick(0)
     params = FigureParams(**p)  # the CLI's defaults for what the job did not give
-    make_figure(_media_input(folder, data, job["input_name"], prep), out=folder / "out" / name,
+    make_figure(_media_input(data, job["input_name"], prep), out=folder / "out" / name,
                 grid=params.grid,
                 title=params.title or None, label=params.label or None, dpi=params.dpi,
                 fig_width=params.fig_width, font_size=params.font_size, on_progress=tick,
@@ -403,7 +403,7 @@ def _run_movie(folder: Path, job: dict[str, Any], painters: PainterCache, tick: 
     tick(0)
     params = MovieParams(**p)  # the CLI's defaults for what the job did not give
     kwargs = _media_kwargs(prep, painters.renderer)  # progress: per frame (on_progress), not 0/1
-    make_movie(_media_input(folder, data, job["input_name"], prep), out=folder / "out" / name,
+    make_movie(_media_input(data, job["input_name"], prep), out=folder / "out" / name,
                frames_per_step=params.frames_per_step, easing=params.easing, hold=params.hold, fps=params.fps,
                title=params.title or None, label=params.label or None, on_progress=tick, **kwargs)
     return [name]
