@@ -12,10 +12,12 @@ from __future__ import annotations
 import errno
 import io
 import os
+import sqlite3
 import stat
 import sys
 import threading
 import time
+from pathlib import Path
 
 import pytest
 from web_support import EXAMPLE, standin_app, standin_site, wait_for
@@ -203,6 +205,74 @@ def test_a_full_disk_fails_writes_in_one_line_and_reads_still_work(api, monkeypa
     r = api.post("/api/jobs", json={"upload_id": uid, "options": {"size": "64x48"}})
     assert r.status_code == 507
     assert api.post("/api/check", json={"upload_id": uid}).status_code == 200  # reads still work
+
+
+class _FullDisk(sqlite3.Connection):
+    """A connection on a full disk: every write fails as SQLite reports it ("disk I/O error")."""
+
+    def execute(self, sql, *args):  # type: ignore[override]
+        if sql.split()[0].upper() in ("INSERT", "UPDATE", "DELETE"):
+            raise sqlite3.OperationalError("disk I/O error")
+        return super().execute(sql, *args)
+
+
+def _fill_disk(monkeypatch, free: int = 0) -> None:
+    """What a full disk does to the server (measured on a 30 MB tmpfs): no free bytes, no database
+    write, and no new SQLite shared-memory index (a connection that must create ``-shm`` fails)."""
+    import shutil
+
+    real = sqlite3.connect
+
+    def connect(path, *args, **kwargs):
+        if not Path(f"{path}-shm").exists():
+            raise sqlite3.OperationalError("disk I/O error")
+        return real(path, *args, factory=_FullDisk, **kwargs)
+
+    monkeypatch.setattr(sqlite3, "connect", connect)
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: shutil._ntuple_diskusage(1 << 30, 1 << 30, free))
+
+
+def test_on_a_full_disk_reads_work_and_every_write_answers_507(api, monkeypatch):
+    store = api.app.state.store
+    uid = upload(api, EXAMPLE.read_bytes()).json()["upload_id"]
+    done, queued = (api.post("/api/jobs", json={"upload_id": uid, "options": {"size": "64x48"}}).json()["id"]
+                    for _ in range(2))
+    job = store.claim("w")
+    assert job["id"] == done
+    (store.job_dir(done) / "out" / "a.png").write_bytes(b"png")
+    store.finish(done, job["attempt"], ["a.png"], 3600)
+    _fill_disk(monkeypatch)
+    r = api.get(f"/api/jobs/{queued}")
+    assert r.status_code == 200 and r.json()["status"] == "queued", r.text
+    r = api.get(f"/api/jobs/{done}/files/a.png")
+    assert r.status_code == 200 and r.content == b"png"
+    assert api.post("/api/check", json={"upload_id": uid}).status_code == 200
+    r = api.get("/readyz")
+    assert r.status_code == 503 and r.json()["checks"]["disk"] is False, r.text
+    for r in (api.delete(f"/api/jobs/{queued}"),
+              api.post("/api/jobs", json={"upload_id": uid, "options": {"size": "64x48"}})):
+        assert r.status_code == 507, r.text
+        assert r.json()["error"].startswith("the server's disk is full") and r.headers["retry-after"]
+    assert store.get(queued)["status"] == "queued"  # nothing changed
+
+
+def test_a_disk_io_error_with_space_left_is_not_called_a_full_disk(api, monkeypatch):
+    uid = upload(api, EXAMPLE.read_bytes()).json()["upload_id"]
+    queued = api.post("/api/jobs", json={"upload_id": uid, "options": {"size": "64x48"}}).json()["id"]
+    _fill_disk(monkeypatch, free=10 << 30)
+    r = api.delete(f"/api/jobs/{queued}")
+    assert r.status_code == 500 and "OperationalError" in r.json()["error"]
+
+
+def test_a_reading_process_that_fills_the_disk_reports_it_as_full():
+    from brainpainter.web.upload import _failed
+
+    assert _failed(OSError(errno.ENOSPC, "No space left on device"), "x")[0] == "full"
+    assert _failed(OSError(errno.EDQUOT, "Disk quota exceeded"), "x")[0] == "full"
+    full = BrainPainterError("cannot write 'a': the disk is full")
+    full.errno = errno.ENOSPC  # type: ignore[attr-defined]  # as io.folders.os_error keeps it
+    assert _failed(full, "x")[0] == "full"
+    assert _failed(ValueError("bad"), "cannot read") == ("error", "cannot read")
 
 
 def test_files_without_a_database_row_are_cleaned_up(tmp_path):

@@ -53,10 +53,13 @@ from brainpainter.errors import BrainPainterError
 from brainpainter.web.config import ServerConfig
 from brainpainter.web.guard import Guard
 from brainpainter.web.http import (
+    FULL_BELOW,
     ApiError,
     Work,
     client_of,
     disk_budget,
+    disk_free,
+    disk_full,
     one_line,
     receive_body,
     require_octet_stream,
@@ -151,7 +154,7 @@ def _add_error_handlers(app: FastAPI, config: ServerConfig) -> None:
 
     @app.exception_handler(BrainPainterError)
     async def _bp_error(request: Request, exc: BrainPainterError) -> JSONResponse:
-        if _disk_full(exc):
+        if disk_full(exc, config.data_dir):
             return _full(request, exc)
         return JSONResponse({"error": line(exc)}, status_code=400)
 
@@ -176,7 +179,7 @@ def _add_error_handlers(app: FastAPI, config: ServerConfig) -> None:
     @app.exception_handler(OSError)
     @app.exception_handler(sqlite3.OperationalError)
     async def _os_error(request: Request, exc: Exception) -> JSONResponse:
-        if _disk_full(exc):
+        if disk_full(exc, config.data_dir):
             return _full(request, exc)
         log.error("internal error on %s %s", request.method, request.url.path, exc_info=exc)
         return JSONResponse({"error": f"internal error: {type(exc).__name__} (logged on the server)"},
@@ -205,14 +208,16 @@ def _add_page_and_probes(app: FastAPI, config: ServerConfig, store: Store, pool:
 
     @app.get("/readyz", tags=["probes"])
     async def readyz() -> JSONResponse:
-        """Ready to take work: database writable, a job worker warm, the preview renderer warm."""
+        """Ready to take work: database writable, disk not full, a job worker warm, the preview renderer
+        warm."""
         try:
             db_ok = await run_in_threadpool(store.ping)
         except Exception:
             db_ok = False
         workers = await run_in_threadpool(store.workers)
+        disk_ok = await run_in_threadpool(disk_free, store.root) >= FULL_BELOW
         ready_workers = [w for w in workers if w["state"] in ("ready", "busy")]
-        checks = {"database": db_ok,
+        checks = {"database": db_ok, "disk": disk_ok,
                   "workers": len(ready_workers) >= min(1, config.workers) and pool.alive_workers() >= min(
                       1, config.workers),
                   "preview": pool.preview_ready or not config.preview}
@@ -413,15 +418,6 @@ def _full(request: Request, exc: BaseException) -> JSONResponse:
     return JSONResponse({"error": "the server's disk is full; nothing was changed. Try again later (the "
                                   "operator must free space)."}, status_code=507,
                         headers={"retry-after": "600"})
-
-
-def _disk_full(exc: BaseException) -> bool:
-    """An error that means the disk (or the data folder's quota) is full."""
-    import errno
-
-    if getattr(exc, "errno", None) in (errno.ENOSPC, errno.EDQUOT):  # OSError, or os_error's one line
-        return True
-    return isinstance(exc, sqlite3.OperationalError) and "full" in str(exc)
 
 
 def _job(store: Store, job_id: str) -> dict[str, Any]:

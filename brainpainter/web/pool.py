@@ -79,6 +79,7 @@ class Pool:
     def start(self) -> None:
         c = self.config
         lock_data_dir(self.store.root)
+        self.store.keep_open()
         again = self.store.requeue(max_attempts=c.max_attempts, ttl_s=c.result_ttl_s)
         if again:
             log.info("re-queued %d job(s) left running by a previous server", len(again))
@@ -104,8 +105,11 @@ class Pool:
                 p.kill()
                 p.join(timeout=5)
         # jobs the stopped workers held go back to the queue now (a restart would do it too)
-        self.store.requeue(max_attempts=self.config.max_attempts, ttl_s=self.config.result_ttl_s)
-        unlock_data_dir(self.store.root)
+        try:
+            self.store.requeue(max_attempts=self.config.max_attempts, ttl_s=self.config.result_ttl_s)
+        finally:
+            self.store.close()
+            unlock_data_dir(self.store.root)
 
     def _spawn_worker(self, slot: int) -> None:
         from brainpainter.web.worker import job_worker_main

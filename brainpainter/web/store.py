@@ -146,6 +146,7 @@ class Store:
             _private(folder)  # uploaded tables are readable by this user only
         self.path = self.root / "jobs.sqlite3"
         self._usage: tuple[float, int] = (0.0, 0)
+        self._keeper: sqlite3.Connection | None = None
         try:
             with self.connect() as db:
                 db.execute("PRAGMA journal_mode=WAL")
@@ -186,6 +187,23 @@ class Store:
                 db.execute("ROLLBACK")
                 raise
             db.execute("COMMIT")
+
+    def keep_open(self) -> None:
+        """Hold one connection for the server's life, so that SQLite keeps its ``-wal`` and ``-shm`` files.
+
+        With no connection open, the last one to close removes them and the next must create them
+        again, which fails on a full disk ("disk I/O error"): status reads would fail with writes.
+        """
+        if self._keeper is None:
+            self._keeper = sqlite3.connect(self.path, timeout=30.0, isolation_level=None,
+                                           check_same_thread=False)
+            self._keeper.execute("SELECT count(*) FROM jobs").fetchone()  # maps the shared-memory index
+
+    def close(self) -> None:
+        """Let go of the connection :meth:`keep_open` holds."""
+        if self._keeper is not None:
+            self._keeper.close()
+            self._keeper = None
 
     def job_dir(self, job_id: str) -> Path:
         if not valid_id(job_id):
