@@ -172,6 +172,44 @@ def test_one_clients_uploads_never_evict_anothers(tmp_path):
 
 
 # -- 4/5. results on disk ------------------------------------------------------------------------------
+def test_uploads_and_jobs_belong_to_the_client_that_made_them(tmp_path):
+    """Another client (another token; the same address) gets 404 for an upload's or a job's id."""
+    config = ServerConfig(data_dir=tmp_path / "data", workers=0, preview=False, rate_per_minute=100_000)
+    app = create_app(config)
+    with TestClient(app) as alice, TestClient(app) as bob:
+        r = upload(alice, EXAMPLE.read_bytes())
+        cookie = r.headers["set-cookie"]
+        assert "bp_client=" in cookie and "HttpOnly" in cookie and "SameSite=Strict" in cookie, cookie
+        uid = r.json()["upload_id"]
+        job = alice.post("/api/jobs", json={"upload_id": uid, "options": {"size": "64x48"}}).json()["id"]
+        store = app.state.store
+        claimed = store.claim("w")
+        (store.job_dir(job) / "out" / "a.png").write_bytes(b"png")
+        store.finish(job, claimed["attempt"], ["a.png"], 3600)
+        other = alice.post("/api/jobs", json={"upload_id": uid, "options": {"size": "64x48"}}).json()["id"]
+        assert "set-cookie" not in alice.get(f"/api/jobs/{job}").headers  # issued once
+        for r in (bob.get(f"/api/jobs/{job}"), bob.get(f"/api/jobs/{job}/files/a.png"),
+                  bob.delete(f"/api/jobs/{other}"), bob.post("/api/check", json={"upload_id": uid}),
+                  bob.post("/api/jobs", json={"upload_id": uid}),
+                  bob.post("/api/preview", json={"upload_id": uid})):
+            assert r.status_code == 404 and "another client" in r.json()["error"], r.text
+        mine = upload(bob, EXAMPLE.read_bytes()).json()["upload_id"]
+        r = bob.post("/api/check", json={"upload_id": mine, "options": {"tracts": uid}})
+        assert r.status_code == 404, r.text  # nor another's upload as option tracts
+        assert store.get(other)["status"] == "queued"
+        assert alice.get(f"/api/jobs/{job}").json()["status"] == "done"
+        assert alice.get(f"/api/jobs/{job}/files/a.png").content == b"png"
+        assert alice.delete(f"/api/jobs/{other}").json()["status"] == "cancelled"
+        assert alice.post("/api/check", json={"upload_id": uid}).status_code == 200
+        token = alice.cookies["bp_client"]
+    # a script may send its token as a header instead; the database holds no token
+    with TestClient(app) as script:
+        assert script.get(f"/api/jobs/{job}", headers={"x-brainpainter-client": token}).status_code == 200
+        assert script.get(f"/api/jobs/{job}", headers={"x-brainpainter-client": "x" * 40}).status_code == 404
+    for db in (tmp_path / "data").glob("jobs.sqlite3*"):
+        assert token.encode() not in db.read_bytes()
+
+
 def test_data_folder_and_uploads_are_private(api, tmp_path):
     uid = upload(api, EXAMPLE.read_bytes()).json()["upload_id"]
     root = tmp_path / "data"
@@ -354,6 +392,31 @@ def rendering(tmp_path_factory):
     with standin_app(standin_site(tmp_path_factory.mktemp("site")), tmp_path_factory.mktemp("data"),
                      workers=1, preview=False, rate_per_minute=100_000, max_jobs_per_client=50) as client:
         yield client
+
+
+def test_a_figure_over_the_pixel_limit_is_refused_before_it_is_queued(api):
+    """Issue 33: dpi 600 x 40 in on the 4-row example made a 24000x23720 PNG (5.6 GB, 239 s)."""
+    uid = upload(api, EXAMPLE.read_bytes()).json()["upload_id"]
+    r = api.post("/api/jobs", json={"upload_id": uid, "kind": "figure",
+                                    "figure": {"format": "png", "dpi": 600, "fig_width": 40}})
+    assert r.status_code == 400, r.text
+    msg = r.json()["error"]
+    assert msg.startswith("the figure would be 24000x") and "at most 40000000 pixels" in msg
+    assert "\n" not in msg
+    assert api.app.state.store.counts() == {}  # nothing queued
+    # the CLI's default figure of the same table (2160 px wide), and any PDF, are taken
+    for figure in ({"format": "png"}, {"format": "pdf", "dpi": 600, "fig_width": 40}):
+        r = api.post("/api/jobs", json={"upload_id": uid, "kind": "figure", "figure": figure})
+        assert r.status_code == 202, r.text
+    assert api.get("/api/meta").json()["limits"]["max_figure_pixels"] == 40_000_000
+
+
+def test_rendering_processes_run_under_the_memory_limit(rendering):
+    workers = rendering.app.state.store.workers()
+    assert workers
+    limits = Path(f"/proc/{workers[0]['pid']}/limits").read_text()
+    line = next(x for x in limits.splitlines() if x.startswith("Max data size"))
+    assert line.split()[3] == str(4 * 1024**3), line
 
 
 def _long_movie(client) -> str:

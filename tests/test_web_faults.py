@@ -13,7 +13,7 @@ import sqlite3
 import time
 
 import pytest
-from web_support import STANDIN, Server, alive, env_with_site, rss_mb, standin_site, wait_for
+from web_support import CLIENT, STANDIN, Server, alive, env_with_site, rss_mb, standin_site, wait_for
 
 httpx = pytest.importorskip("httpx")
 
@@ -117,9 +117,9 @@ def test_a_movie_job_survives_a_killed_server_and_its_workers_die_with_it(tmp_pa
     server = Server(tmp_path / "data", env_with_site(site), tmp_path / "server.log", [
         "--workers", "1", "--no-preview", "--renderer", STANDIN, "--rate", "100000"])
     server.start()
-    try:
+    try:  # one client (its token) before and after the restart
         rows = "".join(f"s{k},{k % 3},{(k + 1) % 3},{(k + 2) % 3}\n" for k in range(4))
-        with httpx.Client(base_url=server.url, timeout=30) as client:
+        with httpx.Client(base_url=server.url, headers=CLIENT, timeout=30) as client:
             r = client.post("/api/uploads", content=(HEADER + rows).encode(), headers=OCTET)
             uid = r.json()["upload_id"]
             r = client.post("/api/jobs", json={"upload_id": uid, "kind": "movie", "options": {
@@ -136,7 +136,7 @@ def test_a_movie_job_survives_a_killed_server_and_its_workers_die_with_it(tmp_pa
         assert wait_for(lambda: not any(alive(p) for p in old), 15), old
         assert time.monotonic() - killed < 15
         server.start()
-        with httpx.Client(base_url=server.url, timeout=30) as client:
+        with httpx.Client(base_url=server.url, headers=CLIENT, timeout=30) as client:
             job = wait_for(lambda: (j := client.get(url).json())["status"] in ("done", "failed") and j, 180)
             assert job and job["status"] == "done", job
             assert [f["name"] for f in job["files"]] == ["movie.gif"]

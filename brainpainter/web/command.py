@@ -44,6 +44,12 @@ CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
               help="Largest number of streamlines in one tract upload (a hard cap; fewer are drawn).")
 @click.option("--max-tract-files", type=int, default=100, show_default=True,
               help="Largest number of files (bundles) in one tract upload.")
+@click.option("--max-pixels", type=int, default=2400 * 1800, show_default=True,
+              help="Largest width x height of one rendered view.")
+@click.option("--max-figure-pixels", type=int, default=40_000_000, show_default=True,
+              help="Largest width x height of a figure job's PNG (refused before it is queued).")
+@click.option("--worker-memory-gb", type=float, default=4.0, show_default=True,
+              help="Data memory each rendering process may use; a job needing more fails (0: no limit).")
 @click.option("--max-disk-gb", type=float, default=0.0, show_default=True,
               help="Disk the data folder may use; beyond it new uploads and jobs get 507 (0: no budget).")
 @click.option("--max-connections", type=click.IntRange(1, 100_000), default=500, show_default=True,
@@ -77,12 +83,14 @@ def serve(host: str, port: int, data_dir: Path | None, workers: int, no_preview:
         raise BrainPainterError(f"serve needs FastAPI and uvicorn ({exc}); "
                                 "pip install fastapi uvicorn") from None
     for key in ("max_images", "max_jobs_per_client", "max_queued", "rate_per_minute", "max_rows",
-                "max_map_images", "max_tract_streamlines", "max_tract_files"):
+                "max_map_images", "max_tract_streamlines", "max_tract_files", "max_pixels",
+                "max_figure_pixels"):
         if limits[key] < 1:
             raise BrainPainterError(f"--{key.replace('_', '-')} must be at least 1; {limits[key]} was given.")
-    for key in ("max_upload_mb", "job_time_limit_s", "result_ttl_s", "max_disk_gb"):
+    for key in ("max_upload_mb", "job_time_limit_s", "result_ttl_s", "max_disk_gb", "worker_memory_gb"):
         value = limits[key]
-        if not math.isfinite(value) or value < 0 or (value == 0 and key != "max_disk_gb"):
+        if not math.isfinite(value) or value < 0 or (value == 0 and key not in ("max_disk_gb",
+                                                                                "worker_memory_gb")):
             option = {"job_time_limit_s": "job-time-limit", "result_ttl_s": "keep-results"}.get(
                 key, key.replace("_", "-"))
             raise BrainPainterError(f"--{option} must be a positive number; {value} was given.")

@@ -119,7 +119,8 @@ class Pool:
         name = f"w{slot}-{self._boot}-{self._spawned}"
         proc = self._ctx.Process(
             target=job_worker_main, name=f"brainpainter-{name}", daemon=True,
-            args=(str(self.store.root), name, c.renderer, c.lp_threads(), c.result_ttl_s, c.job_time_limit_s))
+            args=(str(self.store.root), name, c.renderer, c.lp_threads(), c.result_ttl_s, c.job_time_limit_s),
+            kwargs={"memory": c.worker_memory_bytes})
         proc.start()
         self._workers[slot] = (name, proc)
 
@@ -130,7 +131,8 @@ class Pool:
         parent_conn, child_conn = self._ctx.Pipe()
         proc = self._ctx.Process(target=preview_main, name="brainpainter-preview", daemon=True,
                                  args=(child_conn, c.renderer, c.lp_threads(),
-                                       (c.preview_max_width, c.preview_max_width * 3 // 4)))
+                                       (c.preview_max_width, c.preview_max_width * 3 // 4)),
+                                 kwargs={"memory": c.worker_memory_bytes})
         proc.start()
         child_conn.close()
         self._preview_proc, self._preview_conn, self._preview_ready = proc, parent_conn, False

@@ -11,6 +11,10 @@ Layout of the data folder::
 
 Ids are 32 random hex digits (:func:`secrets.token_hex`); they are the only
 names that become paths, and only after :func:`valid_id` has checked them.
+Every upload and job has an ``owner`` (the key of the token of the client that
+made it: :mod:`brainpainter.web.guard`); asked with another owner, the store
+answers as if the id did not exist. ``client`` (an address) is what the
+per-client limits count by.
 
 A job's life: ``queued`` -> ``running`` (claimed by one worker with a new
 ``attempt`` number) -> ``done`` | ``failed`` | ``cancelled``; later
@@ -44,7 +48,7 @@ FORGET_AFTER_S = 30 * 24 * 3600.0  # an expired job's row is kept this long (its
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS uploads (
     id TEXT PRIMARY KEY, client TEXT NOT NULL, name TEXT NOT NULL, size INTEGER NOT NULL,
-    created REAL NOT NULL, expires REAL NOT NULL
+    created REAL NOT NULL, expires REAL NOT NULL, owner TEXT NOT NULL DEFAULT ''
 );
 CREATE TABLE IF NOT EXISTS jobs (
     id TEXT PRIMARY KEY, client TEXT NOT NULL, kind TEXT NOT NULL, status TEXT NOT NULL,
@@ -53,7 +57,7 @@ CREATE TABLE IF NOT EXISTS jobs (
     progress INTEGER NOT NULL DEFAULT 0, total INTEGER NOT NULL DEFAULT 0,
     attempt INTEGER NOT NULL DEFAULT 0, worker TEXT, heartbeat REAL,
     error TEXT, files TEXT NOT NULL DEFAULT '[]', completions INTEGER NOT NULL DEFAULT 0,
-    deaths INTEGER NOT NULL DEFAULT 0
+    deaths INTEGER NOT NULL DEFAULT 0, owner TEXT NOT NULL DEFAULT ''
 );
 CREATE INDEX IF NOT EXISTS jobs_status ON jobs (status, created);
 CREATE INDEX IF NOT EXISTS jobs_client ON jobs (client, status);
@@ -154,6 +158,9 @@ class Store:
                 columns = {r["name"] for r in db.execute("PRAGMA table_info(jobs)")}
                 if "deaths" not in columns:  # a database of an earlier version
                     db.execute("ALTER TABLE jobs ADD COLUMN deaths INTEGER NOT NULL DEFAULT 0")
+                for table in ("jobs", "uploads"):  # before owners: the old rows belong to nobody
+                    if "owner" not in {r["name"] for r in db.execute(f"PRAGMA table_info({table})")}:
+                        db.execute(f"ALTER TABLE {table} ADD COLUMN owner TEXT NOT NULL DEFAULT ''")
                 db.execute("SELECT count(*) FROM jobs").fetchone()
         except sqlite3.DatabaseError as exc:
             raise BrainPainterError(
@@ -237,16 +244,18 @@ class Store:
         return used
 
     # -- uploads -------------------------------------------------------------------------
-    def add_upload(self, client: str, name: str, data: bytes, ttl_s: float, keep: int = 20) -> str:
-        """Store an upload; the client's uploads beyond its newest `keep` are deleted (disk stays bounded;
-        jobs keep their own copy of their table)."""
+    def add_upload(self, client: str, name: str, data: bytes, ttl_s: float, keep: int = 20, *,
+                   owner: str = "") -> str:
+        """Store an upload of `owner`; the client's uploads beyond its newest `keep` are deleted (disk stays
+        bounded; jobs keep their own copy of their table)."""
         upload_id = new_id()
         atomic_write_bytes(self.upload_path(upload_id), data)
         _private(self.upload_path(upload_id))
         now = time.time()
         with self.transaction() as db:
-            db.execute("INSERT INTO uploads VALUES (?, ?, ?, ?, ?, ?)",
-                       (upload_id, client, name, len(data), now, now + ttl_s))
+            db.execute("INSERT INTO uploads (id, client, name, size, created, expires, owner) "
+                       "VALUES (?, ?, ?, ?, ?, ?, ?)", (upload_id, client, name, len(data), now, now + ttl_s,
+                                                        owner))
             old = [r["id"] for r in db.execute(
                 "SELECT id FROM uploads WHERE client = ? ORDER BY created DESC, rowid DESC LIMIT -1 OFFSET ?",
                 (client, keep)).fetchall()]
@@ -255,10 +264,10 @@ class Store:
             self.upload_path(i).unlink(missing_ok=True)
         return upload_id
 
-    def get_upload(self, upload_id: str) -> tuple[str, bytes] | None:
-        """``(name, bytes)`` of a live upload, or None."""
-        row = self._row("SELECT name, expires FROM uploads WHERE id = ?", upload_id)
-        if row is None or row["expires"] < time.time():
+    def get_upload(self, upload_id: str, owner: str | None = None) -> tuple[str, bytes] | None:
+        """``(name, bytes)`` of a live upload (of `owner`, when given), or None."""
+        row = self._row("SELECT name, expires, owner FROM uploads WHERE id = ?", upload_id)
+        if row is None or row["expires"] < time.time() or (owner is not None and row["owner"] != owner):
             return None
         try:
             return row["name"], self.upload_path(upload_id).read_bytes()
@@ -268,9 +277,9 @@ class Store:
     # -- jobs: the server's side -----------------------------------------------------------
     def submit(self, client: str, kind: str, options: dict[str, Any], params: dict[str, Any],
                input_name: str, data: bytes, total: int, *, max_per_client: int, max_queued: int,
-               extra: dict[str, bytes] | None = None) -> str:
-        """Queue a job, or raise :class:`LimitError` (nothing stored then); `extra`: more input files
-        (name -> bytes, e.g. the tract upload the options name) kept beside ``input.bin``."""
+               extra: dict[str, bytes] | None = None, owner: str = "") -> str:
+        """Queue a job of `owner`, or raise :class:`LimitError` (nothing stored then); `extra`: more input
+        files (name -> bytes, e.g. the tract upload the options name) kept beside ``input.bin``."""
         job_id = new_id()
         folder = self.job_dir(job_id)
         (folder / "out").mkdir(mode=0o700, parents=True)
@@ -290,20 +299,20 @@ class Store:
                     raise LimitError(f"the server has {queued} jobs waiting, its limit; try again in a "
                                      "minute.", 503, retry_after=30)
                 db.execute(
-                    "INSERT INTO jobs (id, client, kind, status, options, params, input_name, created, total)"
-                    " VALUES (?, ?, ?, 'queued', ?, ?, ?, ?, ?)",
+                    "INSERT INTO jobs (id, client, kind, status, options, params, input_name, created, total,"
+                    " owner) VALUES (?, ?, ?, 'queued', ?, ?, ?, ?, ?, ?)",
                     (job_id, client, kind, json.dumps(options), json.dumps(params), input_name, time.time(),
-                     total))
+                     total, owner))
                 self._event(db, job_id, 0, "queued", None)
         except BaseException:
             shutil.rmtree(folder, ignore_errors=True)
             raise
         return job_id
 
-    def get(self, job_id: str) -> dict[str, Any] | None:
-        """The job `job_id` (status, progress, files...), or None."""
+    def get(self, job_id: str, owner: str | None = None) -> dict[str, Any] | None:
+        """The job `job_id` (status, progress, files...; of `owner`, when given), or None."""
         row = self._row("SELECT * FROM jobs WHERE id = ?", job_id)
-        return None if row is None else _job(row)
+        return None if row is None or (owner is not None and row["owner"] != owner) else _job(row)
 
     def _row(self, sql: str, row_id: str) -> sqlite3.Row | None:
         """The row that `sql` (``... WHERE id = ?``) selects, or None (also for a malformed id)."""

@@ -235,7 +235,7 @@ def _map_main(conn: Any, work: str, entries: list[tuple[str | None, str]], max_i
     from brainpainter.web.worker import die_with_parent
 
     die_with_parent()
-    _limit_memory()
+    limit_memory()
     try:
         conn.send(("ok", build_bundle(Path(work), [(h, Path(p)) for h, p in entries], max_images)))
     except BrainPainterError as exc:
@@ -251,14 +251,17 @@ def _map_main(conn: Any, work: str, entries: list[tuple[str | None, str]], max_i
         conn.close()
 
 
-def _limit_memory() -> None:
+def limit_memory(limit: int | None = None) -> None:
+    """Bound this process's data memory (``RLIMIT_DATA``) to `limit` bytes (default: a reading process's
+    :data:`brainpainter.web.maps.MEMORY_LIMIT`); more raises ``MemoryError``. A no-op where unsupported."""
     try:
         import resource
 
         _, hard = resource.getrlimit(resource.RLIMIT_DATA)
         from brainpainter.web.maps import MEMORY_LIMIT
 
-        limit = MEMORY_LIMIT if hard == resource.RLIM_INFINITY else min(MEMORY_LIMIT, hard)
+        limit = MEMORY_LIMIT if limit is None else limit
+        limit = limit if hard == resource.RLIM_INFINITY else min(limit, hard)
         resource.setrlimit(resource.RLIMIT_DATA, (limit, hard))
     except (ImportError, ValueError, OSError):  # not on this platform: the time limit remains
         pass
@@ -318,7 +321,7 @@ def _tracts_main(conn: Any, work: str, files: list[str], max_files: int, max_str
     from brainpainter.web.worker import die_with_parent
 
     die_with_parent()
-    _limit_memory()
+    limit_memory()
     try:
         report = build_tract_bundle(Path(work), [Path(f) for f in files], max_files, max_streamlines)
         conn.send(("ok", report))

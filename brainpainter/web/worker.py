@@ -134,10 +134,15 @@ def _set_threads(lp_threads: int) -> None:
 
 # -- job worker -------------------------------------------------------------------------
 def job_worker_main(data_dir: str, name: str, renderer: str, lp_threads: int, ttl_s: float,
-                    time_limit_s: float, warm: bool = True) -> None:
-    """Entry point of a job worker process: take jobs until the parent process is gone."""
+                    time_limit_s: float, warm: bool = True, memory: int | None = None) -> None:
+    """Entry point of a job worker process: take jobs until the parent process is gone; `memory`: the
+    bytes of data memory it may use (None: no limit)."""
     _set_threads(lp_threads)
     die_with_parent()
+    if memory is not None:
+        from brainpainter.web.upload import limit_memory
+
+        limit_memory(memory)
     from brainpainter.web.store import Store
 
     parent = os.getppid()
@@ -199,6 +204,12 @@ def run_job(store: Any, job: dict[str, Any], painters: PainterCache, *, ttl_s: f
     except BrainPainterError as exc:
         line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         if store.fail(job_id, attempt, _no_paths(line, store), ttl_s):  # (a stale attempt touches nothing)
+            discard_outputs(folder, published=False)
+        return
+    except MemoryError:
+        line = ("the job needs more memory than this server gives one job; choose fewer rows or views, a "
+                "smaller size, or a lower dpi.")
+        if store.fail(job_id, attempt, line, ttl_s):
             discard_outputs(folder, published=False)
         return
     except Exception as exc:
@@ -377,19 +388,24 @@ def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
 
 
 def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
-    from brainpainter.media.figure import make_figure
-    from brainpainter.web.options import FigureParams
+    from brainpainter.media.figure import make_figure, save_figure
+    from brainpainter.web.options import FigureParams, check_figure_pixels
 
     data, prep = _prepared(folder, job)
-    p = job["params"]
+    p = dict(job["params"])
+    max_pixels = p.pop("max_pixels", None)  # the server's limit when the job was queued (PNG only)
     name = f"figure.{p.get('format', 'pdf')}"
     tick(0)
     params = FigureParams(**p)  # the CLI's defaults for what the job did not give
-    make_figure(_media_input(folder, data, job["input_name"], prep), out=folder / "out" / name,
-                grid=params.grid,
-                title=params.title or None, label=params.label or None, dpi=params.dpi,
-                fig_width=params.fig_width, font_size=params.font_size, on_progress=tick,
-                **_media_kwargs(prep, painters.renderer))
+    made = make_figure(_media_input(folder, data, job["input_name"], prep), grid=params.grid,
+                       title=params.title or None, label=params.label or None, dpi=params.dpi,
+                       fig_width=params.fig_width, font_size=params.font_size, on_progress=tick,
+                       **_media_kwargs(prep, painters.renderer))
+    if max_pixels is not None:  # composed now: its real size, before the PNG is drawn
+        w, h = made.figure.get_size_inches() * params.dpi
+        check_figure_pixels(round(w), round(h), max_pixels)
+    save_figure(made.figure, folder / "out" / name, params.dpi,
+                transparent=prep.run.settings.background is None)
     return [name]
 
 
@@ -413,16 +429,22 @@ _KIND_RUNNERS = {"images": _run_images, "figure": _run_figure, "movie": _run_mov
 
 
 # -- preview process ----------------------------------------------------------------------
-def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int, int]) -> None:
+def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int, int],
+                 memory: int | None = None) -> None:
     """Entry point of the preview process: answer render requests on `conn` until the parent is gone.
 
     A request is ``{"atlas", "surface", "hidden", "settings", "colors", "view", "coloring"}``
     (``colors`` a :class:`~brainpainter.rendering.geometry.VertexColors` when ``coloring`` is
     ``"vertices"``); the answer is
-    ``("ok", png_bytes, milliseconds)`` or ``("error", one_line_message, 0)``.
+    ``("ok", png_bytes, milliseconds)`` or ``("error", one_line_message, 0)``; `memory`: the bytes of
+    data memory the process may use (None: no limit).
     """
     _set_threads(lp_threads)
     die_with_parent()
+    if memory is not None:
+        from brainpainter.web.upload import limit_memory
+
+        limit_memory(memory)
     from brainpainter.atlas.registry import get_atlas
     from brainpainter.errors import BrainPainterError
     from brainpainter.io.output import png_bytes
