@@ -148,3 +148,28 @@ def test_a_movie_job_survives_a_killed_server_and_its_workers_die_with_it(tmp_pa
         assert deaths == 0  # the server's death is not the job's fault
     finally:
         server.stop()
+
+
+def test_serve_says_where_to_open_it_and_stops_without_leaking_a_semaphore(tmp_path):
+    """Issue 33: a human line besides the JSON log; a movie job's worker (tqdm made a multiprocessing
+    lock in it) left "1 leaked semaphore objects" in the resource tracker's warning at stop."""
+    site = standin_site(tmp_path / "site")
+    log = tmp_path / "server.log"
+    server = Server(tmp_path / "data", env_with_site(site), log, [
+        "--workers", "1", "--no-preview", "--renderer", STANDIN, "--rate", "100000"])
+    server.start()
+    try:
+        with httpx.Client(base_url=server.url, timeout=30) as client:
+            rows = "".join(f"s{k},{k % 3},{(k + 1) % 3},{(k + 2) % 3}\n" for k in range(2))
+            r = client.post("/api/uploads", content=(HEADER + rows).encode(), headers=OCTET)
+            uid = r.json()["upload_id"]
+            r = client.post("/api/jobs", json={"upload_id": uid, "kind": "movie", "options": {
+                "size": "32x24", "views": "lateral-left"}, "movie": {"format": "gif", "frames_per_step": 2}})
+            url = f"/api/jobs/{r.json()['id']}"
+            job = wait_for(lambda: (j := client.get(url).json())["status"] in ("done", "failed") and j, 120)
+            assert job and job["status"] == "done", job
+    finally:
+        server.stop()
+    text = log.read_text()
+    assert f"open {server.url}/ in a browser" in text, text[-2000:]
+    assert "leaked" not in text and "resource_tracker" not in text, text[-2000:]

@@ -122,7 +122,8 @@ def serve(host: str, port: int, data_dir: Path | None, workers: int, no_preview:
     web_log.propagate = False
     shown_host = host if host not in ("0.0.0.0", "::", "") else "127.0.0.1"
     shown_host = f"[{shown_host}]" if ":" in shown_host else shown_host
-    click.echo(json.dumps({"event": "start", "url": f"http://{shown_host}:{port}/", "listen": host,
+    url = f"http://{shown_host}:{port}/"
+    click.echo(json.dumps({"event": "start", "url": url, "listen": host,
                            "data_dir": str(config.data_dir), "workers": workers,
                            "preview": not no_preview}), err=True)
     if host not in ("127.0.0.1", "localhost", "::1"):
@@ -131,5 +132,8 @@ def serve(host: str, port: int, data_dir: Path | None, workers: int, no_preview:
                    "authenticates, or a firewall, when that is not intended.", err=True)
     from brainpainter.web.server import run
 
+    def listening() -> None:  # the one line for a person, besides the JSON log
+        click.echo(f"open {url} in a browser (Ctrl+C stops the server; data in {config.data_dir})", err=True)
+
     run(create_app(config), host=host, port=port, log_level=log_level, max_connections=max_connections,
-        forwarded_allow_ips=forwarded_allow_ips)
+        forwarded_allow_ips=forwarded_allow_ips, on_listening=listening)

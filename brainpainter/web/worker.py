@@ -123,6 +123,18 @@ def die_with_parent() -> None:
         os._exit(0)
 
 
+def _thread_locks_only() -> None:
+    """Give tqdm a thread lock: its default, a multiprocessing lock, is a named semaphore that a process
+    stopped by its server (SIGTERM) or its parent's death never removes, and Python's resource tracker
+    then reports it as leaked when the server stops. One process draws one job at a time; threads are
+    all it needs to lock against."""
+    import threading
+
+    from tqdm import tqdm
+
+    tqdm.set_lock(threading.RLock())
+
+
 def _set_threads(lp_threads: int) -> None:
     """Ready a server process for Blender: llvmpipe's thread count, and no Blender script folders
     inherited on ``sys.path`` (:func:`brainpainter.rendering.parallel.forget_blender_paths`)."""
@@ -139,6 +151,7 @@ def job_worker_main(data_dir: str, name: str, renderer: str, lp_threads: int, tt
     bytes of data memory it may use (None: no limit)."""
     _set_threads(lp_threads)
     die_with_parent()
+    _thread_locks_only()
     if memory is not None:
         from brainpainter.web.upload import limit_memory
 
@@ -441,6 +454,7 @@ def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int
     """
     _set_threads(lp_threads)
     die_with_parent()
+    _thread_locks_only()
     if memory is not None:
         from brainpainter.web.upload import limit_memory
 
