@@ -7,9 +7,11 @@ minute; ``benchmarks/bench_serve_attack.py`` runs the issue's full bars.
 
 from __future__ import annotations
 
+import json
 import os
 import socket
 import sqlite3
+import sys
 import time
 
 import pytest
@@ -173,3 +175,39 @@ def test_serve_says_where_to_open_it_and_stops_without_leaking_a_semaphore(tmp_p
     text = log.read_text()
     assert f"open {server.url}/ in a browser" in text, text[-2000:]
     assert "leaked" not in text and "resource_tracker" not in text, text[-2000:]
+
+
+def test_the_curl_example_of_docs_serve_md_works_with_its_cookie_jar(tmp_path):
+    """The API example (upload, then a job naming the upload) as written, then the job's status with the
+    same jar; without the jar the job is another client's (404)."""
+    import re
+    import shutil
+    import subprocess
+
+    from web_support import REPO
+
+    if shutil.which("curl") is None:
+        pytest.skip("curl is not installed")
+    api = (REPO / "docs" / "serve.md").read_text().split("## API", 1)[1].split("## Logs", 1)[0]
+    script = re.search(r"```bash\n(.*?)```", api, re.S).group(1)
+    assert "-b jar -c jar" in script
+    server = Server(tmp_path / "data", dict(os.environ), tmp_path / "server.log",
+                    ["--workers", "0", "--no-preview", "--rate", "100000"])
+    server.start()
+    try:
+        script = script.replace("http://127.0.0.1:8000", server.url)
+        script = script.replace("python -c", f"{sys.executable} -c")
+        (tmp_path / "examples").mkdir()
+        shutil.copy(REPO / "examples" / "brainpainter_dk.csv", tmp_path / "examples")
+        r = subprocess.run(["bash", "-e", "-c", script], cwd=tmp_path, capture_output=True, text=True,
+                           timeout=60)
+        assert r.returncode == 0, r.stderr
+        job = json.loads(r.stdout.strip().splitlines()[-1])
+        assert job["status"] == "queued", job
+        status = ["curl", "-s", "-o", "/dev/null", "-w", "%{http_code}", f"{server.url}{job['url']}"]
+        mine = subprocess.run([*status[:2], "-b", "jar", *status[2:]], cwd=tmp_path, capture_output=True,
+                              text=True, timeout=30)
+        assert mine.stdout == "200"
+        assert subprocess.run(status, capture_output=True, text=True, timeout=30).stdout == "404"
+    finally:
+        server.stop()
