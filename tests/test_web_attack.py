@@ -270,7 +270,8 @@ def _fill_disk(monkeypatch, free: int = 0) -> None:
     monkeypatch.setattr(shutil, "disk_usage", lambda p: shutil._ntuple_diskusage(1 << 30, 1 << 30, free))
 
 
-def test_on_a_full_disk_reads_work_and_every_write_answers_507(api, monkeypatch):
+def _full_disk_routes(api, fill) -> None:
+    """A done and a queued job; `fill()` fills the disk; then reads answer and writes get 507."""
     store = api.app.state.store
     uid = upload(api, EXAMPLE.read_bytes()).json()["upload_id"]
     done, queued = (api.post("/api/jobs", json={"upload_id": uid, "options": {"size": "64x48"}}).json()["id"]
@@ -279,7 +280,7 @@ def test_on_a_full_disk_reads_work_and_every_write_answers_507(api, monkeypatch)
     assert job["id"] == done
     (store.job_dir(done) / "out" / "a.png").write_bytes(b"png")
     store.finish(done, job["attempt"], ["a.png"], 3600)
-    _fill_disk(monkeypatch)
+    fill()
     r = api.get(f"/api/jobs/{queued}")
     assert r.status_code == 200 and r.json()["status"] == "queued", r.text
     r = api.get(f"/api/jobs/{done}/files/a.png")
@@ -287,11 +288,30 @@ def test_on_a_full_disk_reads_work_and_every_write_answers_507(api, monkeypatch)
     assert api.post("/api/check", json={"upload_id": uid}).status_code == 200
     r = api.get("/readyz")
     assert r.status_code == 503 and r.json()["checks"]["disk"] is False, r.text
-    for r in (api.delete(f"/api/jobs/{queued}"),
+    for r in (api.delete(f"/api/jobs/{queued}"), upload(api, EXAMPLE.read_bytes()),
               api.post("/api/jobs", json={"upload_id": uid, "options": {"size": "64x48"}})):
         assert r.status_code == 507, r.text
         assert r.json()["error"].startswith("the server's disk is full") and r.headers["retry-after"]
     assert store.get(queued)["status"] == "queued"  # nothing changed
+
+
+def test_on_a_full_disk_reads_work_and_every_write_answers_507(api, monkeypatch):
+    _full_disk_routes(api, lambda: _fill_disk(monkeypatch))
+
+
+def test_on_a_real_full_disk_reads_work_and_every_write_answers_507(tmpfs):
+    """The same on a 4 MB tmpfs filled to the last byte (root only)."""
+    disk = tmpfs("size=4m")
+
+    def fill() -> None:
+        with open(disk / "filler", "wb", buffering=0) as fh, pytest.raises(OSError):
+            while True:
+                fh.write(b"x" * 4096)
+
+    config = ServerConfig(data_dir=disk / "data", workers=0, preview=False, rate_per_minute=100_000)
+    with TestClient(create_app(config)) as api:
+        _full_disk_routes(api, fill)
+        (disk / "filler").unlink()
 
 
 def test_a_disk_io_error_with_space_left_is_not_called_a_full_disk(api, monkeypatch):
@@ -396,13 +416,19 @@ def test_serve_refuses_non_finite_limits_and_warns_on_every_interface(tmp_path, 
     monkeypatch.setattr(server, "run", lambda app, **kw: seen.update(kw))
     for key in ("MPLCONFIGDIR", "XDG_CACHE_HOME"):  # serve sets them for its own process
         monkeypatch.setenv(key, os.environ.get(key, ""))
+    import logging
+
+    web_log = logging.getLogger("brainpainter.web")  # serve sets up its log; later tests read it (caplog)
+    monkeypatch.setattr(web_log, "propagate", web_log.propagate)
+    monkeypatch.setattr(web_log, "handlers", list(web_log.handlers))
+    monkeypatch.setattr(web_log, "level", web_log.level)
     mask = os.umask(0o022)
     try:
         r = CliRunner().invoke(cli, ["serve", "--data-dir", str(tmp_path / "e"), "--host", "0.0.0.0",
                                      "--workers", "0", "--no-preview"])
     finally:
         os.umask(mask)
-        from brainpainter.web.store import unlock_data_dir
+        from brainpainter.web.folder_lock import unlock_data_dir
         unlock_data_dir(tmp_path / "e")
     assert r.exit_code == 0, r.output
     assert "http://127.0.0.1:8000/" in r.output and "no authentication" in r.output

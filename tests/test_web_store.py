@@ -136,7 +136,7 @@ def test_serve_command_refuses_a_data_dir_in_use_and_bad_limits(tmp_path):
     import subprocess
     import sys
 
-    from brainpainter.web.store import lock_data_dir, unlock_data_dir
+    from brainpainter.web.folder_lock import lock_data_dir, unlock_data_dir
 
     data = tmp_path / "data"
     lock_data_dir(data)

@@ -51,15 +51,13 @@ from starlette.requests import ClientDisconnect
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.web.config import ServerConfig
+from brainpainter.web.disk import FULL_BELOW, disk_free, disk_full
 from brainpainter.web.guard import Guard
 from brainpainter.web.http import (
-    FULL_BELOW,
     ApiError,
     Work,
     client_of,
     disk_budget,
-    disk_free,
-    disk_full,
     one_line,
     owner_of,
     receive_body,

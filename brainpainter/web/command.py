@@ -103,7 +103,7 @@ def serve(host: str, port: int, data_dir: Path | None, workers: int, no_preview:
     except OSError as exc:
         raise BrainPainterError(f"--data-dir {str(config.data_dir)!r} cannot be created ({exc.strerror}); "
                                 "choose a writable folder.") from None
-    from brainpainter.web.store import lock_data_dir
+    from brainpainter.web.folder_lock import lock_data_dir
 
     lock_data_dir(config.data_dir)  # one server per data folder (held until this process ends)
     os.umask(0o077)  # uploads, results and the database: this user only (the workers inherit it)

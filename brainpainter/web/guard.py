@@ -186,22 +186,15 @@ class Guard:
         deadline = time.monotonic() + seconds
         body_done = method not in STATE_CHANGING
         state = {"status": 0, "bytes": 0, "started": False}
-        token = client_token(dict(scope.get("headers", [])))
-        issued = token is None
-        if token is None:
-            token = secrets.token_hex(16)
-        scope.setdefault("state", {})["owner"] = owner_key(token)
+        cookie = _own(scope)
 
         async def send_wrapper(message: Message) -> None:
             if message["type"] == "http.response.start":
                 state["status"], state["started"] = message["status"], True
                 headers = [h for h in message.get("headers", []) if h[0].lower() != b"server"]
                 headers += [*SECURITY_HEADERS, (b"x-request-id", rid.encode())]
-                if issued:
-                    secure = "; Secure" if scope.get("scheme") == "https" else ""
-                    headers.append((b"set-cookie", f"{TOKEN_COOKIE}={token}; Path=/; Max-Age="
-                                                   f"{TOKEN_MAX_AGE_S}; HttpOnly; SameSite=Strict{secure}"
-                                                   .encode()))
+                if cookie is not None:
+                    headers.append((b"set-cookie", cookie))
                 if path.startswith("/api/"):
                     headers.append((b"cache-control", b"no-store"))
                 message = {**message, "headers": headers}
@@ -257,6 +250,20 @@ class Guard:
                 "t": round(time.time(), 3), "id": rid, "client": client, "method": method, "path": path,
                 "status": state["status"], "ms": round((time.perf_counter() - t0) * 1000, 1),
                 "bytes_in": received, "bytes_out": state["bytes"]}))
+
+
+def _own(scope: Scope) -> bytes | None:
+    """Put the owner key of the request's client token in ``scope["state"]``; when the request has no
+    token, make one: the ``Set-Cookie`` value that gives it to the client is returned."""
+    token = client_token(dict(scope.get("headers", [])))
+    cookie = None
+    if token is None:
+        token = secrets.token_hex(16)
+        secure = "; Secure" if scope.get("scheme") == "https" else ""
+        cookie = (f"{TOKEN_COOKIE}={token}; Path=/; Max-Age={TOKEN_MAX_AGE_S}; HttpOnly; "
+                  f"SameSite=Strict{secure}").encode()
+    scope.setdefault("state", {})["owner"] = owner_key(token)
+    return cookie
 
 
 async def _send_json(send: Send, status: int, body: dict[str, Any],

@@ -170,7 +170,7 @@ def inflate(path: Path) -> Path:
                         "that much. Upload a smaller map.")
                 dst.write(block)
     except (OSError, EOFError, gzip.BadGzipFile) as exc:
-        from brainpainter.web.http import disk_full
+        from brainpainter.web.disk import disk_full
 
         if disk_full(exc):  # the server's disk, not the file: the reading process reports it (507)
             raise

@@ -30,7 +30,8 @@ from dataclasses import replace
 from typing import Any
 
 from brainpainter.web.config import ServerConfig
-from brainpainter.web.store import Store, lock_data_dir, unlock_data_dir
+from brainpainter.web.folder_lock import lock_data_dir, unlock_data_dir
+from brainpainter.web.store import Store
 
 log = logging.getLogger("brainpainter.web")
 

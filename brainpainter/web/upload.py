@@ -105,7 +105,7 @@ def _in_child(target: Any, args: tuple[Any, ...], name: str, time_limit_s: float
 def _failed(exc: BaseException, line: str) -> tuple[str, str]:
     """What a reading process sends for an unexpected error `exc`: ``("full", ...)`` when the disk is
     full (the server answers 507), else ``("error", line)``."""
-    from brainpainter.web.http import disk_full
+    from brainpainter.web.disk import disk_full
 
     return ("full", "no space left on the server's disk") if disk_full(exc) else ("error", line)
 
@@ -232,7 +232,7 @@ def read_map_files(parts: list[tuple[str, bytes]], hemis: list[str | None], fold
 def _map_main(conn: Any, work: str, entries: list[tuple[str | None, str]], max_images: int) -> None:
     """Entry point of the map reading process: send ``("ok", (report, images))`` or ``("error", line)``."""
     from brainpainter.web.maps import build_bundle
-    from brainpainter.web.worker import die_with_parent
+    from brainpainter.web.worker import die_with_parent, limit_memory
 
     die_with_parent()
     limit_memory()
@@ -249,22 +249,6 @@ def _map_main(conn: Any, work: str, entries: list[tuple[str | None, str]], max_i
                                "name says (docs/maps.md lists the formats)."))
     finally:
         conn.close()
-
-
-def limit_memory(limit: int | None = None) -> None:
-    """Bound this process's data memory (``RLIMIT_DATA``) to `limit` bytes (default: a reading process's
-    :data:`brainpainter.web.maps.MEMORY_LIMIT`); more raises ``MemoryError``. A no-op where unsupported."""
-    try:
-        import resource
-
-        _, hard = resource.getrlimit(resource.RLIMIT_DATA)
-        from brainpainter.web.maps import MEMORY_LIMIT
-
-        limit = MEMORY_LIMIT if limit is None else limit
-        limit = limit if hard == resource.RLIM_INFINITY else min(limit, hard)
-        resource.setrlimit(resource.RLIMIT_DATA, (limit, hard))
-    except (ImportError, ValueError, OSError):  # not on this platform: the time limit remains
-        pass
 
 
 # -- tractograms (brainpainter.web.tracts): read in a process of their own, bounded in time and memory ---
@@ -318,7 +302,7 @@ def read_tract_upload(path: Path, names: list[str], sizes: list[int], folder: Pa
 def _tracts_main(conn: Any, work: str, files: list[str], max_files: int, max_streamlines: int) -> None:
     """Entry point of the tract reading process: send ``("ok", report)`` or ``("error", line)``."""
     from brainpainter.web.tracts import build_tract_bundle
-    from brainpainter.web.worker import die_with_parent
+    from brainpainter.web.worker import die_with_parent, limit_memory
 
     die_with_parent()
     limit_memory()

@@ -33,6 +33,8 @@ from pathlib import Path
 from typing import Any
 
 POLL_S = 0.2
+OUT_OF_MEMORY = ("the job needs more memory than this server gives one job (--worker-memory-gb); choose "
+                 "fewer rows or views, a smaller size, or a lower dpi.")
 HEARTBEAT_S = 5.0
 
 #: Job kinds and the output file name stems they make.
@@ -123,16 +125,34 @@ def die_with_parent() -> None:
         os._exit(0)
 
 
-def _thread_locks_only() -> None:
-    """Give tqdm a thread lock: its default, a multiprocessing lock, is a named semaphore that a process
-    stopped by its server (SIGTERM) or its parent's death never removes, and Python's resource tracker
-    then reports it as leaked when the server stops. One process draws one job at a time; threads are
-    all it needs to lock against."""
+def limit_memory(limit: int | None = None) -> None:
+    """Bound this process's data memory (``RLIMIT_DATA``) to `limit` bytes (default: a reading process's
+    :data:`brainpainter.web.maps.MEMORY_LIMIT`); more raises ``MemoryError``. A no-op where unsupported."""
+    try:
+        import resource
+
+        _, hard = resource.getrlimit(resource.RLIMIT_DATA)
+        from brainpainter.web.maps import MEMORY_LIMIT
+
+        limit = MEMORY_LIMIT if limit is None else limit
+        limit = limit if hard == resource.RLIM_INFINITY else min(limit, hard)
+        resource.setrlimit(resource.RLIMIT_DATA, (limit, hard))
+    except (ImportError, ValueError, OSError):  # not on this platform: the time limit remains
+        pass
+
+
+def _rendering_process(memory: int | None) -> None:
+    """Ready a rendering process: at most `memory` bytes of data memory (None: no limit), and tqdm locks
+    with a thread lock, not its default multiprocessing lock (a named semaphore that a process stopped by
+    its server never removes: the resource tracker then warns of a leaked semaphore at the server's stop;
+    one process draws one job at a time)."""
     import threading
 
     from tqdm import tqdm
 
     tqdm.set_lock(threading.RLock())
+    if memory is not None:
+        limit_memory(memory)
 
 
 def _set_threads(lp_threads: int) -> None:
@@ -151,11 +171,7 @@ def job_worker_main(data_dir: str, name: str, renderer: str, lp_threads: int, tt
     bytes of data memory it may use (None: no limit)."""
     _set_threads(lp_threads)
     die_with_parent()
-    _thread_locks_only()
-    if memory is not None:
-        from brainpainter.web.upload import limit_memory
-
-        limit_memory(memory)
+    _rendering_process(memory)
     from brainpainter.web.store import Store
 
     parent = os.getppid()
@@ -214,15 +230,10 @@ def run_job(store: Any, job: dict[str, Any], painters: PainterCache, *, ttl_s: f
         if now is not None and now["status"] == "cancelled":  # cancelled: what was made goes now
             discard_outputs(folder)
         return
-    except BrainPainterError as exc:
-        line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    except (BrainPainterError, MemoryError) as exc:
+        line = OUT_OF_MEMORY if isinstance(exc, MemoryError) else str(exc).splitlines()[0] if str(exc) else (
+            type(exc).__name__)
         if store.fail(job_id, attempt, _no_paths(line, store), ttl_s):  # (a stale attempt touches nothing)
-            discard_outputs(folder, published=False)
-        return
-    except MemoryError:
-        line = ("the job needs more memory than this server gives one job; choose fewer rows or views, a "
-                "smaller size, or a lower dpi.")
-        if store.fail(job_id, attempt, line, ttl_s):
             discard_outputs(folder, published=False)
         return
     except Exception as exc:
@@ -415,8 +426,8 @@ def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
                        fig_width=params.fig_width, font_size=params.font_size, on_progress=tick,
                        **_media_kwargs(prep, painters.renderer))
     if max_pixels is not None:  # composed now: its real size, before the PNG is drawn
-        w, h = made.figure.get_size_inches() * params.dpi
-        check_figure_pixels(round(w), round(h), max_pixels)
+        w, h = (round(x) for x in made.figure.get_size_inches() * params.dpi)
+        check_figure_pixels(w, h, max_pixels)
     save_figure(made.figure, folder / "out" / name, params.dpi,
                 transparent=prep.run.settings.background is None)
     return [name]
@@ -454,11 +465,7 @@ def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int
     """
     _set_threads(lp_threads)
     die_with_parent()
-    _thread_locks_only()
-    if memory is not None:
-        from brainpainter.web.upload import limit_memory
-
-        limit_memory(memory)
+    _rendering_process(memory)
     from brainpainter.atlas.registry import get_atlas
     from brainpainter.errors import BrainPainterError
     from brainpainter.io.output import png_bytes
