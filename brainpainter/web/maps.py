@@ -174,6 +174,10 @@ def inflate(path: Path) -> Path:
                         "that much. Upload a smaller map.")
                 dst.write(block)
     except (OSError, EOFError, gzip.BadGzipFile) as exc:
+        from brainpainter.web.disk import disk_full
+
+        if disk_full(exc):  # the server's disk, not the file: the reading process reports it (507)
+            raise
         raise BrainPainterError(f"{name!r} is not a readable gzip file ({type(exc).__name__}); upload the "
                                 "file as written by your software.") from None
     path.unlink()
