@@ -5,11 +5,13 @@ Files (read with nibabel): FreeSurfer morphometry ("curv" format,
 data arrays = several images), NIfTI holding one value per vertex (``N x 1 x 1``
 [``x k``]), ``.npy``, plain text (one number per line; columns = images);
 label maps ``.annot``, ``.label.gii`` (categories, drawn in their own colours)
-and FreeSurfer ``.label`` vertex lists (a highlighted area). Arrays:
+and FreeSurfer ``.label`` vertex lists (a highlighted area); CIFTI-2 files
+(``.dscalar.nii``, ``.dlabel.nii``, ... read by :mod:`brainpainter.maps.cifti`). Arrays:
 ``{"lh": ndarray (n,) or (k, n), "rh": ...}`` (also ``left``/``right``, and
 nilearn's ``SurfaceImage``). Every map is kept at its own resolution and
-brought to fsaverage when drawn (:func:`brainpainter.maps.resolution.to_fsaverage`). A volume in MNI space is
-turned into the same arrays by ``brainpainter.maps.volume`` and handed to
+brought to fsaverage when drawn (:func:`brainpainter.maps.resolution.to_fsaverage`; fsLR maps, 32,492
+vertices, or 163,842 where the file or ``space`` says fsLR, through :mod:`brainpainter.maps.fslr`).
+A volume in MNI space is turned into the same arrays by ``brainpainter.maps.volume`` and handed to
 :func:`read_maps` as a dict.
 """
 
@@ -18,15 +20,17 @@ from __future__ import annotations
 import gzip
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from brainpainter.errors import BrainPainterError
-from brainpainter.maps.resolution import FAMILY, N_FSAVERAGE, native, to_fsaverage
+from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.maps.fslr import SPACES, decide_space, names_fslr
+from brainpainter.maps.options import frame_rows
+from brainpainter.maps.resolution import FAMILY, FSLR, N_FSAVERAGE, native, to_fsaverage
 
 if TYPE_CHECKING:
     from brainpainter.maps.volume import Method
@@ -37,7 +41,7 @@ TEXT = (".txt", ".csv", ".tsv", ".1d")
 SUFFIXES = (".mgh", ".mgz", ".gii", ".nii", ".nii.gz", ".npy", ".annot", ".label", *TEXT,
             "(none: FreeSurfer curv format, e.g. lh.thickness)")
 #: lh/rh spellings in file names: FreeSurfer's ``lh.``, BIDS' ``hemi-L``, and ``_lh``/``.L.``.
-_PAIRS = ((r"(^|[._-])lh([._-])", r"\1rh\2"), (r"hemi-L", "hemi-R"), (r"([._-])L([._-])", r"\1R\2"),
+_PAIRS = ((r"(^|[._-])lh([._-])", r"\1rh\2"), (r"hemi-L", "hemi-R"), (r"(^|[._-])L([._-])", r"\1R\2"),
           (r"(^|[._-])left([._-])", r"\1right\2"))
 
 
@@ -45,9 +49,10 @@ _PAIRS = ((r"(^|[._-])lh([._-])", r"\1rh\2"), (r"hemi-L", "hemi-R"), (r"([._-])L
 class Hemi:
     """One hemisphere's map as read: values on fsaverage and, for label maps, the category names."""
 
-    values: NDArray[Any]  # float32, shape (k, n), n a count of the fsaverage family; NaN = no value
+    values: NDArray[Any]  # float32, shape (k, n), n a count of the fsaverage family or fsLR; NaN = no value
     categories: tuple[str, ...] | None = None
     colors: NDArray[Any] | None = None  # float, shape (n_categories, 3), sRGB 0-1
+    fslr: bool = False  # the file's metadata names fsLR
 
 
 @dataclass(frozen=True)
@@ -58,8 +63,9 @@ class VertexMaps:
     ----------
     values : dict of str to ndarray of float32, shape (k, n)
         Per hemisphere given (``lh``/``rh``), at the map's own resolution (``n``
-        a count of the fsaverage family; :meth:`on_fsaverage` brings one image
-        to fsaverage); a hemisphere absent shows the underlay.
+        a count of the fsaverage family, or of fsLR when ``space`` is ``"fsLR"``;
+        :meth:`on_fsaverage` brings one image to fsaverage); a hemisphere absent
+        shows the underlay.
     images : tuple of str
         Name of each of the ``k`` images.
     categories : tuple of str, optional
@@ -70,6 +76,10 @@ class VertexMaps:
     regions : dict of str to ndarray of float64, shape (k,), optional
         Values of whole regions beside the map, per image (a volume's mean in each
         subcortical structure, keyed as the atlases' regions: ``"Left-Hippocampus"``).
+    space : {"fsaverage", "fsLR"}
+        The mesh family of ``values``.
+    notes : tuple of str
+        What the reader decided that the user should hear (``note: ...`` on the CLI).
     """
 
     values: dict[str, NDArray[Any]]
@@ -78,6 +88,8 @@ class VertexMaps:
     category_colors: NDArray[Any] | None = None
     source: str = ""
     regions: dict[str, NDArray[Any]] | None = None
+    space: str = "fsaverage"
+    notes: tuple[str, ...] = ()
 
     @property
     def n_images(self) -> int:
@@ -85,6 +97,12 @@ class VertexMaps:
 
     def on_fsaverage(self, hemi: str, image: int) -> NDArray[Any]:
         """Image `image` of hemisphere `hemi` on fsaverage, float32 (163842,)."""
+        if self.space == "fsLR":
+            from brainpainter.maps.fslr import fslr_to_fsaverage
+
+            labels = self.categories is not None
+            resampled: NDArray[Any] = fslr_to_fsaverage(self.values[hemi][image], hemi, labels)[0]
+            return resampled
         row: NDArray[Any] = to_fsaverage(self.values[hemi][image], self.categories is not None)[0]
         return row
 
@@ -112,7 +130,7 @@ class VertexMaps:
         return {"kind": "vertex map", "source": self.source, "n_images": self.n_images,
                 "images": list(self.images), "hemis": sorted(self.values),
                 "categories": None if self.categories is None else len(self.categories),
-                "regions": sorted(self.regions or {})}
+                "regions": sorted(self.regions or {}), "space": self.space, "notes": list(self.notes)}
 
 
 def pair_of(path: str | Path) -> dict[str, Path]:
@@ -134,7 +152,7 @@ def pair_of(path: str | Path) -> dict[str, Path]:
 def _swap(lh_pat: str, rh_sub: str) -> tuple[str, str]:
     """The rh pattern and its lh substitution, from an lh pattern and its rh substitution."""
     table = {r"(^|[._-])lh([._-])": (r"(^|[._-])rh([._-])", r"\1lh\2"), r"hemi-L": (r"hemi-R", "hemi-L"),
-             r"([._-])L([._-])": (r"([._-])R([._-])", r"\1L\2"),
+             r"(^|[._-])L([._-])": (r"(^|[._-])R([._-])", r"\1L\2"),
              r"(^|[._-])left([._-])": (r"(^|[._-])right([._-])", r"\1left\2")}
     return table[lh_pat]
 
@@ -167,14 +185,16 @@ def is_map_input(data: Any) -> bool:
     return hasattr(data, "data") and hasattr(data.data, "parts")  # nilearn SurfaceImage
 
 
-def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = None) -> VertexMaps:
+def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = None, *,
+              space: str | None = None, frames: Any = None) -> VertexMaps:
     """Any map input to :class:`VertexMaps` on fsaverage (the hook every command calls).
 
     Parameters
     ----------
     data : path, dict, nilearn SurfaceImage or VertexMaps, optional
         One file whose name says its hemisphere (its partner is found beside
-        it), ``{"lh": ..., "rh": ...}`` (``left``/``right``) of arrays or paths,
+        it), a CIFTI-2 file (``.dscalar.nii``, ``.dlabel.nii``, ...),
+        ``{"lh": ..., "rh": ...}`` (``left``/``right``) of arrays or paths,
         an MNI152 volume (a 3-D/4-D NIfTI file or nibabel image), or maps
         already read (returned as they are).
     lh, rh : path or ndarray, optional
@@ -182,18 +202,37 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
     volume : path or nibabel image, optional
         An MNI152 volume (``--volume FILE``), projected by
         :func:`read_volume`.
+    space : {"fsaverage", "fsLR"}, optional
+        The mesh of 163,842-vertex maps when the file does not say (``--space``);
+        fsaverage when neither says, with a note.
+    frames : str or sequence of int, optional
+        The images to keep (``--frames 0:100:10``, ``"3"``, ``[0, 4]``): frames of a series.
     """
     from brainpainter.maps import volume as volumes
+    from brainpainter.maps.cifti import is_cifti, read_cifti
 
     if isinstance(data, VertexMaps) and lh is None and rh is None and volume is None:
-        return data  # already read (e.g. kept by the web server)
+        return pick_images(data, frames)  # already read (e.g. kept by the web server)
+    if space is not None and space not in SPACES:
+        raise choice_error("space", space, SPACES)
+    if is_cifti(data) and lh is None and rh is None and volume is None:
+        c = read_cifti(data, frames)
+        chosen, notes = decide_space({h: v.shape[1] for h, v in c.values.items()}, space, c.says_fslr,
+                                     f"CIFTI file {Path(data).name!r}")
+        return VertexMaps(c.values, c.images, c.categories, c.category_colors, c.source, c.regions, chosen,
+                          notes)
+    cifti = [v for v in (data, lh, rh, volume) if is_cifti(v)]
+    if cifti:
+        raise BrainPainterError(f"{Path(cifti[0]).name!r} is a CIFTI file, which holds both hemispheres: "
+                                "give it alone, as INPUT (brainpainter render FILE.dscalar.nii), not with "
+                                "--lh/--rh.")
     if volume is None and data is not None and volumes.is_volume(data):
         volume, data = data, None
     if volume is not None:
         if data is not None or lh is not None or rh is not None:
             raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "
                                     "volume is projected onto both hemispheres.")
-        return read_volume(volume)
+        return pick_images(read_volume(volume), frames)
     given: dict[str, Any] = {}
     if data is not None:
         if hasattr(data, "data") and hasattr(data.data, "parts"):
@@ -216,7 +255,48 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
     if not given:
         raise BrainPainterError("no map given: give --lh FILE and/or --rh FILE (or a dict of arrays).")
     hemis = {h: read_hemi(v, h) for h, v in given.items()}
-    return _combine(hemis, given)
+    maps = _combine(hemis, given)
+    says = any(h.fslr for h in hemis.values()) or any(
+        names_fslr(Path(v).name) for v in given.values() if isinstance(v, str | Path))
+    chosen, notes = decide_space({h: v.shape[1] for h, v in maps.values.items()}, space, says, "the map")
+    return pick_images(replace(maps, space=chosen, notes=notes), frames)
+
+
+def pick_images(maps: VertexMaps, frames: Any) -> VertexMaps:
+    """`maps` with only the images `frames` picks (:func:`frame_rows`); all when None."""
+    if frames is None:
+        return maps
+    rows = frame_rows(frames, maps.n_images, maps.source or "the map")
+    return replace(maps, values={h: v[rows] for h, v in maps.values.items()},
+                   images=tuple(maps.images[i] for i in rows),
+                   regions=None if maps.regions is None else {k: v[rows] for k, v in maps.regions.items()})
+
+
+def maps_to_fsaverage(data: Any, space: str | None = None) -> dict[str, NDArray[Any]]:
+    """Surface maps of any mesh brainpainter knows, on fsaverage (``brainpainter.to_fsaverage``).
+
+    Parameters
+    ----------
+    data : path or dict
+        A CIFTI-2 file (``.dscalar.nii``, ``.dlabel.nii``, ...), one file of an lh/rh pair
+        (an fsLR GIfTI such as ``L.thickness.32k_fs_LR.func.gii``), or
+        ``{"lh": array or path, "rh": ...}`` on fsLR 32k/164k or the fsaverage family.
+    space : {"fsaverage", "fsLR"}, optional
+        The mesh of 163,842-vertex maps that do not say (default fsaverage).
+
+    Returns
+    -------
+    dict of str to ndarray of float32
+        ``{"lh": (163842,), "rh": (163842,)}`` for the hemispheres given, ``(k, 163842)`` for
+        ``k > 1`` images; NaN outside the cortex (the medial wall) and where the map has no value.
+        A label map gives indices into its categories (:func:`read_maps`'s ``categories``).
+    """
+    maps = read_maps(data, space=space)
+    out: dict[str, NDArray[Any]] = {}
+    for hemi in maps.values:
+        rows = np.stack([maps.on_fsaverage(hemi, i) for i in range(maps.n_images)])
+        out[hemi] = rows[0] if maps.n_images == 1 else rows
+    return out
 
 
 def read_volume(img: Any, *, method: Method = "linear") -> VertexMaps:
@@ -298,7 +378,8 @@ def _stem(path: str | Path) -> str:
         if name.lower().endswith(suffix):
             name = name[: -len(suffix)]
             break
-    for pat in (r"(^|[._-])[lr]h([._-]|$)", r"()hemi-[LR]_?", r"(^|[._-])(?:left|right)([._-]|$)"):
+    for pat in (r"(^|[._-])[lr]h([._-]|$)", r"()hemi-[LR]_?", r"(^|[._-])(?:left|right)([._-]|$)",
+                r"(^|[._-])[LR]([._-]|$)"):
         name = re.sub(pat, lambda m: m.group(1) or "", name)
     return name.strip("._-") or "map"
 
@@ -314,9 +395,10 @@ def read_hemi(value: Any, hemi: str) -> Hemi:
 def _as_rows(arr: NDArray[Any], what: str) -> NDArray[Any]:
     """An array as (k images, n vertices): 1-D, (k, n) or (n, k) with n an fsaverage count."""
     a = np.asarray(arr)
-    if a.ndim == 2 and a.shape[0] in FAMILY and a.shape[1] not in FAMILY:
+    known = {*FAMILY, *FSLR}
+    if a.ndim == 2 and a.shape[0] in known and a.shape[1] not in known:
         a = a.T
-    if a.ndim == 2 and 1 in a.shape and a.size in FAMILY:
+    if a.ndim == 2 and 1 in a.shape and a.size in known:
         a = a.reshape(1, -1)
     if a.ndim not in (1, 2) or a.size == 0:
         raise BrainPainterError(f"{what} has shape {a.shape}; a map has one value per vertex, shape (n,) "
@@ -347,7 +429,8 @@ def read_file(path: Path, hemi: str) -> Hemi:
             v[idx] = 1.0
             return Hemi(native(v, what=what))
         if name.endswith(".gii"):
-            return _gifti(nib.load(str(path)), what)
+            img = nib.load(str(path))
+            return replace(_gifti(img, what), fslr=_gifti_says_fslr(img))
         if name.endswith((".mgh", ".mgz", ".nii", ".nii.gz")):
             raw = path.read_bytes()  # read whole: no file left open by a lazy proxy
             raw = gzip.decompress(raw) if name.endswith((".mgz", ".gz")) else raw
@@ -375,10 +458,16 @@ def _surface_frames(data: NDArray[Any], what: str) -> NDArray[Any]:
     dimensions are limited to 32767 (fsaverage as ``27307 x 1 x 6``): the
     vertex index runs over the first three axes, first axis fastest.
     """
-    if data.ndim >= 3 and int(np.prod(data.shape[:3])) in FAMILY and 1 in data.shape[1:3]:
+    if data.ndim >= 3 and int(np.prod(data.shape[:3])) in {*FAMILY, *FSLR} and 1 in data.shape[1:3]:
         return data.reshape((-1, int(np.prod(data.shape[3:], dtype=np.int64))), order="F")
     raise BrainPainterError(f"{what} has shape {data.shape}, not one value per vertex (N x 1 x 1) of an "
                             "fsaverage surface; a volume in MNI space goes to --volume.")
+
+
+def _gifti_says_fslr(img: Any) -> bool:
+    """Whether a GIfTI image's metadata (the file's or a data array's) names fsLR."""
+    metas = [img.meta, *(d.meta for d in img.darrays)]
+    return any(names_fslr(str(v)) for m in metas if m is not None for v in m.values())
 
 
 def _gifti(img: Any, what: str) -> Hemi:
