@@ -221,3 +221,71 @@ def test_to_fsaverage_of_arrays_and_fsaverage5():
     assert np.nanmax(out["rh"]) == pytest.approx(2.0) and np.isnan(out["lh"]).any()
     coarse = brainpainter.to_fsaverage({"lh": np.ones(10242)})
     assert set(coarse) == {"lh"} and np.isfinite(coarse["lh"]).all()
+
+
+def _dk_dlabel(path: Path) -> Path:
+    """DK (fsaverage's lh/rh.aparc.annot) brought to fsLR 32k by nearest vertex on the deformed spheres."""
+    from scipy.spatial import cKDTree
+
+    fsaverage = FREESURFER / "subjects" / "fsaverage"
+    surf, label = fsaverage / "surf", fsaverage / "label"
+    table: dict[int, tuple[str, tuple[float, float, float, float]]] = {0: ("???", (0, 0, 0, 0))}
+    keys, cols = [], None
+    for hemi, side, structure in (("lh", "L", "CortexLeft"), ("rh", "R", "CortexRight")):
+        deformed = f"fs_LR-deformed_to-fsaverage.{side}.sphere.32k_fs_LR.surf.gii"
+        xyz = nib.load(str(FSLR / "resample_fsaverage" / deformed)).darrays[0].data
+        sphere, _ = nib.freesurfer.read_geometry(str(surf / f"{hemi}.sphere"))
+        _, nearest = cKDTree(sphere / 100.0).query(xyz / np.linalg.norm(xyz, axis=1, keepdims=True))
+        lab, ctab, names = nib.freesurfer.read_annot(str(label / f"{hemi}.aparc.annot"))
+        for i, name in enumerate(n.decode() for n in names):
+            table[i + 1] = (name, (*(ctab[i, :3] / 255.0), 1.0))
+        keys.append(np.where(lab[nearest] >= 0, lab[nearest] + 1, 0))
+        model = axes.BrainModelAxis.from_surface(np.arange(N32), N32, structure)
+        cols = model if cols is None else cols + model
+    return _write(path, np.concatenate(keys)[None], axes.LabelAxis(["dk"], [table]), cols)
+
+
+@pytest.mark.render
+@pytest.mark.integration
+def test_dk_dlabel_on_fslr_renders_as_dk(tmp_path):
+    """The bar: a DK dlabel on fsLR 32k renders lateral-left with >= 90 % of brain pixels DK's colour."""
+    from brainpainter.color.scale import make_scale
+    from brainpainter.maps.layers import vertex_colors
+    from brainpainter.rendering.geometry import VertexColors
+    from brainpainter.rendering.painter import Painter
+    from brainpainter.rendering.settings import RenderSettings
+    from brainpainter.rendering.views import get_view
+
+    label = FREESURFER / "subjects" / "fsaverage" / "label"
+    if not label.is_dir() or not (FSLR / "resample_fsaverage").is_dir():
+        pytest.skip("shared data not found")
+    dlabel = read_maps(_dk_dlabel(tmp_path / "dk.dlabel.nii"))
+    annot = read_maps(label / "lh.aparc.annot")
+    assert dlabel.space == "fsLR" and set(dlabel.categories or ()) <= set(annot.categories or ())
+    view, scale = get_view("lateral-left"), make_scale(cmap="viridis", vmin=0, vmax=1)
+    images = []
+    with Painter("dk", settings=RenderSettings(width=600, height=450), coloring="vertices") as p:
+        for maps in (annot, dlabel):
+            colors = vertex_colors(maps, 0, p.scene.geometry.source_vertex, scale, "none")
+            images.append(p.paint_colors(VertexColors({}, colors), view))
+    brain = [(img[..., 3] > 0) & ~np.all(img[..., :3] == 255, axis=-1) for img in images]
+    both = brain[0] & brain[1]
+    assert both.sum() > 0.3 * 600 * 450
+    diff = np.abs(images[0][..., :3].astype(int) - images[1][..., :3].astype(int)).max(-1)
+    assert (diff[both] <= 10).mean() >= 0.90
+
+
+@pytest.mark.render
+def test_dscalar_renders_cortex_and_subcortical_structure(tmp_path):
+    """A 32k dscalar: the cortex and the thalamus (its voxels' mean) drawn in the map's colours."""
+    cols = axes.BrainModelAxis.from_surface(np.arange(N32), N32, "CortexLeft") + _voxels("thalamus_left", 4)
+    data = np.concatenate([np.full(N32, 1.0), np.full(4, -1.0)])[None]
+    path = _write(tmp_path / "x.dscalar.nii", data, axes.ScalarAxis(["m"]), cols)
+    result = brainpainter.render(path, views="lateral-left,subcortical", width=320, height=240, cmap="RdBu_r",
+                                 vmin=-1, vmax=1)
+    cortex, deep = result.images[("m", "lateral-left")], result.images[("m", "subcortical")]
+    c, d = cortex[..., :3].astype(int), deep[..., :3].astype(int)
+    red = (c[..., 0] > 60) & (c[..., 1] < 30) & (c[..., 0] > 2 * c[..., 2])  # RdBu_r's dark red
+    blue = (d[..., 2] > 60) & (d[..., 2] > d[..., 0] + 40)  # RdBu_r's dark blue
+    assert red.mean() > 0.2  # the left cortex: +1
+    assert blue.sum() > 100  # the left thalamus: -1
