@@ -107,8 +107,8 @@ def decide_space(counts: Mapping[str, int], space: str | None, says_fslr: bool,
 
 
 @cache
-def _weights(hemi: str, res: str) -> tuple[Any, NDArray[np.bool_], NDArray[np.int64]]:
-    """(CSR (163842 x n_fsLR) of weights, fsLR cortex mask (n_fsLR,), nearest fsLR vertex (163842,))."""
+def _weights(hemi: str, res: str) -> tuple[Any, NDArray[np.bool_]]:
+    """(CSR matrix (163842 x n_fsLR) of weights, fsLR cortex mask (n_fsLR,)), loaded once."""
     from scipy import sparse
 
     with resources.files("brainpainter").joinpath("data/fslr-fsaverage.npz").open("rb") as fh:
@@ -118,12 +118,16 @@ def _weights(hemi: str, res: str) -> tuple[Any, NDArray[np.bool_], NDArray[np.in
             roi_bits = z[f"{hemi}_{res}_roi"]
     n = {v: k for k, v in RESAMPLED.items()}[res]
     matrix = sparse.csr_matrix((weights, indices, indptr), shape=(N_FSAVERAGE, n))
-    roi = np.unpackbits(roi_bits)[:n].astype(bool)
-    # the vertex of largest weight in each row (the nearest): where a label map's label comes from
-    lengths = np.diff(indptr)
-    order = np.lexsort((-weights, np.repeat(np.arange(N_FSAVERAGE), lengths)))
-    nearest = indices[order[indptr[:-1]]].astype(np.int64)
-    return matrix, roi, nearest
+    return matrix, np.unpackbits(roi_bits)[:n].astype(bool)
+
+
+@cache
+def _nearest(hemi: str, res: str) -> NDArray[np.int64]:
+    """For each fsaverage vertex, the fsLR vertex of largest weight (the nearest), (163842,): its label."""
+    matrix, _ = _weights(hemi, res)
+    rows = np.repeat(np.arange(N_FSAVERAGE), np.diff(matrix.indptr))
+    order = np.lexsort((-matrix.data, rows))  # by row, largest weight first
+    return np.asarray(matrix.indices[order[matrix.indptr[:-1]]], np.int64)
 
 
 def fslr_to_fsaverage(values: NDArray[Any], hemi: str, categorical: bool = False,
@@ -145,10 +149,11 @@ def fslr_to_fsaverage(values: NDArray[Any], hemi: str, categorical: bool = False
     """
     v = np.asarray(values, dtype=np.float32)
     v = v[None] if v.ndim == 1 else v
-    matrix, roi, nearest = _weights(hemi, check_fslr(v.shape[1], what))
+    res = check_fslr(v.shape[1], what)
+    matrix, roi = _weights(hemi, res)
     v = np.where(roi, v, np.float32(np.nan))
     if categorical:
-        out: NDArray[Any] = v[:, nearest]
+        out: NDArray[Any] = v[:, _nearest(hemi, res)]
         return out
     ok = np.isfinite(v)
     total = matrix @ np.where(ok, v, 0.0).T  # (163842, k)
