@@ -289,3 +289,10 @@ def test_dscalar_renders_cortex_and_subcortical_structure(tmp_path):
     blue = (d[..., 2] > 60) & (d[..., 2] > d[..., 0] + 40)  # RdBu_r's dark blue
     assert red.mean() > 0.2  # the left cortex: +1
     assert blue.sum() > 100  # the left thalamus: -1
+
+
+def test_export_takes_the_map_options_of_a_cifti_series(tmp_path):
+    data = np.arange(3 * 10, dtype=np.float32).reshape(3, 10)
+    path = _write(tmp_path / "run.dtseries.nii", data, axes.SeriesAxis(0, 1, 3), _cortex())
+    out = brainpainter.export(path, tmp_path / "x.glb", frames="1", space="fsLR")
+    assert out.stat().st_size > 1000
