@@ -296,3 +296,16 @@ def test_export_takes_the_map_options_of_a_cifti_series(tmp_path):
     path = _write(tmp_path / "run.dtseries.nii", data, axes.SeriesAxis(0, 1, 3), _cortex())
     out = brainpainter.export(path, tmp_path / "x.glb", frames="1", space="fsLR")
     assert out.stat().st_size > 1000
+
+
+def test_truncated_cifti_is_one_line_and_allocates_nothing_it_says(tmp_path):
+    cols = axes.BrainModelAxis.from_surface(np.arange(N32), N32, "CortexLeft")
+    path = _write(tmp_path / "x.dscalar.nii", np.ones((4, N32)), axes.ScalarAxis(list("abcd")), cols)
+    raw = path.read_bytes()
+    for cut, pattern in ((len(raw) // 2, "says it holds 519872 bytes"),
+                         (len(raw) - 8, "cannot read the data")):
+        short = tmp_path / f"cut{cut}.dscalar.nii"
+        short.write_bytes(raw[:cut])
+        with pytest.raises(BrainPainterError, match=pattern) as e:
+            read_maps(short)
+        assert "\n" not in str(e.value)

@@ -139,16 +139,21 @@ def read_cifti(path: str | Path, frames: Any = None) -> Cifti:
     for hemi, n in nvertices.items():
         known_count(n, f"{what} ({hemi})")
     need = 4 * len(rows) * sum(nvertices.values())
-    have = int(np.prod(img.shape)) * img.get_data_dtype().itemsize
+    have = _check_size(img, (len(rows_axis), len(cols_axis)), p.stat().st_size, what)
     if need > max(GROWTH * have, _FLOOR):
         raise BrainPainterError(
             f"{what}: {len(rows)} rows over {sum(nvertices.values())} vertices take {need // 2**20} MiB, "
             f"more than {GROWTH} times the file's data; pick fewer rows with --frames (e.g. --frames 0:10).")
     dtype = np.float64 if isinstance(rows_axis, axes.LabelAxis) else np.float32
-    if rows == list(range(len(rows_axis))):
-        data = np.asarray(img.dataobj, dtype=dtype).reshape(len(rows), -1)
-    else:  # row by row: nibabel's proxy takes no list of rows
-        data = np.stack([np.asarray(img.dataobj[r], dtype=dtype).reshape(-1) for r in rows])
+    try:
+        if rows == list(range(len(rows_axis))):
+            data = np.asarray(img.dataobj, dtype=dtype).reshape(len(rows), -1)
+        else:  # row by row: nibabel's proxy takes no list of rows
+            data = np.stack([np.asarray(img.dataobj[r], dtype=dtype).reshape(-1) for r in rows])
+    except Exception as exc:  # a file shorter than its header says, or data nibabel cannot convert
+        text = " ".join(str(exc).split())[:160]
+        raise BrainPainterError(f"cannot read the data of {what}: {text}. The file is damaged or "
+                                "truncated; write it again.") from None
     labels = _label_table(rows_axis, rows) if isinstance(rows_axis, axes.LabelAxis) else None
     if labels is not None:
         data = labels[1](data)
@@ -192,6 +197,25 @@ def _grayordinates(cols_axis: Any, data: NDArray[Any], nvertices: dict[str, int]
                                                 f"{nvertices[hemi]} vertices; the file is damaged.")
                     values[hemi][:, vertex] = data[:, j][:, None]
     return values, regions
+
+
+def _check_size(img: Any, axes_shape: tuple[int, int], file_size: int, what: str) -> int:
+    """The bytes of the file's data, checked against its axes and the file's size (before reading).
+
+    Raises
+    ------
+    BrainPainterError
+        Data of another shape than the axes, or more data than the file holds (nothing is allocated).
+    """
+    shape = tuple(int(n) for n in img.shape)
+    if shape != axes_shape:
+        raise BrainPainterError(f"{what} holds data of shape {shape} but its axes say {axes_shape}; the file "
+                                "is damaged; write it again.")
+    size = int(np.prod(shape, dtype=np.int64)) * int(img.get_data_dtype().itemsize)
+    if size > file_size:
+        raise BrainPainterError(f"{what} says it holds {size} bytes of data but the file has {file_size}; it "
+                                "is truncated or damaged; write it again.")
+    return size
 
 
 def _refuse_cifti1(path: Path, what: str) -> None:
