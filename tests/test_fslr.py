@@ -309,3 +309,10 @@ def test_truncated_cifti_is_one_line_and_allocates_nothing_it_says(tmp_path):
         with pytest.raises(BrainPainterError, match=pattern) as e:
             read_maps(short)
         assert "\n" not in str(e.value)
+
+
+def test_a_cifti_path_that_is_no_regular_file_is_refused(tmp_path):
+    fifo = tmp_path / "pipe.dscalar.nii"
+    os.mkfifo(fifo)
+    with pytest.raises(BrainPainterError, match="not a regular file"):
+        read_maps(fifo)

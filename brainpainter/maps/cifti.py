@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
+from brainpainter.io.files import check_input
 from brainpainter.maps.options import frame_rows
 from brainpainter.maps.resolution import known_count
 
@@ -43,6 +44,8 @@ _STRUCTURES = {"ACCUMBENS": "Accumbens-area", "AMYGDALA": "Amygdala", "CAUDATE":
 #: Values drawn may be at most this multiple of the file's data (and at least 64 MiB): a parcel
 #: file's few values spread over every vertex must not grow without bound.
 GROWTH = 4
+#: The largest CIFTI file read (an HCP dtseries of 1200 frames is 440 MB).
+MAX_BYTES = 16 * 2**30
 _FLOOR = 64 * 2**20
 
 
@@ -112,8 +115,7 @@ def read_cifti(path: str | Path, frames: Any = None) -> Cifti:
         raise BrainPainterError(
             f"{p.name!r} is a CIFTI connectome (dconn/pconn): brainpainter draws maps, not connectomes yet; "
             "give one row of it as a dscalar (wb_command -cifti-merge ... or -cifti-reduce).")
-    if not p.is_file():
-        raise BrainPainterError(f"CIFTI file {str(p)!r} does not exist; give an existing file.")
+    check_input(p, "CIFTI file", limit=MAX_BYTES, hint="give a CIFTI-2 file")  # a regular file, not a FIFO
     what = f"CIFTI file {p.name!r}"
     _refuse_cifti1(p, what)
     img: Any
