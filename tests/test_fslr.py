@@ -316,3 +316,31 @@ def test_a_cifti_path_that_is_no_regular_file_is_refused(tmp_path):
     os.mkfifo(fifo)
     with pytest.raises(BrainPainterError, match="not a regular file"):
         read_maps(fifo)
+
+
+def test_hcp_refsulc_at_32k_correlates_with_fsaverage_sulc(tmp_path):
+    """HCP's sulcal depth taken to fsLR 32k (nearest 164k vertex), as a 91k-style dscalar, |r| >= 0.85."""
+    from scipy.spatial import cKDTree
+
+    deformed = FSLR / "resample_fsaverage"
+    if not deformed.is_dir():
+        pytest.skip("shared data not found")
+    cols, rows = None, []
+    for side, structure in (("L", "CortexLeft"), ("R", "CortexRight")):
+        sphere = [nib.load(str(deformed / f"fs_LR-deformed_to-fsaverage.{side}.sphere.{r}_fs_LR.surf.gii"))
+                  .darrays[0].data for r in ("32k", "164k")]
+        _, nearest = cKDTree(sphere[1]).query(sphere[0])
+        sulc = nib.load(str(FSLR / f"{side}.refsulc.164k_fs_LR.shape.gii")).darrays[0].data[nearest]
+        roi = nib.load(str(FSLR / f"{side}.atlasroi.32k_fs_LR.shape.gii")).darrays[0].data
+        cortex = np.flatnonzero(roi > 0)
+        rows.append(sulc[cortex])  # 29696 + 29716 = 59412 grayordinates of cortex, as HCP's 91k files
+        model = axes.BrainModelAxis.from_surface(cortex, N32, structure)
+        cols = model if cols is None else cols + model
+    path = _write(tmp_path / "sulc.32k_fs_LR.dscalar.nii", np.concatenate(rows)[None],
+                  axes.ScalarAxis(["sulc"]), cols)
+    on = brainpainter.to_fsaverage(path)
+    for hemi in ("lh", "rh"):
+        fs = nib.freesurfer.read_morph_data(str(FREESURFER / "subjects" / "fsaverage" / "surf"
+                                                / f"{hemi}.sulc"))
+        ok = np.isfinite(on[hemi])
+        assert abs(np.corrcoef(on[hemi][ok], fs[ok])[0, 1]) >= 0.85
