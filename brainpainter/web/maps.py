@@ -4,7 +4,8 @@ An upload is a map when its file name says so
 (:func:`brainpainter.maps.inputs.is_map_input`: ``lh.thickness``, ``.mgh``/``.mgz``,
 ``.func.gii``, ``.npy``, ``.annot``...) or when it is a NIfTI volume (``.nii``,
 ``.nii.gz``, 3-D or 4-D, projected onto fsaverage by
-:func:`brainpainter.maps.volume.project_volume`). Two files (lh and rh) travel in
+:func:`brainpainter.maps.volume.project_volume`) or a CIFTI-2 file (``.dscalar.nii``,
+``.dlabel.nii``..., :mod:`brainpainter.maps.cifti`). Two files (lh and rh) travel in
 one request body, one after the other, with their names and sizes in the query.
 
 The files are read (:func:`build_bundle`) in a process of its own, started by
@@ -12,8 +13,8 @@ The files are read (:func:`build_bundle`) in a process of its own, started by
 parse time limit, with its data memory bounded (:data:`MEMORY_LIMIT`);
 compressed files (``.gz``, ``.mgz``) are inflated to disk, at most
 :data:`MAX_INFLATED` bytes. What is kept is a *bundle* (:data:`MAGIC`, one JSON
-line, then the files): the map files as read (a volume: its projection, one
-``.npy`` per hemisphere), so that previews and jobs read them again with
+line, then the files): the map files as read (a volume: its projection, a CIFTI file:
+its cortex, one ``.npy`` per hemisphere), so that previews and jobs read them again with
 :func:`brainpainter.maps.inputs.read_maps`, as the CLI reads ``--lh``/``--rh``.
 Client file names are only labels: they are made safe (:func:`file_name`) and
 every file is written into a fresh private folder.
@@ -185,10 +186,14 @@ def build_bundle(work: Path, entries: list[tuple[str | None, Path]],
     (dict, list of str)
         The upload's report (:func:`base_report`) and its image names.
     """
+    from brainpainter.maps.cifti import is_cifti
+
     names = [p.name for _, p in entries]
     files = [(hemi, inflate(p)) for hemi, p in entries]
     if len(files) == 1 and files[0][0] is None:
         path = files[0][1]
+        if is_cifti(path):
+            return _cifti_bundle(work, path, names[0], max_images)
         shape = _nifti_shape(path)
         if sum(s > 1 for s in shape[:3]) >= 3:
             return _volume_bundle(work, path, names[0], shape, max_images)
@@ -233,39 +238,73 @@ def _volume_bundle(work: Path, path: Path, shown: str, shape: tuple[int, ...],
         raise BrainPainterError(f"{shown!r} has {voxels} voxels per volume; this server reads at most "
                                 f"{MAX_VOXELS}. Resample it to 1 or 2 mm MNI152.")
     maps = read_volume(path)  # the cortex by registration fusion, the structures by their means
+    report = base_report(maps, "volume", [shown], f"volume: {shown} (MNI152, {'x'.join(map(str, shape))}) "
+                         f"projected onto fsaverage, {_images(maps.n_images)}")
+    _write_arrays(work, maps, volume.name, "volume", report)
+    return report, list(maps.images)
+
+
+def _cifti_bundle(work: Path, path: Path, shown: str, max_images: int) -> tuple[dict[str, Any], list[str]]:
+    """A CIFTI-2 file: its cortex per hemisphere (fsLR or fsaverage) and its subcortical means."""
+    from brainpainter.maps.inputs import read_maps
+
+    maps = read_maps(path)
+    _check_images(maps, max_images)
+    kind = "label map" if maps.categories is not None else "map"
+    what = f"{len(maps.categories)} labels" if maps.categories is not None else _images(maps.n_images)
+    meshes = ", ".join(sorted({_mesh(maps, v.shape[1]) for v in maps.values.values()}))
+    report = base_report(maps, kind, [shown], f"CIFTI {kind}: {shown}, {meshes}, {what}")
+    _write_arrays(work, maps, path.name, "cifti", report)
+    return report, list(maps.images)
+
+
+def _write_arrays(work: Path, maps: Any, stem: str, kind: str, report: dict[str, Any]) -> None:
+    """Store `maps`: one ``.npy`` per hemisphere; image names, regions, mesh and labels in the header."""
+    import numpy as np
+
     out = work / "out"
     out.mkdir()
     stored = []
     for hemi, values in maps.values.items():
-        target = out / f"{hemi}.{file_name(volume.name)}.npy"
+        target = out / f"{hemi}.{file_name(stem)}.npy"
         np.save(target, np.asarray(values, np.float32), allow_pickle=False)
         stored.append((hemi, target))
-    report = base_report(maps, "volume", [shown], f"volume: {shown} (MNI152, {'x'.join(map(str, shape))}) "
-                         f"projected onto fsaverage, {_images(maps.n_images)}")
-    extra = {"images": list(maps.images),
+    extra = {"images": list(maps.images), "space": maps.space,
              "regions": {k: [float(x) for x in v] for k, v in (maps.regions or {}).items()}}
-    _write_bundle(work / "bundle.bin", "volume", stored, report, extra)
-    return report, list(maps.images)
+    if maps.categories is not None:
+        extra["categories"] = list(maps.categories)
+        extra["category_colors"] = np.asarray(maps.category_colors, float).tolist()
+    _write_bundle(work / "bundle.bin", kind, stored, report, extra)
+
+
+def _check_images(maps: Any, max_images: int) -> None:
+    if maps.n_images > max_images:
+        raise BrainPainterError(
+            f"the map holds {maps.n_images} images; this server draws at most {max_images} images per "
+            "upload. Upload fewer images, or render it with 'brainpainter render' on your own computer.")
 
 
 def _surface_bundle(work: Path, files: list[tuple[str, Path]], names: list[str],
                     max_images: int) -> tuple[dict[str, Any], list[str]]:
     from brainpainter.maps.inputs import read_maps
-    from brainpainter.maps.resolution import surface_of
 
     order = sorted(files, key=lambda f: f[0])  # lh first
     maps = read_maps({h: p for h, p in order})
-    if maps.n_images > max_images:
-        raise BrainPainterError(
-            f"the map holds {maps.n_images} images; this server draws at most {max_images} images per "
-            "upload. Upload fewer images, or render it with 'brainpainter render' on your own computer.")
-    surfaces = sorted({surface_of(v.shape[1]) for v in maps.values.values()})
+    _check_images(maps, max_images)
+    surfaces = sorted({_mesh(maps, v.shape[1]) for v in maps.values.values()})
     kind = "label map" if maps.categories is not None else "map"
     what = f"{len(maps.categories)} labels" if maps.categories is not None else _images(maps.n_images)
     shown = [n for _, n in sorted(zip([h for h, _ in files], names, strict=True))]
     report = base_report(maps, kind, shown, f"{kind}: {' + '.join(shown)}, {', '.join(surfaces)}, {what}")
     _write_bundle(work / "bundle.bin", "surface", order, report)
     return report, list(maps.images)
+
+
+def _mesh(maps: Any, n: int) -> str:
+    """The mesh of a map of `n` vertices per hemisphere (``fsaverage5``, ``fsLR 32k``)."""
+    from brainpainter.maps.resolution import FSLR, surface_of
+
+    return FSLR[n] if maps.space == "fsLR" else surface_of(n)
 
 
 def _images(n: int) -> str:
@@ -276,12 +315,11 @@ def base_report(maps: Any, kind: str, names: list[str], summary: str) -> dict[st
     """The report of a map upload (the page shows ``summary``: what was understood)."""
     import numpy as np
 
-    from brainpainter.maps.resolution import surface_of
-
     finite = maps.finite()
     return {
         "ok": True, "kind": "map", "map_kind": kind, "summary": summary, "files": names,
-        "hemis": sorted(maps.values), "surfaces": {h: surface_of(v.shape[1]) for h, v in maps.values.items()},
+        "hemis": sorted(maps.values),
+        "surfaces": {h: _mesh(maps, v.shape[1]) for h, v in maps.values.items()},
         "n_images": maps.n_images, "images": list(maps.images[:20]),
         "categories": None if maps.categories is None else list(maps.categories[:50]),
         "values": {"range": [float(np.min(finite)), float(np.max(finite))] if finite.size else None,
@@ -355,8 +393,15 @@ def read_bundle(data: bytes, where: Path | None = None) -> Any:
 
     header, _ = bundle_header(data)
     with extracted(data, where) as files:
-        maps = read_maps(files)
+        space = header.get("space") or ("fsaverage" if header.get("kind") == "volume" else None)
+        maps = read_maps(files, space=space)
     if "images" in header and len(header["images"]) == maps.n_images:
         regions = {k: np.asarray(v, float) for k, v in header.get("regions", {}).items()}
         maps = dataclasses.replace(maps, images=tuple(header["images"]), regions=regions or None)
+    if header.get("categories"):  # a CIFTI label map: indices into the stored names
+        colors = np.asarray(header.get("category_colors"), float).reshape(-1, 3)
+        if len(colors) != len(header["categories"]):
+            raise BrainPainterError("the stored map upload is damaged; upload the map again.")
+        maps = dataclasses.replace(maps, categories=tuple(map(str, header["categories"])),
+                                   category_colors=colors)
     return maps
