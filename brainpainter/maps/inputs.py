@@ -167,7 +167,8 @@ def is_map_input(data: Any) -> bool:
     return hasattr(data, "data") and hasattr(data.data, "parts")  # nilearn SurfaceImage
 
 
-def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = None) -> VertexMaps:
+def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = None, *,
+              projection: str | None = None, radius: float | None = None) -> VertexMaps:
     """Any map input to :class:`VertexMaps` on fsaverage (the hook every command calls).
 
     Parameters
@@ -182,6 +183,9 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
     volume : path or nibabel image, optional
         An MNI152 volume (``--volume FILE``), projected by
         :func:`read_volume`.
+    projection, radius : optional
+        How a volume is sampled (``--projection``, ``--projection-radius``), as in
+        :func:`brainpainter.maps.volume.project_volume`.
     """
     from brainpainter.maps import volume as volumes
 
@@ -193,7 +197,7 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
         if data is not None or lh is not None or rh is not None:
             raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "
                                     "volume is projected onto both hemispheres.")
-        return read_volume(volume)
+        return read_volume(volume, projection=projection, radius=radius)
     given: dict[str, Any] = {}
     if data is not None:
         if hasattr(data, "data") and hasattr(data.data, "parts"):
@@ -219,7 +223,8 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
     return _combine(hemis, given)
 
 
-def read_volume(img: Any, *, method: Method = "linear") -> VertexMaps:
+def read_volume(img: Any, *, method: Method = "linear", projection: str | None = None,
+                radius: float | None = None) -> VertexMaps:
     """A volume as maps on fsaverage, with its subcortical means: what ``--volume FILE`` draws.
 
     Parameters
@@ -228,6 +233,9 @@ def read_volume(img: Any, *, method: Method = "linear") -> VertexMaps:
         An MNI152 volume, 3-D or 4-D (one image per volume).
     method : {"linear", "nearest"}
         As in :func:`brainpainter.maps.volume.project_volume`.
+    projection : {"ribbon", "line", "point"}, optional
+    radius : float, optional
+        As in :func:`~brainpainter.maps.volume.project_volume` (default 3 mm).
 
     Returns
     -------
@@ -237,10 +245,13 @@ def read_volume(img: Any, *, method: Method = "linear") -> VertexMaps:
         subcortical structure (:func:`~brainpainter.maps.volume.subcortical_means`), shape
         (n_volumes,) each.
     """
+    from brainpainter.maps.options import RADIUS_MM, check_projection
     from brainpainter.maps.volume import load_volume, project_volume, subcortical_means
 
     volume = load_volume(img)
-    projected = project_volume(img, method=method)
+    radius = RADIUS_MM if radius is None else radius
+    projected = project_volume(img, method=method, projection=check_projection(projection, method, radius),
+                               radius=radius)
     means = subcortical_means(img, method=method)
     k = volume.n_volumes
     if len(volume.shape) == 3:
