@@ -61,7 +61,8 @@ def test_a_blob_peaks_on_the_vertex_at_its_mni_position(tmp_path, hemi, point):
     assert set(maps) == {"lh", "rh"} and maps[hemi].shape == (163842,) and maps[hemi].dtype == np.float32
     peak = int(np.nanargmax(maps[hemi]))
     assert np.linalg.norm(fsaverage_mni152()[hemi][peak] - centre) < 1.5
-    assert maps[hemi][vertex] > 0.97 * maps[hemi][peak]
+    point = project_volume(save(tmp_path, blob(centre)), projection="point")[hemi]   # the position alone
+    assert point[vertex] > 0.97 * np.nanmax(point)
     other = "rh" if hemi == "lh" else "lh"
     assert np.nanmax(maps[other]) < 0.05 * maps[hemi][peak]      # the other hemisphere stays dark
 
@@ -114,6 +115,10 @@ def test_nan_voxels_are_skipped_not_spread(tmp_path):
     finite = values[np.isfinite(values)]
     assert 0.3 < finite.size / values.size < 0.9                      # half the weight is finite
     np.testing.assert_allclose(finite, 2.0, rtol=1e-5)
+    series = project_volume(save(tmp_path, np.stack([data, data], axis=-1), name="series.nii.gz"))
+    both = np.isfinite(series["lh"][1]) & np.isfinite(maps["lh"])      # a series: the same values, and
+    np.testing.assert_allclose(series["lh"][1][both], 2.0, rtol=1e-5)   # NaN alike but where the finite
+    assert np.mean(np.isnan(series["lh"][1]) != np.isnan(maps["lh"])) < 1e-3   # weight is 0.5 exactly
 
 
 # -- sampling around a vertex: --projection ribbon | line | point --------------------------------
@@ -138,6 +143,18 @@ def test_fsaverage_faces_are_a_closed_consistently_wound_sphere():
     for hemi in ("lh", "rh"):                                         # normals point out of the brain
         out = fsaverage_mni152()[hemi] - fsaverage_mni152()[hemi].mean(axis=0)
         assert np.mean(np.einsum("ij,ij->i", sheet.normals(hemi), out) > 0) > 0.75
+
+
+def test_trilinear_matrix_samples_as_map_coordinates():
+    from scipy.ndimage import map_coordinates
+
+    from brainpainter.maps.trilinear import trilinear
+
+    rng = np.random.default_rng(3)
+    grid = rng.standard_normal((7, 9, 5)).astype(np.float32)
+    ijk = rng.uniform(-0.5, [6.5, 8.5, 4.5], (500, 3)).T          # beyond the edges too
+    expected = map_coordinates(grid, ijk, order=1, mode="nearest", prefilter=False)
+    np.testing.assert_allclose(trilinear(grid.shape, ijk) @ grid.ravel(order="F"), expected, atol=1e-5)
 
 
 @pytest.fixture(scope="module")

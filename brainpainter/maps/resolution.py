@@ -104,8 +104,9 @@ def to_fsaverage(values: NDArray[Any], categorical: bool = False, what: str = "m
 
 
 @cache
-def fsaverage_faces() -> NDArray[np.int64]:
-    """fsaverage's triangles, rebuilt from the shipped parents (no surface file needed).
+def fsaverage_faces(level: int = 7) -> NDArray[np.int64]:
+    """fsaverage's triangles (or those of the family member of `level` 3-7, e.g. 6: fsaverage6),
+    rebuilt from the shipped parents (no surface file needed).
 
     The 30 edges of the icosahedron are the parents of level 1; its 20 faces are the
     triangles of those edges, oriented alike; each level splits every face in four through
@@ -113,9 +114,9 @@ def fsaverage_faces() -> NDArray[np.int64]:
 
     Returns
     -------
-    ndarray of int64, shape (327680, 3)
-        Every face of fsaverage's mesh (both hemispheres share it), all wound the same way
-        (:func:`brainpainter.maps.volume.surface_normals` turns them outwards for given positions).
+    ndarray of int64, shape (20 * 4**level, 3)
+        Every face (327680 for fsaverage; both hemispheres share them), all wound the same way
+        (:func:`brainpainter.maps.sheet.normals` turns them outwards for given positions).
     """
     parents = _family()["parents"].astype(np.int64)
     edges = np.sort(parents[:LEVELS[1] - LEVELS[0]], axis=1)
@@ -123,7 +124,7 @@ def fsaverage_faces() -> NDArray[np.int64]:
     faces = [(a, b, c) for a, b in sorted(pairs) for c in range(b + 1, LEVELS[0])
              if (a, c) in pairs and (b, c) in pairs]
     tri = _oriented(np.asarray(faces, np.int64))
-    for lo, hi in itertools.pairwise(LEVELS):
+    for lo, hi in itertools.pairwise(LEVELS[:level + 1]):
         child = np.sort(parents[lo - LEVELS[0]:hi - LEVELS[0]], axis=1)
         keys = child[:, 0] * N_FSAVERAGE + child[:, 1]
         order = np.argsort(keys)

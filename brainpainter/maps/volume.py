@@ -30,6 +30,7 @@ from brainpainter.maps import depth as depth_sampling
 from brainpainter.maps import sheet
 from brainpainter.maps.options import RADIUS_MM, Projection, check_projection
 from brainpainter.maps.regfusion import aseg_mni152, fsaverage_mni152
+from brainpainter.maps.trilinear import trilinear
 
 Method = Literal["linear", "nearest"]
 ORDERS = {"nearest": 0, "linear": 1}
@@ -220,16 +221,30 @@ def _sample(volume: Volume, ijk: NDArray[np.float64], inside: NDArray[np.bool_],
     if volume.n_volumes > 1 and not isinstance(data, np.ndarray) and not _is_uncompressed(data):
         data = np.asarray(data, dtype=np.float32)   # gzip cannot seek: read the series once
     series = Volume(volume.name, data, volume.affine)
-    for i in range(volume.n_volumes):
+    # a series: the interpolation's weights worked out once (a sparse matrix), not once per volume
+    matrix = trilinear(volume.shape, ijk) if order == 1 and volume.n_volumes > 1 else None
+
+    def at(grid: NDArray[np.float32]) -> NDArray[np.float32]:
+        if matrix is not None:
+            values: NDArray[np.float32] = matrix @ grid.ravel(order="F")
+            return values
+        return map_coordinates(grid, ijk, order=order, mode="nearest", prefilter=False)  # type: ignore[no-any-return]
+
+    done = False
+    if matrix is not None and isinstance(data, np.ndarray):
+        block = data.reshape(-1, volume.n_volumes, order="F")   # as the matrix ravels (NIfTI's order)
+        if np.isfinite(block).all():                     # a series in memory, no NaN: one product
+            nonzero, done = bool(np.any(block != 0)), True
+            out[:] = (matrix @ block.astype(np.float32, copy=False)).T
+    for i in range(0 if done else volume.n_volumes):
         vol = series.volume(i)
         finite = np.isfinite(vol)
         nonzero = nonzero or bool(np.any(finite & (vol != 0)))
         if order == 0 or finite.all():
-            map_coordinates(vol, ijk, output=out[i], order=order, mode="nearest", prefilter=False)
+            out[i] = at(vol)
         else:   # NaN-aware trilinear: the finite voxels around a point, weighted, renormalised
-            weight = map_coordinates(finite.astype(np.float32), ijk, order=1, mode="nearest", prefilter=False)
-            map_coordinates(np.where(finite, vol, np.float32(0)), ijk, output=out[i], order=1, mode="nearest",
-                            prefilter=False)
+            weight = at(finite.astype(np.float32))
+            out[i] = at(np.where(finite, vol, np.float32(0)))
             enough = weight >= MIN_FINITE_WEIGHT
             out[i][enough] /= weight[enough]
             out[i][~enough] = np.nan
@@ -332,21 +347,13 @@ def project_volume(img: ImageLike, *, method: Method = "linear", projection: Pro
     return out
 
 
-Surfaces = dict[str, depth_sampling.SurfaceLike] | None
-
-
-def _where(white: Surfaces, pial: Surfaces, depth: str,
+def _where(white: dict[str, Any] | None, pial: dict[str, Any] | None, depth: str,
            n_depths: int) -> tuple[dict[str, NDArray[np.float64]], dict[str, tuple[int, int]]]:
     """The points :func:`project_volume` samples per hemisphere, shape (n * k, 3), and (n, k): the
     registration-fusion positions (k = 1), or `n_depths` points from a subject's white to pial."""
     if white is None or pial is None:
-        points = fsaverage_mni152()
-        return points, {hemi: (len(xyz), 1) for hemi, xyz in points.items()}
-    if depth not in depth_sampling.DEPTHS:
-        raise choice_error("depth", depth, depth_sampling.DEPTHS)
-    pairs = depth_sampling.surface_pairs(white, pial)
-    return ({hemi: depth_sampling.depth_points(w, p, n_depths).reshape(-1, 3)
-             for hemi, (w, p) in pairs.items()}, {hemi: (len(w), n_depths) for hemi, (w, _) in pairs.items()})
+        return fsaverage_mni152(), {hemi: (len(xyz), 1) for hemi, xyz in fsaverage_mni152().items()}
+    return depth_sampling.sample_points(white, pial, depth, n_depths)
 
 
 def _project_depths(volume: Volume, projection: str, radius: float,
