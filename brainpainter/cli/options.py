@@ -21,6 +21,7 @@ import click
 from brainpainter.cli.params import FINITE, split_commas
 from brainpainter.color.scale import ScaleOptions
 from brainpainter.maps.options import MapOptions
+from brainpainter.rendering.layers import LayerOptions
 from brainpainter.rendering.options import DEFAULT_VIEWS, RunnerOptions, SceneOptions
 from brainpainter.rendering.settings import RenderSettings, parse_size
 from brainpainter.table.options import TableOptions
@@ -39,6 +40,7 @@ RENDER_OPTION_NAMES = (
     "missing_color", "hide", "background", "transparent", "size", "quality", "shading", "lighting",
     "glass_opacity", "cortex", "outline_width", "outline_color", "renderer", "atlas_config", "tracts",
     "tracts_space", "tracts_affine", "max_streamlines", "tract_values", "tract_value", "tract_radius",
+    *(f.name for f in fields(LayerOptions)),
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
@@ -122,7 +124,17 @@ def render_option_list(views: str | None = None, size: str = DEFAULT_SIZE) -> di
         "tract_values": field_option(scene, "tract_values", type=click.Path(dir_okay=False)),
         "tract_value": field_option(scene, "tract_value"),
         "tract_radius": field_option(scene, "tract_radius"),
+        **{f.name: field_option(LayerOptions, f.name, **_layer_click(f.name)) for f in fields(LayerOptions)},
     }
+
+
+def _layer_click(name: str) -> dict[str, Any]:
+    """What click needs beyond the field for a layer's option: a metavar, or the 0..1 range of an opacity."""
+    if name.endswith("_alpha"):
+        return {"type": click.FloatRange(0.0, 1.0), "metavar": "0..1"}
+    if name.endswith(("_vmin", "_vmax", "_center")):
+        return {}
+    return {"metavar": "TEXT"} if name.endswith("_label") else {"metavar": "NAME"}
 
 
 def _check_size(ctx: click.Context, param: click.Parameter, value: str | None) -> tuple[int, int] | None:

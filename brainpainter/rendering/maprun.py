@@ -10,6 +10,7 @@ So ``render``, ``--jobs`` and Dask paint maps exactly as they paint tables.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -22,6 +23,7 @@ from brainpainter.maps.layers import map_scale, vertex_colors
 from brainpainter.maps.outlines import mesh_edges
 from brainpainter.maps.resolution import map_mesh
 from brainpainter.rendering.geometry import VertexColors
+from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import Options
 from brainpainter.rendering.painter import Painter, region_colors
 from brainpainter.rendering.parallel import Item
@@ -69,11 +71,16 @@ class MapRun:
     source_vertex: dict[str, NDArray[Any]]
     cluster_edges: dict[str, NDArray[Any]] | None = None
     tract_values: None = None  # a map colours no tracts
+    layers: tuple[Layer, ...] = ()
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
     @property
     def maps(self) -> VertexMaps:
         return self.table.maps
+
+    def scale_of(self, kind: str) -> Any:
+        """The colour scale of layer `kind`; the map's where the run has no such layer."""
+        return next((layer.scale for layer in self.layers if layer.kind == kind), self.scale)
 
     def painter(self) -> Painter:
         """A new (not loaded) painter drawing a per-vertex scene."""
@@ -125,7 +132,11 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     source_vertex = {hemi: np.asarray(m.source_vertex) for hemi, m in meshes.items()}
     edges = ({hemi: mesh_edges(m.faces) for hemi, m in meshes.items()} if options.maps.outline_threshold
              else None)
-    scale = map_scale(options.scale, maps, options.maps.threshold)
+    scale_options = options.layers.scale_options("map", options.scale, first=True)
+    assert scale_options is not None
+    scale = map_scale(scale_options, maps, options.maps.threshold)
+    label = options.layers.label("map")
+    layer = Layer("map", scale, 1.0, label if label is not None else Path(maps.source).name or "map")
     return MapRun(MapTable(maps, atlas_obj), scale, view_list, outlined(options.settings, outline),
-                  options, source_vertex, edges)
+                  options, source_vertex, edges, layers=(layer,))
 
