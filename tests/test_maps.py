@@ -462,3 +462,41 @@ def test_mesh_edges_are_the_unique_sorted_edges():
     e.sort(axis=1)
     assert np.array_equal(mesh_edges(faces), np.unique(e, axis=0))
     assert mesh_edges(np.zeros((0, 3), int)).shape == (0, 2)
+
+
+@pytest.mark.render
+def test_a_map_over_region_colours_mixes_both_by_map_alpha(tmp_path):
+    """Bar (issue 35): ``render table.csv --lh map --map-alpha 0.5``: the map's pixels are neither the
+    regions' colour nor the map's alone, and the regions show where the map is thresholded away."""
+    import json
+
+    from click.testing import CliRunner
+    from PIL import Image
+
+    from brainpainter.cli.main import cli
+
+    lateral = ("superiorfrontal", "caudalmiddlefrontal", "rostralmiddlefrontal", "precentral",
+               "postcentral", "supramarginal", "superiorparietal", "inferiorparietal", "lateraloccipital",
+               "superiortemporal", "middletemporal", "inferiortemporal", "parsopercularis",
+               "parstriangularis", "insula")
+    table = tmp_path / "regions.csv"
+    table.write_text("Image-name-unique," + ",".join(f"lh_{r}" for r in lateral) + "\nctrl,"
+                     + ",".join("1" for _ in lateral) + "\n")
+    values = np.where(np.arange(N5) < N5 // 2, 1.0, 0.0).astype(np.float32)  # a patch of fsaverage5
+    nib.MGHImage(values.reshape(-1, 1, 1), np.eye(4)).to_filename(tmp_path / "patch.mgh")
+    out = tmp_path / "out"
+    result = CliRunner().invoke(cli, [
+        "render", str(table), "--lh", str(tmp_path / "patch.mgh"), "--threshold", "0.5",
+        "--gradient", "blue,red", "--vmin", "0", "--vmax", "1", "--map-gradient", "white,blue",
+        "--map-vmin", "0", "--map-vmax", "1", "--map-alpha", "0.5", "--views", "lateral-left",
+        "--size", "240x180", "--shading", "flat", "--quality", "fast", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    img = np.asarray(Image.open(out / "ctrl_lateral-left.png").convert("RGB")).astype(int)
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    red = (r > 200) & (g < 40) & (b < 40)  # a region alone
+    blue = (b > 200) & (r < 40) & (g < 40)  # the map alone
+    mixed = (np.abs(r - 128) < 20) & (g < 40) & (np.abs(b - 128) < 20)  # half of each
+    assert red.sum() > 500 and mixed.sum() > 500, (red.sum(), mixed.sum())
+    assert blue.sum() == 0
+    layers = json.loads((out / "manifest.json").read_text())["settings"]["layers"]
+    assert [(la["kind"], la["opacity"]) for la in layers] == [("regions", 1.0), ("map", 0.5)]

@@ -180,12 +180,12 @@ parallel_options = stack([
 
 def tables_or_maps(inputs: Sequence[Any], kwargs: dict[str, Any]) -> Any:
     """The data of a command: INPUT tables (one, or a list), or None (maps by ``--lh/--rh/--volume``, or
-    ``--tract-values`` alone).
+    ``--tract-values`` alone). INPUT with maps: the maps are drawn over the tables' region colours.
 
     Raises
     ------
     BrainPainterError
-        Neither, or both, given.
+        Neither given.
     """
     from brainpainter.errors import BrainPainterError
 
@@ -193,8 +193,6 @@ def tables_or_maps(inputs: Sequence[Any], kwargs: dict[str, Any]) -> Any:
     if not inputs and not maps and kwargs.get("tract_values") is None:
         raise BrainPainterError("give INPUT tables, or maps: --lh FILE and/or --rh FILE, or --volume FILE, "
                                 "or tract values alone: --tract-values FILE --tracts DIR.")
-    if inputs and maps:
-        raise BrainPainterError("give INPUT tables or maps (--lh/--rh, --volume), not both in one command.")
     if not inputs:
         return None
     return inputs[0] if len(inputs) == 1 else list(inputs)

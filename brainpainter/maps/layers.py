@@ -76,7 +76,9 @@ Image = float | tuple[int, int, float]
 
 def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArray[Any]], scale: ColourScale,
                   underlay_kind: str = "sulc", threshold: float | None = None,
-                  cluster_edges: dict[str, NDArray[Any]] | None = None) -> dict[str, NDArray[Any]]:
+                  cluster_edges: dict[str, NDArray[Any]] | None = None,
+                  below: dict[str, NDArray[Any]] | None = None,
+                  opacity: float = 1.0) -> dict[str, NDArray[Any]]:
     """The colours of one image of `maps` at the drawn vertices.
 
     Parameters
@@ -94,6 +96,10 @@ def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArr
         ``|v| < threshold`` shows the underlay.
     cluster_edges : dict of str to ndarray of int, shape (m, 2), optional
         The mesh's edges: the borders of the coloured (supra-threshold) areas are outlined too.
+    below : dict of str to ndarray of float, shape (n_hemi, 3), optional
+        What the map is drawn over (region colours), NaN where the underlay shows.
+    opacity : float
+        0-1: how much the map covers what is below it.
 
     Returns
     -------
@@ -104,15 +110,19 @@ def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArr
     for hemi, sv in source_vertex.items():
         sv = np.asarray(sv, np.int64)
         rgb = underlay(hemi, sv, underlay_kind)
+        if below is not None and hemi in below:
+            under = np.asarray(below[hemi], np.float32)
+            rgb = np.where(np.isnan(under), rgb, under).astype(np.float32)
         if hemi in maps.values and len(sv):
             v = _values_at(maps, hemi, image, sv)
             show = np.isfinite(v) & masks(hemi)["cortex"][sv]
             if threshold is not None and maps.categories is None:
                 show &= np.abs(np.where(show, v, 0.0)) >= threshold
             if maps.categories is not None and maps.category_colors is not None:
-                rgb[show] = maps.category_colors[v[show].astype(np.int64)]
+                over = maps.category_colors[v[show].astype(np.int64)]
             else:
-                rgb[show] = scale(v[show])[:, :3]
+                over = scale(v[show])[:, :3]
+            rgb[show] = over if opacity >= 1.0 else (1.0 - opacity) * rgb[show] + opacity * over
             if cluster_edges is not None and hemi in cluster_edges:
                 rgb[border_vertices(~show, cluster_edges[hemi])] = OUTLINE_COLOR  # the cluster's edge
         out[hemi] = np.clip(rgb, 0.0, 1.0).astype(np.float32)

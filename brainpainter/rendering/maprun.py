@@ -10,7 +10,6 @@ So ``render``, ``--jobs`` and Dask paint maps exactly as they paint tables.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -18,10 +17,12 @@ from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.template import Template, load_template
-from brainpainter.maps.inputs import VertexMaps, read_maps
-from brainpainter.maps.layers import map_scale, vertex_colors
+from brainpainter.errors import BrainPainterError
+from brainpainter.maps.inputs import VertexMaps, is_map_input, read_maps
+from brainpainter.maps.layers import vertex_colors
 from brainpainter.maps.outlines import mesh_edges
 from brainpainter.maps.resolution import map_mesh
+from brainpainter.rendering.composition import RegionsBelow, map_layers
 from brainpainter.rendering.geometry import VertexColors
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import Options
@@ -29,6 +30,7 @@ from brainpainter.rendering.painter import Painter, region_colors
 from brainpainter.rendering.parallel import Item
 from brainpainter.rendering.settings import outlined
 from brainpainter.rendering.views import View, parse_views
+from brainpainter.table.region_table import RegionTable, read_table
 
 #: Default views of a map run: both hemispheres, outside and inside.
 MAP_VIEWS = "lateral-left,medial-left,lateral-right,medial-right"
@@ -40,10 +42,11 @@ class MapTable:
 
     maps: VertexMaps
     atlas: Atlas
+    below: RegionTable | None = None  # region values under the map: its rows are the images
 
     @property
     def images(self) -> list[str]:
-        return list(self.maps.images)
+        return list(self.maps.images if self.below is None else self.below.images)
 
     @property
     def regions(self) -> list[str]:
@@ -56,7 +59,8 @@ class MapTable:
         return np.zeros((len(self.maps.images), len(self.atlas.keys)))
 
     def summary(self) -> dict[str, Any]:
-        return self.maps.summary()
+        return self.maps.summary() if self.below is None else {**self.maps.summary(),
+                                                               "table": self.below.summary()}
 
 
 @dataclass
@@ -72,6 +76,7 @@ class MapRun:
     cluster_edges: dict[str, NDArray[Any]] | None = None
     tract_values: None = None  # a map colours no tracts
     layers: tuple[Layer, ...] = ()
+    below: RegionsBelow | None = None  # region values under the map
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
     @property
@@ -95,13 +100,21 @@ class MapRun:
         """The colours of image `image` (or of ``(a, b, w)``: images a and b blended, a movie's frame)."""
         if image not in self._cache:
             self._cache.clear()  # one image at a time: the views of a row share it
-            m = self.options.maps
-            cortex = vertex_colors(self.maps, image, self.source_vertex, self.scale, m.underlay, m.threshold,
-                                   cluster_edges=self.cluster_edges)
+            m, scale = self.options.maps, self.scale_of("map")
+            map_image: float | tuple[int, int, float] = image if self.maps.n_images > 1 else 0
+            regions: dict[str, Any] = {}
+            below = None
+            if self.below is not None:  # region values under the map: a movie's frame takes the nearer row
+                row = image if not isinstance(image, tuple) else image[0] if image[2] < 0.5 else image[1]
+                regions, below = self.below.colors(round(row))
+            cortex = vertex_colors(self.maps, map_image, self.source_vertex, scale, m.underlay, m.threshold,
+                                   cluster_edges=self.cluster_edges, below=below,
+                                   opacity=self.layers[-1].opacity)
             # a volume's subcortical means: below --threshold a structure shows no value, as the cortex does
-            means = {k: v for k, v in self.maps.region_values(image).items()
+            means = {k: v for k, v in self.maps.region_values(map_image).items()
                      if m.threshold is None or abs(v) >= m.threshold}
-            regions = region_colors(means, self.table.atlas, self.scale)
+            means_rgb = region_colors(means, self.table.atlas, scale)
+            regions.update(means_rgb if self.below is None else {k: means_rgb[k] for k in means})
             self._cache[image] = VertexColors(regions, cortex)
         return self._cache[image]
 
@@ -117,8 +130,16 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     """Read the maps and check the options of a map run (as ``prepare_run`` does for a table)."""
     from brainpainter.atlas.registry import get_atlas
 
+    table = None
+    if data is not None and not is_map_input(data):  # a region table, the map drawn over its colours
+        table = read_table(data, atlas, **options.table.kwargs())
+        data, atlas = None, table.atlas
     maps = read_maps(data, options.maps.lh, options.maps.rh, options.maps.volume)
     outline = options.maps.outline
+    if table is not None and outline is not None and outline != table.atlas.name:
+        raise BrainPainterError(f"a map over region values outlines the table's atlas "
+                                f"({table.atlas.name!r}); --outline {outline!r} was given. Give --outline "
+                                f"{table.atlas.name}.")
     # --outline ATLAS: the map is drawn on that atlas's mesh, whose vertices carry its labels
     atlas_obj = get_atlas(outline) if outline is not None else atlas if atlas is not None else get_atlas("dk")
     views = options.scene.views
@@ -132,11 +153,8 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     source_vertex = {hemi: np.asarray(m.source_vertex) for hemi, m in meshes.items()}
     edges = ({hemi: mesh_edges(m.faces) for hemi, m in meshes.items()} if options.maps.outline_threshold
              else None)
-    scale_options = options.layers.scale_options("map", options.scale, first=True)
-    assert scale_options is not None
-    scale = map_scale(scale_options, maps, options.maps.threshold)
-    label = options.layers.label("map")
-    layer = Layer("map", scale, 1.0, label if label is not None else Path(maps.source).name or "map")
-    return MapRun(MapTable(maps, atlas_obj), scale, view_list, outlined(options.settings, outline),
-                  options, source_vertex, edges, layers=(layer,))
+    layers, below = map_layers(options, maps, table, meshes)
+    return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list,
+                  outlined(options.settings, outline), options, source_vertex, edges, layers=layers,
+                  below=below)
 
