@@ -500,3 +500,31 @@ def test_a_map_over_region_colours_mixes_both_by_map_alpha(tmp_path):
     assert blue.sum() == 0
     layers = json.loads((out / "manifest.json").read_text())["settings"]["layers"]
     assert [(la["kind"], la["opacity"]) for la in layers] == [("regions", 1.0), ("map", 0.5)]
+
+
+def test_sulcal_depth_greys_darken_with_depth_and_spread_with_contrast():
+    from brainpainter.maps.layers import depth_greys
+
+    depth = np.linspace(-2.0, 2.0, 101)  # FreeSurfer's sulc: positive in sulci
+    grey = depth_greys(depth)
+    assert np.all(np.diff(grey) <= 0) and len(np.unique(grey)) > 50  # deeper: darker, many greys
+    assert grey.max() == pytest.approx(GYRUS_GREY) and grey.min() == pytest.approx(SULCUS_GREY)
+    assert np.ptp(depth_greys(depth, 0.0)) == 0  # contrast 0: one grey
+    assert np.ptp(depth_greys(depth, 2.0)) == pytest.approx(2 * (GYRUS_GREY - SULCUS_GREY))
+    with pytest.raises(BrainPainterError, match="--underlay-contrast must be a number from 0"):
+        MapOptions(underlay_contrast=-1)
+
+
+@pytest.mark.render
+def test_the_sulcal_underlay_is_many_greys_not_two(tmp_path):
+    """Bar (issue 35): --underlay sulc, --shading flat, the map thresholded away: at most half of the
+    underlay's pixels are its two commonest greys (two tones held nearly all of them)."""
+    from brainpainter import render
+
+    result = render(lh=np.zeros(N5), rh=np.zeros(N5), threshold=1.0, underlay="sulc", shading="flat",
+                    quality="fast", views="lateral-left", width=240, height=180, progress=False)
+    img = next(iter(result.images.values()))
+    brain = _brain(img)
+    greys, counts = np.unique(img[brain][:, :3], axis=0, return_counts=True)
+    assert np.ptp(greys, axis=1).max() == 0  # the underlay only: greys
+    assert brain.sum() > 10_000 and np.sort(counts)[-2:].sum() <= 0.5 * brain.sum()

@@ -44,7 +44,8 @@ RENDER_OPTION_NAMES = (
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
-MAP_OPTION_NAMES = ("lh", "rh", "volume", "underlay", "threshold", "outline", "outline_threshold")
+MAP_OPTION_NAMES = ("lh", "rh", "volume", "underlay", "underlay_contrast", "threshold", "outline",
+                    "outline_threshold")
 
 
 def field_option(cls: type, name: str, *decls: str, **overrides: Any) -> Callable[[F], F]:
@@ -166,6 +167,7 @@ map_options = stack([
     field_option(MapOptions, "rh", type=click.Path(dir_okay=False), metavar="FILE"),
     field_option(MapOptions, "volume", type=click.Path(dir_okay=False), metavar="FILE"),
     field_option(MapOptions, "underlay"),
+    field_option(MapOptions, "underlay_contrast"),
     field_option(MapOptions, "threshold"),
     field_option(MapOptions, "outline", metavar="ATLAS"),
     field_option(MapOptions, "outline_threshold"),

@@ -24,6 +24,7 @@ class MapKwargs(TypedDict, total=False):
     rh: Any
     volume: Any
     underlay: str
+    underlay_contrast: float
     threshold: float | None
     outline: str | None
     outline_threshold: bool
@@ -42,6 +43,9 @@ class MapOptions:
         registration fusion; the subcortical structures take its mean inside each.
     underlay : {"sulc", "curv", "none"}
         What shows where the map has no value.
+    underlay_contrast : float
+        0-4: how far the sulcal-depth greys spread (0: one grey; 1: 0.52 in the deepest sulci to
+        0.74 on the crowns).
     threshold : float, optional
         Values with ``|v| < threshold`` show the underlay.
     outline : str, optional
@@ -59,7 +63,10 @@ class MapOptions:
                 "map, a PET image) projected onto the cortex; the subcortical structures show its mean "
                 "inside each. See docs/maps.md."})
     underlay: str = field(default="sulc", metadata={
-        "choices": UNDERLAYS, "help": "Map underlay: sulcal-depth or curvature greys, or one grey."})
+        "choices": UNDERLAYS, "help": "Map underlay: sulcal-depth greys (scaled from the depth), curvature "
+                                      "greys (two tones), or one grey."})
+    underlay_contrast: float = field(default=1.0, metadata={
+        "help": "How far the sulcal-depth greys spread, 0 (one grey) to 4 (1: darkest 0.52, lightest 0.74)."})
     threshold: float | None = field(default=None, metadata={
         "help": "Map values with |v| below this show the underlay."})
     outline: str | None = field(default=None, metadata={
@@ -70,6 +77,10 @@ class MapOptions:
     def __post_init__(self) -> None:
         if self.underlay not in UNDERLAYS:
             raise choice_error("underlay", self.underlay, UNDERLAYS)
+        c = self.underlay_contrast
+        if not isinstance(c, int | float) or not math.isfinite(c) or not 0 <= c <= 4:
+            raise BrainPainterError(f"--underlay-contrast must be a number from 0 (one grey) to 4; {c!r} was "
+                                    "given.")
         t = self.threshold
         if t is not None and (not isinstance(t, int | float) or not math.isfinite(t) or t < 0):
             raise BrainPainterError(f"--threshold must be a number >= 0; {t!r} was given.")

@@ -74,6 +74,7 @@ class MapRun:
     options: Options
     source_vertex: dict[str, NDArray[Any]]
     cluster_edges: dict[str, NDArray[Any]] | None = None
+    depth: dict[str, NDArray[Any]] | None = None  # sulcal depth of the drawn vertices, where the mesh has it
     tract_values: None = None  # a map colours no tracts
     layers: tuple[Layer, ...] = ()
     below: RegionsBelow | None = None  # region values under the map
@@ -109,7 +110,8 @@ class MapRun:
                 regions, below = self.below.colors(round(row))
             cortex = vertex_colors(self.maps, map_image, self.source_vertex, scale, m.underlay, m.threshold,
                                    cluster_edges=self.cluster_edges, below=below,
-                                   opacity=self.layers[-1].opacity)
+                                   opacity=self.layers[-1].opacity, depth=self.depth,
+                                   contrast=m.underlay_contrast)
             # a volume's subcortical means: below --threshold a structure shows no value, as the cortex does
             means = {k: v for k, v in self.maps.region_values(map_image).items()
                      if m.threshold is None or abs(v) >= m.threshold}
@@ -154,7 +156,8 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     edges = ({hemi: mesh_edges(m.faces) for hemi, m in meshes.items()} if options.maps.outline_threshold
              else None)
     layers, below = map_layers(options, maps, table, meshes)
+    depth = {hemi: np.asarray(m.sulc) for hemi, m in meshes.items() if getattr(m, "sulc", None) is not None}
     return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list,
-                  outlined(options.settings, outline), options, source_vertex, edges, layers=layers,
+                  outlined(options.settings, outline), options, source_vertex, edges, depth, layers=layers,
                   below=below)
 
