@@ -45,7 +45,7 @@ RENDER_OPTION_NAMES = (
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
 MAP_OPTION_NAMES = ("lh", "rh", "volume", "underlay", "underlay_contrast", "threshold", "outline",
-                    "outline_threshold")
+                    "outline_threshold", "contour", "contour_levels")
 
 
 def field_option(cls: type, name: str, *decls: str, **overrides: Any) -> Callable[[F], F]:
@@ -171,6 +171,8 @@ map_options = stack([
     field_option(MapOptions, "threshold"),
     field_option(MapOptions, "outline", metavar="ATLAS"),
     field_option(MapOptions, "outline_threshold"),
+    field_option(MapOptions, "contour", metavar="FILE[,FILE]"),
+    field_option(MapOptions, "contour_levels", metavar="V[,V...]"),
 ])
 
 #: ``@parallel_options``: ``--jobs`` and ``--scheduler``, where the images are rendered.

@@ -28,6 +28,28 @@ class MapKwargs(TypedDict, total=False):
     threshold: float | None
     outline: str | None
     outline_threshold: bool
+    contour: Any
+    contour_levels: str | float | None
+
+
+#: Contour levels at most (each is a line set drawn in every image).
+MAX_LEVELS = 10
+
+
+def contour_levels(levels: str | float | None) -> tuple[float, ...]:
+    """``--contour-levels`` as numbers: ``"0.05,0.01"`` -> ``(0.05, 0.01)``; None -> ``(0.5,)``."""
+    if levels is None:
+        return (0.5,)
+    items = [t for t in str(levels).replace(";", ",").split(",") if t.strip()] \
+        if isinstance(levels, str) else [levels]
+    try:
+        out = tuple(float(t) for t in items)
+    except (TypeError, ValueError):
+        out = ()
+    if not out or len(out) > MAX_LEVELS or not all(math.isfinite(v) for v in out):
+        raise BrainPainterError(f"--contour-levels must be 1 to {MAX_LEVELS} finite numbers, comma-separated "
+                                f"(e.g. 0.05 or 2.3,3.1); {levels!r} was given.")
+    return out
 
 
 @dataclass(frozen=True)
@@ -52,6 +74,10 @@ class MapOptions:
         An atlas whose region borders are drawn over the map.
     outline_threshold : bool
         Draw the borders of the supra-threshold areas.
+    contour : path, or "LH,RH" paths, optional
+        A second map whose iso-lines are drawn over the map (a cluster mask, a p-map).
+    contour_levels : str or float, optional
+        The iso-lines' values, comma-separated (default 0.5: a mask's edge).
     """
 
     lh: Any = field(default=None, metadata={
@@ -73,6 +99,11 @@ class MapOptions:
         "help": "Draw this atlas's region borders over the map (dk, destrieux, dkt, ...)."})
     outline_threshold: bool = field(default=False, metadata={
         "help": "Draw the borders of the areas above --threshold."})
+    contour: Any = field(default=None, metadata={
+        "help": "A second map (FILE, or LH,RH files) whose iso-lines are drawn over the map at constant "
+                "pixel width (--outline-width): a cluster mask, a p-map."})
+    contour_levels: str | float | None = field(default=None, metadata={
+        "help": "Values of the --contour lines, comma-separated (default 0.5: a mask's edge; p-map: 0.05)."})
 
     def __post_init__(self) -> None:
         if self.underlay not in UNDERLAYS:
@@ -84,9 +115,15 @@ class MapOptions:
         t = self.threshold
         if t is not None and (not isinstance(t, int | float) or not math.isfinite(t) or t < 0):
             raise BrainPainterError(f"--threshold must be a number >= 0; {t!r} was given.")
+        self.levels  # noqa: B018 (a bad level fails now)
         if self.volume is not None and (self.lh is not None or self.rh is not None):
             raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "
                                     "volume is projected onto both hemispheres.")
+
+    @property
+    def levels(self) -> tuple[float, ...]:
+        """The contour levels, as numbers (default: 0.5)."""
+        return contour_levels(self.contour_levels)
 
     @property
     def given(self) -> bool:

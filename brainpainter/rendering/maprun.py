@@ -20,7 +20,8 @@ from brainpainter.atlas.template import Template, load_template
 from brainpainter.errors import BrainPainterError
 from brainpainter.maps.inputs import VertexMaps, is_map_input, read_maps
 from brainpainter.maps.layers import vertex_colors
-from brainpainter.maps.outlines import mesh_edges
+from brainpainter.maps.options import MapOptions
+from brainpainter.maps.outlines import Contours, mesh_edges
 from brainpainter.maps.resolution import map_mesh
 from brainpainter.rendering.composition import RegionsBelow, map_layers
 from brainpainter.rendering.geometry import VertexColors
@@ -75,6 +76,7 @@ class MapRun:
     source_vertex: dict[str, NDArray[Any]]
     cluster_edges: dict[str, NDArray[Any]] | None = None
     depth: dict[str, NDArray[Any]] | None = None  # sulcal depth of the drawn vertices, where the mesh has it
+    contours: Contours | None = None  # a second map's iso-lines (--contour)
     tract_values: None = None  # a map colours no tracts
     layers: tuple[Layer, ...] = ()
     below: RegionsBelow | None = None  # region values under the map
@@ -92,7 +94,7 @@ class MapRun:
         """A new (not loaded) painter drawing a per-vertex scene."""
         scene = self.options.scene
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
-                       scene.renderer, coloring="vertices")
+                       scene.renderer, coloring="vertices", contours=self.contours)
 
     def items(self, rows: Any) -> list[tuple[int, View]]:
         return [(i, view) for i in rows for view in self.views]
@@ -156,8 +158,26 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     edges = ({hemi: mesh_edges(m.faces) for hemi, m in meshes.items()} if options.maps.outline_threshold
              else None)
     layers, below = map_layers(options, maps, table, meshes)
+    contours = read_contours(options.maps)
     depth = {hemi: np.asarray(m.sulc) for hemi, m in meshes.items() if getattr(m, "sulc", None) is not None}
     return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list,
-                  outlined(options.settings, outline), options, source_vertex, edges, depth, layers=layers,
-                  below=below)
+                  outlined(options.settings, outline if contours is None else "contour"), options,
+                  source_vertex, edges, depth, contours, layers=layers, below=below)
+
+
+def read_contours(options: MapOptions) -> Contours | None:
+    """The second map of ``--contour`` (``FILE`` or ``LH,RH``) and its levels, on fsaverage (None without)."""
+    if options.contour is None:
+        return None
+    given = options.contour
+    parts = [p.strip() for p in given.split(",")] if isinstance(given, str) else None
+    if parts is not None and len(parts) == 2:
+        maps = read_maps(None, parts[0], parts[1])
+    else:
+        maps = read_maps(given)
+    if maps.n_images != 1:
+        raise BrainPainterError(f"--contour takes a map of one image; {maps.source} has {maps.n_images}. "
+                                "Give one image (a cluster mask, a p-map).")
+    values = {hemi: np.asarray(maps.on_fsaverage(hemi, 0), np.float32) for hemi in maps.values}
+    return Contours(values, options.levels, regions=options.outline is not None)
 

@@ -219,6 +219,9 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
         from brainpainter.rendering.maprun import prepare_map_run
 
         return prepare_map_run(data, atlas_obj, options)  # type: ignore[return-value]
+    if options.maps.contour is not None:
+        raise BrainPainterError("--contour draws a second map's iso-lines over a map; give the map too "
+                                "(--lh/--rh or --volume), or draw region borders with --outline ATLAS.")
     views = options.scene.views
     if views is not None:  # a given option's errors before a big input file is read
         view_list = parse_views(views if isinstance(views, str) else list(views))
