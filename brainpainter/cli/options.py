@@ -161,8 +161,7 @@ render_options = make_render_options()
 #: ``@input_options``: how INPUT tables are read (as for ``render`` and ``check``).
 input_options = option_group(TableOptions)
 
-#: ``@map_options``: ``--lh``, ``--rh``, ``--volume``, ``--underlay``, ... (per-vertex maps, docs/maps.md).
-map_options = stack([
+_MAP_COLOUR_OPTIONS = [
     field_option(MapOptions, "lh", type=click.Path(dir_okay=False), metavar="FILE"),
     field_option(MapOptions, "rh", type=click.Path(dir_okay=False), metavar="FILE"),
     field_option(MapOptions, "volume", type=click.Path(dir_okay=False), metavar="FILE"),
@@ -171,6 +170,12 @@ map_options = stack([
     field_option(MapOptions, "threshold"),
     field_option(MapOptions, "outline", metavar="ATLAS"),
     field_option(MapOptions, "outline_threshold"),
+]
+#: ``@map_colour_options``: what colours a map's vertices (``export``, which draws no lines).
+map_colour_options = stack(_MAP_COLOUR_OPTIONS)
+#: ``@map_options``: ``--lh``, ``--rh``, ``--volume``, ``--underlay``, ..., ``--contour`` (docs/maps.md).
+map_options = stack([
+    *_MAP_COLOUR_OPTIONS,
     field_option(MapOptions, "contour", metavar="FILE[,FILE]"),
     field_option(MapOptions, "contour_levels", metavar="V[,V...]"),
 ])
