@@ -242,6 +242,8 @@ def compose_figure(images: Mapping[tuple[str, str], NDArray[Any]], image_names: 
 
     bars = [(scale, opts.label, opts.ticks, nan, missing),
             *((s, lb, None, False, False) for s, lb in more_bars)]
+    if len(bars) > 1:  # narrower bars side by side: every other round tick where there are many
+        bars = [(s, lb, t if t is not None else thinned_ticks(s), n, m) for s, lb, t, n, m in bars]
 
     def bar_h(usable: float) -> float:
         width = bar_width(usable, len(bars))
@@ -262,6 +264,12 @@ def compose_figure(images: Mapping[tuple[str, str], NDArray[Any]], image_names: 
         layout.colorbar_axes.append(draw_bar(fig, grid, s, bar_opts, n, m, color, slot))
     layout.colorbar_ax = layout.colorbar_axes[0]
     return layout
+
+
+def thinned_ticks(scale: ColourScale) -> list[float]:
+    """The scale's round ticks, every other one where there are more than 4 (a bar of several)."""
+    ticks = [float(t) for t in scale.ticks()]
+    return ticks[::2] if len(ticks) > 4 and not scale.categories else ticks
 
 
 def bar_width(usable: float, n: int) -> float:
