@@ -8,7 +8,7 @@ layer's from the plain scale options and its own, a later layer's from its own o
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -30,13 +30,15 @@ from brainpainter.tracts.values import TractValues
 
 
 def run_layers(options: Options, table: RegionTable, tract_values: TractValues | None,
-               tracts_only: bool) -> tuple[Layer, ...]:
+               tracts_only: bool, others: Sequence[str] = ()) -> tuple[Layer, ...]:
     """The layers of a region run: its region values (unless it has bundle values only), then tract values.
 
     The first layer's scale is made from the plain scale options (``--cmap``, ``--vmin``, ...) and
     its own (``--regions-cmap``, ...) over its values and those of every layer sharing it; a tract
     layer given options of its own (``--tracts-cmap``, ``--tracts-vmin``, ...) gets a scale of its
     own over its values alone (a gradient given no range spans them: FA 0.3-0.7, not levels 0-3).
+    `others`: the kinds the run draws besides (a map over the regions); options of a layer it does
+    not draw are refused.
     """
     data: dict[str, NDArray[Any]] = {}
     if not tracts_only:
@@ -44,6 +46,7 @@ def run_layers(options: Options, table: RegionTable, tract_values: TractValues |
     if tract_values is not None:
         data["tracts"] = tract_values.values
     kinds = list(data)
+    options.layers.check_drawn([*kinds, *others])
     own = {kind: options.layers.scale_options(kind, options.scale, k == 0) for k, kind in enumerate(kinds)}
     first_options = own[kinds[0]]
     assert first_options is not None
@@ -150,6 +153,7 @@ def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None,
     label = given if given is not None else Path(maps.source).name or "map"
     alpha = float(options.layers.map_alpha)
     threshold = options.maps.threshold
+    options.layers.check_drawn(["map"] if table is None else ["regions", "map"])
     if table is None:
         own = options.layers.scale_options("map", options.scale, first=True)
         assert own is not None
@@ -159,7 +163,7 @@ def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None,
             f"a map drawn over region values has one image, or one per row of the table; the map has "
             f"{maps.n_images} and the table {len(table.images)} rows ({table.source}). Give a map of one "
             "image, or as many as the table's rows.")
-    regions = run_layers(options, table, None, False)[0]
+    regions = run_layers(options, table, None, False, others=("map",))[0]
     own = options.layers.scale_options("map", options.scale, first=False)
     plain = ScaleOptions(nan_color=options.scale.nan_color, missing_color=options.scale.missing_color)
     scale = map_scale(own if own is not None else plain, maps, threshold)

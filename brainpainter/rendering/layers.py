@@ -11,6 +11,7 @@ are the first layer's; a later layer given options of its own gets a scale of it
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, fields, replace
 from typing import Any, TypedDict
 
@@ -22,6 +23,8 @@ LAYER_KINDS = ("regions", "map", "tracts")
 #: The colour-scale options each layer has (the fields of :class:`ScaleOptions` that make its colours).
 SCALE_FIELDS = ("gradient", "cmap", "vmin", "vmax", "center")
 _WHAT = {"regions": "Region values", "map": "The map", "tracts": "Tract values"}
+_GIVE = {"regions": "give a region table as INPUT", "map": "give a map (--lh/--rh or --volume)",
+         "tracts": "give tract values (--tract-values, or bundle columns in INPUT, with --tracts)"}
 
 
 @dataclass(frozen=True)
@@ -157,6 +160,25 @@ class LayerOptions:
         """The colour-bar label given for layer `kind`."""
         label: str | None = getattr(self, f"{kind}_label")
         return label
+
+    def check_drawn(self, kinds: Sequence[str]) -> None:
+        """Refuse options of a layer the run does not draw (``--tracts-cmap`` and no tract values).
+
+        Raises
+        ------
+        BrainPainterError
+            Naming the first such option and what draws that layer.
+        """
+        for kind in LAYER_KINDS:
+            if kind in kinds:
+                continue
+            names = [*self.given(kind), *(["label"] if self.label(kind) is not None else []),
+                     *(["alpha"] if kind == "map" and float(self.map_alpha) != 1.0 else [])]
+            if names:
+                raise BrainPainterError(
+                    f"--{kind}-{names[0]} colours {_WHAT[kind].lower()}, but this run draws none "
+                    f"(it draws {', '.join(kinds) or 'nothing with values'}); {_GIVE[kind]}, or leave "
+                    f"the --{kind}-* options out.")
 
     def scale_options(self, kind: str, base: ScaleOptions, first: bool) -> ScaleOptions | None:
         """The scale options of layer `kind`: `base` (the plain options) for the first layer, with its own.
