@@ -580,3 +580,19 @@ def test_a_contour_is_a_line_of_constant_pixel_width(tmp_path):
     assert built is not None and built.levels == (0.5, 0.9) and np.array_equal(built.values["lh"], mask)
     with pytest.raises(BrainPainterError, match="--contour draws a second map's iso-lines over a map"):
         prepare_run({"lh_insula": [1.0]}, contour=contour)
+
+
+@pytest.mark.render
+def test_layers_with_jobs_are_identical_to_serial(tmp_path):
+    """Regions, a map over them and a contour (issue 35) through --jobs 2: the serial run's bytes."""
+    import brainpainter
+
+    table = tmp_path / "t.csv"
+    table.write_text("Image-name-unique,lh_insula,lh_precentral\na,1,2\nb,2,1\n")
+    mask = (np.arange(N5) % 7 == 0).astype(np.float32)
+    kw = {"width": 160, "height": 120, "views": "lateral-left", "progress": False, "lh": np.zeros((2, N5)),
+          "threshold": 0.5, "map_alpha": 0.5, "contour": {"lh": mask}, "cmap": "viridis"}
+    a = brainpainter.render(table, out=tmp_path / "a", **kw)
+    b = brainpainter.render(table, out=tmp_path / "b", jobs=2, **kw)
+    assert b.workers["backend"] == "LocalRunner" and len(a.files) == 2
+    assert all(x.read_bytes() == y.read_bytes() for x, y in zip(a.files, b.files, strict=True))
