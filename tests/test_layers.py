@@ -45,3 +45,9 @@ def test_options_of_a_layer_not_drawn_are_refused(tmp_path):
         prepare_run(None, lh=np.zeros(10242), regions_label="thickness")
     run = prepare_run(table, regions_cmap="viridis", regions_label="thickness")  # drawn: accepted
     assert [(la.kind, la.label, la.scale.name) for la in run.layers] == [("regions", "thickness", "viridis")]
+
+
+def test_a_contour_that_cannot_be_read_names_contour(tmp_path):
+    with pytest.raises(BrainPainterError, match=r"^--contour .*lh\.none\.mgh.* does not exist.*; --contour "
+                                                r"takes one file whose name says its hemisphere, or two: LH,RH\.$"):
+        prepare_run(None, lh=np.zeros(10242), contour=str(tmp_path / "lh.none.mgh"))

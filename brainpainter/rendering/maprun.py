@@ -171,10 +171,13 @@ def read_contours(options: MapOptions) -> Contours | None:
         return None
     given = options.contour
     parts = [p.strip() for p in given.split(",")] if isinstance(given, str) else None
-    if parts is not None and len(parts) == 2:
-        maps = read_maps(None, parts[0], parts[1])
-    else:
-        maps = read_maps(given)
+    pair = parts is not None and len(parts) == 2
+    try:
+        maps = read_maps(None, parts[0], parts[1]) if parts is not None and pair else read_maps(given)
+    except BrainPainterError as exc:  # the readers speak of --lh/--rh: say which option it was
+        what = given if isinstance(given, str) else "(a map)"
+        raise BrainPainterError(f"--contour {what}: {str(exc).rstrip('.')}; --contour takes one file whose "
+                                "name says its hemisphere, or two: LH,RH.") from None
     if maps.n_images != 1:
         raise BrainPainterError(f"--contour takes a map of one image; {maps.source} has {maps.n_images}. "
                                 "Give one image (a cluster mask, a p-map).")
