@@ -48,7 +48,7 @@ def test_options_of_a_layer_not_drawn_are_refused(tmp_path):
 
 
 def test_a_contour_that_cannot_be_read_names_contour(tmp_path):
-    message = r"^--contour .*lh\.none\.mgh.* does not exist.*; --contour takes one file whose name says its " \
-              r"hemisphere, or two: LH,RH\.$"
+    message = (r"^--contour .*lh\.none\.mgh.* does not exist.*; --contour takes one file whose name says "
+               r"its hemisphere, or two: LH,RH\.$")
     with pytest.raises(BrainPainterError, match=message):
         prepare_run(None, lh=np.zeros(10242), contour=str(tmp_path / "lh.none.mgh"))
