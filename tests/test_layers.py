@@ -52,3 +52,18 @@ def test_a_contour_that_cannot_be_read_names_contour(tmp_path):
                r"its hemisphere, or two: LH,RH\.$")
     with pytest.raises(BrainPainterError, match=message):
         prepare_run(None, lh=np.zeros(10242), contour=str(tmp_path / "lh.none.mgh"))
+
+
+def test_each_automatic_scale_of_its_own_is_named_by_its_layer(capsys):
+    from types import SimpleNamespace
+
+    from brainpainter.cli.params import echo_scale
+    from brainpainter.color.scale import make_scale
+    from brainpainter.rendering.layers import Layer
+
+    regions = make_scale(cmap="viridis", vmin=1.5, vmax=4)
+    chosen = SimpleNamespace(chosen="values >= 0", describe=lambda: "viridis 0-4.7 (values >= 0)")
+    echo_scale(regions, (Layer("regions", regions), Layer("map", chosen)))  # type: ignore[arg-type]
+    assert capsys.readouterr().out == "map scale: viridis 0-4.7 (values >= 0)\n"
+    echo_scale(chosen)
+    assert capsys.readouterr().out == "scale: viridis 0-4.7 (values >= 0)\n"

@@ -500,6 +500,7 @@ def test_a_map_over_region_colours_mixes_both_by_map_alpha(tmp_path):
     assert blue.sum() == 0
     layers = json.loads((out / "manifest.json").read_text())["settings"]["layers"]
     assert [(la["kind"], la["opacity"]) for la in layers] == [("regions", 1.0), ("map", 0.5)]
+    assert "input: wide" in result.output and "15/95 regions with values" in result.output  # the table's line
 
 
 def test_sulcal_depth_greys_darken_with_depth_and_spread_with_contrast():

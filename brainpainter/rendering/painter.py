@@ -279,6 +279,8 @@ class RenderResult:
     workers : dict
         Where it ran (``backend``, ``workers``, ``startup_seconds``, ``retried``);
         not part of the manifest, which is the same however the run was split.
+    layers : tuple of Layer
+        What was drawn, each with its colour scale (:mod:`brainpainter.rendering.layers`).
     """
 
     files: list[Path]
@@ -287,6 +289,7 @@ class RenderResult:
     scale: ColourScale | None = None
     table: RegionTable | None = None
     workers: dict[str, Any] = field(default_factory=dict)
+    layers: tuple[Any, ...] = ()
 
     def __repr__(self) -> str:
         """One short line (the images and files are many and large)."""

@@ -361,7 +361,7 @@ def render(data: Any = None, atlas: Atlas | str | None = None, *, out: str | Pat
     finally:
         if own or not isinstance(runner, SerialRunner):  # a painter given by the caller stays open
             runner.close()
-    return RenderResult(files, images, manifest, run.scale, run.table, runner.summary())
+    return RenderResult(files, images, manifest, run.scale, run.table, runner.summary(), run.layers)
 
 
 def painter_options(painter: Painter, options: Options) -> Options:
