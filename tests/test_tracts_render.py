@@ -299,3 +299,73 @@ def test_the_tracts_box_lies_on_whole_output_pixels():
     pixels = (box + 1.0) / 2.0 * np.array([width, height, width, height])
     assert np.allclose(pixels, np.round(pixels), atol=1e-6)
     assert 0 <= pixels[0] < pixels[2] <= width and 0 <= pixels[1] < pixels[3] <= height
+
+
+MAGMA_ENDS = ((0.001462, 0.000466, 0.013866), (0.987053, 0.991438, 0.749504))  # magma's first and last
+
+
+def _layers_table(tmp_path: Path) -> Path:
+    """Thickness 1.5-4 on the left hemisphere's regions, and bundle FA 0.3 (AF_L) and 0.7 (CST_R)."""
+    path = tmp_path / "thick.csv"
+    path.write_text("Image-name-unique,lh_insula,lh_precuneus,lh_superiorfrontal,AF_L,CST_R\n"
+                    "ctrl,1.5,4,2.75,0.3,0.7\n")
+    return path
+
+
+LAYER_OPTIONS = ["--cmap", "viridis", "--vmin", "1.5", "--vmax", "4", "--tracts-cmap", "magma",
+                 "--tracts-vmin", "0.3", "--tracts-vmax", "0.7", "--tracts-label", "FA"]
+
+
+def test_tracts_with_their_own_scale_span_its_colours_and_the_cortex_keeps_its_own(tmp_path, bundles, tiny):
+    import json
+
+    from click.testing import CliRunner
+    from matplotlib import colormaps
+    from PIL import Image
+
+    from brainpainter.cli.main import cli
+    from brainpainter.rendering.run import prepare_run
+
+    out = tmp_path / "out"
+    result = CliRunner().invoke(cli, [
+        "render", str(_layers_table(tmp_path)), "--tracts", str(bundles), "--tracts-space", "template",
+        "--template", str(tiny), "--views", "subcortical-dorsal", "--size", "320x240",
+        "--shading", "flat", "--glass-opacity", "0", "--background", "#808080", "--max-streamlines", "60",
+        "--quality", "fast", "--tract-radius", "1", *LAYER_OPTIONS, "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    top = np.asarray(Image.open(out / "ctrl_subcortical-dorsal.png").convert("RGB"))
+    left = np.arange(top.shape[1]) < top.shape[1] // 2
+    # FA 0.3 (AF, left) is magma's first colour, FA 0.7 (CST, right) its last: not the cortex's viridis
+    first, last = (_mask(top, rgb, 20) for rgb in MAGMA_ENDS)
+    assert (first & left[None, :]).sum() > 200 and (last & ~left[None, :]).sum() > 200
+    # the cortex (glass in a tract render) on its own 1.5-4 scale: the regions' colours of the same run
+    run = prepare_run(_layers_table(tmp_path), tracts=[str(bundles)], tracts_space="template",
+                      template=str(tiny), cmap="viridis", vmin=1.5, vmax=4, tracts_cmap="magma",
+                      tracts_vmin=0.3, tracts_vmax=0.7)
+    colors = run.item(0, get_view("lateral-left")).colors
+    viridis = colormaps["viridis"]
+    for region, value in (("Left-insula", 1.5), ("Left-precuneus", 4.0)):
+        assert np.allclose(colors[region], viridis((value - 1.5) / 2.5)[:3], atol=0.01), region
+    layers = json.loads((out / "manifest.json").read_text())["settings"]["layers"]
+    assert [(la["kind"], la["label"], la["scale"]["name"], la["scale"]["vmin"], la["scale"]["vmax"])
+            for la in layers] == [("regions", "thick.csv", "viridis", 1.5, 4.0),
+                                  ("tracts", "FA", "magma", 0.3, 0.7)]
+
+
+def test_a_figure_of_regions_and_tracts_draws_two_labelled_colour_bars(tmp_path, bundles, tiny):
+    from matplotlib import colormaps
+
+    from brainpainter.media.figure import make_figure
+
+    result = make_figure(_layers_table(tmp_path), tracts=[str(bundles)], tracts_space="template",
+                         template=str(tiny), views="subcortical-dorsal", width=160, height=120,
+                         quality="fast", max_streamlines=20, cmap="viridis", vmin=1.5, vmax=4,
+                         tracts_cmap="magma", tracts_vmin=0.3, tracts_vmax=0.7, tracts_label="FA",
+                         progress=False)
+    axes = result.colorbar_axes
+    assert [ax.get_xlabel() for ax in axes] == ["thick.csv", "FA"]
+    assert axes[0].get_position().x1 < axes[1].get_position().x0  # side by side
+    for ax, cmap in zip(axes, ("viridis", "magma"), strict=True):
+        bar = np.asarray(ax.get_images()[0].get_array())[..., :3].reshape(-1, 3)
+        ends = np.asarray([colormaps[cmap](0.0)[:3], colormaps[cmap](1.0)[:3]])
+        assert np.abs(bar[[0, -1]] - ends).max() < 0.02, cmap

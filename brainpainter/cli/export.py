@@ -14,7 +14,7 @@ import click
 from brainpainter.cli.options import (
     input_options,
     make_render_options,
-    map_options,
+    map_colour_options,
     render_kwargs,
     tables_or_maps,
 )
@@ -35,7 +35,7 @@ from brainpainter.media.export import export as run
 @click.option("--title", default=None, help="Heading of the HTML page (default: the image name).")
 @click.option("--label", default=None, help="Colour-bar label of the HTML page, e.g. 'z-score'.")
 @make_render_options(only=("atlas", *EXPORT_OPTIONS))
-@map_options
+@map_colour_options
 @input_options
 def export(inputs: tuple[Path, ...], fmt: str | None, out: Path | None, row: str | None, title: str | None,
            label: str | None, **options: Any) -> None:

@@ -21,6 +21,7 @@ import click
 from brainpainter.cli.params import FINITE, split_commas
 from brainpainter.color.scale import ScaleOptions
 from brainpainter.maps.options import MapOptions
+from brainpainter.rendering.layers import LayerOptions
 from brainpainter.rendering.options import DEFAULT_VIEWS, RunnerOptions, SceneOptions
 from brainpainter.rendering.settings import RenderSettings, parse_size
 from brainpainter.table.options import TableOptions
@@ -39,11 +40,13 @@ RENDER_OPTION_NAMES = (
     "missing_color", "hide", "background", "transparent", "size", "quality", "shading", "lighting",
     "glass_opacity", "cortex", "outline_width", "outline_color", "renderer", "atlas_config", "tracts",
     "tracts_space", "tracts_affine", "max_streamlines", "tract_values", "tract_value", "tract_radius",
+    *(f.name for f in fields(LayerOptions)),
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
-MAP_OPTION_NAMES = ("lh", "rh", "volume", "projection", "projection_radius", "underlay", "threshold",
-                    "outline", "outline_threshold", "space", "frames")
+MAP_OPTION_NAMES = ("lh", "rh", "volume", "projection", "projection_radius", "underlay", "underlay_contrast",
+                    "threshold", "outline", "outline_threshold", "space", "frames", "contour",
+                    "contour_levels")
 
 
 def field_option(cls: type, name: str, *decls: str, **overrides: Any) -> Callable[[F], F]:
@@ -123,7 +126,17 @@ def render_option_list(views: str | None = None, size: str = DEFAULT_SIZE) -> di
         "tract_values": field_option(scene, "tract_values", type=click.Path(dir_okay=False)),
         "tract_value": field_option(scene, "tract_value"),
         "tract_radius": field_option(scene, "tract_radius"),
+        **{f.name: field_option(LayerOptions, f.name, **_layer_click(f.name)) for f in fields(LayerOptions)},
     }
+
+
+def _layer_click(name: str) -> dict[str, Any]:
+    """What click needs beyond the field for a layer's option: a metavar, or the 0..1 range of an opacity."""
+    if name.endswith("_alpha"):
+        return {"type": click.FloatRange(0.0, 1.0), "metavar": "0..1"}
+    if name.endswith(("_vmin", "_vmax", "_center")):
+        return {}
+    return {"metavar": "TEXT"} if name.endswith("_label") else {"metavar": "NAME"}
 
 
 def _check_size(ctx: click.Context, param: click.Parameter, value: str | None) -> tuple[int, int] | None:
@@ -149,19 +162,27 @@ render_options = make_render_options()
 #: ``@input_options``: how INPUT tables are read (as for ``render`` and ``check``).
 input_options = option_group(TableOptions)
 
-#: ``@map_options``: ``--lh``, ``--rh``, ``--volume``, ``--underlay``, ... (per-vertex maps, docs/maps.md).
-map_options = stack([
+_MAP_COLOUR_OPTIONS = [
     field_option(MapOptions, "lh", type=click.Path(dir_okay=False), metavar="FILE"),
     field_option(MapOptions, "rh", type=click.Path(dir_okay=False), metavar="FILE"),
     field_option(MapOptions, "volume", type=click.Path(dir_okay=False), metavar="FILE"),
     field_option(MapOptions, "projection"),
     field_option(MapOptions, "projection_radius", metavar="MM"),
     field_option(MapOptions, "underlay"),
+    field_option(MapOptions, "underlay_contrast"),
     field_option(MapOptions, "threshold"),
     field_option(MapOptions, "outline", metavar="ATLAS"),
     field_option(MapOptions, "outline_threshold"),
     field_option(MapOptions, "space"),
     field_option(MapOptions, "frames", metavar="ROWS"),
+]
+#: ``@map_colour_options``: what colours a map's vertices (``export``, which draws no lines).
+map_colour_options = stack(_MAP_COLOUR_OPTIONS)
+#: ``@map_options``: ``--lh``, ``--rh``, ``--volume``, ``--underlay``, ..., ``--contour`` (docs/maps.md).
+map_options = stack([
+    *_MAP_COLOUR_OPTIONS,
+    field_option(MapOptions, "contour", metavar="FILE[,FILE]"),
+    field_option(MapOptions, "contour_levels", metavar="V[,V...]"),
 ])
 
 #: ``@parallel_options``: ``--jobs`` and ``--scheduler``, where the images are rendered.
@@ -173,12 +194,12 @@ parallel_options = stack([
 
 def tables_or_maps(inputs: Sequence[Any], kwargs: dict[str, Any]) -> Any:
     """The data of a command: INPUT tables (one, or a list), or None (maps by ``--lh/--rh/--volume``, or
-    ``--tract-values`` alone).
+    ``--tract-values`` alone). INPUT with maps: the maps are drawn over the tables' region colours.
 
     Raises
     ------
     BrainPainterError
-        Neither, or both, given.
+        Neither given.
     """
     from brainpainter.errors import BrainPainterError
 
@@ -186,8 +207,6 @@ def tables_or_maps(inputs: Sequence[Any], kwargs: dict[str, Any]) -> Any:
     if not inputs and not maps and kwargs.get("tract_values") is None:
         raise BrainPainterError("give INPUT tables, or maps: --lh FILE and/or --rh FILE, or --volume FILE, "
                                 "or tract values alone: --tract-values FILE --tracts DIR.")
-    if inputs and maps:
-        raise BrainPainterError("give INPUT tables or maps (--lh/--rh, --volume), not both in one command.")
     if not inputs:
         return None
     return inputs[0] if len(inputs) == 1 else list(inputs)

@@ -21,12 +21,18 @@ def echo_json(obj: object) -> None:
     click.echo(json.dumps(obj, indent=2))
 
 
-def echo_scale(scale: Any) -> None:
+def echo_scale(scale: Any, layers: Any = ()) -> None:
     """Say which colour scale was chosen and why (``scale: viridis 0-4.7 (values >= 0)``), when automatic.
 
     `scale` is a :class:`~brainpainter.color.scale.ColourScale`; a scale whose limits were given says nothing.
+    With several `layers` (:class:`~brainpainter.rendering.layers.Layer`), each automatic scale of its
+    own is named by its layer (``map scale: RdBu_r -3 to 3 (values of both signs)``).
     """
-    if getattr(scale, "chosen", ""):
+    if len(layers) > 1:
+        for layer in layers:
+            if layer.own_scale and getattr(layer.scale, "chosen", ""):
+                click.echo(f"{layer.kind} scale: {layer.scale.describe()}")
+    elif getattr(scale, "chosen", ""):
         click.echo(f"scale: {scale.describe()}")
 
 

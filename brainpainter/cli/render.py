@@ -25,6 +25,16 @@ def _one_or_many(inputs: tuple[Path, ...]) -> Path | list[Path]:
     return inputs[0] if len(inputs) == 1 else list(inputs)
 
 
+def echo_input(summary: dict[str, Any]) -> None:
+    """The input line of a table (``input: ...``) and its warnings."""
+    from brainpainter.table.region_table import summary_line
+    from brainpainter.table.report import input_warnings
+
+    click.echo(f"input: {summary_line(summary)}")
+    for line in input_warnings(summary):
+        click.echo(f"warning: {line}")
+
+
 # -- check --------------------------------------------------------------------
 @click.command(context_settings=CONTEXT)
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",
@@ -92,15 +102,12 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
                    f"hemispheres {', '.join(m['hemis'])})")
         for note in m.get("notes", []):
             click.echo(f"note: {note}")
-        echo_scale(result.scale)
+        if "table" in m:  # region values under the map
+            echo_input(m["table"])
+        echo_scale(result.scale, result.layers)
         return
-    from brainpainter.table.region_table import summary_line
-    from brainpainter.table.report import input_warnings
-
     s = result.manifest["input"]
-    click.echo(f"input: {summary_line(s)}")
-    for line in input_warnings(s):
-        click.echo(f"warning: {line}")
+    echo_input(s)
     rendered = len({f["row"] for f in result.manifest["files"]})  # --rows may choose some of the rows
     of = f" of {s['n_images']}" if rendered != s["n_images"] else ""
     click.echo(

@@ -2,8 +2,10 @@
 
 Layers, bottom first (the conventions of nilearn and surfplot):
 
-1. the underlay: two greys from fsaverage's ``sulc`` (or ``curv``) sign, light
-   on gyri and dark in sulci (``none``: one grey);
+1. the underlay: greys from the sulcal depth of the mesh drawn (its ``sulc``), light
+   on gyral crowns and dark deep in sulci, spread by ``--underlay-contrast``; without
+   one, and for ``curv``, two greys from fsaverage's ``sulc`` (or ``curv``) sign
+   (``none``: one grey);
 2. the data, through the run's colour scale, where it is finite, on the
    cortex (not on ``cortex.label``'s medial wall) and ``|v| >= threshold``.
 
@@ -60,15 +62,35 @@ def _drawn_categories(maps: VertexMaps) -> tuple[tuple[str, tuple[float, float, 
                  if i in used)
 
 
-def underlay(hemi: str, source_vertex: NDArray[Any], kind: str) -> NDArray[Any]:
-    """Underlay colour of each vertex, float32 (n, 3); `source_vertex` indexes fsaverage."""
+def underlay(hemi: str, source_vertex: NDArray[Any], kind: str, depth: NDArray[Any] | None = None,
+             contrast: float = 1.0) -> NDArray[Any]:
+    """Underlay colour of each vertex, float32 (n, 3); `source_vertex` indexes fsaverage.
+
+    `depth` (shape (n,), FreeSurfer's ``sulc``: positive in sulci), for ``kind="sulc"``: greys
+    scaled from it (its 2nd to 98th percentile across :data:`SULCUS_GREY` to :data:`GYRUS_GREY`
+    about their middle, times `contrast`); else two greys from fsaverage's sign masks.
+    """
     sv = np.asarray(source_vertex, np.int64)
     if kind == "none":
         grey = np.full(len(sv), PLAIN_GREY, np.float32)
+    elif kind == "sulc" and depth is not None and len(depth) == len(sv) and len(sv):
+        grey = depth_greys(np.asarray(depth, np.float64), contrast)
     else:
         deep = masks(hemi)[kind][sv]
         grey = np.where(deep, SULCUS_GREY, GYRUS_GREY).astype(np.float32)
     return np.repeat(grey[:, None], 3, axis=1)
+
+
+def depth_greys(depth: NDArray[Any], contrast: float = 1.0) -> NDArray[Any]:
+    """Greys of sulcal depths (shape (n,), positive in sulci): darker the deeper, float32 (n,)."""
+    finite = depth[np.isfinite(depth)]
+    if not finite.size:
+        return np.full(len(depth), 0.5 * (GYRUS_GREY + SULCUS_GREY), np.float32)
+    lo, hi = np.percentile(finite, [2, 98])
+    t = np.clip((np.nan_to_num(depth, nan=0.5 * (lo + hi)) - lo) / max(hi - lo, 1e-9), 0.0, 1.0)  # 0-1
+    mid, half = 0.5 * (GYRUS_GREY + SULCUS_GREY), 0.5 * (GYRUS_GREY - SULCUS_GREY) * contrast
+    grey: NDArray[Any] = np.clip(mid + half * (1.0 - 2.0 * t), 0.0, 1.0).astype(np.float32)
+    return grey
 
 
 Image = float | tuple[int, int, float]
@@ -76,7 +98,10 @@ Image = float | tuple[int, int, float]
 
 def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArray[Any]], scale: ColourScale,
                   underlay_kind: str = "sulc", threshold: float | None = None,
-                  cluster_edges: dict[str, NDArray[Any]] | None = None) -> dict[str, NDArray[Any]]:
+                  cluster_edges: dict[str, NDArray[Any]] | None = None,
+                  below: dict[str, NDArray[Any]] | None = None, opacity: float = 1.0,
+                  depth: dict[str, NDArray[Any]] | None = None,
+                  contrast: float = 1.0) -> dict[str, NDArray[Any]]:
     """The colours of one image of `maps` at the drawn vertices.
 
     Parameters
@@ -94,6 +119,14 @@ def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArr
         ``|v| < threshold`` shows the underlay.
     cluster_edges : dict of str to ndarray of int, shape (m, 2), optional
         The mesh's edges: the borders of the coloured (supra-threshold) areas are outlined too.
+    below : dict of str to ndarray of float, shape (n_hemi, 3), optional
+        What the map is drawn over (region colours), NaN where the underlay shows.
+    opacity : float
+        0-1: how much the map covers what is below it.
+    depth : dict of str to ndarray of float, shape (n_hemi,), optional
+        Sulcal depth of the drawn vertices (the mesh's ``sulc``): the underlay's greys scale with it.
+    contrast : float
+        How far those greys spread (``--underlay-contrast``).
 
     Returns
     -------
@@ -103,16 +136,20 @@ def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArr
     out: dict[str, NDArray[Any]] = {}
     for hemi, sv in source_vertex.items():
         sv = np.asarray(sv, np.int64)
-        rgb = underlay(hemi, sv, underlay_kind)
+        rgb = underlay(hemi, sv, underlay_kind, None if depth is None else depth.get(hemi), contrast)
+        if below is not None and hemi in below:
+            under = np.asarray(below[hemi], np.float32)
+            rgb = np.where(np.isnan(under), rgb, under).astype(np.float32)
         if hemi in maps.values and len(sv):
             v = _values_at(maps, hemi, image, sv)
             show = np.isfinite(v) & masks(hemi)["cortex"][sv]
             if threshold is not None and maps.categories is None:
                 show &= np.abs(np.where(show, v, 0.0)) >= threshold
             if maps.categories is not None and maps.category_colors is not None:
-                rgb[show] = maps.category_colors[v[show].astype(np.int64)]
+                over = maps.category_colors[v[show].astype(np.int64)]
             else:
-                rgb[show] = scale(v[show])[:, :3]
+                over = scale(v[show])[:, :3]
+            rgb[show] = over if opacity >= 1.0 else (1.0 - opacity) * rgb[show] + opacity * over
             if cluster_edges is not None and hemi in cluster_edges:
                 rgb[border_vertices(~show, cluster_edges[hemi])] = OUTLINE_COLOR  # the cluster's edge
         out[hemi] = np.clip(rgb, 0.0, 1.0).astype(np.float32)

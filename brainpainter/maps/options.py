@@ -51,11 +51,34 @@ class MapKwargs(TypedDict, total=False):
     projection: str | None
     projection_radius: float | None
     underlay: str
+    underlay_contrast: float
     threshold: float | None
     outline: str | None
     outline_threshold: bool
     space: str | None
     frames: Any
+    contour: Any
+    contour_levels: str | float | None
+
+
+#: Contour levels at most (each is a line set drawn in every image).
+MAX_LEVELS = 10
+
+
+def contour_levels(levels: str | float | None) -> tuple[float, ...]:
+    """``--contour-levels`` as numbers: ``"0.05,0.01"`` -> ``(0.05, 0.01)``; None -> ``(0.5,)``."""
+    if levels is None:
+        return (0.5,)
+    items = [t for t in str(levels).replace(";", ",").split(",") if t.strip()] \
+        if isinstance(levels, str) else [levels]
+    try:
+        out = tuple(float(t) for t in items)
+    except (TypeError, ValueError):
+        out = ()
+    if not out or len(out) > MAX_LEVELS or not all(math.isfinite(v) for v in out):
+        raise BrainPainterError(f"--contour-levels must be 1 to {MAX_LEVELS} finite numbers, comma-separated "
+                                f"(e.g. 0.05 or 2.3,3.1); {levels!r} was given.")
+    return out
 
 
 @dataclass(frozen=True)
@@ -76,6 +99,9 @@ class MapOptions:
         Its radius in mm (default 3).
     underlay : {"sulc", "curv", "none"}
         What shows where the map has no value.
+    underlay_contrast : float
+        0-4: how far the sulcal-depth greys spread (0: one grey; 1: 0.52 in the deepest sulci to
+        0.74 on the crowns).
     threshold : float, optional
         Values with ``|v| < threshold`` show the underlay.
     outline : str, optional
@@ -86,6 +112,10 @@ class MapOptions:
         The mesh of a 163,842-vertex map that does not say (fsaverage when neither says).
     frames : str or sequence of int, optional
         The images of a series to draw (``"0:100:10"``, ``"3"``, ``"0,5,9"``).
+    contour : path, or "LH,RH" paths, optional
+        A second map whose iso-lines are drawn over the map (a cluster mask, a p-map).
+    contour_levels : str or float, optional
+        The iso-lines' values, comma-separated (default 0.5: a mask's edge).
     """
 
     lh: Any = field(default=None, metadata={
@@ -103,7 +133,10 @@ class MapOptions:
     projection_radius: float | None = field(default=None, metadata={
         "help": f"Radius of --projection in mm (default {RADIUS_MM:g})."})
     underlay: str = field(default="sulc", metadata={
-        "choices": UNDERLAYS, "help": "Map underlay: sulcal-depth or curvature greys, or one grey."})
+        "choices": UNDERLAYS, "help": "Map underlay: sulcal-depth greys (scaled from the depth), curvature "
+                                      "greys (two tones), or one grey."})
+    underlay_contrast: float = field(default=1.0, metadata={
+        "help": "How far the sulcal-depth greys spread, 0 (one grey) to 4 (1: darkest 0.52, lightest 0.74)."})
     threshold: float | None = field(default=None, metadata={
         "help": "Map values with |v| below this show the underlay."})
     outline: str | None = field(default=None, metadata={
@@ -117,10 +150,19 @@ class MapOptions:
     frames: Any = field(default=None, metadata={
         "help": "Images of a map series to draw (a CIFTI dtseries' frames): start:stop:step or a comma list, "
                 "e.g. 0:100:10."})
+    contour: Any = field(default=None, metadata={
+        "help": "A second map (FILE, or LH,RH files) whose iso-lines are drawn over the map at constant "
+                "pixel width (--outline-width): a cluster mask, a p-map."})
+    contour_levels: str | float | None = field(default=None, metadata={
+        "help": "Values of the --contour lines, comma-separated (default 0.5: a mask's edge; p-map: 0.05)."})
 
     def __post_init__(self) -> None:
         if self.underlay not in UNDERLAYS:
             raise choice_error("underlay", self.underlay, UNDERLAYS)
+        c = self.underlay_contrast
+        if not isinstance(c, int | float) or not math.isfinite(c) or not 0 <= c <= 4:
+            raise BrainPainterError(f"--underlay-contrast must be a number from 0 (one grey) to 4; {c!r} was "
+                                    "given.")
         t = self.threshold
         if t is not None and (not isinstance(t, int | float) or not math.isfinite(t) or t < 0):
             raise BrainPainterError(f"--threshold must be a number >= 0; {t!r} was given.")
@@ -132,9 +174,15 @@ class MapOptions:
                                     "surface maps (--lh/--rh) are not projected. Leave them out.")
         check_projection(self.projection, "linear", RADIUS_MM if self.projection_radius is None
                          else self.projection_radius)
+        self.levels  # noqa: B018 (a bad level fails now)
         if self.volume is not None and (self.lh is not None or self.rh is not None):
             raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "
                                     "volume is projected onto both hemispheres.")
+
+    @property
+    def levels(self) -> tuple[float, ...]:
+        """The contour levels, as numbers (default: 0.5)."""
+        return contour_levels(self.contour_levels)
 
     @property
     def given(self) -> bool:

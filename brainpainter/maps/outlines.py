@@ -1,4 +1,5 @@
-"""Outlines over a map: cluster borders (``--outline-threshold``) and the label lookups of ``--outline``.
+"""Outlines over a map: cluster borders (``--outline-threshold``), the label lookups of ``--outline``,
+and the iso-lines of a second map (``--contour``: :class:`Contours`).
 
 An atlas's region borders (``--outline ATLAS``) are drawn as lines of constant pixel
 width through the scene model (:mod:`brainpainter.rendering.borders`,
@@ -11,6 +12,7 @@ side of each border is marked (the vertex whose label is the smaller).
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -18,6 +20,25 @@ from numpy.typing import NDArray
 
 #: Outline colour (sRGB).
 OUTLINE_COLOR = (0.05, 0.05, 0.05)
+
+
+@dataclass(frozen=True)
+class Contours:
+    """Iso-lines of a second map (``--contour``), drawn at constant pixel width as ``--outline``'s borders.
+
+    Attributes
+    ----------
+    values : dict of str to ndarray of float32, shape (163842,)
+        The map on fsaverage, per hemisphere it covers.
+    levels : tuple of float
+        The values whose iso-lines are drawn (a mask's edge: 0.5; a p-map: 0.05).
+    regions : bool
+        Whether the atlas's region borders (``--outline``) are drawn too.
+    """
+
+    values: dict[str, NDArray[Any]] = field(repr=False)
+    levels: tuple[float, ...]
+    regions: bool = False
 
 
 def mesh_edges(faces: NDArray[Any]) -> NDArray[Any]:

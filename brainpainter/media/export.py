@@ -402,7 +402,8 @@ EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cm
                   "nan_color", "missing_color", "background", "image_column", "value", "region_column",
                   "strict", "tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_values",
                   "tract_value", "tract_radius", "lh", "rh", "volume", "projection", "projection_radius",
-                  "underlay", "threshold", "outline", "outline_threshold", "space", "frames")
+                  "underlay", "underlay_contrast", "threshold", "outline", "outline_threshold", "space",
+                  "frames")
 
 
 def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
@@ -419,9 +420,9 @@ def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
     atlas_obj, scene = load_scene(table.atlas, opts.template, opts.surface, opts.hide,
                                   tracts=opts.tract_spec(), tract_nodes=tv.nodes if tv is not None else (),
                                   tract_radius=opts.tract_radius)
-    meshes = region_meshes(scene, region_colors(table.row(i), atlas_obj, run.scale))
+    meshes = region_meshes(scene, region_colors(table.row(i), atlas_obj, run.scale_of("regions")))
     return scene, meshes + tract_meshes(
-        scene, tract_colors(tv.row(table.images[i]), run.scale) if tv is not None else {})
+        scene, tract_colors(tv.row(table.images[i]), run.scale_of("tracts")) if tv is not None else {})
 
 
 def export(data: Any, out: str | Path, *, format: str | None = None, row: str | int | None = None,

@@ -1,6 +1,7 @@
 """Publication figures: renders laid out with matplotlib, with a colour bar and titles.
 
-Two layouts share one colour scale and one colour bar:
+Two layouts share the colour bars: one per scale (the first layer's, and each later layer's with a
+scale of its own, such as tract values beside region values):
 
 * **per row** (default): each chosen input row is a line of the chosen views
   side by side (one line: a single-image figure; several: stacked, each
@@ -24,7 +25,7 @@ from __future__ import annotations
 
 import io
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Unpack
 
@@ -36,6 +37,7 @@ from brainpainter.media.colorbar import quiet_glyphs
 from brainpainter.media.drawn import common_crop, content_box, swatches_needed
 from brainpainter.media.layout import FigureKwargs, FigureOptions, compose_figure
 from brainpainter.media.outfile import check_out_file
+from brainpainter.rendering.layers import colorbar_layers
 from brainpainter.rendering.options import Options, RenderKwargs, take
 from brainpainter.rendering.run import make_runner, paint, prepare_run
 from brainpainter.rendering.views import ImagesByView
@@ -70,8 +72,11 @@ class FigureResult:
     images : dict of (str, str) to ndarray
         The renders, ``(image name, view name) -> RGBA (h, w, 4)``.
     colorbar_ax : matplotlib.axes.Axes
+        The first colour bar's.
     image_axes : dict of (str, str) to Axes
         Where each render is: ``(image name, view name) -> Axes``.
+    colorbar_axes : list of Axes
+        Every colour bar's: the first layer's, then each later layer's with a scale of its own.
     """
 
     figure: Figure
@@ -80,6 +85,7 @@ class FigureResult:
     images: dict[tuple[str, str], NDArray[Any]]
     colorbar_ax: Axes
     image_axes: dict[tuple[str, str], Axes] = field(default_factory=dict)
+    colorbar_axes: list[Axes] = field(default_factory=list)
 
     def __repr__(self) -> str:
         """One short line."""
@@ -190,11 +196,16 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
                 bar.update(1)
                 if on_progress is not None:
                     on_progress(len(images), len(plan))
+        more = [(layer.scale, layer.label) for layer in colorbar_layers(run.layers)[1:]]
+        if more and figure_opts.label is None:  # several bars: each names its layer
+            figure_opts = replace(figure_opts, label=run.layers[0].label)
         layout = compose_figure(images, [table.images[i] for i in chosen], [v.name for v in run.views],
-                                run.scale, figure_opts, nan=nan, missing=missing, background=background)
+                                run.scale, figure_opts, nan=nan, missing=missing, background=background,
+                                more_bars=more)
         if tx is not None and path is not None:
             tx.tmp.write_bytes(figure_bytes(layout.figure, path, figure_opts.dpi,
                                             transparent=background is None))
             tx.commit()
     assert layout.colorbar_ax is not None
-    return FigureResult(layout.figure, path, run.scale, images, layout.colorbar_ax, layout.image_axes)
+    return FigureResult(layout.figure, path, run.scale, images, layout.colorbar_ax, layout.image_axes,
+                        layout.colorbar_axes)

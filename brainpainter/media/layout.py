@@ -9,7 +9,7 @@ lays out the renders with them.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, TypedDict
 
 from numpy.typing import NDArray
@@ -26,6 +26,7 @@ if TYPE_CHECKING:  # pragma: no cover
 ONE_COLUMN_IN = 3.5  # inches; journals: 85-90 mm single column, 170-183 mm double
 TWO_COLUMN_IN = 7.2
 GAP_IN, PAD_IN = 0.04, 0.05  # between images, around the figure
+BAR_GAP_IN = 0.3  # between colour bars side by side
 
 
 class FigureKwargs(TypedDict, total=False):
@@ -117,13 +118,17 @@ class FigureLayout:
     ----------
     figure : matplotlib.figure.Figure
     colorbar_ax : matplotlib.axes.Axes
+        The first colour bar's.
     image_axes : dict of (str, str) to Axes
         ``(image name, view name) -> Axes``.
+    colorbar_axes : list of Axes
+        Every colour bar's, left to right (the first and each later layer's with a scale of its own).
     """
 
     figure: Figure
     colorbar_ax: Axes | None = None
     image_axes: dict[tuple[str, str], Axes] = field(default_factory=dict)
+    colorbar_axes: list[Axes] = field(default_factory=list)
 
 
 @dataclass
@@ -203,7 +208,8 @@ def plan_grid(aspect: Mapping[str, float], image_names: Sequence[str], view_name
 def compose_figure(images: Mapping[tuple[str, str], NDArray[Any]], image_names: Sequence[str],
                    view_names: Sequence[str], scale: ColourScale, opts: FigureOptions | None = None, *,
                    nan: bool = False, missing: bool = False,
-                   background: ColorLike | None = "white") -> FigureLayout:
+                   background: ColorLike | None = "white",
+                   more_bars: Sequence[tuple[ColourScale, str]] = ()) -> FigureLayout:
     """Lay out renders, titles and a colour bar in a matplotlib figure.
 
     Parameters
@@ -219,6 +225,9 @@ def compose_figure(images: Mapping[tuple[str, str], NDArray[Any]], image_names: 
         Show swatches for the NaN and missing colours.
     background : colour or None
         Figure background (and the renders'); None: transparent.
+    more_bars : sequence of (ColourScale, str)
+        Colour bars of further layers and their labels, beside the first (which has `opts`'
+        label, ticks and swatches).
 
     Returns
     -------
@@ -231,9 +240,15 @@ def compose_figure(images: Mapping[tuple[str, str], NDArray[Any]], image_names: 
     aspect = {v: (crops[v][0].stop - crops[v][0].start) / max(1, crops[v][1].stop - crops[v][1].start)
               for v in view_names}
 
+    bars = [(scale, opts.label, opts.ticks, nan, missing),
+            *((s, lb, None, False, False) for s, lb in more_bars)]
+    if len(bars) > 1:  # narrower bars side by side: every other round tick where there are many
+        bars = [(s, lb, t if t is not None else thinned_ticks(s), n, m) for s, lb, t, n, m in bars]
+
     def bar_h(usable: float) -> float:
-        return colorbar_height(scale, usable, dpi=opts.dpi, label=opts.label, ticks=opts.ticks, nan=nan,
-                               missing=missing, fontsize=opts.font_size)
+        width = bar_width(usable, len(bars))
+        return max(colorbar_height(s, width, dpi=opts.dpi, label=lb, ticks=t, nan=n, missing=m,
+                                   fontsize=opts.font_size) for s, lb, t, n, m in bars)
 
     grid = plan_grid(aspect, image_names, view_names, opts, bar_h)
     fig = new_figure((grid.width, grid.height), opts.dpi, background)
@@ -241,8 +256,25 @@ def compose_figure(images: Mapping[tuple[str, str], NDArray[Any]], image_names: 
     color = text_color(background)
     draw_images(layout, grid, images, crops, image_names, view_names, opts.grid)
     draw_headings(fig, grid, opts, color)
-    layout.colorbar_ax = draw_bar(fig, grid, scale, opts, nan, missing, color)
+    width = bar_width(grid.usable, len(bars))
+    for k, (s, label, ticks, n, m) in enumerate(bars):
+        x = grid.left + k * (width + BAR_GAP_IN)
+        bar_opts = replace(opts, label=label, ticks=ticks)
+        slot = (x, width, 1.0 / len(bars))
+        layout.colorbar_axes.append(draw_bar(fig, grid, s, bar_opts, n, m, color, slot))
+    layout.colorbar_ax = layout.colorbar_axes[0]
     return layout
+
+
+def thinned_ticks(scale: ColourScale) -> list[float]:
+    """The scale's round ticks, every other one where there are more than 4 (a bar of several)."""
+    ticks = [float(t) for t in scale.ticks()]
+    return ticks[::2] if len(ticks) > 4 and not scale.categories else ticks
+
+
+def bar_width(usable: float, n: int) -> float:
+    """The width of each of `n` colour bars side by side under images `usable` inches wide."""
+    return (usable - BAR_GAP_IN * (n - 1)) / n
 
 
 def draw_images(layout: FigureLayout, grid: Grid, images: Mapping[tuple[str, str], NDArray[Any]],
@@ -279,17 +311,19 @@ def draw_headings(fig: Figure, grid: Grid, opts: FigureOptions, color: str) -> N
 
 
 def draw_bar(fig: Figure, grid: Grid, scale: ColourScale, opts: FigureOptions, nan: bool, missing: bool,
-             color: str) -> Axes:
-    """The colour bar, centred right under the images; returns its axes."""
+             color: str, slot: tuple[float, float, float] | None = None) -> Axes:
+    """A colour bar, centred right under the images (or in `slot`: its left edge and width, inches, and
+    its share of the figure's width); returns its axes."""
     from brainpainter.media.colorbar import draw_colorbar, fit_axes
 
+    x, width, share = slot if slot is not None else (grid.left, grid.usable, 1.0)
     bar_h = 1.1 * opts.font_size / 72.0  # as colorbar_figure draws it
     cb_top = grid.images_bottom + 0.08 + 0.04
-    cb_ax = fig.add_axes(grid.box(grid.left, cb_top, grid.usable, bar_h))
+    cb_ax = fig.add_axes(grid.box(x, cb_top, width, bar_h))
     draw_colorbar(cb_ax, scale, label=opts.label, ticks=opts.ticks, nan=nan, missing=missing,
                   fontsize=opts.font_size, color=color)
-    avail = grid.box(grid.left, cb_top, grid.usable, grid.height - cb_top)
-    fit_axes(cb_ax, avail, grow="x", max_width=min(0.55 * grid.width, 3.2) / grid.width)
+    avail = grid.box(x, cb_top, width, grid.height - cb_top)
+    fit_axes(cb_ax, avail, grow="x", max_width=share * min(0.55 * grid.width, 3.2) / grid.width)
     # fit_axes centres vertically; keep the bar right under the images instead.
     pos = cb_ax.get_position()
     cb_ax.set_position((pos.x0, 1 - (cb_top + bar_h) / grid.height, pos.width, bar_h / grid.height))

@@ -369,7 +369,8 @@ class MovieFrames:
                 if tv is not None:  # bundle values (and profiles) change between key frames like regions
                     ra, rb = (tv.row(table.images[self.keys.rows[k]]) for k in (a, b))
                     tvals = interpolate(np.array(list(ra.values())), np.array(list(rb.values())), weight)
-                    colors.update(tract_colors(dict(zip(ra, tvals.tolist(), strict=True)), self.run.scale))
+                    colors.update(tract_colors(dict(zip(ra, tvals.tolist(), strict=True)),
+                                                 self.run.scale_of("tracts")))
             label = names[a] if a == b else f"{names[a]} {ARROW} {names[b]} ({weight:.3f})"
             yield [Item(colors, view, label=label) for view in state_views]
 

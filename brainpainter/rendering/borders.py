@@ -14,6 +14,9 @@ Two ways a border runs, as the colours run:
 - a scene coloured per vertex (a map over an atlas): the colours change halfway along the
   edges between vertices of two labels, so the border joins those midpoints across each
   triangle (:func:`vertex_borders`, marching triangles).
+
+A second map's iso-lines (``--contour``) are drawn the same way: :func:`iso_lines` joins the
+points where the map crosses the level along each edge, interpolated linearly.
 """
 
 from __future__ import annotations
@@ -94,6 +97,43 @@ def vertex_borders(vertices: NDArray[Any], faces: NDArray[Any], vertex_label: ND
                            n[three[:, a]] + n[three[:, b]], lift) for a, b in ((0, 1), (1, 2), (2, 0))]
     out: NDArray[np.float32] = np.concatenate([seg_two, *seg_three])
     return out
+
+
+def iso_lines(vertices: NDArray[Any], faces: NDArray[Any], values: NDArray[Any], level: float,
+              normals: NDArray[Any], lift: float = LIFT_MM) -> NDArray[np.float32]:
+    """Where `values` crosses `level` on the surface, as segments, (m, 2, 3) (marching triangles).
+
+    A triangle with corners on both sides of the level (``values >= level``; NaN counts as below)
+    gets the segment joining the two points where its mixed edges cross the level, placed by
+    linear interpolation (the edge's middle where a value is not finite). Closed regions give
+    closed lines.
+
+    Parameters
+    ----------
+    vertices : ndarray of float, shape (n, 3)
+    faces : ndarray of int, shape (f, 3)
+    values : ndarray of float, shape (n,)
+    level : float
+    normals : ndarray of float, shape (n, 3)
+    lift : float
+        Millimetres off the surface.
+    """
+    v, n = np.asarray(vertices, float), np.asarray(normals, float)
+    f = np.asarray(faces, np.int64)
+    val = np.asarray(values, float)
+    above = np.where(np.isnan(val), False, val >= level)[f]
+    mixed = np.nonzero(above.any(axis=1) & ~above.all(axis=1))[0]
+    a = above[mixed]
+    odd = np.where(a[:, 0] == a[:, 1], 2, np.where(a[:, 0] == a[:, 2], 1, 0))  # the corner alone on its side
+    c, b0, b1 = f[mixed, odd], f[mixed, (odd + 1) % 3], f[mixed, (odd + 2) % 3]
+
+    def crossing(p: NDArray[Any], q: NDArray[Any]) -> tuple[NDArray[Any], NDArray[Any]]:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (level - val[p]) / (val[q] - val[p])
+        t = np.clip(np.where(np.isfinite(t), t, 0.5), 0.0, 1.0)[:, None]
+        return v[p] + t * (v[q] - v[p]), n[p] + n[q]
+
+    return _segments(*crossing(c, b0), *crossing(c, b1), lift)
 
 
 def _lift(points: NDArray[Any], normals: NDArray[Any], lift: float) -> NDArray[Any]:

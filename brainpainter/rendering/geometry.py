@@ -321,20 +321,29 @@ class SceneGeometry:
 
         Per region, the edges between faces of two regions (hidden regions included: their
         border with what is drawn is drawn); per vertex, the lines through the midpoints of the
-        edges between vertices of two labels of the scene's label set.
+        edges between vertices of two labels of the scene's label set, and a second map's
+        iso-lines (``scene.contours``).
         """
-        from brainpainter.rendering.borders import face_borders, vertex_borders
+        from brainpainter.rendering.borders import face_borders, iso_lines, vertex_borders
 
         normals = vertex_normals(verts, cm.faces)
         if not per_vertex:
             return face_borders(verts, cm.faces, np.asarray(cm.face_label), normals)
         from brainpainter.maps.outlines import mesh_labels
 
+        contours = getattr(scene, "contours", None)
+        lines: list[NDArray[np.float32]] = []
+        if contours is not None and hemi in contours.values and len(cm.source_vertex):
+            values = np.asarray(contours.values[hemi])[np.asarray(cm.source_vertex, np.int64)]
+            lines = [iso_lines(verts, cm.faces, values, level, normals) for level in contours.levels]
+        if contours is not None and not contours.regions:
+            return np.concatenate(lines) if lines else np.zeros((0, 2, 3), np.float32)
         labels = mesh_labels(scene.template, scene.labels, hemi, cm)
         if labels is None:
             raise BrainPainterError(f"template {scene.template.name!r} has no per-vertex labels for "
                                     f"{scene.labels!r}, so its region borders cannot be drawn.")
-        return vertex_borders(verts, cm.faces, labels, normals)
+        borders: NDArray[Any] = np.concatenate([vertex_borders(verts, cm.faces, labels, normals), *lines])
+        return borders
 
     @staticmethod
     def _cortex_mesh(scene: SceneParts, hemi: str, per_vertex: bool) -> Any:

@@ -17,16 +17,21 @@ from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.template import Template, load_template
-from brainpainter.maps.inputs import VertexMaps, read_maps
-from brainpainter.maps.layers import map_scale, vertex_colors
-from brainpainter.maps.outlines import mesh_edges
+from brainpainter.errors import BrainPainterError
+from brainpainter.maps.inputs import VertexMaps, is_map_input, read_maps
+from brainpainter.maps.layers import vertex_colors
+from brainpainter.maps.options import MapOptions
+from brainpainter.maps.outlines import Contours, mesh_edges
 from brainpainter.maps.resolution import map_mesh
+from brainpainter.rendering.composition import RegionsBelow, map_layers
 from brainpainter.rendering.geometry import VertexColors
+from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import Options
 from brainpainter.rendering.painter import Painter, region_colors
 from brainpainter.rendering.parallel import Item
 from brainpainter.rendering.settings import outlined
 from brainpainter.rendering.views import View, parse_views
+from brainpainter.table.region_table import RegionTable, read_table
 
 #: Default views of a map run: both hemispheres, outside and inside.
 MAP_VIEWS = "lateral-left,medial-left,lateral-right,medial-right"
@@ -38,10 +43,11 @@ class MapTable:
 
     maps: VertexMaps
     atlas: Atlas
+    below: RegionTable | None = None  # region values under the map: its rows are the images
 
     @property
     def images(self) -> list[str]:
-        return list(self.maps.images)
+        return list(self.maps.images if self.below is None else self.below.images)
 
     @property
     def regions(self) -> list[str]:
@@ -54,7 +60,8 @@ class MapTable:
         return np.zeros((len(self.maps.images), len(self.atlas.keys)))
 
     def summary(self) -> dict[str, Any]:
-        return self.maps.summary()
+        return self.maps.summary() if self.below is None else {**self.maps.summary(),
+                                                               "table": self.below.summary()}
 
 
 @dataclass
@@ -68,18 +75,26 @@ class MapRun:
     options: Options
     source_vertex: dict[str, NDArray[Any]]
     cluster_edges: dict[str, NDArray[Any]] | None = None
+    depth: dict[str, NDArray[Any]] | None = None  # sulcal depth of the drawn vertices, where the mesh has it
+    contours: Contours | None = None  # a second map's iso-lines (--contour)
     tract_values: None = None  # a map colours no tracts
+    layers: tuple[Layer, ...] = ()
+    below: RegionsBelow | None = None  # region values under the map
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
     @property
     def maps(self) -> VertexMaps:
         return self.table.maps
 
+    def scale_of(self, kind: str) -> Any:
+        """The colour scale of layer `kind`; the map's where the run has no such layer."""
+        return next((layer.scale for layer in self.layers if layer.kind == kind), self.scale)
+
     def painter(self) -> Painter:
         """A new (not loaded) painter drawing a per-vertex scene."""
         scene = self.options.scene
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
-                       scene.renderer, coloring="vertices")
+                       scene.renderer, coloring="vertices", contours=self.contours)
 
     def items(self, rows: Any) -> list[tuple[int, View]]:
         return [(i, view) for i in rows for view in self.views]
@@ -88,13 +103,22 @@ class MapRun:
         """The colours of image `image` (or of ``(a, b, w)``: images a and b blended, a movie's frame)."""
         if image not in self._cache:
             self._cache.clear()  # one image at a time: the views of a row share it
-            m = self.options.maps
-            cortex = vertex_colors(self.maps, image, self.source_vertex, self.scale, m.underlay, m.threshold,
-                                   cluster_edges=self.cluster_edges)
+            m, scale = self.options.maps, self.scale_of("map")
+            map_image: float | tuple[int, int, float] = image if self.maps.n_images > 1 else 0
+            regions: dict[str, Any] = {}
+            below = None
+            if self.below is not None:  # region values under the map: a movie's frame takes the nearer row
+                row = image if not isinstance(image, tuple) else image[0] if image[2] < 0.5 else image[1]
+                regions, below = self.below.colors(round(row))
+            cortex = vertex_colors(self.maps, map_image, self.source_vertex, scale, m.underlay, m.threshold,
+                                   cluster_edges=self.cluster_edges, below=below,
+                                   opacity=self.layers[-1].opacity, depth=self.depth,
+                                   contrast=m.underlay_contrast)
             # a volume's subcortical means: below --threshold a structure shows no value, as the cortex does
-            means = {k: v for k, v in self.maps.region_values(image).items()
+            means = {k: v for k, v in self.maps.region_values(map_image).items()
                      if m.threshold is None or abs(v) >= m.threshold}
-            regions = region_colors(means, self.table.atlas, self.scale)
+            means_rgb = region_colors(means, self.table.atlas, scale)
+            regions.update(means_rgb if self.below is None else {k: means_rgb[k] for k in means})
             self._cache[image] = VertexColors(regions, cortex)
         return self._cache[image]
 
@@ -110,10 +134,18 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     """Read the maps and check the options of a map run (as ``prepare_run`` does for a table)."""
     from brainpainter.atlas.registry import get_atlas
 
+    table = None
+    if data is not None and not is_map_input(data):  # a region table, the map drawn over its colours
+        table = read_table(data, atlas, **options.table.kwargs())
+        data, atlas = None, table.atlas
     m = options.maps
     maps = read_maps(data, m.lh, m.rh, m.volume, space=m.space, frames=m.frames, projection=m.projection,
                      radius=m.projection_radius)
     outline = options.maps.outline
+    if table is not None and outline is not None and outline != table.atlas.name:
+        raise BrainPainterError(f"a map over region values outlines the table's atlas "
+                                f"({table.atlas.name!r}); --outline {outline!r} was given. Give --outline "
+                                f"{table.atlas.name}.")
     # --outline ATLAS: the map is drawn on that atlas's mesh, whose vertices carry its labels
     atlas_obj = get_atlas(outline) if outline is not None else atlas if atlas is not None else get_atlas("dk")
     views = options.scene.views
@@ -127,7 +159,30 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     source_vertex = {hemi: np.asarray(m.source_vertex) for hemi, m in meshes.items()}
     edges = ({hemi: mesh_edges(m.faces) for hemi, m in meshes.items()} if options.maps.outline_threshold
              else None)
-    scale = map_scale(options.scale, maps, options.maps.threshold)
-    return MapRun(MapTable(maps, atlas_obj), scale, view_list, outlined(options.settings, outline),
-                  options, source_vertex, edges)
+    layers, below = map_layers(options, maps, table, meshes)
+    contours = read_contours(options.maps)
+    depth = {hemi: np.asarray(m.sulc) for hemi, m in meshes.items() if getattr(m, "sulc", None) is not None}
+    return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list,
+                  outlined(options.settings, outline if contours is None else "contour"), options,
+                  source_vertex, edges, depth, contours, layers=layers, below=below)
+
+
+def read_contours(options: MapOptions) -> Contours | None:
+    """The second map of ``--contour`` (``FILE`` or ``LH,RH``) and its levels, on fsaverage (None without)."""
+    if options.contour is None:
+        return None
+    given = options.contour
+    parts = [p.strip() for p in given.split(",")] if isinstance(given, str) else None
+    pair = parts is not None and len(parts) == 2
+    try:
+        maps = read_maps(None, parts[0], parts[1]) if parts is not None and pair else read_maps(given)
+    except BrainPainterError as exc:  # the readers speak of --lh/--rh: say which option it was
+        what = given if isinstance(given, str) else "(a map)"
+        raise BrainPainterError(f"--contour {what}: {str(exc).rstrip('.')}; --contour takes one file whose "
+                                "name says its hemisphere, or two: LH,RH.") from None
+    if maps.n_images != 1:
+        raise BrainPainterError(f"--contour takes a map of one image; {maps.source} has {maps.n_images}. "
+                                "Give one image (a cluster mask, a p-map).")
+    values = {hemi: np.asarray(maps.on_fsaverage(hemi, 0), np.float32) for hemi in maps.values}
+    return Contours(values, options.levels, regions=options.outline is not None)
 

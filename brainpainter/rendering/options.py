@@ -13,6 +13,8 @@ group                     options                                               
                           glass_opacity, outline_width
 :class:`TableOptions`     image_column, value, region_column, strict                  table.options
 :class:`MapOptions`       lh, rh, underlay, threshold                                 maps.options
+:class:`LayerOptions`     each layer's scale: regions_cmap, map_vmin, tracts_vmax,    rendering.layers
+                          map_alpha, ...
 :class:`RunnerOptions`    jobs, client, scheduler                                     here
 ========================  ==========================================================  ============
 
@@ -37,6 +39,7 @@ from brainpainter.color.rgb import to_rgb
 from brainpainter.color.scale import ScaleKwargs, ScaleOptions
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.maps.options import MapKwargs, MapOptions
+from brainpainter.rendering.layers import LayerKwargs, LayerOptions
 from brainpainter.rendering.settings import RenderSettings, SettingsKwargs
 from brainpainter.rendering.views import parse_views
 from brainpainter.table.options import TableKwargs, TableOptions
@@ -78,7 +81,7 @@ class RunnerKwargs(TypedDict, total=False):
 
 
 class RenderKwargs(SceneKwargs, ScaleKwargs, SettingsKwargs, TableKwargs, RunnerKwargs, MapKwargs,
-                   total=False):
+                   LayerKwargs, total=False):
     """Every option of a run as a flat keyword (see :class:`Options` for what each means)."""
 
 
@@ -269,7 +272,8 @@ class RunnerOptions:
 # -- all of them ----------------------------------------------------------------------------
 #: Option group -> its class, in the order they are checked (cheap checks first).
 GROUPS: dict[str, type] = {"runner": RunnerOptions, "scale": ScaleOptions, "scene": SceneOptions,
-                           "settings": RenderSettings, "table": TableOptions, "maps": MapOptions}
+                           "settings": RenderSettings, "table": TableOptions, "maps": MapOptions,
+                           "layers": LayerOptions}
 
 
 def option_names(cls: type) -> list[str]:
@@ -300,6 +304,8 @@ class Options:
         image_column, value, region_column, strict.
     maps : MapOptions
         lh, rh, underlay, threshold (per-vertex maps, :mod:`brainpainter.maps`).
+    layers : LayerOptions
+        Each layer's own colour options (``tracts_cmap``, ``map_vmin``, ``map_alpha``, ...).
     size_given : bool
         Whether the user gave ``width`` or ``height``; if not, an atlas with its own
         :attr:`~brainpainter.atlas.model.Atlas.image_aspect` reshapes the default size.
@@ -311,6 +317,7 @@ class Options:
     settings: RenderSettings = field(default_factory=RenderSettings)
     table: TableOptions = field(default_factory=TableOptions)
     maps: MapOptions = field(default_factory=MapOptions)
+    layers: LayerOptions = field(default_factory=LayerOptions)
     size_given: bool = field(default=True, compare=False)  # not an option: how the settings were made
 
     @classmethod

@@ -22,6 +22,7 @@ from brainpainter.atlas.template import Template, load_template, template_for
 from brainpainter.color.rgb import ColorLike, to_rgb
 from brainpainter.color.scale import ColourScale
 from brainpainter.errors import choice_error
+from brainpainter.maps.outlines import Contours
 from brainpainter.rendering.geometry import Palette, VertexColors
 from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.settings import RGB, RenderSettings
@@ -118,6 +119,7 @@ def load_scene(
     tract_nodes: Iterable[tuple[str, int]] = (),
     tract_radius: float | None = None,
     coloring: str = "regions",
+    contours: Contours | None = None,
 ) -> tuple[Atlas, Scene]:
     """The atlas and the scene a renderer (or an exporter) draws; nothing is rendered.
 
@@ -155,6 +157,7 @@ def load_scene(
         tract_nodes=tuple((str(n), int(k)) for n, k in tract_nodes),
         tract_radius=None if tract_radius is None else float(tract_radius),
         coloring=coloring,
+        contours=contours,
     )
     return atlas, scene
 
@@ -185,6 +188,8 @@ class Painter:
         :func:`brainpainter.tracts.tubes.auto_radius`).
     coloring : {"regions", "vertices"}
         ``"vertices"`` draws per-vertex maps (:attr:`brainpainter.rendering.scene.Scene.coloring`).
+    contours : Contours, optional
+        A second map's iso-lines (:attr:`brainpainter.rendering.scene.Scene.contours`).
     """
 
     atlas: Atlas | str = "dk"
@@ -199,6 +204,7 @@ class Painter:
     tract_nodes: Iterable[tuple[str, int]] = ()
     tract_radius: float | None = None
     coloring: str = "regions"
+    contours: Contours | None = None
     _renderer: Any = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -206,7 +212,7 @@ class Painter:
         self.atlas, self.scene = load_scene(self.atlas, self.template, self.surface, self.hidden,
                                             self.settings, self.medial_wall_color, self.atlas_config,
                                             self.tracts, self.tract_nodes, self.tract_radius,
-                                            self.coloring)
+                                            self.coloring, self.contours)
         self.template = self.scene.template
         from brainpainter.atlas import registry
         from brainpainter.rendering.pythons import require_bpy
@@ -273,6 +279,8 @@ class RenderResult:
     workers : dict
         Where it ran (``backend``, ``workers``, ``startup_seconds``, ``retried``);
         not part of the manifest, which is the same however the run was split.
+    layers : tuple of Layer
+        What was drawn, each with its colour scale (:mod:`brainpainter.rendering.layers`).
     """
 
     files: list[Path]
@@ -281,6 +289,7 @@ class RenderResult:
     scale: ColourScale | None = None
     table: RegionTable | None = None
     workers: dict[str, Any] = field(default_factory=dict)
+    layers: tuple[Any, ...] = ()
 
     def __repr__(self) -> str:
         """One short line (the images and files are many and large)."""

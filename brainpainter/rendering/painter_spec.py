@@ -42,6 +42,8 @@ class PainterSpec:
     tract_nodes : tuple of (str, int)
         How each bundle is coloured (:class:`~brainpainter.rendering.scene.Scene`).
     coloring : {"regions", "vertices"}
+    contours : Contours, optional
+        A second map's iso-lines (its values travel with the spec: about 1.3 MB for both hemispheres).
     """
 
     atlas: Any
@@ -56,6 +58,7 @@ class PainterSpec:
     tract_nodes: tuple[tuple[str, int], ...] = ()
     tract_radius: float | None = None
     coloring: str = "regions"
+    contours: Any = None
 
     @classmethod
     def of(cls, painter: Painter, template: Any = None) -> PainterSpec:
@@ -74,7 +77,7 @@ class PainterSpec:
             settings=painter.settings, renderer=painter.renderer, renderer_target=target,
             medial_wall_color=tuple(float(c) for c in painter.scene.medial_wall_color),  # type: ignore[arg-type]
             tracts=painter.tracts, tract_nodes=tuple(painter.tract_nodes), tract_radius=painter.tract_radius,
-            coloring=painter.scene.coloring,
+            coloring=painter.scene.coloring, contours=painter.scene.contours,
         )
 
     @property
@@ -102,4 +105,5 @@ class PainterSpec:
                 registry.renderers.register(self.renderer, lambda: obj, replace=True)
         return Painter(self.atlas, self.template, self.surface, self.hidden, self.settings,
                        self.renderer, self.medial_wall_color, tracts=self.tracts,
-                       tract_nodes=self.tract_nodes, tract_radius=self.tract_radius, coloring=self.coloring)
+                       tract_nodes=self.tract_nodes, tract_radius=self.tract_radius, coloring=self.coloring,
+                       contours=self.contours)

@@ -21,9 +21,11 @@ from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.registry import get_atlas, load_atlas_config
-from brainpainter.color.scale import ColourScale, ScaleOptions, widen
+from brainpainter.color.scale import ColourScale
 from brainpainter.errors import BrainPainterError, NoRegionColumnError
 from brainpainter.maps.inputs import is_map_input
+from brainpainter.rendering.composition import run_layers
+from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
 from brainpainter.rendering.painter import (
     VOLUME_VIEWS,
@@ -47,7 +49,11 @@ if TYPE_CHECKING:
 
 @dataclass
 class Run:
-    """A checked run: the table, its colour scale (fixed over all rows), views, settings and options."""
+    """A checked run: the table, its colour scale (fixed over all rows), views, settings and options.
+
+    `scale` is the first layer's; `layers` are the region values and the tract values drawn, each
+    with its scale (:mod:`brainpainter.rendering.layers`).
+    """
 
     table: RegionTable
     scale: ColourScale
@@ -55,6 +61,11 @@ class Run:
     settings: RenderSettings
     options: Options
     tract_values: TractValues | None = None
+    layers: tuple[Layer, ...] = ()
+
+    def scale_of(self, kind: str) -> ColourScale:
+        """The colour scale of layer `kind` (``"regions"``, ``"tracts"``); the run's scale if it has none."""
+        return next((layer.scale for layer in self.layers if layer.kind == kind), self.scale)
 
     def painter(self) -> Painter:
         """A new (not loaded) painter for this run's atlas, scene options and image settings."""
@@ -70,9 +81,9 @@ class Run:
 
     def item(self, i: int, view: View, metadata: Mapping[str, str] | None = None) -> Item:
         """The image of row `i` from `view`, as a painter task."""
-        colors = region_colors(self.table.row(i), self.table.atlas, self.scale)
+        colors = region_colors(self.table.row(i), self.table.atlas, self.scale_of("regions"))
         if self.tract_values is not None:
-            colors.update(tract_colors(self.tract_values.row(self.table.images[i]), self.scale))
+            colors.update(tract_colors(self.tract_values.row(self.table.images[i]), self.scale_of("tracts")))
         return Item(colors, view, metadata, self.table.images[i])
 
 
@@ -208,6 +219,9 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
         from brainpainter.rendering.maprun import prepare_map_run
 
         return prepare_map_run(data, atlas_obj, options)  # type: ignore[return-value]
+    if options.maps.contour is not None:
+        raise BrainPainterError("--contour draws a second map's iso-lines over a map; give the map too "
+                                "(--lh/--rh or --volume), or draw region borders with --outline ATLAS.")
     views = options.scene.views
     if views is not None:  # a given option's errors before a big input file is read
         view_list = parse_views(views if isinstance(views, str) else list(views))
@@ -226,8 +240,6 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
                 raise
             raise NoRegionColumnError(f"{exc} Nor does any column name a bundle of --tracts "
                                       f"{sorted(bundle_names(spec))[:6]}.") from None
-    values = table.values if tract_values is None else np.concatenate(
-        [np.ravel(table.values), np.ravel(tract_values.values)])
     if views is None:
         view_list = parse_views(default_views(table.atlas, only_tracts))
     outline = options.maps.outline
@@ -238,9 +250,8 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     settings = outlined(options.settings, outline)
     if not options.size_given and table.atlas.image_aspect:  # a brain of another shape: frame the views
         settings = with_aspect(settings, shown_aspect(table.atlas, options.scene.template, view_list))
-    return Run(table, run_scale(options.scale, values, only_tracts and tract_values is not None
-                                and any(n > 1 for _, n in tract_values.nodes)),
-               view_list, settings, options, tract_values)
+    layers = run_layers(options, table, tract_values, only_tracts and tract_values is not None)
+    return Run(table, layers[0].scale, view_list, settings, options, tract_values, layers)
 
 
 def default_views(atlas: Atlas, only_tracts: bool) -> tuple[str, ...] | None:
@@ -250,22 +261,6 @@ def default_views(atlas: Atlas, only_tracts: bool) -> tuple[str, ...] | None:
     if atlas.views:
         return atlas.views
     return VOLUME_VIEWS if only_tracts or not atlas.cortical() else None
-
-
-def run_scale(options: ScaleOptions, values: NDArray[Any], measures: bool) -> ColourScale:
-    """The colour scale of a run whose values (all rows) are `values`, shape any.
-
-    `measures`: the values are measures along tracts (profiles alone, FA 0.2-0.7, MD 0.0007), not
-    BrainPainter's levels 0..N-1, so a gradient given no vmin/vmax spans their range.
-    """
-    if measures and options.cmap is None and options.vmin is None and options.vmax is None \
-            and options.center is None:
-        finite = np.asarray(values, dtype=float)[np.isfinite(values)]
-        if finite.size:
-            lo, hi = float(finite.min()), float(finite.max())
-            lo, hi = widen(lo) if hi <= lo else (lo, hi)
-            options = replace(options, vmin=lo, vmax=hi)
-    return options.scale(values)
 
 
 def make_runner(painter: Painter, template: Any = None, options: RunnerOptions | None = None,
@@ -366,7 +361,7 @@ def render(data: Any = None, atlas: Atlas | str | None = None, *, out: str | Pat
     finally:
         if own or not isinstance(runner, SerialRunner):  # a painter given by the caller stays open
             runner.close()
-    return RenderResult(files, images, manifest, run.scale, run.table, runner.summary())
+    return RenderResult(files, images, manifest, run.scale, run.table, runner.summary(), run.layers)
 
 
 def painter_options(painter: Painter, options: Options) -> Options:
@@ -399,6 +394,7 @@ def run_settings(run: Run, painter: Painter) -> dict[str, Any]:
     return {
         "atlas": run.table.atlas.name, "template": painter.scene.template.name, "surface": painter.surface,
         "views": [v.to_dict() for v in run.views], "scale": run.scale.to_dict(),
+        "layers": [layer.to_dict() for layer in run.layers],
         "hidden": sorted(painter.scene.hidden), "renderer": painter.renderer, **run.settings.to_dict(),
     }
 

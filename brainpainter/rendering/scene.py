@@ -38,6 +38,7 @@ __all__ = ["LIGHTINGS", "QUALITIES", "RGB", "SHADINGS", "SULC_LIGHTINGS", "Blank
            "RenderSettings", "Renderer", "Scene", "nothing_drawn"]
 
 if TYPE_CHECKING:
+    from brainpainter.maps.outlines import Contours
     from brainpainter.rendering.geometry import Palette, SceneGeometry
     from brainpainter.tracts.model import Tracts
 
@@ -74,6 +75,9 @@ class Scene:
     coloring : {"regions", "vertices"}
         ``"vertices"``: a map; the cortex has one palette slot per vertex
         (:class:`~brainpainter.rendering.geometry.SceneGeometry`).
+    contours : Contours, optional
+        A second map's iso-lines, drawn with the region borders at ``settings.outline_width``
+        pixels (a per-vertex scene only).
     """
 
     template: Template
@@ -86,6 +90,7 @@ class Scene:
     tract_nodes: tuple[tuple[str, int], ...] = ()
     tract_radius: float | None = None
     coloring: str = "regions"
+    contours: Contours | None = None
 
     def __post_init__(self) -> None:
         if self.surface not in SURFACES:

@@ -1,0 +1,199 @@
+"""Layers: each kind of data drawn (region values, a map, tract values) with its own colour scale.
+
+A :class:`Layer` is one kind of data's colour scale, opacity and colour-bar label; a run's
+layers are ordered, the first being its main input (a region table, a map, or tract values
+alone). :class:`LayerOptions` holds the options of each kind (``--regions-cmap``,
+``--map-vmin``, ``--tracts-vmax``, ``--map-alpha``, ...), one definition from which the CLI
+is made (:mod:`brainpainter.rendering.options`). The plain ``--cmap``/``--vmin``/``--vmax``
+are the first layer's; a later layer given options of its own gets a scale of its own
+(:meth:`LayerOptions.scale_options`), one given none shares the first layer's scale.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field, fields, replace
+from typing import Any, TypedDict
+
+from brainpainter.color.scale import ColourScale, ScaleOptions
+from brainpainter.errors import BrainPainterError
+
+#: The kinds of data a layer draws, in the order of their options.
+LAYER_KINDS = ("regions", "map", "tracts")
+#: The colour-scale options each layer has (the fields of :class:`ScaleOptions` that make its colours).
+SCALE_FIELDS = ("gradient", "cmap", "vmin", "vmax", "center")
+_WHAT = {"regions": "Region values", "map": "The map", "tracts": "Tract values"}
+_GIVE = {"regions": "give a region table as INPUT", "map": "give a map (--lh/--rh or --volume)",
+         "tracts": "give tract values (--tract-values, or bundle columns in INPUT, with --tracts)"}
+
+
+@dataclass(frozen=True)
+class Layer:
+    """One kind of data drawn, with its colour scale.
+
+    Attributes
+    ----------
+    kind : {"regions", "map", "tracts"}
+    scale : ColourScale
+    opacity : float
+        0-1: how much of the layer covers the layers below it.
+    label : str
+        Its colour bar's label (a file's name where none was given).
+    own_scale : bool
+        Whether its scale is its own; False: it shares the first layer's (one colour bar).
+    """
+
+    kind: str
+    scale: ColourScale
+    opacity: float = 1.0
+    label: str = ""
+    own_scale: bool = True
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready (the manifest's ``layers``)."""
+        return {"kind": self.kind, "label": self.label, "opacity": self.opacity,
+                "scale": self.scale.to_dict()}
+
+
+def colorbar_layers(layers: tuple[Layer, ...]) -> list[Layer]:
+    """The layers that need a colour bar of their own: the first, and every later one with its own scale."""
+    return [layer for k, layer in enumerate(layers) if k == 0 or layer.own_scale]
+
+
+class LayerKwargs(TypedDict, total=False):
+    """The keyword arguments of :class:`LayerOptions`."""
+
+    regions_gradient: str | None
+    regions_cmap: str | None
+    regions_vmin: float | None
+    regions_vmax: float | None
+    regions_center: float | None
+    regions_label: str | None
+    map_gradient: str | None
+    map_cmap: str | None
+    map_vmin: float | None
+    map_vmax: float | None
+    map_center: float | None
+    map_label: str | None
+    map_alpha: float
+    tracts_gradient: str | None
+    tracts_cmap: str | None
+    tracts_vmin: float | None
+    tracts_vmax: float | None
+    tracts_center: float | None
+    tracts_label: str | None
+
+
+def _scale_field(kind: str, name: str) -> Any:
+    """A field of :class:`LayerOptions`: option `name` of :class:`ScaleOptions`, for layer `kind` only."""
+    help_text = next(f for f in fields(ScaleOptions) if f.name == name).metadata["help"]
+    return field(default=None, metadata={
+        "help": f"{_WHAT[kind]} only: {help_text[0].lower()}{help_text[1:]}"})
+
+
+def _label_field(kind: str) -> Any:
+    return field(default=None, metadata={
+        "help": f"Colour-bar label of {_WHAT[kind].lower()} (default: its file's name)."})
+
+
+@dataclass(frozen=True)
+class LayerOptions:
+    """The colour options of each layer; those not given follow the plain ``--cmap``/``--vmin``/...
+
+    Attributes
+    ----------
+    regions_gradient, regions_cmap, regions_vmin, regions_vmax, regions_center : optional
+        The region values' scale (as :class:`ScaleOptions`).
+    map_gradient, map_cmap, map_vmin, map_vmax, map_center : optional
+        The map's scale.
+    tracts_gradient, tracts_cmap, tracts_vmin, tracts_vmax, tracts_center : optional
+        The tract values' scale.
+    regions_label, map_label, tracts_label : str, optional
+        Each layer's colour-bar label.
+    map_alpha : float
+        Opacity of a map drawn over region colours, 0-1.
+    """
+
+    regions_gradient: str | None = _scale_field("regions", "gradient")
+    regions_cmap: str | None = _scale_field("regions", "cmap")
+    regions_vmin: float | None = _scale_field("regions", "vmin")
+    regions_vmax: float | None = _scale_field("regions", "vmax")
+    regions_center: float | None = _scale_field("regions", "center")
+    regions_label: str | None = _label_field("regions")
+    map_gradient: str | None = _scale_field("map", "gradient")
+    map_cmap: str | None = _scale_field("map", "cmap")
+    map_vmin: float | None = _scale_field("map", "vmin")
+    map_vmax: float | None = _scale_field("map", "vmax")
+    map_center: float | None = _scale_field("map", "center")
+    map_label: str | None = _label_field("map")
+    map_alpha: float = field(default=1.0, metadata={
+        "help": "Opacity of a map drawn over region colours (INPUT with --lh/--rh), 0 to 1."})
+    tracts_gradient: str | None = _scale_field("tracts", "gradient")
+    tracts_cmap: str | None = _scale_field("tracts", "cmap")
+    tracts_vmin: float | None = _scale_field("tracts", "vmin")
+    tracts_vmax: float | None = _scale_field("tracts", "vmax")
+    tracts_center: float | None = _scale_field("tracts", "center")
+    tracts_label: str | None = _label_field("tracts")
+
+    def __post_init__(self) -> None:
+        try:
+            alpha_ok = 0.0 <= float(self.map_alpha) <= 1.0
+        except (TypeError, ValueError):
+            alpha_ok = False
+        if not alpha_ok:
+            raise BrainPainterError(f"--map-alpha must be a number from 0 (transparent) to 1 (opaque); "
+                                    f"{self.map_alpha!r} was given.")
+        for kind in LAYER_KINDS:
+            own = self.given(kind)
+            if own:
+                try:
+                    ScaleOptions(**own)  # a bad colour map or range fails now, before any data is read
+                except BrainPainterError as exc:
+                    raise BrainPainterError(f"--{kind}-* options: {exc}") from None
+
+    def given(self, kind: str) -> dict[str, Any]:
+        """The scale options given for layer `kind` (``{"cmap": "magma", "vmin": 0.3}``)."""
+        return {name: value for name in SCALE_FIELDS
+                if (value := getattr(self, f"{kind}_{name}")) is not None}
+
+    def label(self, kind: str) -> str | None:
+        """The colour-bar label given for layer `kind`."""
+        label: str | None = getattr(self, f"{kind}_label")
+        return label
+
+    def check_drawn(self, kinds: Sequence[str]) -> None:
+        """Refuse options of a layer the run does not draw (``--tracts-cmap`` and no tract values).
+
+        Raises
+        ------
+        BrainPainterError
+            Naming the first such option and what draws that layer.
+        """
+        for kind in LAYER_KINDS:
+            if kind in kinds:
+                continue
+            names = [*self.given(kind), *(["label"] if self.label(kind) is not None else []),
+                     *(["alpha"] if kind == "map" and float(self.map_alpha) != 1.0 else [])]
+            if names:
+                raise BrainPainterError(
+                    f"--{kind}-{names[0]} colours {_WHAT[kind].lower()}, but this run draws none "
+                    f"(it draws {', '.join(kinds) or 'nothing with values'}); {_GIVE[kind]}, or leave "
+                    f"the --{kind}-* options out.")
+
+    def scale_options(self, kind: str, base: ScaleOptions, first: bool) -> ScaleOptions | None:
+        """The scale options of layer `kind`: `base` (the plain options) for the first layer, with its own.
+
+        A later layer given none of its own shares the first layer's scale (None); given some, its
+        scale is its own: its options, else the colour map or gradient of `base`, and its range from
+        its own values.
+        """
+        own = self.given(kind)
+        if not first and not own:
+            return None
+        if "cmap" in own or "gradient" in own:  # its own colour map replaces the plain one
+            base = replace(base, cmap=None, gradient=None)
+        if first:
+            return replace(base, **own)
+        inherited = {"gradient": base.gradient, "cmap": base.cmap, "nan_color": base.nan_color,
+                     "missing_color": base.missing_color}
+        return ScaleOptions(**{**inherited, **own})
