@@ -18,7 +18,8 @@ from brainpainter.maps.inputs import read_maps
 from brainpainter.maps.options import MapOptions, check_projection
 from brainpainter.maps.regfusion import ASEG_FILE, REGFUSION_FILE, aseg_mni152, fsaverage_mni152
 from brainpainter.maps.resolution import fsaverage_faces
-from brainpainter.maps.volume import project_volume, subcortical_means, subcortical_table, volume_images
+from brainpainter.maps.volume import project_volume, subcortical_means
+from brainpainter.maps.volume_images import subcortical_table, volume_images
 
 REPO = Path(__file__).resolve().parents[1]
 # MNI152 2 mm grid (FSL's MNI152_T1_2mm: 91 x 109 x 91)

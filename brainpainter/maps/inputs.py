@@ -312,7 +312,7 @@ def read_volume(img: Any, *, method: Method = "linear", projection: str | None =
     -------
     brainpainter.maps.inputs.VertexMaps
         ``values`` of shape (n_volumes, 163842) per hemisphere, images named as in
-        :func:`~brainpainter.maps.volume.volume_images`, and ``regions``: the mean inside each
+        :func:`~brainpainter.maps.volume_images.volume_images`, and ``regions``: the mean inside each
         subcortical structure (:func:`~brainpainter.maps.volume.subcortical_means`), shape
         (n_volumes,) each.
     """

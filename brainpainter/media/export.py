@@ -399,11 +399,10 @@ _VIEWER_JS = r"""
 
 #: The options of a run that an export uses (it renders no image: no size, views, quality or workers).
 EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cmap", "vmin", "vmax", "center",
-                  "nan_color", "missing_color", "background", "image_column", "value", "region_column",
-                  "strict", "tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_values",
-                  "tract_value", "tract_radius", "lh", "rh", "volume", "projection", "projection_radius",
-                  "underlay", "underlay_contrast", "threshold", "outline", "outline_threshold", "space",
-                  "frames")
+                  "nan_color", "missing_color", "background", "image_column", "value", "region_column", "strict",
+                  "tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_values", "tract_value",
+                  "tract_radius", "lh", "rh", "volume", "projection", "projection_radius", "underlay",
+                  "underlay_contrast", "threshold", "outline", "outline_threshold", "space", "frames")
 
 
 def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
