@@ -228,6 +228,18 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
             raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "
                                     "volume is projected onto both hemispheres.")
         return pick_images(read_volume(volume, projection=projection, radius=radius), frames)
+    given = _given(data, lh, rh)
+    hemis = {h: read_hemi(v, h, external=external) for h, v in given.items()}
+    maps = _combine(hemis, given)
+    says = any(h.fslr for h in hemis.values()) or any(
+        names_fslr(Path(v).name) for v in given.values() if isinstance(v, str | Path))
+    chosen, notes = decide_space({h: v.shape[1] for h, v in maps.values.items()}, space, says, "the map")
+    return pick_images(replace(maps, space=chosen, notes=notes), frames)
+
+
+def _given(data: Any, lh: Any, rh: Any) -> dict[str, Any]:
+    """The file or array of each hemisphere given (``{"lh": ..., "rh": ...}``), from `data` (a file of a
+    pair, a dict, a nilearn SurfaceImage) and `lh`/`rh`."""
     given: dict[str, Any] = {}
     if data is not None:
         if hasattr(data, "data") and hasattr(data.data, "parts"):
@@ -249,12 +261,7 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
             given[hemi] = value
     if not given:
         raise BrainPainterError("no map given: give --lh FILE and/or --rh FILE (or a dict of arrays).")
-    hemis = {h: read_hemi(v, h, external=external) for h, v in given.items()}
-    maps = _combine(hemis, given)
-    says = any(h.fslr for h in hemis.values()) or any(
-        names_fslr(Path(v).name) for v in given.values() if isinstance(v, str | Path))
-    chosen, notes = decide_space({h: v.shape[1] for h, v in maps.values.items()}, space, says, "the map")
-    return pick_images(replace(maps, space=chosen, notes=notes), frames)
+    return given
 
 
 def pick_images(maps: VertexMaps, frames: Any) -> VertexMaps:
