@@ -232,7 +232,7 @@ def glb_bytes(meshes: Sequence[RegionMesh]) -> bytes:
 
 def _viewer_script(name: str = "three-viewer.min.js") -> str:
     """A script of the package data: three.js (``three-viewer.min.js``) or the viewer
-    (``export-viewer.js``).."""
+    (``export-viewer.js``)."""
     return (resources.files("brainpainter") / "data" / name).read_text(encoding="utf-8")
 
 
