@@ -74,6 +74,7 @@ from brainpainter.web.options import (
     upload_name,
 )
 from brainpainter.web.pool import MAX_PREVIEW_WAITING, Pool, PreviewBusy, PreviewUnavailable, preview_request
+from brainpainter.web.reproduce import reproduce
 from brainpainter.web.store import LimitError, Store, valid_id
 from brainpainter.web.tract_routes import add_tracts_route, tracts_of
 from brainpainter.web.tracts import is_tract_bundle, is_tract_upload
@@ -296,6 +297,13 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
         """The ``check`` report of an upload with these options (the colour scale included)."""
         name, data = await run_in_threadpool(_upload, store, body.upload_id)
         o = body.options
+        tracts = None if is_tract_bundle(data) else await run_in_threadpool(tracts_of, store, o)
+        report = await _check_report(data, name, o, tracts)
+        # the command line and the Python call that make these images again
+        report["reproduce"] = await work.run(reproduce, data, name, o, tracts)
+        return report
+
+    async def _check_report(data: bytes, name: str, o: RenderOptions, tracts: bytes | None) -> dict[str, Any]:
         if is_tract_bundle(data):  # the tracts alone: their report, with the colour scale of `o`
             return await work.run(tract_check, data, name, o, data_dir=store.root)
         if is_bundle(data):
@@ -305,8 +313,7 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
                           "center": o.center}}
         # read on a work thread: the upload was read within the time limit already (as preview and
         # job submission read it)
-        report = (await work.run(check_table, data, name, opts, config.max_rows))[0]
-        tracts = await run_in_threadpool(tracts_of, store, o)
+        report: dict[str, Any] = (await work.run(check_table, data, name, opts, config.max_rows))[0]
         if tracts is not None:  # one scale over the regions' and the bundles' values, as drawn
             report["values"]["scale"] = await work.run(table_tract_scale, data, name, o, tracts, store.root)
         return report

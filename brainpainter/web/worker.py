@@ -251,7 +251,7 @@ def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
     from brainpainter.rendering.parallel import SerialRunner
     from brainpainter.rendering.run import paint, png_metadata, run_settings
 
-    _, prep = _prepared(folder, job)
+    data, prep = _prepared(folder, job)
     run = prep.run
     table = run.table
     painter = painters.get(table.atlas, prep.options.surface, prep.hidden, run.settings, prep.coloring,
@@ -276,6 +276,7 @@ def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
                 "files": entries}
     if painter.scene.tracts is not None:  # what was drawn of the tractograms, as render's manifest says
         manifest["tracts"] = painter.scene.tracts.summary()
+    manifest["reproduce"] = _reproduced(folder, job, data, prep)
     publish_drawn(folder, names, manifest, (run.settings.width, run.settings.height))
     # the zip is not stored (it would copy every PNG): it is made while it is downloaded
     return [*names, MANIFEST, zip_name(job["id"])]
@@ -369,6 +370,28 @@ def zip_stream(out: Path, names: list[str], chunk: int = 1 << 20) -> Iterator[by
     yield sink.take()
 
 
+def _reproduced(folder: Path, job: dict[str, Any], data: bytes, prep: Any) -> dict[str, str]:
+    """The command line and Python call that make a job's files again (its manifest's ``reproduce``)."""
+    from brainpainter.web.reproduce import reproduce
+
+    tracts = (folder / TRACTS).read_bytes() if (folder / TRACTS).is_file() else None
+    return reproduce(data, job["input_name"], prep.options, tracts, job["kind"], job["params"])
+
+
+def _media_manifest(folder: Path, job: dict[str, Any], data: bytes, prep: Any, name: str) -> list[str]:
+    """Write a figure's or movie's ``manifest.json`` beside it (what was made, and the command that makes it
+    again); the job's files."""
+    from brainpainter import __version__
+    from brainpainter.io.output import write_json
+    from brainpainter.io.transaction import MANIFEST
+
+    write_json(folder / "out" / MANIFEST, {
+        "software": {"brainpainter": __version__}, "input": job["input_name"], "file": name,
+        "options": job["options"], job["kind"]: job["params"],
+        "reproduce": _reproduced(folder, job, data, prep)})
+    return [name, MANIFEST]
+
+
 def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
     kwargs: dict[str, Any] = dict(prep.kwargs)  # the run's options (tract files included)
     kwargs.update(atlas=prep.run.table.atlas, hide=prep.hidden, surface=prep.options.surface,
@@ -390,7 +413,7 @@ def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
                 title=params.title or None, label=params.label or None, dpi=params.dpi,
                 fig_width=params.fig_width, font_size=params.font_size, on_progress=tick,
                 **_media_kwargs(prep, painters.renderer))
-    return [name]
+    return _media_manifest(folder, job, data, prep, name)
 
 
 def _run_movie(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
@@ -406,7 +429,7 @@ def _run_movie(folder: Path, job: dict[str, Any], painters: PainterCache, tick: 
     make_movie(_media_input(data, job["input_name"], prep), out=folder / "out" / name,
                frames_per_step=params.frames_per_step, easing=params.easing, hold=params.hold, fps=params.fps,
                title=params.title or None, label=params.label or None, on_progress=tick, **kwargs)
-    return [name]
+    return _media_manifest(folder, job, data, prep, name)
 
 
 _KIND_RUNNERS = {"images": _run_images, "figure": _run_figure, "movie": _run_movie}
