@@ -216,20 +216,7 @@ def build_tract_bundle(work: Path, files: list[Path], max_files: int,
     from brainpainter.tracts.read import read_bundles
     from brainpainter.web.options import MAX_WEB_STREAMLINES
 
-    given = work / "given"
-    given.mkdir(exist_ok=True)
-    found: list[Path] = []
-    subjects: list[str] = []
-    zips = [f for f in files if f.suffix.lower() == ".zip"]
-    if subject is not None and len(zips) != 1:
-        raise BrainPainterError(f"subject {subject[:100]!r} names a folder of a zip, but {len(zips)} zips "
-                                "were uploaded; upload one .zip of subject folders.")
-    for f in files:
-        if f.suffix.lower() == ".zip":
-            got, subjects = unzip(f, given, max_files, subject)
-            found += got
-        else:
-            found.append(f)
+    found, subjects = _unzipped(files, work / "given", max_files, subject)
     tracts = [f for f in found if f.suffix.lower() in SUFFIXES]
     tables = [f for f in found if f.suffix.lower() in VALUE_SUFFIXES]
     ignored = sorted(f.name for f in found if f not in tracts and f not in tables)
@@ -282,6 +269,26 @@ def build_tract_bundle(work: Path, files: list[Path], max_files: int,
     stored = [("bundles", f) for f in kept] + [("values", f) for f in tables]
     write_bundle(work / "bundle.bin", MAGIC, {"report": report}, "role", list(stored))
     return report
+
+
+def _unzipped(files: list[Path], given: Path, max_files: int,
+              subject: str | None) -> tuple[list[Path], list[str]]:
+    """The uploaded `files` with each zip's members in its place (written into `given`), and the subject
+    folders of a zip of them (:func:`unzip`)."""
+    given.mkdir(exist_ok=True)
+    found: list[Path] = []
+    subjects: list[str] = []
+    zips = [f for f in files if f.suffix.lower() == ".zip"]
+    if subject is not None and len(zips) != 1:
+        raise BrainPainterError(f"subject {subject[:100]!r} names a folder of a zip, but {len(zips)} zips "
+                                "were uploaded; upload one .zip of subject folders.")
+    for f in files:
+        if f.suffix.lower() == ".zip":
+            got, subjects = unzip(f, given, max_files, subject)
+            found += got
+        else:
+            found.append(f)
+    return found, subjects
 
 
 def write_kept(tracts: Any, folder: Path) -> list[Path]:
