@@ -68,6 +68,7 @@ class MapRun:
     options: Options
     source_vertex: dict[str, NDArray[Any]]
     cluster_edges: dict[str, NDArray[Any]] | None = None
+    tract_values: None = None  # a map colours no tracts
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
     @property

@@ -462,7 +462,7 @@ def _meta(config: ServerConfig) -> dict[str, Any]:
     from brainpainter.rendering.painter import HIDE_GROUPS
     from brainpainter.rendering.settings import CORTEX_MODES
     from brainpainter.rendering.views import PRESETS
-    from brainpainter.web.options import MAX_WEB_STREAMLINES
+    from brainpainter.web.tracts import MAX_WEB_STREAMLINES
 
     return {
         "version": _version(),

@@ -19,7 +19,8 @@ vertices) per hemisphere, and in the header the image names, label names and col
 a volume's subcortical means. Previews and jobs rebuild the maps from it
 (:func:`read_bundle`) exactly as the upload read them. Client file names are
 only labels: they are made safe (:func:`file_name`) and every file is written
-into a fresh private folder.
+into a fresh private folder. A GIfTI is read with ``external="refuse"``: data it
+says is in another file is an error, never read.
 """
 
 from __future__ import annotations
@@ -40,7 +41,8 @@ KIND = b"BRAINPAINTER-MAPS/"
 #: NIfTI volumes (one file, MNI152 space), projected onto the cortex.
 VOLUME_SUFFIXES = (".nii", ".nii.gz")
 #: Compound endings kept when a client's file name is made safe.
-_ENDINGS = (".func.gii", ".shape.gii", ".label.gii", ".nii.gz")
+_ENDINGS = (".func.gii.gz", ".shape.gii.gz", ".label.gii.gz", ".gii.gz", ".func.gii", ".shape.gii",
+            ".label.gii", ".nii.gz")
 #: Largest size a compressed file may inflate to (bytes).
 MAX_INFLATED = 1 << 30
 #: Largest number of voxels of one volume of a NIfTI file (e.g. 512 x 512 x 512).
@@ -247,7 +249,7 @@ def _surface_bundle(work: Path, files: list[tuple[str, Path]], names: list[str],
     from brainpainter.maps.resolution import surface_of
 
     order = sorted(files, key=lambda f: f[0])  # lh first
-    maps = read_maps({h: p for h, p in order})
+    maps = read_maps({h: p for h, p in order}, external="refuse")  # a GIfTI reads no other file
     if maps.n_images > max_images:
         raise BrainPainterError(
             f"the map holds {maps.n_images} images; this server draws at most {max_images} images per "

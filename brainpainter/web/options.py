@@ -25,13 +25,12 @@ from brainpainter.maps.options import MapOptions
 from brainpainter.rendering.options import SceneOptions, option_names
 from brainpainter.rendering.settings import RenderSettings, parse_size
 from brainpainter.table.options import TableOptions as ReadOptions
+from brainpainter.web.tracts import MAX_WEB_STREAMLINES
 
 if TYPE_CHECKING:
     from brainpainter.rendering.run import Run
     from brainpainter.web.tracts import TractFiles
 
-#: Streamlines a web render draws at most (option ``max_streamlines``).
-MAX_WEB_STREAMLINES = 20_000
 #: The options of tracts (given to a run only with tractograms).
 TRACT_FIELDS = ("tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_radius", "tract_value")
 

@@ -15,7 +15,7 @@ capped.
 What is kept is a *tract bundle* (:data:`MAGIC`, one JSON line, then the files):
 what was read, never the files as sent (a file padded to a gigabyte is kept as
 its streamlines): each bundle's streamlines as the reader kept them (at most
-:data:`brainpainter.web.options.MAX_WEB_STREAMLINES` over all bundles, the most
+:data:`MAX_WEB_STREAMLINES` over all bundles, the most
 a render may draw, resampled to :data:`brainpainter.tracts.model.N_POINTS`
 points) in one ``.tck`` file named after the bundle, and the values table (at
 most :data:`MAX_TABLE_BYTES`). A render names it by its upload id (option ``tracts``); its files are
@@ -48,6 +48,8 @@ from brainpainter.web.bundle import members, write_bundle
 MAGIC = b"BRAINPAINTER-TRACTS/2\n"
 #: The first bytes of a stored tract upload of any version (an earlier one reads as damaged).
 KIND = b"BRAINPAINTER-TRACTS/"
+#: Streamlines a web render draws at most (option ``max_streamlines``); a stored upload keeps as many.
+MAX_WEB_STREAMLINES = 20_000
 #: Table files of an upload read as tract values (one at most).
 VALUE_SUFFIXES = (".csv", ".tsv", ".xlsx")
 #: Largest total size the members of an uploaded zip may inflate to (bytes).
@@ -214,7 +216,6 @@ def build_tract_bundle(work: Path, files: list[Path], max_files: int,
 
     from brainpainter.tracts.model import MAX_STREAMLINES, N_POINTS
     from brainpainter.tracts.read import read_bundles
-    from brainpainter.web.options import MAX_WEB_STREAMLINES
 
     found, subjects = _unzipped(files, work / "given", max_files, subject)
     tracts = [f for f in found if f.suffix.lower() in SUFFIXES]

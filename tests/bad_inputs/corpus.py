@@ -324,6 +324,21 @@ def _gifti(structure: str) -> Callable[[Path], None]:
     return make
 
 
+def _gifti_external(name: str, gz: bool = False) -> Callable[[Path], None]:
+    """A fsaverage5 .func.gii whose data array says it is in the file `name` (``ExternalFileBinary``)."""
+    def make(path: Path) -> None:
+        import nibabel as nib
+        import numpy as np
+
+        da = nib.gifti.GiftiDataArray(np.zeros(10242, np.float32), datatype="NIFTI_TYPE_FLOAT32")
+        xml = nib.gifti.GiftiImage(darrays=[da]).to_xml(enc="utf-8").decode()
+        xml = xml.replace('Encoding="GZipBase64Binary"', 'Encoding="ExternalFileBinary"')
+        xml = re.sub(r"<Data>.*?</Data>", "<Data></Data>", xml.replace('ExternalFileName=""',
+                                                                      f'ExternalFileName="{name}"'), flags=re.S)
+        path.write_bytes(gzip.compress(xml.encode()) if gz else xml.encode())
+    return make
+
+
 def toml(text: str) -> bytes:
     return text.strip().encode() + b"\n"
 
@@ -579,6 +594,28 @@ INPROCESS: list[Case] = [
           "rh.a.annot": _annot},
          ["add", "net", "--annot", "lh=lh.a.label.gii", "--annot", "rh=rh.a.annot"], "holds no data array",
          command="atlas"),
+    # -- files that point elsewhere: a GIfTI reads external data only from its own folder (issue 33) -----------
+    *[Case(f"gifti-external-{cid}", {"lh.x.func.gii": _gifti_external(name), **extra},
+           ["--lh", "lh.x.func.gii", "--out", "o", *RENDER], message, command="render")
+      for cid, name, extra, message in (
+          ("absolute", "/etc/passwd", {}, "keeps its data in '/etc/passwd', outside its own folder"),
+          ("parent", "../../secret.bin", {}, "keeps its data in '../../secret.bin', outside its own folder"),
+          ("symlink-out", "in.bin", {"in.bin": _link_to("/etc/passwd")}, "'in.bin', outside its own folder"),
+          ("missing", "gone.bin", {}, "keeps its data in 'gone.bin', which is not a file in its folder"))],
+    Case("volume-is-gifti-with-external-data", {"lh.x.func.gii": _gifti_external("/etc/passwd")},
+         ["--volume", "lh.x.func.gii", "--out", "o", *RENDER], "looks like a GIfTI file, not a NIfTI or MGH volume",
+         command="render"),
+    Case("volume-is-gzipped-gifti", {"thick_left.gii.gz": _gifti_external("x.bin", gz=True)},
+         ["--volume", "thick_left.gii.gz", "--out", "o", *RENDER],
+         "looks like gzip-compressed data (a GIfTI file inside), not a NIfTI or MGH volume", command="render"),
+    Case("gifti-gz-external-absolute", {"lh.x.func.gii.gz": _gifti_external("/etc/hostname", gz=True)},
+         ["--lh", "lh.x.func.gii.gz", "--out", "o", *RENDER], "outside its own folder", command="render"),
+    Case("gifti-xml-entity", {"lh.x.func.gii": b'<?xml version="1.0"?><!DOCTYPE GIFTI [<!ENTITY a "b">]>'
+                                               b'<GIFTI Version="1.0" NumberOfDataArrays="0"></GIFTI>'},
+         ["--lh", "lh.x.func.gii", "--out", "o", *RENDER], "declares the XML entity 'a'", command="render"),
+    Case("map-gzip-named-curv", {"lh.thickness": gzip.compress(b'<?xml version="1.0"?><GIFTI></GIFTI>')},
+         ["--lh", "lh.thickness", "--out", "o", *RENDER],
+         "looks like gzip-compressed data (a GIfTI file inside), not a FreeSurfer curv file", command="render"),
     # -- finite numbers only, checked before anything is written -----------------------------------------------
     _render(["--out", "o", "--vmin", "nan"], "is not a finite number", "vmin-nan"),
     _render(["--out", "o", "--vmax", "inf"], "is not a finite number", "vmax-inf"),
