@@ -321,7 +321,7 @@ def test_preview_stays_in_sight_and_the_page_says_how_to_make_it_again(served, t
         summary = page.locator("#report-summary")  # one line, not the report's lists
         expect(summary).to_contain_text("Checked: wide (BrainPainter names), atlas dk (inferred): 4 image(s)")
         assert "\n" not in summary.inner_text() and summary.locator("li").count() == 0
-        for width in (1440, 400):
+        for width in (1440, 1024, 400):
             page.set_viewport_size({"width": width, "height": 900})
             for sel in ("#cmap", "#hide"):
                 page.evaluate(TO_MIDDLE, sel)
