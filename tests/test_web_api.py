@@ -275,8 +275,27 @@ def test_figure_and_movie_jobs(server, kind, params, suffix, magic):
     made = server.get(manifest["url"]).json()
     assert made["file"] == f["name"] and made[kind] == job_params(params[kind], kind)
     more = " --frames-per-step 2" if kind == "movie" else ""
-    assert made["reproduce"]["command"] == (f"brainpainter {kind} table.csv -o {f['name']} --views lateral-left "
-                                            f"--size 80x60{more}")
+    assert made["reproduce"]["command"] == (f"brainpainter {kind} table.csv -o {f['name']} --views "
+                                            f"lateral-left --size 80x60{more}")
+
+
+def test_export_job_writes_a_row_as_an_interactive_page(server):
+    """Issue 38, item 8: the page's "Interactive 3D (HTML)" is the CLI's export of the row shown."""
+    uid = upload(server, EXAMPLE.read_bytes())["upload_id"]
+    job = run_job(server, uid, {"size": "80x60", "views": "lateral-left", "gradient": "white,red"},
+                  kind="export", export={"row": 3})
+    assert job["status"] == "done", job
+    f, manifest = job["files"]
+    assert f["name"] == "stage-4.html"
+    page = server.get(f["url"], params={"download": 1})
+    assert page.headers["content-disposition"].startswith("attachment")
+    assert b"<title>stage-4</title>" in page.content and b"three" in page.content
+    made = server.get(manifest["url"]).json()
+    assert made["reproduce"]["command"] == ("brainpainter export table.csv -o stage-4.html --gradient "
+                                            "white,red --format html --row stage-4")
+    r = server.post("/api/jobs", json={"upload_id": uid, "kind": "export", "options": {},
+                                       "export": {"row": 4}})
+    assert r.status_code == 400 and r.json()["error"] == "row must be 0..3; 4 was given.", r.text
 
 
 def job_params(given: dict, kind: str) -> dict:

@@ -356,6 +356,9 @@ def test_preview_stays_in_sight_and_the_page_says_how_to_make_it_again(served, t
         expect(figure).to_be_visible(timeout=240_000)
         assert wait_for(lambda: figure.evaluate("i => i.complete && i.naturalWidth > 0"), 30)
         assert figure.evaluate("i => i.getBoundingClientRect().width") >= 400
+        # item 8: the row shown as the CLI's interactive HTML export
+        page.get_by_role("button", name="Interactive 3D (HTML)").click()
+        expect(page.get_by_role("link", name="Download stage-4.html")).to_be_visible(timeout=240_000)
         _shot(page, tmp_path, "page-jobs.png")
         assert errors == []
 

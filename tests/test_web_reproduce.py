@@ -105,3 +105,27 @@ def test_tracts_from_a_zip_of_subject_folders_and_a_transparent_map(tmp_path):
     assert cli["background"] is None and cli["underlay"] == "curv" and cli["threshold"] == 0.5
     args, kwargs = called(got["python"])
     assert args == [] and kwargs["lh"] == "lh.thickness" and kwargs["background"] is None
+
+
+def test_figure_movie_and_export_commands_parse_with_their_cli_commands():
+    """A job's command is its own CLI command's (figure, movie, export), with only the options it takes."""
+    from brainpainter.cli.export import export
+    from brainpainter.cli.media import figure, movie
+
+    o = RenderOptions(views="lateral-left", size="320x240", cmap="viridis", quality="high")
+    for kind, params, command in (("figure", {"format": "png", "dpi": 150, "grid": True}, figure),
+                                  ("movie", {"format": "gif", "hold": 3, "easing": "smooth"}, movie),
+                                  ("export", {"row": 1, "image": "stage 2", "title": "Stage 2"}, export)):
+        got = reproduce(TABLE, "t.csv", o, kind=kind, params=params)
+        words = shlex.split(got["command"])
+        assert words[:3] == ["brainpainter", kind, "t.csv"], got["command"]
+        given = command.make_context(kind, words[2:]).params
+        if kind == "export":
+            assert given["out"] == Path("stage_2.html") and given["row"] == "stage 2"
+            assert given["fmt"] == "html" and given["title"] == "Stage 2" and given["cmap"] == "viridis"
+            assert "--size" not in got["command"] and "--views" not in got["command"]
+        else:
+            assert given["out"] == Path(f"{kind}.{params['format']}") and given["size"] == (320, 240)
+            assert all(given[k] == v for k, v in params.items() if k != "format"), (params, given)
+        args, kwargs = called(got["python"].replace(f"brainpainter.{kind}(", "brainpainter.render("))
+        assert args == ["t.csv"] and kwargs["cmap"] == "viridis"

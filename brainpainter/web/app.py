@@ -19,7 +19,7 @@ API (all JSON unless said; errors are ``{"error": "one line"}`` with the CLI's m
                                    alone, coloured by their values table)
     POST /api/check                {"upload_id", "options"} -> the check report for those options
     POST /api/preview              {"upload_id", "options", "row", "view"} -> image/png
-    POST /api/jobs                 {"upload_id", "kind", "options", "figure"|"movie"} -> 202 {job}
+    POST /api/jobs                 {"upload_id", "kind", "options", "figure"|"movie"|"export"} -> 202 {job}
     GET  /api/jobs/{id}            status, progress, files
     DELETE /api/jobs/{id}          cancel
     GET  /api/jobs/{id}/files/{name}   one of the job's own files (?download=1: as attachment)
@@ -63,6 +63,7 @@ from brainpainter.web.http import (
 )
 from brainpainter.web.maps import file_name, is_bundle, is_map_upload
 from brainpainter.web.options import (
+    ExportParams,
     FigureParams,
     MovieParams,
     RenderOptions,
@@ -102,9 +103,10 @@ class PreviewRequest(CheckRequest):
 
 
 class JobRequest(CheckRequest):
-    kind: Literal["images", "figure", "movie"] = "images"
+    kind: Literal["images", "figure", "movie", "export"] = "images"
     figure: FigureParams = Field(default_factory=FigureParams)
     movie: MovieParams = Field(default_factory=MovieParams)
+    export: ExportParams = Field(default_factory=ExportParams)
 
 
 # -- the app ------------------------------------------------------------------------------
@@ -344,7 +346,8 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
 
     @app.post("/api/jobs", tags=["api"], status_code=202)
     async def submit(body: JobRequest, request: Request) -> dict[str, Any]:
-        """Queue a job: ``images`` (every row from every view, as PNGs plus a zip), ``figure`` (PDF/PNG)
+        """Queue a job: ``images`` (every row from every view, as PNGs plus a zip), ``figure`` (PDF/PNG),
+        ``export`` (one row as an interactive 3D page, HTML)
         or ``movie`` (MP4/GIF)."""
         from brainpainter.web.worker import TRACTS
 
@@ -357,8 +360,11 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
         n_rows, n_views = len(prep.run.table.images), len(prep.run.views)
         if body.kind == "movie" and n_rows < 2:
             raise BrainPainterError(f"a movie needs at least 2 rows (key frames); the table has {n_rows}.")
+        if body.kind == "export" and body.export.row >= n_rows:
+            raise BrainPainterError(f"row must be 0..{n_rows - 1}; {body.export.row} was given.")
         params = body.figure.model_dump() if body.kind == "figure" else (
-            body.movie.model_dump() if body.kind == "movie" else {})
+            body.movie.model_dump() if body.kind == "movie" else
+            body.export.model_dump() if body.kind == "export" else {})
         total = (n_rows * n_views if body.kind == "images" else
                  body.movie.n_frames(n_rows) if body.kind == "movie" else 1)  # movie: progress per frame
         try:

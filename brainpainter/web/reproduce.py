@@ -164,8 +164,15 @@ def python_call(positional: list[str], pairs: list[tuple[str, Any]], command: st
 
 def media_options(kind: str, params: dict[str, Any]) -> tuple[str, list[tuple[str, Any]]]:
     """The output file and the options of a figure or movie job (`params`: :class:`FigureParams` or
-    :class:`MovieParams` fields) that differ from ``brainpainter figure``'s or ``movie``'s defaults."""
+    :class:`MovieParams` fields) that differ from ``brainpainter figure``'s or ``movie``'s defaults; an
+    export job's format and row (`params`: ``image``, the row's name, and ``title``)."""
+    from brainpainter.io.output import safe_name
     from brainpainter.web.options import FigureParams, MovieParams
+
+    if kind == "export":
+        image = str(params.get("image", ""))
+        more = [("title", params["title"])] if params.get("title") else []
+        return f"{safe_name(image)}.html", [("format", "html"), ("row", image), *more]
 
     model: Any = FigureParams if kind == "figure" else MovieParams
     given = model(**params)
@@ -190,7 +197,7 @@ def reproduce(data: bytes, name: str, options: RenderOptions, tracts: bytes | No
     options : RenderOptions
     tracts : bytes, optional
         The tract bundle option ``tracts`` names (drawn with the table).
-    kind : {"images", "figure", "movie"}
+    kind : {"images", "figure", "movie", "export"}
         The job the command makes (images: ``brainpainter render``).
     params : dict, optional
         A figure's or movie's options.
@@ -210,7 +217,12 @@ def reproduce(data: bytes, name: str, options: RenderOptions, tracts: bytes | No
         pairs += [(k, v if k == "tracts" else v[0]) for k, v in merged.items()]
     pairs += changed(options, kind=upload, tracts=drawn is not None)
     command, out = "render", OUT
-    if kind in ("figure", "movie"):
+    if kind == "export":  # an export draws no image: no views, size or quality
+        from brainpainter.media.export import EXPORT_OPTIONS
+
+        keep = ("atlas", *EXPORT_OPTIONS)  # as the CLI's export command takes them
+        pairs = [(k, v) for k, v in pairs if k in keep]
+    if kind in ("figure", "movie", "export"):
         command = kind
         out, more = media_options(kind, params or {})
         pairs += more

@@ -375,7 +375,10 @@ def _reproduced(folder: Path, job: dict[str, Any], data: bytes, prep: Any) -> di
     from brainpainter.web.reproduce import reproduce
 
     tracts = (folder / TRACTS).read_bytes() if (folder / TRACTS).is_file() else None
-    return reproduce(data, job["input_name"], prep.options, tracts, job["kind"], job["params"])
+    params = dict(job["params"])
+    if job["kind"] == "export":  # the command names the row by its image name
+        params["image"] = prep.run.table.images[params.get("row", 0)]
+    return reproduce(data, job["input_name"], prep.options, tracts, job["kind"], params)
 
 
 def _media_manifest(folder: Path, job: dict[str, Any], data: bytes, prep: Any, name: str) -> list[str]:
@@ -432,7 +435,22 @@ def _run_movie(folder: Path, job: dict[str, Any], painters: PainterCache, tick: 
     return _media_manifest(folder, job, data, prep, name)
 
 
-_KIND_RUNNERS = {"images": _run_images, "figure": _run_figure, "movie": _run_movie}
+def _run_export(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
+    """One row as an interactive 3D page (``brainpainter export --format html``): no renderer."""
+    from brainpainter.media.export import EXPORT_OPTIONS, export
+    from brainpainter.web.options import ExportParams
+
+    data, prep = _prepared(folder, job)
+    params = ExportParams(**job["params"])
+    name = f"{prep.file_names[params.row]}.html"
+    tick(0)
+    kwargs = {k: v for k, v in prep.kwargs.items() if k in EXPORT_OPTIONS}
+    export(_media_input(data, job["input_name"], prep), folder / "out" / name, format="html", row=params.row,
+           atlas=prep.run.table.atlas, title=params.title or None, **{**kwargs, "hide": prep.hidden})
+    return _media_manifest(folder, job, data, prep, name)
+
+
+_KIND_RUNNERS = {"images": _run_images, "figure": _run_figure, "movie": _run_movie, "export": _run_export}
 
 
 # -- preview process ----------------------------------------------------------------------

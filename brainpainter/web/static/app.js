@@ -496,6 +496,7 @@ async function submit(kind, format) {
     body.movie = { format, frames_per_step: Number($("frames_per_step").value), hold: Number($("hold").value),
                    easing: $("easing").value, fps: Number($("fps").value) };
   }
+  if (kind === "export") body.export = { row: Number($("row").value || 0) };
   let job;
   try {
     const res = await api("/api/jobs", { method: "POST", headers: { "content-type": "application/json" },
@@ -503,7 +504,9 @@ async function submit(kind, format) {
     job = await res.json();
     fieldError("");
   } catch (e) { say("job-error", pageWords(fieldError(e.message))); return; }
-  const label = kind === "images" ? "All images" : `${kind} (${format.toUpperCase()})`;
+  const label = kind === "images" ? "All images" : kind === "export"
+    ? `interactive 3D (HTML) of ${$("row").selectedOptions[0]?.textContent || "the row"}`
+    : `${kind} (${format.toUpperCase()})`;
   const box = el("div", { class: "job", "data-job": job.id });
   const progId = `prog-${job.id.slice(0, 8)}`;
   const status = el("p", { text: `${label}: queued` });
@@ -532,7 +535,8 @@ function jobStep(job) {
     return job.kind === "figure" ? `composing figure (${job.total} images drawn)`
       : `encoding movie (${job.total} frames drawn)`;
   }
-  return `${job.status} (${job.progress}/${job.total}${job.kind === "figure" && job.total <= 1 ? "" : unit})`;
+  const counted = job.kind === "movie" || job.kind === "images" || (job.kind === "figure" && job.total > 1);
+  return `${job.status} (${job.progress}/${job.total}${counted ? unit : ""})`;
 }
 
 // A movie's length before it is made: frames as brainpainter movie plans them, and seconds.
