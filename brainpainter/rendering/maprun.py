@@ -110,7 +110,8 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     """Read the maps and check the options of a map run (as ``prepare_run`` does for a table)."""
     from brainpainter.atlas.registry import get_atlas
 
-    maps = read_maps(data, options.maps.lh, options.maps.rh, options.maps.volume)
+    m = options.maps
+    maps = read_maps(data, m.lh, m.rh, m.volume, space=m.space, frames=m.frames)
     outline = options.maps.outline
     # --outline ATLAS: the map is drawn on that atlas's mesh, whose vertices carry its labels
     atlas_obj = get_atlas(outline) if outline is not None else atlas if atlas is not None else get_atlas("dk")

@@ -51,6 +51,7 @@ from starlette.requests import ClientDisconnect
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.web.config import ServerConfig
+from brainpainter.web.disk import FULL_BELOW, disk_free, disk_full
 from brainpainter.web.guard import Guard
 from brainpainter.web.http import (
     ApiError,
@@ -58,8 +59,10 @@ from brainpainter.web.http import (
     client_of,
     disk_budget,
     one_line,
+    owner_of,
     receive_body,
     require_octet_stream,
+    validation_line,
 )
 from brainpainter.web.maps import file_name, is_bundle, is_map_upload
 from brainpainter.web.options import (
@@ -68,6 +71,8 @@ from brainpainter.web.options import (
     MovieParams,
     RenderOptions,
     TableOptions,
+    check_figure_pixels,
+    figure_pixels,
     map_check,
     prepare,
     table_tract_scale,
@@ -154,7 +159,7 @@ def _add_error_handlers(app: FastAPI, config: ServerConfig) -> None:
 
     @app.exception_handler(BrainPainterError)
     async def _bp_error(request: Request, exc: BrainPainterError) -> JSONResponse:
-        if _disk_full(exc):
+        if disk_full(exc, config.data_dir):
             return _full(request, exc)
         return JSONResponse({"error": line(exc)}, status_code=400)
 
@@ -169,7 +174,7 @@ def _add_error_handlers(app: FastAPI, config: ServerConfig) -> None:
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
-        return JSONResponse({"error": _validation_line(exc)}, status_code=422)
+        return JSONResponse({"error": validation_line(exc)}, status_code=422)
 
     @app.exception_handler(StarletteHTTPException)
     async def _http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
@@ -184,7 +189,7 @@ def _add_error_handlers(app: FastAPI, config: ServerConfig) -> None:
     @app.exception_handler(OSError)
     @app.exception_handler(sqlite3.OperationalError)
     async def _os_error(request: Request, exc: Exception) -> JSONResponse:
-        if _disk_full(exc):
+        if disk_full(exc, config.data_dir):
             return _full(request, exc)
         log.error("internal error on %s %s", request.method, request.url.path, exc_info=exc)
         return JSONResponse({"error": f"internal error: {type(exc).__name__} (logged on the server)"},
@@ -213,14 +218,16 @@ def _add_page_and_probes(app: FastAPI, config: ServerConfig, store: Store, pool:
 
     @app.get("/readyz", tags=["probes"])
     async def readyz() -> JSONResponse:
-        """Ready to take work: database writable, a job worker warm, the preview renderer warm."""
+        """Ready to take work: database writable, disk not full, a job worker warm, the preview renderer
+        warm."""
         try:
             db_ok = await run_in_threadpool(store.ping)
         except Exception:
             db_ok = False
         workers = await run_in_threadpool(store.workers)
+        disk_ok = await run_in_threadpool(disk_free, store.root) >= FULL_BELOW
         ready_workers = [w for w in workers if w["state"] in ("ready", "busy")]
-        checks = {"database": db_ok,
+        checks = {"database": db_ok, "disk": disk_ok,
                   "workers": len(ready_workers) >= min(1, config.workers) and pool.alive_workers() >= min(
                       1, config.workers),
                   "preview": pool.preview_ready or not config.preview}
@@ -284,7 +291,8 @@ def _add_upload_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
         finally:
             path.unlink(missing_ok=True)
         upload_id = await run_in_threadpool(store.add_upload, client_of(request), shown, data,
-                                            config.result_ttl_s, config.max_uploads_per_client)
+                                            config.result_ttl_s, config.max_uploads_per_client,
+                                            owner=owner_of(request))
         return {"upload_id": upload_id, "name": shown, "size": size, "report": report,
                 "images": images[:MAX_LISTED_IMAGES]}
 
@@ -295,11 +303,12 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
     previews = anyio.CapacityLimiter(MAX_PREVIEW_WAITING)
 
     @app.post("/api/check", tags=["api"])
-    async def check(body: CheckRequest) -> dict[str, Any]:
+    async def check(body: CheckRequest, request: Request) -> dict[str, Any]:
         """The ``check`` report of an upload with these options (the colour scale included)."""
-        name, data = await run_in_threadpool(_upload, store, body.upload_id)
+        name, data = await run_in_threadpool(_upload, store, body.upload_id, owner_of(request))
         o = body.options
-        tracts = None if is_tract_bundle(data) else await run_in_threadpool(tracts_of, store, o)
+        tracts = None if is_tract_bundle(data) else await run_in_threadpool(tracts_of, store, o,
+                                                                            owner_of(request))
         report = await _check_report(data, name, o, tracts)
         # the command line and the Python call that make these images again
         report["reproduce"] = await work.run(reproduce, data, name, o, tracts)
@@ -322,10 +331,10 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
 
     # -- preview -------------------------------------------------------------------------------
     @app.post("/api/preview", tags=["api"], responses={200: {"content": {"image/png": {}}}})
-    async def preview(body: PreviewRequest) -> Response:
+    async def preview(body: PreviewRequest, request: Request) -> Response:
         """One row from one view, small, rendered by the warm preview painter."""
-        name, data = await run_in_threadpool(_upload, store, body.upload_id)
-        tracts = await run_in_threadpool(tracts_of, store, body.options)
+        name, data = await run_in_threadpool(_upload, store, body.upload_id, owner_of(request))
+        tracts = await run_in_threadpool(tracts_of, store, body.options, owner_of(request))
         req = await work.run(preview_request, data, name, body.options, body.row, body.view, config,
                              tracts, store.root)
         if previews.borrowed_tokens >= previews.total_tokens:  # never queue without bound
@@ -351,9 +360,9 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
         or ``movie`` (MP4/GIF)."""
         from brainpainter.web.worker import TRACTS
 
-        name, data = await run_in_threadpool(_upload, store, body.upload_id)
+        name, data = await run_in_threadpool(_upload, store, body.upload_id, owner_of(request))
         await disk_budget(store, config)
-        tracts = await run_in_threadpool(tracts_of, store, body.options)
+        tracts = await run_in_threadpool(tracts_of, store, body.options, owner_of(request))
         prep = await work.run(prepare, data, name, body.options, max_images=config.max_images,
                               max_pixels=config.max_pixels, tracts=tracts,
                               data_dir=store.root)
@@ -365,35 +374,39 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
         params = body.figure.model_dump() if body.kind == "figure" else (
             body.movie.model_dump() if body.kind == "movie" else
             body.export.model_dump() if body.kind == "export" else {})
+        if body.kind == "figure" and body.figure.format == "png":  # a PDF embeds the renders as they are
+            size = await work.run(figure_pixels, prep, body.figure)
+            check_figure_pixels(*size, config.max_figure_pixels)
+            params["max_pixels"] = config.max_figure_pixels  # the worker checks the composed figure too
         total = (n_rows * n_views if body.kind == "images" else
                  body.movie.n_frames(n_rows) if body.kind == "movie" else 1)  # movie: progress per frame
         try:
             job_id = await run_in_threadpool(
                 store.submit, client_of(request), body.kind, body.options.model_dump(), params, name, data,
                 total, max_per_client=config.max_jobs_per_client, max_queued=config.max_queued,
-                extra={TRACTS: tracts} if tracts is not None else None)
+                extra={TRACTS: tracts} if tracts is not None else None, owner=owner_of(request))
         except LimitError as exc:
             raise ApiError(exc.status, str(exc), {"retry-after": str(exc.retry_after)}) from None
         return _public(await run_in_threadpool(store.get, job_id))
 
     @app.get("/api/jobs/{job_id}", tags=["api"])
-    async def job_status(job_id: str) -> dict[str, Any]:
+    async def job_status(job_id: str, request: Request) -> dict[str, Any]:
         """Status, progress and files of a job."""
-        return _public(await run_in_threadpool(_job, store, job_id))
+        return _public(await run_in_threadpool(_job, store, job_id, owner_of(request)))
 
     @app.delete("/api/jobs/{job_id}", tags=["api"])
-    async def cancel(job_id: str) -> dict[str, Any]:
+    async def cancel(job_id: str, request: Request) -> dict[str, Any]:
         """Cancel a queued or running job."""
-        await run_in_threadpool(_job, store, job_id)
+        await run_in_threadpool(_job, store, job_id, owner_of(request))
         await run_in_threadpool(store.cancel, job_id)
-        return _public(await run_in_threadpool(_job, store, job_id))
+        return _public(await run_in_threadpool(_job, store, job_id, owner_of(request)))
 
     @app.get("/api/jobs/{job_id}/files/{file_name}", tags=["api"], response_model=None)
-    async def job_file(job_id: str, file_name: str, download: bool = False) -> Response:
+    async def job_file(job_id: str, file_name: str, request: Request, download: bool = False) -> Response:
         """One file the job made (only names listed in its ``files``)."""
-        from brainpainter.web.worker import zip_name, zip_stream
+        from brainpainter.web.job_zip import zip_name, zip_stream
 
-        job = await run_in_threadpool(_job, store, job_id)
+        job = await run_in_threadpool(_job, store, job_id, owner_of(request))
         if file_name not in job["files"]:
             raise ApiError(404, f"job {job_id} has no file {file_name[:100]!r}; its files are listed in "
                                 f"GET /api/jobs/{job_id}.")
@@ -419,10 +432,11 @@ def _version() -> str:
     return __version__
 
 
-def _upload(store: Store, upload_id: str) -> tuple[str, bytes]:
-    got = store.get_upload(upload_id) if valid_id(upload_id) else None
-    if got is None:
-        raise ApiError(404, "upload not found (it expired, or the id is wrong); upload the table again.")
+def _upload(store: Store, upload_id: str, owner: str) -> tuple[str, bytes]:
+    got = store.get_upload(upload_id, owner) if valid_id(upload_id) else None
+    if got is None:  # another client's upload too: its id tells nothing
+        raise ApiError(404, "upload not found (it expired, the id is wrong, or another client made it: send "
+                            "this client's cookie or X-BrainPainter-Client header); upload the table again.")
     return got
 
 
@@ -433,19 +447,11 @@ def _full(request: Request, exc: BaseException) -> JSONResponse:
                         headers={"retry-after": "600"})
 
 
-def _disk_full(exc: BaseException) -> bool:
-    """An error that means the disk (or the data folder's quota) is full."""
-    import errno
-
-    if getattr(exc, "errno", None) in (errno.ENOSPC, errno.EDQUOT):  # OSError, or os_error's one line
-        return True
-    return isinstance(exc, sqlite3.OperationalError) and "full" in str(exc)
-
-
-def _job(store: Store, job_id: str) -> dict[str, Any]:
-    job = store.get(job_id) if valid_id(job_id) else None
+def _job(store: Store, job_id: str, owner: str) -> dict[str, Any]:
+    job = store.get(job_id, owner) if valid_id(job_id) else None
     if job is None:
-        raise ApiError(404, "job not found (it expired, or the id is wrong).")
+        raise ApiError(404, "job not found (it expired, the id is wrong, or another client made it: send "
+                            "this client's cookie or X-BrainPainter-Client header).")
     return job
 
 
@@ -478,7 +484,8 @@ def _meta(config: ServerConfig) -> dict[str, Any]:
         "hide_groups": list(HIDE_GROUPS),
         "defaults": RenderOptions().model_dump(),
         "limits": {"max_upload_mb": config.max_upload_mb, "max_images": config.max_images,
-                   "max_pixels": config.max_pixels, "max_jobs_per_client": config.max_jobs_per_client,
+                   "max_pixels": config.max_pixels, "max_figure_pixels": config.max_figure_pixels,
+                   "max_jobs_per_client": config.max_jobs_per_client,
                    "result_ttl_s": config.result_ttl_s, "job_time_limit_s": config.job_time_limit_s,
                    "max_map_images": config.max_map_images, "max_tract_files": config.max_tract_files,
                    "max_tract_streamlines": config.max_tract_streamlines,
@@ -486,15 +493,3 @@ def _meta(config: ServerConfig) -> dict[str, Any]:
         "tract_spaces": list(SPACES), "cortex_modes": list(CORTEX_MODES),
         "renderer": config.renderer,
     }
-
-
-def _validation_line(exc: RequestValidationError) -> str:
-    errors = exc.errors()
-    if not errors:
-        return "the request is not valid JSON of the expected form."
-    e = errors[0]
-    loc = ".".join(str(p) for p in e.get("loc", ()) if p not in ("body", "query"))
-    given = e.get("input")
-    shown = "" if isinstance(given, dict | list) or given is None else f"; {str(given)[:80]!r} was given"
-    more = f" ({len(errors) - 1} more problem(s))" if len(errors) > 1 else ""
-    return f"option {loc or 'body'!r}: {e.get('msg', 'invalid')}{shown}.{more}"

@@ -175,7 +175,7 @@ def media_options(kind: str, params: dict[str, Any]) -> tuple[str, list[tuple[st
         return f"{safe_name(image)}.html", [("format", "html"), ("row", image), *more]
 
     model: Any = FigureParams if kind == "figure" else MovieParams
-    given = model(**params)
+    given = model(**{k: v for k, v in params.items() if k in model.model_fields})  # not the server's limits
     out = f"{kind}.{given.format}"
     pairs = [(n, getattr(given, n)) for n, info in model.model_fields.items()
              if n != "format" and getattr(given, n) != info.get_default(call_default_factory=True)]

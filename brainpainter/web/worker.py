@@ -20,23 +20,22 @@ marked done (at most once: see the store).
 
 from __future__ import annotations
 
-import io
 import os
 import shutil
 import sys
 import time
 import traceback
-import zipfile
 from collections import OrderedDict
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 POLL_S = 0.2
+OUT_OF_MEMORY = ("the job needs more memory than this server gives one job (--worker-memory-gb); choose "
+                 "fewer rows or views, a smaller size, or a lower dpi.")
 HEARTBEAT_S = 5.0
 
 #: Job kinds and the output file name stems they make.
-KINDS = ("images", "figure", "movie")
+KINDS = ("images", "figure", "movie", "export")
 
 
 class PainterCache:
@@ -123,6 +122,36 @@ def die_with_parent() -> None:
         os._exit(0)
 
 
+def limit_memory(limit: int | None = None) -> None:
+    """Bound this process's data memory (``RLIMIT_DATA``) to `limit` bytes (default: a reading process's
+    :data:`brainpainter.web.maps.MEMORY_LIMIT`); more raises ``MemoryError``. A no-op where unsupported."""
+    try:
+        import resource
+
+        _, hard = resource.getrlimit(resource.RLIMIT_DATA)
+        from brainpainter.web.maps import MEMORY_LIMIT
+
+        limit = MEMORY_LIMIT if limit is None else limit
+        limit = limit if hard == resource.RLIM_INFINITY else min(limit, hard)
+        resource.setrlimit(resource.RLIMIT_DATA, (limit, hard))
+    except (ImportError, ValueError, OSError):  # not on this platform: the time limit remains
+        pass
+
+
+def _rendering_process(memory: int | None) -> None:
+    """Ready a rendering process: at most `memory` bytes of data memory (None: no limit), and tqdm locks
+    with a thread lock, not its default multiprocessing lock (a named semaphore that a process stopped by
+    its server never removes: the resource tracker then warns of a leaked semaphore at the server's stop;
+    one process draws one job at a time)."""
+    import threading
+
+    from tqdm import tqdm
+
+    tqdm.set_lock(threading.RLock())
+    if memory is not None:
+        limit_memory(memory)
+
+
 def _set_threads(lp_threads: int) -> None:
     """Ready a server process for Blender: llvmpipe's thread count, and no Blender script folders
     inherited on ``sys.path`` (:func:`brainpainter.rendering.parallel.forget_blender_paths`)."""
@@ -134,10 +163,12 @@ def _set_threads(lp_threads: int) -> None:
 
 # -- job worker -------------------------------------------------------------------------
 def job_worker_main(data_dir: str, name: str, renderer: str, lp_threads: int, ttl_s: float,
-                    time_limit_s: float, warm: bool = True) -> None:
-    """Entry point of a job worker process: take jobs until the parent process is gone."""
+                    time_limit_s: float, warm: bool = True, memory: int | None = None) -> None:
+    """Entry point of a job worker process: take jobs until the parent process is gone; `memory`: the
+    bytes of data memory it may use (None: no limit)."""
     _set_threads(lp_threads)
     die_with_parent()
+    _rendering_process(memory)
     from brainpainter.web.store import Store
 
     parent = os.getppid()
@@ -196,8 +227,9 @@ def run_job(store: Any, job: dict[str, Any], painters: PainterCache, *, ttl_s: f
         if now is not None and now["status"] == "cancelled":  # cancelled: what was made goes now
             discard_outputs(folder)
         return
-    except BrainPainterError as exc:
-        line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    except (BrainPainterError, MemoryError) as exc:
+        line = OUT_OF_MEMORY if isinstance(exc, MemoryError) else str(exc).splitlines()[0] if str(exc) else (
+            type(exc).__name__)
         if store.fail(job_id, attempt, _no_paths(line, store), ttl_s):  # (a stale attempt touches nothing)
             discard_outputs(folder, published=False)
         return
@@ -250,6 +282,7 @@ def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
     from brainpainter.io.transaction import MANIFEST
     from brainpainter.rendering.parallel import SerialRunner
     from brainpainter.rendering.run import paint, png_metadata, run_settings
+    from brainpainter.web.job_zip import zip_name
 
     data, prep = _prepared(folder, job)
     run = prep.run
@@ -326,50 +359,6 @@ def discard_outputs(folder: Path, published: bool = True) -> None:
         shutil.rmtree(folder / sub, ignore_errors=True)
 
 
-def zip_name(job_id: str) -> str:
-    """The name of an ``images`` job's zip of all its files."""
-    return f"brainpainter-{job_id[:8]}.zip"
-
-
-def zip_stream(out: Path, names: list[str], chunk: int = 1 << 20) -> Iterator[bytes]:
-    """The bytes of a zip of `names` (files in `out`), made as they are sent: nothing is stored.
-
-    PNGs are compressed already, so members are stored; memory holds about one `chunk`.
-    """
-    class _Sink(io.RawIOBase):
-        def __init__(self) -> None:
-            self.parts: list[bytes] = []
-            self.pos = 0
-
-        def writable(self) -> bool:
-            return True
-
-        def write(self, b: Any) -> int:
-            data = bytes(b)
-            self.parts.append(data)
-            self.pos += len(data)
-            return len(data)
-
-        def tell(self) -> int:
-            return self.pos
-
-        def take(self) -> bytes:
-            data, self.parts = b"".join(self.parts), []
-            return data
-
-    sink = _Sink()
-    with zipfile.ZipFile(sink, "w", compression=zipfile.ZIP_STORED) as zf:
-        for n in names:
-            path = out / n
-            info = zipfile.ZipInfo.from_file(path, arcname=n)
-            with path.open("rb") as src, zf.open(info, "w", force_zip64=True) as dst:
-                while block := src.read(chunk):
-                    dst.write(block)
-                    yield sink.take()
-            yield sink.take()
-    yield sink.take()
-
-
 def _reproduced(folder: Path, job: dict[str, Any], data: bytes, prep: Any) -> dict[str, str]:
     """The command line and Python call that make a job's files again (its manifest's ``reproduce``)."""
     from brainpainter.web.reproduce import reproduce
@@ -403,19 +392,24 @@ def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
 
 
 def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
-    from brainpainter.media.figure import make_figure
-    from brainpainter.web.options import FigureParams
+    from brainpainter.media.figure import make_figure, save_figure
+    from brainpainter.web.options import FigureParams, check_figure_pixels
 
     data, prep = _prepared(folder, job)
-    p = job["params"]
+    p = dict(job["params"])
+    max_pixels = p.pop("max_pixels", None)  # the server's limit when the job was queued (PNG only)
     name = f"figure.{p.get('format', 'pdf')}"
     tick(0)
     params = FigureParams(**p)  # the CLI's defaults for what the job did not give
-    make_figure(_media_input(data, job["input_name"], prep), out=folder / "out" / name,
-                grid=params.grid,
-                title=params.title or None, label=params.label or None, dpi=params.dpi,
-                fig_width=params.fig_width, font_size=params.font_size, on_progress=tick,
-                **_media_kwargs(prep, painters.renderer))
+    made = make_figure(_media_input(data, job["input_name"], prep), grid=params.grid,
+                       title=params.title or None, label=params.label or None, dpi=params.dpi,
+                       fig_width=params.fig_width, font_size=params.font_size, on_progress=tick,
+                       **_media_kwargs(prep, painters.renderer))
+    if max_pixels is not None:  # composed now: its real size, before the PNG is drawn
+        w, h = (round(x) for x in made.figure.get_size_inches() * params.dpi)
+        check_figure_pixels(w, h, max_pixels)
+    save_figure(made.figure, folder / "out" / name, params.dpi,
+                transparent=prep.run.settings.background is None)
     return _media_manifest(folder, job, data, prep, name)
 
 
@@ -454,16 +448,19 @@ _KIND_RUNNERS = {"images": _run_images, "figure": _run_figure, "movie": _run_mov
 
 
 # -- preview process ----------------------------------------------------------------------
-def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int, int]) -> None:
+def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int, int],
+                 memory: int | None = None) -> None:
     """Entry point of the preview process: answer render requests on `conn` until the parent is gone.
 
     A request is ``{"atlas", "surface", "hidden", "settings", "colors", "view", "coloring"}``
     (``colors`` a :class:`~brainpainter.rendering.geometry.VertexColors` when ``coloring`` is
     ``"vertices"``); the answer is
-    ``("ok", png_bytes, milliseconds)`` or ``("error", one_line_message, 0)``.
+    ``("ok", png_bytes, milliseconds)`` or ``("error", one_line_message, 0)``; `memory`: the bytes of
+    data memory the process may use (None: no limit).
     """
     _set_threads(lp_threads)
     die_with_parent()
+    _rendering_process(memory)
     from brainpainter.atlas.registry import get_atlas
     from brainpainter.errors import BrainPainterError
     from brainpainter.io.output import png_bytes
