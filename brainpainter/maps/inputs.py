@@ -173,7 +173,8 @@ def is_map_input(data: Any) -> bool:
 
 
 def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = None, *,
-              external: External = "folder", space: str | None = None, frames: Any = None) -> VertexMaps:
+              external: External = "folder", space: str | None = None, frames: Any = None,
+              projection: str | None = None, radius: float | None = None) -> VertexMaps:
     """Any map input to :class:`VertexMaps` on fsaverage (the hook every command calls).
 
     Parameters
@@ -198,6 +199,9 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
         fsaverage when neither says, with a note.
     frames : str or sequence of int, optional
         The images to keep (``--frames 0:100:10``, ``"3"``, ``[0, 4]``): frames of a series.
+    projection, radius : optional
+        How a volume is sampled (``--projection``, ``--projection-radius``), as in
+        :func:`brainpainter.maps.volume.project_volume`.
     """
     from brainpainter.maps import volume as volumes
     from brainpainter.maps.cifti import is_cifti, read_cifti
@@ -223,7 +227,7 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
         if data is not None or lh is not None or rh is not None:
             raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "
                                     "volume is projected onto both hemispheres.")
-        return pick_images(read_volume(volume), frames)
+        return pick_images(read_volume(volume, projection=projection, radius=radius), frames)
     given: dict[str, Any] = {}
     if data is not None:
         if hasattr(data, "data") and hasattr(data.data, "parts"):
@@ -290,7 +294,8 @@ def maps_to_fsaverage(data: Any, space: str | None = None) -> dict[str, NDArray[
     return out
 
 
-def read_volume(img: Any, *, method: Method = "linear") -> VertexMaps:
+def read_volume(img: Any, *, method: Method = "linear", projection: str | None = None,
+                radius: float | None = None) -> VertexMaps:
     """A volume as maps on fsaverage, with its subcortical means: what ``--volume FILE`` draws.
 
     Parameters
@@ -299,6 +304,9 @@ def read_volume(img: Any, *, method: Method = "linear") -> VertexMaps:
         An MNI152 volume, 3-D or 4-D (one image per volume).
     method : {"linear", "nearest"}
         As in :func:`brainpainter.maps.volume.project_volume`.
+    projection : {"ribbon", "line", "point"}, optional
+    radius : float, optional
+        As in :func:`~brainpainter.maps.volume.project_volume` (default 3 mm).
 
     Returns
     -------
@@ -308,10 +316,13 @@ def read_volume(img: Any, *, method: Method = "linear") -> VertexMaps:
         subcortical structure (:func:`~brainpainter.maps.volume.subcortical_means`), shape
         (n_volumes,) each.
     """
+    from brainpainter.maps.options import RADIUS_MM, check_projection
     from brainpainter.maps.volume import load_volume, project_volume, subcortical_means
 
     volume = load_volume(img)
-    projected = project_volume(img, method=method)
+    radius = RADIUS_MM if radius is None else radius
+    projected = project_volume(img, method=method, projection=check_projection(projection, method, radius),
+                               radius=radius)
     means = subcortical_means(img, method=method)
     k = volume.n_volumes
     if len(volume.shape) == 3:

@@ -401,8 +401,8 @@ _VIEWER_JS = r"""
 EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cmap", "vmin", "vmax", "center",
                   "nan_color", "missing_color", "background", "image_column", "value", "region_column",
                   "strict", "tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_values",
-                  "tract_value", "tract_radius", "lh", "rh", "volume", "underlay", "threshold", "outline",
-                  "outline_threshold", "space", "frames")
+                  "tract_value", "tract_radius", "lh", "rh", "volume", "projection", "projection_radius",
+                  "underlay", "threshold", "outline", "outline_threshold", "space", "frames")
 
 
 def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:

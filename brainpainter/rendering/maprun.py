@@ -111,7 +111,8 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     from brainpainter.atlas.registry import get_atlas
 
     m = options.maps
-    maps = read_maps(data, m.lh, m.rh, m.volume, space=m.space, frames=m.frames)
+    maps = read_maps(data, m.lh, m.rh, m.volume, space=m.space, frames=m.frames, projection=m.projection,
+                     radius=m.projection_radius)
     outline = options.maps.outline
     # --outline ATLAS: the map is drawn on that atlas's mesh, whose vertices carry its labels
     atlas_obj = get_atlas(outline) if outline is not None else atlas if atlas is not None else get_atlas("dk")
