@@ -243,6 +243,9 @@ def test_render_all_job_makes_every_png_and_a_zip(server):
     assert job["status"] == "done" and job["progress"] == job["total"] == 8 and job["attempt"] == 1
     names = [f["name"] for f in job["files"]]
     assert names[-1].endswith(".zip") and "manifest.json" in names
+    manifest = server.get(job["files"][names.index("manifest.json")]["url"]).json()
+    assert manifest["reproduce"]["command"] == ("brainpainter render table.csv -o brainpainter-out --views "
+                                                "lateral-left,subcortical --gradient white,red --size 64x48")
     zipped = zip_pngs(server.get(job["files"][-1]["url"], params={"download": 1}).content)
     assert sorted(zipped) == sorted(n for n in names if n.endswith(".png"))
     assert sorted(zipped) == sorted(f"stage-{i}_{v}.png" for i in range(1, 5)
@@ -266,8 +269,40 @@ def test_figure_and_movie_jobs(server, kind, params, suffix, magic):
     uid = upload(server, EXAMPLE.read_bytes())["upload_id"]
     job = run_job(server, uid, {"size": "80x60", "views": "lateral-left"}, kind=kind, **params)
     assert job["status"] == "done", job
-    (f,) = job["files"]
+    f, manifest = job["files"]
     assert f["name"].endswith(suffix) and server.get(f["url"]).content.startswith(magic)
+    # the download carries the command that makes it again (issue 38, item 4)
+    made = server.get(manifest["url"]).json()
+    assert made["file"] == f["name"] and made[kind] == job_params(params[kind], kind)
+    more = " --frames-per-step 2" if kind == "movie" else ""
+    assert made["reproduce"]["command"] == (f"brainpainter {kind} table.csv -o {f['name']} --views "
+                                            f"lateral-left --size 80x60{more}")
+
+
+def test_export_job_writes_a_row_as_an_interactive_page(server):
+    """Issue 38, item 8: the page's "Interactive 3D (HTML)" is the CLI's export of the row shown."""
+    uid = upload(server, EXAMPLE.read_bytes())["upload_id"]
+    job = run_job(server, uid, {"size": "80x60", "views": "lateral-left", "gradient": "white,red"},
+                  kind="export", export={"row": 3})
+    assert job["status"] == "done", job
+    f, manifest = job["files"]
+    assert f["name"] == "stage-4.html"
+    page = server.get(f["url"], params={"download": 1})
+    assert page.headers["content-disposition"].startswith("attachment")
+    assert b"<title>stage-4</title>" in page.content and b"three" in page.content
+    made = server.get(manifest["url"]).json()
+    assert made["reproduce"]["command"] == ("brainpainter export table.csv -o stage-4.html --gradient "
+                                            "white,red --format html --row stage-4")
+    r = server.post("/api/jobs", json={"upload_id": uid, "kind": "export", "options": {},
+                                       "export": {"row": 4}})
+    assert r.status_code == 400 and r.json()["error"] == "row must be 0..3; 4 was given.", r.text
+
+
+def job_params(given: dict, kind: str) -> dict:
+    """A figure's or movie's parameters as the job keeps them (the API's defaults filled in)."""
+    from brainpainter.web.options import FigureParams, MovieParams
+
+    return (FigureParams if kind == "figure" else MovieParams)(**given).model_dump()
 
 
 def test_movie_job_counts_frames_and_the_options_have_the_cli_defaults(server):

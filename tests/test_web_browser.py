@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from web_support import EXAMPLE, Server, env_with_site, png_pixels, zip_pngs
+from web_support import EXAMPLE, Server, env_with_site, png_pixels, wait_for, zip_pngs
 
 pytestmark = pytest.mark.render
 
@@ -262,4 +262,161 @@ def test_page_takes_tracts_alone(served, tmp_path):
         page.screenshot(path=str(shot))
         if os.environ.get("BRAINPAINTER_SCREENSHOT"):
             shutil.copy(shot, Path(os.environ["BRAINPAINTER_SCREENSHOT"]).with_name("tracts-page.png"))
+        assert errors == []
+
+
+#: The preview image's box against the window: True when all of it is inside.
+IN_VIEW = ("() => { const r = document.getElementById('preview').getBoundingClientRect(); "
+           "return r.height > 20 && r.top >= 0 && r.left >= 0 && r.bottom <= innerHeight "
+           "&& r.right <= innerWidth; }")
+#: Scroll an element to the middle of the window, as while editing it.
+TO_MIDDLE = "(sel) => document.querySelector(sel).scrollIntoView({block: 'center'})"
+
+
+def _shot(page: Any, tmp_path: Path, name: str) -> None:
+    """A screenshot of the window, kept beside BRAINPAINTER_SCREENSHOT when it is set."""
+    shot = tmp_path / name
+    page.screenshot(path=str(shot))
+    if os.environ.get("BRAINPAINTER_SCREENSHOT"):
+        shutil.copy(shot, Path(os.environ["BRAINPAINTER_SCREENSHOT"]).with_name(name))
+
+
+def test_preview_stays_in_sight_and_the_page_says_how_to_make_it_again(served, tmp_path):
+    """Issue 38 (items 3, 4, 6, 7): the preview stays inside the window while the colour map or the last
+    options fieldset is edited (1440x900 and 400x900); only the options of a table are shown; the page
+    shows the `brainpainter render` command and the Python call of the current options, the scale drawn,
+    rounded; a skip link leads to the preview, the hidden file input is no tab stop, and the report's live
+    region says one line; a movie says its length before it starts and plays in the page, a figure is
+    shown at least 400 px wide."""
+    from playwright.sync_api import expect
+
+    with _page(tmp_path) as (page, errors):
+        page.set_viewport_size({"width": 1440, "height": 900})
+        page.goto(served.url + "/")
+        expect(page.locator("#atlas option[value=dk]")).to_have_count(1)
+        page.keyboard.press("Tab")
+        skip = page.locator(":focus")
+        expect(skip).to_have_text("Skip to the preview")
+        assert page.locator("#file").get_attribute("tabindex") == "-1"
+        page.locator("#size").fill("320x240")
+        page.get_by_role("button", name="Use the example table").click()
+        expect(page.locator("#preview-status")).to_contain_text("rendered in", timeout=120_000)
+        command = page.locator("#command")
+        expect(command).to_contain_text("brainpainter render brainpainter_dk.csv -o brainpainter-out")
+        expect(command).to_contain_text("--size 320x240")
+        page.locator("#gradient").fill("white,blue")
+        page.locator("#vmax").fill("1.5")
+        expect(command).to_contain_text("--gradient white,blue", timeout=60_000)
+        expect(command).to_contain_text("--vmax 1.5")
+        expect(page.locator("#python")).to_contain_text(
+            "brainpainter.render('brainpainter_dk.csv', out='brainpainter-out'")
+        expect(page.get_by_role("button", name="Copy command")).to_be_visible()
+        expect(page.locator("#scale-used")).to_contain_text("Drawn: white,blue, 0 to 1.5")
+        expect(page.locator("#scale-used")).to_contain_text("above 1.5 are saturated")
+        # what applies to a table: no tract options, no map-only fields
+        expect(page.locator("#tract-options")).to_be_hidden()
+        expect(page.locator("#underlay")).to_be_hidden()
+        expect(page.locator("#outline")).to_be_visible()
+        assert page.locator("#report").get_attribute("aria-live") is None
+        summary = page.locator("#report-summary")  # one line, not the report's lists
+        expect(summary).to_contain_text("Checked: wide (BrainPainter names), atlas dk (inferred): 4 image(s)")
+        assert "\n" not in summary.inner_text() and summary.locator("li").count() == 0
+        for width in (1440, 1024, 400):
+            page.set_viewport_size({"width": width, "height": 900})
+            for sel in ("#cmap", "#hide"):
+                page.evaluate(TO_MIDDLE, sel)
+                page.wait_for_timeout(100)
+                assert page.evaluate(IN_VIEW), (width, sel, page.locator("#preview").bounding_box())
+            _shot(page, tmp_path, f"page-editing-{width}.png")
+        page.locator("#quality").select_option("high")
+        expect(page.locator("#preview-status")).to_contain_text("previews are drawn at default quality",
+                                                                timeout=60_000)
+        page.locator("#quality").select_option("default")
+        # jobs (item 6): a movie's length before it starts, an MP4 playing in the page, a figure to judge,
+        # and what a figure job does after its images
+        page.set_viewport_size({"width": 1440, "height": 900})
+        length = page.locator("#movie-length")
+        expect(length).to_contain_text("A movie of these 4 rows: 73 frames, 3.0 s at 24 frames per second")
+        assert page.evaluate("jobStep({kind: 'figure', status: 'running', progress: 12, total: 12})") == (
+            "composing figure (12 images drawn)")
+        page.locator("summary", has_text="Figure and movie options").click()
+        page.locator("#frames_per_step").fill("2")
+        page.locator("#hold").fill("12")
+        expect(length).to_contain_text("55 frames, 2.3 s at 24 frames per second, holding each row 0.5 s")
+        page.locator('#views input[value="medial-left"]').uncheck()
+        page.locator('#views input[value="subcortical"]').uncheck()
+        page.get_by_role("button", name="Movie (MP4)").click()
+        video = page.locator(".job video")
+        expect(video).to_have_count(1, timeout=240_000)
+        # the page's CSP forbids eval (wait_for_function): poll with evaluate
+        assert wait_for(lambda: page.evaluate("document.querySelector('.job video').readyState >= 1"), 30)
+        assert page.evaluate("document.querySelector('.job video').duration") > 2
+        page.get_by_role("button", name="Figure (PNG)").click()
+        figure = page.locator(".job").first.locator(".gallery.wide img")
+        expect(figure).to_be_visible(timeout=240_000)
+        assert wait_for(lambda: figure.evaluate("i => i.complete && i.naturalWidth > 0"), 30)
+        assert figure.evaluate("i => i.getBoundingClientRect().width") >= 400
+        # item 8: the row shown as the CLI's interactive HTML export
+        page.get_by_role("button", name="Interactive 3D (HTML)").click()
+        expect(page.get_by_role("link", name="Download stage-4.html")).to_be_visible(timeout=240_000)
+        _shot(page, tmp_path, "page-jobs.png")
+        assert errors == []
+
+
+def test_refused_uploads_keep_their_message_and_the_last_good_one(served, tmp_path):
+    """Issue 38 (items 1, 2, 5): after a good table, a refused table leaves the good one in use (a view
+    change re-renders it); dipy's minimal_bundles.zip (subject folders) draws its first subject's tracts
+    in the preview and lets another subject be chosen; a refused tract upload keeps its message beside
+    its field after the next preview, and the tracts drawn before stay."""
+    import dipy
+    from playwright.sync_api import expect
+
+    bundles = Path(dipy.__file__).parent / "data" / "files" / "minimal_bundles.zip"
+    (tmp_path / "bad.csv").write_text("nothing,here\n1,2\n")
+    (tmp_path / "AF_L.trk").write_bytes(b"not a tractogram\n" * 20)
+    with _page(tmp_path) as (page, errors):
+        page.goto(served.url + "/")
+        expect(page.locator("#atlas option[value=dk]")).to_have_count(1)
+        page.locator("#size").fill("320x240")
+        page.locator("#pview").select_option("subcortical")
+        page.get_by_role("button", name="Use the example table").click()
+        status = page.locator("#preview-status")
+        expect(status).to_contain_text("subcortical · rendered in", timeout=120_000)
+        table = png_pixels(page.locator("#preview").screenshot())
+        page.locator("#file").set_input_files(str(tmp_path / "bad.csv"))
+        error = page.locator("#error")
+        expect(error).to_contain_text("bad.csv was refused")
+        expect(error).to_contain_text("Still in use: brainpainter_dk.csv")
+        page.locator("#pview").select_option("lateral-left")
+        expect(status).to_contain_text("lateral-left · rendered in", timeout=60_000)
+        expect(error).to_be_visible()
+        expect(page.locator("#render-all")).to_be_enabled()
+        expect(page.locator("#report")).to_contain_text("OK: wide")
+
+        page.locator("#pview").select_option("subcortical")
+        expect(status).to_contain_text("subcortical · rendered in", timeout=60_000)
+        page.locator("#tract-files").set_input_files(str(bundles))
+        tract_status = page.locator("#tract-status")
+        expect(tract_status).to_contain_text("subject sub_1 of 5", timeout=60_000)
+        expect(page.locator("#tract-options")).to_be_visible()
+        expect(page.locator("#command")).to_contain_text("--tracts minimal_bundles/sub_1", timeout=60_000)
+        seq = page.locator("#preview").get_attribute("data-seq")
+        expect(page.locator("#preview")).not_to_have_attribute("data-seq", seq, timeout=60_000)
+        expect(status).to_contain_text("rendered in", timeout=60_000)
+        expect(page.locator("#command")).to_contain_text("--tracts minimal_bundles/sub_1", timeout=60_000)
+        drawn = png_pixels(page.locator("#preview").screenshot())
+        changed = np.abs(drawn[..., :3].astype(int) - table[..., :3].astype(int)).max(-1) > 60
+        assert changed.mean() > 0.005, changed.mean()  # the bundles, in their direction colours
+        _shot(page, tmp_path, "page-tracts.png")
+        page.locator("#subject").select_option("sub_3")
+        expect(tract_status).to_contain_text("subject sub_3 of 5", timeout=60_000)
+
+        page.locator("#tract-files").set_input_files(str(tmp_path / "AF_L.trk"))
+        tract_error = page.locator("#tract-error")
+        expect(tract_error).to_contain_text("AF_L.trk was refused", timeout=60_000)
+        expect(tract_status).to_contain_text("Still drawn: tracts: AF_left")
+        page.locator("#pview").select_option("lateral-left")
+        expect(status).to_contain_text("lateral-left · rendered in", timeout=60_000)
+        expect(tract_error).to_be_visible()
+        _shot(page, tmp_path, "page-refused.png")
         assert errors == []

@@ -141,7 +141,7 @@ def test_a_movie_job_survives_a_killed_server_and_its_workers_die_with_it(tmp_pa
         with httpx.Client(base_url=server.url, headers=CLIENT, timeout=30) as client:
             job = wait_for(lambda: (j := client.get(url).json())["status"] in ("done", "failed") and j, 180)
             assert job and job["status"] == "done", job
-            assert [f["name"] for f in job["files"]] == ["movie.gif"]
+            assert [f["name"] for f in job["files"]] == ["movie.gif", "manifest.json"]
             gif = client.get(job["files"][0]["url"]).content
             assert gif[:6] == b"GIF89a"
         db = sqlite3.connect(f"file:{tmp_path / 'data' / 'jobs.sqlite3'}?mode=ro", uri=True)

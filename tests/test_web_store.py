@@ -307,9 +307,9 @@ def test_a_figure_job_publishes_one_file_and_a_cancelled_one_nothing(tmp_path):
             run_job(store, store.claim("w"), painters, ttl_s=60, time_limit_s=60)
         painters.close()
     assert during and all(seen == [] for seen in during)  # nothing visible while rendering
-    assert store.get(done)["status"] == "done" and store.get(done)["files"] == ["figure.png"]
+    assert store.get(done)["status"] == "done" and store.get(done)["files"] == ["figure.png", "manifest.json"]
     out = store.job_dir(done) / "out"
-    assert sorted(p.name for p in out.iterdir()) == ["figure.png"]  # no staging folder left
+    assert sorted(p.name for p in out.iterdir()) == ["figure.png", "manifest.json"]  # no staging folder left
     assert (out / "figure.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert store.get(cancelled)["status"] == "cancelled"
     assert _visible(store.job_dir(cancelled)) == ["input.bin"]

@@ -279,6 +279,29 @@ def test_zip_inflation_is_bounded(tmp_path, monkeypatch):
         tracts.unzip(tmp_path / "b.zip", tmp_path / "out", 10)
 
 
+def test_a_zip_of_subject_folders_draws_the_chosen_subject(server, files):
+    """dipy's minimal_bundles.zip layout (sub_1/AF_L.trk, ... sub_10/...): the first subject in natural
+    order by default, another chosen by ``subject``; the report lists them; an unknown one is one line."""
+    subjects = {f"sub_{i}": files["many.trk"] if i == 2 else files["AF_L.trk"] for i in (10, 2, 1)}
+    data = zipped({f"{s}/{n}": d for s, d in subjects.items() for n in ("AF_L.trk", "CST_R.trk")}
+                  | {"sub_1/": b""})
+    r = post(server, [("minimal_bundles.zip", data)])
+    assert r.status_code == 200, r.text
+    rep = r.json()["report"]
+    assert rep["subjects"] == ["sub_1", "sub_2", "sub_10"] and rep["subject"] == "sub_1"
+    assert rep["summary"] == "tracts: AF_left, CST_right (80 streamlines of 80); subject sub_1 of 3"
+    r = server.post("/api/tracts", params={"name": "minimal_bundles.zip", "subject": "sub_10"}, content=data,
+                    headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 200 and r.json()["report"]["subject"] == "sub_10", r.text
+    before = stored(server)
+    r = server.post("/api/tracts", params={"name": "minimal_bundles.zip", "subject": "sub_3"}, content=data,
+                    headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 400 and r.json()["error"] == (
+        "subject 'sub_3' is not a folder of 'minimal_bundles.zip'; its subject folders are 'sub_1', 'sub_2', "
+        "'sub_10'. Choose one of them (or leave subject out)."), r.text
+    assert stored(server) == before
+
+
 # -- drawn by Blender: the bundles' colours where they project ------------------------------------------
 @pytest.mark.render
 def test_blender_preview_draws_each_bundle_in_its_colour_on_its_side(tmp_path_factory, files):

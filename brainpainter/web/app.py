@@ -19,7 +19,7 @@ API (all JSON unless said; errors are ``{"error": "one line"}`` with the CLI's m
                                    alone, coloured by their values table)
     POST /api/check                {"upload_id", "options"} -> the check report for those options
     POST /api/preview              {"upload_id", "options", "row", "view"} -> image/png
-    POST /api/jobs                 {"upload_id", "kind", "options", "figure"|"movie"} -> 202 {job}
+    POST /api/jobs                 {"upload_id", "kind", "options", "figure"|"movie"|"export"} -> 202 {job}
     GET  /api/jobs/{id}            status, progress, files
     DELETE /api/jobs/{id}          cancel
     GET  /api/jobs/{id}/files/{name}   one of the job's own files (?download=1: as attachment)
@@ -62,9 +62,11 @@ from brainpainter.web.http import (
     owner_of,
     receive_body,
     require_octet_stream,
+    validation_line,
 )
 from brainpainter.web.maps import file_name, is_bundle, is_map_upload
 from brainpainter.web.options import (
+    ExportParams,
     FigureParams,
     MovieParams,
     RenderOptions,
@@ -78,6 +80,7 @@ from brainpainter.web.options import (
     upload_name,
 )
 from brainpainter.web.pool import MAX_PREVIEW_WAITING, Pool, PreviewBusy, PreviewUnavailable, preview_request
+from brainpainter.web.reproduce import reproduce
 from brainpainter.web.store import LimitError, Store, valid_id
 from brainpainter.web.tract_routes import add_tracts_route, tracts_of
 from brainpainter.web.tracts import is_tract_bundle, is_tract_upload
@@ -105,9 +108,10 @@ class PreviewRequest(CheckRequest):
 
 
 class JobRequest(CheckRequest):
-    kind: Literal["images", "figure", "movie"] = "images"
+    kind: Literal["images", "figure", "movie", "export"] = "images"
     figure: FigureParams = Field(default_factory=FigureParams)
     movie: MovieParams = Field(default_factory=MovieParams)
+    export: ExportParams = Field(default_factory=ExportParams)
 
 
 # -- the app ------------------------------------------------------------------------------
@@ -170,7 +174,7 @@ def _add_error_handlers(app: FastAPI, config: ServerConfig) -> None:
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
-        return JSONResponse({"error": _validation_line(exc)}, status_code=422)
+        return JSONResponse({"error": validation_line(exc)}, status_code=422)
 
     @app.exception_handler(StarletteHTTPException)
     async def _http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
@@ -303,6 +307,14 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
         """The ``check`` report of an upload with these options (the colour scale included)."""
         name, data = await run_in_threadpool(_upload, store, body.upload_id, owner_of(request))
         o = body.options
+        tracts = None if is_tract_bundle(data) else await run_in_threadpool(tracts_of, store, o,
+                                                                            owner_of(request))
+        report = await _check_report(data, name, o, tracts)
+        # the command line and the Python call that make these images again
+        report["reproduce"] = await work.run(reproduce, data, name, o, tracts)
+        return report
+
+    async def _check_report(data: bytes, name: str, o: RenderOptions, tracts: bytes | None) -> dict[str, Any]:
         if is_tract_bundle(data):  # the tracts alone: their report, with the colour scale of `o`
             return await work.run(tract_check, data, name, o, data_dir=store.root)
         if is_bundle(data):
@@ -312,8 +324,7 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
                           "center": o.center}}
         # read on a work thread: the upload was read within the time limit already (as preview and
         # job submission read it)
-        report = (await work.run(check_table, data, name, opts, config.max_rows))[0]
-        tracts = await run_in_threadpool(tracts_of, store, o, owner_of(request))
+        report: dict[str, Any] = (await work.run(check_table, data, name, opts, config.max_rows))[0]
         if tracts is not None:  # one scale over the regions' and the bundles' values, as drawn
             report["values"]["scale"] = await work.run(table_tract_scale, data, name, o, tracts, store.root)
         return report
@@ -344,7 +355,8 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
 
     @app.post("/api/jobs", tags=["api"], status_code=202)
     async def submit(body: JobRequest, request: Request) -> dict[str, Any]:
-        """Queue a job: ``images`` (every row from every view, as PNGs plus a zip), ``figure`` (PDF/PNG)
+        """Queue a job: ``images`` (every row from every view, as PNGs plus a zip), ``figure`` (PDF/PNG),
+        ``export`` (one row as an interactive 3D page, HTML)
         or ``movie`` (MP4/GIF)."""
         from brainpainter.web.worker import TRACTS
 
@@ -357,8 +369,11 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
         n_rows, n_views = len(prep.run.table.images), len(prep.run.views)
         if body.kind == "movie" and n_rows < 2:
             raise BrainPainterError(f"a movie needs at least 2 rows (key frames); the table has {n_rows}.")
+        if body.kind == "export" and body.export.row >= n_rows:
+            raise BrainPainterError(f"row must be 0..{n_rows - 1}; {body.export.row} was given.")
         params = body.figure.model_dump() if body.kind == "figure" else (
-            body.movie.model_dump() if body.kind == "movie" else {})
+            body.movie.model_dump() if body.kind == "movie" else
+            body.export.model_dump() if body.kind == "export" else {})
         if body.kind == "figure" and body.figure.format == "png":  # a PDF embeds the renders as they are
             size = await work.run(figure_pixels, prep, body.figure)
             check_figure_pixels(*size, config.max_figure_pixels)
@@ -389,7 +404,7 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
     @app.get("/api/jobs/{job_id}/files/{file_name}", tags=["api"], response_model=None)
     async def job_file(job_id: str, file_name: str, request: Request, download: bool = False) -> Response:
         """One file the job made (only names listed in its ``files``)."""
-        from brainpainter.web.worker import zip_name, zip_stream
+        from brainpainter.web.job_zip import zip_name, zip_stream
 
         job = await run_in_threadpool(_job, store, job_id, owner_of(request))
         if file_name not in job["files"]:
@@ -478,15 +493,3 @@ def _meta(config: ServerConfig) -> dict[str, Any]:
         "tract_spaces": list(SPACES), "cortex_modes": list(CORTEX_MODES),
         "renderer": config.renderer,
     }
-
-
-def _validation_line(exc: RequestValidationError) -> str:
-    errors = exc.errors()
-    if not errors:
-        return "the request is not valid JSON of the expected form."
-    e = errors[0]
-    loc = ".".join(str(p) for p in e.get("loc", ()) if p not in ("body", "query"))
-    given = e.get("input")
-    shown = "" if isinstance(given, dict | list) or given is None else f"; {str(given)[:80]!r} was given"
-    more = f" ({len(errors) - 1} more problem(s))" if len(errors) > 1 else ""
-    return f"option {loc or 'body'!r}: {e.get('msg', 'invalid')}{shown}.{more}"

@@ -31,7 +31,8 @@ from brainpainter.web.config import ServerConfig
 access_log = logging.getLogger("brainpainter.web.access")
 
 CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' blob: data:; "
-       "connect-src 'self'; font-src 'self'; form-action 'none'; base-uri 'none'; frame-ancestors 'none'")
+       "media-src 'self'; connect-src 'self'; font-src 'self'; form-action 'none'; base-uri 'none'; "
+       "frame-ancestors 'none'")
 SECURITY_HEADERS = [
     (b"content-security-policy", CSP.encode()),
     (b"x-content-type-options", b"nosniff"),

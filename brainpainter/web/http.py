@@ -1,5 +1,5 @@
 """What the routes of the web API share: their error, the work threads, who the client is, the disk budget,
-receiving an upload's body."""
+receiving an upload's body, a request that does not fit the schema as one line."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ if TYPE_CHECKING:
     from pathlib import Path
 
     from fastapi import Request
+    from fastapi.exceptions import RequestValidationError
 
     from brainpainter.web.config import ServerConfig
     from brainpainter.web.store import Store
@@ -107,3 +108,16 @@ async def receive_body(request: Request, root: Path) -> tuple[Path, int]:
         path.unlink(missing_ok=True)
         raise
     return path, size
+
+
+def validation_line(exc: RequestValidationError) -> str:
+    """A request that does not fit the API's schema, as one line: the first problem, and how many more."""
+    errors = exc.errors()
+    if not errors:
+        return "the request is not valid JSON of the expected form."
+    e = errors[0]
+    loc = ".".join(str(p) for p in e.get("loc", ()) if p not in ("body", "query"))
+    given = e.get("input")
+    shown = "" if isinstance(given, dict | list) or given is None else f"; {str(given)[:80]!r} was given"
+    more = f" ({len(errors) - 1} more problem(s))" if len(errors) > 1 else ""
+    return f"option {loc or 'body'!r}: {e.get('msg', 'invalid')}{shown}.{more}"

@@ -320,6 +320,15 @@ class FigureParams(BaseModel):
                              description="Text size in points.")
 
 
+class ExportParams(BaseModel):
+    """``export`` job options: one row as an interactive 3D page (``brainpainter export --format html``)."""
+
+    model_config = ConfigDict(extra="forbid")
+    row: int = Field(0, ge=0, description="Row (0-based) exported.")
+    title: str | None = Field(None, max_length=200,
+                              description="The page's heading (default: the row's name).")
+
+
 def figure_pixels(prep: Prepared, params: FigureParams) -> tuple[int, int]:
     """``(width, height)`` in pixels of a figure job's PNG, laid out as ``brainpainter figure`` does
     (:func:`brainpainter.media.layout.plan_grid`) before anything is rendered.

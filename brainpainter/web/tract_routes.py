@@ -37,6 +37,9 @@ def add_tracts_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
                                 "values."))] = None,
                             sizes: Annotated[list[int] | None, Query(alias="size", description=(
                                 "With several names: the bytes of each file, in the body's order."))] = None,
+                            subject: Annotated[str | None, Query(max_length=200, description=(
+                                "A zip of subject folders (sub_1/AF_L.trk, sub_2/AF_L.trk, ...): the folder "
+                                "to draw (default: the first; the report lists them)."))] = None,
                             ) -> dict[str, Any]:
         """Upload tractograms and get their report (bundles, streamlines); nothing is kept when they cannot
         be drawn."""
@@ -58,7 +61,7 @@ def add_tracts_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
             data, report = await work.run(
                 read_tract_upload, path, names, sizes, store.root / "incoming",
                 max_files=config.max_tract_files, max_streamlines=config.max_tract_streamlines,
-                time_limit_s=config.parse_time_limit_s)
+                time_limit_s=config.parse_time_limit_s, subject=subject)
         finally:
             path.unlink(missing_ok=True)
         upload_id = await run_in_threadpool(store.add_upload, client_of(request), shown, data,

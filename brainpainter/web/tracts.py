@@ -85,14 +85,27 @@ def member_name(name: str) -> str:
 
 
 # -- reading (in the process that upload.read_tract_upload starts) ------------------------------
-def unzip(path: Path, into: Path, max_files: int) -> list[Path]:
+def unzip(path: Path, into: Path, max_files: int,
+          subject: str | None = None) -> tuple[list[Path], list[str]]:
     """The members of zip `path` written into `into` (flattened); ``__MACOSX`` and dot files skipped.
+
+    A zip of subject folders (``sub_1/AF_L.trk``, ``sub_2/AF_L.trk``, ...: the same bundle file in
+    several top-level folders, as dipy's and pyAFQ's outputs are zipped) gives the members of one
+    folder, `subject` (default: the first in natural order), and the files at its top level.
+
+    Returns
+    -------
+    files : list of Path
+        The members written.
+    subjects : list of str
+        The zip's subject folders, in natural order (empty for a zip of bundles).
 
     Raises
     ------
     BrainPainterError
-        A member named with ``..`` or an absolute path, two members of the same name, more than
-        `max_files` files, more than :data:`MAX_UNZIPPED` bytes inflated, or not a zip.
+        A member named with ``..`` or an absolute path, two members of the same name (not in subject
+        folders), more than `max_files` files, more than :data:`MAX_UNZIPPED` bytes inflated, not a zip,
+        or a `subject` the zip does not hold.
     """
     shown = path.name
     out: list[Path] = []
@@ -108,6 +121,10 @@ def unzip(path: Path, into: Path, max_files: int) -> list[Path]:
                         "files themselves (no '..' or absolute paths) and upload it again.")
             infos = [i for i in infos if not any(p.startswith(".") or p == "__MACOSX"
                                                  for p in PurePosixPath(i.filename).parts)]
+            subjects = subject_folders([i.filename.replace("\\", "/") for i in infos])
+            if subjects or subject is not None:
+                chosen = pick_subject(shown, subjects, subject)
+                infos = [i for i in infos if _top_folder(i.filename) in (chosen, None)]
             if len(infos) > max_files:
                 raise BrainPainterError(f"{shown!r} holds {len(infos)} files; this server reads at most "
                                         f"{max_files} per upload. Upload fewer bundles.")
@@ -129,7 +146,44 @@ def unzip(path: Path, into: Path, max_files: int) -> list[Path]:
     except (zipfile.BadZipFile, zipfile.LargeZipFile, NotImplementedError, EOFError) as exc:
         raise BrainPainterError(f"{shown!r} is not a readable zip file ({type(exc).__name__}); zip the "
                                 "bundle files (.trk, .tck, .trx) and upload it again.") from None
-    return out
+    return out, subjects
+
+
+def _top_folder(name: str) -> str | None:
+    """The top-level folder of zip member `name` (None for a file at the zip's top level)."""
+    parts = PurePosixPath(name.replace("\\", "/")).parts
+    return parts[0] if len(parts) > 1 else None
+
+
+def _natural(name: str) -> tuple[Any, ...]:
+    """A sort key putting ``sub_2`` before ``sub_10``."""
+    return tuple(int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", name))
+
+
+def subject_folders(names: list[str]) -> list[str]:
+    """The subject folders of a zip whose members are `names`: top-level folders holding the same
+    tractogram file name (``sub_1/AF_L.trk``, ``sub_2/AF_L.trk``), in natural order; empty when no
+    tractogram name repeats across top-level folders (a zip of bundles, folders flattened)."""
+    folders: dict[str, set[str]] = {}
+    for name in names:
+        top = _top_folder(name)
+        if top is not None and name.lower().endswith(SUFFIXES):
+            folders.setdefault(member_name(name), set()).add(top)
+    if not any(len(tops) > 1 for tops in folders.values()):
+        return []
+    return sorted({top for tops in folders.values() for top in tops}, key=_natural)
+
+
+def pick_subject(shown: str, subjects: list[str], subject: str | None) -> str:
+    """The subject folder to read: `subject`, or the first of `subjects`."""
+    if subject is None:
+        return subjects[0]
+    if subject not in subjects:
+        listed = ", ".join(repr(s) for s in subjects[:10]) + (", ..." if len(subjects) > 10 else "")
+        what = f"its subject folders are {listed}" if subjects else "it has no subject folders"
+        raise BrainPainterError(f"subject {subject[:100]!r} is not a folder of {shown!r}; {what}. Choose "
+                                "one of them (or leave subject out).")
+    return subject
 
 
 def header_count(path: Path) -> int | None:
@@ -148,8 +202,10 @@ def header_count(path: Path) -> int | None:
 
 
 def build_tract_bundle(work: Path, files: list[Path], max_files: int,
-                       max_streamlines: int) -> dict[str, Any]:
+                       max_streamlines: int, subject: str | None = None) -> dict[str, Any]:
     """Read the uploaded `files` (tractograms, zips, one values table) and write ``work/bundle.bin``.
+
+    `subject`: the folder read from a zip of subject folders (default: the first; :func:`unzip`).
 
     Returns
     -------
@@ -161,11 +217,7 @@ def build_tract_bundle(work: Path, files: list[Path], max_files: int,
     from brainpainter.tracts.model import MAX_STREAMLINES, N_POINTS
     from brainpainter.tracts.read import read_bundles
 
-    given = work / "given"
-    given.mkdir(exist_ok=True)
-    found: list[Path] = []
-    for f in files:
-        found += unzip(f, given, max_files) if f.suffix.lower() == ".zip" else [f]
+    found, subjects = _unzipped(files, work / "given", max_files, subject)
     tracts = [f for f in found if f.suffix.lower() in SUFFIXES]
     tables = [f for f in found if f.suffix.lower() in VALUE_SUFFIXES]
     ignored = sorted(f.name for f in found if f not in tracts and f not in tables)
@@ -211,9 +263,33 @@ def build_tract_bundle(work: Path, files: list[Path], max_files: int,
         notes.append(f"ignored (not a tractogram or a table): {', '.join(ignored[:10])}")
     summary["notes"] = []
     report = tract_report(summary, [f.name for f in files], values, notes)
+    if subjects:
+        report["subjects"] = subjects
+        report["subject"] = pick_subject("", subjects, subject)
+        report["summary"] += f"; subject {report['subject']} of {len(subjects)}"
     stored = [("bundles", f) for f in kept] + [("values", f) for f in tables]
     write_bundle(work / "bundle.bin", MAGIC, {"report": report}, "role", list(stored))
     return report
+
+
+def _unzipped(files: list[Path], given: Path, max_files: int,
+              subject: str | None) -> tuple[list[Path], list[str]]:
+    """The uploaded `files` with each zip's members in its place (written into `given`), and the subject
+    folders of a zip of them (:func:`unzip`)."""
+    given.mkdir(exist_ok=True)
+    found: list[Path] = []
+    subjects: list[str] = []
+    zips = [f for f in files if f.suffix.lower() == ".zip"]
+    if subject is not None and len(zips) != 1:
+        raise BrainPainterError(f"subject {subject[:100]!r} names a folder of a zip, but {len(zips)} zips "
+                                "were uploaded; upload one .zip of subject folders.")
+    for f in files:
+        if f.suffix.lower() == ".zip":
+            got, subjects = unzip(f, given, max_files, subject)
+            found += got
+        else:
+            found.append(f)
+    return found, subjects
 
 
 def write_kept(tracts: Any, folder: Path) -> list[Path]:

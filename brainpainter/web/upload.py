@@ -253,7 +253,8 @@ def _map_main(conn: Any, work: str, entries: list[tuple[str | None, str]], max_i
 
 # -- tractograms (brainpainter.web.tracts): read in a process of their own, bounded in time and memory ---
 def read_tract_upload(path: Path, names: list[str], sizes: list[int], folder: Path, *, max_files: int,
-                      max_streamlines: int, time_limit_s: float) -> tuple[bytes, dict[str, Any]]:
+                      max_streamlines: int, time_limit_s: float,
+                      subject: str | None = None) -> tuple[bytes, dict[str, Any]]:
     """The received body at `path` (the files `names`, `sizes` bytes each) read as tractograms:
     ``(tract bundle, report)``; raises the first error as one line.
 
@@ -267,6 +268,8 @@ def read_tract_upload(path: Path, names: list[str], sizes: list[int], folder: Pa
         Most streamlines the files may hold together (the hard cap; fewer are drawn).
     time_limit_s : float
         The reading process is killed after this many seconds.
+    subject : str, optional
+        The folder read from a zip of subject folders (default: the first).
     """
     from brainpainter.web.maps import split_body
     from brainpainter.web.tracts import member_name
@@ -288,7 +291,8 @@ def read_tract_upload(path: Path, names: list[str], sizes: list[int], folder: Pa
             written.append(str(target))
         shown = " + ".join(member_name(n) for n in names)[:200]
         report = _in_child(
-            _tracts_main, (str(work), written, max_files, max_streamlines), "brainpainter-read-tracts",
+            _tracts_main, (str(work), written, max_files, max_streamlines, subject),
+            "brainpainter-read-tracts",
             time_limit_s,
             f"reading {shown!r} took longer than this server's limit of {time_limit_s:g} s; upload fewer "
             "streamlines (a subsample), or render them with 'brainpainter render --tracts' on your own "
@@ -299,7 +303,8 @@ def read_tract_upload(path: Path, names: list[str], sizes: list[int], folder: Pa
         shutil.rmtree(work, ignore_errors=True)
 
 
-def _tracts_main(conn: Any, work: str, files: list[str], max_files: int, max_streamlines: int) -> None:
+def _tracts_main(conn: Any, work: str, files: list[str], max_files: int, max_streamlines: int,
+                 subject: str | None) -> None:
     """Entry point of the tract reading process: send ``("ok", report)`` or ``("error", line)``."""
     from brainpainter.web.tracts import build_tract_bundle
     from brainpainter.web.worker import die_with_parent, limit_memory
@@ -307,7 +312,8 @@ def _tracts_main(conn: Any, work: str, files: list[str], max_files: int, max_str
     die_with_parent()
     limit_memory()
     try:
-        report = build_tract_bundle(Path(work), [Path(f) for f in files], max_files, max_streamlines)
+        report = build_tract_bundle(Path(work), [Path(f) for f in files], max_files, max_streamlines,
+                                    subject)
         conn.send(("ok", report))
     except BrainPainterError as exc:
         line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__

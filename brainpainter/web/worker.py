@@ -20,15 +20,12 @@ marked done (at most once: see the store).
 
 from __future__ import annotations
 
-import io
 import os
 import shutil
 import sys
 import time
 import traceback
-import zipfile
 from collections import OrderedDict
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -38,7 +35,7 @@ OUT_OF_MEMORY = ("the job needs more memory than this server gives one job (--wo
 HEARTBEAT_S = 5.0
 
 #: Job kinds and the output file name stems they make.
-KINDS = ("images", "figure", "movie")
+KINDS = ("images", "figure", "movie", "export")
 
 
 class PainterCache:
@@ -285,8 +282,9 @@ def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
     from brainpainter.io.transaction import MANIFEST
     from brainpainter.rendering.parallel import SerialRunner
     from brainpainter.rendering.run import paint, png_metadata, run_settings
+    from brainpainter.web.job_zip import zip_name
 
-    _, prep = _prepared(folder, job)
+    data, prep = _prepared(folder, job)
     run = prep.run
     table = run.table
     painter = painters.get(table.atlas, prep.options.surface, prep.hidden, run.settings, prep.coloring,
@@ -311,6 +309,7 @@ def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
                 "files": entries}
     if painter.scene.tracts is not None:  # what was drawn of the tractograms, as render's manifest says
         manifest["tracts"] = painter.scene.tracts.summary()
+    manifest["reproduce"] = _reproduced(folder, job, data, prep)
     publish_drawn(folder, names, manifest, (run.settings.width, run.settings.height))
     # the zip is not stored (it would copy every PNG): it is made while it is downloaded
     return [*names, MANIFEST, zip_name(job["id"])]
@@ -360,48 +359,29 @@ def discard_outputs(folder: Path, published: bool = True) -> None:
         shutil.rmtree(folder / sub, ignore_errors=True)
 
 
-def zip_name(job_id: str) -> str:
-    """The name of an ``images`` job's zip of all its files."""
-    return f"brainpainter-{job_id[:8]}.zip"
+def _reproduced(folder: Path, job: dict[str, Any], data: bytes, prep: Any) -> dict[str, str]:
+    """The command line and Python call that make a job's files again (its manifest's ``reproduce``)."""
+    from brainpainter.web.reproduce import reproduce
+
+    tracts = (folder / TRACTS).read_bytes() if (folder / TRACTS).is_file() else None
+    params = dict(job["params"])
+    if job["kind"] == "export":  # the command names the row by its image name
+        params["image"] = prep.run.table.images[params.get("row", 0)]
+    return reproduce(data, job["input_name"], prep.options, tracts, job["kind"], params)
 
 
-def zip_stream(out: Path, names: list[str], chunk: int = 1 << 20) -> Iterator[bytes]:
-    """The bytes of a zip of `names` (files in `out`), made as they are sent: nothing is stored.
+def _media_manifest(folder: Path, job: dict[str, Any], data: bytes, prep: Any, name: str) -> list[str]:
+    """Write a figure's or movie's ``manifest.json`` beside it (what was made, and the command that makes it
+    again); the job's files."""
+    from brainpainter import __version__
+    from brainpainter.io.output import write_json
+    from brainpainter.io.transaction import MANIFEST
 
-    PNGs are compressed already, so members are stored; memory holds about one `chunk`.
-    """
-    class _Sink(io.RawIOBase):
-        def __init__(self) -> None:
-            self.parts: list[bytes] = []
-            self.pos = 0
-
-        def writable(self) -> bool:
-            return True
-
-        def write(self, b: Any) -> int:
-            data = bytes(b)
-            self.parts.append(data)
-            self.pos += len(data)
-            return len(data)
-
-        def tell(self) -> int:
-            return self.pos
-
-        def take(self) -> bytes:
-            data, self.parts = b"".join(self.parts), []
-            return data
-
-    sink = _Sink()
-    with zipfile.ZipFile(sink, "w", compression=zipfile.ZIP_STORED) as zf:
-        for n in names:
-            path = out / n
-            info = zipfile.ZipInfo.from_file(path, arcname=n)
-            with path.open("rb") as src, zf.open(info, "w", force_zip64=True) as dst:
-                while block := src.read(chunk):
-                    dst.write(block)
-                    yield sink.take()
-            yield sink.take()
-    yield sink.take()
+    write_json(folder / "out" / MANIFEST, {
+        "software": {"brainpainter": __version__}, "input": job["input_name"], "file": name,
+        "options": job["options"], job["kind"]: job["params"],
+        "reproduce": _reproduced(folder, job, data, prep)})
+    return [name, MANIFEST]
 
 
 def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
@@ -430,7 +410,7 @@ def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
         check_figure_pixels(w, h, max_pixels)
     save_figure(made.figure, folder / "out" / name, params.dpi,
                 transparent=prep.run.settings.background is None)
-    return [name]
+    return _media_manifest(folder, job, data, prep, name)
 
 
 def _run_movie(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
@@ -446,10 +426,25 @@ def _run_movie(folder: Path, job: dict[str, Any], painters: PainterCache, tick: 
     make_movie(_media_input(data, job["input_name"], prep), out=folder / "out" / name,
                frames_per_step=params.frames_per_step, easing=params.easing, hold=params.hold, fps=params.fps,
                title=params.title or None, label=params.label or None, on_progress=tick, **kwargs)
-    return [name]
+    return _media_manifest(folder, job, data, prep, name)
 
 
-_KIND_RUNNERS = {"images": _run_images, "figure": _run_figure, "movie": _run_movie}
+def _run_export(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
+    """One row as an interactive 3D page (``brainpainter export --format html``): no renderer."""
+    from brainpainter.media.export import EXPORT_OPTIONS, export
+    from brainpainter.web.options import ExportParams
+
+    data, prep = _prepared(folder, job)
+    params = ExportParams(**job["params"])
+    name = f"{prep.file_names[params.row]}.html"
+    tick(0)
+    kwargs = {k: v for k, v in prep.kwargs.items() if k in EXPORT_OPTIONS}
+    export(_media_input(data, job["input_name"], prep), folder / "out" / name, format="html", row=params.row,
+           atlas=prep.run.table.atlas, title=params.title or None, **{**kwargs, "hide": prep.hidden})
+    return _media_manifest(folder, job, data, prep, name)
+
+
+_KIND_RUNNERS = {"images": _run_images, "figure": _run_figure, "movie": _run_movie, "export": _run_export}
 
 
 # -- preview process ----------------------------------------------------------------------

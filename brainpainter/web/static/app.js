@@ -5,7 +5,7 @@
 const $ = (id) => document.getElementById(id);
 const state = { uploadId: null, files: null, name: null, report: null, meta: null, isMap: false,
                 previewCtl: null, previewTimer: null, previewUrl: null, seq: 0, scale: null,
-                tractsId: null, tractReport: null };
+                tractsId: null, tractReport: null, tractFiles: null, summary: "" };
 const DEFAULT_VIEWS = ["lateral-left", "medial-left", "subcortical"];
 const MAP_VIEWS = ["lateral-left", "medial-left", "lateral-right", "medial-right"];  // a map's default
 const TRACT_VIEWS = ["subcortical", "subcortical-dorsal"];  // tracts alone: the views that show them
@@ -20,10 +20,27 @@ function el(tag, attrs = {}, ...children) {
   return node;
 }
 
-function showError(message) {
-  const box = $("error");
+// Messages in their own place: an upload's refusal beside its field (kept until that field's next upload
+// is accepted or removed), a preview's or a job's error in their panel.
+function say(id, message) {
+  const box = $(id);
   box.textContent = message || "";
   box.hidden = !message;
+}
+const showError = (message) => say("error", message);
+const showPreviewError = (message) => say("preview-error", message);
+
+// A number for people: 4 significant digits (-4.699817180633545 -> -4.7).
+function fmt(x) {
+  return typeof x === "number" && Number.isFinite(x) ? String(Number(x.toPrecision(4))) : String(x);
+}
+
+// The server's messages name CLI flags (--vmin); the page names its fields (“vmin”).
+function pageWords(text) {
+  return String(text).replace(/--([a-z][a-z-]*)/g, (flag, name) => {
+    const label = document.querySelector(`label[for="${name.replace(/-/g, "_")}"]`);
+    return label ? `“${label.textContent.trim()}”` : flag;
+  });
 }
 
 // An option error names a CLI flag (--size) or an API field (options.size, movie.hold): shown next to
@@ -171,11 +188,16 @@ function options() {
 // other in one body with their names and sizes; the server tells a map from a table by the names.
 const GRADIENT = "white,yellow,orange,red";
 
+// "x.csv was refused: ...", without the server's own "x.csv: " in front
+function refused(shown, message) {
+  const m = String(message);
+  return `${shown} was refused: ${m.startsWith(`${shown}: `) ? m.slice(shown.length + 2) : m}`;
+}
+
 async function upload(files) {
-  state.files = files;
   const names = files.map((f) => f.name);
-  state.name = names.join(" + ");
-  $("file-name").textContent = state.name;
+  const shown = names.join(" + ");
+  $("file-name").textContent = `Checking ${shown}…`;
   showError(""); fieldError("");
   const o = options();
   const q = new URLSearchParams();
@@ -189,6 +211,8 @@ async function upload(files) {
     const res = await api(`/api/uploads?${q}`, { method: "POST", body: new Blob(files.map((f) => f.blob)),
                                                  headers: { "content-type": "application/octet-stream" } });
     const j = await res.json();
+    state.files = files; state.name = shown;
+    $("file-name").textContent = shown;
     state.uploadId = j.upload_id; state.report = j.report;
     state.isMap = j.report.kind === "map";
     // a map's own default colours (viridis, RdBu_r for signed values) unless the user chose a gradient
@@ -197,13 +221,40 @@ async function upload(files) {
     setDefaultViews(state.isMap ? MAP_VIEWS : DEFAULT_VIEWS);
     showReport(j.report);
     fillRows(j.images, j.report.n_images);
+    showFieldsets();
     setReady(true);
     schedulePreview(0);
   } catch (e) {
-    state.uploadId = null;
-    $("report").textContent = "";
-    showError(e.message);
+    // the last good upload stays in use (its report, rows and preview), or the page says there is none
+    if (state.uploadId) {
+      $("file-name").textContent = `In use: ${state.name}`;
+      showError(`${refused(shown, e.message)} Still in use: ${state.name}.`);
+      showReport(state.report);
+      setReady(true);
+    } else {
+      $("file-name").textContent = "";
+      showError(refused(shown, e.message));
+      $("report").textContent = "";
+      noUpload();
+    }
   }
+}
+
+// Nothing to draw: no image, no colour bar, no command, and a caption that says so.
+function noUpload() {
+  $("preview").hidden = true; $("preview-bar").hidden = true; $("reproduce").hidden = true;
+  $("preview-status").textContent = "No table or map in use: upload one to see a preview.";
+  $("row").replaceChildren();
+  setReady(false);
+}
+
+// Only the options that apply to what was uploaded (all of them before any upload).
+function showFieldsets() {
+  const any = Boolean(state.uploadId || state.tractsId);
+  $("tract-options").hidden = any && !state.tractsId;
+  const maps = !any || state.isMap;
+  for (const n of document.querySelectorAll("[data-map-only]")) n.hidden = !maps;
+  $("map-options").querySelector("legend").textContent = maps ? "Maps and outlines" : "Outlines";
 }
 
 // the default views of a map (both hemispheres) or a table, unless the user chose others
@@ -219,17 +270,23 @@ function showReport(r) {
   box.replaceChildren();
   state.scale = r.values ? r.values.scale : null;
   showBar(state.scale);
+  showReproduce(r.reproduce);
+  if (state.summary !== r.summary) {  // the live region says one line, and only when it changes
+    state.summary = r.summary;
+    $("report-summary").textContent = `Checked: ${r.summary}`;
+  }
   box.append(el("p", { class: "ok", text: `OK: ${r.summary}` }));
   const dl = el("dl");
   const add = (k, v) => dl.append(el("dt", { text: k }), el("dd", { text: v }));
-  if (r.kind === "map") { showMapReport(r, box, dl, add); return; }
-  if (r.kind === "tracts") { showTractReport(r, box, dl, add); return; }
+  if (r.kind === "map") { showMapReport(r, box, dl, add); showScaleUsed(state.scale, r.values.range); return; }
+  if (r.kind === "tracts") { showTractReport(r, box, dl, add); showScaleUsed(state.scale, null); return; }
+  showScaleUsed(state.scale, r.values.range);
   for (const i of r.inputs) { add("format", i.format); add("shape", i.shape.description); }
   add("atlas", r.atlas.name + (r.atlas.inferred ? ` (inferred: ${r.atlas.reason})` : " (given)"));
   add("images", `${r.n_images}: ${r.images.slice(0, 6).join(", ")}${r.n_images > 6 ? ", …" : ""}`);
   add("regions", `${r.n_regions_with_value} of ${r.n_regions_in_atlas} have a value`);
-  if (r.values.range) add("values", `${r.values.range[0]} .. ${r.values.range[1]}`);
-  if (r.values.scale) add("scale", `${r.values.scale.name}: ${r.values.scale.vmin} .. ${r.values.scale.vmax}`);
+  if (r.values.range) add("values", `${fmt(r.values.range[0])} .. ${fmt(r.values.range[1])}`);
+  if (r.values.scale) add("scale", `${r.values.scale.name}: ${fmt(r.values.scale.vmin)} .. ${fmt(r.values.scale.vmax)}`);
   add("empty cells", String(r.cells.n_empty));
   box.append(dl);
   const list = (title, items) => {
@@ -245,7 +302,33 @@ function showReport(r) {
     .map((n) => `${n.name}` + (n.closest && n.closest.length ? ` (closest: ${n.closest.join(", ")})` : "")
       + (n.region_of_atlas && n.region_of_atlas.length ? ` (a region of ${n.region_of_atlas.join(", ")})` : "")));
   list("Set aside (not regions)", r.names.filter((n) => n.status === "ignored").map((n) => `${n.name}: ${n.reason}`));
-  list("Notes", [...r.values.hints, ...r.notes]);
+  list("Notes", [...r.values.hints, ...r.notes].map(pageWords));
+}
+
+// What the colours are, as drawn: the scale's name and range (an automatic one says so), the range as
+// placeholders of vmin and vmax, and values beyond it reported as saturated.
+function showScaleUsed(scale, range) {
+  const p = $("scale-used");
+  if (!scale) { p.hidden = true; return; }
+  const auto = $("use-gradient").checked && !$("gradient").value.trim();
+  let text = `Drawn: ${scale.name}, ${fmt(scale.vmin)} to ${fmt(scale.vmax)}` +
+    (scale.center !== null && scale.center !== undefined ? `, centre ${fmt(scale.center)}` : "") +
+    (auto ? " (chosen for the data; type a gradient or choose a colour map to change it)." : ".");
+  if (range && (range[0] < scale.vmin || range[1] > scale.vmax)) {
+    text += ` Values ${range[0] < scale.vmin ? `below ${fmt(scale.vmin)}` : ""}` +
+      `${range[0] < scale.vmin && range[1] > scale.vmax ? " and " : ""}` +
+      `${range[1] > scale.vmax ? `above ${fmt(scale.vmax)}` : ""} are saturated (drawn in the end colours).`;
+  }
+  p.textContent = text; p.hidden = false;
+  $("vmin").placeholder = fmt(scale.vmin); $("vmax").placeholder = fmt(scale.vmax);
+  $("gradient").placeholder = auto ? `automatic: ${scale.name}` : "";
+}
+
+// The command line and Python call that make the same images (from the server: the CLI's own options).
+function showReproduce(r) {
+  if (!r) return;
+  $("command").textContent = r.command; $("python").textContent = r.python;
+  $("reproduce").hidden = false;
 }
 
 function showMapReport(r, box, dl, add) {
@@ -253,11 +336,11 @@ function showMapReport(r, box, dl, add) {
   add("surface", Object.entries(r.surfaces).map(([h, s]) => `${h}: ${s}`).join(", "));
   add("images", `${r.n_images}: ${r.images.slice(0, 6).join(", ")}${r.n_images > 6 ? ", …" : ""}`);
   if (r.categories) add("labels", `${r.categories.length}: ${r.categories.slice(0, 8).join(", ")}…`);
-  if (r.values.range) add("values", `${r.values.range[0].toPrecision(4)} .. ${r.values.range[1].toPrecision(4)}`);
+  if (r.values.range) add("values", `${fmt(r.values.range[0])} .. ${fmt(r.values.range[1])}`);
   if (r.values.scale) {
     const t = r.values.scale.threshold;
-    add("scale", `${r.values.scale.name}: ${r.values.scale.vmin} .. ${r.values.scale.vmax}` +
-        (t ? ` (|value| < ${t} shows the underlay)` : ""));
+    add("scale", `${r.values.scale.name}: ${fmt(r.values.scale.vmin)} .. ${fmt(r.values.scale.vmax)}` +
+        (t ? ` (|value| < ${fmt(t)} shows the underlay)` : ""));
   }
   box.append(dl);
 }
@@ -267,31 +350,36 @@ function showTractReport(r, box, dl, add) {
   showBar(state.scale);
   add("bundles", r.bundles.map((b) => `${b.name} (${b.drawn} of ${b.streamlines})`).join(", "));
   if (r.values) add("values", `${r.values.file}: ${r.values.nodes ? `profiles of ${r.values.nodes} nodes` : "one value per bundle"}`);
-  if (r.scale) add("scale", `${r.scale.name}: ${r.scale.vmin} .. ${r.scale.vmax}`);
+  if (r.scale) add("scale", `${r.scale.name}: ${fmt(r.scale.vmin)} .. ${fmt(r.scale.vmax)}`);
+  if (r.subject) add("subject", `${r.subject} (of ${r.subjects.length})`);
   box.append(dl);
   if (r.notes.length) {
     box.append(el("h3", { text: "Notes" }));
     const ul = el("ul");
-    for (const t of r.notes) ul.append(el("li", { text: t }));
+    for (const t of r.notes) ul.append(el("li", { text: pageWords(t) }));
     box.append(ul);
   }
 }
 
 // -- tracts: their own upload, drawn with the table (option tracts) or alone --------------------
-async function uploadTracts(files) {
+async function uploadTracts(files, subject = null) {
   const q = new URLSearchParams();
   for (const f of files) q.append("name", f.name);
   if (files.length > 1) for (const f of files) q.append("size", String(f.size));
-  showError("");
+  if (subject) q.set("subject", subject);
+  const shown = files.map((f) => f.name).join(" + ");
+  say("tract-error", "");
   $("tract-status").textContent = "Reading the tractograms…";
   try {
     const res = await api(`/api/tracts?${q}`, { method: "POST", body: new Blob(files.map((f) => f.blob)),
                                                 headers: { "content-type": "application/octet-stream" } });
     const j = await res.json();
     const alone = !state.uploadId || state.uploadId === state.tractsId;
-    state.tractsId = j.upload_id; state.tractReport = j.report;
+    state.tractsId = j.upload_id; state.tractReport = j.report; state.tractFiles = files;
     $("tract-status").textContent = `OK: ${j.report.summary}`;
     $("tract-clear").disabled = false;
+    showSubjects(j.report);
+    showFieldsets();
     if (alone && j.report.values) {  // no table: the tracts alone, coloured by their values table
       state.uploadId = j.upload_id; state.files = null; state.isMap = false;
       if ($("gradient").value === "") $("gradient").value = GRADIENT;
@@ -304,17 +392,29 @@ async function uploadTracts(files) {
     }
     schedulePreview(0);
   } catch (e) {
-    $("tract-status").textContent = "";
-    showError(e.message);
+    say("tract-error", refused(shown, e.message));
+    $("tract-status").textContent = state.tractsId ? `Still drawn: ${state.tractReport.summary}`
+      : "No tracts are drawn.";
+    $("tract-clear").disabled = false;
   }
+}
+
+// A zip of subject folders: choose the subject (the upload is read again for it).
+function showSubjects(report) {
+  const subjects = report.subjects || [];
+  $("subject-box").hidden = subjects.length < 2;
+  $("subject").replaceChildren(...subjects.map((s) => el("option", { value: s, text: s })));
+  if (report.subject) $("subject").value = report.subject;
 }
 
 function clearTracts() {
   if (state.uploadId && state.uploadId === state.tractsId) {
     state.uploadId = null; setReady(false); $("report").textContent = "";
   }
-  state.tractsId = null; state.tractReport = null;
+  state.tractsId = null; state.tractReport = null; state.tractFiles = null;
   $("tract-status").textContent = ""; $("tract-clear").disabled = true; $("tract-files").value = "";
+  say("tract-error", ""); $("subject-box").hidden = true;
+  showFieldsets();
   schedulePreview(0);
 }
 
@@ -324,6 +424,8 @@ function fillRows(images, total) {
   images.forEach((name, i) => sel.append(el("option", { value: String(i), text: name })));
   if (total > images.length) sel.append(el("option", { disabled: true, text: `… ${total - images.length} more` }));
   sel.value = String(Math.max(0, images.length - 1));
+  state.nRows = total;
+  movieLength();
 }
 
 function setReady(on) {
@@ -361,12 +463,13 @@ async function preview() {
     img.alt = `Preview of ${$("row").selectedOptions[0]?.textContent || "row"} from ${body.view}`;
     $("preview-status").textContent =
       `${$("row").selectedOptions[0]?.textContent || ""} · ${body.view} · rendered in ${res.headers.get("x-render-ms")} ms ` +
-      `(round trip ${Math.round(performance.now() - t0)} ms)`;
-    showError(""); fieldError("");
+      `(round trip ${Math.round(performance.now() - t0)} ms)` +
+      (body.options.quality === "high" ? " · previews are drawn at default quality; jobs draw high" : "");
+    showPreviewError(""); fieldError("");
   } catch (e) {
     if (e.name === "AbortError") return;
     $("preview-status").textContent = "No preview.";
-    showError(fieldError(e.message));
+    showPreviewError(pageWords(fieldError(e.message)));
   }
 }
 
@@ -383,7 +486,7 @@ async function refreshScale(opts, signal) {
 // -- jobs -------------------------------------------------------------------------------
 async function submit(kind, format) {
   if (!state.uploadId) return;
-  showError("");
+  say("job-error", "");
   const body = { upload_id: state.uploadId, kind, options: options() };
   if (kind === "figure") {
     body.figure = { format, dpi: Number($("dpi").value), font_size: Number($("font_size").value),
@@ -393,20 +496,23 @@ async function submit(kind, format) {
     body.movie = { format, frames_per_step: Number($("frames_per_step").value), hold: Number($("hold").value),
                    easing: $("easing").value, fps: Number($("fps").value) };
   }
+  if (kind === "export") body.export = { row: Number($("row").value || 0) };
   let job;
   try {
     const res = await api("/api/jobs", { method: "POST", headers: { "content-type": "application/json" },
                                          body: JSON.stringify(body) });
     job = await res.json();
     fieldError("");
-  } catch (e) { showError(fieldError(e.message)); return; }
-  const label = kind === "images" ? "All images" : `${kind} (${format.toUpperCase()})`;
+  } catch (e) { say("job-error", pageWords(fieldError(e.message))); return; }
+  const label = kind === "images" ? "All images" : kind === "export"
+    ? `interactive 3D (HTML) of ${$("row").selectedOptions[0]?.textContent || "the row"}`
+    : `${kind} (${format.toUpperCase()})`;
   const box = el("div", { class: "job", "data-job": job.id });
   const progId = `prog-${job.id.slice(0, 8)}`;
   const status = el("p", { text: `${label}: queued` });
   const prog = el("progress", { id: progId, max: String(Math.max(1, job.total)), value: "0" });
   const cancel = el("button", { type: "button", text: "Cancel" });
-  cancel.addEventListener("click", () => api(job.url, { method: "DELETE" }).catch((e) => showError(e.message)));
+  cancel.addEventListener("click", () => api(job.url, { method: "DELETE" }).catch((e) => say("job-error", e.message)));
   box.append(el("label", { for: progId, text: label }), prog, status, cancel);
   $("jobs").prepend(box);
   for (let i = 0; i < 7200; i++) { // bounded: at most about an hour of polling
@@ -414,13 +520,37 @@ async function submit(kind, format) {
     try { job = await (await api(job.url)).json(); } catch (e) { status.textContent = e.message; return; }
     prog.value = job.progress;
     prog.max = Math.max(1, job.total);
-    const unit = job.kind === "movie" ? " frames" : job.kind === "images" ? " images" : "";
-    status.textContent = `${label}: ${job.status} (${job.progress}/${job.total}${unit})`;
+    status.textContent = `${label}: ${jobStep(job)}`;
     if (["done", "failed", "cancelled", "expired"].includes(job.status)) break;
   }
   cancel.remove();
   if (job.status !== "done") { status.textContent = `${label}: ${job.status}${job.error ? ": " + job.error : ""}`; return; }
   showResult(box, job, label);
+}
+
+// What a job is doing: images or frames drawn, then the step after them.
+function jobStep(job) {
+  const unit = job.kind === "movie" ? " frames" : " images";
+  if (job.status === "running" && job.total > 0 && job.progress >= job.total && job.kind !== "images") {
+    return job.kind === "figure" ? `composing figure (${job.total} images drawn)`
+      : `encoding movie (${job.total} frames drawn)`;
+  }
+  const counted = job.kind === "movie" || job.kind === "images" || (job.kind === "figure" && job.total > 1);
+  return `${job.status} (${job.progress}/${job.total}${counted ? unit : ""})`;
+}
+
+// A movie's length before it is made: frames as brainpainter movie plans them, and seconds.
+function movieLength() {
+  const k = state.uploadId ? state.nRows || 0 : 0;
+  const n = Number($("frames_per_step").value), hold = Number($("hold").value), fps = Number($("fps").value);
+  if (k < 2 || !(n >= 1) || !(hold >= 0) || !(fps > 0)) {
+    $("movie-length").textContent = k === 1 ? "A movie needs at least 2 rows." : "";
+    return;
+  }
+  const frames = k * (1 + hold) + (k - 1) * (n - 1);
+  $("movie-length").textContent = `A movie of these ${k} rows: ${frames} frames, ${(frames / fps).toFixed(1)} s ` +
+    `at ${fmt(fps)} frames per second` +
+    (hold ? `, holding each row ${(hold / fps).toFixed(1)} s.` : " (no hold on each row).");
 }
 
 function showResult(box, job, label) {
@@ -432,11 +562,15 @@ function showResult(box, job, label) {
       links.append(el("a", { href: `${f.url}?download=1`, download: f.name,
                              text: images ? `Download all (${f.name})` : `Download ${f.name}` }));
     }
-    if (f.name.endsWith(".png") || f.name.endsWith(".gif")) {
+    if (f.name.endsWith(".mp4")) {
+      gallery.append(el("figure", {}, el("video", { src: f.url, controls: true, preload: "metadata",
+                                                     "aria-label": f.name })));
+    } else if (f.name.endsWith(".png") || f.name.endsWith(".gif")) {
       gallery.append(el("figure", {}, el("img", { src: f.url, alt: f.name, loading: "lazy" }),
                         el("figcaption", { text: f.name })));
     }
   }
+  if (!images) gallery.classList.add("wide");  // a figure or a movie: as wide as the panel, to judge it
   box.append(links, gallery);
   box.querySelector("p").textContent = `${label}: done`;
 }
@@ -483,10 +617,23 @@ function wire() {
     if (list.length) uploadTracts(picked(list));
   });
   $("tract-clear").addEventListener("click", clearTracts);
+  $("subject").addEventListener("change", () => {
+    if (state.tractFiles) uploadTracts(state.tractFiles, $("subject").value);
+  });
+  for (const b of document.querySelectorAll("button.copy")) {
+    b.addEventListener("click", async () => {
+      const text = $(b.dataset.copy).textContent;
+      try { await navigator.clipboard.writeText(text); b.textContent = "Copied"; } catch (e) {
+        getSelection().selectAllChildren($(b.dataset.copy)); b.textContent = "Selected: press Ctrl+C";
+      }
+      setTimeout(() => { b.textContent = b.dataset.copy === "command" ? "Copy command" : "Copy Python"; }, 2000);
+    });
+  }
+  for (const id of ["frames_per_step", "hold", "fps"]) $(id).addEventListener("input", movieLength);
   $("affine-file").addEventListener("change", async () => {
     const f = $("affine-file").files[0];
     if (!f) return;
-    if (f.size > 2000) { showError(`${f.name} is ${f.size} bytes; an affine is 4 rows of 4 numbers.`); return; }
+    if (f.size > 2000) { showPreviewError(`${f.name} is ${f.size} bytes; an affine is 4 rows of 4 numbers.`); return; }
     $("tracts_affine").value = (await f.text()).trim();
     schedulePreview(0);
   });
