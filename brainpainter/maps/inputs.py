@@ -18,7 +18,7 @@ from __future__ import annotations
 import gzip
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -70,6 +70,9 @@ class VertexMaps:
     regions : dict of str to ndarray of float64, shape (k,), optional
         Values of whole regions beside the map, per image (a volume's mean in each
         subcortical structure, keyed as the atlases' regions: ``"Left-Hippocampus"``).
+    own_mesh : bool
+        The values are per vertex of the user's own surfaces (``--lh-surface``), drawn as
+        they are (:meth:`on_surface`), not on fsaverage.
     """
 
     values: dict[str, NDArray[Any]]
@@ -78,6 +81,7 @@ class VertexMaps:
     category_colors: NDArray[Any] | None = None
     source: str = ""
     regions: dict[str, NDArray[Any]] | None = None
+    own_mesh: bool = False
 
     @property
     def n_images(self) -> int:
@@ -87,6 +91,13 @@ class VertexMaps:
         """Image `image` of hemisphere `hemi` on fsaverage, float32 (163842,)."""
         row: NDArray[Any] = to_fsaverage(self.values[hemi][image], self.categories is not None)[0]
         return row
+
+    def on_surface(self, hemi: str, image: int) -> NDArray[Any]:
+        """Image `image` of `hemi` on the surface it is drawn on: the user's own as given, else fsaverage."""
+        if self.own_mesh:
+            row: NDArray[Any] = self.values[hemi][image]
+            return row
+        return self.on_fsaverage(hemi, image)
 
     def finite(self) -> NDArray[Any]:
         """Every finite value of every image and hemisphere, shape (m,) (for the colour scale)."""
@@ -112,7 +123,7 @@ class VertexMaps:
         return {"kind": "vertex map", "source": self.source, "n_images": self.n_images,
                 "images": list(self.images), "hemis": sorted(self.values),
                 "categories": None if self.categories is None else len(self.categories),
-                "regions": sorted(self.regions or {})}
+                "regions": sorted(self.regions or {}), **({"own_mesh": True} if self.own_mesh else {})}
 
 
 def pair_of(path: str | Path) -> dict[str, Path]:
@@ -167,7 +178,8 @@ def is_map_input(data: Any) -> bool:
     return hasattr(data, "data") and hasattr(data.data, "parts")  # nilearn SurfaceImage
 
 
-def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = None) -> VertexMaps:
+def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = None,
+              mesh: Mapping[str, int] | None = None) -> VertexMaps:
     """Any map input to :class:`VertexMaps` on fsaverage (the hook every command calls).
 
     Parameters
@@ -182,6 +194,10 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
     volume : path or nibabel image, optional
         An MNI152 volume (``--volume FILE``), projected by
         :func:`read_volume`.
+    mesh : mapping of {"lh", "rh"} to int, optional
+        The vertex counts of the user's own surfaces (``--lh-surface``/``--rh-surface``):
+        each hemisphere's map has exactly that many values and is drawn on that surface
+        as it is (``own_mesh``), never on fsaverage.
     """
     from brainpainter.maps import volume as volumes
 
@@ -189,6 +205,10 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
         return data  # already read (e.g. kept by the web server)
     if volume is None and data is not None and volumes.is_volume(data):
         volume, data = data, None
+    if volume is not None and mesh is not None:
+        raise BrainPainterError("a volume (--volume) is projected onto fsaverage, not onto your own "
+                                "surfaces; give per-vertex maps of those surfaces with --lh/--rh, or leave "
+                                "out --lh-surface/--rh-surface.")
     if volume is not None:
         if data is not None or lh is not None or rh is not None:
             raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "
@@ -215,8 +235,15 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
             given[hemi] = value
     if not given:
         raise BrainPainterError("no map given: give --lh FILE and/or --rh FILE (or a dict of arrays).")
-    hemis = {h: read_hemi(v, h) for h, v in given.items()}
-    return _combine(hemis, given)
+    if mesh is not None:
+        missing = sorted(set(given) - set(mesh))
+        if missing:
+            flag = f"--{missing[0]}-surface"
+            raise BrainPainterError(f"a map of {missing[0]} was given but no surface to draw it on ({flag}); "
+                                    f"give {flag} FILE, or leave out the other surface to draw on fsaverage.")
+    hemis = {h: read_hemi(v, h, None if mesh is None else mesh[h]) for h, v in given.items()}
+    maps = _combine(hemis, given)
+    return maps if mesh is None else replace(maps, own_mesh=True)
 
 
 def read_volume(img: Any, *, method: Method = "linear") -> VertexMaps:
@@ -303,20 +330,21 @@ def _stem(path: str | Path) -> str:
     return name.strip("._-") or "map"
 
 
-def read_hemi(value: Any, hemi: str) -> Hemi:
-    """One hemisphere's file or array, on fsaverage (see the module docstring)."""
+def read_hemi(value: Any, hemi: str, n: int | None = None) -> Hemi:
+    """One hemisphere's file or array (see the module docstring); `n`: its own surface's vertex count."""
     if isinstance(value, str | Path):
-        return read_file(Path(value), hemi)
+        return read_file(Path(value), hemi, n)
     arr = np.asarray(value, dtype=np.float64) if not isinstance(value, np.ndarray) else value
-    return Hemi(native(_as_rows(arr, f"the {hemi} array"), what=f"the {hemi} array"))
+    return Hemi(native(_as_rows(arr, f"the {hemi} array", n), what=f"the {hemi} array", n=n))
 
 
-def _as_rows(arr: NDArray[Any], what: str) -> NDArray[Any]:
-    """An array as (k images, n vertices): 1-D, (k, n) or (n, k) with n an fsaverage count."""
+def _as_rows(arr: NDArray[Any], what: str, n: int | None = None) -> NDArray[Any]:
+    """An array as (k images, n vertices): 1-D, (k, n) or (n, k) with n an fsaverage count (or `n`)."""
     a = np.asarray(arr)
-    if a.ndim == 2 and a.shape[0] in FAMILY and a.shape[1] not in FAMILY:
+    counts = FAMILY if n is None else {n}
+    if a.ndim == 2 and a.shape[0] in counts and a.shape[1] not in counts:
         a = a.T
-    if a.ndim == 2 and 1 in a.shape and a.size in FAMILY:
+    if a.ndim == 2 and 1 in a.shape and a.size in counts:
         a = a.reshape(1, -1)
     if a.ndim not in (1, 2) or a.size == 0:
         raise BrainPainterError(f"{what} has shape {a.shape}; a map has one value per vertex, shape (n,) "
@@ -326,8 +354,8 @@ def _as_rows(arr: NDArray[Any], what: str) -> NDArray[Any]:
     return a.astype(np.float32)
 
 
-def read_file(path: Path, hemi: str) -> Hemi:
-    """Read one hemisphere's map file (any format of :data:`SUFFIXES`)."""
+def read_file(path: Path, hemi: str, n: int | None = None) -> Hemi:
+    """Read one hemisphere's map file (any format of :data:`SUFFIXES`); `n`: its own surface's count."""
     import nibabel as nib
     from nibabel.freesurfer import read_annot, read_label, read_morph_data  # type: ignore[attr-defined]
 
@@ -338,28 +366,29 @@ def read_file(path: Path, hemi: str) -> Hemi:
     try:
         if name.endswith(".annot"):
             labels, ctab, names = read_annot(str(path))  # type: ignore[no-untyped-call]
-            return _labels(labels, [n.decode() if isinstance(n, bytes) else str(n) for n in names],
-                           ctab[:, :3] / 255.0, what)
+            return _labels(labels, [s.decode() if isinstance(s, bytes) else str(s) for s in names],
+                           ctab[:, :3] / 255.0, what, n)
         if name.endswith(".label"):
             idx = read_label(str(path))  # type: ignore[no-untyped-call]
-            n = next((c for c in sorted(FAMILY) if c > int(idx.max(initial=-1))), N_FSAVERAGE)
-            v = np.full(n, np.nan, np.float32)
+            size = n if n is not None and n > int(idx.max(initial=-1)) else next(
+                (c for c in sorted(FAMILY) if c > int(idx.max(initial=-1))), N_FSAVERAGE)
+            v = np.full(size, np.nan, np.float32)
             v[idx] = 1.0
-            return Hemi(native(v, what=what))
+            return Hemi(native(v, what=what, n=n))
         if name.endswith(".gii"):
-            return _gifti(nib.load(str(path)), what)
+            return _gifti(nib.load(str(path)), what, n)
         if name.endswith((".mgh", ".mgz", ".nii", ".nii.gz")):
             raw = path.read_bytes()  # read whole: no file left open by a lazy proxy
             raw = gzip.decompress(raw) if name.endswith((".mgz", ".gz")) else raw
             klass: Any = nib.MGHImage if name.endswith((".mgh", ".mgz")) else nib.Nifti1Image
-            frames = _surface_frames(np.asarray(klass.from_bytes(raw).dataobj), what)
-            return Hemi(native(_as_rows(frames, what), what=what))
+            frames = _surface_frames(np.asarray(klass.from_bytes(raw).dataobj), what, n)
+            return Hemi(native(_as_rows(frames, what, n), what=what, n=n))
         if name.endswith(".npy"):
-            return Hemi(native(_as_rows(np.load(path, allow_pickle=False), what), what=what))
+            return Hemi(native(_as_rows(np.load(path, allow_pickle=False), what, n), what=what, n=n))
         if name.endswith(TEXT):
             delim = "," if name.endswith(".csv") else ("\t" if name.endswith(".tsv") else None)
-            return Hemi(native(_as_rows(np.loadtxt(path, delimiter=delim, ndmin=2), what), what=what))
-        return Hemi(native(read_morph_data(str(path)), what=what))  # type: ignore[no-untyped-call]
+            return Hemi(native(_as_rows(np.loadtxt(path, delimiter=delim, ndmin=2), what, n), what=what, n=n))
+        return Hemi(native(read_morph_data(str(path)), what=what, n=n))  # type: ignore[no-untyped-call]
     except BrainPainterError:
         raise
     except Exception as exc:  # nibabel's many errors for a file that is not what its name says
@@ -368,20 +397,21 @@ def read_file(path: Path, hemi: str) -> Hemi:
             f"cannot read {what} ({hemi}): {text}. Maps are {', '.join(SUFFIXES)}.") from None
 
 
-def _surface_frames(data: NDArray[Any], what: str) -> NDArray[Any]:
+def _surface_frames(data: NDArray[Any], what: str, n: int | None = None) -> NDArray[Any]:
     """An ``.mgh``/NIfTI surface overlay as (n vertices, k frames).
 
     ``N x 1 x 1 [x k]``, or FreeSurfer's folded form for NIfTI, whose
     dimensions are limited to 32767 (fsaverage as ``27307 x 1 x 6``): the
     vertex index runs over the first three axes, first axis fastest.
     """
-    if data.ndim >= 3 and int(np.prod(data.shape[:3])) in FAMILY and 1 in data.shape[1:3]:
+    counts = FAMILY if n is None else {n}
+    if data.ndim >= 3 and int(np.prod(data.shape[:3])) in counts and 1 in data.shape[1:3]:
         return data.reshape((-1, int(np.prod(data.shape[3:], dtype=np.int64))), order="F")
     raise BrainPainterError(f"{what} has shape {data.shape}, not one value per vertex (N x 1 x 1) of an "
                             "fsaverage surface; a volume in MNI space goes to --volume.")
 
 
-def _gifti(img: Any, what: str) -> Hemi:
+def _gifti(img: Any, what: str, n: int | None = None) -> Hemi:
     arrays = [np.asarray(d.data) for d in img.darrays]
     if not arrays:
         raise BrainPainterError(f"{what} holds no data array; give a .func.gii or .shape.gii with values.")
@@ -393,15 +423,16 @@ def _gifti(img: Any, what: str) -> Hemi:
         code = np.searchsorted(keys, arrays[0])
         code[~np.isin(arrays[0], keys)] = -1
         rgb = np.nan_to_num(colors.astype(float), nan=0.5)
-        return _labels(code, [str(table[k]) for k in keys], rgb, what)
-    return Hemi(native(_as_rows(np.vstack([a.reshape(1, -1) for a in arrays]), what), what=what))
+        return _labels(code, [str(table[k]) for k in keys], rgb, what, n)
+    return Hemi(native(_as_rows(np.vstack([a.reshape(1, -1) for a in arrays]), what, n), what=what, n=n))
 
 
-def _labels(labels: NDArray[Any], names: list[str], colors: NDArray[Any], what: str) -> Hemi:
+def _labels(labels: NDArray[Any], names: list[str], colors: NDArray[Any], what: str,
+            n_vertices: int | None = None) -> Hemi:
     """A label map: indices into `names` per vertex (-1 = none); medial wall and unknown get none."""
     lab = np.asarray(labels).astype(np.int64)
     v = np.where(lab >= 0, lab, np.nan).astype(np.float32)
     for i, n in enumerate(names):
         if n.lower() in ("unknown", "medial_wall", "???", "corpuscallosum") or "medial_wall" in n.lower():
             v[lab == i] = np.nan
-    return Hemi(native(v, what=what), tuple(names), np.asarray(colors, float))
+    return Hemi(native(v, what=what, n=n_vertices), tuple(names), np.asarray(colors, float))

@@ -27,6 +27,8 @@ class MapKwargs(TypedDict, total=False):
     threshold: float | None
     outline: str | None
     outline_threshold: bool
+    lh_surface: Any
+    rh_surface: Any
 
 
 @dataclass(frozen=True)
@@ -48,6 +50,9 @@ class MapOptions:
         An atlas whose region borders are drawn over the map.
     outline_threshold : bool
         Draw the borders of the supra-threshold areas.
+    lh_surface, rh_surface : path, optional
+        The user's own surface of a hemisphere (GIfTI ``.surf.gii`` or FreeSurfer ``lh.pial``, ...):
+        the maps, of its vertex count, are drawn on it as they are (:mod:`brainpainter.atlas.surfaces`).
     """
 
     lh: Any = field(default=None, metadata={
@@ -66,6 +71,12 @@ class MapOptions:
         "help": "Draw this atlas's region borders over the map (dk, destrieux, dkt, ...)."})
     outline_threshold: bool = field(default=False, metadata={
         "help": "Draw the borders of the areas above --threshold."})
+    lh_surface: Any = field(default=None, metadata={
+        "help": "Draw the maps on this left-hemisphere surface of your own, as they are (no resampling): "
+                "GIfTI .surf.gii (HCP, fMRIPrep) or FreeSurfer lh.pial, lh.inflated, ...; the maps have "
+                "its vertex count. See docs/maps.md."})
+    rh_surface: Any = field(default=None, metadata={"help": "Right-hemisphere surface of your own (as "
+                                                            "--lh-surface)."})
 
     def __post_init__(self) -> None:
         if self.underlay not in UNDERLAYS:
@@ -76,6 +87,15 @@ class MapOptions:
         if self.volume is not None and (self.lh is not None or self.rh is not None):
             raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "
                                     "volume is projected onto both hemispheres.")
+        if self.surfaces and self.outline is not None:
+            raise BrainPainterError(f"--outline {self.outline} draws an atlas's borders on fsaverage; your "
+                                    "own surfaces (--lh-surface/--rh-surface) have no atlas labels: leave "
+                                    "out --outline, or the surfaces.")
+
+    @property
+    def surfaces(self) -> dict[str, Any]:
+        """The user's own surfaces given, ``{"lh": path, "rh": path}`` (either, both or none)."""
+        return {hemi: s for hemi, s in (("lh", self.lh_surface), ("rh", self.rh_surface)) if s is not None}
 
     @property
     def given(self) -> bool:

@@ -54,15 +54,23 @@ def surface_of(n: int, what: str = "map") -> str:
         "FreeSurfer's mri_surf2surf (--trgsubject fsaverage).")
 
 
-def native(values: NDArray[Any], what: str = "map") -> NDArray[Any]:
+def native(values: NDArray[Any], what: str = "map", n: int | None = None) -> NDArray[Any]:
     """`values` as float32 (k images, n vertices), `n` checked to be a count of :data:`FAMILY`.
 
     Maps are kept at their own resolution (a series of fsaverage5 images stays
-    small) and brought to fsaverage one image at a time, when drawn.
+    small) and brought to fsaverage one image at a time, when drawn. Given `n`
+    (the vertices of the user's own surface, ``--lh-surface``), the map must
+    have exactly that many values instead.
     """
     v = np.asarray(values, dtype=np.float32)
     v = v[None] if v.ndim == 1 else v
-    surface_of(v.shape[1], what)
+    if n is None:
+        surface_of(v.shape[1], what)
+    elif v.shape[1] != n:
+        raise BrainPainterError(
+            f"{what} has {v.shape[1]} values per hemisphere, but the surface it is drawn on has {n} "
+            "vertices; give the map made on that surface (the same subject and mesh), or leave out "
+            "--lh-surface/--rh-surface to draw fsaverage data on fsaverage.")
     return v
 
 
@@ -113,7 +121,8 @@ def map_mesh(template: Any, labels: str, hemi: str) -> Any:
     """The template's cortex mesh that maps are drawn on: one vertex per fsaverage vertex it keeps.
 
     The stored (not region-split) mesh of label set `labels` (or of the mesh
-    an overlay label set labels); its ``source_vertex`` indexes fsaverage.
+    an overlay label set labels); its ``source_vertex`` indexes fsaverage (or, for a
+    template of the user's own surfaces, ``own_vertices`` in its manifest, that surface).
 
     Returns
     -------
@@ -129,6 +138,8 @@ def map_mesh(template: Any, labels: str, hemi: str) -> Any:
         return template.cortex(labels, hemi)  # no cortex: an empty mesh
     mesh = template.base_cortex(entry.get("base", labels), hemi)
     sv = np.asarray(mesh.source_vertex)
+    if template.manifest.get("own_vertices"):  # the user's own surface: maps of its own vertices
+        return mesh
     if len(sv) and (sv.min() < 0 or sv.max() >= N_FSAVERAGE):
         raise BrainPainterError(
             f"template {template.name!r} is not made from fsaverage, so per-vertex maps cannot be drawn on "

@@ -9,7 +9,7 @@ So ``render``, ``--jobs`` and Dask paint maps exactly as they paint tables.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.template import Template, load_template
+from brainpainter.errors import BrainPainterError
 from brainpainter.maps.inputs import VertexMaps, read_maps
 from brainpainter.maps.layers import map_scale, vertex_colors
 from brainpainter.maps.outlines import mesh_edges
@@ -26,6 +27,7 @@ from brainpainter.rendering.options import Options
 from brainpainter.rendering.painter import Painter, region_colors
 from brainpainter.rendering.parallel import Item
 from brainpainter.rendering.settings import outlined
+from brainpainter.rendering.sulc import convexity
 from brainpainter.rendering.views import View, parse_views
 
 #: Default views of a map run: both hemispheres, outside and inside.
@@ -68,6 +70,7 @@ class MapRun:
     options: Options
     source_vertex: dict[str, NDArray[Any]]
     cluster_edges: dict[str, NDArray[Any]] | None = None
+    mesh_masks: dict[str, dict[str, NDArray[Any]]] | None = None
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
     @property
@@ -89,7 +92,7 @@ class MapRun:
             self._cache.clear()  # one image at a time: the views of a row share it
             m = self.options.maps
             cortex = vertex_colors(self.maps, image, self.source_vertex, self.scale, m.underlay, m.threshold,
-                                   cluster_edges=self.cluster_edges)
+                                   cluster_edges=self.cluster_edges, mesh_masks=self.mesh_masks)
             # a volume's subcortical means: below --threshold a structure shows no value, as the cortex does
             means = {k: v for k, v in self.maps.region_values(image).items()
                      if m.threshold is None or abs(v) >= m.threshold}
@@ -109,22 +112,64 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     """Read the maps and check the options of a map run (as ``prepare_run`` does for a table)."""
     from brainpainter.atlas.registry import get_atlas
 
-    maps = read_maps(data, options.maps.lh, options.maps.rh, options.maps.volume)
     outline = options.maps.outline
     # --outline ATLAS: the map is drawn on that atlas's mesh, whose vertices carry its labels
     atlas_obj = get_atlas(outline) if outline is not None else atlas if atlas is not None else get_atlas("dk")
-    views = options.scene.views
-    if views is None:  # not given: both hemispheres; a volume also colours the subcortical structures
-        views = MAP_VIEWS + (",subcortical" if maps.regions else "")
-    view_list = parse_views(views if isinstance(views, str) else list(views))
+    surfaces = options.maps.surfaces
+    if surfaces:  # the user's own surfaces: the run's template, maps of their vertex counts drawn as they are
+        options = _on_own_surfaces(options, surfaces, atlas_obj.template_labels)
     template = options.scene.template
     tpl = template if isinstance(template, Template) else load_template(template)
     labels = atlas_obj.template_labels if atlas_obj.template_labels in tpl.label_sets else "dk"
     meshes = {hemi: map_mesh(tpl, labels, hemi) for hemi in ("lh", "rh")}
+    maps = read_maps(data, options.maps.lh, options.maps.rh, options.maps.volume,
+                     mesh={hemi: len(meshes[hemi].source_vertex) for hemi in surfaces} if surfaces else None)
+    views = options.scene.views
+    if views is None:  # not given: both hemispheres; a volume also colours the subcortical structures
+        views = MAP_VIEWS + (",subcortical" if maps.regions else "")
+        if len(surfaces) == 1:  # one surface of your own: the views of its hemisphere
+            side = "left" if "lh" in surfaces else "right"
+            views = f"lateral-{side},medial-{side}"
+    view_list = parse_views(views if isinstance(views, str) else list(views))
     source_vertex = {hemi: np.asarray(m.source_vertex) for hemi, m in meshes.items()}
     edges = ({hemi: mesh_edges(m.faces) for hemi, m in meshes.items()} if options.maps.outline_threshold
              else None)
+    masks = {hemi: surface_masks(tpl, labels, meshes[hemi]) for hemi in surfaces} if surfaces else None
     scale = map_scale(options.scale, maps, options.maps.threshold)
     return MapRun(MapTable(maps, atlas_obj), scale, view_list, outlined(options.settings, outline),
-                  options, source_vertex, edges)
+                  options, source_vertex, edges, masks)
+
+
+def _on_own_surfaces(options: Options, surfaces: dict[str, Any], labels: str) -> Options:
+    """`options` drawing on the template of the user's surfaces (:mod:`brainpainter.atlas.surfaces`)."""
+    from brainpainter.atlas.surfaces import surface_template
+
+    if options.scene.surface != "pial":
+        raise BrainPainterError(
+            f"--surface {options.scene.surface} picks one of the template's surfaces; with --lh-surface/"
+            "--rh-surface your own surface file is drawn: give the inflated one there (lh.inflated, "
+            "*.inflated.surf.gii) and leave out --surface.")
+    if options.scene.tracts:
+        raise BrainPainterError("--tracts are placed on the fsaverage template, not on your own surfaces "
+                                "(--lh-surface/--rh-surface); leave out one or the other.")
+    folder = surface_template(surfaces, labels)
+    return replace(options, scene=replace(options.scene, template=str(folder)))
+
+
+def surface_masks(template: Template, labels: str, mesh: Any) -> dict[str, NDArray[Any]]:
+    """The ``cortex``, ``sulc`` and ``curv`` masks of a surface template's mesh, bool (n_vertices,).
+
+    From the ``cortex``, ``sulc`` and ``curv`` arrays found beside the surface
+    (:mod:`brainpainter.atlas.surfaces`); without them every vertex is cortex and
+    the deeper half of the surface by :func:`~brainpainter.rendering.sulc.convexity` is a sulcus.
+    """
+    z = template._npz(template.manifest["labels"][labels]["cortex"][mesh.hemi]["file"])
+    n = len(mesh.source_vertex)
+    if "sulc" in z:
+        deep = np.asarray(z["sulc"]) > 0
+    else:
+        depth = convexity(mesh.vertices["pial"], mesh.faces)
+        deep = depth > np.median(depth)
+    return {"cortex": np.asarray(z["cortex"], bool) if "cortex" in z else np.ones(n, bool), "sulc": deep,
+            "curv": np.asarray(z["curv"]) > 0 if "curv" in z else deep}
 

@@ -180,6 +180,10 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
         from brainpainter.rendering.maprun import prepare_map_run
 
         return prepare_map_run(data, atlas_obj, options)  # type: ignore[return-value]
+    if options.maps.surfaces:
+        raise BrainPainterError("--lh-surface/--rh-surface draw per-vertex maps (--lh/--rh) on your own "
+                                "surfaces; a region table is drawn on the template's regions: leave the "
+                                "surfaces out, or give maps.")
     views = options.scene.views
     if views is None and atlas_obj is not None and not atlas_obj.cortical():
         views = VOLUME_VIEWS  # a volumetric atlas alone: its structures, not a grey cortex
@@ -295,7 +299,7 @@ def render(data: Any = None, atlas: Atlas | str | None = None, *, out: str | Pat
         raise BrainPainterError(
             f"the table was read with atlas {run.table.atlas.name!r} but the painter draws "
             f"{painter.atlas.name!r}; give atlas= the painter's atlas, or make a Painter for this one.")  # type: ignore[union-attr]
-    runner = make_runner(painter, checked.scene.template, checked.runner,
+    runner = make_runner(painter, run.options.scene.template, checked.runner,
                          n_items=len(chosen) * len(run.views))
     # The renderer (or every worker's) starts before any output exists: one that cannot start leaves none.
     runner.start()

@@ -1,0 +1,256 @@
+"""The user's own surfaces (``--lh-surface``/``--rh-surface``) as a template: maps drawn on them as they are.
+
+A surface file, GIfTI (``.surf.gii``, also gzipped) or FreeSurfer geometry
+(``lh.pial``, ``lh.inflated``, ...), read with nibabel, becomes the cortex of
+a template (:mod:`brainpainter.atlas.template`) whose ``source_vertex`` is
+the surface's own vertex index: a map with one value per vertex of that
+surface is drawn on it with no resampling, through the same scene parts as
+fsaverage's. Beside the surface, when present and of the same vertex count:
+
+* ``sulc``: FreeSurfer's ``lh.sulc`` in the same folder or in ``../surf/``,
+  or the surface's name with its surface word replaced by ``sulc``
+  (``100307.L.midthickness.32k_fs_LR.surf.gii`` ->
+  ``100307.L.sulc.32k_fs_LR.shape.gii``; fMRIPrep's ``..._hemi-L_sulc.shape.gii``);
+  the underlay greys and the shading;
+* ``curv``: FreeSurfer's ``lh.curv`` (the ``curv`` underlay);
+* the cortex: FreeSurfer's ``../label/lh.cortex.label``, or HCP's
+  ``atlasroi`` (``100307.L.atlasroi.32k_fs_LR.shape.gii``); the medial
+  wall outside it shows the underlay, not the map.
+
+Hemispheres whose x ranges overlap (inflated surfaces, each centred at 0) are
+moved apart, 10 mm between them. The template is written once per content
+into the user's cache folder (``platformdirs``), so workers load it by path.
+"""
+
+from __future__ import annotations
+
+import gzip
+import hashlib
+import json
+import os
+import re
+import shutil
+import tempfile
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from brainpainter.atlas.template import FORMAT, FORMAT_VERSION, HEMIS
+from brainpainter.atlas.writer import save_npz
+from brainpainter.errors import BrainPainterError
+
+#: The one region of a surface template's label set: the whole surface.
+SURFACE_REGION = "surface"
+#: Space between the hemispheres when overlapping ones are moved apart, mm.
+GAP_MM = 10.0
+#: Hemispheres are moved apart when their x ranges overlap by more than this fraction of the narrower one.
+OVERLAP = 0.25
+#: The surface word of a file name, replaced to find the files beside it (longest first).
+_SURFACE_WORD = re.compile(r"very_inflated|veryinflated|midthickness|inflated|smoothwm|pial|white|orig")
+_FREESURFER = re.compile(r"^([lr]h)\.")
+#: Bump when what a surface template holds changes (its cache key).
+_VERSION = 1
+
+
+def read_surface(path: str | Path) -> tuple[NDArray[np.float32], NDArray[np.int32]]:
+    """Vertices and triangles of one surface file: GIfTI (``.gii``, ``.gii.gz``) or FreeSurfer geometry.
+
+    GIfTI files are read from their bytes (an ``ExternalFileBinary`` array,
+    which points to another file, is refused by nibabel).
+
+    Returns
+    -------
+    vertices : ndarray of float32, shape (n_vertices, 3)
+    faces : ndarray of int32, shape (n_faces, 3)
+
+    Raises
+    ------
+    BrainPainterError
+        A missing or unreadable file, or one that is no valid triangle mesh.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise BrainPainterError(f"surface file {str(p)!r} does not exist; give a GIfTI .surf.gii or a "
+                                "FreeSurfer surface (lh.pial, lh.inflated, ...).")
+    try:
+        if _is_gifti(p):
+            img = _gifti(p)
+            pts = img.agg_data("NIFTI_INTENT_POINTSET")
+            tri = img.agg_data("NIFTI_INTENT_TRIANGLE")
+            if not isinstance(pts, np.ndarray) or not isinstance(tri, np.ndarray):
+                raise ValueError("it holds no point set and triangle array (a .func.gii or .shape.gii is "
+                                 "a map: give it with --lh/--rh)")
+            v, f = pts, tri
+        else:
+            from nibabel.freesurfer import read_geometry  # type: ignore[attr-defined]
+
+            v, f = read_geometry(str(p))[:2]  # type: ignore[no-untyped-call]
+    except Exception as exc:  # nibabel's many errors for a file that is not what its name says
+        text = " ".join(str(exc).split())[:160] or type(exc).__name__
+        raise BrainPainterError(f"cannot read surface file {p.name!r}: {text}. Surfaces are GIfTI "
+                                "(.surf.gii, .gii.gz) or FreeSurfer geometry (lh.pial, ...).") from None
+    v, f = np.asarray(v), np.asarray(f)
+    if v.ndim != 2 or v.shape[1] != 3 or f.ndim != 2 or f.shape[1] != 3 or not len(f) or len(v) < 3:
+        raise BrainPainterError(f"surface file {p.name!r} has vertices of shape {v.shape} and faces of shape "
+                                f"{f.shape}; a surface has (n, 3) vertices and (m, 3) triangles.")
+    if not np.isfinite(v).all() or f.min() < 0 or f.max() >= len(v):
+        raise BrainPainterError(f"surface file {p.name!r} has non-finite coordinates or faces that name "
+                                f"vertices it lacks (0 to {len(v) - 1}); give an intact surface file.")
+    return v.astype(np.float32), f.astype(np.int32)
+
+
+def _is_gifti(path: Path) -> bool:
+    return path.name.lower().endswith((".gii", ".gii.gz"))
+
+
+def _gifti(path: Path) -> Any:
+    """A GIfTI image read from the file's bytes (gunzipped for ``.gz``)."""
+    import nibabel as nib
+
+    raw = path.read_bytes()
+    if path.name.lower().endswith(".gz"):
+        raw = gzip.decompress(raw)
+    return nib.GiftiImage.from_bytes(raw)
+
+
+def _read_values(path: Path) -> NDArray[Any]:
+    """One value per vertex from a FreeSurfer morphometry file or a GIfTI's first data array, shape (n,)."""
+    if _is_gifti(path):
+        return np.asarray(_gifti(path).darrays[0].data).ravel()
+    from nibabel.freesurfer import read_morph_data  # type: ignore[attr-defined]
+
+    return np.asarray(read_morph_data(str(path))).ravel()  # type: ignore[no-untyped-call]
+
+
+def beside(path: str | Path, hemi: str, what: str) -> list[Path]:
+    """Where a `what` file (``sulc``, ``curv``, ``cortex``) of surface `path` may lie, first found wins.
+
+    FreeSurfer names (``lh.pial``): ``lh.{what}`` in the same folder, then in
+    ``../surf/`` (``cortex``: ``../label/lh.cortex.label``); other names: the
+    surface word replaced by `what` (``cortex``: by ``atlasroi``), and
+    ``.surf.gii`` by ``.shape.gii``.
+    """
+    p = Path(path)
+    if _FREESURFER.match(p.name):
+        if what == "cortex":
+            return [p.parent.parent / "label" / f"{hemi}.cortex.label", p.parent / f"{hemi}.cortex.label"]
+        return [p.parent / f"{hemi}.{what}", p.parent.parent / "surf" / f"{hemi}.{what}"]
+    if not _SURFACE_WORD.search(p.name):
+        return []
+    name = _SURFACE_WORD.sub("atlasroi" if what == "cortex" else what, p.name, count=1)
+    return [p.with_name(name.replace(".surf.gii", ".shape.gii")), p.with_name(name)]
+
+
+def _extras(path: Path, hemi: str, n: int) -> dict[str, NDArray[Any]]:
+    """The ``sulc``, ``curv`` and ``cortex`` arrays found beside the surface that fit its `n` vertices."""
+    out: dict[str, NDArray[Any]] = {}
+    for what in ("sulc", "curv", "cortex"):
+        for file in beside(path, hemi, what):
+            if not file.is_file() or file == path:
+                continue
+            try:
+                if file.name.endswith(".label"):
+                    from nibabel.freesurfer import read_label  # type: ignore[attr-defined]
+
+                    idx = np.asarray(read_label(str(file)), np.int64)  # type: ignore[no-untyped-call]
+                    if len(idx) and (idx.min() < 0 or idx.max() >= n):
+                        continue
+                    values = np.zeros(n, np.float32)
+                    values[idx] = 1.0
+                else:
+                    values = _read_values(file)
+            except Exception:  # an unreadable neighbour is no neighbour: the next one is tried
+                continue
+            if len(values) == n and np.isfinite(values).all():
+                out[what] = (values > 0).astype(np.uint8) if what == "cortex" else values.astype(np.float32)
+                break
+    return out
+
+
+def _apart(vertices: dict[str, NDArray[Any]]) -> dict[str, NDArray[Any]]:
+    """The hemispheres moved apart along x when they overlap (inflated ones), else as they are."""
+    if set(vertices) != set(HEMIS):
+        return vertices
+    lh, rh = vertices["lh"], vertices["rh"]
+    overlap = float(lh[:, 0].max() - rh[:, 0].min())
+    narrower = min(float(np.ptp(lh[:, 0])), float(np.ptp(rh[:, 0])))
+    if overlap <= OVERLAP * narrower:
+        return vertices
+    return {"lh": lh - np.array([GAP_MM / 2 + lh[:, 0].max(), 0, 0], np.float32),
+            "rh": rh + np.array([GAP_MM / 2 - rh[:, 0].min(), 0, 0], np.float32)}
+
+
+def cache_root() -> Path:
+    """The folder of surface templates (in the user's cache folder)."""
+    import platformdirs
+
+    return Path(platformdirs.user_cache_dir("brainpainter", appauthor=False)) / "surfaces"
+
+
+def surface_template(surfaces: Mapping[str, str | Path], labels: str, root: Path | None = None) -> Path:
+    """The template folder of the user's surfaces, written once per content.
+
+    Parameters
+    ----------
+    surfaces : mapping of {"lh", "rh"} to path
+        One surface file per hemisphere drawn (one or both).
+    labels : str
+        The name of the template's one label set (the run's atlas's ``template_labels``); its one
+        region, :data:`SURFACE_REGION`, is the whole surface.
+    root : Path, optional
+        Where templates are kept (default :func:`cache_root`).
+
+    Returns
+    -------
+    Path
+        A folder :func:`brainpainter.atlas.template.load_template` reads: per hemisphere
+        ``cortex-{hemi}.npz`` with ``faces``, ``face_label`` (zeros), ``pial`` (the surface),
+        ``source_vertex`` (0..n-1), and ``sulc``, ``curv``, ``cortex`` where found (:func:`beside`).
+    """
+    given = {hemi: Path(surfaces[hemi]) for hemi in HEMIS if surfaces.get(hemi) is not None}
+    if not given:
+        raise BrainPainterError("no surface given: give --lh-surface FILE and/or --rh-surface FILE.")
+    meshes = {hemi: read_surface(p) for hemi, p in given.items()}
+    extras = {hemi: _extras(p, hemi, len(meshes[hemi][0])) for hemi, p in given.items()}
+    placed = _apart({hemi: m[0] for hemi, m in meshes.items()})
+    digest = hashlib.sha256(json.dumps([_VERSION, labels]).encode())
+    for hemi in given:
+        for array in (placed[hemi], meshes[hemi][1], *extras[hemi].values()):
+            digest.update(np.ascontiguousarray(array).tobytes())
+        digest.update(json.dumps(sorted(extras[hemi])).encode())
+    folder = (root or cache_root()) / digest.hexdigest()[:24]
+    if (folder / "manifest.json").is_file():
+        return folder
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=".stage-", dir=folder.parent))
+    try:
+        cortex: dict[str, Any] = {}
+        for hemi, (_, faces) in meshes.items():
+            v = placed[hemi]
+            save_npz(stage / f"cortex-{hemi}.npz", {
+                "faces": faces, "face_label": np.zeros(len(faces), np.int16), "pial": v,
+                "source_vertex": np.arange(len(v), dtype=np.int32), **extras[hemi]})
+            cortex[hemi] = {"file": f"cortex-{hemi}.npz", "names": [SURFACE_REGION], "n_vertices": len(v),
+                            "n_faces": len(faces), "found": sorted(extras[hemi])}
+        points = np.concatenate(list(placed.values()))
+        manifest = {
+            "format": FORMAT, "format_version": FORMAT_VERSION, "name": f"surfaces-{folder.name[:8]}",
+            "source": {"builder": "brainpainter.atlas.surfaces",
+                       **{hemi: str(p.absolute()) for hemi, p in given.items()}},
+            "space": "the surfaces' own coordinates (millimetres, x right, y anterior, z superior)",
+            "own_vertices": True, "surfaces": ["pial"],
+            "labels": {labels: {"source": "the user's surfaces", "cortex": cortex}}, "glass": {},
+            "bounds": {"pial": [points.min(axis=0).tolist(), points.max(axis=0).tolist()]},
+        }
+        (stage / "manifest.json").write_text(json.dumps(manifest, indent=1) + "\n", encoding="utf-8")
+        try:
+            os.rename(stage, folder)
+        except OSError:  # another process wrote the same template first: use it
+            if not (folder / "manifest.json").is_file():
+                raise
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+    return folder
