@@ -166,6 +166,20 @@ def test_counts_that_differ_and_other_refusals_are_one_line(tmp_path):
         prepare_run({"Left-insula": [1.0]}, lh_surface=str(pial))
 
 
+def test_export_of_a_map_on_an_own_surface(tmp_path):
+    """GLB and HTML: the surface's own mesh in the map's colours (a brain without subcortical structures)."""
+    import trimesh
+
+    pial = _subject(tmp_path / "subj")
+    v, _ = _icosphere(-40.0)
+    path = brainpainter.export({"lh": v[:, 1]}, tmp_path / "m.glb", lh_surface=str(pial))
+    cortex = trimesh.load(path).geometry["Left-cortex"]
+    assert cortex.visual.kind == "vertex" and len(cortex.vertices) == len(v)
+    assert len(np.unique(cortex.visual.vertex_colors[:, :3], axis=0)) > 10  # a map, not one colour
+    html = brainpainter.export({"lh": v[:, 1]}, tmp_path / "m.html", lh_surface=str(pial)).read_text()
+    assert "vertexColors: m.vertexColors" in html
+
+
 def test_read_maps_of_own_counts(tmp_path):
     """A map of any vertex count reads when a surface of that count is given (else it is refused)."""
     n = 1234

@@ -124,6 +124,8 @@ def region_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
         if wall:
             out.append(RegionMesh(f"{HEMI_PREFIX[hemi]}medial-wall", hemi,
                                   *_submesh(verts, normals, np.concatenate(wall)), scene.medial_wall_color))
+    if not template.manifest.get("subcortical"):  # a brain of surfaces only (the user's own surfaces)
+        return out
     sub = template.subcortical()
     normals = vertex_normals(sub.vertices, sub.faces)
     for i, key in enumerate(sub.label_names):
@@ -402,7 +404,7 @@ EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cm
                   "nan_color", "missing_color", "background", "image_column", "value", "region_column",
                   "strict", "tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_values",
                   "tract_value", "tract_radius", "lh", "rh", "volume", "underlay", "threshold", "outline",
-                  "outline_threshold")
+                  "outline_threshold", "lh_surface", "rh_surface")
 
 
 def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
@@ -488,8 +490,9 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
         from brainpainter.media.drawn import swatches_needed
         from brainpainter.rendering.views import parse_views
 
-        nan, missing = swatches_needed(table, [i], parse_views("lateral-left,medial-right,subcortical"),
-                                       scene.geometry)
+        # the whole brain's swatches (a map's own views: its surfaces may be of one hemisphere)
+        views = run.views if isinstance(run, MapRun) else parse_views("lateral-left,medial-right,subcortical")
+        nan, missing = swatches_needed(table, [i], views, scene.geometry)
         bar = colorbar_image(run.scale, (420, 64 if label else 48), background=run.settings.background,
                              label=label, nan=nan, missing=missing, fontsize=9.0)
         payload = html_page(glb, title=title or table.images[i], meshes=meshes,
