@@ -192,6 +192,23 @@ def test_read_maps_of_own_counts(tmp_path):
 
 
 @pytest.mark.integration
+def test_hcp_32k_map_on_the_fslr_sphere_with_its_atlasroi():
+    """A 32,492-vertex fsLR map on HCP's 32k sphere as it is; HCP's atlasroi beside it is the cortex."""
+    fslr = SHARED / "fslr"
+    if not (fslr / "L.sphere.32k_fs_LR.surf.gii").is_file():
+        pytest.skip("shared fsLR data not found")
+    area = fslr / "resample_fsaverage" / "fs_LR.L.midthickness_va_avg.32k_fs_LR.shape.gii"
+    run = prepare_run(None, lh=str(area), lh_surface=str(fslr / "L.sphere.32k_fs_LR.surf.gii"))
+    roi = np.asarray(nib.load(fslr / "L.atlasroi.32k_fs_LR.shape.gii").darrays[0].data) > 0
+    assert len(roi) == 32492 and run.mesh_masks is not None
+    np.testing.assert_array_equal(run.mesh_masks["lh"]["cortex"], roi)
+    rgb = run.colors(0).vertices["lh"]
+    values = np.asarray(nib.load(area).darrays[0].data, float)
+    np.testing.assert_allclose(rgb[roi], run.scale(values[roi])[:, :3], atol=1e-6)
+    assert (np.ptp(rgb[~roi], axis=1) < 1e-6).all()  # the medial wall: the grey underlay
+
+
+@pytest.mark.integration
 def test_cli_count_mismatch_exits_2_without_output(tmp_path):
     pial = _subject(tmp_path / "subj")
     n = len(_icosphere()[0])

@@ -49,7 +49,8 @@ GAP_MM = 10.0
 #: Hemispheres are moved apart when their x ranges overlap by more than this fraction of the narrower one.
 OVERLAP = 0.25
 #: The surface word of a file name, replaced to find the files beside it (longest first).
-_SURFACE_WORD = re.compile(r"very_inflated|veryinflated|midthickness|inflated|smoothwm|pial|white|orig")
+_SURFACE_WORD = re.compile(r"very_inflated|veryinflated|midthickness|inflated|smoothwm|pial|white|orig|"
+                           r"sphere")
 _FREESURFER = re.compile(r"^([lr]h)\.")
 #: Bump when what a surface template holds changes (its cache key).
 _VERSION = 1
