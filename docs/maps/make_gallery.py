@@ -56,6 +56,24 @@ def main() -> None:
     one[int(np.argmin(xyz[:, 0]))] = 1.0
     save(brainpainter.render({"lh": one}, views="lateral-left", surface="inflated", threshold=0.05,
                              cmap="autumn", vmin=0, vmax=1, **SIZE), "single_vertex")
+    own_surfaces()
+
+
+def own_surfaces() -> None:
+    """6. maps on the user's own surfaces (--lh-surface/--rh-surface), drawn as they are."""
+    import gzip
+    import tempfile
+
+    nilearn = Path(nib.__file__).parents[1] / "nilearn" / "datasets" / "data" / "fsaverage5"
+    with tempfile.TemporaryDirectory() as tmp:  # nilearn's maps are gzipped GIfTI: the map readers take .gii
+        thick = Path(tmp) / "thick_left.gii"
+        thick.write_bytes(gzip.decompress((nilearn / "thick_left.gii.gz").read_bytes()))
+        save(brainpainter.render(None, lh=thick, lh_surface=nilearn / "pial_left.gii.gz",
+                                 views="lateral-left,medial-left", **SIZE), "own_surface_pial")
+    surf = FS / "fsaverage5" / "surf"  # a FreeSurfer subject's folder: lh.sulc beside, label/lh.cortex.label
+    save(brainpainter.render(None, lh=surf / "lh.curv", rh=surf / "rh.curv", lh_surface=surf / "lh.inflated",
+                             rh_surface=surf / "rh.inflated", views="dorsal,medial-left", **SIZE),
+         "own_surface_inflated")
 
 
 if __name__ == "__main__":
