@@ -164,6 +164,12 @@ def test_counts_that_differ_and_other_refusals_are_one_line(tmp_path):
         prepare_run({"lh": np.zeros(len(v))}, lh_surface=str(pial), outline="dk")
     with pytest.raises(BrainPainterError, match="a region table is drawn"):
         prepare_run({"Left-insula": [1.0]}, lh_surface=str(pial))
+    from brainpainter.rendering.painter import Painter
+    from brainpainter.testing import stand_in
+
+    with stand_in() as renderer, Painter(renderer=renderer, coloring="vertices") as painter:
+        with pytest.raises(BrainPainterError, match="the painter draws template 'fsaverage'"):
+            brainpainter.render({"lh": np.zeros(len(v))}, lh_surface=str(pial), painter=painter)
 
 
 def test_export_of_a_map_on_an_own_surface(tmp_path):
