@@ -32,6 +32,7 @@ import re
 import shutil
 import tempfile
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -91,6 +92,10 @@ def read_surface(path: str | Path) -> tuple[NDArray[np.float32], NDArray[np.int3
             v, f = read_geometry(str(p))[:2]  # type: ignore[no-untyped-call]
     except Exception as exc:  # nibabel's many errors for a file that is not what its name says
         text = " ".join(str(exc).split())[:160] or type(exc).__name__
+        if "ExternalFileBinary" in text:
+            raise BrainPainterError(
+                f"surface file {p.name!r} keeps its data in another file (ExternalFileBinary), which is not "
+                "opened; save it as one file (wb_command -gifti-convert BASE64_BINARY IN OUT).") from None
         raise BrainPainterError(f"cannot read surface file {p.name!r}: {text}. Surfaces are GIfTI "
                                 "(.surf.gii, .gii.gz) or FreeSurfer geometry (lh.pial, ...).") from None
     v, f = np.asarray(v), np.asarray(f)
@@ -191,13 +196,49 @@ def cache_root() -> Path:
     return Path(platformdirs.user_cache_dir("brainpainter", appauthor=False)) / "surfaces"
 
 
-def surface_template(surfaces: Mapping[str, str | Path], labels: str, root: Path | None = None) -> Path:
+@dataclass(frozen=True)
+class Surface:
+    """One hemisphere's surface as read, with what was found beside it.
+
+    Attributes
+    ----------
+    path : Path
+    vertices : ndarray of float32, shape (n_vertices, 3)
+    faces : ndarray of int32, shape (n_faces, 3)
+    extras : dict of str to ndarray, shape (n_vertices,)
+        ``sulc``, ``curv`` (float32) and ``cortex`` (uint8, 1 = cortex) where found (:func:`beside`).
+    """
+
+    path: Path
+    vertices: NDArray[np.float32]
+    faces: NDArray[np.int32]
+    extras: dict[str, NDArray[Any]]
+
+    @property
+    def n_vertices(self) -> int:
+        return len(self.vertices)
+
+
+def read_surfaces(surfaces: Mapping[str, str | Path | None]) -> dict[str, Surface]:
+    """The surfaces given (``{"lh": path, "rh": path}``, one or both), read and checked; nothing written."""
+    given = {hemi: Path(surfaces[hemi]) for hemi in HEMIS if surfaces.get(hemi) is not None}  # type: ignore[arg-type]
+    if not given:
+        raise BrainPainterError("no surface given: give --lh-surface FILE and/or --rh-surface FILE.")
+    out = {}
+    for hemi, path in given.items():
+        v, f = read_surface(path)
+        out[hemi] = Surface(path, v, f, _extras(path, hemi, len(v)))
+    return out
+
+
+def surface_template(surfaces: Mapping[str, Surface | str | Path], labels: str,
+                     root: Path | None = None) -> Path:
     """The template folder of the user's surfaces, written once per content.
 
     Parameters
     ----------
-    surfaces : mapping of {"lh", "rh"} to path
-        One surface file per hemisphere drawn (one or both).
+    surfaces : mapping of {"lh", "rh"} to Surface or path
+        One surface per hemisphere drawn (one or both), read (:func:`read_surfaces`) or a file.
     labels : str
         The name of the template's one label set (the run's atlas's ``template_labels``); its one
         region, :data:`SURFACE_REGION`, is the whole surface.
@@ -211,17 +252,15 @@ def surface_template(surfaces: Mapping[str, str | Path], labels: str, root: Path
         ``cortex-{hemi}.npz`` with ``faces``, ``face_label`` (zeros), ``pial`` (the surface),
         ``source_vertex`` (0..n-1), and ``sulc``, ``curv``, ``cortex`` where found (:func:`beside`).
     """
-    given = {hemi: Path(surfaces[hemi]) for hemi in HEMIS if surfaces.get(hemi) is not None}
-    if not given:
-        raise BrainPainterError("no surface given: give --lh-surface FILE and/or --rh-surface FILE.")
-    meshes = {hemi: read_surface(p) for hemi, p in given.items()}
-    extras = {hemi: _extras(p, hemi, len(meshes[hemi][0])) for hemi, p in given.items()}
-    placed = _apart({hemi: m[0] for hemi, m in meshes.items()})
+    read = {hemi: s for hemi, s in surfaces.items() if isinstance(s, Surface)}
+    read.update(read_surfaces({hemi: s for hemi, s in surfaces.items() if not isinstance(s, Surface)})
+                if len(read) < len(surfaces) else {})
+    placed = _apart({hemi: s.vertices for hemi, s in read.items()})
     digest = hashlib.sha256(json.dumps([_VERSION, labels]).encode())
-    for hemi in given:
-        for array in (placed[hemi], meshes[hemi][1], *extras[hemi].values()):
+    for hemi, surface in sorted(read.items()):
+        for array in (placed[hemi], surface.faces, *surface.extras.values()):
             digest.update(np.ascontiguousarray(array).tobytes())
-        digest.update(json.dumps(sorted(extras[hemi])).encode())
+        digest.update(json.dumps([hemi, sorted(surface.extras)]).encode())
     folder = (root or cache_root()) / digest.hexdigest()[:24]
     if (folder / "manifest.json").is_file():
         return folder
@@ -229,18 +268,18 @@ def surface_template(surfaces: Mapping[str, str | Path], labels: str, root: Path
     stage = Path(tempfile.mkdtemp(prefix=".stage-", dir=folder.parent))
     try:
         cortex: dict[str, Any] = {}
-        for hemi, (_, faces) in meshes.items():
-            v = placed[hemi]
+        for hemi, surface in sorted(read.items()):
+            v, faces = placed[hemi], surface.faces
             save_npz(stage / f"cortex-{hemi}.npz", {
                 "faces": faces, "face_label": np.zeros(len(faces), np.int16), "pial": v,
-                "source_vertex": np.arange(len(v), dtype=np.int32), **extras[hemi]})
+                "source_vertex": np.arange(len(v), dtype=np.int32), **surface.extras})
             cortex[hemi] = {"file": f"cortex-{hemi}.npz", "names": [SURFACE_REGION], "n_vertices": len(v),
-                            "n_faces": len(faces), "found": sorted(extras[hemi])}
+                            "n_faces": len(faces), "found": sorted(surface.extras)}
         points = np.concatenate(list(placed.values()))
         manifest = {
             "format": FORMAT, "format_version": FORMAT_VERSION, "name": f"surfaces-{folder.name[:8]}",
             "source": {"builder": "brainpainter.atlas.surfaces",
-                       **{hemi: str(p.absolute()) for hemi, p in given.items()}},
+                       **{hemi: str(s.path.absolute()) for hemi, s in sorted(read.items())}},
             "space": "the surfaces' own coordinates (millimetres, x right, y anterior, z superior)",
             "own_vertices": True, "surfaces": ["pial"],
             "labels": {labels: {"source": "the user's surfaces", "cortex": cortex}}, "glass": {},

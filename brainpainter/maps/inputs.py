@@ -344,7 +344,7 @@ def _as_rows(arr: NDArray[Any], what: str, n: int | None = None) -> NDArray[Any]
     counts = FAMILY if n is None else {n}
     if a.ndim == 2 and a.shape[0] in counts and a.shape[1] not in counts:
         a = a.T
-    if a.ndim == 2 and 1 in a.shape and a.size in counts:
+    if a.ndim == 2 and 1 in a.shape:  # one image (a column of a text file), whatever its count
         a = a.reshape(1, -1)
     if a.ndim not in (1, 2) or a.size == 0:
         raise BrainPainterError(f"{what} has shape {a.shape}; a map has one value per vertex, shape (n,) "

@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
+from brainpainter.atlas.surfaces import Surface, read_surfaces, surface_template
 from brainpainter.atlas.template import Template, load_template
 from brainpainter.errors import BrainPainterError
 from brainpainter.maps.inputs import VertexMaps, read_maps
@@ -117,13 +118,17 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     atlas_obj = get_atlas(outline) if outline is not None else atlas if atlas is not None else get_atlas("dk")
     surfaces = options.maps.surfaces
     if surfaces:  # the user's own surfaces: the run's template, maps of their vertex counts drawn as they are
-        options = _on_own_surfaces(options, surfaces, atlas_obj.template_labels)
+        read = _own_surfaces(options, surfaces)
+        maps = read_maps(data, options.maps.lh, options.maps.rh, options.maps.volume,
+                         mesh={hemi: s.n_vertices for hemi, s in read.items()})
+        folder = surface_template(read, atlas_obj.template_labels)  # written only for maps that fit
+        options = replace(options, scene=replace(options.scene, template=str(folder)))
+    else:
+        maps = read_maps(data, options.maps.lh, options.maps.rh, options.maps.volume)
     template = options.scene.template
     tpl = template if isinstance(template, Template) else load_template(template)
     labels = atlas_obj.template_labels if atlas_obj.template_labels in tpl.label_sets else "dk"
     meshes = {hemi: map_mesh(tpl, labels, hemi) for hemi in ("lh", "rh")}
-    maps = read_maps(data, options.maps.lh, options.maps.rh, options.maps.volume,
-                     mesh={hemi: len(meshes[hemi].source_vertex) for hemi in surfaces} if surfaces else None)
     views = options.scene.views
     if views is None:  # not given: both hemispheres; a volume also colours the subcortical structures
         views = MAP_VIEWS + (",subcortical" if maps.regions else "")
@@ -140,10 +145,8 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
                   options, source_vertex, edges, masks)
 
 
-def _on_own_surfaces(options: Options, surfaces: dict[str, Any], labels: str) -> Options:
-    """`options` drawing on the template of the user's surfaces (:mod:`brainpainter.atlas.surfaces`)."""
-    from brainpainter.atlas.surfaces import surface_template
-
+def _own_surfaces(options: Options, surfaces: dict[str, Any]) -> dict[str, Surface]:
+    """The user's surfaces read (:mod:`brainpainter.atlas.surfaces`), once the options allow them."""
     if options.scene.surface != "pial":
         raise BrainPainterError(
             f"--surface {options.scene.surface} picks one of the template's surfaces; with --lh-surface/"
@@ -152,8 +155,7 @@ def _on_own_surfaces(options: Options, surfaces: dict[str, Any], labels: str) ->
     if options.scene.tracts:
         raise BrainPainterError("--tracts are placed on the fsaverage template, not on your own surfaces "
                                 "(--lh-surface/--rh-surface); leave out one or the other.")
-    folder = surface_template(surfaces, labels)
-    return replace(options, scene=replace(options.scene, template=str(folder)))
+    return read_surfaces(surfaces)
 
 
 def surface_masks(template: Template, labels: str, mesh: Any) -> dict[str, NDArray[Any]]:
