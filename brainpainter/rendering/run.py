@@ -295,7 +295,7 @@ def render(data: Any = None, atlas: Atlas | str | None = None, *, out: str | Pat
             f"the painter colours {painter.scene.coloring} but the data is "
             f"{'a map' if hasattr(run, 'source_vertex') else 'a region table'}; make a Painter for it "
             "(brainpainter.Painter(coloring='vertices') draws maps).")
-    elif checked.maps.surfaces and Path(run.options.scene.template) != Path(painter.scene.template.path):
+    elif checked.maps.surfaces and str(run.options.scene.template) != str(painter.scene.template.path):
         raise BrainPainterError(
             f"the maps are drawn on your own surfaces (lh_surface/rh_surface), but the painter draws "
             f"template {painter.scene.template.name!r}; leave out painter= (or the surfaces).")
