@@ -195,6 +195,9 @@ def test_read_maps_of_own_counts(tmp_path):
     m = read_maps(lh=tmp_path / "lh.x.npy", mesh={"lh": n})
     assert m.own_mesh and m.values["lh"].shape == (1, n)
     np.testing.assert_array_equal(m.on_surface("lh", 0), np.arange(n))
+    np.save(tmp_path / "rh.x.npy", np.arange(n, dtype=float))  # the partner beside it: only with its surface
+    assert sorted(read_maps(tmp_path / "lh.x.npy", mesh={"lh": n}).values) == ["lh"]
+    assert sorted(read_maps(tmp_path / "lh.x.npy", mesh={"lh": n, "rh": n}).values) == ["lh", "rh"]
 
 
 @pytest.mark.integration

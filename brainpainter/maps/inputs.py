@@ -225,7 +225,8 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
                     raise BrainPainterError(f"a map dict has keys lh/rh (or left/right); {key!r} was given.")
                 given[hemi] = value
         elif isinstance(data, str | Path):
-            given.update(pair_of(data))
+            found = pair_of(data)  # a partner found beside the file is drawn only where a surface is given
+            given.update({h: p for h, p in found.items() if mesh is None or h in mesh or p == Path(data)})
         else:
             raise BrainPainterError(
                 f"a map is a file, or a dict {{'lh': array, 'rh': array}}; a {type(data).__name__} was "
