@@ -103,6 +103,20 @@ def test_template_of_a_freesurfer_subject(tmp_path):
     assert tpl.cortex_names("dk", "rh") == ()  # no rh surface given: no rh cortex
 
 
+def test_hcp_names_find_sulc_and_atlasroi_and_turn_hcp_sulc_back(tmp_path):
+    """Beside 100307.L.midthickness.32k_fs_LR.surf.gii: its sulc (HCP's sign, sulci negative) and atlasroi."""
+    v, f = _icosphere()
+    nib.save(_gifti_surface(v, f), tmp_path / "100307.L.midthickness.32k_fs_LR.surf.gii")
+    for word, values in (("sulc", v[:, 2]), ("atlasroi", (v[:, 1] > 0).astype(np.float32))):
+        nib.save(nib.GiftiImage(darrays=[nib.gifti.GiftiDataArray(values.astype(np.float32))]),
+                 tmp_path / f"100307.L.{word}.32k_fs_LR.shape.gii")
+    folder = surface_template({"lh": tmp_path / "100307.L.midthickness.32k_fs_LR.surf.gii"}, "dk",
+                              root=tmp_path / "cache")
+    z = np.load(folder / "cortex-lh.npz")
+    np.testing.assert_allclose(z["sulc"], -v[:, 2])  # FreeSurfer's sign: sulci positive
+    np.testing.assert_array_equal(z["cortex"] > 0, v[:, 1] > 0)
+
+
 def test_overlapping_hemispheres_are_moved_apart(tmp_path):
     """Inflated hemispheres (each centred at 0) end up 10 mm apart; pial ones that touch stay put."""
     v, f = _icosphere(0.0)

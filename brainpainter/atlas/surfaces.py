@@ -10,7 +10,8 @@ fsaverage's. Beside the surface, when present and of the same vertex count:
 * ``sulc``: FreeSurfer's ``lh.sulc`` in the same folder or in ``../surf/``,
   or the surface's name with its surface word replaced by ``sulc``
   (``100307.L.midthickness.32k_fs_LR.surf.gii`` ->
-  ``100307.L.sulc.32k_fs_LR.shape.gii``; fMRIPrep's ``..._hemi-L_sulc.shape.gii``);
+  ``100307.L.sulc.32k_fs_LR.shape.gii``, whose sign HCP turned: turned back, so
+  sulci are positive as in FreeSurfer; fMRIPrep's ``..._hemi-L_sulc.shape.gii``);
   the underlay greys and the shading;
 * ``curv``: FreeSurfer's ``lh.curv`` (the ``curv`` underlay);
 * the cortex: FreeSurfer's ``../label/lh.cortex.label``, or HCP's
@@ -53,6 +54,8 @@ OVERLAP = 0.25
 _SURFACE_WORD = re.compile(r"very_inflated|veryinflated|midthickness|inflated|smoothwm|pial|white|orig|"
                            r"sphere")
 _FREESURFER = re.compile(r"^([lr]h)\.")
+#: In the names of HCP Pipelines' files, whose sulc is FreeSurfer's times -1 (Caret's sign: sulci negative).
+HCP_NAME = "fs_LR"
 #: Bump when what a surface template holds changes (its cache key).
 _VERSION = 1
 
@@ -171,6 +174,8 @@ def _extras(path: Path, hemi: str, n: int) -> dict[str, NDArray[Any]]:
             except Exception:  # an unreadable neighbour is no neighbour: the next one is tried
                 continue
             if len(values) == n and np.isfinite(values).all():
+                if what == "sulc" and HCP_NAME in file.name:  # HCP's sulc is FreeSurfer's times -1
+                    values = -values
                 out[what] = (values > 0).astype(np.uint8) if what == "cortex" else values.astype(np.float32)
                 break
     return out
