@@ -9,6 +9,7 @@ bar of docs/maps.md) and check pixels.
 from __future__ import annotations
 
 import gzip
+import json
 import os
 import shutil
 import subprocess
@@ -198,6 +199,44 @@ def test_export_of_a_map_on_an_own_surface(tmp_path):
     assert len(np.unique(cortex.visual.vertex_colors[:, :3], axis=0)) > 10  # a map, not one colour
     html = brainpainter.export({"lh": v[:, 1]}, tmp_path / "m.html", lh_surface=str(pial)).read_text()
     assert "vertexColors: m.vertexColors" in html
+
+
+def _subject_template(path: Path, n_source: int = 500) -> tuple[Path, np.ndarray]:
+    """A template as the builder makes it from a subject: a mesh keeping every 3rd of `n_source` vertices."""
+    from brainpainter.testing.templates import CortexMesh, save_arrays, write_template
+
+    v, f = _icosphere()
+    cortex = {"dk": {hemi: CortexMesh(v + np.float32(dx), f, np.zeros(len(f), np.int16), ("insula",), v, v)
+                     for hemi, dx in (("lh", -40), ("rh", 40))}}
+    write_template(path, cortex, name="subject")
+    sv = (np.arange(len(v)) * 3).astype(np.int32)
+    manifest = json.loads((path / "manifest.json").read_text())
+    for hemi in ("lh", "rh"):
+        file = path / f"cortex-{hemi}-dk.npz"
+        arrays = dict(np.load(file))
+        save_arrays(file, {**arrays, "source_vertex": sv, "sulc": v[:, 2] - 5})
+        manifest["labels"]["dk"]["cortex"][hemi]["n_source_vertices"] = n_source
+    (path / "manifest.json").write_text(json.dumps(manifest))
+    return path, sv
+
+
+def test_a_template_built_from_a_subject_takes_maps_of_the_subject(tmp_path):
+    """Maps of the subject's vertex count, vertex i of the template showing value source_vertex[i]."""
+    folder, sv = _subject_template(tmp_path / "subject")
+    values = np.random.default_rng(1).normal(size=500)
+    run = prepare_run({"lh": values, "rh": -values}, template=str(folder), cmap="viridis", vmin=-3, vmax=3)
+    colors = run.colors(0).vertices
+    np.testing.assert_allclose(colors["lh"], run.scale(values[sv])[:, :3], atol=1e-6)
+    np.testing.assert_allclose(colors["rh"], run.scale(-values[sv])[:, :3], atol=1e-6)
+    assert run.mesh_masks is not None and run.mesh_masks["lh"]["sulc"].shape == (500,)
+    with pytest.raises(BrainPainterError, match="10242 values per hemisphere, but the surface it is"):
+        prepare_run({"lh": np.zeros(10242)}, template=str(folder))
+    from brainpainter.testing import stand_in
+
+    with stand_in() as renderer:  # the per-vertex scene of the subject's mesh is drawn
+        r = brainpainter.render({"lh": values}, template=str(folder), renderer=renderer, views="lateral-left",
+                                width=32, height=32, progress=False)
+    assert len(r.images) == 1
 
 
 def test_read_maps_of_own_counts(tmp_path):

@@ -279,7 +279,8 @@ def surface_template(surfaces: Mapping[str, Surface | str | Path], labels: str,
                 "faces": faces, "face_label": np.zeros(len(faces), np.int16), "pial": v,
                 "source_vertex": np.arange(len(v), dtype=np.int32), **surface.extras})
             cortex[hemi] = {"file": f"cortex-{hemi}.npz", "names": [SURFACE_REGION], "n_vertices": len(v),
-                            "n_faces": len(faces), "found": sorted(surface.extras)}
+                            "n_source_vertices": len(v), "n_faces": len(faces),
+                            "found": sorted(surface.extras)}
         points = np.concatenate(list(placed.values()))
         manifest = {
             "format": FORMAT, "format_version": FORMAT_VERSION, "name": f"surfaces-{folder.name[:8]}",

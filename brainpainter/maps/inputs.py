@@ -207,8 +207,8 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
         volume, data = data, None
     if volume is not None and mesh is not None:
         raise BrainPainterError("a volume (--volume) is projected onto fsaverage, not onto your own "
-                                "surfaces; give per-vertex maps of those surfaces with --lh/--rh, or leave "
-                                "out --lh-surface/--rh-surface.")
+                                "surfaces (--lh-surface/--rh-surface, or a template built from a subject); "
+                                "give per-vertex maps of those surfaces with --lh/--rh, or leave them out.")
     if volume is not None:
         if data is not None or lh is not None or rh is not None:
             raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "

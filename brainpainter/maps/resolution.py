@@ -69,8 +69,8 @@ def native(values: NDArray[Any], what: str = "map", n: int | None = None) -> NDA
     elif v.shape[1] != n:
         raise BrainPainterError(
             f"{what} has {v.shape[1]} values per hemisphere, but the surface it is drawn on has {n} "
-            "vertices; give the map made on that surface (the same subject and mesh), or leave out "
-            "--lh-surface/--rh-surface to draw fsaverage data on fsaverage.")
+            "vertices; give the map made on that surface (the same subject and mesh), or draw fsaverage "
+            "data on fsaverage (no --lh-surface/--rh-surface, the default --template).")
     return v
 
 
@@ -117,12 +117,30 @@ def masks(hemi: str) -> dict[str, NDArray[Any]]:
             for name in ("cortex", "sulc", "curv")}
 
 
+def own_vertex_count(template: Any, hemi: str) -> int | None:
+    """The vertex count of the maps a template made from a surface other than fsaverage's family takes.
+
+    The builder records the size of the surface a template was made from
+    (``n_source_vertices``, or ``n_source_faces``: ``F / 2 + 2`` vertices); a
+    template of the user's own surfaces (:mod:`brainpainter.atlas.surfaces`)
+    records its vertices (and ``own_vertices``: whatever their count). None for
+    the fsaverage family (maps of any family member are brought to fsaverage) and
+    for a template that records no size.
+    """
+    counts = {int(e["n_source_vertices"]) if "n_source_vertices" in e else int(e["n_source_faces"]) // 2 + 2
+              for label_set in template.manifest["labels"].values()
+              for e in [label_set.get("cortex", {}).get(hemi) or {}]
+              if "base" not in e and ("n_source_vertices" in e or "n_source_faces" in e)}
+    count = counts.pop() if len(counts) == 1 else None
+    return None if count is None or (count in FAMILY and not template.manifest.get("own_vertices")) else count
+
+
 def map_mesh(template: Any, labels: str, hemi: str) -> Any:
     """The template's cortex mesh that maps are drawn on: one vertex per fsaverage vertex it keeps.
 
     The stored (not region-split) mesh of label set `labels` (or of the mesh
-    an overlay label set labels); its ``source_vertex`` indexes fsaverage (or, for a
-    template of the user's own surfaces, ``own_vertices`` in its manifest, that surface).
+    an overlay label set labels); its ``source_vertex`` indexes fsaverage, or the
+    surface the template was made from where that is no fsaverage (:func:`own_vertex_count`).
 
     Returns
     -------
@@ -138,7 +156,7 @@ def map_mesh(template: Any, labels: str, hemi: str) -> Any:
         return template.cortex(labels, hemi)  # no cortex: an empty mesh
     mesh = template.base_cortex(entry.get("base", labels), hemi)
     sv = np.asarray(mesh.source_vertex)
-    if template.manifest.get("own_vertices"):  # the user's own surface: maps of its own vertices
+    if own_vertex_count(template, hemi) is not None:  # a subject's or the user's surface: maps of its own
         return mesh
     if len(sv) and (sv.min() < 0 or sv.max() >= N_FSAVERAGE):
         raise BrainPainterError(

@@ -22,7 +22,7 @@ from brainpainter.errors import BrainPainterError
 from brainpainter.maps.inputs import VertexMaps, read_maps
 from brainpainter.maps.layers import map_scale, vertex_colors
 from brainpainter.maps.outlines import mesh_edges
-from brainpainter.maps.resolution import map_mesh
+from brainpainter.maps.resolution import map_mesh, own_vertex_count
 from brainpainter.rendering.geometry import VertexColors
 from brainpainter.rendering.options import Options
 from brainpainter.rendering.painter import Painter, region_colors
@@ -123,10 +123,13 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
                          mesh={hemi: s.n_vertices for hemi, s in read.items()})
         folder = surface_template(read, atlas_obj.template_labels)  # written only for maps that fit
         options = replace(options, scene=replace(options.scene, template=str(folder)))
-    else:
-        maps = read_maps(data, options.maps.lh, options.maps.rh, options.maps.volume)
     template = options.scene.template
     tpl = template if isinstance(template, Template) else load_template(template)
+    # a template made from another surface than fsaverage's family (a subject's, the user's) takes maps of
+    # that surface's vertex count, drawn as they are
+    own = {hemi: n for hemi in ("lh", "rh") if (n := own_vertex_count(tpl, hemi)) is not None}
+    if not surfaces:
+        maps = read_maps(data, options.maps.lh, options.maps.rh, options.maps.volume, mesh=own or None)
     labels = atlas_obj.template_labels if atlas_obj.template_labels in tpl.label_sets else "dk"
     meshes = {hemi: map_mesh(tpl, labels, hemi) for hemi in ("lh", "rh")}
     views = options.scene.views
@@ -139,7 +142,7 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     source_vertex = {hemi: np.asarray(m.source_vertex) for hemi, m in meshes.items()}
     edges = ({hemi: mesh_edges(m.faces) for hemi, m in meshes.items()} if options.maps.outline_threshold
              else None)
-    masks = {hemi: surface_masks(tpl, labels, meshes[hemi]) for hemi in surfaces} if surfaces else None
+    masks = {hemi: surface_masks(tpl, labels, meshes[hemi], n) for hemi, n in own.items()} if own else None
     scale = map_scale(options.scale, maps, options.maps.threshold)
     return MapRun(MapTable(maps, atlas_obj), scale, view_list, outlined(options.settings, outline),
                   options, source_vertex, edges, masks)
@@ -158,20 +161,32 @@ def _own_surfaces(options: Options, surfaces: dict[str, Any]) -> dict[str, Surfa
     return read_surfaces(surfaces)
 
 
-def surface_masks(template: Template, labels: str, mesh: Any) -> dict[str, NDArray[Any]]:
-    """The ``cortex``, ``sulc`` and ``curv`` masks of a surface template's mesh, bool (n_vertices,).
+def surface_masks(template: Template, labels: str, mesh: Any, n: int) -> dict[str, NDArray[Any]]:
+    """The ``cortex``, ``sulc`` and ``curv`` masks of the `n`-vertex surface a template was made from.
 
-    From the ``cortex``, ``sulc`` and ``curv`` arrays found beside the surface
-    (:mod:`brainpainter.atlas.surfaces`); without them every vertex is cortex and
-    the deeper half of the surface by :func:`~brainpainter.rendering.sulc.convexity` is a sulcus.
+    At the vertices the template's mesh keeps (its ``source_vertex``), from its
+    ``sulc`` and the ``cortex`` and ``curv`` arrays found beside the user's
+    surface (:mod:`brainpainter.atlas.surfaces`); without them every vertex is
+    cortex and the deeper half of the mesh by
+    :func:`~brainpainter.rendering.sulc.convexity` is a sulcus.
+
+    Returns
+    -------
+    dict of str to ndarray of bool, shape (n,)
     """
-    z = template._npz(template.manifest["labels"][labels]["cortex"][mesh.hemi]["file"])
-    n = len(mesh.source_vertex)
-    if "sulc" in z:
-        deep = np.asarray(z["sulc"]) > 0
+    entry = template.manifest["labels"][labels]["cortex"][mesh.hemi]
+    z = template._npz(template.manifest["labels"][entry.get("base", labels)]["cortex"][mesh.hemi]["file"])
+    sv = np.asarray(mesh.source_vertex, np.int64)
+    if mesh.sulc is not None:
+        deep = np.asarray(mesh.sulc) > 0
     else:
         depth = convexity(mesh.vertices["pial"], mesh.faces)
         deep = depth > np.median(depth)
-    return {"cortex": np.asarray(z["cortex"], bool) if "cortex" in z else np.ones(n, bool), "sulc": deep,
+    kept = {"cortex": np.asarray(z["cortex"]) > 0 if "cortex" in z else np.ones(len(sv), bool), "sulc": deep,
             "curv": np.asarray(z["curv"]) > 0 if "curv" in z else deep}
+    out = {}
+    for name, mask in kept.items():
+        out[name] = np.zeros(n, bool)
+        out[name][sv] = mask
+    return out
 
