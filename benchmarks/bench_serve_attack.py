@@ -38,6 +38,8 @@ REPO = Path(__file__).resolve().parents[1]
 EXAMPLE = REPO / "examples" / "brainpainter_dk.csv"
 HEADER = "Image-name-unique,Left-insula,Right-insula,Left-Hippocampus\n"
 OCTET = {"content-type": "application/octet-stream"}
+#: One client token for every connection of the benchmark (its uploads and jobs are its own: docs/serve.md).
+CLIENT = {"x-brainpainter-client": "bench-serve-attack-0123456789abcdef"}
 
 
 def rows_table(n: int) -> bytes:
@@ -61,7 +63,7 @@ def _alive(pid: int) -> bool:
 def bench_rows(tmp: Path, renderer: str) -> dict:
     server = Serve(tmp / "rows", "--workers", "0", "--renderer", renderer, "--rate", "100000")
     try:
-        with httpx.Client(base_url=server.url, timeout=120) as client:
+        with httpx.Client(base_url=server.url, headers=CLIENT, timeout=120) as client:
             t0 = time.perf_counter()
             r = client.post("/api/uploads", content=rows_table(200_000), headers=OCTET)
             big = {"status": r.status_code, "s": round(time.perf_counter() - t0, 2), "answer": r.json()}
@@ -75,7 +77,7 @@ def bench_rows(tmp: Path, renderer: str) -> dict:
             def preview() -> None:
                 t = time.perf_counter()
                 codes.append(httpx.post(f"{server.url}/api/preview", json={"upload_id": uid, "row": 5},
-                                        timeout=120).status_code)
+                                        headers=CLIENT, timeout=120).status_code)
                 times.append(time.perf_counter() - t)
 
             threads = [threading.Thread(target=preview) for _ in range(10)]
@@ -165,7 +167,7 @@ def bench_forwarded(tmp: Path) -> dict:
     server = Serve(tmp / "xff", "--workers", "0", "--no-preview", "--max-jobs-per-client", "4")
     accepted = 0
     try:
-        with httpx.Client(base_url=server.url, timeout=60) as client:
+        with httpx.Client(base_url=server.url, headers=CLIENT, timeout=60) as client:
             for k in range(10):
                 h = {"x-forwarded-for": f"198.51.100.{k + 1}"}
                 r = client.post("/api/uploads", content=EXAMPLE.read_bytes(), headers={**OCTET, **h})
@@ -180,7 +182,7 @@ def bench_forwarded(tmp: Path) -> dict:
 def bench_kill(tmp: Path, renderer: str) -> dict:
     data = tmp / "kill"
     server = Serve(data, "--workers", "1", "--no-preview", "--renderer", renderer)
-    with httpx.Client(base_url=server.url, timeout=60) as client:
+    with httpx.Client(base_url=server.url, headers=CLIENT, timeout=60) as client:
         uid = client.post("/api/uploads", content=EXAMPLE.read_bytes(), headers=OCTET).json()["upload_id"]
         r = client.post("/api/jobs", json={"upload_id": uid, "kind": "movie", "options": {
             "size": "320x240", "views": "lateral-left"}, "movie": {"format": "mp4", "frames_per_step": 24}})
@@ -201,7 +203,7 @@ def bench_kill(tmp: Path, renderer: str) -> dict:
     server.log.close()
     server.start()
     try:
-        with httpx.Client(base_url=server.url, timeout=60) as client:
+        with httpx.Client(base_url=server.url, headers=CLIENT, timeout=60) as client:
             for _ in range(36000):
                 job = client.get(url).json()
                 if job["status"] in ("done", "failed", "cancelled"):
@@ -215,7 +217,7 @@ def bench_kill(tmp: Path, renderer: str) -> dict:
 
 def bench_sigterm(tmp: Path, renderer: str) -> dict:
     server = Serve(tmp / "term", "--workers", "0", "--renderer", renderer, "--rate", "100000")
-    with httpx.Client(base_url=server.url, timeout=60) as client:
+    with httpx.Client(base_url=server.url, headers=CLIENT, timeout=60) as client:
         uid = client.post("/api/uploads", content=rows_table(20_000), headers=OCTET).json()["upload_id"]
     threads = [threading.Thread(target=lambda: _quiet_post(f"{server.url}/api/preview",
                                                            {"upload_id": uid, "row": 3})) for _ in range(8)]
@@ -237,7 +239,7 @@ def bench_sigterm(tmp: Path, renderer: str) -> dict:
 
 def _quiet_post(url: str, body: dict) -> None:
     try:
-        httpx.post(url, json=body, timeout=60)
+        httpx.post(url, json=body, headers=CLIENT, timeout=60)
     except httpx.HTTPError:
         pass
 

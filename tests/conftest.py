@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 import shutil
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
@@ -39,6 +39,31 @@ def without_root_powers() -> list[str]:
     if shutil.which("setpriv") is None:
         pytest.skip("running as root without setpriv (util-linux) to drop root's capabilities")
     return ["setpriv", "--inh-caps=-all", "--bounding-set=-all", "--"]
+
+
+@pytest.fixture
+def tmpfs(tmp_path) -> Iterator[Callable[[str], Path]]:
+    """``tmpfs(options)``: a tmpfs mounted with `options` (``"size=96k"``, ``"ro,size=64k"``) on a new
+    folder of `tmp_path` (root on Linux only: the test is skipped elsewhere); all unmounted afterwards."""
+    import subprocess
+    import sys
+
+    if os.geteuid() != 0 or sys.platform != "linux":
+        pytest.skip("mounting a small tmpfs needs root on Linux")
+    mounted: list[Path] = []
+
+    def mount(options: str) -> Path:
+        disk = tmp_path / f"disk{len(mounted)}"
+        disk.mkdir()
+        if subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(disk)],
+                          capture_output=True).returncode != 0:
+            pytest.skip("cannot mount a tmpfs here")
+        mounted.append(disk)
+        return disk
+
+    yield mount
+    for disk in mounted:
+        subprocess.run(["umount", "-l", str(disk)], check=False)
 
 
 @pytest.fixture

@@ -33,15 +33,21 @@ def test_vertex_normals_sum_corner_by_corner():
     assert np.array_equal(mesh.vertex_normals(v, m.faces, np.float64), expected)
 
 
-def test_an_enclosed_surface_is_occluded_and_an_open_one_is_not():
+def _nested_spheres() -> tuple[np.ndarray, np.ndarray, int, int]:
+    """A sphere of radius 5 mm inside one of 20 mm: vertices, faces, the outer one's vertices and faces."""
     outer = trimesh.creation.icosphere(subdivisions=3, radius=20.0)
     inner = trimesh.creation.icosphere(subdivisions=3, radius=5.0)
     v = np.vstack([outer.vertices, inner.vertices])
     f = np.vstack([outer.faces, inner.faces + len(outer.vertices)])
+    return v, f, len(outer.vertices), len(outer.faces)
+
+
+def test_an_enclosed_surface_is_occluded_and_an_open_one_is_not():
+    v, f, n, _ = _nested_spheres()
     ao = occlusion.ambient_occlusion(v, f, n_directions=64)
     assert ao.dtype == np.float32 and ao.shape == (len(v),)
-    assert np.percentile(ao[: len(outer.vertices)], 5) > 0.95  # a sphere sees the whole sky
-    assert ao[len(outer.vertices):].max() < 0.05  # inside another sphere: no sky at all
+    assert np.percentile(ao[:n], 5) > 0.95  # a sphere sees the whole sky
+    assert ao[n:].max() < 0.05  # inside another sphere: no sky at all
 
 
 def test_a_fold_is_darker_at_its_bottom():
@@ -58,6 +64,16 @@ def test_a_fold_is_darker_at_its_bottom():
     top = (np.abs(v[:, 0]) > 12) & (np.abs(v[:, 2] - 5.0) < 0.1)
     assert floor.any() and top.any()
     assert ao[floor].mean() < 0.5 < 0.9 < ao[top].mean()
+
+
+def test_a_hidden_surface_shades_nothing():
+    v, f, n, n_faces = _nested_spheres()
+    baked = occlusion.ambient_occlusion(v, f, n_directions=64)
+    shown = np.arange(len(f)) >= n_faces  # the outer sphere hidden
+    ao = occlusion.occlusion_of_shown(v, f, shown, baked)
+    assert np.percentile(ao[n:], 5) > 0.95  # the inner sphere alone sees the whole sky
+    assert np.array_equal(ao[:n], baked[:n])  # the hidden one keeps what it had (never drawn)
+    assert np.array_equal(occlusion.occlusion_of_shown(v, f, np.ones(len(f), bool), baked), baked)
 
 
 def test_stored_as_uint8():
@@ -124,3 +140,26 @@ def test_folds_read_in_saturated_colours_on_the_default_template():
     g, b = red[brain][:, 1].astype(int), red[brain][:, 2].astype(int)
     assert (np.abs(g - b) <= 1).all()
     assert np.mean(g == 0) > 0.8
+
+
+@pytest.mark.render
+@pytest.mark.integration
+def test_hidden_ventricles_leave_the_caudate_and_thalamus_lit():
+    """Issue 33 item 14: the occlusion baked with the ventricles darkened what hiding them uncovers."""
+    from brainpainter.rendering.painter import Painter
+    from brainpainter.rendering.settings import RenderSettings
+    from brainpainter.rendering.views import get_view
+
+    view = get_view("subcortical")
+    keys = ["Left-Caudate", "Right-Caudate", "Left-Thalamus", "Right-Thalamus"]
+    brightness = {}
+    for hidden in ((), ("ventricles",)):
+        with Painter("dk", hidden=hidden, settings=RenderSettings(width=400, height=300)) as painter:
+            yellow, blue = (painter.paint_colors(dict.fromkeys(keys, c), view)[..., :3].astype(int)
+                            for c in ((1.0, 1.0, 0.0), (0.0, 0.0, 1.0)))
+        shown = np.abs(yellow - blue).sum(axis=-1) > 0  # the pixels of the four structures
+        brightness[hidden] = yellow[shown].max(axis=1)
+    lit, uncovered = brightness[()], brightness[("ventricles",)]
+    # without the ventricles the structures see more sky, never less (baked with them: 0.87x, 12 % < 80)
+    assert uncovered.mean() >= 0.97 * lit.mean(), (uncovered.mean(), lit.mean())
+    assert np.mean(uncovered < 80) <= np.mean(lit < 80)

@@ -293,9 +293,7 @@ def test_nilearn_pial_with_its_thickness_renders_as_given(tmp_path):
     """Bar: nilearn's fsaverage5 pial_left.gii.gz, thick_left.gii.gz as given; left seen from the left."""
     if not (NILEARN_FS5 / "pial_left.gii.gz").is_file():
         pytest.skip("nilearn's fsaverage5 data not installed")
-    thick = tmp_path / "thick_left.gii"  # maps read .gii; the surface reads the .gii.gz itself
-    thick.write_bytes(gzip.decompress((NILEARN_FS5 / "thick_left.gii.gz").read_bytes()))
-    surface = NILEARN_FS5 / "pial_left.gii.gz"
+    thick, surface = NILEARN_FS5 / "thick_left.gii.gz", NILEARN_FS5 / "pial_left.gii.gz"
     values = np.asarray(nib.load(thick).darrays[0].data, float)
     verts = read_surface(surface)[0]
     anterior = 4.0 * (verts[:, 1] > np.median(verts[:, 1]))  # top of the scale (yellow) in front, 0 behind

@@ -269,8 +269,11 @@ def test_ctrl_c_stops_every_worker_process(tmp_path, tiny, table):
     rows = "".join(f"S{i:02d},{i % 4},{i % 3},{i}\n" for i in range(200))
     table.write_text("Image-name-unique,Left-insula,Right-insula,Left-precuneus\n" + rows)
     out = tmp_path / "out"
+    # Ctrl-C as a terminal delivers it: a test run started in the background (``pytest &``, some CI
+    # runners) passes SIGINT on ignored, and Python then leaves it ignored, so the run went on to exit 0.
     script = (
-        "import sys; sys.path.insert(0, sys.argv[1])\n"
+        "import signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+        "sys.path.insert(0, sys.argv[1])\n"
         "from _parallel_renderers import SlowStandIn\n"
         "from brainpainter.rendering.run import render\n"
         "from brainpainter.testing import registered_renderer\n"

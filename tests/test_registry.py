@@ -53,6 +53,33 @@ def test_bad_atlas_name_suggests_nearest():
         registry.atlases.get("dkk")
 
 
+def test_atlas_of_a_plugin_not_installed_names_its_package(tmp_path):
+    table = tmp_path / "t.csv"
+    table.write_text("Image-name-unique,Left-Auditory\nA,1\n")
+    result = subprocess.run([sys.executable, "-m", "brainpainter", "render", str(table), "--atlas", "mouse",
+                             "--out", str(tmp_path / "out")], capture_output=True, text=True)
+    assert result.returncode == 2 and not result.stdout, result
+    assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+    assert "'mouse' is provided by the brainpainter-atlas-mouse package" in result.stderr
+    assert "pip install plugins/atlases/brainpainter-atlas-mouse" in result.stderr
+    assert not (tmp_path / "out").exists()
+    with pytest.raises(BrainPainterError, match="pip install brainpainter-atlas-schaefer-yeo"):
+        registry.atlases.get("Schaefer400_17n")
+
+
+def test_known_atlas_plugins_are_the_repositorys_plugins():
+    """The table of plugins not installed says what each plugin's pyproject.toml registers."""
+    import tomllib
+    from pathlib import Path
+
+    found = {}
+    for pyproject in (Path(__file__).parents[1] / "plugins" / "atlases").glob("*/pyproject.toml"):
+        project = tomllib.loads(pyproject.read_text())["project"]
+        assert project["name"] == pyproject.parent.name  # the folder the hint names
+        found[project["name"]] = set(project["entry-points"]["brainpainter.atlases"])
+    assert found == {dist: set(names) for dist, names in registry.KNOWN_ATLAS_PLUGINS.items()}
+
+
 def test_pip_installed_plugin_appears_in_atlas_list(tmp_path):
     """A real throw-away distribution, built and installed by pip into tmp_path."""
     src = tmp_path / "src"

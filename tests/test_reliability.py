@@ -157,15 +157,9 @@ needs_mount = pytest.mark.skipif(os.geteuid() != 0 or sys.platform != "linux",
 
 
 @pytest.fixture
-def small_disk(tmp_path):
+def small_disk(tmpfs):
     """A 96 KB tmpfs (root only); unmounted afterwards."""
-    disk = tmp_path / "disk"
-    disk.mkdir()
-    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=96k", "tmpfs", str(disk)],
-                      capture_output=True).returncode != 0:
-        pytest.skip("cannot mount a tmpfs here")
-    yield disk
-    subprocess.run(["umount", "-l", str(disk)], check=False)
+    return tmpfs("size=96k")
 
 
 @needs_mount

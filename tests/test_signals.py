@@ -191,3 +191,44 @@ def test_the_entry_module_installs_its_handlers_before_any_import():
     assert proc.stdout.strip() == "['brainpainter', 'brainpainter.cli', 'brainpainter.cli.entry']"
     assert proc.returncode == 130 and "Traceback" not in proc.stderr
     assert proc.stderr.strip() == "interrupted: nothing was published; partial output was removed"
+
+
+_HOLD_A_RUN = """
+import sys, time
+from brainpainter.cli.guard import private_temp
+with private_temp() as root:
+    print(root, flush=True)
+    time.sleep(600)
+"""
+
+
+def test_the_next_run_removes_the_folder_of_a_run_killed_with_sigkill(tmp_path):
+    """``kill -9`` leaves a run's temporary folder (issue 33: 3 GB after one bomb); the next run removes
+    the folders of dead processes and never those of live ones."""
+    import tempfile
+
+    from brainpainter.cli.guard import private_temp
+
+    env = {**os.environ, "TMPDIR": str(tmp_path)}
+    procs = [subprocess.Popen([sys.executable, "-c", _HOLD_A_RUN], env=env, stdout=subprocess.PIPE, text=True)
+             for _ in range(2)]
+    try:
+        killed, live = (Path(p.stdout.readline().strip()) for p in procs)
+        (killed / "tmp" / "big.bin").write_bytes(b"x" * 1000)
+        procs[0].send_signal(signal.SIGKILL)
+        procs[0].wait(timeout=30)
+        assert killed.is_dir() and live.is_dir()
+        saved = tempfile.tempdir
+        tempfile.tempdir = str(tmp_path)
+        try:
+            with private_temp() as mine:
+                assert not killed.exists(), "the killed run's folder is left"
+                assert live.is_dir() and Path(mine).is_dir()
+        finally:
+            tempfile.tempdir = saved
+        assert sorted(p.name for p in tmp_path.iterdir()) == [live.name]
+    finally:
+        for p in procs:
+            p.kill()
+            p.wait(timeout=30)
+            p.stdout.close()

@@ -474,3 +474,70 @@ def test_a_table_of_regions_and_bundles_reports_no_bundle_as_unmatched(tmp_path,
                       strict=True)  # a bundle column is no unknown region name
     assert tuple(run.table.regions) == ("Left-insula",) and not run.table.unmatched
     assert run.tract_values is not None and run.tract_values.row("ctrl")["tract:CST_right"] == 3.0
+
+
+# -- tractometry tables alone (issue 33 item 15) -------------------------------------------------
+def _profile(path: Path, bundles=("AF_L", "CST_R"), n: int = 10) -> Path:
+    """A pyAFQ ``tract_profiles.csv`` as pandas writes it: unnamed index, two measures, subject, session."""
+    rows = [{"tractID": b, "nodeID": k, "dti_fa": 0.3 + 0.02 * k, "dti_md": 0.0007, "subjectID": "s1",
+             "sessionID": 1} for b in bundles for k in range(n)]
+    pd.DataFrame(rows).to_csv(path)
+    return path
+
+
+def test_a_profile_table_as_input_colours_the_tracts_along_their_nodes(tmp_path, bundles):
+    from brainpainter.rendering.run import prepare_run
+
+    table = _profile(tmp_path / "tract_profiles.csv")
+    with pytest.raises(BrainPainterError, match=r"2 value columns \['dti_fa', 'dti_md'\].*--tract-value"):
+        prepare_run(str(table), tracts=[str(bundles)], tracts_space="template")
+    run = prepare_run(str(table), tracts=[str(bundles)], tracts_space="template", tract_value="dti_fa")
+    assert run.tract_values is not None and dict(run.tract_values.nodes) == {"AF_left": 10, "CST_right": 10}
+    assert (run.scale.vmin, run.scale.vmax) == pytest.approx((0.3, 0.48))  # the measure's range, not 0..3
+    colors = run.item(0, get_view("subcortical")).colors
+    assert colors["tract:AF_left:0"] == pytest.approx(run.scale(np.array([0.3]))[0][:3])
+    assert colors["tract:AF_left:9"] == pytest.approx(run.scale(np.array([0.48]))[0][:3])
+    assert colors["tract:AF_left:0"] != colors["tract:AF_left:9"]
+
+
+@pytest.mark.parametrize("table", ["profile", "bundles"])
+def test_tract_values_alone_render_without_a_region_table(tmp_path, monkeypatch, bundles, tiny, table):
+    from PIL import Image
+
+    from brainpainter.cli.main import main
+    from brainpainter.testing import stand_in
+
+    monkeypatch.chdir(tmp_path)
+    if table == "profile":
+        (tmp_path / "v.csv").write_text("bundle,node,value\n" + "".join(
+            f"{b},{k},{k}\n" for b in ("AF_L", "CST_R") for k in range(4)))
+    else:
+        (tmp_path / "v.csv").write_text("AF_L,CST_R\n0,3\n")
+    with stand_in() as renderer, pytest.raises(SystemExit) as exit_:
+        main(["render", "--tract-values", "v.csv", "--tracts", str(bundles), "--tracts-space", "template",
+              "--template", str(tiny), "--renderer", renderer, "--views", "subcortical", "--size", "80x60",
+              "--out", "o", "-q"])
+    assert exit_.value.code in (0, None)
+    rgb = np.asarray(Image.open(tmp_path / "o" / "1_subcortical.png").convert("RGB")).reshape(-1, 3)
+    red = (rgb[:, 0] > 200) & (rgb[:, 1] < 60) & (rgb[:, 2] < 60)  # value 3: the scale's last colour
+    assert red.sum() > 0
+
+
+@pytest.mark.parametrize(("content", "message"), [
+    ("bundle,node,value\nUF_L,0,1\nUF_L,1,2\n", "are none of the tracts drawn ['AF_left', 'CST_right']"),
+    ("foo,bar\n1,2\n", "names a region of any installed atlas (dk, destrieux, dkt); columns start "
+                       "['foo', 'bar']. Use names like 'Left-insula' or 'lh_insula_thickness' (see "
+                       "'brainpainter atlas show dk'). Nor does any column name a bundle of --tracts "
+                       "['AF_left', 'CST_right']."),
+])
+def test_a_table_matching_no_region_nor_bundle_is_a_one_line_error(tmp_path, monkeypatch, capsys, bundles,
+                                                                    content, message):
+    from brainpainter.cli.main import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "t.csv").write_text(content)
+    with pytest.raises(SystemExit) as exit_:
+        main(["render", "t.csv", "--tracts", str(bundles), "--out", "o"])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and message in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "o").exists()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from brainpainter.errors import BrainPainterError
@@ -41,3 +42,15 @@ def test_free_camera_and_all():
 def test_bad_views(spec, message):
     with pytest.raises(BrainPainterError, match=message):
         parse_views(spec)
+
+
+def test_views_aspect_is_the_shape_of_what_the_views_show():
+    """A box 2 long (y), 1 wide (x), 1 high (z), as a mouse brain: wide from the side, tall from above."""
+    from brainpainter.rendering.framing import views_aspect
+
+    box = np.array([[x, y, z] for x in (0, 1) for y in (0, 2) for z in (0, 1)], dtype=float)
+    side, top = get_view("lateral-left"), get_view("dorsal")
+    assert views_aspect(box, [(side.azimuth, side.elevation)]) == pytest.approx(2.0)
+    assert views_aspect(box, [(top.azimuth, top.elevation)]) == pytest.approx(0.75)  # 0.5, at least 3:4
+    assert views_aspect(box, [(side.azimuth, side.elevation), (top.azimuth, top.elevation)]) == \
+        pytest.approx(1.0)  # the geometric mean of 2 and 0.5

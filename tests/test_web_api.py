@@ -95,8 +95,8 @@ def test_page_is_self_contained_under_a_strict_csp(server):
 def test_probes_schema_and_meta(server):
     assert server.get("/healthz").json() == {"status": "ok"}
     ready = server.get("/readyz")
-    assert ready.status_code == 200 and ready.json()["checks"] == {"database": True, "workers": True,
-                                                                   "preview": True}
+    assert ready.status_code == 200 and ready.json()["checks"] == {"database": True, "disk": True,
+                                                                   "workers": True, "preview": True}
     schema = server.get("/openapi.json").json()
     assert {"/api/uploads", "/api/check", "/api/preview", "/api/jobs", "/api/jobs/{job_id}",
             "/api/jobs/{job_id}/files/{file_name}", "/healthz", "/readyz"} <= set(schema["paths"])

@@ -12,10 +12,12 @@ from __future__ import annotations
 import errno
 import io
 import os
+import sqlite3
 import stat
 import sys
 import threading
 import time
+from pathlib import Path
 
 import pytest
 from web_support import EXAMPLE, standin_app, standin_site, wait_for
@@ -170,6 +172,44 @@ def test_one_clients_uploads_never_evict_anothers(tmp_path):
 
 
 # -- 4/5. results on disk ------------------------------------------------------------------------------
+def test_uploads_and_jobs_belong_to_the_client_that_made_them(tmp_path):
+    """Another client (another token; the same address) gets 404 for an upload's or a job's id."""
+    config = ServerConfig(data_dir=tmp_path / "data", workers=0, preview=False, rate_per_minute=100_000)
+    app = create_app(config)
+    with TestClient(app) as alice, TestClient(app) as bob:
+        r = upload(alice, EXAMPLE.read_bytes())
+        cookie = r.headers["set-cookie"]
+        assert "bp_client=" in cookie and "HttpOnly" in cookie and "SameSite=Strict" in cookie, cookie
+        uid = r.json()["upload_id"]
+        job = alice.post("/api/jobs", json={"upload_id": uid, "options": {"size": "64x48"}}).json()["id"]
+        store = app.state.store
+        claimed = store.claim("w")
+        (store.job_dir(job) / "out" / "a.png").write_bytes(b"png")
+        store.finish(job, claimed["attempt"], ["a.png"], 3600)
+        other = alice.post("/api/jobs", json={"upload_id": uid, "options": {"size": "64x48"}}).json()["id"]
+        assert "set-cookie" not in alice.get(f"/api/jobs/{job}").headers  # issued once
+        for r in (bob.get(f"/api/jobs/{job}"), bob.get(f"/api/jobs/{job}/files/a.png"),
+                  bob.delete(f"/api/jobs/{other}"), bob.post("/api/check", json={"upload_id": uid}),
+                  bob.post("/api/jobs", json={"upload_id": uid}),
+                  bob.post("/api/preview", json={"upload_id": uid})):
+            assert r.status_code == 404 and "another client" in r.json()["error"], r.text
+        mine = upload(bob, EXAMPLE.read_bytes()).json()["upload_id"]
+        r = bob.post("/api/check", json={"upload_id": mine, "options": {"tracts": uid}})
+        assert r.status_code == 404, r.text  # nor another's upload as option tracts
+        assert store.get(other)["status"] == "queued"
+        assert alice.get(f"/api/jobs/{job}").json()["status"] == "done"
+        assert alice.get(f"/api/jobs/{job}/files/a.png").content == b"png"
+        assert alice.delete(f"/api/jobs/{other}").json()["status"] == "cancelled"
+        assert alice.post("/api/check", json={"upload_id": uid}).status_code == 200
+        token = alice.cookies["bp_client"]
+    # a script may send its token as a header instead; the database holds no token
+    with TestClient(app) as script:
+        assert script.get(f"/api/jobs/{job}", headers={"x-brainpainter-client": token}).status_code == 200
+        assert script.get(f"/api/jobs/{job}", headers={"x-brainpainter-client": "x" * 40}).status_code == 404
+    for db in (tmp_path / "data").glob("jobs.sqlite3*"):
+        assert token.encode() not in db.read_bytes()
+
+
 def test_data_folder_and_uploads_are_private(api, tmp_path):
     uid = upload(api, EXAMPLE.read_bytes()).json()["upload_id"]
     root = tmp_path / "data"
@@ -203,6 +243,120 @@ def test_a_full_disk_fails_writes_in_one_line_and_reads_still_work(api, monkeypa
     r = api.post("/api/jobs", json={"upload_id": uid, "options": {"size": "64x48"}})
     assert r.status_code == 507
     assert api.post("/api/check", json={"upload_id": uid}).status_code == 200  # reads still work
+
+
+class _FullDisk(sqlite3.Connection):
+    """A connection on a full disk: every write fails as SQLite reports it ("disk I/O error")."""
+
+    def execute(self, sql, *args):  # type: ignore[override]
+        if sql.split()[0].upper() in ("INSERT", "UPDATE", "DELETE"):
+            raise sqlite3.OperationalError("disk I/O error")
+        return super().execute(sql, *args)
+
+
+def _fill_disk(monkeypatch, free: int = 0) -> None:
+    """What a full disk does to the server (measured on a 30 MB tmpfs): no free bytes, no database
+    write, and no new SQLite shared-memory index (a connection that must create ``-shm`` fails)."""
+    import shutil
+
+    real = sqlite3.connect
+
+    def connect(path, *args, **kwargs):
+        if not Path(f"{path}-shm").exists():
+            raise sqlite3.OperationalError("disk I/O error")
+        return real(path, *args, factory=_FullDisk, **kwargs)
+
+    monkeypatch.setattr(sqlite3, "connect", connect)
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: shutil._ntuple_diskusage(1 << 30, 1 << 30, free))
+
+
+def _full_disk_routes(api, fill) -> None:
+    """A done and a queued job; `fill()` fills the disk; then reads answer and writes get 507."""
+    store = api.app.state.store
+    uid = upload(api, EXAMPLE.read_bytes()).json()["upload_id"]
+    done, queued = (api.post("/api/jobs", json={"upload_id": uid, "options": {"size": "64x48"}}).json()["id"]
+                    for _ in range(2))
+    job = store.claim("w")
+    assert job["id"] == done
+    (store.job_dir(done) / "out" / "a.png").write_bytes(b"png")
+    store.finish(done, job["attempt"], ["a.png"], 3600)
+    fill()
+    r = api.get(f"/api/jobs/{queued}")
+    assert r.status_code == 200 and r.json()["status"] == "queued", r.text
+    r = api.get(f"/api/jobs/{done}/files/a.png")
+    assert r.status_code == 200 and r.content == b"png"
+    assert api.post("/api/check", json={"upload_id": uid}).status_code == 200
+    r = api.get("/readyz")
+    assert r.status_code == 503 and r.json()["checks"]["disk"] is False, r.text
+    for r in (api.delete(f"/api/jobs/{queued}"), upload(api, EXAMPLE.read_bytes()),
+              api.post("/api/jobs", json={"upload_id": uid, "options": {"size": "64x48"}})):
+        assert r.status_code == 507, r.text
+        assert r.json()["error"].startswith("the server's disk is full") and r.headers["retry-after"]
+    assert store.get(queued)["status"] == "queued"  # nothing changed
+
+
+def test_on_a_full_disk_reads_work_and_every_write_answers_507(api, monkeypatch):
+    _full_disk_routes(api, lambda: _fill_disk(monkeypatch))
+
+
+def test_on_a_real_full_disk_reads_work_and_every_write_answers_507(tmpfs):
+    """The same on a 4 MB tmpfs filled to the last byte (root only)."""
+    disk = tmpfs("size=4m")
+
+    def fill() -> None:
+        with open(disk / "filler", "wb", buffering=0) as fh, pytest.raises(OSError):
+            while True:
+                fh.write(b"x" * 4096)
+
+    config = ServerConfig(data_dir=disk / "data", workers=0, preview=False, rate_per_minute=100_000)
+    with TestClient(create_app(config)) as api:
+        _full_disk_routes(api, fill)
+        (disk / "filler").unlink()
+
+
+def test_a_disk_io_error_with_space_left_is_not_called_a_full_disk(api, monkeypatch):
+    uid = upload(api, EXAMPLE.read_bytes()).json()["upload_id"]
+    queued = api.post("/api/jobs", json={"upload_id": uid, "options": {"size": "64x48"}}).json()["id"]
+    _fill_disk(monkeypatch, free=10 << 30)
+    r = api.delete(f"/api/jobs/{queued}")
+    assert r.status_code == 500 and "OperationalError" in r.json()["error"]
+
+
+def test_a_reading_process_that_fills_the_disk_reports_it_as_full():
+    from brainpainter.web.upload import _failed
+
+    assert _failed(OSError(errno.ENOSPC, "No space left on device"), "x")[0] == "full"
+    assert _failed(OSError(errno.EDQUOT, "Disk quota exceeded"), "x")[0] == "full"
+    full = BrainPainterError("cannot write 'a': the disk is full")
+    full.errno = errno.ENOSPC  # type: ignore[attr-defined]  # as io.folders.os_error keeps it
+    assert _failed(full, "x")[0] == "full"
+    assert _failed(ValueError("bad"), "cannot read") == ("error", "cannot read")
+
+
+def test_a_map_that_fills_the_disk_while_inflating_is_a_full_disk_not_a_bad_file(tmp_path):
+    """Measured on a 30 MB tmpfs: a 64 KB .nii.gz of 64 MB answered 400 "not a readable gzip file"."""
+    import gzip
+
+    from brainpainter.web.maps import inflate
+
+    class _Full(io.RawIOBase):
+        def writable(self) -> bool:
+            return True
+
+        def write(self, b) -> int:
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+    class FullDisk(type(tmp_path)):  # a file system with no space left
+        def open(self, mode="r", *args, **kwargs):
+            return _Full() if "w" in mode else super().open(mode, *args, **kwargs)
+
+    (tmp_path / "v.nii.gz").write_bytes(gzip.compress(b"\0" * 100_000))
+    with pytest.raises(OSError) as err:
+        inflate(FullDisk(tmp_path / "v.nii.gz"))
+    assert err.value.errno == errno.ENOSPC
+    (tmp_path / "w.nii.gz").write_bytes(b"not gzip")
+    with pytest.raises(BrainPainterError, match="not a readable gzip file"):
+        inflate(tmp_path / "w.nii.gz")
 
 
 def test_files_without_a_database_row_are_cleaned_up(tmp_path):
@@ -262,13 +416,19 @@ def test_serve_refuses_non_finite_limits_and_warns_on_every_interface(tmp_path, 
     monkeypatch.setattr(server, "run", lambda app, **kw: seen.update(kw))
     for key in ("MPLCONFIGDIR", "XDG_CACHE_HOME"):  # serve sets them for its own process
         monkeypatch.setenv(key, os.environ.get(key, ""))
+    import logging
+
+    web_log = logging.getLogger("brainpainter.web")  # serve sets up its log; later tests read it (caplog)
+    monkeypatch.setattr(web_log, "propagate", web_log.propagate)
+    monkeypatch.setattr(web_log, "handlers", list(web_log.handlers))
+    monkeypatch.setattr(web_log, "level", web_log.level)
     mask = os.umask(0o022)
     try:
         r = CliRunner().invoke(cli, ["serve", "--data-dir", str(tmp_path / "e"), "--host", "0.0.0.0",
                                      "--workers", "0", "--no-preview"])
     finally:
         os.umask(mask)
-        from brainpainter.web.store import unlock_data_dir
+        from brainpainter.web.folder_lock import unlock_data_dir
         unlock_data_dir(tmp_path / "e")
     assert r.exit_code == 0, r.output
     assert "http://127.0.0.1:8000/" in r.output and "no authentication" in r.output
@@ -284,6 +444,31 @@ def rendering(tmp_path_factory):
     with standin_app(standin_site(tmp_path_factory.mktemp("site")), tmp_path_factory.mktemp("data"),
                      workers=1, preview=False, rate_per_minute=100_000, max_jobs_per_client=50) as client:
         yield client
+
+
+def test_a_figure_over_the_pixel_limit_is_refused_before_it_is_queued(api):
+    """Issue 33: dpi 600 x 40 in on the 4-row example made a 24000x23720 PNG (5.6 GB, 239 s)."""
+    uid = upload(api, EXAMPLE.read_bytes()).json()["upload_id"]
+    r = api.post("/api/jobs", json={"upload_id": uid, "kind": "figure",
+                                    "figure": {"format": "png", "dpi": 600, "fig_width": 40}})
+    assert r.status_code == 400, r.text
+    msg = r.json()["error"]
+    assert msg.startswith("the figure would be 24000x") and "at most 40000000 pixels" in msg
+    assert "\n" not in msg
+    assert api.app.state.store.counts() == {}  # nothing queued
+    # the CLI's default figure of the same table (2160 px wide), and any PDF, are taken
+    for figure in ({"format": "png"}, {"format": "pdf", "dpi": 600, "fig_width": 40}):
+        r = api.post("/api/jobs", json={"upload_id": uid, "kind": "figure", "figure": figure})
+        assert r.status_code == 202, r.text
+    assert api.get("/api/meta").json()["limits"]["max_figure_pixels"] == 40_000_000
+
+
+def test_rendering_processes_run_under_the_memory_limit(rendering):
+    workers = rendering.app.state.store.workers()
+    assert workers
+    limits = Path(f"/proc/{workers[0]['pid']}/limits").read_text()
+    line = next(x for x in limits.splitlines() if x.startswith("Max data size"))
+    assert line.split()[3] == str(4 * 1024**3), line
 
 
 def _long_movie(client) -> str:

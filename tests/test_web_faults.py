@@ -7,13 +7,15 @@ minute; ``benchmarks/bench_serve_attack.py`` runs the issue's full bars.
 
 from __future__ import annotations
 
+import json
 import os
 import socket
 import sqlite3
+import sys
 import time
 
 import pytest
-from web_support import STANDIN, Server, alive, env_with_site, rss_mb, standin_site, wait_for
+from web_support import CLIENT, STANDIN, Server, alive, env_with_site, rss_mb, standin_site, wait_for
 
 httpx = pytest.importorskip("httpx")
 
@@ -117,9 +119,9 @@ def test_a_movie_job_survives_a_killed_server_and_its_workers_die_with_it(tmp_pa
     server = Server(tmp_path / "data", env_with_site(site), tmp_path / "server.log", [
         "--workers", "1", "--no-preview", "--renderer", STANDIN, "--rate", "100000"])
     server.start()
-    try:
+    try:  # one client (its token) before and after the restart
         rows = "".join(f"s{k},{k % 3},{(k + 1) % 3},{(k + 2) % 3}\n" for k in range(4))
-        with httpx.Client(base_url=server.url, timeout=30) as client:
+        with httpx.Client(base_url=server.url, headers=CLIENT, timeout=30) as client:
             r = client.post("/api/uploads", content=(HEADER + rows).encode(), headers=OCTET)
             uid = r.json()["upload_id"]
             r = client.post("/api/jobs", json={"upload_id": uid, "kind": "movie", "options": {
@@ -136,7 +138,7 @@ def test_a_movie_job_survives_a_killed_server_and_its_workers_die_with_it(tmp_pa
         assert wait_for(lambda: not any(alive(p) for p in old), 15), old
         assert time.monotonic() - killed < 15
         server.start()
-        with httpx.Client(base_url=server.url, timeout=30) as client:
+        with httpx.Client(base_url=server.url, headers=CLIENT, timeout=30) as client:
             job = wait_for(lambda: (j := client.get(url).json())["status"] in ("done", "failed") and j, 180)
             assert job and job["status"] == "done", job
             assert [f["name"] for f in job["files"]] == ["movie.gif"]
@@ -146,5 +148,66 @@ def test_a_movie_job_survives_a_killed_server_and_its_workers_die_with_it(tmp_pa
         (deaths,) = db.execute("SELECT deaths FROM jobs").fetchone()
         db.close()
         assert deaths == 0  # the server's death is not the job's fault
+    finally:
+        server.stop()
+
+
+def test_serve_says_where_to_open_it_and_stops_without_leaking_a_semaphore(tmp_path):
+    """Issue 33: a human line besides the JSON log; a movie job's worker (tqdm made a multiprocessing
+    lock in it) left "1 leaked semaphore objects" in the resource tracker's warning at stop."""
+    site = standin_site(tmp_path / "site")
+    log = tmp_path / "server.log"
+    server = Server(tmp_path / "data", env_with_site(site), log, [
+        "--workers", "1", "--no-preview", "--renderer", STANDIN, "--rate", "100000"])
+    server.start()
+    try:
+        with httpx.Client(base_url=server.url, timeout=30) as client:
+            rows = "".join(f"s{k},{k % 3},{(k + 1) % 3},{(k + 2) % 3}\n" for k in range(2))
+            r = client.post("/api/uploads", content=(HEADER + rows).encode(), headers=OCTET)
+            uid = r.json()["upload_id"]
+            r = client.post("/api/jobs", json={"upload_id": uid, "kind": "movie", "options": {
+                "size": "32x24", "views": "lateral-left"}, "movie": {"format": "gif", "frames_per_step": 2}})
+            url = f"/api/jobs/{r.json()['id']}"
+            job = wait_for(lambda: (j := client.get(url).json())["status"] in ("done", "failed") and j, 120)
+            assert job and job["status"] == "done", job
+    finally:
+        server.stop()
+    text = log.read_text()
+    assert f"open {server.url}/ in a browser" in text, text[-2000:]
+    assert "leaked" not in text and "resource_tracker" not in text, text[-2000:]
+
+
+def test_the_curl_example_of_docs_serve_md_works_with_its_cookie_jar(tmp_path):
+    """The API example (upload, then a job naming the upload) as written, then the job's status with the
+    same jar; without the jar the job is another client's (404)."""
+    import re
+    import shutil
+    import subprocess
+
+    from web_support import REPO
+
+    if shutil.which("curl") is None:
+        pytest.skip("curl is not installed")
+    api = (REPO / "docs" / "serve.md").read_text().split("## API", 1)[1].split("## Logs", 1)[0]
+    script = re.search(r"```bash\n(.*?)```", api, re.S).group(1)
+    assert "-b jar -c jar" in script
+    server = Server(tmp_path / "data", dict(os.environ), tmp_path / "server.log",
+                    ["--workers", "0", "--no-preview", "--rate", "100000"])
+    server.start()
+    try:
+        script = script.replace("http://127.0.0.1:8000", server.url)
+        script = script.replace("python -c", f"{sys.executable} -c")
+        (tmp_path / "examples").mkdir()
+        shutil.copy(REPO / "examples" / "brainpainter_dk.csv", tmp_path / "examples")
+        r = subprocess.run(["bash", "-e", "-c", script], cwd=tmp_path, capture_output=True, text=True,
+                           timeout=60)
+        assert r.returncode == 0, r.stderr
+        job = json.loads(r.stdout.strip().splitlines()[-1])
+        assert job["status"] == "queued", job
+        status = ["curl", "-s", "-o", "/dev/null", "-w", "%{http_code}", f"{server.url}{job['url']}"]
+        mine = subprocess.run([*status[:2], "-b", "jar", *status[2:]], cwd=tmp_path, capture_output=True,
+                              text=True, timeout=30)
+        assert mine.stdout == "200"
+        assert subprocess.run(status, capture_output=True, text=True, timeout=30).stdout == "404"
     finally:
         server.stop()

@@ -21,6 +21,7 @@ import time
 
 import pytest
 from web_support import (
+    CLIENT,
     STANDIN,
     Server,
     alive,
@@ -57,7 +58,7 @@ def submit_all(server: Server, n_jobs: int, n_clients: int, halfway: threading.E
         raise AssertionError(f"{path}: the server did not come back")
 
     def client_loop() -> None:
-        with httpx.Client() as client:
+        with httpx.Client(headers=CLIENT) as client:  # one owner: the jobs are read below
             while True:
                 with lock:
                     k = next(counter, None)
@@ -124,7 +125,7 @@ def test_concurrent_jobs_survive_a_killed_server(tmp_path, n_jobs, n_clients, ma
         for k, status, body in refused:
             assert status in (429, 503) and set(body) == {"error"} and "\n" not in body["error"], (k, body)
 
-        with httpx.Client(base_url=server.url, timeout=30) as client:
+        with httpx.Client(base_url=server.url, headers=CLIENT, timeout=30) as client:
             def all_finished() -> bool:
                 states = [client.get(f"/api/jobs/{j}").json()["status"] for j in accepted.values()]
                 return all(s in ("done", "failed", "cancelled") for s in states)

@@ -148,6 +148,36 @@ def test_one_hemisphere_and_a_figure_job(server, tmp_path):
     assert server.get(job["files"][0]["url"]).content.startswith(b"\x89PNG")
 
 
+def test_gzipped_gifti_pair_uploads_and_previews(server):
+    """nilearn ships fsaverage5 maps as .gii.gz (issue 33 item 9): read as a map, not as a table."""
+    from test_gifti import gifti_xml
+
+    files = [(f"{h}.thick.func.gii.gz", gzip.compress(gifti_xml(np.full(N5, v)))) for h, v in (("lh", 2.0),
+                                                                                                ("rh", -2.0))]
+    r = post(server, files)
+    assert r.status_code == 200, r.text
+    summary = r.json()["report"]["summary"]
+    assert summary == "map: lh.thick.func.gii.gz + rh.thick.func.gii.gz, fsaverage5, 1 image", summary
+    assert r.json()["images"] == ["thick"]
+    assert colourful(preview(server, r.json()["upload_id"], "lateral-left")) > 0.5
+
+
+def test_a_gifti_that_names_another_file_reads_nothing_and_tells_nothing(server, tmp_path):
+    """``Encoding="ExternalFileBinary"`` made the reader draw any file of the server, and its error told
+    whether a path exists (issue 33 item 1): no data outside the upload is read, the answer is the same."""
+    from test_gifti import external_xml
+
+    secret = tmp_path / "secret.bin"
+    np.arange(N5, dtype=np.float32).tofile(secret)
+    answers = []
+    for name in (str(secret), str(tmp_path / "missing.bin"), "../../../secret.bin", "lh.x.bin"):
+        r = post(server, [("lh.x.func.gii", external_xml(name))])
+        assert r.status_code == 400, r.text
+        answers.append(r.json()["error"].replace(repr(name[:80]), "NAME"))  # long names are cut
+    assert len(set(answers)) == 1, "\n".join(answers)
+    assert answers[0].startswith("map file 'lh.x.func.gii' keeps its data in another file (NAME, "), answers
+
+
 # -- a volume ----------------------------------------------------------------------------------
 def test_volume_upload_is_projected_onto_the_cortex(server):
     r = post(server, [("zstat1.nii.gz", mni_volume())])

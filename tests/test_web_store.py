@@ -136,7 +136,7 @@ def test_serve_command_refuses_a_data_dir_in_use_and_bad_limits(tmp_path):
     import subprocess
     import sys
 
-    from brainpainter.web.store import lock_data_dir, unlock_data_dir
+    from brainpainter.web.folder_lock import lock_data_dir, unlock_data_dir
 
     data = tmp_path / "data"
     lock_data_dir(data)
@@ -313,3 +313,34 @@ def test_a_figure_job_publishes_one_file_and_a_cancelled_one_nothing(tmp_path):
     assert (out / "figure.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert store.get(cancelled)["status"] == "cancelled"
     assert _visible(store.job_dir(cancelled)) == ["input.bin"]
+
+
+def test_a_figure_job_over_its_pixel_limit_when_composed_fails_in_one_line(tmp_path):
+    """The layout before rendering estimates the height; the composed figure is checked before its PNG."""
+    store = Store(tmp_path)
+    opts = RenderOptions(size="32x24", views="lateral-left").model_dump()
+    params = {"format": "png", "dpi": 100, "max_pixels": 10_000}
+    job_id = store.submit("c", "figure", opts, params, "ex.csv", EXAMPLE.read_bytes(), 4, **LIMITS)
+    with stand_in("stand-in", StandInRenderer) as name:
+        painters = PainterCache(name)
+        run_job(store, store.claim("w"), painters, ttl_s=60, time_limit_s=60)
+        painters.close()
+    job = store.get(job_id)
+    assert job["status"] == "failed" and job["error"].startswith("the figure would be 350x"), job["error"]
+    assert "at most 10000 pixels" in job["error"]
+    assert _visible(store.job_dir(job_id) / "out") == []
+
+
+def test_a_job_out_of_memory_fails_in_one_line(tmp_path):
+    store = Store(tmp_path)
+    job_id = submit(store)
+
+    def no_memory(n: int) -> None:
+        raise MemoryError
+
+    with stand_in("stand-in", StandInRenderer.with_(fail=no_memory)) as name:
+        painters = PainterCache(name)
+        run_job(store, store.claim("w"), painters, ttl_s=60, time_limit_s=60)
+        painters.close()
+    job = store.get(job_id)
+    assert job["status"] == "failed" and job["error"].startswith("the job needs more memory than this server")

@@ -23,6 +23,8 @@ from brainpainter.testing import fake_distribution
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLE = REPO / "examples" / "brainpainter_dk.csv"
 STANDIN = "web-stand-in"
+#: A script's client token (docs/serve.md): connections that send it share their uploads and jobs.
+CLIENT = {"x-brainpainter-client": "web-support-client-0123456789abcdef"}
 
 
 def standin_site(root: Path) -> Path:

@@ -67,7 +67,7 @@ from brainpainter.io.rawtable import has_control
 
 #: Colour-table names that are not regions (compared in lower case), besides any "medial ... wall".
 NON_REGION_NAMES = frozenset({"", "unknown", "???", "corpuscallosum", "medial_wall", "medial.wall"})
-LABEL_SUFFIXES = (".annot", ".label.gii", ".gii")
+LABEL_SUFFIXES = (".annot", ".label.gii", ".gii", ".label.gii.gz", ".gii.gz")
 
 
 def is_non_region(name: str) -> bool:
@@ -182,9 +182,9 @@ def _swapped(path: Path, hemi: str, named: str, how: str) -> BrainPainterError:
 
 
 def _read_gifti_labels(path: Path, hemi: str | None = None) -> tuple[NDArray[Any], list[str], NDArray[Any]]:
-    import nibabel as nib
+    from brainpainter.io.gifti import read_gifti
 
-    img: Any = nib.load(str(path))
+    img: Any = read_gifti(path, what="label map")
     if not getattr(img, "darrays", None):
         raise BrainPainterError(f"{path} holds no data array; a GIFTI label file has one label per vertex")
     meta = {**dict(img.meta or {}), **dict(img.darrays[0].meta or {})}

@@ -17,7 +17,8 @@ from numpy.typing import NDArray
 from brainpainter.errors import BrainPainterError
 
 #: Mesh file endings read (longest first: ``.surf.gii`` before ``.gii``).
-MESH_SUFFIXES = (".surf.gii", ".gii", ".gltf", ".glb", ".ply", ".obj", ".stl", ".off")
+MESH_SUFFIXES = (".surf.gii.gz", ".gii.gz", ".surf.gii", ".gii", ".gltf", ".glb", ".ply", ".obj", ".stl",
+                 ".off")
 _AXIS = {"R": (0, 1.0), "L": (0, -1.0), "A": (1, 1.0), "P": (1, -1.0), "S": (2, 1.0), "I": (2, -1.0)}
 
 
@@ -127,10 +128,10 @@ def read_mesh(path: str | Path) -> tuple[NDArray[Any], NDArray[Any]]:
     """
     path = Path(path)
     try:
-        if path.name.lower().endswith(".gii"):
-            import nibabel as nib
+        if path.name.lower().endswith((".gii", ".gii.gz")):
+            from brainpainter.io.gifti import read_gifti
 
-            img: Any = nib.load(str(path))
+            img: Any = read_gifti(path, what="mesh file")
             pts = [d.data for d in img.darrays if d.data.ndim == 2 and d.data.shape[1] == 3
                    and np.issubdtype(d.data.dtype, np.floating)]
             tri = [d.data for d in img.darrays if d.data.ndim == 2 and d.data.shape[1] == 3
@@ -141,7 +142,7 @@ def read_mesh(path: str | Path) -> tuple[NDArray[Any], NDArray[Any]]:
         import trimesh
 
         try:
-            mesh: Any = trimesh.load(str(path), force="mesh", process=False)
+            mesh: Any = trimesh.load(str(path), force="mesh", process=False, resolver=_in_folder(path))
         except ValueError:
             if path.name.lower().endswith(".ply"):  # mixed triangles and quads in a binary PLY
                 return read_ply_polygons(path)
@@ -153,6 +154,23 @@ def read_mesh(path: str | Path) -> tuple[NDArray[Any], NDArray[Any]]:
         reason = " ".join(str(exc).split())[:200] or type(exc).__name__
         raise BrainPainterError(f"cannot read {path} as a mesh: {reason}; give OBJ, PLY, STL, OFF, "
                                 "GLB/glTF or GIfTI surface files") from None
+
+
+def _in_folder(path: Path) -> Any:
+    """A trimesh resolver for the files a mesh names (glTF buffers, OBJ materials and textures) that
+    reads only inside the mesh's own folder (trimesh 4 read ``../`` and absolute names anywhere)."""
+    from trimesh.resolvers import FilePathResolver
+
+    class InFolder(FilePathResolver):
+        def get(self, name: str) -> bytes:
+            folder = Path(self.parent).resolve()
+            if not (folder / name.strip()).resolve().is_relative_to(folder):
+                raise BrainPainterError(f"mesh file {path.name!r} names {name.strip()[:80]!r}, outside its "
+                                        "own folder; a mesh's buffers and materials are read only from it.")
+            data: bytes = super().get(name)
+            return data
+
+    return InFolder(str(path))
 
 
 def weld(vertices: NDArray[Any], faces: NDArray[Any]) -> tuple[NDArray[Any], NDArray[Any]]:

@@ -392,7 +392,8 @@ def build_mesh_atlas(name: str, meshes: list[Path], *, subcortical: list[Path] |
                      title: str = "", description: str = "", citation: str = "", out: Path,
                      max_faces: int = MAX_FACES, colors: Mapping[str, tuple[int, int, int]] | None = None,
                      surface_also: tuple[str, ...] = (),
-                     progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+                     progress: Callable[[str], None] | None = None,
+                     views: tuple[str, ...] = ()) -> dict[str, Any]:
     """Read the mesh folders and write an atlas folder into `out` (existing, empty).
 
     Parameters
@@ -414,6 +415,8 @@ def build_mesh_atlas(name: str, meshes: list[Path], *, subcortical: list[Path] |
     surface_also : tuple of str
         Keys of hemisphere structures drawn in the surface views too.
     progress : callable, optional
+    views : tuple of str
+        The atlas's default views (:attr:`Atlas.views`), when not the usual ones.
 
     Returns
     -------
@@ -427,7 +430,7 @@ def build_mesh_atlas(name: str, meshes: list[Path], *, subcortical: list[Path] |
               "orientation": (orientation or "as given (taken as RAS)").upper()}
     return write_mesh_atlas(name, regions, report, source=source, title=title, description=description
                             or f"{len(regions)} region meshes from {', '.join(source['folders'])}.",
-                            citation=citation, out=out, colors=colors, surface_also=surface_also)
+                            citation=citation, out=out, colors=colors, surface_also=surface_also, views=views)
 
 
 def write_mesh_atlas(name: str, regions: list[RegionMesh], report: list[str], *, source: dict[str, Any],
@@ -435,12 +438,14 @@ def write_mesh_atlas(name: str, regions: list[RegionMesh], report: list[str], *,
                      colors: Mapping[str, tuple[int, int, int]] | None = None,
                      surface_also: tuple[str, ...] = (),
                      groups: Mapping[str, tuple[str, tuple[str, ...]]] | None = None,
-                     glass: tuple[NDArray[Any], NDArray[Any]] | None = None) -> dict[str, Any]:
+                     glass: tuple[NDArray[Any], NDArray[Any]] | None = None,
+                     views: tuple[str, ...] = ()) -> dict[str, Any]:
     """Write ``atlas.json``, ``regions.tsv`` and ``template/`` of checked region meshes into `out`.
 
     `groups` maps a region that is not drawn (a BrainGlobe parent structure)
     to its full name and the drawn regions it colours (its descendants);
-    `glass` is a whole-brain glass mesh; see :func:`write_mesh_template`.
+    `glass` is a whole-brain glass mesh; see :func:`write_mesh_template`;
+    `views` are the atlas's default views (:attr:`Atlas.views`), when not the usual ones.
     Returns the ``atlas.json`` written.
     """
     import matplotlib
@@ -464,6 +469,7 @@ def write_mesh_atlas(name: str, regions: list[RegionMesh], report: list[str], *,
         "name": name, "title": title or name, "kind": "meshes", "template_labels": name, "template": name,
         "description": description, "citation": citation, "aliases": [], "source": source, "report": report,
         "image_aspect": image_aspect(regions),
+        **({"views": list(views)} if views else {}),
         "groups": {k: list(m) for k, (_, m) in (groups or {}).items()},
         "regions": [{"key": r.key, "file": r.file.name, "part": r.part, "n_vertices": len(r.vertices),
                      "n_faces": len(r.faces), "n_read_vertices": r.n_read_vertices, "notes": r.notes}

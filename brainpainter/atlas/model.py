@@ -125,6 +125,11 @@ class Atlas:
     image_aspect : float or None
         Width / height of the images when the user gives no size (a mouse brain, longer
         than wide, is framed in a square); None: the command's own size (1200 x 900).
+        Where set, a run at no size given frames its views instead
+        (:func:`brainpainter.rendering.painter.shown_aspect`).
+    views : tuple of str
+        Default views (``atlas.json``'s ``views``): those its meshes can show (the mouse's
+        hemispheres are open on the medial side, so no medial view). Empty: the usual ones.
     """
 
     name: str
@@ -140,6 +145,7 @@ class Atlas:
     sources: tuple[tuple[str, str], ...] = ()
     template_dir: Path | None = None
     image_aspect: float | None = None
+    views: tuple[str, ...] = ()
     _by_key: dict[str, Region] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -296,6 +302,7 @@ def load_atlas_dir(path: str | Path) -> Atlas:
         template_dir=path / "template" if (path / "template" / "manifest.json").is_file() else None,
         members=tuple((str(k), tuple(str(m) for m in v)) for k, v in meta.get("groups", {}).items()),
         image_aspect=float(meta["image_aspect"]) if meta.get("image_aspect") else None,
+        views=tuple(str(v) for v in meta.get("views", ())),
     )
 
 

@@ -98,6 +98,10 @@ def ambient_occlusion(vertices: NDArray[Any], faces: NDArray[Any], *, n_directio
         return np.ones(n, np.float32)
     normals = vertex_normals(v, f, np.float64)
     points = surface_points(v, f, cell)
+    centre = (points.min(axis=0) + points.max(axis=0)) / 2.0
+    # pixels a depth map spans, whatever the direction: the points lie within this many cells of the centre
+    reach = int(np.ceil(float(np.linalg.norm(points - centre, axis=1).max()) / cell)) + 2
+    side = 2 * reach + 1
     seen = np.zeros(n)
     weight = np.zeros(n)
     for d in sphere_directions(n_directions):
@@ -105,16 +109,17 @@ def ambient_occlusion(vertices: NDArray[Any], faces: NDArray[Any], *, n_directio
         up = cos > 0.0
         if not up.any():
             continue
-        # a basis (a, b) of the plane the depth map lies in
+        # a basis (a, b) of the plane the depth map lies in, and the height along d
         a = np.cross(d, (1.0, 0.0, 0.0) if abs(d[0]) < 0.9 else (0.0, 1.0, 0.0))
         a /= np.linalg.norm(a)
-        b = np.cross(d, a)
-        ij = np.floor(points @ np.column_stack([a, b]) / cell).astype(np.int64)
-        ij -= ij.min(axis=0)
-        width = int(ij[:, 1].max()) + 1
-        pixel = ij[:, 0] * width + ij[:, 1]
-        height = points @ d
-        top = np.full(int(pixel.max()) + 1, -np.inf)
+        basis = np.column_stack([a, np.cross(d, a), d])
+        projected = points @ basis
+        # pixels are whole cells of the plane's own coordinates, numbered from the centre's (0 .. side-1)
+        ij = np.floor(projected[:, :2] / cell).astype(np.int64) - (np.floor(centre @ basis[:, :2] / cell)
+                                                                   .astype(np.int64) - reach)
+        pixel = ij[:, 0] * side + ij[:, 1]
+        height = projected[:, 2]
+        top = np.full(side * side, -np.inf)
         np.maximum.at(top, pixel, height)
         c = cos[up]
         # a flat surface tilted from the map rises by up to cell * tan(tilt) within one pixel
@@ -123,6 +128,32 @@ def ambient_occlusion(vertices: NDArray[Any], faces: NDArray[Any], *, n_directio
         seen[up] += cos[up] * visible
         weight[up] += cos[up]
     out: NDArray[Any] = np.where(weight > 0, seen / np.where(weight > 0, weight, 1.0), 1.0).astype(np.float32)
+    return out
+
+
+def occlusion_of_shown(vertices: NDArray[Any], faces: NDArray[Any], shown: NDArray[Any],
+                       baked: NDArray[Any]) -> NDArray[Any]:
+    """Occlusion of a mesh some of whose faces are hidden: what the bake gives the faces shown alone.
+
+    Parameters
+    ----------
+    vertices : ndarray of float, shape (n_vertices, 3)
+    faces : ndarray of int, shape (n_faces, 3)
+    shown : ndarray of bool, shape (n_faces,)
+        The faces drawn; the others occlude nothing.
+    baked : ndarray of float32, shape (n_vertices,)
+        The occlusion baked with every face (kept for the vertices of hidden faces only).
+
+    Returns
+    -------
+    ndarray of float32, shape (n_vertices,)
+    """
+    shown = np.asarray(shown, dtype=bool)
+    f = np.asarray(faces, dtype=np.int64)[shown]
+    used, inverse = np.unique(f, return_inverse=True)
+    out: NDArray[Any] = np.array(baked, dtype=np.float32, copy=True)
+    if len(used) and not shown.all():  # all shown: what was baked
+        out[used] = ambient_occlusion(np.asarray(vertices)[used], inverse.reshape(-1, 3))
     return out
 
 

@@ -29,10 +29,28 @@ from brainpainter.errors import BrainPainterError, PluginError, choice_error
 CONFIG_FILE = "atlas.toml"
 GROUPS = ("brainpainter.atlases", "brainpainter.renderers", "brainpainter.templates")
 
+# The optional distributions of this repository (plugins/atlases/<distribution>) and the atlases
+# each provides (its "brainpainter.atlases" entry points).
+KNOWN_ATLAS_PLUGINS: Mapping[str, tuple[str, ...]] = MappingProxyType({
+    "brainpainter-atlas-mouse": ("mouse",),
+    "brainpainter-atlas-yeo7": ("yeo7",),
+    "brainpainter-atlas-schaefer-yeo": (
+        *(f"schaefer{n}_{k}n" for n in range(100, 1001, 100) for k in (7, 17)), "yeo17"),
+})
+
+
+def install_hint(name: str, distribution: str) -> str:
+    """What to do when `name` is asked for and its `distribution` is not installed."""
+    return (f"{name!r} is provided by the {distribution} package, which is not installed: "
+            f"pip install {distribution} (from a checkout of brainpainter: "
+            f"pip install plugins/atlases/{distribution}).")
+
+
 # Names a user may know that live in optional distributions: name -> pip hint.
 KNOWN_ELSEWHERE: Mapping[str, Mapping[str, str]] = MappingProxyType({
     "brainpainter.renderers": MappingProxyType({}),
-    "brainpainter.atlases": MappingProxyType({}),
+    "brainpainter.atlases": MappingProxyType({
+        name: install_hint(name, dist) for dist, names in KNOWN_ATLAS_PLUGINS.items() for name in names}),
     "brainpainter.templates": MappingProxyType({}),
 })
 

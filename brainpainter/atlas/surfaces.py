@@ -25,7 +25,6 @@ into the user's cache folder (``platformdirs``), so workers load it by path.
 
 from __future__ import annotations
 
-import gzip
 import hashlib
 import json
 import os
@@ -43,6 +42,7 @@ from numpy.typing import NDArray
 from brainpainter.atlas.template import FORMAT, FORMAT_VERSION, HEMIS
 from brainpainter.atlas.writer import save_npz
 from brainpainter.errors import BrainPainterError
+from brainpainter.io.gifti import read_gifti
 
 #: The one region of a surface template's label set: the whole surface.
 SURFACE_REGION = "surface"
@@ -63,8 +63,8 @@ _VERSION = 1
 def read_surface(path: str | Path) -> tuple[NDArray[np.float32], NDArray[np.int32]]:
     """Vertices and triangles of one surface file: GIfTI (``.gii``, ``.gii.gz``) or FreeSurfer geometry.
 
-    GIfTI files are read from their bytes (an ``ExternalFileBinary`` array,
-    which points to another file, is refused by nibabel).
+    GIfTI files are read by :func:`brainpainter.io.gifti.read_gifti` (data kept in
+    another file is read only from inside the surface's own folder).
 
     Returns
     -------
@@ -82,7 +82,7 @@ def read_surface(path: str | Path) -> tuple[NDArray[np.float32], NDArray[np.int3
                                 "FreeSurfer surface (lh.pial, lh.inflated, ...).")
     try:
         if _is_gifti(p):
-            img = _gifti(p)
+            img = read_gifti(p, what="surface file")
             pts = img.agg_data("NIFTI_INTENT_POINTSET")
             tri = img.agg_data("NIFTI_INTENT_TRIANGLE")
             if not isinstance(pts, np.ndarray) or not isinstance(tri, np.ndarray):
@@ -93,12 +93,10 @@ def read_surface(path: str | Path) -> tuple[NDArray[np.float32], NDArray[np.int3
             from nibabel.freesurfer import read_geometry  # type: ignore[attr-defined]
 
             v, f = read_geometry(str(p))[:2]  # type: ignore[no-untyped-call]
+    except BrainPainterError:
+        raise
     except Exception as exc:  # nibabel's many errors for a file that is not what its name says
         text = " ".join(str(exc).split())[:160] or type(exc).__name__
-        if "ExternalFileBinary" in text:
-            raise BrainPainterError(
-                f"surface file {p.name!r} keeps its data in another file (ExternalFileBinary), which is not "
-                "opened; save it as one file (wb_command -gifti-convert BASE64_BINARY IN OUT).") from None
         raise BrainPainterError(f"cannot read surface file {p.name!r}: {text}. Surfaces are GIfTI "
                                 "(.surf.gii, .gii.gz) or FreeSurfer geometry (lh.pial, ...).") from None
     v, f = np.asarray(v), np.asarray(f)
@@ -115,20 +113,10 @@ def _is_gifti(path: Path) -> bool:
     return path.name.lower().endswith((".gii", ".gii.gz"))
 
 
-def _gifti(path: Path) -> Any:
-    """A GIfTI image read from the file's bytes (gunzipped for ``.gz``)."""
-    import nibabel as nib
-
-    raw = path.read_bytes()
-    if path.name.lower().endswith(".gz"):
-        raw = gzip.decompress(raw)
-    return nib.GiftiImage.from_bytes(raw)
-
-
 def _read_values(path: Path) -> NDArray[Any]:
     """One value per vertex from a FreeSurfer morphometry file or a GIfTI's first data array, shape (n,)."""
     if _is_gifti(path):
-        return np.asarray(_gifti(path).darrays[0].data).ravel()
+        return np.asarray(read_gifti(path).darrays[0].data).ravel()
     from nibabel.freesurfer import read_morph_data  # type: ignore[attr-defined]
 
     return np.asarray(read_morph_data(str(path))).ravel()  # type: ignore[no-untyped-call]

@@ -68,7 +68,7 @@ from brainpainter.atlas import registry
 from brainpainter.atlas.mesh import CortexMesh, LabelledMesh, faces_digest, labels_at_vertices, split_mesh
 from brainpainter.atlas.model import SURFACES as SURFACES  # re-exported: readers of templates look here
 from brainpainter.atlas.model import Atlas
-from brainpainter.atlas.occlusion import from_stored
+from brainpainter.atlas.occlusion import from_stored, occlusion_of_shown
 from brainpainter.errors import BrainPainterError
 
 FORMAT = "brainpainter-template"
@@ -168,7 +168,7 @@ class Template:
 
     def subcortical_names(self) -> tuple[str, ...]:
         """``subcortical().label_names``, read from the manifest (no mesh is loaded)."""
-        return tuple(s["name"] for s in self.manifest["subcortical"]["structures"])
+        return tuple(s["name"] for s in (self.manifest.get("subcortical") or {}).get("structures", []))
 
     def cortex(self, labels: str, hemi: str) -> CortexMesh:
         """The hemisphere `hemi` split by label set `labels`.
@@ -265,8 +265,14 @@ class Template:
         return Template(path=self.path, manifest=manifest, _cache=self._cache)
 
     def subcortical(self) -> LabelledMesh:
-        """All subcortical structures (names as in FreeSurfer's aseg LUT, or a volume atlas's keys)."""
-        entry = self.manifest["subcortical"]
+        """All subcortical structures (names as in FreeSurfer's aseg LUT, or a volume atlas's keys).
+
+        A template without them (the user's own surfaces) gives an empty mesh.
+        """
+        entry = self.manifest.get("subcortical")
+        if not entry:
+            return LabelledMesh(np.zeros((0, 3), np.float32), np.zeros((0, 3), np.int32),
+                                np.zeros(0, np.int16), ())
         names = self.subcortical_names()
         files = entry.get("parts", [entry["file"]])
         arrays = [self._npz(f) for f in files]
@@ -284,6 +290,25 @@ class Template:
             n_l += int(z["face_label"].max()) + 1 if len(z["face_label"]) else 0
         return LabelledMesh(np.concatenate(verts), np.concatenate(faces).astype(np.int32),
                             np.concatenate(labels).astype(np.int16), names, occlusion)
+
+    def subcortical_occlusion(self, hidden: frozenset[str] = frozenset()) -> NDArray[Any] | None:
+        """The baked occlusion of :meth:`subcortical`, or with the `hidden` structures taken away.
+
+        Hiding a structure uncovers the ones it shaded (the caudate and thalamus beside the
+        ventricles): their occlusion is baked again without it (a few seconds for the aseg
+        structures), once per set of hidden structures. None when the template has none baked.
+        """
+        sub = self.subcortical()
+        gone = [i for i, name in enumerate(sub.label_names) if name in hidden]
+        if sub.occlusion is None or not gone:
+            return sub.occlusion
+        entry = self.manifest["subcortical"]
+        key = f"subcortical-occlusion:{entry.get('parts', [entry['file']])}:{gone}"
+        if key not in self._cache:
+            shown = ~np.isin(np.asarray(sub.face_label), gone)
+            self._cache[key] = occlusion_of_shown(sub.vertices, sub.faces, shown, sub.occlusion)
+        out: NDArray[Any] = self._cache[key]
+        return out
 
     def with_volumes(self, folders: list[Path] | tuple[Path, ...]) -> Template:
         """This template with the meshes of volumetric atlases as its subcortical part.

@@ -239,10 +239,19 @@ def read_volume(path: str | Path) -> LabelVolume:
     """Read an integer label volume (NIfTI, MGH, ...) with nibabel; one-line errors for bad input."""
     import nibabel as nib
 
+    from brainpainter.io.hdf5 import check_hdf5
+    from brainpainter.io.sniff import HEAD, not_a_volume
+
     path = Path(path).expanduser()
     if not path.is_file():
         raise BrainPainterError(f"label volume {path} does not exist; give a NIfTI (.nii, .nii.gz) or MGH "
                                 "(.mgz) file of integer labels")
+    with path.open("rb") as f:
+        found = not_a_volume(f.read(HEAD))
+    if found:  # never given to nib.load, which reads a GIfTI (and the files it names)
+        raise BrainPainterError(f"label volume {path} looks like {found}, not a volume; give a NIfTI (.nii, "
+                                ".nii.gz), MGH (.mgz) or MINC file of integer labels")
+    check_hdf5(path, "label volume")  # MINC-2 can take its data from other files
     try:
         with warnings.catch_warnings(action="ignore"):  # nibabel's parse warnings: the error says it
             img: Any = nib.load(str(path))

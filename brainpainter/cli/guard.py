@@ -15,7 +15,11 @@
 While a command runs, caches and temporary files of the libraries it loads
 (matplotlib's font cache, fontconfig, Blender's user folders, ffmpeg's and
 Python's temporary files) go to one temporary folder that is removed when the
-command ends, so a run writes nothing outside its output folder.
+command ends, so a run writes nothing outside its output folder. The folder
+holds a lock (``flock`` on :data:`RUN_LOCK`) while its process lives; a
+process killed with ``kill -9`` cannot remove its folder, so every run first
+removes the ``brainpainter-run-*`` folders whose lock nobody holds
+(:func:`remove_dead_runs`).
 """
 
 from __future__ import annotations
@@ -53,6 +57,10 @@ CACHE_VARIABLES = {
     "BLENDER_USER_RESOURCES": "blender/resources",
 }
 
+RUN_PREFIX = "brainpainter-run-"
+#: The lock file of a run's temporary folder, held (``flock``) by the process that made it while it lives.
+RUN_LOCK = ".owner.lock"
+
 #: Caches that would only be written into the run's temporary folder and thrown away with it; Mesa's
 #: shader cache thread also kept writing there after a Ctrl-C had removed it ("Failed to create ...").
 NO_DISK_CACHE = {"MESA_SHADER_CACHE_DISABLE": "true"}
@@ -89,10 +97,56 @@ def _on_signal(signum: int, frame: Any) -> None:
     raise Terminated() if signum == signal.SIGTERM else Interrupted()
 
 
+def _hold_lock(root: str) -> int:
+    """Lock `root`'s :data:`RUN_LOCK` for this process (the file descriptor; the lock goes when it is
+    closed or the process dies). Locked under another name, then renamed: a sweep never sees it unlocked."""
+    import fcntl
+
+    fd, tmp = tempfile.mkstemp(prefix=".locking-", dir=root)
+    fcntl.flock(fd, fcntl.LOCK_EX)
+    os.rename(tmp, os.path.join(root, RUN_LOCK))
+    return fd
+
+
+def remove_dead_runs(folder: str | None = None) -> list[str]:
+    """Remove the run folders (``brainpainter-run-*`` in `folder`, default the temporary folder) of
+    processes that are gone: those whose :data:`RUN_LOCK` can be locked. A folder without the lock file
+    (being made, or made by an earlier version) is left alone. Returns the folders removed."""
+    import fcntl
+
+    folder = folder or tempfile.gettempdir()
+    gone: list[str] = []
+    try:
+        names = [n for n in os.listdir(folder) if n.startswith(RUN_PREFIX)]
+    except OSError:
+        return gone
+    for name in names:
+        root = os.path.join(folder, name)
+        try:
+            fd = os.open(os.path.join(root, RUN_LOCK), os.O_RDONLY | os.O_NOFOLLOW)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:  # held: its process lives
+            os.close(fd)
+            continue
+        try:
+            if not os.path.islink(root):
+                shutil.rmtree(root, ignore_errors=True)
+                gone.append(root)
+        finally:
+            os.close(fd)
+    return gone
+
+
 @contextmanager
 def private_temp() -> Iterator[str]:
-    """Point caches and temporary files at a fresh folder; remove it afterwards."""
-    root = tempfile.mkdtemp(prefix="brainpainter-run-")
+    """Point caches and temporary files at a fresh folder (locked while this process lives); remove it
+    afterwards. The folders of runs killed earlier go first (:func:`remove_dead_runs`)."""
+    remove_dead_runs()
+    root = tempfile.mkdtemp(prefix=RUN_PREFIX)
+    lock = _hold_lock(root)
     saved = {k: os.environ.get(k) for k in (*CACHE_VARIABLES, *NO_DISK_CACHE, "TMPDIR")}
     saved_tempdir = tempfile.tempdir
     try:
@@ -119,6 +173,7 @@ def private_temp() -> Iterator[str]:
                 if not os.path.exists(root):
                     break
                 time.sleep(0.05)
+            os.close(lock)
 
 
 @contextmanager

@@ -170,7 +170,8 @@ parallel_options = stack([
 
 
 def tables_or_maps(inputs: Sequence[Any], kwargs: dict[str, Any]) -> Any:
-    """The data of a command: INPUT tables (one, or a list), or None when maps come by ``--lh/--rh/--volume``.
+    """The data of a command: INPUT tables (one, or a list), or None (maps by ``--lh/--rh/--volume``, or
+    ``--tract-values`` alone).
 
     Raises
     ------
@@ -180,8 +181,9 @@ def tables_or_maps(inputs: Sequence[Any], kwargs: dict[str, Any]) -> Any:
     from brainpainter.errors import BrainPainterError
 
     maps = any(kwargs.get(name) is not None for name in ("lh", "rh", "volume"))
-    if not inputs and not maps:
-        raise BrainPainterError("give INPUT tables, or maps: --lh FILE and/or --rh FILE, or --volume FILE.")
+    if not inputs and not maps and kwargs.get("tract_values") is None:
+        raise BrainPainterError("give INPUT tables, or maps: --lh FILE and/or --rh FILE, or --volume FILE, "
+                                "or tract values alone: --tract-values FILE --tracts DIR.")
     if inputs and maps:
         raise BrainPainterError("give INPUT tables or maps (--lh/--rh, --volume), not both in one command.")
     if not inputs:

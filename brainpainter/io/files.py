@@ -17,6 +17,7 @@ from __future__ import annotations
 import errno
 import os
 import stat
+import zlib
 from pathlib import Path
 
 from brainpainter.errors import BrainPainterError
@@ -28,6 +29,8 @@ LIMITS = {
     "subject file": 1024 * 2**20,
     "template file": 1024 * 2**20,
 }
+#: Largest data file read (a map, a GIfTI), and largest size a gzipped one may inflate to (bytes).
+MAX_DATA_FILE = 1024 * 2**20
 
 
 def _open(path: Path, what: str, hint: str) -> int:
@@ -142,3 +145,29 @@ def check_input_dir(path: str | os.PathLike[str], what: str = "folder", hint: st
     if not stat.S_ISDIR(st.st_mode):
         raise BrainPainterError(f"{what} {name!r} is not a folder; {hint or 'give a folder'}.")
     return path
+
+
+def inflated(raw: bytes, what: str, limit: int | None = None) -> bytes:
+    """`raw`, or if it is gzip-compressed (by its magic number), its contents, at most `limit` bytes
+    (default :data:`MAX_DATA_FILE`).
+
+    Raises
+    ------
+    BrainPainterError
+        Inflating to more than `limit` bytes, or broken or cut-short gzip data.
+    """
+    if raw[:2] != b"\x1f\x8b":
+        return raw
+    limit = MAX_DATA_FILE if limit is None else limit
+    d = zlib.decompressobj(wbits=31)
+    try:
+        out = d.decompress(raw, limit + 1)
+    except zlib.error as exc:
+        raise BrainPainterError(f"{what} is not readable gzip data ({exc}); give the file as your software "
+                                "wrote it.") from None
+    if len(out) > limit:
+        raise BrainPainterError(f"{what} inflates to more than {limit >> 20} MB; at most that much is read, "
+                                "to keep memory bounded. Check that it is the right file.")
+    if not d.eof:
+        raise BrainPainterError(f"{what} is cut short (its gzip data end early); give the whole file.")
+    return out

@@ -53,18 +53,21 @@ def read_surface(surface: SurfaceLike, what: str) -> NDArray[np.float64]:
 
 
 def _read_surface_file(path: Path, what: str) -> NDArray[np.float64]:
-    import nibabel as nib
     from nibabel.freesurfer.io import read_geometry
+
+    from brainpainter.io.gifti import read_gifti
 
     if not path.is_file():
         raise BrainPainterError(f"the {what} surface {path} does not exist; give a FreeSurfer surface "
                                 "(surf/lh.white) or a GIfTI .surf.gii file.")
     try:
-        if path.name.endswith(".gii"):
-            img: Any = nib.load(path)
+        if path.name.endswith((".gii", ".gii.gz")):
+            img: Any = read_gifti(path, what=f"{what} surface")
             arrays = img.get_arrays_from_intent("NIFTI_INTENT_POINTSET") or img.darrays[:1]
             return read_surface(np.asarray(arrays[0].data), what)
         coords, _, meta = read_geometry(path, read_metadata=True)  # type: ignore[no-untyped-call]
+    except BrainPainterError:
+        raise
     except Exception as exc:  # nibabel raises many types for a file that is not a surface
         raise BrainPainterError(f"cannot read the {what} surface {path} ({type(exc).__name__}: {exc}); "
                                 "give a FreeSurfer surface (surf/lh.white) or a GIfTI .surf.gii.") from None

@@ -2,7 +2,7 @@
 
 Files (read with nibabel): FreeSurfer morphometry ("curv" format,
 ``lh.thickness``), ``.mgh``/``.mgz``, GIfTI ``.func.gii``/``.shape.gii`` (several
-data arrays = several images), NIfTI holding one value per vertex (``N x 1 x 1``
+data arrays = several images; also gzipped, ``.gii.gz``), NIfTI holding one value per vertex (``N x 1 x 1``
 [``x k``]), ``.npy``, plain text (one number per line; columns = images);
 label maps ``.annot``, ``.label.gii`` (categories, drawn in their own colours)
 and FreeSurfer ``.label`` vertex lists (a highlighted area). Arrays:
@@ -15,7 +15,6 @@ turned into the same arrays by ``brainpainter.maps.volume`` and handed to
 
 from __future__ import annotations
 
-import gzip
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
@@ -26,6 +25,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
+from brainpainter.io.files import MAX_DATA_FILE, inflated, read_input
+from brainpainter.io.gifti import External, read_gifti
+from brainpainter.io.sniff import CURV, GZIP, HEAD, MGH, NIFTI1, NIFTI2, NPY, described, what_is
 from brainpainter.maps.resolution import FAMILY, N_FSAVERAGE, native, to_fsaverage
 
 if TYPE_CHECKING:
@@ -34,8 +36,11 @@ if TYPE_CHECKING:
 HEMIS = ("lh", "rh")
 #: File endings read as text, as arrays, as surface images, as label maps.
 TEXT = (".txt", ".csv", ".tsv", ".1d")
-SUFFIXES = (".mgh", ".mgz", ".gii", ".nii", ".nii.gz", ".npy", ".annot", ".label", *TEXT,
+SUFFIXES = (".mgh", ".mgz", ".gii", ".gii.gz", ".nii", ".nii.gz", ".npy", ".annot", ".label", *TEXT,
             "(none: FreeSurfer curv format, e.g. lh.thickness)")
+#: GIfTI endings, compound ones first (gzipped GIfTI is read too).
+GIFTI_ENDINGS = (".func.gii.gz", ".shape.gii.gz", ".label.gii.gz", ".gii.gz", ".func.gii", ".shape.gii",
+                 ".label.gii", ".gii")
 #: lh/rh spellings in file names: FreeSurfer's ``lh.``, BIDS' ``hemi-L``, and ``_lh``/``.L.``.
 _PAIRS = ((r"(^|[._-])lh([._-])", r"\1rh\2"), (r"hemi-L", "hemi-R"), (r"([._-])L([._-])", r"\1R\2"),
           (r"(^|[._-])left([._-])", r"\1right\2"))
@@ -151,7 +156,7 @@ def _swap(lh_pat: str, rh_sub: str) -> tuple[str, str]:
 
 
 #: File endings that are maps, never tables.
-MAP_ONLY_SUFFIXES = (".mgh", ".mgz", ".gii", ".nii", ".nii.gz", ".npy", ".annot", ".label")
+MAP_ONLY_SUFFIXES = (".mgh", ".mgz", ".gii", ".gii.gz", ".nii", ".nii.gz", ".npy", ".annot", ".label")
 #: FreeSurfer morphometry files ("curv" format, no ending), e.g. ``lh.thickness``, ``rh.sulc``.
 _MORPH = re.compile(r"^[lr]h\.(thickness|sulc|curv|area|volume|jacobian_white|avg_curv|pial_lgi|w-g\.pct)"
                     r"(\.|$)")
@@ -178,8 +183,8 @@ def is_map_input(data: Any) -> bool:
     return hasattr(data, "data") and hasattr(data.data, "parts")  # nilearn SurfaceImage
 
 
-def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = None,
-              mesh: Mapping[str, int] | None = None) -> VertexMaps:
+def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = None, *,
+              external: External = "folder", mesh: Mapping[str, int] | None = None) -> VertexMaps:
     """Any map input to :class:`VertexMaps` on fsaverage (the hook every command calls).
 
     Parameters
@@ -194,10 +199,14 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
     volume : path or nibabel image, optional
         An MNI152 volume (``--volume FILE``), projected by
         :func:`read_volume`.
+    external : {"folder", "refuse"}
+        Where a GIfTI file may keep its data: in a file inside its own folder,
+        or nowhere but in itself (the web server;
+        :func:`brainpainter.io.gifti.read_gifti`).
     mesh : mapping of {"lh", "rh"} to int, optional
-        The vertex counts of the user's own surfaces (``--lh-surface``/``--rh-surface``):
-        each hemisphere's map has exactly that many values and is drawn on that surface
-        as it is (``own_mesh``), never on fsaverage.
+        The vertex counts of the user's own surfaces (``--lh-surface``/``--rh-surface``, or a
+        template built from a subject): each hemisphere's map has exactly that many values and
+        is drawn on that surface as it is (``own_mesh``), never on fsaverage.
     """
     from brainpainter.maps import volume as volumes
 
@@ -242,7 +251,8 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
             flag = f"--{missing[0]}-surface"
             raise BrainPainterError(f"a map of {missing[0]} was given but no surface to draw it on ({flag}); "
                                     f"give {flag} FILE, or leave out the other surface to draw on fsaverage.")
-    hemis = {h: read_hemi(v, h, None if mesh is None else mesh[h]) for h, v in given.items()}
+    hemis = {h: read_hemi(v, h, external=external, n=None if mesh is None else mesh[h])
+             for h, v in given.items()}
     maps = _combine(hemis, given)
     return maps if mesh is None else replace(maps, own_mesh=True)
 
@@ -322,7 +332,7 @@ def _combine(hemis: dict[str, Hemi], given: dict[str, Any]) -> VertexMaps:
 
 def _stem(path: str | Path) -> str:
     name = Path(path).name
-    for suffix in (".nii.gz", ".func.gii", ".shape.gii", ".label.gii", *SUFFIXES[:-1]):
+    for suffix in (*GIFTI_ENDINGS, ".nii.gz", *SUFFIXES[:-1]):
         if name.lower().endswith(suffix):
             name = name[: -len(suffix)]
             break
@@ -331,10 +341,10 @@ def _stem(path: str | Path) -> str:
     return name.strip("._-") or "map"
 
 
-def read_hemi(value: Any, hemi: str, n: int | None = None) -> Hemi:
+def read_hemi(value: Any, hemi: str, *, external: External = "folder", n: int | None = None) -> Hemi:
     """One hemisphere's file or array (see the module docstring); `n`: its own surface's vertex count."""
     if isinstance(value, str | Path):
-        return read_file(Path(value), hemi, n)
+        return read_file(Path(value), hemi, external=external, n=n)
     arr = np.asarray(value, dtype=np.float64) if not isinstance(value, np.ndarray) else value
     return Hemi(native(_as_rows(arr, f"the {hemi} array", n), what=f"the {hemi} array", n=n))
 
@@ -355,8 +365,13 @@ def _as_rows(arr: NDArray[Any], what: str, n: int | None = None) -> NDArray[Any]
     return a.astype(np.float32)
 
 
-def read_file(path: Path, hemi: str, n: int | None = None) -> Hemi:
-    """Read one hemisphere's map file (any format of :data:`SUFFIXES`); `n`: its own surface's count."""
+def read_file(path: Path, hemi: str, *, external: External = "folder", n: int | None = None) -> Hemi:
+    """Read one hemisphere's map file (any format of :data:`SUFFIXES`); `n`: its own surface's count.
+
+    A file whose first bytes say another format than its name (gzip data named
+    ``lh.thickness``) is an error naming what was found; `external` is where a
+    GIfTI may keep its data (:func:`brainpainter.io.gifti.read_gifti`).
+    """
     import nibabel as nib
     from nibabel.freesurfer import read_annot, read_label, read_morph_data  # type: ignore[attr-defined]
 
@@ -365,6 +380,9 @@ def read_file(path: Path, hemi: str, n: int | None = None) -> Hemi:
         raise BrainPainterError(f"map file {str(path)!r} ({hemi}) does not exist; give an existing file.")
     what = f"map file {path.name!r}"
     try:
+        if not name.endswith((".gii", ".gii.gz", ".mgh", ".mgz", ".nii", ".nii.gz")):  # these: once read
+            with path.open("rb") as f:
+                _is_format(f.read(HEAD), name, what)
         if name.endswith(".annot"):
             labels, ctab, names = read_annot(str(path))  # type: ignore[no-untyped-call]
             return _labels(labels, [s.decode() if isinstance(s, bytes) else str(s) for s in names],
@@ -376,12 +394,13 @@ def read_file(path: Path, hemi: str, n: int | None = None) -> Hemi:
             v = np.full(size, np.nan, np.float32)
             v[idx] = 1.0
             return Hemi(native(v, what=what, n=n))
-        if name.endswith(".gii"):
-            return _gifti(nib.load(str(path)), what, n)
+        if name.endswith((".gii", ".gii.gz")):
+            return _gifti(read_gifti(path, external=external, what="map file"), what, n)
         if name.endswith((".mgh", ".mgz", ".nii", ".nii.gz")):
-            raw = path.read_bytes()  # read whole: no file left open by a lazy proxy
-            raw = gzip.decompress(raw) if name.endswith((".mgz", ".gz")) else raw
-            klass: Any = nib.MGHImage if name.endswith((".mgh", ".mgz")) else nib.Nifti1Image
+            # read whole (no file left open by a lazy proxy), inflated if gzip, bounded
+            raw = inflated(read_input(path, "map file", MAX_DATA_FILE), what)
+            found = _is_format(raw[:HEAD], name, what)
+            klass: Any = {MGH: nib.MGHImage, NIFTI2: nib.Nifti2Image}.get(found or "", nib.Nifti1Image)
             frames = _surface_frames(np.asarray(klass.from_bytes(raw).dataobj), what, n)
             return Hemi(native(_as_rows(frames, what, n), what=what, n=n))
         if name.endswith(".npy"):
@@ -396,6 +415,38 @@ def read_file(path: Path, hemi: str, n: int | None = None) -> Hemi:
         text = " ".join(str(exc).split())[:160]
         raise BrainPainterError(
             f"cannot read {what} ({hemi}): {text}. Maps are {', '.join(SUFFIXES)}.") from None
+
+
+def _is_format(head: bytes, name: str, what: str) -> str | None:
+    """What a file's first bytes `head` are (:func:`brainpainter.io.sniff.what_is`), if its name allows it.
+
+    Raises
+    ------
+    BrainPainterError
+        The bytes are another format than the name says (``'lh.thickness' looks like gzip-compressed
+        data, not a FreeSurfer curv file``).
+    """
+    found = what_is(head)
+    expected, allowed = next((f for ends, f in _FORMATS if name.endswith(ends)), _CURV)
+    if found in allowed:
+        return found
+    hint = ("gunzip it first (a gzipped GIfTI is read when named .gii.gz)" if found == GZIP else
+            "give the file your software wrote, or name it for what it holds (docs/maps.md: the formats)")
+    if found is None:
+        raise BrainPainterError(f"cannot read {what}: it is not {expected} (its first bytes match no format "
+                                f"known here); {hint}.")
+    raise BrainPainterError(f"{what} looks like {described(head)}, not {expected}; {hint}.")
+
+
+#: Per file ending: the format it names and what its first bytes may be (None: no magic number).
+_CURV: tuple[str, frozenset[str | None]] = ("a FreeSurfer curv file", frozenset({CURV, None}))
+_FORMATS: tuple[tuple[tuple[str, ...], tuple[str, frozenset[str | None]]], ...] = (
+    ((".mgh", ".mgz"), ("an MGH image", frozenset({MGH}))),
+    ((".nii", ".nii.gz"), ("a NIfTI image", frozenset({NIFTI1, NIFTI2}))),
+    ((".npy",), ("a NumPy .npy file", frozenset({NPY}))),
+    ((".annot",), ("a FreeSurfer .annot file", frozenset({None}))),
+    ((".label", *TEXT), ("a text file", frozenset({None}))),
+)
 
 
 def _surface_frames(data: NDArray[Any], what: str, n: int | None = None) -> NDArray[Any]:

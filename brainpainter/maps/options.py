@@ -99,5 +99,5 @@ class MapOptions:
 
     @property
     def given(self) -> bool:
-        """Whether a map was given through --lh/--rh or --volume."""
-        return self.lh is not None or self.rh is not None or self.volume is not None
+        """Whether a map was given through --lh/--rh or --volume (or a surface of the user's own)."""
+        return self.lh is not None or self.rh is not None or self.volume is not None or bool(self.surfaces)

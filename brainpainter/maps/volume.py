@@ -78,6 +78,9 @@ def load_volume(img: ImageLike) -> Volume:
     """
     import nibabel as nib
 
+    from brainpainter.io.hdf5 import check_hdf5
+    from brainpainter.io.sniff import HEAD, not_a_volume
+
     name = "volume"
     image: Any = img
     if isinstance(img, (str, os.PathLike)):
@@ -86,6 +89,13 @@ def load_volume(img: ImageLike) -> Volume:
         if not path.is_file():
             raise BrainPainterError(f"volume file {path} does not exist; give a NIfTI (.nii, .nii.gz) "
                                     "or MGH (.mgz) volume in MNI152 space.")
+        with path.open("rb") as f:
+            found = not_a_volume(f.read(HEAD))
+        if found:  # never given to nib.load, which reads a GIfTI (and the files it names)
+            raise BrainPainterError(f"volume file {path.name!r} looks like {found}, not a NIfTI or MGH "
+                                    "volume; a map per vertex goes to --lh/--rh, a volume is .nii, .nii.gz "
+                                    "or .mgz.")
+        check_hdf5(path, "volume file")  # MINC-2 can take its data from other files
         try:
             image = nib.load(str(path))
         except Exception as exc:  # nibabel raises ImageFileError, ValueError, OSError, ...

@@ -124,8 +124,6 @@ def region_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
         if wall:
             out.append(RegionMesh(f"{HEMI_PREFIX[hemi]}medial-wall", hemi,
                                   *_submesh(verts, normals, np.concatenate(wall)), scene.medial_wall_color))
-    if not template.manifest.get("subcortical"):  # a brain of surfaces only (the user's own surfaces)
-        return out
     sub = template.subcortical()
     normals = vertex_normals(sub.vertices, sub.faces)
     for i, key in enumerate(sub.label_names):
@@ -490,7 +488,6 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
         from brainpainter.media.drawn import swatches_needed
         from brainpainter.rendering.views import parse_views
 
-        # the whole brain's swatches (a map's own views: its surfaces may be of one hemisphere)
         views = run.views if isinstance(run, MapRun) else parse_views("lateral-left,medial-right,subcortical")
         nan, missing = swatches_needed(table, [i], views, scene.geometry)
         bar = colorbar_image(run.scale, (420, 64 if label else 48), background=run.settings.background,

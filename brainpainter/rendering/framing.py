@@ -143,6 +143,26 @@ def extent(points: NDArray[Any], azimuth: float, elevation: float, aspect: float
     return max(float(np.ptp(u)), 1e-6, float(np.ptp(v)) * aspect)
 
 
+def views_aspect(points: NDArray[Any], views: list[tuple[float, float]], lo: float = 0.75,
+                 hi: float = 2.0) -> float:
+    """Image width / height that frames `points` from these directions: the geometric mean of each
+    direction's (width / height) of the points, between `lo` and `hi`.
+
+    Parameters
+    ----------
+    points : ndarray of float, shape (n, 3)
+        RAS millimetres.
+    views : list of (float, float)
+        Azimuth and elevation of each view, degrees.
+    """
+    pts = np.asarray(points, dtype=float)
+    shapes = []
+    for azimuth, elevation in views:
+        right, up, _ = view_axes(azimuth, elevation)
+        shapes.append(max(float(np.ptp(pts @ right)), 1e-6) / max(float(np.ptp(pts @ up)), 1e-6))
+    return float(np.clip(np.exp(np.mean(np.log(shapes))), lo, hi)) if shapes else 4 / 3
+
+
 def frame(points: NDArray[Any], azimuth: float, elevation: float, zoom: float,
           aspect: float, margin: float = MARGIN) -> CameraPose:
     """Frame `points` tightly in an orthographic view.

@@ -280,7 +280,7 @@ class SceneGeometry:
             face_slot = slots_for(list(sub.label_names), NEUTRAL_SLOT, hidden)[
                 np.asarray(sub.face_label, np.int64)]
             add("subcortical", "subcortical", None, sub.vertices, sub.faces, face_slot,
-                np.zeros(len(sub.vertices), np.float32), ao=getattr(sub, "occlusion", None))
+                np.zeros(len(sub.vertices), np.float32), ao=template.subcortical_occlusion(hidden))
         if scene.tracts is not None:
             parts += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for, scene.tract_radius)
         for hemi in HEMIS:

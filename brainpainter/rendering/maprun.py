@@ -19,7 +19,7 @@ from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.surfaces import Surface, read_surfaces, surface_template
 from brainpainter.atlas.template import Template, load_template
 from brainpainter.errors import BrainPainterError
-from brainpainter.maps.inputs import VertexMaps, read_maps
+from brainpainter.maps.inputs import VertexMaps, is_map_input, read_maps
 from brainpainter.maps.layers import map_scale, vertex_colors
 from brainpainter.maps.outlines import mesh_edges
 from brainpainter.maps.resolution import map_mesh, own_vertex_count
@@ -71,6 +71,7 @@ class MapRun:
     options: Options
     source_vertex: dict[str, NDArray[Any]]
     cluster_edges: dict[str, NDArray[Any]] | None = None
+    tract_values: None = None  # a map colours no tracts
     mesh_masks: dict[str, dict[str, NDArray[Any]]] | None = None
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
@@ -118,6 +119,10 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     atlas_obj = get_atlas(outline) if outline is not None else atlas if atlas is not None else get_atlas("dk")
     surfaces = options.maps.surfaces
     if surfaces:  # the user's own surfaces: the run's template, maps of their vertex counts drawn as they are
+        if data is not None and not is_map_input(data):
+            raise BrainPainterError("--lh-surface/--rh-surface draw per-vertex maps (--lh/--rh) on your own "
+                                    "surfaces; a region table is drawn on the template's regions: leave the "
+                                    "surfaces out, or give maps.")
         read = _own_surfaces(options, surfaces)
         maps = read_maps(data, options.maps.lh, options.maps.rh, options.maps.volume,
                          mesh={hemi: s.n_vertices for hemi, s in read.items()})
@@ -145,7 +150,7 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     masks = {hemi: surface_masks(tpl, labels, meshes[hemi], n) for hemi, n in own.items()} if own else None
     scale = map_scale(options.scale, maps, options.maps.threshold)
     return MapRun(MapTable(maps, atlas_obj), scale, view_list, outlined(options.settings, outline),
-                  options, source_vertex, edges, masks)
+                  options, source_vertex, edges, mesh_masks=masks)
 
 
 def _own_surfaces(options: Options, surfaces: dict[str, Any]) -> dict[str, Surface]:

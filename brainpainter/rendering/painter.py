@@ -87,6 +87,25 @@ def region_colors(values: Mapping[str, float], atlas: Atlas, scale: ColourScale)
 VOLUME_VIEWS = ("subcortical", "subcortical-dorsal")
 
 
+def shown_aspect(atlas: Atlas, template: Template | str, views: Iterable[View]) -> float:
+    """Image width / height that frames `atlas`'s brain in `views` (a brain of another shape than a
+    human's, :attr:`Atlas.image_aspect`, drawn at no size given): its side views wide, its top view tall.
+    """
+    from brainpainter.rendering.framing import views_aspect
+
+    if atlas.template_dir is not None and template == "fsaverage":
+        template = str(atlas.template_dir)
+    tpl = template_for(atlas, template if isinstance(template, Template) else load_template(template))
+    points = [next(iter(tpl.cortex(atlas.template_labels, hemi).vertices.values()))
+              for hemi in ("lh", "rh") if atlas.cortical(hemi)]
+    if tpl.manifest.get("subcortical"):
+        points.append(tpl.subcortical().vertices)
+    if not points:
+        return atlas.image_aspect or 4 / 3
+    ras = np.vstack(points)[::5] @ np.asarray(tpl.to_ras, dtype=float).T
+    return views_aspect(ras, [(v.azimuth, v.elevation) for v in views])
+
+
 def load_scene(
     atlas: Atlas | str = "dk",
     template: Template | str = "fsaverage",

@@ -21,17 +21,25 @@ from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.registry import get_atlas, load_atlas_config
-from brainpainter.color.scale import ColourScale
-from brainpainter.errors import BrainPainterError
+from brainpainter.color.scale import ColourScale, ScaleOptions, widen
+from brainpainter.errors import BrainPainterError, NoRegionColumnError
 from brainpainter.maps.inputs import is_map_input
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
-from brainpainter.rendering.painter import VOLUME_VIEWS, Painter, RenderResult, region_colors, resolve_hidden
+from brainpainter.rendering.painter import (
+    VOLUME_VIEWS,
+    Painter,
+    RenderResult,
+    region_colors,
+    resolve_hidden,
+    shown_aspect,
+)
 from brainpainter.rendering.parallel import Item, LocalRunner, PainterSpec, Runner, SerialRunner, chunked
 from brainpainter.rendering.settings import RGB, RenderSettings, outlined, with_aspect
 from brainpainter.rendering.views import ImagesByView, View, parse_views
 from brainpainter.table.region_table import RegionTable, read_table
 from brainpainter.table.rows import select_rows
-from brainpainter.tracts.values import TractValues, read_tract_values
+from brainpainter.tracts.model import TractSpec
+from brainpainter.tracts.values import TractValues, is_profile, read_tract_values
 
 if TYPE_CHECKING:
     from brainpainter.io.transaction import FolderTransaction
@@ -89,39 +97,59 @@ def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, b
     """The tract values of a run: ``tract_values`` if given, else the main table's bundle columns, if any.
 
     Columns of the main table count as bundles when their canonical name is a bundle of ``tracts``
-    (a file's name); without any, bundles are coloured by direction.
+    (a file's name); without any, bundles are coloured by direction. A main table that is an
+    along-tract profile (bundle and node columns, pyAFQ's ``tract_profiles.csv``) is tract values
+    only: its errors are reported, and so is a profile none of whose bundles is drawn.
 
     Returns
     -------
     values : TractValues or None
     only_tracts : bool
-        Every value column of the main table is a bundle (it holds no region values).
+        Every value column of the main table is a bundle (it holds no region values), or there is
+        no main table (``tract_values`` alone).
     """
     scene = options.scene
     if scene.tract_values is not None:
-        return read_tract_values(scene.tract_values, scene.tract_value), False
+        return read_tract_values(scene.tract_values, scene.tract_value), data is None
     spec = scene.tract_spec()
-    if spec is None or isinstance(data, list):
+    if spec is None or data is None or isinstance(data, list):
         return None, False
-    from brainpainter.tracts.names import canonical
+    from brainpainter.io.readers import read_raw
 
-    known = {canonical(f.name[: -len(f.suffix)]) for f in spec.files}
+    known = bundle_names(spec)
     # a stream (the web API's upload) is read again for the region table: back to where it was
     pos = data.tell() if hasattr(data, "seek") and hasattr(data, "tell") else None
+    profile = False
     try:
-        tv = read_tract_values(data)
+        raw = read_raw(data)
+        profile = is_profile(raw)
+        tv = read_tract_values(raw, scene.tract_value)
     except BrainPainterError:
+        if profile:
+            raise
         return None, False
     finally:
         if pos is not None:
             data.seek(pos)
     keep = [j for j, (name, _) in enumerate(tv.nodes) if name in known]
+    if not keep and profile:
+        raise BrainPainterError(
+            f"the profile table's bundles {sorted(tv.bundles)[:6]} are none of the tracts drawn "
+            f"{sorted(known)[:6]}; name the tractogram files after the bundles (AF_L.trk, "
+            "CST_right.tck, ...) or give the tractograms the profiles were made on.")
     if not keep:
         return None, False
     names = {tv.nodes[j][0] for j in keep}
     cols = [j for j, key in enumerate(tv.keys) if key.split(":")[1] in names]
     return (TractValues(tv.images, tuple(tv.keys[j] for j in cols), tv.values[:, cols],
                         tuple(tv.nodes[j] for j in keep)), len(keep) == len(tv.nodes))
+
+
+def bundle_names(spec: TractSpec) -> set[str]:
+    """The bundles of the tractograms to draw: their files' names, canonical (``AF_L.trk``: ``AF_left``)."""
+    from brainpainter.tracts.names import canonical
+
+    return {canonical(f.name[: -len(f.suffix)]) for f in spec.files}
 
 
 def without_bundle_columns(data: Any, bundles: set[str]) -> Any:
@@ -180,34 +208,64 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
         from brainpainter.rendering.maprun import prepare_map_run
 
         return prepare_map_run(data, atlas_obj, options)  # type: ignore[return-value]
-    if options.maps.surfaces:
-        raise BrainPainterError("--lh-surface/--rh-surface draw per-vertex maps (--lh/--rh) on your own "
-                                "surfaces; a region table is drawn on the template's regions: leave the "
-                                "surfaces out, or give maps.")
     views = options.scene.views
-    if views is None and atlas_obj is not None and not atlas_obj.cortical():
-        views = VOLUME_VIEWS  # a volumetric atlas alone: its structures, not a grey cortex
+    if views is not None:  # a given option's errors before a big input file is read
+        view_list = parse_views(views if isinstance(views, str) else list(views))
     tract_values, only_tracts = run_tract_values(data, options)
-    if views is None and only_tracts:
-        views = VOLUME_VIEWS  # bundle values alone: the views that show tracts
-    view_list = parse_views(views if views is None or isinstance(views, str) else list(views))
     if only_tracts and tract_values is not None:
-        table = tracts_only_table(tract_values, atlas_obj, data)
+        source = data if data is not None else options.scene.tract_values
+        table = tracts_only_table(tract_values, atlas_obj, source)
     else:
         if tract_values is not None and options.scene.tract_values is None:
             data = without_bundle_columns(data, {name for name, _ in tract_values.nodes})
-        table = read_table(data, atlas_obj, **options.table.kwargs())
+        try:
+            table = read_table(data, atlas_obj, **options.table.kwargs())
+        except NoRegionColumnError as exc:
+            spec = options.scene.tract_spec()
+            if spec is None or tract_values is not None:
+                raise
+            raise NoRegionColumnError(f"{exc} Nor does any column name a bundle of --tracts "
+                                      f"{sorted(bundle_names(spec))[:6]}.") from None
     values = table.values if tract_values is None else np.concatenate(
         [np.ravel(table.values), np.ravel(tract_values.values)])
+    if views is None:
+        view_list = parse_views(default_views(table.atlas, only_tracts))
     outline = options.maps.outline
     if outline is not None and outline not in (table.atlas.name, table.atlas.template_labels):
         raise BrainPainterError(
             f"a region render outlines its own atlas's regions ({table.atlas.name!r}); --outline "
             f"{outline!r} was given. Give --outline {table.atlas.name}, or draw a map (--lh/--rh).")
     settings = outlined(options.settings, outline)
-    if not options.size_given and table.atlas.image_aspect:
-        settings = with_aspect(settings, table.atlas.image_aspect)
-    return Run(table, options.scale.scale(values), view_list, settings, options, tract_values)
+    if not options.size_given and table.atlas.image_aspect:  # a brain of another shape: frame the views
+        settings = with_aspect(settings, shown_aspect(table.atlas, options.scene.template, view_list))
+    return Run(table, run_scale(options.scale, values, only_tracts and tract_values is not None
+                                and any(n > 1 for _, n in tract_values.nodes)),
+               view_list, settings, options, tract_values)
+
+
+def default_views(atlas: Atlas, only_tracts: bool) -> tuple[str, ...] | None:
+    """The views of a run given none: the atlas's own (:attr:`Atlas.views`); the subcortical views for
+    a volumetric atlas (its structures, not a grey cortex) or bundle values alone (the views that show
+    tracts); else None (BrainPainter's three)."""
+    if atlas.views:
+        return atlas.views
+    return VOLUME_VIEWS if only_tracts or not atlas.cortical() else None
+
+
+def run_scale(options: ScaleOptions, values: NDArray[Any], measures: bool) -> ColourScale:
+    """The colour scale of a run whose values (all rows) are `values`, shape any.
+
+    `measures`: the values are measures along tracts (profiles alone, FA 0.2-0.7, MD 0.0007), not
+    BrainPainter's levels 0..N-1, so a gradient given no vmin/vmax spans their range.
+    """
+    if measures and options.cmap is None and options.vmin is None and options.vmax is None \
+            and options.center is None:
+        finite = np.asarray(values, dtype=float)[np.isfinite(values)]
+        if finite.size:
+            lo, hi = float(finite.min()), float(finite.max())
+            lo, hi = widen(lo) if hi <= lo else (lo, hi)
+            options = replace(options, vmin=lo, vmax=hi)
+    return options.scale(values)
 
 
 def make_runner(painter: Painter, template: Any = None, options: RunnerOptions | None = None,
@@ -390,8 +448,11 @@ def write_images(run: Run, painter: Painter, runner: Runner, chosen: Sequence[in
         else:
             write_pngs(tx, painted, names, lambda i, view: png_metadata(table.images[i], view, settings),
                        (run.settings.width, run.settings.height), bar)
+        summary = table.summary()
+        if run.tract_values is not None:
+            summary["tract_values"] = run.tract_values.summary()
         manifest = {
-            "software": {"brainpainter": __version__}, "input": table.summary(), "settings": settings,
+            "software": {"brainpainter": __version__}, "input": summary, "settings": settings,
             "files": [{"file": path.name, "image": table.images[i], "row": i, "view": view.name}
                       for path, (i, view) in zip(files, plan, strict=False)],
         }

@@ -172,6 +172,11 @@ def summary_line(s: dict[str, Any]) -> str:
     """One line from :meth:`RegionTable.summary`'s dict."""
     rng = s["value_range"]
     rng_text = f"values {rng[0]:g}..{rng[1]:g}" if rng else "no values"
+    tracts = s.get("tract_values")  # a run's bundle values or profiles (rendering.run)
+    if tracts:
+        trng = tracts["value_range"]
+        rng_text += (f"; tract values {trng[0]:g}..{trng[1]:g}" if trng else "; no tract values") + (
+            f" on {len(tracts['bundles'])} bundle(s)")
     shapes = "; ".join(dict.fromkeys(
         i["shape"]["kind"] + (f" ({i['shape']['flavour']})" if i["shape"]["flavour"] else "")
         for i in s.get("inputs", [])))
@@ -240,7 +245,7 @@ def inspect_table(data: Any, atlas: Atlas | str | None = None, *, image_column: 
         guess = infer_atlas(names, candidates)
         if guess is None:
             shown = [h for raw in raws for h in raw.header][:4]
-            raise BrainPainterError(
+            raise NoRegionColumnError(
                 f"{', '.join(r.source for r in raws)}: no column name or value names a region of any "
                 f"installed atlas ({', '.join(a.name for a in candidates)}); columns start {shown}. Use "
                 "names like 'Left-insula' or 'lh_insula_thickness' (see 'brainpainter atlas show dk')."

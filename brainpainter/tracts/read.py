@@ -5,15 +5,24 @@
 (an ``ArraySequence``), subsampled to the budget and resampled to a few points
 right away, so a whole-brain tractogram of a million streamlines never sits in
 memory (only the kept, resampled ones do: budget x points x 12 bytes).
-``.trx`` is read by trx-python (memory-mapped; its groups are bundles).
+``.trx`` is read by trx-python (memory-mapped; its groups are bundles). A
+compressed ``.trx`` (a deflated zip) is unpacked here, not by trx-python: every
+member's size is checked before anything is written (and the bytes are counted
+while they are), into a fresh folder under the caller's `scratch` folder that is
+removed on every exit.
 Coordinates are the files' RAS millimetres (nibabel's ``RASMM`` space: for
 ``.tck`` these are MRtrix's scanner coordinates, which need no reference image).
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
+import shutil
+import tempfile
+import zipfile
 from collections.abc import Iterable, Iterator
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import Any
 
 import numpy as np
@@ -89,19 +98,97 @@ def _nibabel_bundle(path: Path, budget: int, n_points: int, seed: int) -> tuple[
     return lines, total
 
 
-def _trx_bundles(path: Path, budget: int, n_points: int, seed: int) -> list[tuple[str, NDArray[Any], int]]:
-    """``(name, resampled streamlines, count)`` per group of a .trx (the file name when it has none)."""
+@contextlib.contextmanager
+def _open_trx(path: Path, scratch: Path | None, max_inflated: int | None) -> Iterator[Any]:
+    """The ``TrxFile`` of `path`, closed (and its unpacked copy removed) on every exit.
+
+    A stored (uncompressed) zip or a folder is memory-mapped where it is; a compressed zip is
+    unpacked into a fresh folder under `scratch` (when None: trx-python's ``TRX_TMPDIR`` if set, else
+    the system's temporary folder) after its members' sizes were checked against `max_inflated` bytes
+    (None: the free space there).
+    """
     try:
-        from trx.trx_file_memmap import load as load_trx
+        import trx.trx_file_memmap as tmm
     except ImportError:
         raise BrainPainterError(f"reading {str(path)!r} needs trx-python, which is not installed; "
                                 f"{TRX_HINT}, or convert it to .trk/.tck.") from None
+    folder: str | None = None
     try:
-        trx = load_trx(str(path))
-    except Exception as exc:
-        raise BrainPainterError(f"{str(path)!r} could not be read as a .trx file ({type(exc).__name__}: "
-                                f"{exc}); give a valid TRX file.") from None
-    try:
+        try:
+            if path.is_dir():
+                trx = tmm.load(str(path))
+            else:
+                with zipfile.ZipFile(path) as zf:
+                    infos = [i for i in zf.infolist() if not i.is_dir()]
+                    if all(i.compress_type == zipfile.ZIP_STORED for i in infos):
+                        trx = tmm.load_from_zip(str(path))
+                    else:
+                        folder = tempfile.mkdtemp(prefix="trx-", dir=scratch or _trx_tmpdir())
+                        _unpack(path, zf, infos, Path(folder), max_inflated)
+                        trx = tmm.load_from_directory(folder)
+        except BrainPainterError:
+            raise
+        except Exception as exc:
+            raise BrainPainterError(f"{str(path)!r} could not be read as a .trx file ({type(exc).__name__}: "
+                                    f"{exc}); give a valid TRX file.") from None
+        try:
+            yield trx
+        finally:
+            trx.close()
+    finally:
+        if folder is not None:
+            shutil.rmtree(folder, ignore_errors=True)
+
+
+def _trx_tmpdir() -> Path | None:
+    """trx-python's ``TRX_TMPDIR`` (``use_working_dir``: the current folder); None when not set."""
+    given = os.environ.get("TRX_TMPDIR")
+    return None if given is None else Path.cwd() if given == "use_working_dir" else Path(given)
+
+
+def _unpack(path: Path, zf: zipfile.ZipFile, infos: list[zipfile.ZipInfo], folder: Path,
+            max_inflated: int | None) -> None:
+    """Write the members `infos` of a .trx's zip into `folder`, checking sizes before and while writing.
+
+    Raises
+    ------
+    BrainPainterError
+        A member named outside the folder, or members that (say they) inflate to more than
+        `max_inflated` bytes (the free space of `folder` when None).
+    """
+    limit = max_inflated if max_inflated is not None else shutil.disk_usage(folder).free
+    where = "this server unpacks at most" if max_inflated is not None else "the free space is"
+    declared = sum(i.file_size for i in infos)
+
+    def too_big(size: int) -> BrainPainterError:
+        return BrainPainterError(
+            f"{str(path)!r} unpacks to {size / 2**20:,.0f} MB or more; {where} {limit / 2**20:,.0f} MB. "
+            "Give a smaller .trx (a subsample), or save it uncompressed (trx-python's save without "
+            "compression).")
+
+    if declared > limit:
+        raise too_big(declared)
+    total = 0
+    for info in infos:
+        parts = PurePosixPath(info.filename.replace("\\", "/")).parts
+        if not parts or info.filename.startswith(("/", "\\")) or ".." in parts or ":" in parts[0]:
+            raise BrainPainterError(f"{str(path)!r} holds {info.filename[:100]!r}, a path outside the .trx; "
+                                    "give a valid TRX file.")
+        target = folder.joinpath(*parts)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        with zf.open(info) as src, target.open("wb") as dst:
+            while block := src.read(1 << 20):
+                total += len(block)
+                if total > limit:
+                    raise too_big(total)
+                dst.write(block)
+
+
+def _trx_bundles(path: Path, budget: int, n_points: int, seed: int, scratch: Path | None = None,
+                 max_inflated: int | None = None) -> list[tuple[str, NDArray[Any], int]]:
+    """``(name, resampled streamlines, count)`` per group of a .trx (the file name when it has none);
+    a compressed one is unpacked under `scratch` (see :func:`_open_trx`)."""
+    with _open_trx(path, scratch, max_inflated) as trx:
         seq = trx.streamlines
         groups = dict(trx.groups) or {_stem(path): np.arange(len(seq))}
         out = []
@@ -114,8 +201,6 @@ def _trx_bundles(path: Path, budget: int, n_points: int, seed: int) -> list[tupl
                                    [np.zeros((0, n_points, 3), np.float32)])
             out.append((str(name), lines, len(members)))
         return out
-    finally:
-        trx.close()
 
 
 def _stem(path: Path) -> str:
@@ -123,7 +208,7 @@ def _stem(path: Path) -> str:
 
 
 def read_bundles(files: Iterable[Path], to_template: NDArray[Any], max_streamlines: int, n_points: int,
-                 seed: int = 0) -> Tracts:
+                 seed: int = 0, *, scratch: Path | None = None, max_inflated: int | None = None) -> Tracts:
     """Read every bundle, subsample to `max_streamlines` in all, resample, orient, place.
 
     Parameters
@@ -137,6 +222,11 @@ def read_bundles(files: Iterable[Path], to_template: NDArray[Any], max_streamlin
         (proportional to its count; at least one streamline).
     n_points : int
     seed : int
+    scratch : Path, optional
+        Where a compressed .trx is unpacked (a fresh folder, removed after; default: the system's
+        temporary folder).
+    max_inflated : int, optional
+        Largest size (bytes) a compressed .trx may unpack to (default: the free space there).
 
     Returns
     -------
@@ -153,7 +243,8 @@ def read_bundles(files: Iterable[Path], to_template: NDArray[Any], max_streamlin
     read: list[tuple[str, NDArray[Any], int, Path]] = []
     for path in files:
         if path.suffix.lower() == ".trx":
-            for name, lines, total in _trx_bundles(path, max_streamlines, n_points, seed):
+            bundles = _trx_bundles(path, max_streamlines, n_points, seed, scratch, max_inflated)
+            for name, lines, total in bundles:
                 read.append((canonical(name), lines, total, path))
         else:
             lines, total = _nibabel_bundle(path, max_streamlines, n_points, seed)

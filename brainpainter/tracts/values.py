@@ -34,6 +34,8 @@ NODE_COLUMNS = ("node", "nodeid", "node_id", "nodes")
 BUNDLE_COLUMNS = ("bundle", "tract", "tractid", "tract_id", "bundle_name", "tractname")
 IMAGE_COLUMNS = ("image-name-unique", "image", "subject", "subjectid", "subject_id", "participant_id",
                  "sub", "id")
+#: Columns of a long profile that are no measure: pandas' unnamed index, pyAFQ's session.
+NOT_MEASURES = ("", "unnamed: 0", "index", "sessionid", "session_id", "session", "ses")
 #: Nodes per bundle at most (a palette slot each).
 MAX_NODES = 1000
 
@@ -74,6 +76,12 @@ class TractValues:
     def bundles(self) -> tuple[str, ...]:
         return tuple(n for n, _ in self.nodes)
 
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready summary: bundles with their nodes, the finite value range (None: no value)."""
+        finite = self.values[np.isfinite(self.values)]
+        return {"bundles": {name: n for name, n in self.nodes},
+                "value_range": [float(finite.min()), float(finite.max())] if finite.size else None}
+
 
 def _number(cell: Any, decimal_comma: bool) -> float:
     if cell is None:
@@ -97,6 +105,18 @@ def _find(header: list[str], names: tuple[str, ...]) -> int | None:
         if name in low:
             return low.index(name)
     return None
+
+
+def is_profile(data: Any) -> bool:
+    """Whether `data` (anything :func:`read_tract_values` reads) is a long along-tract profile table.
+
+    A profile has a node column and a bundle column (``node``/``nodeID``, ``bundle``/``tractID``):
+    it holds tract values only, whatever else it holds.
+    """
+    from brainpainter.io.readers import read_raw
+
+    header = list(read_raw(data).header)
+    return _find(header, NODE_COLUMNS) is not None and _find(header, BUNDLE_COLUMNS) is not None
 
 
 def read_tract_values(data: Any, value: str | None = None) -> TractValues:
@@ -171,6 +191,7 @@ def _long_profile(source: str, header: list[str], rows: list[list[Any]], dc: boo
         value_col = header.index(value)
     else:
         numeric = [j for j in range(len(header)) if j not in skip
+                   and header[j].strip().lower() not in NOT_MEASURES
                    and any(math.isfinite(_number(r[j], dc)) for r in rows[:50])]
         if len(numeric) != 1:
             raise BrainPainterError(

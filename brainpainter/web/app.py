@@ -51,6 +51,7 @@ from starlette.requests import ClientDisconnect
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.web.config import ServerConfig
+from brainpainter.web.disk import FULL_BELOW, disk_free, disk_full
 from brainpainter.web.guard import Guard
 from brainpainter.web.http import (
     ApiError,
@@ -58,6 +59,7 @@ from brainpainter.web.http import (
     client_of,
     disk_budget,
     one_line,
+    owner_of,
     receive_body,
     require_octet_stream,
 )
@@ -67,6 +69,8 @@ from brainpainter.web.options import (
     MovieParams,
     RenderOptions,
     TableOptions,
+    check_figure_pixels,
+    figure_pixels,
     map_check,
     prepare,
     table_tract_scale,
@@ -114,7 +118,7 @@ def _static_dir() -> Any:
 def create_app(config: ServerConfig | None = None) -> FastAPI:
     """The application for `config` (its pool starts and stops with the app's lifespan)."""
     config = config or ServerConfig()
-    store = Store(config.data_dir)
+    store = Store(config.data_dir, config.max_disk_bytes)
     pool = Pool(config, store)
 
     @asynccontextmanager
@@ -151,13 +155,18 @@ def _add_error_handlers(app: FastAPI, config: ServerConfig) -> None:
 
     @app.exception_handler(BrainPainterError)
     async def _bp_error(request: Request, exc: BrainPainterError) -> JSONResponse:
-        if _disk_full(exc):
+        if disk_full(exc, config.data_dir):
             return _full(request, exc)
         return JSONResponse({"error": line(exc)}, status_code=400)
 
     @app.exception_handler(ApiError)
     async def _api_error(request: Request, exc: ApiError) -> JSONResponse:
         return JSONResponse({"error": line(exc)}, status_code=exc.status, headers=exc.headers)
+
+    @app.exception_handler(LimitError)  # the disk budget, counted as an upload is stored
+    async def _limit(request: Request, exc: LimitError) -> JSONResponse:
+        return JSONResponse({"error": line(exc)}, status_code=exc.status,
+                            headers={"retry-after": str(exc.retry_after)})
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
@@ -176,7 +185,7 @@ def _add_error_handlers(app: FastAPI, config: ServerConfig) -> None:
     @app.exception_handler(OSError)
     @app.exception_handler(sqlite3.OperationalError)
     async def _os_error(request: Request, exc: Exception) -> JSONResponse:
-        if _disk_full(exc):
+        if disk_full(exc, config.data_dir):
             return _full(request, exc)
         log.error("internal error on %s %s", request.method, request.url.path, exc_info=exc)
         return JSONResponse({"error": f"internal error: {type(exc).__name__} (logged on the server)"},
@@ -205,14 +214,16 @@ def _add_page_and_probes(app: FastAPI, config: ServerConfig, store: Store, pool:
 
     @app.get("/readyz", tags=["probes"])
     async def readyz() -> JSONResponse:
-        """Ready to take work: database writable, a job worker warm, the preview renderer warm."""
+        """Ready to take work: database writable, disk not full, a job worker warm, the preview renderer
+        warm."""
         try:
             db_ok = await run_in_threadpool(store.ping)
         except Exception:
             db_ok = False
         workers = await run_in_threadpool(store.workers)
+        disk_ok = await run_in_threadpool(disk_free, store.root) >= FULL_BELOW
         ready_workers = [w for w in workers if w["state"] in ("ready", "busy")]
-        checks = {"database": db_ok,
+        checks = {"database": db_ok, "disk": disk_ok,
                   "workers": len(ready_workers) >= min(1, config.workers) and pool.alive_workers() >= min(
                       1, config.workers),
                   "preview": pool.preview_ready or not config.preview}
@@ -276,7 +287,8 @@ def _add_upload_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
         finally:
             path.unlink(missing_ok=True)
         upload_id = await run_in_threadpool(store.add_upload, client_of(request), shown, data,
-                                            config.result_ttl_s, config.max_uploads_per_client)
+                                            config.result_ttl_s, config.max_uploads_per_client,
+                                            owner=owner_of(request))
         return {"upload_id": upload_id, "name": shown, "size": size, "report": report,
                 "images": images[:MAX_LISTED_IMAGES]}
 
@@ -287,33 +299,33 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
     previews = anyio.CapacityLimiter(MAX_PREVIEW_WAITING)
 
     @app.post("/api/check", tags=["api"])
-    async def check(body: CheckRequest) -> dict[str, Any]:
+    async def check(body: CheckRequest, request: Request) -> dict[str, Any]:
         """The ``check`` report of an upload with these options (the colour scale included)."""
-        name, data = await run_in_threadpool(_upload, store, body.upload_id)
+        name, data = await run_in_threadpool(_upload, store, body.upload_id, owner_of(request))
         o = body.options
         if is_tract_bundle(data):  # the tracts alone: their report, with the colour scale of `o`
             return await work.run(tract_check, data, name, o, data_dir=store.root)
         if is_bundle(data):
-            return await work.run(map_check, data, name, o, scratch=store.root / "incoming")
+            return await work.run(map_check, data, name, o)
         opts = {**o.model_dump(include=set(TableOptions.model_fields)),
                 "scale": {"gradient": o.gradient, "cmap": o.cmap, "vmin": o.vmin, "vmax": o.vmax,
                           "center": o.center}}
         # read on a work thread: the upload was read within the time limit already (as preview and
         # job submission read it)
         report = (await work.run(check_table, data, name, opts, config.max_rows))[0]
-        tracts = await run_in_threadpool(tracts_of, store, o)
+        tracts = await run_in_threadpool(tracts_of, store, o, owner_of(request))
         if tracts is not None:  # one scale over the regions' and the bundles' values, as drawn
             report["values"]["scale"] = await work.run(table_tract_scale, data, name, o, tracts, store.root)
         return report
 
     # -- preview -------------------------------------------------------------------------------
     @app.post("/api/preview", tags=["api"], responses={200: {"content": {"image/png": {}}}})
-    async def preview(body: PreviewRequest) -> Response:
+    async def preview(body: PreviewRequest, request: Request) -> Response:
         """One row from one view, small, rendered by the warm preview painter."""
-        name, data = await run_in_threadpool(_upload, store, body.upload_id)
-        tracts = await run_in_threadpool(tracts_of, store, body.options)
+        name, data = await run_in_threadpool(_upload, store, body.upload_id, owner_of(request))
+        tracts = await run_in_threadpool(tracts_of, store, body.options, owner_of(request))
         req = await work.run(preview_request, data, name, body.options, body.row, body.view, config,
-                             store.root / "incoming", tracts, store.root)
+                             tracts, store.root)
         if previews.borrowed_tokens >= previews.total_tokens:  # never queue without bound
             raise ApiError(503, f"{MAX_PREVIEW_WAITING} previews are waiting; try again in a moment",
                            {"retry-after": "2"})
@@ -336,46 +348,50 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
         or ``movie`` (MP4/GIF)."""
         from brainpainter.web.worker import TRACTS
 
-        name, data = await run_in_threadpool(_upload, store, body.upload_id)
+        name, data = await run_in_threadpool(_upload, store, body.upload_id, owner_of(request))
         await disk_budget(store, config)
-        tracts = await run_in_threadpool(tracts_of, store, body.options)
+        tracts = await run_in_threadpool(tracts_of, store, body.options, owner_of(request))
         prep = await work.run(prepare, data, name, body.options, max_images=config.max_images,
-                              max_pixels=config.max_pixels, scratch=store.root / "incoming", tracts=tracts,
+                              max_pixels=config.max_pixels, tracts=tracts,
                               data_dir=store.root)
         n_rows, n_views = len(prep.run.table.images), len(prep.run.views)
         if body.kind == "movie" and n_rows < 2:
             raise BrainPainterError(f"a movie needs at least 2 rows (key frames); the table has {n_rows}.")
         params = body.figure.model_dump() if body.kind == "figure" else (
             body.movie.model_dump() if body.kind == "movie" else {})
+        if body.kind == "figure" and body.figure.format == "png":  # a PDF embeds the renders as they are
+            size = await work.run(figure_pixels, prep, body.figure)
+            check_figure_pixels(*size, config.max_figure_pixels)
+            params["max_pixels"] = config.max_figure_pixels  # the worker checks the composed figure too
         total = (n_rows * n_views if body.kind == "images" else
                  body.movie.n_frames(n_rows) if body.kind == "movie" else 1)  # movie: progress per frame
         try:
             job_id = await run_in_threadpool(
                 store.submit, client_of(request), body.kind, body.options.model_dump(), params, name, data,
                 total, max_per_client=config.max_jobs_per_client, max_queued=config.max_queued,
-                extra={TRACTS: tracts} if tracts is not None else None)
+                extra={TRACTS: tracts} if tracts is not None else None, owner=owner_of(request))
         except LimitError as exc:
             raise ApiError(exc.status, str(exc), {"retry-after": str(exc.retry_after)}) from None
         return _public(await run_in_threadpool(store.get, job_id))
 
     @app.get("/api/jobs/{job_id}", tags=["api"])
-    async def job_status(job_id: str) -> dict[str, Any]:
+    async def job_status(job_id: str, request: Request) -> dict[str, Any]:
         """Status, progress and files of a job."""
-        return _public(await run_in_threadpool(_job, store, job_id))
+        return _public(await run_in_threadpool(_job, store, job_id, owner_of(request)))
 
     @app.delete("/api/jobs/{job_id}", tags=["api"])
-    async def cancel(job_id: str) -> dict[str, Any]:
+    async def cancel(job_id: str, request: Request) -> dict[str, Any]:
         """Cancel a queued or running job."""
-        await run_in_threadpool(_job, store, job_id)
+        await run_in_threadpool(_job, store, job_id, owner_of(request))
         await run_in_threadpool(store.cancel, job_id)
-        return _public(await run_in_threadpool(_job, store, job_id))
+        return _public(await run_in_threadpool(_job, store, job_id, owner_of(request)))
 
     @app.get("/api/jobs/{job_id}/files/{file_name}", tags=["api"], response_model=None)
-    async def job_file(job_id: str, file_name: str, download: bool = False) -> Response:
+    async def job_file(job_id: str, file_name: str, request: Request, download: bool = False) -> Response:
         """One file the job made (only names listed in its ``files``)."""
         from brainpainter.web.worker import zip_name, zip_stream
 
-        job = await run_in_threadpool(_job, store, job_id)
+        job = await run_in_threadpool(_job, store, job_id, owner_of(request))
         if file_name not in job["files"]:
             raise ApiError(404, f"job {job_id} has no file {file_name[:100]!r}; its files are listed in "
                                 f"GET /api/jobs/{job_id}.")
@@ -401,10 +417,11 @@ def _version() -> str:
     return __version__
 
 
-def _upload(store: Store, upload_id: str) -> tuple[str, bytes]:
-    got = store.get_upload(upload_id) if valid_id(upload_id) else None
-    if got is None:
-        raise ApiError(404, "upload not found (it expired, or the id is wrong); upload the table again.")
+def _upload(store: Store, upload_id: str, owner: str) -> tuple[str, bytes]:
+    got = store.get_upload(upload_id, owner) if valid_id(upload_id) else None
+    if got is None:  # another client's upload too: its id tells nothing
+        raise ApiError(404, "upload not found (it expired, the id is wrong, or another client made it: send "
+                            "this client's cookie or X-BrainPainter-Client header); upload the table again.")
     return got
 
 
@@ -415,19 +432,11 @@ def _full(request: Request, exc: BaseException) -> JSONResponse:
                         headers={"retry-after": "600"})
 
 
-def _disk_full(exc: BaseException) -> bool:
-    """An error that means the disk (or the data folder's quota) is full."""
-    import errno
-
-    if getattr(exc, "errno", None) in (errno.ENOSPC, errno.EDQUOT):  # OSError, or os_error's one line
-        return True
-    return isinstance(exc, sqlite3.OperationalError) and "full" in str(exc)
-
-
-def _job(store: Store, job_id: str) -> dict[str, Any]:
-    job = store.get(job_id) if valid_id(job_id) else None
+def _job(store: Store, job_id: str, owner: str) -> dict[str, Any]:
+    job = store.get(job_id, owner) if valid_id(job_id) else None
     if job is None:
-        raise ApiError(404, "job not found (it expired, or the id is wrong).")
+        raise ApiError(404, "job not found (it expired, the id is wrong, or another client made it: send "
+                            "this client's cookie or X-BrainPainter-Client header).")
     return job
 
 
@@ -450,7 +459,7 @@ def _meta(config: ServerConfig) -> dict[str, Any]:
     from brainpainter.rendering.painter import HIDE_GROUPS
     from brainpainter.rendering.settings import CORTEX_MODES
     from brainpainter.rendering.views import PRESETS
-    from brainpainter.web.options import MAX_WEB_STREAMLINES
+    from brainpainter.web.tracts import MAX_WEB_STREAMLINES
 
     return {
         "version": _version(),
@@ -460,7 +469,8 @@ def _meta(config: ServerConfig) -> dict[str, Any]:
         "hide_groups": list(HIDE_GROUPS),
         "defaults": RenderOptions().model_dump(),
         "limits": {"max_upload_mb": config.max_upload_mb, "max_images": config.max_images,
-                   "max_pixels": config.max_pixels, "max_jobs_per_client": config.max_jobs_per_client,
+                   "max_pixels": config.max_pixels, "max_figure_pixels": config.max_figure_pixels,
+                   "max_jobs_per_client": config.max_jobs_per_client,
                    "result_ttl_s": config.result_ttl_s, "job_time_limit_s": config.job_time_limit_s,
                    "max_map_images": config.max_map_images, "max_tract_files": config.max_tract_files,
                    "max_tract_streamlines": config.max_tract_streamlines,

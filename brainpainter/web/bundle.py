@@ -4,6 +4,11 @@ A bundle is its kind's magic line, one line of JSON (the header: the upload's re
 ``files`` list of ``{tag: ..., "name": ..., "size": ...}``), then the files' bytes one after the
 other. :mod:`brainpainter.web.maps` tags each file with its hemisphere (``hemi``),
 :mod:`brainpainter.web.tracts` with its role (``role``: ``bundles`` or ``values``).
+
+The header has no size limit of its own: whatever the server accepted (a report listing thousands of
+images, a volume's per-image means) must read back. Its files are what the upload's reader read (arrays,
+kept streamlines), so a bundle stays within the server's limits on images and streamlines, however much
+the upload inflated to.
 """
 
 from __future__ import annotations
@@ -15,9 +20,6 @@ from pathlib import Path
 from typing import Any
 
 from brainpainter.errors import BrainPainterError
-
-#: Largest header line (bytes).
-HEADER_LIMIT = 1 << 16
 
 
 def write_bundle(target: Path, magic: bytes, header: dict[str, Any], tag: str,
@@ -41,7 +43,7 @@ def bundle_header(data: bytes, magic: bytes, tag: str, allowed: tuple[str, ...],
         `damaged` (one line) when the header is unreadable, a file's `tag` is not `allowed`, or the
         sizes do not add up to the data.
     """
-    end = data.find(b"\n", len(magic), len(magic) + HEADER_LIMIT)
+    end = data.find(b"\n", len(magic)) if data.startswith(magic) else -1
     try:
         if end < 0:
             raise ValueError("no header")

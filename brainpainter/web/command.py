@@ -44,6 +44,12 @@ CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
               help="Largest number of streamlines in one tract upload (a hard cap; fewer are drawn).")
 @click.option("--max-tract-files", type=int, default=100, show_default=True,
               help="Largest number of files (bundles) in one tract upload.")
+@click.option("--max-pixels", type=int, default=2400 * 1800, show_default=True,
+              help="Largest width x height of one rendered view.")
+@click.option("--max-figure-pixels", type=int, default=40_000_000, show_default=True,
+              help="Largest width x height of a figure job's PNG (refused before it is queued).")
+@click.option("--worker-memory-gb", type=float, default=4.0, show_default=True,
+              help="Data memory each rendering process may use; a job needing more fails (0: no limit).")
 @click.option("--max-disk-gb", type=float, default=0.0, show_default=True,
               help="Disk the data folder may use; beyond it new uploads and jobs get 507 (0: no budget).")
 @click.option("--max-connections", type=click.IntRange(1, 100_000), default=500, show_default=True,
@@ -77,12 +83,14 @@ def serve(host: str, port: int, data_dir: Path | None, workers: int, no_preview:
         raise BrainPainterError(f"serve needs FastAPI and uvicorn ({exc}); "
                                 "pip install fastapi uvicorn") from None
     for key in ("max_images", "max_jobs_per_client", "max_queued", "rate_per_minute", "max_rows",
-                "max_map_images", "max_tract_streamlines", "max_tract_files"):
+                "max_map_images", "max_tract_streamlines", "max_tract_files", "max_pixels",
+                "max_figure_pixels"):
         if limits[key] < 1:
             raise BrainPainterError(f"--{key.replace('_', '-')} must be at least 1; {limits[key]} was given.")
-    for key in ("max_upload_mb", "job_time_limit_s", "result_ttl_s", "max_disk_gb"):
+    for key in ("max_upload_mb", "job_time_limit_s", "result_ttl_s", "max_disk_gb", "worker_memory_gb"):
         value = limits[key]
-        if not math.isfinite(value) or value < 0 or (value == 0 and key != "max_disk_gb"):
+        if not math.isfinite(value) or value < 0 or (value == 0 and key not in ("max_disk_gb",
+                                                                                "worker_memory_gb")):
             option = {"job_time_limit_s": "job-time-limit", "result_ttl_s": "keep-results"}.get(
                 key, key.replace("_", "-"))
             raise BrainPainterError(f"--{option} must be a positive number; {value} was given.")
@@ -95,7 +103,7 @@ def serve(host: str, port: int, data_dir: Path | None, workers: int, no_preview:
     except OSError as exc:
         raise BrainPainterError(f"--data-dir {str(config.data_dir)!r} cannot be created ({exc.strerror}); "
                                 "choose a writable folder.") from None
-    from brainpainter.web.store import lock_data_dir
+    from brainpainter.web.folder_lock import lock_data_dir
 
     lock_data_dir(config.data_dir)  # one server per data folder (held until this process ends)
     os.umask(0o077)  # uploads, results and the database: this user only (the workers inherit it)
@@ -114,7 +122,8 @@ def serve(host: str, port: int, data_dir: Path | None, workers: int, no_preview:
     web_log.propagate = False
     shown_host = host if host not in ("0.0.0.0", "::", "") else "127.0.0.1"
     shown_host = f"[{shown_host}]" if ":" in shown_host else shown_host
-    click.echo(json.dumps({"event": "start", "url": f"http://{shown_host}:{port}/", "listen": host,
+    url = f"http://{shown_host}:{port}/"
+    click.echo(json.dumps({"event": "start", "url": url, "listen": host,
                            "data_dir": str(config.data_dir), "workers": workers,
                            "preview": not no_preview}), err=True)
     if host not in ("127.0.0.1", "localhost", "::1"):
@@ -123,5 +132,8 @@ def serve(host: str, port: int, data_dir: Path | None, workers: int, no_preview:
                    "authenticates, or a firewall, when that is not intended.", err=True)
     from brainpainter.web.server import run
 
+    def listening() -> None:  # the one line for a person, besides the JSON log
+        click.echo(f"open {url} in a browser (Ctrl+C stops the server; data in {config.data_dir})", err=True)
+
     run(create_app(config), host=host, port=port, log_level=log_level, max_connections=max_connections,
-        forwarded_allow_ips=forwarded_allow_ips)
+        forwarded_allow_ips=forwarded_allow_ips, on_listening=listening)

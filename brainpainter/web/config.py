@@ -34,6 +34,11 @@ class ServerConfig:
         Largest rows x views of one job.
     max_pixels : int
         Largest width x height of one rendered view.
+    max_figure_pixels : int
+        Largest width x height of a figure job's PNG (checked before it is queued, and again when composed).
+    worker_memory_gb : float
+        Data memory each rendering process (job worker, preview) may use; a job needing more fails with one
+        line. 0 = no limit.
     max_jobs_per_client : int
         Queued or running jobs one client (IP address) may have at once.
     max_uploads_per_client : int
@@ -84,6 +89,8 @@ class ServerConfig:
     max_upload_mb: float = 10.0
     max_images: int = 600
     max_pixels: int = 2400 * 1800
+    max_figure_pixels: int = 40_000_000
+    worker_memory_gb: float = 4.0
     max_jobs_per_client: int = 4
     max_uploads_per_client: int = 100
     max_queued: int = 100
@@ -107,6 +114,10 @@ class ServerConfig:
     @property
     def max_disk_bytes(self) -> int:
         return int(self.max_disk_gb * 1024**3)
+
+    @property
+    def worker_memory_bytes(self) -> int | None:
+        return int(self.worker_memory_gb * 1024**3) if self.worker_memory_gb > 0 else None
 
     @property
     def max_upload_bytes(self) -> int:

@@ -1,14 +1,22 @@
-"""The server's guard: security headers, body size limits, a rate limit and the access log.
+"""The server's guard: security headers, body size limits, a rate limit, client tokens and the access log.
 
 :class:`Guard` is pure ASGI middleware around the app (:mod:`brainpainter.web.app`);
 every response carries a strict Content-Security-Policy and every request is
 logged as one JSON line on the ``brainpainter.web.access`` logger.
+
+Uploads and jobs belong to the client that made them. A client is known by a
+token: the cookie :data:`TOKEN_COOKIE` (issued on the first request without
+one: ``HttpOnly; SameSite=Strict``) or the header :data:`TOKEN_HEADER` (a
+script's own random token). Routes see only its hash (``brainpainter.web.http.owner_of``),
+and the database keeps only the hash (:func:`owner_key`), so reading it gives no token away.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import logging
+import re
 import secrets
 import threading
 import time
@@ -39,6 +47,26 @@ UPLOAD_PATHS = ("/api/uploads", "/api/tracts")
 MAX_UPLOADS_IN_FLIGHT = 64  # uploads being received from all clients together
 UPLOAD_SLOT_WAIT_S = 5.0  # an upload beyond a client's slots waits this long for one, then gets 429
 STATE_CHANGING = ("POST", "PUT", "DELETE", "PATCH")
+TOKEN_COOKIE = "bp_client"
+TOKEN_HEADER = "x-brainpainter-client"
+TOKEN_MAX_AGE_S = 30 * 24 * 3600
+_TOKEN = re.compile(r"[0-9A-Za-z_-]{32,128}")
+
+
+def client_token(headers: dict[bytes, bytes]) -> str | None:
+    """The client's token from its :data:`TOKEN_HEADER` header or :data:`TOKEN_COOKIE` cookie (the header
+    first), or None when it sent none of the right form (32 to 128 letters, digits, ``-`` or ``_``)."""
+    from starlette.requests import cookie_parser
+
+    given = headers.get(TOKEN_HEADER.encode(), b"").decode("latin-1").strip()
+    if not given:
+        given = cookie_parser(headers.get(b"cookie", b"").decode("latin-1")).get(TOKEN_COOKIE, "")
+    return given if _TOKEN.fullmatch(given) else None
+
+
+def owner_key(token: str) -> str:
+    """What the server keeps of a token: 32 hex digits of its SHA-256."""
+    return hashlib.sha256(token.encode()).hexdigest()[:32]
 
 
 class _TooLarge(StarletteHTTPException):
@@ -158,12 +186,15 @@ class Guard:
         deadline = time.monotonic() + seconds
         body_done = method not in STATE_CHANGING
         state = {"status": 0, "bytes": 0, "started": False}
+        cookie = _own(scope)
 
         async def send_wrapper(message: Message) -> None:
             if message["type"] == "http.response.start":
                 state["status"], state["started"] = message["status"], True
                 headers = [h for h in message.get("headers", []) if h[0].lower() != b"server"]
                 headers += [*SECURITY_HEADERS, (b"x-request-id", rid.encode())]
+                if cookie is not None:
+                    headers.append((b"set-cookie", cookie))
                 if path.startswith("/api/"):
                     headers.append((b"cache-control", b"no-store"))
                 message = {**message, "headers": headers}
@@ -219,6 +250,20 @@ class Guard:
                 "t": round(time.time(), 3), "id": rid, "client": client, "method": method, "path": path,
                 "status": state["status"], "ms": round((time.perf_counter() - t0) * 1000, 1),
                 "bytes_in": received, "bytes_out": state["bytes"]}))
+
+
+def _own(scope: Scope) -> bytes | None:
+    """Put the owner key of the request's client token in ``scope["state"]``; when the request has no
+    token, make one: the ``Set-Cookie`` value that gives it to the client is returned."""
+    token = client_token(dict(scope.get("headers", [])))
+    cookie = None
+    if token is None:
+        token = secrets.token_hex(16)
+        secure = "; Secure" if scope.get("scheme") == "https" else ""
+        cookie = (f"{TOKEN_COOKIE}={token}; Path=/; Max-Age={TOKEN_MAX_AGE_S}; HttpOnly; "
+                  f"SameSite=Strict{secure}").encode()
+    scope.setdefault("state", {})["owner"] = owner_key(token)
+    return cookie
 
 
 async def _send_json(send: Send, status: int, body: dict[str, Any],

@@ -57,8 +57,16 @@ def one_line(exc: BaseException) -> str:
 
 
 def client_of(request: Request) -> str:
-    """The client's address (the connection's, or the proxy's X-Forwarded-For where trusted)."""
+    """The client's address (the connection's, or the proxy's X-Forwarded-For where trusted): what the
+    per-client limits count by."""
     return request.client.host if request.client else "-"
+
+
+def owner_of(request: Request) -> str:
+    """Who owns what the request makes, and may see it: the key of the client's token
+    (:mod:`brainpainter.web.guard` puts it in the request's state)."""
+    owner: str = request.state.owner
+    return owner
 
 
 async def disk_budget(store: Store, config: ServerConfig) -> None:

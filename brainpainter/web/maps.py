@@ -12,20 +12,21 @@ The files are read (:func:`build_bundle`) in a process of its own, started by
 parse time limit, with its data memory bounded (:data:`MEMORY_LIMIT`);
 compressed files (``.gz``, ``.mgz``) are inflated to disk, at most
 :data:`MAX_INFLATED` bytes. What is kept is a *bundle* (:data:`MAGIC`, one JSON
-line, then the files): the map files as read (a volume: its projection, one
-``.npy`` per hemisphere), so that previews and jobs read them again with
-:func:`brainpainter.maps.inputs.read_maps`, as the CLI reads ``--lh``/``--rh``.
-Client file names are only labels: they are made safe (:func:`file_name`) and
-every file is written into a fresh private folder.
+line, then the files): what :func:`brainpainter.maps.inputs.read_maps` read, never
+the files as sent (a file inflated to a gigabyte of padding is kept as its
+vertex values): one ``.npy`` (gzipped where that pays) of shape (images,
+vertices) per hemisphere, and in the header the image names, label names and colours and
+a volume's subcortical means. Previews and jobs rebuild the maps from it
+(:func:`read_bundle`) exactly as the upload read them. Client file names are
+only labels: they are made safe (:func:`file_name`) and every file is written
+into a fresh private folder. A GIfTI is read with ``external="refuse"``: data it
+says is in another file is an error, never read.
 """
 
 from __future__ import annotations
 
-import contextlib
 import gzip
-import shutil
-import tempfile
-from collections.abc import Iterator
+import io
 from pathlib import Path, PurePosixPath
 from typing import Any
 
@@ -33,12 +34,15 @@ from brainpainter.errors import BrainPainterError
 from brainpainter.web.bundle import bundle_header as read_header
 from brainpainter.web.bundle import members, write_bundle
 
-#: The first bytes of a stored map upload.
-MAGIC = b"BRAINPAINTER-MAPS/1\n"
+#: The first bytes of a stored map upload (:data:`KIND`, then the format's version).
+MAGIC = b"BRAINPAINTER-MAPS/2\n"
+#: The first bytes of a stored map upload of any version (an earlier one reads as damaged).
+KIND = b"BRAINPAINTER-MAPS/"
 #: NIfTI volumes (one file, MNI152 space), projected onto the cortex.
 VOLUME_SUFFIXES = (".nii", ".nii.gz")
 #: Compound endings kept when a client's file name is made safe.
-_ENDINGS = (".func.gii", ".shape.gii", ".label.gii", ".nii.gz")
+_ENDINGS = (".func.gii.gz", ".shape.gii.gz", ".label.gii.gz", ".gii.gz", ".func.gii", ".shape.gii",
+            ".label.gii", ".nii.gz")
 #: Largest size a compressed file may inflate to (bytes).
 MAX_INFLATED = 1 << 30
 #: Largest number of voxels of one volume of a NIfTI file (e.g. 512 x 512 x 512).
@@ -56,7 +60,7 @@ def is_map_upload(names: list[str]) -> bool:
 
 def is_bundle(data: bytes) -> bool:
     """Whether stored upload bytes are a map bundle (else a table)."""
-    return data.startswith(MAGIC)
+    return data.startswith(KIND)
 
 
 def file_name(name: str) -> str:
@@ -170,6 +174,10 @@ def inflate(path: Path) -> Path:
                         "that much. Upload a smaller map.")
                 dst.write(block)
     except (OSError, EOFError, gzip.BadGzipFile) as exc:
+        from brainpainter.web.disk import disk_full
+
+        if disk_full(exc):  # the server's disk, not the file: the reading process reports it (507)
+            raise
         raise BrainPainterError(f"{name!r} is not a readable gzip file ({type(exc).__name__}); upload the "
                                 "file as written by your software.") from None
     path.unlink()
@@ -233,18 +241,9 @@ def _volume_bundle(work: Path, path: Path, shown: str, shape: tuple[int, ...],
         raise BrainPainterError(f"{shown!r} has {voxels} voxels per volume; this server reads at most "
                                 f"{MAX_VOXELS}. Resample it to 1 or 2 mm MNI152.")
     maps = read_volume(path)  # the cortex by registration fusion, the structures by their means
-    out = work / "out"
-    out.mkdir()
-    stored = []
-    for hemi, values in maps.values.items():
-        target = out / f"{hemi}.{file_name(volume.name)}.npy"
-        np.save(target, np.asarray(values, np.float32), allow_pickle=False)
-        stored.append((hemi, target))
     report = base_report(maps, "volume", [shown], f"volume: {shown} (MNI152, {'x'.join(map(str, shape))}) "
                          f"projected onto fsaverage, {_images(maps.n_images)}")
-    extra = {"images": list(maps.images),
-             "regions": {k: [float(x) for x in v] for k, v in (maps.regions or {}).items()}}
-    _write_bundle(work / "bundle.bin", "volume", stored, report, extra)
+    _write_bundle(work, "volume", maps, f"volume={shown}", report)
     return report, list(maps.images)
 
 
@@ -254,7 +253,7 @@ def _surface_bundle(work: Path, files: list[tuple[str, Path]], names: list[str],
     from brainpainter.maps.resolution import surface_of
 
     order = sorted(files, key=lambda f: f[0])  # lh first
-    maps = read_maps({h: p for h, p in order})
+    maps = read_maps({h: p for h, p in order}, external="refuse")  # a GIfTI reads no other file
     if maps.n_images > max_images:
         raise BrainPainterError(
             f"the map holds {maps.n_images} images; this server draws at most {max_images} images per "
@@ -264,7 +263,8 @@ def _surface_bundle(work: Path, files: list[tuple[str, Path]], names: list[str],
     what = f"{len(maps.categories)} labels" if maps.categories is not None else _images(maps.n_images)
     shown = [n for _, n in sorted(zip([h for h, _ in files], names, strict=True))]
     report = base_report(maps, kind, shown, f"{kind}: {' + '.join(shown)}, {', '.join(surfaces)}, {what}")
-    _write_bundle(work / "bundle.bin", "surface", order, report)
+    source = ", ".join(f"{h}={n}" for h, n in zip(sorted(h for h, _ in files), shown, strict=True))
+    _write_bundle(work, "surface", maps, source, report)
     return report, list(maps.images)
 
 
@@ -290,9 +290,33 @@ def base_report(maps: Any, kind: str, names: list[str], summary: str) -> dict[st
     }
 
 
-def _write_bundle(target: Path, kind: str, files: list[tuple[str, Path]], report: dict[str, Any],
-                  extra: dict[str, Any] | None = None) -> None:
-    write_bundle(target, MAGIC, {"kind": kind, "report": report, **(extra or {})}, "hemi", list(files))
+def _write_bundle(work: Path, kind: str, maps: Any, source: str, report: dict[str, Any]) -> None:
+    """Write ``work/bundle.bin``: the maps as read (:class:`brainpainter.maps.inputs.VertexMaps`).
+
+    Each hemisphere's values, ndarray of float32, shape (n_images, n_vertices), as an ``.npy``,
+    gzipped where its first megabyte halves (a constant or sparse map stays small; noisy values, which
+    would cost seconds to compress for little, stay as they are); image names, label names and
+    colours, region values and `source` (the client's file names, never a server path) in the header.
+    """
+    import numpy as np
+
+    out = work / "out"
+    out.mkdir()
+    stored = []
+    for hemi, values in sorted(maps.values.items()):
+        buf = io.BytesIO()
+        np.save(buf, np.asarray(values, np.float32), allow_pickle=False)
+        raw = buf.getbuffer()
+        packed = len(gzip.compress(raw[:1 << 20], compresslevel=1)) < min(len(raw), 1 << 20) // 2
+        target = out / (f"{hemi}.npy.gz" if packed else f"{hemi}.npy")
+        target.write_bytes(gzip.compress(raw, compresslevel=1) if packed else raw)
+        stored.append((hemi, target))
+    colors = maps.category_colors
+    header = {"kind": kind, "report": report, "images": list(maps.images), "source": source,
+              "categories": None if maps.categories is None else list(maps.categories),
+              "category_colors": None if colors is None else np.asarray(colors, float).tolist(),
+              "regions": {k: [float(x) for x in v] for k, v in (maps.regions or {}).items()}}
+    write_bundle(work / "bundle.bin", MAGIC, header, "hemi", list(stored))
 
 
 # -- reading a stored bundle -----------------------------------------------------------------
@@ -308,55 +332,35 @@ def base_of(data: bytes) -> dict[str, Any]:
     return report
 
 
-@contextlib.contextmanager
-def extracted(data: bytes, where: Path | None = None) -> Iterator[dict[str, Path]]:
-    """The files of bundle `data` in a fresh private folder (under `where`), removed afterwards.
-
-    Yields
-    ------
-    dict
-        ``{"lh": path, "rh": path}`` (the hemispheres given), for
-        :func:`brainpainter.maps.inputs.read_maps`.
-    """
-    if where is not None:
-        where.mkdir(parents=True, exist_ok=True)
-    folder = Path(tempfile.mkdtemp(prefix="maps-", dir=where))
-    try:
-        yield extract(data, folder)
-    finally:
-        shutil.rmtree(folder, ignore_errors=True)
-
-
-def extract(data: bytes, folder: Path) -> dict[str, Path]:
-    """Write the files of bundle `data` into `folder` (``folder/lh/NAME``...); their paths by hemisphere."""
-    out: dict[str, Path] = {}
-    for f, content in members(data, *bundle_header(data)):
-        sub = folder / f["hemi"]
-        sub.mkdir(parents=True, exist_ok=True)
-        path = sub / file_name(str(f["name"]))
-        path.write_bytes(content)
-        out[f["hemi"]] = path
-    return out
-
-
-def read_bundle(data: bytes, where: Path | None = None) -> Any:
-    """The maps of bundle `data`, read as the CLI reads them (a volume's image names and subcortical
-    means come from the bundle's header). The files are extracted under `where` and removed.
+def read_bundle(data: bytes) -> Any:
+    """The maps of bundle `data`, as the upload's reader read them (nothing is written to disk).
 
     Returns
     -------
     brainpainter.maps.inputs.VertexMaps
-    """
-    import dataclasses
+        ``values`` of shape (n_images, n_vertices) per hemisphere stored, with the stored image
+        names, labels and region values.
 
+    Raises
+    ------
+    BrainPainterError
+        The bundle is damaged (one line: upload the map again).
+    """
     import numpy as np
 
-    from brainpainter.maps.inputs import read_maps
+    from brainpainter.maps.inputs import VertexMaps
 
-    header, _ = bundle_header(data)
-    with extracted(data, where) as files:
-        maps = read_maps(files)
-    if "images" in header and len(header["images"]) == maps.n_images:
-        regions = {k: np.asarray(v, float) for k, v in header.get("regions", {}).items()}
-        maps = dataclasses.replace(maps, images=tuple(header["images"]), regions=regions or None)
-    return maps
+    header, start = bundle_header(data)
+    try:
+        values = {str(f["hemi"]): np.load(io.BytesIO(gzip.decompress(content) if str(f["name"]).endswith(
+            ".gz") else content), allow_pickle=False) for f, content in members(data, header, start)}
+        images = tuple(str(i) for i in header["images"])
+        if any(v.ndim != 2 or v.shape[0] != len(images) for v in values.values()):
+            raise ValueError("shapes")
+        colors = header["category_colors"]
+        return VertexMaps(
+            values, images, None if header["categories"] is None else tuple(header["categories"]),
+            None if colors is None else np.asarray(colors, float), str(header["source"]),
+            {str(k): np.asarray(v, float) for k, v in header["regions"].items()} or None)
+    except (OSError, EOFError, ValueError, KeyError, TypeError):
+        raise BrainPainterError("the stored map upload is damaged; upload the map again.") from None

@@ -25,13 +25,12 @@ from brainpainter.maps.options import MapOptions
 from brainpainter.rendering.options import SceneOptions, option_names
 from brainpainter.rendering.settings import RenderSettings, parse_size
 from brainpainter.table.options import TableOptions as ReadOptions
+from brainpainter.web.tracts import MAX_WEB_STREAMLINES
 
 if TYPE_CHECKING:
     from brainpainter.rendering.run import Run
     from brainpainter.web.tracts import TractFiles
 
-#: Streamlines a web render draws at most (option ``max_streamlines``).
-MAX_WEB_STREAMLINES = 20_000
 #: The options of tracts (given to a run only with tractograms).
 TRACT_FIELDS = ("tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_radius", "tract_value")
 
@@ -196,7 +195,7 @@ class Prepared:
 
 
 def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int | None = None,
-            max_pixels: int | None = None, scratch: Path | None = None, tracts: bytes | None = None,
+            max_pixels: int | None = None, tracts: bytes | None = None,
             data_dir: Path | None = None) -> Prepared:
     """Check `options` against the uploaded table (or map) exactly as ``brainpainter render`` would.
 
@@ -212,8 +211,6 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
         Largest rows x views.
     max_pixels : int, optional
         Largest width x height of one view.
-    scratch : Path, optional
-        Where a map bundle's files are written while they are read (removed after).
     tracts : bytes, optional
         The tract bundle that option ``tracts`` names (drawn with the table).
     data_dir : Path, optional
@@ -253,7 +250,7 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
         if files is not None:
             raise BrainPainterError("tracts are drawn with a region table, not with a map; upload a region "
                                     "table, or leave option tracts out.")
-        run = prepare_run(read_bundle(data, scratch), options.atlas, **kwargs)
+        run = prepare_run(read_bundle(data), options.atlas, **kwargs)
     else:
         run = prepare_run(table_stream(data, name), options.atlas, **kwargs)
     hidden = options.hide_tokens()
@@ -323,6 +320,44 @@ class FigureParams(BaseModel):
                              description="Text size in points.")
 
 
+def figure_pixels(prep: Prepared, params: FigureParams) -> tuple[int, int]:
+    """``(width, height)`` in pixels of a figure job's PNG, laid out as ``brainpainter figure`` does
+    (:func:`brainpainter.media.layout.plan_grid`) before anything is rendered.
+
+    The width is exact; the height takes each view's crop to have its render's shape (a content box can
+    be taller or wider than its frame, so the worker checks the composed figure again:
+    :func:`check_figure_pixels`).
+    """
+    from brainpainter.media.colorbar import colorbar_height
+    from brainpainter.media.layout import FigureOptions, plan_grid
+
+    opts = FigureOptions(grid=params.grid, title=params.title or None, label=params.label or None,
+                         dpi=params.dpi, fig_width=params.fig_width, font_size=params.font_size)
+    settings, views = prep.run.settings, [v.name for v in prep.run.views]
+
+    def bar_h(usable: float) -> float:  # inches, whatever the dpi: measured at 100 to keep it cheap
+        return colorbar_height(prep.run.scale, usable, dpi=100.0, label=opts.label, fontsize=opts.font_size)
+
+    grid = plan_grid({v: settings.height / settings.width for v in views}, list(prep.run.table.images), views,
+                     opts, bar_h)
+    return round(grid.width * opts.dpi), round(grid.height * opts.dpi)
+
+
+def check_figure_pixels(width: int, height: int, max_pixels: int) -> None:
+    """Refuse a figure of more than `max_pixels` pixels.
+
+    Raises
+    ------
+    BrainPainterError
+        One line: the figure's size, the limit and what to do.
+    """
+    if width * height > max_pixels:
+        raise BrainPainterError(
+            f"the figure would be {width}x{height} = {width * height} pixels; this server makes figures of "
+            f"at most {max_pixels} pixels. Choose a lower dpi or fig_width, fewer rows or views, or a PDF."
+        )
+
+
 class MovieParams(BaseModel):
     """``movie`` job options, with ``brainpainter movie``'s defaults."""
 
@@ -344,14 +379,13 @@ class MovieParams(BaseModel):
         return len(plan_frames(list(range(n_keys)), self.frames_per_step, self.easing, self.hold))
 
 
-def map_check(data: bytes, name: str, options: RenderOptions, *,
-              scratch: Path | None = None) -> dict[str, Any]:
+def map_check(data: bytes, name: str, options: RenderOptions) -> dict[str, Any]:
     """The report of a map upload (:func:`brainpainter.web.maps.base_report`) with the colour scale of
     `options` (the page's colour bar; the threshold band is marked by ``threshold``)."""
     from brainpainter.web.maps import base_of
 
     report = base_of(data)
-    scale = prepare(data, name, options, scratch=scratch).run.scale
+    scale = prepare(data, name, options).run.scale
     report["values"]["scale"] = scale_report(scale)
     return report
 

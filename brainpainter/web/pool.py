@@ -30,7 +30,8 @@ from dataclasses import replace
 from typing import Any
 
 from brainpainter.web.config import ServerConfig
-from brainpainter.web.store import Store, lock_data_dir, unlock_data_dir
+from brainpainter.web.folder_lock import lock_data_dir, unlock_data_dir
+from brainpainter.web.store import Store
 
 log = logging.getLogger("brainpainter.web")
 
@@ -79,6 +80,7 @@ class Pool:
     def start(self) -> None:
         c = self.config
         lock_data_dir(self.store.root)
+        self.store.keep_open()
         again = self.store.requeue(max_attempts=c.max_attempts, ttl_s=c.result_ttl_s)
         if again:
             log.info("re-queued %d job(s) left running by a previous server", len(again))
@@ -104,8 +106,11 @@ class Pool:
                 p.kill()
                 p.join(timeout=5)
         # jobs the stopped workers held go back to the queue now (a restart would do it too)
-        self.store.requeue(max_attempts=self.config.max_attempts, ttl_s=self.config.result_ttl_s)
-        unlock_data_dir(self.store.root)
+        try:
+            self.store.requeue(max_attempts=self.config.max_attempts, ttl_s=self.config.result_ttl_s)
+        finally:
+            self.store.close()
+            unlock_data_dir(self.store.root)
 
     def _spawn_worker(self, slot: int) -> None:
         from brainpainter.web.worker import job_worker_main
@@ -115,7 +120,8 @@ class Pool:
         name = f"w{slot}-{self._boot}-{self._spawned}"
         proc = self._ctx.Process(
             target=job_worker_main, name=f"brainpainter-{name}", daemon=True,
-            args=(str(self.store.root), name, c.renderer, c.lp_threads(), c.result_ttl_s, c.job_time_limit_s))
+            args=(str(self.store.root), name, c.renderer, c.lp_threads(), c.result_ttl_s, c.job_time_limit_s),
+            kwargs={"memory": c.worker_memory_bytes})
         proc.start()
         self._workers[slot] = (name, proc)
 
@@ -126,7 +132,8 @@ class Pool:
         parent_conn, child_conn = self._ctx.Pipe()
         proc = self._ctx.Process(target=preview_main, name="brainpainter-preview", daemon=True,
                                  args=(child_conn, c.renderer, c.lp_threads(),
-                                       (c.preview_max_width, c.preview_max_width * 3 // 4)))
+                                       (c.preview_max_width, c.preview_max_width * 3 // 4)),
+                                 kwargs={"memory": c.worker_memory_bytes})
         proc.start()
         child_conn.close()
         self._preview_proc, self._preview_conn, self._preview_ready = proc, parent_conn, False
@@ -244,7 +251,7 @@ def preview_settings(settings: Any, max_width: int) -> Any:
 
 
 def preview_request(data: bytes, name: str, options: Any, row: int | str, view: str, config: ServerConfig,
-                    scratch: Any = None, tracts: bytes | None = None, data_dir: Any = None) -> dict[str, Any]:
+                    tracts: bytes | None = None, data_dir: Any = None) -> dict[str, Any]:
     """The preview process's request for `row` (index or image name) of an upload from `view`.
 
     `options` is a :class:`brainpainter.web.options.RenderOptions`; a map's colours are per vertex
@@ -257,7 +264,7 @@ def preview_request(data: bytes, name: str, options: Any, row: int | str, view: 
     from brainpainter.rendering.views import parse_views
     from brainpainter.web.options import prepare
 
-    prep = prepare(data, name, options, max_pixels=config.max_pixels, scratch=scratch, tracts=tracts,
+    prep = prepare(data, name, options, max_pixels=config.max_pixels, tracts=tracts,
                    data_dir=data_dir)
     table = prep.run.table
     if isinstance(row, int) or re.fullmatch(r"[0-9]{1,9}", row):

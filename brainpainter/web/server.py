@@ -16,8 +16,10 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import socket
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 from uvicorn.protocols.http.h11_impl import H11Protocol
@@ -116,9 +118,15 @@ def raise_open_files_limit() -> int:
 
 
 def run(app: Any, *, host: str, port: int, log_level: str, max_connections: int,
-        forwarded_allow_ips: str | None) -> None:
-    """Serve `app` with uvicorn until SIGINT/SIGTERM."""
+        forwarded_allow_ips: str | None, on_listening: Callable[[], None] | None = None) -> None:
+    """Serve `app` with uvicorn until SIGINT/SIGTERM; `on_listening` is called once the socket listens."""
     import uvicorn
+
+    class Server(uvicorn.Server):
+        async def startup(self, sockets: list[socket.socket] | None = None) -> None:
+            await super().startup(sockets)
+            if self.started and on_listening is not None:
+                on_listening()
 
     files = raise_open_files_limit()
     limit = max(1, min(max_connections, files // 2)) if files else max_connections
@@ -128,7 +136,7 @@ def run(app: Any, *, host: str, port: int, log_level: str, max_connections: int,
         timeout_graceful_shutdown=int(GRACEFUL_SHUTDOWN_S),
         proxy_headers=forwarded_allow_ips is not None, forwarded_allow_ips=forwarded_allow_ips,
     )
-    server = uvicorn.Server(config)
+    server = Server(config)
     config.load()  # configures uvicorn's loggers, so their handlers exist for the filter
     quiet_repeats()
     server.run()

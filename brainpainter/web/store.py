@@ -11,6 +11,10 @@ Layout of the data folder::
 
 Ids are 32 random hex digits (:func:`secrets.token_hex`); they are the only
 names that become paths, and only after :func:`valid_id` has checked them.
+Every upload and job has an ``owner`` (the key of the token of the client that
+made it: :mod:`brainpainter.web.guard`); asked with another owner, the store
+answers as if the id did not exist. ``client`` (an address) is what the
+per-client limits count by.
 
 A job's life: ``queued`` -> ``running`` (claimed by one worker with a new
 ``attempt`` number) -> ``done`` | ``failed`` | ``cancelled``; later
@@ -28,6 +32,7 @@ import re
 import secrets
 import shutil
 import sqlite3
+import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -44,7 +49,7 @@ FORGET_AFTER_S = 30 * 24 * 3600.0  # an expired job's row is kept this long (its
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS uploads (
     id TEXT PRIMARY KEY, client TEXT NOT NULL, name TEXT NOT NULL, size INTEGER NOT NULL,
-    created REAL NOT NULL, expires REAL NOT NULL
+    created REAL NOT NULL, expires REAL NOT NULL, owner TEXT NOT NULL DEFAULT ''
 );
 CREATE TABLE IF NOT EXISTS jobs (
     id TEXT PRIMARY KEY, client TEXT NOT NULL, kind TEXT NOT NULL, status TEXT NOT NULL,
@@ -53,7 +58,7 @@ CREATE TABLE IF NOT EXISTS jobs (
     progress INTEGER NOT NULL DEFAULT 0, total INTEGER NOT NULL DEFAULT 0,
     attempt INTEGER NOT NULL DEFAULT 0, worker TEXT, heartbeat REAL,
     error TEXT, files TEXT NOT NULL DEFAULT '[]', completions INTEGER NOT NULL DEFAULT 0,
-    deaths INTEGER NOT NULL DEFAULT 0
+    deaths INTEGER NOT NULL DEFAULT 0, owner TEXT NOT NULL DEFAULT ''
 );
 CREATE INDEX IF NOT EXISTS jobs_status ON jobs (status, created);
 CREATE INDEX IF NOT EXISTS jobs_client ON jobs (client, status);
@@ -66,47 +71,6 @@ CREATE TABLE IF NOT EXISTS workers (
     name TEXT PRIMARY KEY, pid INTEGER, state TEXT NOT NULL, heartbeat REAL NOT NULL
 );
 """
-
-
-_HELD_LOCKS: dict[str, Any] = {}
-
-
-def lock_data_dir(data_dir: str | Path) -> None:
-    """Hold ``DATA_DIR/server.lock`` for the life of this process: one server per data folder.
-
-    A second server on the same folder would re-queue the first one's running jobs. The lock
-    (``flock``) goes with the process, even on ``kill -9``; calling again in the same process is a no-op.
-
-    Raises
-    ------
-    BrainPainterError
-        Another process holds the folder.
-    """
-    import fcntl
-
-    from brainpainter.errors import BrainPainterError
-
-    root = Path(data_dir).resolve()
-    if str(root) in _HELD_LOCKS:
-        return
-    root.mkdir(parents=True, exist_ok=True)
-    fh = open(root / "server.lock", "a+")  # held open (and locked) for the life of the process
-    try:
-        fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
-        fh.close()
-        raise BrainPainterError(
-            f"another brainpainter serve is using --data-dir {str(root)!r}; stop it, or give this server "
-            "its own --data-dir."
-        ) from None
-    _HELD_LOCKS[str(root)] = fh
-
-
-def unlock_data_dir(data_dir: str | Path) -> None:
-    """Let go of the folder locked by :func:`lock_data_dir` in this process (no-op when not held)."""
-    fh = _HELD_LOCKS.pop(str(Path(data_dir).resolve()), None)
-    if fh is not None:
-        fh.close()  # closing the file releases the flock
 
 
 class LimitError(Exception):
@@ -135,17 +99,23 @@ class Store:
     ----------
     data_dir : path
         Created if needed.
+    max_disk_bytes : int
+        Disk the data folder may use (0: no budget); an upload or a job's input that would write past
+        it is refused (:class:`LimitError`, 507) before a byte is written.
     """
 
-    def __init__(self, data_dir: str | Path) -> None:
+    def __init__(self, data_dir: str | Path, max_disk_bytes: int = 0) -> None:
         from brainpainter.errors import BrainPainterError
 
         self.root = Path(data_dir)
+        self.max_disk_bytes = max_disk_bytes
+        self._usage_lock = threading.Lock()
         for folder in (self.root, self.root / "uploads", self.root / "jobs"):
             folder.mkdir(mode=0o700, parents=True, exist_ok=True)
             _private(folder)  # uploaded tables are readable by this user only
         self.path = self.root / "jobs.sqlite3"
         self._usage: tuple[float, int] = (0.0, 0)
+        self._keeper: sqlite3.Connection | None = None
         try:
             with self.connect() as db:
                 db.execute("PRAGMA journal_mode=WAL")
@@ -153,6 +123,9 @@ class Store:
                 columns = {r["name"] for r in db.execute("PRAGMA table_info(jobs)")}
                 if "deaths" not in columns:  # a database of an earlier version
                     db.execute("ALTER TABLE jobs ADD COLUMN deaths INTEGER NOT NULL DEFAULT 0")
+                for table in ("jobs", "uploads"):  # before owners: the old rows belong to nobody
+                    if "owner" not in {r["name"] for r in db.execute(f"PRAGMA table_info({table})")}:
+                        db.execute(f"ALTER TABLE {table} ADD COLUMN owner TEXT NOT NULL DEFAULT ''")
                 db.execute("SELECT count(*) FROM jobs").fetchone()
         except sqlite3.DatabaseError as exc:
             raise BrainPainterError(
@@ -187,6 +160,23 @@ class Store:
                 raise
             db.execute("COMMIT")
 
+    def keep_open(self) -> None:
+        """Hold one connection for the server's life, so that SQLite keeps its ``-wal`` and ``-shm`` files.
+
+        With no connection open, the last one to close removes them and the next must create them
+        again, which fails on a full disk ("disk I/O error"): status reads would fail with writes.
+        """
+        if self._keeper is None:
+            self._keeper = sqlite3.connect(self.path, timeout=30.0, isolation_level=None,
+                                           check_same_thread=False)
+            self._keeper.execute("SELECT count(*) FROM jobs").fetchone()  # maps the shared-memory index
+
+    def close(self) -> None:
+        """Let go of the connection :meth:`keep_open` holds."""
+        if self._keeper is not None:
+            self._keeper.close()
+            self._keeper = None
+
     def job_dir(self, job_id: str) -> Path:
         if not valid_id(job_id):
             raise ValueError("not a job id")
@@ -204,7 +194,8 @@ class Store:
         return True
 
     def disk_usage(self, max_age_s: float = 10.0) -> int:
-        """Bytes used by the data folder (walked at most every `max_age_s` seconds)."""
+        """Bytes used by the data folder (walked at most every `max_age_s` seconds; what this process
+        wrote since is added as it is written, :meth:`charge`)."""
         t, used = self._usage
         if time.monotonic() - t < max_age_s:
             return used
@@ -218,17 +209,38 @@ class Store:
         self._usage = (time.monotonic(), used)
         return used
 
+    def charge(self, nbytes: int) -> None:
+        """Count `nbytes` about to be written against the disk budget, or refuse them.
+
+        Raises
+        ------
+        LimitError
+            507 when the data folder would use more than its budget (nothing is counted then).
+        """
+        if self.max_disk_bytes <= 0:
+            return
+        with self._usage_lock:  # one check-and-count at a time: two writers cannot both fit the last bytes
+            used = self.disk_usage()
+            if used + nbytes > self.max_disk_bytes:
+                raise LimitError(f"this server's storage budget ({self.max_disk_bytes / 2**30:.3g} GB) is "
+                                 "used up; try again after older results expire.", 507, retry_after=600)
+            self._usage = (self._usage[0], used + _blocks(nbytes))
+
     # -- uploads -------------------------------------------------------------------------
-    def add_upload(self, client: str, name: str, data: bytes, ttl_s: float, keep: int = 20) -> str:
-        """Store an upload; the client's uploads beyond its newest `keep` are deleted (disk stays bounded;
-        jobs keep their own copy of their table)."""
+    def add_upload(self, client: str, name: str, data: bytes, ttl_s: float, keep: int = 20, *,
+                   owner: str = "") -> str:
+        """Store an upload of `owner`; the client's uploads beyond its newest `keep` are deleted (disk stays
+        bounded; jobs keep their own copy of their table). Its bytes count against the disk budget as they
+        are written (:meth:`charge`)."""
+        self.charge(len(data))
         upload_id = new_id()
         atomic_write_bytes(self.upload_path(upload_id), data)
         _private(self.upload_path(upload_id))
         now = time.time()
         with self.transaction() as db:
-            db.execute("INSERT INTO uploads VALUES (?, ?, ?, ?, ?, ?)",
-                       (upload_id, client, name, len(data), now, now + ttl_s))
+            db.execute("INSERT INTO uploads (id, client, name, size, created, expires, owner) "
+                       "VALUES (?, ?, ?, ?, ?, ?, ?)", (upload_id, client, name, len(data), now, now + ttl_s,
+                                                        owner))
             old = [r["id"] for r in db.execute(
                 "SELECT id FROM uploads WHERE client = ? ORDER BY created DESC, rowid DESC LIMIT -1 OFFSET ?",
                 (client, keep)).fetchall()]
@@ -237,10 +249,10 @@ class Store:
             self.upload_path(i).unlink(missing_ok=True)
         return upload_id
 
-    def get_upload(self, upload_id: str) -> tuple[str, bytes] | None:
-        """``(name, bytes)`` of a live upload, or None."""
-        row = self._row("SELECT name, expires FROM uploads WHERE id = ?", upload_id)
-        if row is None or row["expires"] < time.time():
+    def get_upload(self, upload_id: str, owner: str | None = None) -> tuple[str, bytes] | None:
+        """``(name, bytes)`` of a live upload (of `owner`, when given), or None."""
+        row = self._row("SELECT name, expires, owner FROM uploads WHERE id = ?", upload_id)
+        if row is None or row["expires"] < time.time() or (owner is not None and row["owner"] != owner):
             return None
         try:
             return row["name"], self.upload_path(upload_id).read_bytes()
@@ -250,14 +262,16 @@ class Store:
     # -- jobs: the server's side -----------------------------------------------------------
     def submit(self, client: str, kind: str, options: dict[str, Any], params: dict[str, Any],
                input_name: str, data: bytes, total: int, *, max_per_client: int, max_queued: int,
-               extra: dict[str, bytes] | None = None) -> str:
-        """Queue a job, or raise :class:`LimitError` (nothing stored then); `extra`: more input files
-        (name -> bytes, e.g. the tract upload the options name) kept beside ``input.bin``."""
+               extra: dict[str, bytes] | None = None, owner: str = "") -> str:
+        """Queue a job of `owner`, or raise :class:`LimitError` (nothing stored then); `extra`: more input
+        files (name -> bytes, e.g. the tract upload the options name) kept beside ``input.bin``."""
+        inputs = {"input.bin": data, **(extra or {})}
+        self.charge(sum(len(c) for c in inputs.values()))
         job_id = new_id()
         folder = self.job_dir(job_id)
         (folder / "out").mkdir(mode=0o700, parents=True)
         _private(folder)
-        for name, content in {"input.bin": data, **(extra or {})}.items():
+        for name, content in inputs.items():
             atomic_write_bytes(folder / name, content)
             _private(folder / name)
         try:
@@ -272,20 +286,20 @@ class Store:
                     raise LimitError(f"the server has {queued} jobs waiting, its limit; try again in a "
                                      "minute.", 503, retry_after=30)
                 db.execute(
-                    "INSERT INTO jobs (id, client, kind, status, options, params, input_name, created, total)"
-                    " VALUES (?, ?, ?, 'queued', ?, ?, ?, ?, ?)",
+                    "INSERT INTO jobs (id, client, kind, status, options, params, input_name, created, total,"
+                    " owner) VALUES (?, ?, ?, 'queued', ?, ?, ?, ?, ?, ?)",
                     (job_id, client, kind, json.dumps(options), json.dumps(params), input_name, time.time(),
-                     total))
+                     total, owner))
                 self._event(db, job_id, 0, "queued", None)
         except BaseException:
             shutil.rmtree(folder, ignore_errors=True)
             raise
         return job_id
 
-    def get(self, job_id: str) -> dict[str, Any] | None:
-        """The job `job_id` (status, progress, files...), or None."""
+    def get(self, job_id: str, owner: str | None = None) -> dict[str, Any] | None:
+        """The job `job_id` (status, progress, files...; of `owner`, when given), or None."""
         row = self._row("SELECT * FROM jobs WHERE id = ?", job_id)
-        return None if row is None else _job(row)
+        return None if row is None or (owner is not None and row["owner"] != owner) else _job(row)
 
     def _row(self, sql: str, row_id: str) -> sqlite3.Row | None:
         """The row that `sql` (``... WHERE id = ?``) selects, or None (also for a malformed id)."""
@@ -473,6 +487,11 @@ class Store:
     def _event(db: sqlite3.Connection, job_id: str, attempt: int, event: str, detail: str | None) -> None:
         db.execute("INSERT INTO events (job_id, attempt, event, detail, t) VALUES (?, ?, ?, ?, ?)",
                    (job_id, attempt, event, detail, time.time()))
+
+
+def _blocks(nbytes: int) -> int:
+    """Disk bytes a file of `nbytes` takes (whole 4 KiB blocks, as :meth:`Store.disk_usage` counts)."""
+    return -(-nbytes // 4096) * 4096
 
 
 def _private(path: Path) -> None:

@@ -8,7 +8,15 @@ from fastapi import FastAPI, Query, Request
 from starlette.concurrency import run_in_threadpool
 
 from brainpainter.web.config import ServerConfig
-from brainpainter.web.http import ApiError, Work, client_of, disk_budget, receive_body, require_octet_stream
+from brainpainter.web.http import (
+    ApiError,
+    Work,
+    client_of,
+    disk_budget,
+    owner_of,
+    receive_body,
+    require_octet_stream,
+)
 from brainpainter.web.options import RenderOptions
 from brainpainter.web.store import Store
 from brainpainter.web.tracts import is_tract_bundle, is_tract_upload
@@ -54,15 +62,16 @@ def add_tracts_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
         finally:
             path.unlink(missing_ok=True)
         upload_id = await run_in_threadpool(store.add_upload, client_of(request), shown, data,
-                                            config.result_ttl_s, config.max_uploads_per_client)
+                                            config.result_ttl_s, config.max_uploads_per_client,
+                                            owner=owner_of(request))
         return {"upload_id": upload_id, "name": shown, "size": size, "report": report}
 
 
-def tracts_of(store: Store, options: RenderOptions) -> bytes | None:
-    """The tract upload that option ``tracts`` names (None without it)."""
+def tracts_of(store: Store, options: RenderOptions, owner: str) -> bytes | None:
+    """The tract upload of `owner` that option ``tracts`` names (None without it)."""
     if options.tracts is None:
         return None
-    got = store.get_upload(options.tracts)
+    got = store.get_upload(options.tracts, owner)
     if got is None or not is_tract_bundle(got[1]):
         raise ApiError(404, "the tract upload of option tracts was not found (it expired, or the id is "
                             "wrong); upload the tractograms again.")

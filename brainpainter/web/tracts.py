@@ -12,8 +12,13 @@ unpacked there too: members with ``..`` or an absolute path are refused,
 folders inside it are flattened, its files and their inflated size are
 capped.
 
-What is kept is a *tract bundle* (:data:`MAGIC`, one JSON line, then the files
-as read). A render names it by its upload id (option ``tracts``); its files are
+What is kept is a *tract bundle* (:data:`MAGIC`, one JSON line, then the files):
+what was read, never the files as sent (a file padded to a gigabyte is kept as
+its streamlines): each bundle's streamlines as the reader kept them (at most
+:data:`MAX_WEB_STREAMLINES` over all bundles, the most
+a render may draw, resampled to :data:`brainpainter.tracts.model.N_POINTS`
+points) in one ``.tck`` file named after the bundle, and the values table (at
+most :data:`MAX_TABLE_BYTES`). A render names it by its upload id (option ``tracts``); its files are
 then written once into ``DATA_DIR/incoming/tracts-<sha256>/`` (content
 addressed: two different uploads never share a folder, so never a cached
 painter), and the run gets the paths exactly as the CLI's ``--tracts``,
@@ -40,11 +45,17 @@ from brainpainter.web.bundle import bundle_header as read_header
 from brainpainter.web.bundle import members, write_bundle
 
 #: The first bytes of a stored tract upload.
-MAGIC = b"BRAINPAINTER-TRACTS/1\n"
+MAGIC = b"BRAINPAINTER-TRACTS/2\n"
+#: The first bytes of a stored tract upload of any version (an earlier one reads as damaged).
+KIND = b"BRAINPAINTER-TRACTS/"
+#: Streamlines a web render draws at most (option ``max_streamlines``); a stored upload keeps as many.
+MAX_WEB_STREAMLINES = 20_000
 #: Table files of an upload read as tract values (one at most).
 VALUE_SUFFIXES = (".csv", ".tsv", ".xlsx")
 #: Largest total size the members of an uploaded zip may inflate to (bytes).
 MAX_UNZIPPED = 1 << 30
+#: Largest values table kept with a tract upload (bytes; one inflated from a zip included).
+MAX_TABLE_BYTES = 16 << 20
 #: Data memory (bytes) of the process that reads a tract upload.
 MEMORY_LIMIT = 4 << 30
 
@@ -56,7 +67,7 @@ def is_tract_upload(names: list[str]) -> bool:
 
 def is_tract_bundle(data: bytes) -> bool:
     """Whether stored upload bytes are a tract bundle."""
-    return data.startswith(MAGIC)
+    return data.startswith(KIND)
 
 
 def member_name(name: str) -> str:
@@ -175,21 +186,58 @@ def build_tract_bundle(work: Path, files: list[Path], max_files: int,
             f"the tractograms hold {sum(counted):,} streamlines; this server reads at most "
             f"{max_streamlines:,} per upload. Upload a subsample (e.g. MRtrix's tckedit -number), or "
             "render it with 'brainpainter render --tracts' on your own computer.")
-    read = read_bundles(sorted(tracts), np.eye(4), MAX_STREAMLINES, N_POINTS)
+    if tables and tables[0].stat().st_size > MAX_TABLE_BYTES:
+        raise BrainPainterError(
+            f"the table {tables[0].name!r} has {tables[0].stat().st_size / 2**20:.0f} MB; this server keeps "
+            f"at most {MAX_TABLE_BYTES >> 20} MB of bundle values per upload. Upload a smaller table.")
+    read = read_bundles(sorted(tracts), np.eye(4), MAX_WEB_STREAMLINES, N_POINTS, scratch=work,
+                        max_inflated=MAX_UNZIPPED)
     if sum(read.counts) > max_streamlines:  # files whose headers did not say
         raise BrainPainterError(
             f"the tractograms hold {sum(read.counts):,} streamlines; this server reads at most "
             f"{max_streamlines:,} per upload. Upload a subsample, or render it on your own computer.")
+    kept = write_kept(read, work / "kept")
+    drawn = read_bundles(kept, np.eye(4), MAX_STREAMLINES, N_POINTS)  # as a render draws by default
+    summary = drawn.summary()
+    for b, total in zip(summary["bundles"], read.counts, strict=True):
+        b["streamlines"] = total
+    notes = [f"{n}: {drawn.drawn(i):,} of {t:,} streamlines drawn by default (a random subsample; "
+             f"option max_streamlines draws up to {read.drawn(i):,})"
+             for i, (n, t) in enumerate(zip(read.names, read.counts, strict=True)) if drawn.drawn(i) < t]
     values: dict[str, Any] | None = None
-    notes = list(read.notes)
     if tables:
         values = _values_report(tables[0], notes)
     if ignored:
         notes.append(f"ignored (not a tractogram or a table): {', '.join(ignored[:10])}")
-    report = tract_report(read.summary(), [f.name for f in files], values, notes)
-    stored = [("bundles", f) for f in sorted(tracts)] + [("values", f) for f in tables]
+    summary["notes"] = []
+    report = tract_report(summary, [f.name for f in files], values, notes)
+    stored = [("bundles", f) for f in kept] + [("values", f) for f in tables]
     write_bundle(work / "bundle.bin", MAGIC, {"report": report}, "role", list(stored))
     return report
+
+
+def write_kept(tracts: Any, folder: Path) -> list[Path]:
+    """Each bundle's kept streamlines as ``folder/<name>.tck`` (RAS millimetres, as read); their paths.
+
+    Parameters
+    ----------
+    tracts : brainpainter.tracts.bundles.Tracts
+        Read with an identity placement: ``lines`` of shape (n_streamlines, n_points, 3) in the files'
+        RAS millimetres.
+    """
+    import numpy as np
+    from nibabel.streamlines.tck import TckFile
+    from nibabel.streamlines.tractogram import Tractogram
+
+    folder.mkdir()
+    out = []
+    for i, name in enumerate(tracts.names):
+        lines = tracts.lines[tracts.bundle == i]
+        path = folder / member_name(f"{name}.tck")
+        tractogram: Any = Tractogram(lines, affine_to_rasmm=np.eye(4))  # type: ignore[no-untyped-call]
+        TckFile(tractogram).save(str(path))  # type: ignore[no-untyped-call]
+        out.append(path)
+    return out
 
 
 def _values_report(table: Path, notes: list[str]) -> dict[str, Any]:

@@ -13,6 +13,7 @@ same way, in a process whose data memory is bounded too.
 
 from __future__ import annotations
 
+import errno
 import multiprocessing as mp
 import os
 import shutil
@@ -21,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.web.maps import MAGIC
+from brainpainter.web.maps import is_bundle
 
 #: Form encodings a browser may send cross-origin without asking first (a CORS "simple" request);
 #: uploads must come with another content type, which only the page itself (same origin) can send.
@@ -74,8 +75,9 @@ def _in_child(target: Any, args: tuple[Any, ...], name: str, time_limit_s: float
               stopped: str) -> Any:
     """``target(pipe, *args)`` in a spawned process killed after `time_limit_s`; what it sent back.
 
-    The child sends ``("ok", payload)`` or ``("error", message)``; a message, a child too slow
-    (`too_slow`) or one that died (`stopped`) is raised as one line.
+    The child sends ``("ok", payload)``, ``("error", message)`` or ``("full", message)`` (:func:`_failed`);
+    a message, a child too slow (`too_slow`) or one that died (`stopped`) is raised as one line, a full
+    disk as ``OSError`` ENOSPC.
     """
     ctx = mp.get_context("spawn")
     parent, child = ctx.Pipe(duplex=False)
@@ -93,9 +95,19 @@ def _in_child(target: Any, args: tuple[Any, ...], name: str, time_limit_s: float
         if proc.is_alive():
             proc.kill()
         proc.join(timeout=5)
+    if status == "full":  # the disk filled while the child wrote (an inflated member): 507, not a bad file
+        raise OSError(errno.ENOSPC, payload)
     if status != "ok":
         raise BrainPainterError(payload)
     return payload
+
+
+def _failed(exc: BaseException, line: str) -> tuple[str, str]:
+    """What a reading process sends for an unexpected error `exc`: ``("full", ...)`` when the disk is
+    full (the server answers 507), else ``("error", line)``."""
+    from brainpainter.web.disk import disk_full
+
+    return ("full", "no space left on the server's disk") if disk_full(exc) else ("error", line)
 
 
 def check_upload(data: bytes, name: str, options: dict[str, Any], *, max_rows: int,
@@ -106,9 +118,9 @@ def check_upload(data: bytes, name: str, options: dict[str, Any], *, max_rows: i
     spreadsheets in a spawned process that is killed after `time_limit_s` seconds.
     """
     check_rows(data, name, max_rows)
-    from brainpainter.web.tracts import MAGIC as TRACTS_MAGIC
+    from brainpainter.web.tracts import is_tract_bundle
 
-    if data.startswith((MAGIC, TRACTS_MAGIC)):  # only the server writes map and tract bundles
+    if is_bundle(data) or is_tract_bundle(data):  # only the server writes map and tract bundles
         raise BrainPainterError(f"{name!r} is not a table (it starts as a stored map or tract upload); "
                                 "upload the table, map or tractogram files themselves.")
     if not is_spreadsheet(data):
@@ -156,8 +168,8 @@ def _check_main(conn: Any, data: bytes, name: str, options: dict[str, Any], max_
     except BrainPainterError as exc:
         conn.send(("error", str(exc).splitlines()[0] if str(exc) else type(exc).__name__))
     except Exception as exc:
-        conn.send(("error", f"cannot read {name!r} ({type(exc).__name__}); save it as CSV and upload it "
-                            "again."))
+        conn.send(_failed(exc, f"cannot read {name!r} ({type(exc).__name__}); save it as CSV and upload it "
+                               "again."))
     finally:
         conn.close()
 
@@ -220,36 +232,23 @@ def read_map_files(parts: list[tuple[str, bytes]], hemis: list[str | None], fold
 def _map_main(conn: Any, work: str, entries: list[tuple[str | None, str]], max_images: int) -> None:
     """Entry point of the map reading process: send ``("ok", (report, images))`` or ``("error", line)``."""
     from brainpainter.web.maps import build_bundle
-    from brainpainter.web.worker import die_with_parent
+    from brainpainter.web.worker import die_with_parent, limit_memory
 
     die_with_parent()
-    _limit_memory()
+    limit_memory()
     try:
         conn.send(("ok", build_bundle(Path(work), [(h, Path(p)) for h, p in entries], max_images)))
     except BrainPainterError as exc:
         line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        conn.send(("error", line.replace(work + "/", "").replace(work, "")))
+        conn.send(_failed(exc, line.replace(work + "/", "").replace(work, "")))
     except MemoryError:
         conn.send(("error", "the map needs more memory than this server gives one upload; upload a smaller "
                             "map (fewer images or volumes, or a coarser volume)."))
     except Exception as exc:
-        conn.send(("error", f"cannot read the map ({type(exc).__name__}); check that the file is what its "
-                            "name says (docs/maps.md lists the formats)."))
+        conn.send(_failed(exc, f"cannot read the map ({type(exc).__name__}); check that the file is what its "
+                               "name says (docs/maps.md lists the formats)."))
     finally:
         conn.close()
-
-
-def _limit_memory() -> None:
-    try:
-        import resource
-
-        _, hard = resource.getrlimit(resource.RLIMIT_DATA)
-        from brainpainter.web.maps import MEMORY_LIMIT
-
-        limit = MEMORY_LIMIT if hard == resource.RLIM_INFINITY else min(MEMORY_LIMIT, hard)
-        resource.setrlimit(resource.RLIMIT_DATA, (limit, hard))
-    except (ImportError, ValueError, OSError):  # not on this platform: the time limit remains
-        pass
 
 
 # -- tractograms (brainpainter.web.tracts): read in a process of their own, bounded in time and memory ---
@@ -303,23 +302,23 @@ def read_tract_upload(path: Path, names: list[str], sizes: list[int], folder: Pa
 def _tracts_main(conn: Any, work: str, files: list[str], max_files: int, max_streamlines: int) -> None:
     """Entry point of the tract reading process: send ``("ok", report)`` or ``("error", line)``."""
     from brainpainter.web.tracts import build_tract_bundle
-    from brainpainter.web.worker import die_with_parent
+    from brainpainter.web.worker import die_with_parent, limit_memory
 
     die_with_parent()
-    _limit_memory()
+    limit_memory()
     try:
         report = build_tract_bundle(Path(work), [Path(f) for f in files], max_files, max_streamlines)
         conn.send(("ok", report))
     except BrainPainterError as exc:
         line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        for prefix in (work + "/in/", work + "/given/", work + "/", work):
+        for prefix in (work + "/in/", work + "/given/", work + "/kept/", work + "/", work):
             line = line.replace(prefix, "")
-        conn.send(("error", line))
+        conn.send(_failed(exc, line))
     except MemoryError:
         conn.send(("error", "the tractograms need more memory than this server gives one upload; upload "
                             "fewer streamlines."))
     except Exception as exc:
-        conn.send(("error", f"cannot read the tractograms ({type(exc).__name__}); check that each file is a "
-                            ".trk, .tck or .trx file (docs/tracts.md)."))
+        conn.send(_failed(exc, f"cannot read the tractograms ({type(exc).__name__}); check that each file is "
+                               "a .trk, .tck or .trx file (docs/tracts.md)."))
     finally:
         conn.close()

@@ -33,6 +33,8 @@ from pathlib import Path
 from typing import Any
 
 POLL_S = 0.2
+OUT_OF_MEMORY = ("the job needs more memory than this server gives one job (--worker-memory-gb); choose "
+                 "fewer rows or views, a smaller size, or a lower dpi.")
 HEARTBEAT_S = 5.0
 
 #: Job kinds and the output file name stems they make.
@@ -123,6 +125,36 @@ def die_with_parent() -> None:
         os._exit(0)
 
 
+def limit_memory(limit: int | None = None) -> None:
+    """Bound this process's data memory (``RLIMIT_DATA``) to `limit` bytes (default: a reading process's
+    :data:`brainpainter.web.maps.MEMORY_LIMIT`); more raises ``MemoryError``. A no-op where unsupported."""
+    try:
+        import resource
+
+        _, hard = resource.getrlimit(resource.RLIMIT_DATA)
+        from brainpainter.web.maps import MEMORY_LIMIT
+
+        limit = MEMORY_LIMIT if limit is None else limit
+        limit = limit if hard == resource.RLIM_INFINITY else min(limit, hard)
+        resource.setrlimit(resource.RLIMIT_DATA, (limit, hard))
+    except (ImportError, ValueError, OSError):  # not on this platform: the time limit remains
+        pass
+
+
+def _rendering_process(memory: int | None) -> None:
+    """Ready a rendering process: at most `memory` bytes of data memory (None: no limit), and tqdm locks
+    with a thread lock, not its default multiprocessing lock (a named semaphore that a process stopped by
+    its server never removes: the resource tracker then warns of a leaked semaphore at the server's stop;
+    one process draws one job at a time)."""
+    import threading
+
+    from tqdm import tqdm
+
+    tqdm.set_lock(threading.RLock())
+    if memory is not None:
+        limit_memory(memory)
+
+
 def _set_threads(lp_threads: int) -> None:
     """Ready a server process for Blender: llvmpipe's thread count, and no Blender script folders
     inherited on ``sys.path`` (:func:`brainpainter.rendering.parallel.forget_blender_paths`)."""
@@ -134,10 +166,12 @@ def _set_threads(lp_threads: int) -> None:
 
 # -- job worker -------------------------------------------------------------------------
 def job_worker_main(data_dir: str, name: str, renderer: str, lp_threads: int, ttl_s: float,
-                    time_limit_s: float, warm: bool = True) -> None:
-    """Entry point of a job worker process: take jobs until the parent process is gone."""
+                    time_limit_s: float, warm: bool = True, memory: int | None = None) -> None:
+    """Entry point of a job worker process: take jobs until the parent process is gone; `memory`: the
+    bytes of data memory it may use (None: no limit)."""
     _set_threads(lp_threads)
     die_with_parent()
+    _rendering_process(memory)
     from brainpainter.web.store import Store
 
     parent = os.getppid()
@@ -196,8 +230,9 @@ def run_job(store: Any, job: dict[str, Any], painters: PainterCache, *, ttl_s: f
         if now is not None and now["status"] == "cancelled":  # cancelled: what was made goes now
             discard_outputs(folder)
         return
-    except BrainPainterError as exc:
-        line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    except (BrainPainterError, MemoryError) as exc:
+        line = OUT_OF_MEMORY if isinstance(exc, MemoryError) else str(exc).splitlines()[0] if str(exc) else (
+            type(exc).__name__)
         if store.fail(job_id, attempt, _no_paths(line, store), ttl_s):  # (a stale attempt touches nothing)
             discard_outputs(folder, published=False)
         return
@@ -223,7 +258,7 @@ def _prepared(folder: Path, job: dict[str, Any]) -> Any:
 
     data = (folder / "input.bin").read_bytes()
     tracts = (folder / TRACTS).read_bytes() if (folder / TRACTS).is_file() else None
-    return data, prepare(data, job["input_name"], RenderOptions(**job["options"]), scratch=folder,
+    return data, prepare(data, job["input_name"], RenderOptions(**job["options"]),
                          tracts=tracts, data_dir=folder.parent.parent)
 
 
@@ -231,7 +266,7 @@ def _prepared(folder: Path, job: dict[str, Any]) -> Any:
 TRACTS = "tracts.bin"
 
 
-def _media_input(folder: Path, data: bytes, name: str, prep: Any) -> Any:
+def _media_input(data: bytes, name: str, prep: Any) -> Any:
     """What figure and movie read: the table as a named stream, a map's maps (read from its files), or
     the table of bundle values of tracts drawn alone."""
     from brainpainter.web.maps import is_bundle, read_bundle
@@ -241,7 +276,7 @@ def _media_input(folder: Path, data: bytes, name: str, prep: Any) -> Any:
         return str(prep.tract_table)
     if not is_bundle(data):
         return table_stream(data, name)
-    return read_bundle(data, folder)
+    return read_bundle(data)
 
 
 def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
@@ -377,19 +412,24 @@ def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
 
 
 def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
-    from brainpainter.media.figure import make_figure
-    from brainpainter.web.options import FigureParams
+    from brainpainter.media.figure import make_figure, save_figure
+    from brainpainter.web.options import FigureParams, check_figure_pixels
 
     data, prep = _prepared(folder, job)
-    p = job["params"]
+    p = dict(job["params"])
+    max_pixels = p.pop("max_pixels", None)  # the server's limit when the job was queued (PNG only)
     name = f"figure.{p.get('format', 'pdf')}"
     tick(0)
     params = FigureParams(**p)  # the CLI's defaults for what the job did not give
-    make_figure(_media_input(folder, data, job["input_name"], prep), out=folder / "out" / name,
-                grid=params.grid,
-                title=params.title or None, label=params.label or None, dpi=params.dpi,
-                fig_width=params.fig_width, font_size=params.font_size, on_progress=tick,
-                **_media_kwargs(prep, painters.renderer))
+    made = make_figure(_media_input(data, job["input_name"], prep), grid=params.grid,
+                       title=params.title or None, label=params.label or None, dpi=params.dpi,
+                       fig_width=params.fig_width, font_size=params.font_size, on_progress=tick,
+                       **_media_kwargs(prep, painters.renderer))
+    if max_pixels is not None:  # composed now: its real size, before the PNG is drawn
+        w, h = (round(x) for x in made.figure.get_size_inches() * params.dpi)
+        check_figure_pixels(w, h, max_pixels)
+    save_figure(made.figure, folder / "out" / name, params.dpi,
+                transparent=prep.run.settings.background is None)
     return [name]
 
 
@@ -403,7 +443,7 @@ def _run_movie(folder: Path, job: dict[str, Any], painters: PainterCache, tick: 
     tick(0)
     params = MovieParams(**p)  # the CLI's defaults for what the job did not give
     kwargs = _media_kwargs(prep, painters.renderer)  # progress: per frame (on_progress), not 0/1
-    make_movie(_media_input(folder, data, job["input_name"], prep), out=folder / "out" / name,
+    make_movie(_media_input(data, job["input_name"], prep), out=folder / "out" / name,
                frames_per_step=params.frames_per_step, easing=params.easing, hold=params.hold, fps=params.fps,
                title=params.title or None, label=params.label or None, on_progress=tick, **kwargs)
     return [name]
@@ -413,16 +453,19 @@ _KIND_RUNNERS = {"images": _run_images, "figure": _run_figure, "movie": _run_mov
 
 
 # -- preview process ----------------------------------------------------------------------
-def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int, int]) -> None:
+def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int, int],
+                 memory: int | None = None) -> None:
     """Entry point of the preview process: answer render requests on `conn` until the parent is gone.
 
     A request is ``{"atlas", "surface", "hidden", "settings", "colors", "view", "coloring"}``
     (``colors`` a :class:`~brainpainter.rendering.geometry.VertexColors` when ``coloring`` is
     ``"vertices"``); the answer is
-    ``("ok", png_bytes, milliseconds)`` or ``("error", one_line_message, 0)``.
+    ``("ok", png_bytes, milliseconds)`` or ``("error", one_line_message, 0)``; `memory`: the bytes of
+    data memory the process may use (None: no limit).
     """
     _set_threads(lp_threads)
     die_with_parent()
+    _rendering_process(memory)
     from brainpainter.atlas.registry import get_atlas
     from brainpainter.errors import BrainPainterError
     from brainpainter.io.output import png_bytes

@@ -61,15 +61,9 @@ def main() -> None:
 
 def own_surfaces() -> None:
     """6. maps on the user's own surfaces (--lh-surface/--rh-surface), drawn as they are."""
-    import gzip
-    import tempfile
-
     nilearn = Path(nib.__file__).parents[1] / "nilearn" / "datasets" / "data" / "fsaverage5"
-    with tempfile.TemporaryDirectory() as tmp:  # nilearn's maps are gzipped GIfTI: the map readers take .gii
-        thick = Path(tmp) / "thick_left.gii"
-        thick.write_bytes(gzip.decompress((nilearn / "thick_left.gii.gz").read_bytes()))
-        save(brainpainter.render(None, lh=thick, lh_surface=nilearn / "pial_left.gii.gz",
-                                 views="lateral-left,medial-left", **SIZE), "own_surface_pial")
+    save(brainpainter.render(None, lh=nilearn / "thick_left.gii.gz", lh_surface=nilearn / "pial_left.gii.gz",
+                             views="lateral-left,medial-left", **SIZE), "own_surface_pial")
     surf = FS / "fsaverage5" / "surf"  # a FreeSurfer subject's folder: lh.sulc beside, label/lh.cortex.label
     save(brainpainter.render(None, lh=surf / "lh.curv", rh=surf / "rh.curv", lh_surface=surf / "lh.inflated",
                              rh_surface=surf / "rh.inflated", views="dorsal,medial-left", **SIZE),

@@ -324,6 +324,21 @@ def _gifti(structure: str) -> Callable[[Path], None]:
     return make
 
 
+def _gifti_external(name: str, gz: bool = False) -> Callable[[Path], None]:
+    """A fsaverage5 .func.gii whose data array says it is in the file `name` (``ExternalFileBinary``)."""
+    def make(path: Path) -> None:
+        import nibabel as nib
+        import numpy as np
+
+        da = nib.gifti.GiftiDataArray(np.zeros(10242, np.float32), datatype="NIFTI_TYPE_FLOAT32")
+        xml = nib.gifti.GiftiImage(darrays=[da]).to_xml(enc="utf-8").decode()
+        xml = xml.replace('Encoding="GZipBase64Binary"', 'Encoding="ExternalFileBinary"')
+        xml = re.sub(r"<Data>.*?</Data>", "<Data></Data>", xml.replace('ExternalFileName=""',
+                                                                      f'ExternalFileName="{name}"'), flags=re.S)
+        path.write_bytes(gzip.compress(xml.encode()) if gz else xml.encode())
+    return make
+
+
 def toml(text: str) -> bytes:
     return text.strip().encode() + b"\n"
 
@@ -339,10 +354,10 @@ def _surface(path: Path) -> None:
     write_geometry(str(path), np.asarray(ico.vertices) * 40.0, np.asarray(ico.faces, np.int32))
 
 
-#: A GIfTI surface whose point set lies in another file (``secret.bin``): never to be opened.
+#: A GIfTI surface whose point set lies in a file outside its folder (``/etc/passwd``): never to be opened.
 EXTERNAL_GIFTI = b"""<?xml version="1.0" encoding="UTF-8"?>
 <GIFTI Version="1.0" NumberOfDataArrays="2">
-<DataArray Intent="NIFTI_INTENT_POINTSET" DataType="NIFTI_TYPE_FLOAT32" ArrayIndexingOrder="RowMajorOrder" Dimensionality="2" Dim0="3" Dim1="3" Encoding="ExternalFileBinary" Endian="LittleEndian" ExternalFileName="secret.bin" ExternalFileOffset="0"><Data></Data></DataArray>
+<DataArray Intent="NIFTI_INTENT_POINTSET" DataType="NIFTI_TYPE_FLOAT32" ArrayIndexingOrder="RowMajorOrder" Dimensionality="2" Dim0="3" Dim1="3" Encoding="ExternalFileBinary" Endian="LittleEndian" ExternalFileName="/etc/passwd" ExternalFileOffset="0"><Data></Data></DataArray>
 <DataArray Intent="NIFTI_INTENT_TRIANGLE" DataType="NIFTI_TYPE_INT32" ArrayIndexingOrder="RowMajorOrder" Dimensionality="2" Dim0="1" Dim1="3" Encoding="ASCII" Endian="LittleEndian" ExternalFileName="" ExternalFileOffset=""><Data>0 1 2</Data></DataArray>
 </GIFTI>
 """
@@ -598,6 +613,28 @@ INPROCESS: list[Case] = [
           "rh.a.annot": _annot},
          ["add", "net", "--annot", "lh=lh.a.label.gii", "--annot", "rh=rh.a.annot"], "holds no data array",
          command="atlas"),
+    # -- files that point elsewhere: a GIfTI reads external data only from its own folder (issue 33) -----------
+    *[Case(f"gifti-external-{cid}", {"lh.x.func.gii": _gifti_external(name), **extra},
+           ["--lh", "lh.x.func.gii", "--out", "o", *RENDER], message, command="render")
+      for cid, name, extra, message in (
+          ("absolute", "/etc/passwd", {}, "keeps its data in '/etc/passwd', outside its own folder"),
+          ("parent", "../../secret.bin", {}, "keeps its data in '../../secret.bin', outside its own folder"),
+          ("symlink-out", "in.bin", {"in.bin": _link_to("/etc/passwd")}, "'in.bin', outside its own folder"),
+          ("missing", "gone.bin", {}, "keeps its data in 'gone.bin', which is not a file in its folder"))],
+    Case("volume-is-gifti-with-external-data", {"lh.x.func.gii": _gifti_external("/etc/passwd")},
+         ["--volume", "lh.x.func.gii", "--out", "o", *RENDER], "looks like a GIfTI file, not a NIfTI or MGH volume",
+         command="render"),
+    Case("volume-is-gzipped-gifti", {"thick_left.gii.gz": _gifti_external("x.bin", gz=True)},
+         ["--volume", "thick_left.gii.gz", "--out", "o", *RENDER],
+         "looks like gzip-compressed data (a GIfTI file inside), not a NIfTI or MGH volume", command="render"),
+    Case("gifti-gz-external-absolute", {"lh.x.func.gii.gz": _gifti_external("/etc/hostname", gz=True)},
+         ["--lh", "lh.x.func.gii.gz", "--out", "o", *RENDER], "outside its own folder", command="render"),
+    Case("gifti-xml-entity", {"lh.x.func.gii": b'<?xml version="1.0"?><!DOCTYPE GIFTI [<!ENTITY a "b">]>'
+                                               b'<GIFTI Version="1.0" NumberOfDataArrays="0"></GIFTI>'},
+         ["--lh", "lh.x.func.gii", "--out", "o", *RENDER], "declares the XML entity 'a'", command="render"),
+    Case("map-gzip-named-curv", {"lh.thickness": gzip.compress(b'<?xml version="1.0"?><GIFTI></GIFTI>')},
+         ["--lh", "lh.thickness", "--out", "o", *RENDER],
+         "looks like gzip-compressed data (a GIfTI file inside), not a FreeSurfer curv file", command="render"),
     # -- finite numbers only, checked before anything is written -----------------------------------------------
     _render(["--out", "o", "--vmin", "nan"], "is not a finite number", "vmin-nan"),
     _render(["--out", "o", "--vmax", "inf"], "is not a finite number", "vmax-inf"),
@@ -653,10 +690,9 @@ INPROCESS: list[Case] = [
     Case("own-surface-not-a-surface", {"lh.pial": b"not a surface\n", "lh.x.txt": b"0\n1\n2\n"},
          ["--lh", "lh.x.txt", "--lh-surface", "lh.pial", "--out", "o", *RENDER], "cannot read surface file 'lh.pial'",
          command="render"),
-    Case("own-surface-external-file", {"lh.pial.surf.gii": EXTERNAL_GIFTI, "secret.bin": bytes(36),
-                                       "lh.x.txt": b"0\n1\n2\n"},
+    Case("own-surface-external-file", {"lh.pial.surf.gii": EXTERNAL_GIFTI, "lh.x.txt": b"0\n1\n2\n"},
          ["--lh", "lh.x.txt", "--lh-surface", "lh.pial.surf.gii", "--out", "o", *RENDER],
-         "keeps its data in another file (ExternalFileBinary), which is not opened", command="render"),
+         "keeps its data in '/etc/passwd', outside its own folder", command="render"),
     Case("own-surface-with-a-table", {"in.csv": GOOD, "lh.pial": _surface},
          ["in.csv", "--lh-surface", "lh.pial", "--out", "o", *RENDER], "a region table is drawn on the template's",
          command="render"),

@@ -53,7 +53,9 @@ def main(source: str | Path, out: Path = OUT) -> Path:
         orientation="RAS", title="Mouse (BrainPainter 2021)",
         description="The original BrainPainter's mouse brain: 20 cortical areas and 7 structures per "
                     "hemisphere, as meshes (coordinates in the original's own unit, about 0.1 mm).",
-        citation=CITATION, surface_also=("Left-Cerebellum", "Right-Cerebellum"), out=out)
+        citation=CITATION, surface_also=("Left-Cerebellum", "Right-Cerebellum"), out=out,
+        # the views its meshes can show: the hemispheres are open on the medial side
+        views=("lateral-left", "subcortical"))
     (out / "ATTRIBUTION.txt").write_text(ATTRIBUTION, encoding="utf-8")
     return out
 
