@@ -32,6 +32,7 @@ __all__ = [
     "read_maps",
     "read_table",
     "render",
+    "to_fsaverage",
 ]
 
 if TYPE_CHECKING:
@@ -42,6 +43,7 @@ if TYPE_CHECKING:
     from brainpainter.atlas.template import load_template
     from brainpainter.color.scale import make_scale
     from brainpainter.errors import BrainPainterError
+    from brainpainter.maps.inputs import maps_to_fsaverage as to_fsaverage
     from brainpainter.maps.inputs import read_maps
     from brainpainter.maps.volume import project_volume
     from brainpainter.media.export import export
@@ -71,6 +73,7 @@ _LAZY = {
     "read_maps": ("brainpainter.maps.inputs", "read_maps"),
     "read_table": ("brainpainter.table.region_table", "read_table"),
     "render": ("brainpainter.rendering.run", "render"),
+    "to_fsaverage": ("brainpainter.maps.inputs", "maps_to_fsaverage"),
 }
 
 

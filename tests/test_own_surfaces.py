@@ -239,11 +239,30 @@ def test_a_template_built_from_a_subject_takes_maps_of_the_subject(tmp_path):
     assert len(r.images) == 1
 
 
+def test_a_cifti_file_on_own_surfaces_is_drawn_as_it_is(tmp_path):
+    """A dscalar's cortex (brain models of the surfaces' vertex count) colours the surfaces' vertices."""
+    from nibabel.cifti2 import cifti2_axes as axes
+
+    pial = _subject(tmp_path / "subj")
+    n = len(_icosphere()[0])
+    cols = (axes.BrainModelAxis.from_surface(np.arange(100), n, "CortexLeft")
+            + axes.BrainModelAxis.from_surface(np.arange(n), n, "CortexRight"))
+    data = np.arange(100 + n, dtype=np.float32)[None]
+    path = tmp_path / "x.dscalar.nii"
+    nib.Cifti2Image(data, header=(axes.ScalarAxis(["z"]), cols)).to_filename(str(path))
+    run = prepare_run(path, lh_surface=str(pial), cmap="viridis", vmin=0, vmax=400)
+    assert run.maps.own_mesh and sorted(run.maps.values) == ["lh"]  # rh has no surface: not drawn
+    rgb, cortex = run.colors(0).vertices["lh"], run.mesh_masks["lh"]["cortex"]
+    shown = cortex & (np.arange(n) < 100)  # vertices 100.. are absent from the file: the underlay
+    np.testing.assert_allclose(rgb[shown], run.scale(data[0, :100][shown[:100]])[:, :3], atol=1e-6)
+    assert (np.ptp(rgb[100:], axis=1) < 1e-6).all()
+
+
 def test_read_maps_of_own_counts(tmp_path):
     """A map of any vertex count reads when a surface of that count is given (else it is refused)."""
     n = 1234
     np.save(tmp_path / "lh.x.npy", np.arange(n, dtype=float))
-    with pytest.raises(BrainPainterError, match="fits no fsaverage surface"):
+    with pytest.raises(BrainPainterError, match="fits no known mesh"):
         read_maps(lh=tmp_path / "lh.x.npy")
     m = read_maps(lh=tmp_path / "lh.x.npy", mesh={"lh": n})
     assert m.own_mesh and m.values["lh"].shape == (1, n)

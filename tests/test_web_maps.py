@@ -289,3 +289,57 @@ def test_a_region_table_takes_the_outline_option(server):
     assert preview(server, uid, "lateral-left", outline="dk").shape == (120, 160, 4)
     r = server.post("/api/preview", json={"upload_id": uid, "options": {"outline": "destrieux"}})
     assert r.status_code == 400 and "outlines its own atlas" in r.json()["error"]
+
+
+def _cifti(tmp_path, name: str, n: int, rows, data, voxels: bool = False) -> bytes:
+    """A CIFTI-2 file of the whole left cortex of an `n`-vertex mesh (and 4 thalamus voxels)."""
+    from nibabel.cifti2 import cifti2_axes as axes
+
+    cols = axes.BrainModelAxis.from_surface(np.arange(n), n, "CortexLeft")
+    if voxels:
+        mask = np.zeros((4, 4, 4), bool)
+        mask.flat[:4] = True
+        cols = cols + axes.BrainModelAxis.from_mask(mask, name="thalamus_left", affine=np.eye(4))
+    nib.Cifti2Image(np.asarray(data, np.float32), header=(rows, cols)).to_filename(str(tmp_path / name))
+    return (tmp_path / name).read_bytes()
+
+
+def test_cifti_uploads_dscalar_and_dlabel(server, tmp_path):
+    """A CIFTI-2 dscalar (fsLR 32k, with a thalamus) and a dlabel upload, read as the CLI reads them."""
+    from nibabel.cifti2 import cifti2_axes as axes
+
+    n = 32492
+    data = np.concatenate([np.linspace(-1, 1, n), np.full(4, 3.0)])[None]
+    dscalar = _cifti(tmp_path, "z.dscalar.nii", n, axes.ScalarAxis(["z"]), data, True)
+    r = post(server, [("z.dscalar.nii", dscalar)])
+    assert r.status_code == 200, r.text
+    rep = r.json()["report"]
+    assert rep["summary"] == "CIFTI map: z.dscalar.nii, fsLR 32k, 1 image" and rep["hemis"] == ["lh"]
+    uid = r.json()["upload_id"]
+    assert colourful(preview(server, uid, "lateral-left")) > 0.5
+    assert colourful(preview(server, uid, "subcortical")) > 0.02  # the thalamus takes its voxels' mean
+    table = {0: ("???", (0, 0, 0, 0)), 1: ("red", (1, 0, 0, 1)), 2: ("blue", (0, 0, 1, 1))}
+    labels = (np.arange(n) % 2 + 1)[None]
+    dlabel = _cifti(tmp_path, "p.dlabel.nii", n, axes.LabelAxis(["p"], [table]), labels)
+    r = post(server, [("p.dlabel.nii", dlabel)])
+    assert r.status_code == 200, r.text
+    rep = r.json()["report"]
+    assert rep["summary"] == "CIFTI label map: p.dlabel.nii, fsLR 32k, 2 labels"
+    assert rep["categories"] == ["red", "blue"]
+    assert colourful(preview(server, r.json()["upload_id"], "lateral-left")) > 0.5
+
+
+def test_a_cifti_upload_keeps_its_fslr_164k_mesh(tmp_path):
+    """A 163842-vertex CIFTI named fs_LR is stored and read back as fsLR, not as fsaverage."""
+    from nibabel.cifti2 import cifti2_axes as axes
+
+    from brainpainter.web.maps import build_bundle, read_bundle
+
+    name = "s.164k_fs_LR.dscalar.nii"
+    _cifti(tmp_path, name, 163842, axes.ScalarAxis(["s"]), np.ones((1, 163842)))
+    work = tmp_path / "work"
+    work.mkdir()
+    report, images = build_bundle(work, [(None, tmp_path / name)], 10)
+    assert report["surfaces"] == {"lh": "fsLR 164k"} and images == ["s"]
+    maps = read_bundle((work / "bundle.bin").read_bytes(), tmp_path / "scratch")
+    assert maps.space == "fsLR" and not maps.notes

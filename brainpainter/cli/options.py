@@ -42,8 +42,8 @@ RENDER_OPTION_NAMES = (
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
-MAP_OPTION_NAMES = ("lh", "rh", "volume", "underlay", "threshold", "outline", "outline_threshold",
-                    "lh_surface", "rh_surface")
+MAP_OPTION_NAMES = ("lh", "rh", "volume", "underlay", "threshold", "outline", "outline_threshold", "space",
+                    "frames", "lh_surface", "rh_surface")
 
 
 def field_option(cls: type, name: str, *decls: str, **overrides: Any) -> Callable[[F], F]:
@@ -158,6 +158,8 @@ map_options = stack([
     field_option(MapOptions, "threshold"),
     field_option(MapOptions, "outline", metavar="ATLAS"),
     field_option(MapOptions, "outline_threshold"),
+    field_option(MapOptions, "space"),
+    field_option(MapOptions, "frames", metavar="ROWS"),
     field_option(MapOptions, "lh_surface", type=click.Path(dir_okay=False), metavar="FILE"),
     field_option(MapOptions, "rh_surface", type=click.Path(dir_okay=False), metavar="FILE"),
 ])

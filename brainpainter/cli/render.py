@@ -90,6 +90,8 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
         m = result.manifest["input"]
         click.echo(f"{len(result.files)} image(s) written to {out} ({m['n_images']} map image(s), "
                    f"hemispheres {', '.join(m['hemis'])})")
+        for note in m.get("notes", []):
+            click.echo(f"note: {note}")
         echo_scale(result.scale)
         return
     from brainpainter.table.region_table import summary_line

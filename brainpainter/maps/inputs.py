@@ -5,11 +5,13 @@ Files (read with nibabel): FreeSurfer morphometry ("curv" format,
 data arrays = several images; also gzipped, ``.gii.gz``), NIfTI holding one value per vertex (``N x 1 x 1``
 [``x k``]), ``.npy``, plain text (one number per line; columns = images);
 label maps ``.annot``, ``.label.gii`` (categories, drawn in their own colours)
-and FreeSurfer ``.label`` vertex lists (a highlighted area). Arrays:
+and FreeSurfer ``.label`` vertex lists (a highlighted area); CIFTI-2 files
+(``.dscalar.nii``, ``.dlabel.nii``, ... read by :mod:`brainpainter.maps.cifti`). Arrays:
 ``{"lh": ndarray (n,) or (k, n), "rh": ...}`` (also ``left``/``right``, and
 nilearn's ``SurfaceImage``). Every map is kept at its own resolution and
-brought to fsaverage when drawn (:func:`brainpainter.maps.resolution.to_fsaverage`). A volume in MNI space is
-turned into the same arrays by ``brainpainter.maps.volume`` and handed to
+brought to fsaverage when drawn (:func:`brainpainter.maps.resolution.to_fsaverage`; fsLR maps, 32,492
+vertices, or 163,842 where the file or ``space`` says fsLR, through :mod:`brainpainter.maps.fslr`).
+A volume in MNI space is turned into the same arrays by ``brainpainter.maps.volume`` and handed to
 :func:`read_maps` as a dict.
 """
 
@@ -24,35 +26,20 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from brainpainter.errors import BrainPainterError
-from brainpainter.io.files import MAX_DATA_FILE, inflated, read_input
-from brainpainter.io.gifti import External, read_gifti
-from brainpainter.io.sniff import CURV, GZIP, HEAD, MGH, NIFTI1, NIFTI2, NPY, described, what_is
-from brainpainter.maps.resolution import FAMILY, N_FSAVERAGE, native, to_fsaverage
+from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.io.gifti import External
+from brainpainter.maps.files import GIFTI_ENDINGS, SUFFIXES, Hemi, read_hemi
+from brainpainter.maps.fslr import SPACES, decide_space, names_fslr
+from brainpainter.maps.options import frame_rows
+from brainpainter.maps.resolution import native, to_fsaverage
 
 if TYPE_CHECKING:
     from brainpainter.maps.volume import Method
 
 HEMIS = ("lh", "rh")
-#: File endings read as text, as arrays, as surface images, as label maps.
-TEXT = (".txt", ".csv", ".tsv", ".1d")
-SUFFIXES = (".mgh", ".mgz", ".gii", ".gii.gz", ".nii", ".nii.gz", ".npy", ".annot", ".label", *TEXT,
-            "(none: FreeSurfer curv format, e.g. lh.thickness)")
-#: GIfTI endings, compound ones first (gzipped GIfTI is read too).
-GIFTI_ENDINGS = (".func.gii.gz", ".shape.gii.gz", ".label.gii.gz", ".gii.gz", ".func.gii", ".shape.gii",
-                 ".label.gii", ".gii")
 #: lh/rh spellings in file names: FreeSurfer's ``lh.``, BIDS' ``hemi-L``, and ``_lh``/``.L.``.
-_PAIRS = ((r"(^|[._-])lh([._-])", r"\1rh\2"), (r"hemi-L", "hemi-R"), (r"([._-])L([._-])", r"\1R\2"),
+_PAIRS = ((r"(^|[._-])lh([._-])", r"\1rh\2"), (r"hemi-L", "hemi-R"), (r"(^|[._-])L([._-])", r"\1R\2"),
           (r"(^|[._-])left([._-])", r"\1right\2"))
-
-
-@dataclass(frozen=True)
-class Hemi:
-    """One hemisphere's map as read: values on fsaverage and, for label maps, the category names."""
-
-    values: NDArray[Any]  # float32, shape (k, n), n a count of the fsaverage family; NaN = no value
-    categories: tuple[str, ...] | None = None
-    colors: NDArray[Any] | None = None  # float, shape (n_categories, 3), sRGB 0-1
 
 
 @dataclass(frozen=True)
@@ -63,8 +50,9 @@ class VertexMaps:
     ----------
     values : dict of str to ndarray of float32, shape (k, n)
         Per hemisphere given (``lh``/``rh``), at the map's own resolution (``n``
-        a count of the fsaverage family; :meth:`on_fsaverage` brings one image
-        to fsaverage); a hemisphere absent shows the underlay.
+        a count of the fsaverage family, or of fsLR when ``space`` is ``"fsLR"``;
+        :meth:`on_fsaverage` brings one image to fsaverage); a hemisphere absent
+        shows the underlay.
     images : tuple of str
         Name of each of the ``k`` images.
     categories : tuple of str, optional
@@ -75,9 +63,13 @@ class VertexMaps:
     regions : dict of str to ndarray of float64, shape (k,), optional
         Values of whole regions beside the map, per image (a volume's mean in each
         subcortical structure, keyed as the atlases' regions: ``"Left-Hippocampus"``).
+    space : {"fsaverage", "fsLR"}
+        The mesh family of ``values``.
+    notes : tuple of str
+        What the reader decided that the user should hear (``note: ...`` on the CLI).
     own_mesh : bool
-        The values are per vertex of the user's own surfaces (``--lh-surface``), drawn as
-        they are (:meth:`on_surface`), not on fsaverage.
+        The values are per vertex of the user's own surfaces (``--lh-surface``, or a template
+        built from a subject), drawn as they are (:meth:`on_surface`), not on fsaverage.
     """
 
     values: dict[str, NDArray[Any]]
@@ -86,6 +78,8 @@ class VertexMaps:
     category_colors: NDArray[Any] | None = None
     source: str = ""
     regions: dict[str, NDArray[Any]] | None = None
+    space: str = "fsaverage"
+    notes: tuple[str, ...] = ()
     own_mesh: bool = False
 
     @property
@@ -94,6 +88,12 @@ class VertexMaps:
 
     def on_fsaverage(self, hemi: str, image: int) -> NDArray[Any]:
         """Image `image` of hemisphere `hemi` on fsaverage, float32 (163842,)."""
+        if self.space == "fsLR":
+            from brainpainter.maps.fslr import fslr_to_fsaverage
+
+            labels = self.categories is not None
+            resampled: NDArray[Any] = fslr_to_fsaverage(self.values[hemi][image], hemi, labels)[0]
+            return resampled
         row: NDArray[Any] = to_fsaverage(self.values[hemi][image], self.categories is not None)[0]
         return row
 
@@ -128,7 +128,8 @@ class VertexMaps:
         return {"kind": "vertex map", "source": self.source, "n_images": self.n_images,
                 "images": list(self.images), "hemis": sorted(self.values),
                 "categories": None if self.categories is None else len(self.categories),
-                "regions": sorted(self.regions or {}), **({"own_mesh": True} if self.own_mesh else {})}
+                "regions": sorted(self.regions or {}), "space": self.space, "notes": list(self.notes),
+                **({"own_mesh": True} if self.own_mesh else {})}
 
 
 def pair_of(path: str | Path) -> dict[str, Path]:
@@ -150,7 +151,7 @@ def pair_of(path: str | Path) -> dict[str, Path]:
 def _swap(lh_pat: str, rh_sub: str) -> tuple[str, str]:
     """The rh pattern and its lh substitution, from an lh pattern and its rh substitution."""
     table = {r"(^|[._-])lh([._-])": (r"(^|[._-])rh([._-])", r"\1lh\2"), r"hemi-L": (r"hemi-R", "hemi-L"),
-             r"([._-])L([._-])": (r"([._-])R([._-])", r"\1L\2"),
+             r"(^|[._-])L([._-])": (r"(^|[._-])R([._-])", r"\1L\2"),
              r"(^|[._-])left([._-])": (r"(^|[._-])right([._-])", r"\1left\2")}
     return table[lh_pat]
 
@@ -184,14 +185,16 @@ def is_map_input(data: Any) -> bool:
 
 
 def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = None, *,
-              external: External = "folder", mesh: Mapping[str, int] | None = None) -> VertexMaps:
+              external: External = "folder", space: str | None = None, frames: Any = None,
+              mesh: Mapping[str, int] | None = None) -> VertexMaps:
     """Any map input to :class:`VertexMaps` on fsaverage (the hook every command calls).
 
     Parameters
     ----------
     data : path, dict, nilearn SurfaceImage or VertexMaps, optional
         One file whose name says its hemisphere (its partner is found beside
-        it), ``{"lh": ..., "rh": ...}`` (``left``/``right``) of arrays or paths,
+        it), a CIFTI-2 file (``.dscalar.nii``, ``.dlabel.nii``, ...),
+        ``{"lh": ..., "rh": ...}`` (``left``/``right``) of arrays or paths,
         an MNI152 volume (a 3-D/4-D NIfTI file or nibabel image), or maps
         already read (returned as they are).
     lh, rh : path or ndarray, optional
@@ -203,26 +206,65 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
         Where a GIfTI file may keep its data: in a file inside its own folder,
         or nowhere but in itself (the web server;
         :func:`brainpainter.io.gifti.read_gifti`).
+    space : {"fsaverage", "fsLR"}, optional
+        The mesh of 163,842-vertex maps when the file does not say (``--space``);
+        fsaverage when neither says, with a note.
+    frames : str or sequence of int, optional
+        The images to keep (``--frames 0:100:10``, ``"3"``, ``[0, 4]``): frames of a series.
     mesh : mapping of {"lh", "rh"} to int, optional
         The vertex counts of the user's own surfaces (``--lh-surface``/``--rh-surface``, or a
         template built from a subject): each hemisphere's map has exactly that many values and
-        is drawn on that surface as it is (``own_mesh``), never on fsaverage.
+        is drawn on that surface as it is (``own_mesh``), never resampled (nor ``space``).
     """
     from brainpainter.maps import volume as volumes
+    from brainpainter.maps.cifti import is_cifti, read_cifti
 
     if isinstance(data, VertexMaps) and lh is None and rh is None and volume is None:
-        return data  # already read (e.g. kept by the web server)
+        return pick_images(data, frames)  # already read (e.g. kept by the web server)
+    if space is not None and space not in SPACES:
+        raise choice_error("space", space, SPACES)
+    if is_cifti(data) and lh is None and rh is None and volume is None:
+        c = read_cifti(data, frames, own_mesh=mesh is not None)
+        if mesh is not None:  # its cortex on the user's own (fsLR) surfaces, as it is
+            return _cifti_on_mesh(c, Path(data).name, mesh)
+        chosen, notes = decide_space({h: v.shape[1] for h, v in c.values.items()}, space, c.says_fslr,
+                                     f"CIFTI file {Path(data).name!r}")
+        return VertexMaps(c.values, c.images, c.categories, c.category_colors, c.source, c.regions, chosen,
+                          notes)
+    cifti = [v for v in (data, lh, rh, volume) if is_cifti(v)]
+    if cifti:
+        raise BrainPainterError(f"{Path(cifti[0]).name!r} is a CIFTI file, which holds both hemispheres: "
+                                "give it alone, as INPUT (brainpainter render FILE.dscalar.nii), not with "
+                                "--lh/--rh.")
     if volume is None and data is not None and volumes.is_volume(data):
         volume, data = data, None
     if volume is not None and mesh is not None:
-        raise BrainPainterError("a volume (--volume) is projected onto fsaverage, not onto your own "
-                                "surfaces (--lh-surface/--rh-surface, or a template built from a subject); "
-                                "give per-vertex maps of those surfaces with --lh/--rh, or leave them out.")
+        raise BrainPainterError(VOLUME_ON_MESH)
     if volume is not None:
         if data is not None or lh is not None or rh is not None:
             raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "
                                     "volume is projected onto both hemispheres.")
-        return read_volume(volume)
+        return pick_images(read_volume(volume), frames)
+    given = _given(data, lh, rh, mesh)
+    if mesh is not None:
+        return pick_images(_read_on_mesh(given, mesh, external), frames)
+    hemis = {h: read_hemi(v, h, external=external) for h, v in given.items()}
+    maps = _combine(hemis, given)
+    says = any(h.fslr for h in hemis.values()) or any(
+        names_fslr(Path(v).name) for v in given.values() if isinstance(v, str | Path))
+    chosen, notes = decide_space({h: v.shape[1] for h, v in maps.values.items()}, space, says, "the map")
+    return pick_images(replace(maps, space=chosen, notes=notes), frames)
+
+
+#: Why a volume is not drawn on the user's own surfaces.
+VOLUME_ON_MESH = ("a volume (--volume) is projected onto fsaverage, not onto your own surfaces (--lh-surface/"
+                  "--rh-surface, or a template built from a subject); give per-vertex maps of those surfaces "
+                  "with --lh/--rh, or leave them out.")
+
+
+def _given(data: Any, lh: Any, rh: Any, mesh: Mapping[str, int] | None) -> dict[str, Any]:
+    """Hemisphere -> file or array of a surface map input (a partner file found beside one given is
+    taken only where `mesh`, the user's own surfaces, has that hemisphere)."""
     given: dict[str, Any] = {}
     if data is not None:
         if hasattr(data, "data") and hasattr(data.data, "parts"):
@@ -234,7 +276,7 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
                     raise BrainPainterError(f"a map dict has keys lh/rh (or left/right); {key!r} was given.")
                 given[hemi] = value
         elif isinstance(data, str | Path):
-            found = pair_of(data)  # a partner found beside the file is drawn only where a surface is given
+            found = pair_of(data)
             given.update({h: p for h, p in found.items() if mesh is None or h in mesh or p == Path(data)})
         else:
             raise BrainPainterError(
@@ -245,16 +287,61 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
             given[hemi] = value
     if not given:
         raise BrainPainterError("no map given: give --lh FILE and/or --rh FILE (or a dict of arrays).")
-    if mesh is not None:
-        missing = sorted(set(given) - set(mesh))
-        if missing:
-            flag = f"--{missing[0]}-surface"
-            raise BrainPainterError(f"a map of {missing[0]} was given but no surface to draw it on ({flag}); "
-                                    f"give {flag} FILE, or leave out the other surface to draw on fsaverage.")
-    hemis = {h: read_hemi(v, h, external=external, n=None if mesh is None else mesh[h])
-             for h, v in given.items()}
-    maps = _combine(hemis, given)
-    return maps if mesh is None else replace(maps, own_mesh=True)
+    return given
+
+
+def _read_on_mesh(given: dict[str, Any], mesh: Mapping[str, int], external: External) -> VertexMaps:
+    """The maps `given`, each of its own surface's vertex count (`mesh`), to be drawn as they are."""
+    missing = sorted(set(given) - set(mesh))
+    if missing:
+        flag = f"--{missing[0]}-surface"
+        raise BrainPainterError(f"a map of {missing[0]} was given but no surface to draw it on ({flag}); "
+                                f"give {flag} FILE, or leave out the other surface to draw on fsaverage.")
+    hemis = {h: read_hemi(v, h, external=external, n=mesh[h]) for h, v in given.items()}
+    return replace(_combine(hemis, given), own_mesh=True)
+
+
+def _cifti_on_mesh(c: Any, name: str, mesh: Mapping[str, int]) -> VertexMaps:
+    """A CIFTI file's cortex (:func:`~brainpainter.maps.cifti.read_cifti`) on the user's own surfaces."""
+    values = {h: native(v, f"CIFTI file {name!r} ({h})", n=mesh[h]) for h, v in c.values.items() if h in mesh}
+    return VertexMaps(values, c.images, c.categories, c.category_colors, c.source, c.regions, own_mesh=True)
+
+
+def pick_images(maps: VertexMaps, frames: Any) -> VertexMaps:
+    """`maps` with only the images `frames` picks (:func:`frame_rows`); all when None."""
+    if frames is None:
+        return maps
+    rows = frame_rows(frames, maps.n_images, maps.source or "the map")
+    return replace(maps, values={h: v[rows] for h, v in maps.values.items()},
+                   images=tuple(maps.images[i] for i in rows),
+                   regions=None if maps.regions is None else {k: v[rows] for k, v in maps.regions.items()})
+
+
+def maps_to_fsaverage(data: Any, space: str | None = None) -> dict[str, NDArray[Any]]:
+    """Surface maps of any mesh brainpainter knows, on fsaverage (``brainpainter.to_fsaverage``).
+
+    Parameters
+    ----------
+    data : path or dict
+        A CIFTI-2 file (``.dscalar.nii``, ``.dlabel.nii``, ...), one file of an lh/rh pair
+        (an fsLR GIfTI such as ``L.thickness.32k_fs_LR.func.gii``), or
+        ``{"lh": array or path, "rh": ...}`` on fsLR 32k/164k or the fsaverage family.
+    space : {"fsaverage", "fsLR"}, optional
+        The mesh of 163,842-vertex maps that do not say (default fsaverage).
+
+    Returns
+    -------
+    dict of str to ndarray of float32
+        ``{"lh": (163842,), "rh": (163842,)}`` for the hemispheres given, ``(k, 163842)`` for
+        ``k > 1`` images; NaN outside the cortex (the medial wall) and where the map has no value.
+        A label map gives indices into its categories (:func:`read_maps`'s ``categories``).
+    """
+    maps = read_maps(data, space=space)
+    out: dict[str, NDArray[Any]] = {}
+    for hemi in maps.values:
+        rows = np.stack([maps.on_fsaverage(hemi, i) for i in range(maps.n_images)])
+        out[hemi] = rows[0] if maps.n_images == 1 else rows
+    return out
 
 
 def read_volume(img: Any, *, method: Method = "linear") -> VertexMaps:
@@ -336,155 +423,8 @@ def _stem(path: str | Path) -> str:
         if name.lower().endswith(suffix):
             name = name[: -len(suffix)]
             break
-    for pat in (r"(^|[._-])[lr]h([._-]|$)", r"()hemi-[LR]_?", r"(^|[._-])(?:left|right)([._-]|$)"):
+    for pat in (r"(^|[._-])[lr]h([._-]|$)", r"()hemi-[LR]_?", r"(^|[._-])(?:left|right)([._-]|$)",
+                r"(^|[._-])[LR]([._-]|$)"):
         name = re.sub(pat, lambda m: m.group(1) or "", name)
     return name.strip("._-") or "map"
 
-
-def read_hemi(value: Any, hemi: str, *, external: External = "folder", n: int | None = None) -> Hemi:
-    """One hemisphere's file or array (see the module docstring); `n`: its own surface's vertex count."""
-    if isinstance(value, str | Path):
-        return read_file(Path(value), hemi, external=external, n=n)
-    arr = np.asarray(value, dtype=np.float64) if not isinstance(value, np.ndarray) else value
-    return Hemi(native(_as_rows(arr, f"the {hemi} array", n), what=f"the {hemi} array", n=n))
-
-
-def _as_rows(arr: NDArray[Any], what: str, n: int | None = None) -> NDArray[Any]:
-    """An array as (k images, n vertices): 1-D, (k, n) or (n, k) with n an fsaverage count (or `n`)."""
-    a = np.asarray(arr)
-    counts = FAMILY if n is None else {n}
-    if a.ndim == 2 and a.shape[0] in counts and a.shape[1] not in counts:
-        a = a.T
-    if a.ndim == 2 and 1 in a.shape:  # one image (a column of a text file), whatever its count
-        a = a.reshape(1, -1)
-    if a.ndim not in (1, 2) or a.size == 0:
-        raise BrainPainterError(f"{what} has shape {a.shape}; a map has one value per vertex, shape (n,) "
-                                "or (images, n).")
-    if not np.issubdtype(a.dtype, np.number):
-        raise BrainPainterError(f"{what} holds {a.dtype} values; a map holds numbers.")
-    return a.astype(np.float32)
-
-
-def read_file(path: Path, hemi: str, *, external: External = "folder", n: int | None = None) -> Hemi:
-    """Read one hemisphere's map file (any format of :data:`SUFFIXES`); `n`: its own surface's count.
-
-    A file whose first bytes say another format than its name (gzip data named
-    ``lh.thickness``) is an error naming what was found; `external` is where a
-    GIfTI may keep its data (:func:`brainpainter.io.gifti.read_gifti`).
-    """
-    import nibabel as nib
-    from nibabel.freesurfer import read_annot, read_label, read_morph_data  # type: ignore[attr-defined]
-
-    name = path.name.lower()
-    if not path.is_file():
-        raise BrainPainterError(f"map file {str(path)!r} ({hemi}) does not exist; give an existing file.")
-    what = f"map file {path.name!r}"
-    try:
-        if not name.endswith((".gii", ".gii.gz", ".mgh", ".mgz", ".nii", ".nii.gz")):  # these: once read
-            with path.open("rb") as f:
-                _is_format(f.read(HEAD), name, what)
-        if name.endswith(".annot"):
-            labels, ctab, names = read_annot(str(path))  # type: ignore[no-untyped-call]
-            return _labels(labels, [s.decode() if isinstance(s, bytes) else str(s) for s in names],
-                           ctab[:, :3] / 255.0, what, n)
-        if name.endswith(".label"):
-            idx = read_label(str(path))  # type: ignore[no-untyped-call]
-            size = n if n is not None and n > int(idx.max(initial=-1)) else next(
-                (c for c in sorted(FAMILY) if c > int(idx.max(initial=-1))), N_FSAVERAGE)
-            v = np.full(size, np.nan, np.float32)
-            v[idx] = 1.0
-            return Hemi(native(v, what=what, n=n))
-        if name.endswith((".gii", ".gii.gz")):
-            return _gifti(read_gifti(path, external=external, what="map file"), what, n)
-        if name.endswith((".mgh", ".mgz", ".nii", ".nii.gz")):
-            # read whole (no file left open by a lazy proxy), inflated if gzip, bounded
-            raw = inflated(read_input(path, "map file", MAX_DATA_FILE), what)
-            found = _is_format(raw[:HEAD], name, what)
-            klass: Any = {MGH: nib.MGHImage, NIFTI2: nib.Nifti2Image}.get(found or "", nib.Nifti1Image)
-            frames = _surface_frames(np.asarray(klass.from_bytes(raw).dataobj), what, n)
-            return Hemi(native(_as_rows(frames, what, n), what=what, n=n))
-        if name.endswith(".npy"):
-            return Hemi(native(_as_rows(np.load(path, allow_pickle=False), what, n), what=what, n=n))
-        if name.endswith(TEXT):
-            delim = "," if name.endswith(".csv") else ("\t" if name.endswith(".tsv") else None)
-            return Hemi(native(_as_rows(np.loadtxt(path, delimiter=delim, ndmin=2), what, n), what=what, n=n))
-        return Hemi(native(read_morph_data(str(path)), what=what, n=n))  # type: ignore[no-untyped-call]
-    except BrainPainterError:
-        raise
-    except Exception as exc:  # nibabel's many errors for a file that is not what its name says
-        text = " ".join(str(exc).split())[:160]
-        raise BrainPainterError(
-            f"cannot read {what} ({hemi}): {text}. Maps are {', '.join(SUFFIXES)}.") from None
-
-
-def _is_format(head: bytes, name: str, what: str) -> str | None:
-    """What a file's first bytes `head` are (:func:`brainpainter.io.sniff.what_is`), if its name allows it.
-
-    Raises
-    ------
-    BrainPainterError
-        The bytes are another format than the name says (``'lh.thickness' looks like gzip-compressed
-        data, not a FreeSurfer curv file``).
-    """
-    found = what_is(head)
-    expected, allowed = next((f for ends, f in _FORMATS if name.endswith(ends)), _CURV)
-    if found in allowed:
-        return found
-    hint = ("gunzip it first (a gzipped GIfTI is read when named .gii.gz)" if found == GZIP else
-            "give the file your software wrote, or name it for what it holds (docs/maps.md: the formats)")
-    if found is None:
-        raise BrainPainterError(f"cannot read {what}: it is not {expected} (its first bytes match no format "
-                                f"known here); {hint}.")
-    raise BrainPainterError(f"{what} looks like {described(head)}, not {expected}; {hint}.")
-
-
-#: Per file ending: the format it names and what its first bytes may be (None: no magic number).
-_CURV: tuple[str, frozenset[str | None]] = ("a FreeSurfer curv file", frozenset({CURV, None}))
-_FORMATS: tuple[tuple[tuple[str, ...], tuple[str, frozenset[str | None]]], ...] = (
-    ((".mgh", ".mgz"), ("an MGH image", frozenset({MGH}))),
-    ((".nii", ".nii.gz"), ("a NIfTI image", frozenset({NIFTI1, NIFTI2}))),
-    ((".npy",), ("a NumPy .npy file", frozenset({NPY}))),
-    ((".annot",), ("a FreeSurfer .annot file", frozenset({None}))),
-    ((".label", *TEXT), ("a text file", frozenset({None}))),
-)
-
-
-def _surface_frames(data: NDArray[Any], what: str, n: int | None = None) -> NDArray[Any]:
-    """An ``.mgh``/NIfTI surface overlay as (n vertices, k frames).
-
-    ``N x 1 x 1 [x k]``, or FreeSurfer's folded form for NIfTI, whose
-    dimensions are limited to 32767 (fsaverage as ``27307 x 1 x 6``): the
-    vertex index runs over the first three axes, first axis fastest.
-    """
-    counts = FAMILY if n is None else {n}
-    if data.ndim >= 3 and int(np.prod(data.shape[:3])) in counts and 1 in data.shape[1:3]:
-        return data.reshape((-1, int(np.prod(data.shape[3:], dtype=np.int64))), order="F")
-    raise BrainPainterError(f"{what} has shape {data.shape}, not one value per vertex (N x 1 x 1) of an "
-                            "fsaverage surface; a volume in MNI space goes to --volume.")
-
-
-def _gifti(img: Any, what: str, n: int | None = None) -> Hemi:
-    arrays = [np.asarray(d.data) for d in img.darrays]
-    if not arrays:
-        raise BrainPainterError(f"{what} holds no data array; give a .func.gii or .shape.gii with values.")
-    table = img.labeltable.get_labels_as_dict() if img.labeltable is not None else {}
-    if len(table) > 1 and arrays[0].dtype.kind in "iu":
-        keys = sorted(table)
-        colors = np.array([[lab.red, lab.green, lab.blue] for lab in sorted(img.labeltable.labels,
-                                                                            key=lambda lab: lab.key)])
-        code = np.searchsorted(keys, arrays[0])
-        code[~np.isin(arrays[0], keys)] = -1
-        rgb = np.nan_to_num(colors.astype(float), nan=0.5)
-        return _labels(code, [str(table[k]) for k in keys], rgb, what, n)
-    return Hemi(native(_as_rows(np.vstack([a.reshape(1, -1) for a in arrays]), what, n), what=what, n=n))
-
-
-def _labels(labels: NDArray[Any], names: list[str], colors: NDArray[Any], what: str,
-            n_vertices: int | None = None) -> Hemi:
-    """A label map: indices into `names` per vertex (-1 = none); medial wall and unknown get none."""
-    lab = np.asarray(labels).astype(np.int64)
-    v = np.where(lab >= 0, lab, np.nan).astype(np.float32)
-    for i, n in enumerate(names):
-        if n.lower() in ("unknown", "medial_wall", "???", "corpuscallosum") or "medial_wall" in n.lower():
-            v[lab == i] = np.nan
-    return Hemi(native(v, what=what, n=n_vertices), tuple(names), np.asarray(colors, float))

@@ -27,6 +27,8 @@ class MapKwargs(TypedDict, total=False):
     threshold: float | None
     outline: str | None
     outline_threshold: bool
+    space: str | None
+    frames: Any
     lh_surface: Any
     rh_surface: Any
 
@@ -50,6 +52,10 @@ class MapOptions:
         An atlas whose region borders are drawn over the map.
     outline_threshold : bool
         Draw the borders of the supra-threshold areas.
+    space : {"fsaverage", "fsLR"}, optional
+        The mesh of a 163,842-vertex map that does not say (fsaverage when neither says).
+    frames : str or sequence of int, optional
+        The images of a series to draw (``"0:100:10"``, ``"3"``, ``"0,5,9"``).
     lh_surface, rh_surface : path, optional
         The user's own surface of a hemisphere (GIfTI ``.surf.gii`` or FreeSurfer ``lh.pial``, ...):
         the maps, of its vertex count, are drawn on it as they are (:mod:`brainpainter.atlas.surfaces`).
@@ -71,6 +77,13 @@ class MapOptions:
         "help": "Draw this atlas's region borders over the map (dk, destrieux, dkt, ...)."})
     outline_threshold: bool = field(default=False, metadata={
         "help": "Draw the borders of the areas above --threshold."})
+    space: str | None = field(default=None, metadata={
+        "choices": ("fsaverage", "fsLR"),
+        "help": "Mesh of a 163842-vertex map (fsaverage or fsLR 164k) when its file does not say; 32492 "
+                "vertices is always fsLR 32k. Default: the file's metadata, else fsaverage."})
+    frames: Any = field(default=None, metadata={
+        "help": "Images of a map series to draw (a CIFTI dtseries' frames): start:stop:step or a comma list, "
+                "e.g. 0:100:10."})
     lh_surface: Any = field(default=None, metadata={
         "help": "Draw the maps on this left-hemisphere surface of your own, as they are (no resampling): "
                 "GIfTI .surf.gii (HCP, fMRIPrep) or FreeSurfer lh.pial, lh.inflated, ...; the maps have "
@@ -84,6 +97,8 @@ class MapOptions:
         t = self.threshold
         if t is not None and (not isinstance(t, int | float) or not math.isfinite(t) or t < 0):
             raise BrainPainterError(f"--threshold must be a number >= 0; {t!r} was given.")
+        if self.space is not None and self.space not in ("fsaverage", "fsLR"):
+            raise choice_error("space", self.space, ("fsaverage", "fsLR"))
         if self.volume is not None and (self.lh is not None or self.rh is not None):
             raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "
                                     "volume is projected onto both hemispheres.")
@@ -101,3 +116,38 @@ class MapOptions:
     def given(self) -> bool:
         """Whether a map was given through --lh/--rh or --volume (or a surface of the user's own)."""
         return self.lh is not None or self.rh is not None or self.volume is not None or bool(self.surfaces)
+
+
+def frame_rows(frames: Any, n: int, what: str) -> list[int]:
+    """The rows of `n` that `frames` picks: ``None`` (all), ``"0:100:10"``, ``"3"``, ``"0,5,9"`` or ints.
+
+    Raises
+    ------
+    BrainPainterError
+        A spelling of none of these, or a row outside ``0..n-1``.
+    """
+    if frames is None:
+        return list(range(n))
+    hint = f"give rows 0 to {n - 1}, e.g. --frames 0:{n}:10 or --frames 0,{n - 1}."
+    rows: list[int] = []
+    try:
+        parts = (frames.split(",") if isinstance(frames, str)
+                 else [frames] if isinstance(frames, int) else frames)
+        for part in parts:
+            if isinstance(part, str) and ":" in part:
+                bits = [int(b) if b.strip() else None for b in part.split(":")]
+                if len(bits) > 3 or any(b is not None and b < 0 for b in bits) or bits[-1] == 0:
+                    raise ValueError(part)
+                rows.extend(range(n)[slice(*bits)])
+            else:
+                row = int(part)
+                if not 0 <= row < n:
+                    raise BrainPainterError(f"--frames {frames!r}: row {row} is outside {what}'s {n} rows; "
+                                            f"{hint}")
+                rows.append(row)
+    except (TypeError, ValueError):
+        raise BrainPainterError(f"--frames {frames!r} is not a list of rows or a start:stop:step range; "
+                                f"{hint}") from None
+    if not rows:
+        raise BrainPainterError(f"--frames {frames!r} picks none of {what}'s {n} rows; {hint}")
+    return rows

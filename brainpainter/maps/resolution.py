@@ -27,6 +27,8 @@ from brainpainter.errors import BrainPainterError
 FAMILY = {642: "fsaverage3", 2562: "fsaverage4", 10242: "fsaverage5", 40962: "fsaverage6",
           163842: "fsaverage"}
 N_FSAVERAGE = 163842
+#: Vertices per hemisphere of each fsLR mesh (HCP's; brought to fsaverage by :mod:`brainpainter.maps.fslr`).
+FSLR = {32492: "fsLR 32k", 59292: "fsLR 59k", 163842: "fsLR 164k"}
 #: Vertex counts of the icosahedron at each subdivision level 0..7.
 LEVELS = tuple(10 * 4**k + 2 for k in range(8))
 
@@ -54,8 +56,27 @@ def surface_of(n: int, what: str = "map") -> str:
         "FreeSurfer's mri_surf2surf (--trgsubject fsaverage).")
 
 
+def known_count(n: int, what: str = "map") -> None:
+    """Check that `n` vertices per hemisphere is a mesh brainpainter knows: the fsaverage family or fsLR.
+
+    Raises
+    ------
+    BrainPainterError
+        Listing the known meshes.
+    """
+    if n in FAMILY or n in FSLR:
+        return
+    known = {**{k: v for k, v in FAMILY.items() if k != N_FSAVERAGE}, **FSLR}
+    meshes = ", ".join(f"{k} {v}" + (" or fsaverage" if k == N_FSAVERAGE else "")
+                       for k, v in sorted(known.items()))
+    raise BrainPainterError(
+        f"{what} has {n} values per hemisphere, which fits no known mesh ({meshes}); resample it to "
+        "fsaverage (FreeSurfer's mri_surf2surf --trgsubject fsaverage) or to fsLR 32k "
+        "(wb_command -metric-resample).")
+
+
 def native(values: NDArray[Any], what: str = "map", n: int | None = None) -> NDArray[Any]:
-    """`values` as float32 (k images, n vertices), `n` checked to be a count of :data:`FAMILY`.
+    """`values` as float32 (k images, n vertices), `n` a count of :data:`FAMILY` or :data:`FSLR`.
 
     Maps are kept at their own resolution (a series of fsaverage5 images stays
     small) and brought to fsaverage one image at a time, when drawn. Given `n`
@@ -65,7 +86,7 @@ def native(values: NDArray[Any], what: str = "map", n: int | None = None) -> NDA
     v = np.asarray(values, dtype=np.float32)
     v = v[None] if v.ndim == 1 else v
     if n is None:
-        surface_of(v.shape[1], what)
+        known_count(v.shape[1], what)
     elif v.shape[1] != n:
         raise BrainPainterError(
             f"{what} has {v.shape[1]} values per hemisphere, but the surface it is drawn on has {n} "

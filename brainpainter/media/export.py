@@ -402,7 +402,7 @@ EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cm
                   "nan_color", "missing_color", "background", "image_column", "value", "region_column",
                   "strict", "tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_values",
                   "tract_value", "tract_radius", "lh", "rh", "volume", "underlay", "threshold", "outline",
-                  "outline_threshold", "lh_surface", "rh_surface")
+                  "outline_threshold", "space", "frames", "lh_surface", "rh_surface")
 
 
 def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:

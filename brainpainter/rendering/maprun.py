@@ -114,6 +114,7 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     """Read the maps and check the options of a map run (as ``prepare_run`` does for a table)."""
     from brainpainter.atlas.registry import get_atlas
 
+    m = options.maps
     outline = options.maps.outline
     # --outline ATLAS: the map is drawn on that atlas's mesh, whose vertices carry its labels
     atlas_obj = get_atlas(outline) if outline is not None else atlas if atlas is not None else get_atlas("dk")
@@ -124,7 +125,7 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
                                     "surfaces; a region table is drawn on the template's regions: leave the "
                                     "surfaces out, or give maps.")
         read = _own_surfaces(options, surfaces)
-        maps = read_maps(data, options.maps.lh, options.maps.rh, options.maps.volume,
+        maps = read_maps(data, m.lh, m.rh, m.volume, space=m.space, frames=m.frames,
                          mesh={hemi: s.n_vertices for hemi, s in read.items()})
         folder = surface_template(read, atlas_obj.template_labels)  # written only for maps that fit
         options = replace(options, scene=replace(options.scene, template=str(folder)))
@@ -134,7 +135,7 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     # that surface's vertex count, drawn as they are
     own = {hemi: n for hemi in ("lh", "rh") if (n := own_vertex_count(tpl, hemi)) is not None}
     if not surfaces:
-        maps = read_maps(data, options.maps.lh, options.maps.rh, options.maps.volume, mesh=own or None)
+        maps = read_maps(data, m.lh, m.rh, m.volume, space=m.space, frames=m.frames, mesh=own or None)
     labels = atlas_obj.template_labels if atlas_obj.template_labels in tpl.label_sets else "dk"
     meshes = {hemi: map_mesh(tpl, labels, hemi) for hemi in ("lh", "rh")}
     views = options.scene.views

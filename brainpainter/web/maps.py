@@ -4,7 +4,8 @@ An upload is a map when its file name says so
 (:func:`brainpainter.maps.inputs.is_map_input`: ``lh.thickness``, ``.mgh``/``.mgz``,
 ``.func.gii``, ``.npy``, ``.annot``...) or when it is a NIfTI volume (``.nii``,
 ``.nii.gz``, 3-D or 4-D, projected onto fsaverage by
-:func:`brainpainter.maps.volume.project_volume`). Two files (lh and rh) travel in
+:func:`brainpainter.maps.volume.project_volume`) or a CIFTI-2 file (``.dscalar.nii``,
+``.dlabel.nii``..., :mod:`brainpainter.maps.cifti`). Two files (lh and rh) travel in
 one request body, one after the other, with their names and sizes in the query.
 
 The files are read (:func:`build_bundle`) in a process of its own, started by
@@ -15,9 +16,10 @@ compressed files (``.gz``, ``.mgz``) are inflated to disk, at most
 line, then the files): what :func:`brainpainter.maps.inputs.read_maps` read, never
 the files as sent (a file inflated to a gigabyte of padding is kept as its
 vertex values): one ``.npy`` (gzipped where that pays) of shape (images,
-vertices) per hemisphere, and in the header the image names, label names and colours and
-a volume's subcortical means. Previews and jobs rebuild the maps from it
-(:func:`read_bundle`) exactly as the upload read them. Client file names are
+vertices) per hemisphere, and in the header the image names, label names and
+colours, a volume's or a CIFTI file's subcortical means and the mesh (fsaverage or
+fsLR). Previews and jobs rebuild the maps from it (:func:`read_bundle`) exactly
+as the upload read them. Client file names are
 only labels: they are made safe (:func:`file_name`) and every file is written
 into a fresh private folder. A GIfTI is read with ``external="refuse"``: data it
 says is in another file is an error, never read.
@@ -193,10 +195,14 @@ def build_bundle(work: Path, entries: list[tuple[str | None, Path]],
     (dict, list of str)
         The upload's report (:func:`base_report`) and its image names.
     """
+    from brainpainter.maps.cifti import is_cifti
+
     names = [p.name for _, p in entries]
     files = [(hemi, inflate(p)) for hemi, p in entries]
     if len(files) == 1 and files[0][0] is None:
         path = files[0][1]
+        if is_cifti(path):
+            return _cifti_bundle(work, path, names[0], max_images)
         shape = _nifti_shape(path)
         if sum(s > 1 for s in shape[:3]) >= 3:
             return _volume_bundle(work, path, names[0], shape, max_images)
@@ -247,18 +253,35 @@ def _volume_bundle(work: Path, path: Path, shown: str, shape: tuple[int, ...],
     return report, list(maps.images)
 
 
-def _surface_bundle(work: Path, files: list[tuple[str, Path]], names: list[str],
-                    max_images: int) -> tuple[dict[str, Any], list[str]]:
+def _cifti_bundle(work: Path, path: Path, shown: str, max_images: int) -> tuple[dict[str, Any], list[str]]:
+    """A CIFTI-2 file: its cortex per hemisphere (fsLR or fsaverage) and its subcortical means."""
     from brainpainter.maps.inputs import read_maps
-    from brainpainter.maps.resolution import surface_of
 
-    order = sorted(files, key=lambda f: f[0])  # lh first
-    maps = read_maps({h: p for h, p in order}, external="refuse")  # a GIfTI reads no other file
+    maps = read_maps(path)
+    _check_images(maps, max_images)
+    kind = "label map" if maps.categories is not None else "map"
+    what = f"{len(maps.categories)} labels" if maps.categories is not None else _images(maps.n_images)
+    meshes = ", ".join(sorted({_mesh(maps, v.shape[1]) for v in maps.values.values()}))
+    report = base_report(maps, kind, [shown], f"CIFTI {kind}: {shown}, {meshes}, {what}")
+    _write_bundle(work, "cifti", maps, f"cifti={shown}", report)
+    return report, list(maps.images)
+
+
+def _check_images(maps: Any, max_images: int) -> None:
     if maps.n_images > max_images:
         raise BrainPainterError(
             f"the map holds {maps.n_images} images; this server draws at most {max_images} images per "
             "upload. Upload fewer images, or render it with 'brainpainter render' on your own computer.")
-    surfaces = sorted({surface_of(v.shape[1]) for v in maps.values.values()})
+
+
+def _surface_bundle(work: Path, files: list[tuple[str, Path]], names: list[str],
+                    max_images: int) -> tuple[dict[str, Any], list[str]]:
+    from brainpainter.maps.inputs import read_maps
+
+    order = sorted(files, key=lambda f: f[0])  # lh first
+    maps = read_maps({h: p for h, p in order}, external="refuse")  # a GIfTI reads no other file
+    _check_images(maps, max_images)
+    surfaces = sorted({_mesh(maps, v.shape[1]) for v in maps.values.values()})
     kind = "label map" if maps.categories is not None else "map"
     what = f"{len(maps.categories)} labels" if maps.categories is not None else _images(maps.n_images)
     shown = [n for _, n in sorted(zip([h for h, _ in files], names, strict=True))]
@@ -266,6 +289,13 @@ def _surface_bundle(work: Path, files: list[tuple[str, Path]], names: list[str],
     source = ", ".join(f"{h}={n}" for h, n in zip(sorted(h for h, _ in files), shown, strict=True))
     _write_bundle(work, "surface", maps, source, report)
     return report, list(maps.images)
+
+
+def _mesh(maps: Any, n: int) -> str:
+    """The mesh of a map of `n` vertices per hemisphere (``fsaverage5``, ``fsLR 32k``)."""
+    from brainpainter.maps.resolution import FSLR, surface_of
+
+    return FSLR[n] if maps.space == "fsLR" else surface_of(n)
 
 
 def _images(n: int) -> str:
@@ -276,12 +306,11 @@ def base_report(maps: Any, kind: str, names: list[str], summary: str) -> dict[st
     """The report of a map upload (the page shows ``summary``: what was understood)."""
     import numpy as np
 
-    from brainpainter.maps.resolution import surface_of
-
     finite = maps.finite()
     return {
         "ok": True, "kind": "map", "map_kind": kind, "summary": summary, "files": names,
-        "hemis": sorted(maps.values), "surfaces": {h: surface_of(v.shape[1]) for h, v in maps.values.items()},
+        "hemis": sorted(maps.values),
+        "surfaces": {h: _mesh(maps, v.shape[1]) for h, v in maps.values.items()},
         "n_images": maps.n_images, "images": list(maps.images[:20]),
         "categories": None if maps.categories is None else list(maps.categories[:50]),
         "values": {"range": [float(np.min(finite)), float(np.max(finite))] if finite.size else None,
@@ -313,6 +342,7 @@ def _write_bundle(work: Path, kind: str, maps: Any, source: str, report: dict[st
         stored.append((hemi, target))
     colors = maps.category_colors
     header = {"kind": kind, "report": report, "images": list(maps.images), "source": source,
+              "space": maps.space,
               "categories": None if maps.categories is None else list(maps.categories),
               "category_colors": None if colors is None else np.asarray(colors, float).tolist(),
               "regions": {k: [float(x) for x in v] for k, v in (maps.regions or {}).items()}}
@@ -361,6 +391,7 @@ def read_bundle(data: bytes) -> Any:
         return VertexMaps(
             values, images, None if header["categories"] is None else tuple(header["categories"]),
             None if colors is None else np.asarray(colors, float), str(header["source"]),
-            {str(k): np.asarray(v, float) for k, v in header["regions"].items()} or None)
+            {str(k): np.asarray(v, float) for k, v in header["regions"].items()} or None,
+            str(header.get("space") or "fsaverage"))
     except (OSError, EOFError, ValueError, KeyError, TypeError):
         raise BrainPainterError("the stored map upload is damaged; upload the map again.") from None

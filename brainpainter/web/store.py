@@ -32,7 +32,6 @@ import re
 import secrets
 import shutil
 import sqlite3
-import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -40,6 +39,7 @@ from pathlib import Path
 from typing import Any
 
 from brainpainter.io.output import atomic_write_bytes
+from brainpainter.web.disk import DiskBudget
 
 _ID = re.compile(r"[0-9a-f]{32}")
 ACTIVE = ("queued", "running")
@@ -109,12 +109,11 @@ class Store:
 
         self.root = Path(data_dir)
         self.max_disk_bytes = max_disk_bytes
-        self._usage_lock = threading.Lock()
         for folder in (self.root, self.root / "uploads", self.root / "jobs"):
             folder.mkdir(mode=0o700, parents=True, exist_ok=True)
             _private(folder)  # uploaded tables are readable by this user only
         self.path = self.root / "jobs.sqlite3"
-        self._usage: tuple[float, int] = (0.0, 0)
+        self.budget = DiskBudget(self.root, max_disk_bytes)
         self._keeper: sqlite3.Connection | None = None
         try:
             with self.connect() as db:
@@ -193,38 +192,16 @@ class Store:
             db.execute("SELECT count(*) FROM jobs").fetchone()
         return True
 
-    def disk_usage(self, max_age_s: float = 10.0) -> int:
-        """Bytes used by the data folder (walked at most every `max_age_s` seconds; what this process
-        wrote since is added as it is written, :meth:`charge`)."""
-        t, used = self._usage
-        if time.monotonic() - t < max_age_s:
-            return used
-        used = 0
-        for dirpath, _, names in os.walk(self.root):
-            for n in names:
-                try:
-                    used += os.lstat(os.path.join(dirpath, n)).st_blocks * 512
-                except OSError:
-                    pass
-        self._usage = (time.monotonic(), used)
-        return used
+    def disk_usage(self, max_age_s: float | None = None) -> int:
+        """Bytes used by the data folder (:meth:`brainpainter.web.disk.DiskBudget.used`)."""
+        return self.budget.used(max_age_s)
 
     def charge(self, nbytes: int) -> None:
-        """Count `nbytes` about to be written against the disk budget, or refuse them.
-
-        Raises
-        ------
-        LimitError
-            507 when the data folder would use more than its budget (nothing is counted then).
-        """
-        if self.max_disk_bytes <= 0:
-            return
-        with self._usage_lock:  # one check-and-count at a time: two writers cannot both fit the last bytes
-            used = self.disk_usage()
-            if used + nbytes > self.max_disk_bytes:
-                raise LimitError(f"this server's storage budget ({self.max_disk_bytes / 2**30:.3g} GB) is "
-                                 "used up; try again after older results expire.", 507, retry_after=600)
-            self._usage = (self._usage[0], used + _blocks(nbytes))
+        """Count `nbytes` about to be written against the disk budget, or refuse them (:class:`LimitError`,
+        507; :meth:`brainpainter.web.disk.DiskBudget.charge`)."""
+        refused = self.budget.charge(nbytes)
+        if refused:
+            raise LimitError(refused, 507, retry_after=600)
 
     # -- uploads -------------------------------------------------------------------------
     def add_upload(self, client: str, name: str, data: bytes, ttl_s: float, keep: int = 20, *,
@@ -487,11 +464,6 @@ class Store:
     def _event(db: sqlite3.Connection, job_id: str, attempt: int, event: str, detail: str | None) -> None:
         db.execute("INSERT INTO events (job_id, attempt, event, detail, t) VALUES (?, ?, ?, ?, ?)",
                    (job_id, attempt, event, detail, time.time()))
-
-
-def _blocks(nbytes: int) -> int:
-    """Disk bytes a file of `nbytes` takes (whole 4 KiB blocks, as :meth:`Store.disk_usage` counts)."""
-    return -(-nbytes // 4096) * 4096
 
 
 def _private(path: Path) -> None:

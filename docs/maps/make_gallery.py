@@ -5,8 +5,10 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
+from tempfile import TemporaryDirectory
 
 import nibabel as nib
 import numpy as np
@@ -56,7 +58,22 @@ def main() -> None:
     one[int(np.argmin(xyz[:, 0]))] = 1.0
     save(brainpainter.render({"lh": one}, views="lateral-left", surface="inflated", threshold=0.05,
                              cmap="autumn", vmin=0, vmax=1, **SIZE), "single_vertex")
+    fslr()
     own_surfaces()
+
+
+def fslr() -> None:
+    """HCP's fsLR data drawn on fsaverage: a real CIFTI-2 dscalar (fsLR 164k), and a DK dlabel on fsLR 32k."""
+    views = "lateral-left,medial-left"
+    save(brainpainter.render(SHARED / "fslr" / "MSMSulc.refsulc.164k_fs_LR.dscalar.nii", views=views, **SIZE),
+         "hcp_refsulc_dscalar")
+    os.environ.setdefault("BRAINPAINTER_SHARED_DATA", str(SHARED))
+    sys.path.insert(0, str(HERE.parents[1] / "tests"))
+    from test_fslr import _dk_dlabel  # DK brought to fsLR 32k by nearest vertex, as the test makes it
+
+    with TemporaryDirectory() as tmp:
+        dlabel = _dk_dlabel(Path(tmp) / "dk.dlabel.nii")
+        save(brainpainter.render(dlabel, views=views, **SIZE), "dk_dlabel_fslr32k")
 
 
 def own_surfaces() -> None:

@@ -709,6 +709,66 @@ INPROCESS: list[Case] = [
 ]
 
 
+def _cifti(kind: str) -> Callable[[Path], None]:
+    """A CIFTI file that brainpainter refuses (issue 34): CIFTI-1, a connectome, a mesh of no known
+    count, a truncated dscalar."""
+    def make(path: Path) -> None:
+        import nibabel as nib
+        import numpy as np
+        from nibabel.cifti2 import cifti2_axes as axes
+
+        if kind == "version-1":
+            img = nib.Nifti2Image(np.zeros((1, 1, 1, 1, 1, 3), np.float32), np.eye(4))
+            img.header.extensions.append(nib.nifti1.Nifti1Extension(32, b'<CIFTI Version="1.0"></CIFTI>'))
+            img.to_filename(str(path))
+            return
+        n = 1000 if kind == "odd-mesh" else 32492
+        model = axes.BrainModelAxis.from_surface(np.arange(3), n, "CortexLeft")
+        rows = model if kind == "dconn" else axes.ScalarAxis(["m"])
+        nib.Cifti2Image(np.zeros((len(rows), 3), np.float32), header=(rows, model)).to_filename(str(path))
+        if kind == "truncated":
+            path.write_bytes(path.read_bytes()[:-6])
+    return make
+
+
+def _fslr_gifti(n: int) -> Callable[[Path], None]:
+    def make(path: Path) -> None:
+        import nibabel as nib
+        import numpy as np
+
+        arr = nib.gifti.GiftiDataArray(np.zeros(n, np.float32), intent="NIFTI_INTENT_SHAPE")
+        nib.save(nib.gifti.GiftiImage(darrays=[arr]), str(path))
+    return make
+
+
+INPROCESS += [
+    # -- CIFTI and fsLR maps (issue 34) ----------------------------------------------------------------------
+    Case("cifti-version-1", {"x.dscalar.nii": _cifti("version-1")}, ["x.dscalar.nii", "--out", "o", *RENDER],
+         "-cifti-version-convert x.dscalar.nii 2 OUT.dscalar.nii", command="render"),
+    Case("cifti-dconn", {"x.dconn.nii": _cifti("dconn")}, ["x.dconn.nii", "--out", "o", *RENDER],
+         "not connectomes yet", command="render"),
+    Case("cifti-two-grayordinate-axes", {"x.dscalar.nii": _cifti("dconn")},
+         ["x.dscalar.nii", "--out", "o", *RENDER], "grayordinates on both axes", command="render"),
+    Case("cifti-mesh-of-no-known-count", {"x.dscalar.nii": _cifti("odd-mesh")},
+         ["x.dscalar.nii", "--out", "o", *RENDER], "1000 values per hemisphere, which fits no known mesh",
+         command="render"),
+    Case("cifti-truncated", {"x.dscalar.nii": _cifti("truncated")}, ["x.dscalar.nii", "--out", "o", *RENDER],
+         "truncated", command="render"),
+    Case("cifti-fifo", {"x.dscalar.nii": _fifo}, ["x.dscalar.nii", "--out", "o", *RENDER],
+         "not a regular file", command="render"),
+    Case("cifti-frames-outside", {"x.dscalar.nii": _cifti("scalar")},
+         ["x.dscalar.nii", "--frames", "1", "--out", "o", *RENDER], "outside", command="render"),
+    Case("cifti-frames-not-rows", {"x.dscalar.nii": _cifti("scalar")},
+         ["x.dscalar.nii", "--frames", "a:b", "--out", "o", *RENDER], "start:stop:step", command="render"),
+    Case("cifti-with-lh", {"x.dscalar.nii": _cifti("scalar")},
+         ["--lh", "x.dscalar.nii", "--out", "o", *RENDER], "holds both hemispheres", command="render"),
+    Case("fslr-59k", {"lh.x.shape.gii": _fslr_gifti(59292)}, ["--lh", "lh.x.shape.gii", "--out", "o", *RENDER],
+         "fsLR 59k", command="render"),
+    Case("fslr-32k-said-fsaverage", {"lh.x.shape.gii": _fslr_gifti(32492)},
+         ["--lh", "lh.x.shape.gii", "--space", "fsaverage", "--out", "o", *RENDER], "not fsaverage",
+         command="render"),
+]
+
 # Hostile image names that are accepted: each becomes a safe file name inside the output folder.
 SAFE = {
     "../../x": "x",

@@ -1,0 +1,163 @@
+"""fsLR (HCP's surface space) brought onto fsaverage: which fsLR mesh a vertex count is, and the resampling.
+
+fsLR 32k (32,492 vertices per hemisphere) and 164k (163,842, the same count
+as fsaverage) are resampled onto fsaverage through HCP's fsLR spheres deformed
+to fsaverage, as ``wb_command -metric-resample ... ADAP_BARY_AREA`` does:
+values by area-weighted (adaptive) barycentric interpolation, labels from the
+vertex of largest weight (the nearest). The weights are built once by
+``tools/build_fslr_resampling.py`` into ``brainpainter/data/fslr-fsaverage.npz``
+(with HCP's notice beside it) and loaded once per resolution and hemisphere.
+Vertices outside HCP's cortex (``atlasroi`` = 0, the medial wall) or without a
+value in the file give no value: an fsaverage vertex takes the weighted mean
+of the finite values it draws on, NaN when it has none.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from functools import cache
+from importlib import resources
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.maps.resolution import FAMILY, FSLR, N_FSAVERAGE
+
+#: The fsLR meshes that can be resampled (HCP ships no 59k sphere deformed to fsaverage).
+RESAMPLED = {32492: "32k", 163842: "164k"}
+#: The mesh families a map can be on (a 163,842-vertex map is on either).
+SPACES = ("fsaverage", "fsLR")
+
+
+def check_fslr(n: int, what: str = "map") -> str:
+    """The resolution key (``"32k"``/``"164k"``) of an fsLR map of `n` vertices per hemisphere.
+
+    Raises
+    ------
+    BrainPainterError
+        For 59k (no deformed sphere) or a count of no fsLR mesh.
+    """
+    if n in RESAMPLED:
+        return RESAMPLED[n]
+    if n == 59292:
+        raise BrainPainterError(
+            f"{what} is on fsLR 59k (59292 vertices), which brainpainter cannot resample (HCP ships no 59k "
+            "sphere deformed to fsaverage); resample it to 32k first: wb_command -metric-resample FILE "
+            "L.sphere.59k_fs_LR.surf.gii L.sphere.32k_fs_LR.surf.gii BARYCENTRIC OUT.func.gii.")
+    raise BrainPainterError(
+        f"{what} has {n} values per hemisphere, which fits no fsLR mesh "
+        f"({', '.join(f'{k} {v}' for k, v in FSLR.items())}); give a map of one of these meshes.")
+
+
+def names_fslr(text: str) -> bool:
+    """Whether `text` names fsLR (``fs_LR``, ``fsLR``, BIDS' ``space-fsLR``)."""
+    return re.search(r"fs_?lr", text, re.IGNORECASE) is not None
+
+
+def decide_space(counts: Mapping[str, int], space: str | None, says_fslr: bool,
+                 what: str) -> tuple[str, tuple[str, ...]]:
+    """The mesh family of maps with `counts` vertices per hemisphere, and a note when it was a guess.
+
+    32,492 vertices is fsLR 32k (59,292 fsLR 59k, refused: no resampling);
+    163,842 is both fsaverage and fsLR 164k: the file decides where it names fsLR
+    (`says_fslr`), else `space`, else fsaverage (with a note). `space` given
+    wins over the file.
+
+    Returns
+    -------
+    (str, tuple of str)
+        ``"fsaverage"`` or ``"fsLR"``, and the notes.
+
+    Raises
+    ------
+    BrainPainterError
+        `space` contradicting a count, fsLR beside fsaverage-family counts, or fsLR 59k.
+    """
+    if space is not None and space not in SPACES:
+        raise choice_error("space", space, SPACES)
+    only_fslr = sorted({n for n in counts.values() if n in FSLR and n != N_FSAVERAGE})
+    if only_fslr:
+        if space == "fsaverage":
+            raise BrainPainterError(f"{what} has {only_fslr[0]} values per hemisphere: {FSLR[only_fslr[0]]}, "
+                                    "not fsaverage; leave out --space (or give --space fsLR).")
+        chosen = "fsLR"
+    elif N_FSAVERAGE in counts.values():
+        chosen = space or ("fsLR" if says_fslr else "fsaverage")
+    else:
+        if space == "fsLR" and counts:
+            n = next(iter(counts.values()))
+            raise BrainPainterError(f"{what} has {n} values per hemisphere: {FAMILY[n]}, not fsLR; leave out "
+                                    "--space (or give --space fsaverage).")
+        return "fsaverage", ()
+    if chosen == "fsLR":
+        for hemi, n in counts.items():
+            if n not in FSLR:
+                raise BrainPainterError(f"{what} mixes meshes: {hemi} has {n} values per hemisphere ("
+                                        f"{FAMILY.get(n, 'no fsLR mesh')}) beside fsLR; give both "
+                                        "hemispheres on one mesh.")
+            check_fslr(n, f"{what} ({hemi})")
+        return "fsLR", ()
+    if space is None:
+        return "fsaverage", (f"{what} has 163842 values per hemisphere, as fsaverage and fsLR 164k have, and "
+                             "does not say which: drawn as fsaverage; give --space fsLR if it is fsLR 164k.",)
+    return "fsaverage", ()
+
+
+@cache
+def _weights(hemi: str, res: str) -> tuple[Any, NDArray[np.bool_]]:
+    """(CSR matrix (163842 x n_fsLR) of weights, fsLR cortex mask (n_fsLR,)), loaded once."""
+    from scipy import sparse
+
+    with resources.files("brainpainter").joinpath("data/fslr-fsaverage.npz").open("rb") as fh:
+        with np.load(fh) as z:
+            indptr, indices = z[f"{hemi}_{res}_indptr"], z[f"{hemi}_{res}_indices"]
+            weights = z[f"{hemi}_{res}_weights"].astype(np.float32) / np.float32(65535)
+            roi_bits = z[f"{hemi}_{res}_roi"]
+    n = {v: k for k, v in RESAMPLED.items()}[res]
+    matrix = sparse.csr_matrix((weights, indices, indptr), shape=(N_FSAVERAGE, n))
+    return matrix, np.unpackbits(roi_bits)[:n].astype(bool)
+
+
+@cache
+def _nearest(hemi: str, res: str) -> NDArray[np.int64]:
+    """For each fsaverage vertex, the fsLR vertex of largest weight (the nearest), (163842,): its label."""
+    matrix, _ = _weights(hemi, res)
+    rows = np.repeat(np.arange(N_FSAVERAGE), np.diff(matrix.indptr))
+    order = np.lexsort((-matrix.data, rows))  # by row, largest weight first
+    return np.asarray(matrix.indices[order[matrix.indptr[:-1]]], np.int64)
+
+
+def fslr_to_fsaverage(values: NDArray[Any], hemi: str, categorical: bool = False,
+                      what: str = "map") -> NDArray[Any]:
+    """fsLR values of hemisphere `hemi` resampled onto fsaverage.
+
+    Parameters
+    ----------
+    values : ndarray, shape (n,) or (k, n)
+        One value per fsLR vertex (``n`` 32492 or 163842), NaN = no value.
+    hemi : {"lh", "rh"}
+    categorical : bool
+        Labels: each fsaverage vertex takes the label of its nearest fsLR vertex.
+
+    Returns
+    -------
+    ndarray of float32, shape (k, 163842)
+        NaN where the fsLR map has no value (medial wall, vertices absent from the file).
+    """
+    v = np.asarray(values, dtype=np.float32)
+    v = v[None] if v.ndim == 1 else v
+    res = check_fslr(v.shape[1], what)
+    matrix, roi = _weights(hemi, res)
+    v = np.where(roi, v, np.float32(np.nan))
+    if categorical:
+        out: NDArray[Any] = v[:, _nearest(hemi, res)]
+        return out
+    ok = np.isfinite(v)
+    total = matrix @ np.where(ok, v, 0.0).T  # (163842, k)
+    weight = matrix @ ok.T.astype(np.float32)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = np.where(weight > 0, total / weight, np.nan).T.astype(np.float32)
+    return out
