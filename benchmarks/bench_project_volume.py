@@ -4,10 +4,11 @@ Writes a 2 mm MNI152 volume (91 x 109 x 91, FSL's grid; smooth random values, gz
 like a statistical map), then times ``brainpainter.project_volume`` on it: the first call
 (reads the shipped registration-fusion positions) and the median of ``--repeat`` warm calls,
 each from the file on disk. Also times ``subcortical_means`` and, with ``--nilearn``,
-``nilearn.surface.vol_to_surf`` on fsaverage5's pial surface (both hemispheres), in the same run.
+``nilearn.surface.vol_to_surf`` on fsaverage5's pial surface (both hemispheres), in the same run;
+``--projection`` chooses how each vertex is sampled (default ``ribbon``).
 Prints the peak resident memory of the process (VmHWM) and what the projection added to it.
 
-    python benchmarks/bench_project_volume.py [--repeat 7] [--volumes 1] [--nilearn]
+    python benchmarks/bench_project_volume.py [--repeat 7] [--volumes 1] [--nilearn] [--projection point]
 """
 
 from __future__ import annotations
@@ -60,16 +61,18 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=7)
     parser.add_argument("--volumes", type=int, default=1, help="volumes in the file (4-D when > 1)")
     parser.add_argument("--nilearn", action="store_true", help="time nilearn's vol_to_surf too")
+    parser.add_argument("--projection", choices=("ribbon", "line", "point"), default="ribbon",
+                        help="how each vertex is sampled (project_volume's projection)")
     args = parser.parse_args()
     from brainpainter.maps.volume import project_volume, subcortical_means
 
     with tempfile.TemporaryDirectory() as tmp:
         path = write_volume(Path(tmp), args.volumes)
         before = peak_mb()
-        first, median = timed(lambda: project_volume(path), args.repeat)
+        first, median = timed(lambda: project_volume(path, projection=args.projection), args.repeat)
         after = peak_mb()
-        print(f"project_volume, {args.volumes} volume(s) of 91x109x91 (2 mm): first call {first:.3f} s, "
-              f"median of {args.repeat} {median:.3f} s")
+        print(f"project_volume ({args.projection}), {args.volumes} volume(s) of 91x109x91 (2 mm): first call "
+              f"{first:.3f} s, median of {args.repeat} {median:.3f} s")
         print(f"peak memory {after:.0f} MB (before projecting {before:.0f} MB: +{after - before:.0f} MB)")
         first, median = timed(lambda: subcortical_means(path), args.repeat)
         print(f"subcortical_means: first call {first:.3f} s, median {median:.3f} s")

@@ -190,7 +190,8 @@ def _brain(img):
 @pytest.mark.render
 @pytest.mark.integration
 def test_dk_map_matches_region_render():
-    """Bar: every vertex of a DK region carries its value -> within 10 RGB units on >= 97 % of pixels."""
+    """Bar: every vertex of a DK region carries its value -> within 10 RGB units on >= 97 % of pixels
+    (flat shading: a map's cortex is lit to read true, not with the regions' relief)."""
     from brainpainter.rendering.geometry import VertexColors
     from brainpainter.rendering.painter import Painter
     from brainpainter.rendering.settings import RenderSettings
@@ -209,7 +210,7 @@ def test_dk_map_matches_region_render():
                 values[prefix + name] = v[lab == i] = float(rng.uniform())
         maps[hemi] = v
     scale = make_scale(cmap="viridis", vmin=0, vmax=1)
-    settings, view = RenderSettings(width=1200, height=900), get_view("lateral-left")
+    settings, view = RenderSettings(width=1200, height=900, shading="flat"), get_view("lateral-left")
     with Painter("dk", settings=settings) as p:
         region = p.paint(values, view, scale)
     with Painter("dk", settings=settings, coloring="vertices") as p:
@@ -220,6 +221,38 @@ def test_dk_map_matches_region_render():
     diff = np.abs(region[..., :3].astype(int) - vertex[..., :3].astype(int)).max(-1)
     assert brain.sum() > 0.4 * 1200 * 900
     assert (diff[brain] <= 10).mean() >= 0.97
+
+
+@pytest.mark.render
+def test_a_constant_map_reads_true_under_the_default_lighting():
+    """Bar (issue 33, item 12): 2.75 on a 1.5-4 viridis scale, each map pixel read back as the nearest
+    colour of the colour map in CIELAB: >= 90 % within +-5 % of the range, while the folds still show
+    (L* p90 - p10 >= 8); a region render of the same colour keeps its relief."""
+    from scipy.ndimage import binary_erosion
+
+    from brainpainter.media.imagemetrics import lightness, read_values
+    from brainpainter.rendering.geometry import VertexColors
+    from brainpainter.rendering.painter import Painter
+    from brainpainter.rendering.settings import RenderSettings
+    from brainpainter.rendering.views import get_view
+
+    scale = make_scale(cmap="viridis", vmin=1.5, vmax=4.0)
+    maps = read_maps({"lh": np.full(N5, 2.75), "rh": np.full(N5, 2.75)})
+    views = [get_view(v) for v in ("lateral-left", "medial-left")]
+    with Painter("dk", settings=RenderSettings(width=400, height=300), coloring="vertices") as p:
+        colors = vertex_colors(maps, 0, p.scene.geometry.source_vertex, scale, "none")
+        images = [p.paint_colors(VertexColors({}, colors), view)[..., :3] for view in views]
+    # the map's pixels: coloured (not the grey medial wall, not the white background), off the edges
+    shown = np.concatenate([img[binary_erosion(np.ptp(img.astype(int), axis=-1) > 40, iterations=2)]
+                            for img in images])
+    assert len(shown) > 0.2 * 2 * 400 * 300                      # the map, not the medial wall
+    within = float(np.mean(np.abs(read_values(shown, "viridis", 1.5, 4.0) - 2.75) <= 0.05 * 2.5))
+    p10, p90 = np.percentile(lightness(shown), [10, 90])
+    assert within >= 0.90 and p90 - p10 >= 8, (within, p90 - p10)
+    with Painter("dk", settings=RenderSettings(width=400, height=300)) as p:   # regions: relief as before
+        region = p.paint({key: 2.75 for key in p.atlas.keys}, views[0], scale)
+    p10, p90 = np.percentile(lightness(region[..., :3][_brain(region)]), [10, 90])
+    assert p90 - p10 >= 25, p90 - p10
 
 
 @pytest.mark.render

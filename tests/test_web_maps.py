@@ -341,5 +341,5 @@ def test_a_cifti_upload_keeps_its_fslr_164k_mesh(tmp_path):
     work.mkdir()
     report, images = build_bundle(work, [(None, tmp_path / name)], 10)
     assert report["surfaces"] == {"lh": "fsLR 164k"} and images == ["s"]
-    maps = read_bundle((work / "bundle.bin").read_bytes(), tmp_path / "scratch")
+    maps = read_bundle((work / "bundle.bin").read_bytes())
     assert maps.space == "fsLR" and not maps.notes

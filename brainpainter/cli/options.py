@@ -42,8 +42,8 @@ RENDER_OPTION_NAMES = (
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
-MAP_OPTION_NAMES = ("lh", "rh", "volume", "underlay", "threshold", "outline", "outline_threshold", "space",
-                    "frames", "lh_surface", "rh_surface")
+MAP_OPTION_NAMES = ("lh", "rh", "volume", "projection", "projection_radius", "underlay", "threshold",
+                    "outline", "outline_threshold", "space", "frames", "lh_surface", "rh_surface")
 
 
 def field_option(cls: type, name: str, *decls: str, **overrides: Any) -> Callable[[F], F]:
@@ -154,6 +154,8 @@ map_options = stack([
     field_option(MapOptions, "lh", type=click.Path(dir_okay=False), metavar="FILE"),
     field_option(MapOptions, "rh", type=click.Path(dir_okay=False), metavar="FILE"),
     field_option(MapOptions, "volume", type=click.Path(dir_okay=False), metavar="FILE"),
+    field_option(MapOptions, "projection"),
+    field_option(MapOptions, "projection_radius", metavar="MM"),
     field_option(MapOptions, "underlay"),
     field_option(MapOptions, "threshold"),
     field_option(MapOptions, "outline", metavar="ATLAS"),

@@ -110,6 +110,17 @@ def depth_points(white: NDArray[np.float64], pial: NDArray[np.float64], n_depths
     return white[None] + t[:, None, None] * (pial - white)[None]
 
 
+def sample_points(white: dict[str, SurfaceLike], pial: dict[str, SurfaceLike], depth: str, n_depths: int
+                  ) -> tuple[dict[str, NDArray[np.float64]], dict[str, tuple[int, int]]]:
+    """`n_depths` points per vertex from white to pial, per hemisphere, shape (n * n_depths, 3),
+    and ``(n, n_depths)``; `depth` checked."""
+    if depth not in DEPTHS:
+        raise choice_error("depth", depth, DEPTHS)
+    pairs = surface_pairs(white, pial)
+    return ({hemi: depth_points(w, p, n_depths).reshape(-1, 3) for hemi, (w, p) in pairs.items()},
+            {hemi: (len(w), n_depths) for hemi, (w, _) in pairs.items()})
+
+
 def combine(samples: NDArray[np.float32], depth: str) -> NDArray[np.float32]:
     """One value per vertex from the samples at several depths.
 

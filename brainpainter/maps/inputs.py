@@ -186,6 +186,7 @@ def is_map_input(data: Any) -> bool:
 
 def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = None, *,
               external: External = "folder", space: str | None = None, frames: Any = None,
+              projection: str | None = None, radius: float | None = None,
               mesh: Mapping[str, int] | None = None) -> VertexMaps:
     """Any map input to :class:`VertexMaps` on fsaverage (the hook every command calls).
 
@@ -211,6 +212,9 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
         fsaverage when neither says, with a note.
     frames : str or sequence of int, optional
         The images to keep (``--frames 0:100:10``, ``"3"``, ``[0, 4]``): frames of a series.
+    projection, radius : optional
+        How a volume is sampled (``--projection``, ``--projection-radius``), as in
+        :func:`brainpainter.maps.volume.project_volume`.
     mesh : mapping of {"lh", "rh"} to int, optional
         The vertex counts of the user's own surfaces (``--lh-surface``/``--rh-surface``, or a
         template built from a subject): each hemisphere's map has exactly that many values and
@@ -244,7 +248,7 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
         if data is not None or lh is not None or rh is not None:
             raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "
                                     "volume is projected onto both hemispheres.")
-        return pick_images(read_volume(volume), frames)
+        return pick_images(read_volume(volume, projection=projection, radius=radius), frames)
     given = _given(data, lh, rh, mesh)
     if mesh is not None:
         return pick_images(_read_on_mesh(given, mesh, external), frames)
@@ -344,7 +348,8 @@ def maps_to_fsaverage(data: Any, space: str | None = None) -> dict[str, NDArray[
     return out
 
 
-def read_volume(img: Any, *, method: Method = "linear") -> VertexMaps:
+def read_volume(img: Any, *, method: Method = "linear", projection: str | None = None,
+                radius: float | None = None) -> VertexMaps:
     """A volume as maps on fsaverage, with its subcortical means: what ``--volume FILE`` draws.
 
     Parameters
@@ -353,6 +358,9 @@ def read_volume(img: Any, *, method: Method = "linear") -> VertexMaps:
         An MNI152 volume, 3-D or 4-D (one image per volume).
     method : {"linear", "nearest"}
         As in :func:`brainpainter.maps.volume.project_volume`.
+    projection : {"ribbon", "line", "point"}, optional
+    radius : float, optional
+        As in :func:`~brainpainter.maps.volume.project_volume` (default 3 mm).
 
     Returns
     -------
@@ -362,10 +370,13 @@ def read_volume(img: Any, *, method: Method = "linear") -> VertexMaps:
         subcortical structure (:func:`~brainpainter.maps.volume.subcortical_means`), shape
         (n_volumes,) each.
     """
+    from brainpainter.maps.options import RADIUS_MM, check_projection
     from brainpainter.maps.volume import load_volume, project_volume, subcortical_means
 
     volume = load_volume(img)
-    projected = project_volume(img, method=method)
+    radius = RADIUS_MM if radius is None else radius
+    projected = project_volume(img, method=method, projection=check_projection(projection, method, radius),
+                               radius=radius)
     means = subcortical_means(img, method=method)
     k = volume.n_volumes
     if len(volume.shape) == 3:

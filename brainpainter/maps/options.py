@@ -9,12 +9,37 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, TypedDict
+from typing import Any, Literal, TypedDict
 
 from brainpainter.errors import BrainPainterError, choice_error
 
 #: What shows where a map has no value: sulcal-depth greys, curvature greys, or one grey.
 UNDERLAYS = ("sulc", "curv", "none")
+Projection = Literal["ribbon", "line", "point"]
+#: How a volume is sampled at a vertex (``--projection``): over the cortical ribbon around it,
+#: along its normal, or at its position alone (:mod:`brainpainter.maps.sheet`).
+PROJECTIONS: tuple[Projection, ...] = ("ribbon", "line", "point")
+RADIUS_MM = 3.0                 # default --projection-radius (nilearn's vol_to_surf: 3 mm)
+MAX_RADIUS_MM = 10.0
+
+
+def check_projection(projection: str | None, method: str, radius: float) -> Projection:
+    """`projection` checked against `method` and `radius` (one line each), its default filled in."""
+    try:
+        ok = 0.5 <= float(radius) <= MAX_RADIUS_MM
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise BrainPainterError(f"the projection radius must be 0.5 to {MAX_RADIUS_MM:g} mm; {radius!r} was "
+                                f"given (default {RADIUS_MM:g}).")
+    if projection is None:
+        return "point" if method == "nearest" else "ribbon"
+    if projection not in PROJECTIONS:
+        raise choice_error("projection", projection, PROJECTIONS)
+    if method == "nearest" and projection != "point":
+        raise BrainPainterError(f"projection {projection!r} averages values, which would mix the labels of "
+                                "method='nearest'; use projection='point' for a label volume.")
+    return projection
 
 
 class MapKwargs(TypedDict, total=False):
@@ -23,6 +48,8 @@ class MapKwargs(TypedDict, total=False):
     lh: Any
     rh: Any
     volume: Any
+    projection: str | None
+    projection_radius: float | None
     underlay: str
     threshold: float | None
     outline: str | None
@@ -44,6 +71,11 @@ class MapOptions:
     volume : path or nibabel image, optional
         An MNI152 volume (3-D, or 4-D: one image per volume) projected onto the cortex by
         registration fusion; the subcortical structures take its mean inside each.
+    projection : {"ribbon", "line", "point"}, optional
+        How the volume is sampled at each vertex (default ``ribbon``; see
+        :func:`brainpainter.maps.volume.project_volume`).
+    projection_radius : float, optional
+        Its radius in mm (default 3).
     underlay : {"sulc", "curv", "none"}
         What shows where the map has no value.
     threshold : float, optional
@@ -69,6 +101,12 @@ class MapOptions:
         "help": "An MNI152 volume (.nii/.nii.gz, 3-D or 4-D = one image per volume: an SPM/FSL/AFNI stat "
                 "map, a PET image) projected onto the cortex; the subcortical structures show its mean "
                 "inside each. See docs/maps.md."})
+    projection: str | None = field(default=None, metadata={"choices": PROJECTIONS, "help": (
+        "How --volume is sampled at each vertex: ribbon (default), the mean over the grey-matter ribbon "
+        "within --projection-radius; line, along the normal (nilearn's vol_to_surf); point, at its "
+        "position alone.")})
+    projection_radius: float | None = field(default=None, metadata={
+        "help": f"Radius of --projection in mm (default {RADIUS_MM:g})."})
     underlay: str = field(default="sulc", metadata={
         "choices": UNDERLAYS, "help": "Map underlay: sulcal-depth or curvature greys, or one grey."})
     threshold: float | None = field(default=None, metadata={
@@ -99,6 +137,12 @@ class MapOptions:
             raise BrainPainterError(f"--threshold must be a number >= 0; {t!r} was given.")
         if self.space is not None and self.space not in ("fsaverage", "fsLR"):
             raise choice_error("space", self.space, ("fsaverage", "fsLR"))
+        if (self.projection is not None or self.projection_radius is not None) and self.volume is None \
+                and (self.lh is not None or self.rh is not None):
+            raise BrainPainterError("--projection and --projection-radius sample a volume (--volume); "
+                                    "surface maps (--lh/--rh) are not projected. Leave them out.")
+        check_projection(self.projection, "linear", RADIUS_MM if self.projection_radius is None
+                         else self.projection_radius)
         if self.volume is not None and (self.lh is not None or self.rh is not None):
             raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "
                                     "volume is projected onto both hemispheres.")

@@ -14,6 +14,7 @@ keep their values exactly. Label maps take the first parent's label instead.
 
 from __future__ import annotations
 
+import itertools
 from functools import cache
 from importlib import resources
 from typing import Any
@@ -128,6 +129,62 @@ def to_fsaverage(values: NDArray[Any], categorical: bool = False, what: str = "m
         else:
             with np.errstate(invalid="ignore"):
                 out[:, lo:hi] = np.where(np.isnan(a), b, np.where(np.isnan(b), a, (a + b) / 2))
+    return out
+
+
+@cache
+def fsaverage_faces(level: int = 7) -> NDArray[np.int64]:
+    """fsaverage's triangles (or those of the family member of `level` 3-7, e.g. 6: fsaverage6),
+    rebuilt from the shipped parents (no surface file needed).
+
+    The 30 edges of the icosahedron are the parents of level 1; its 20 faces are the
+    triangles of those edges, oriented alike; each level splits every face in four through
+    the midpoints of its edges (the children that the parents name). Read-only, cached.
+
+    Returns
+    -------
+    ndarray of int64, shape (20 * 4**level, 3)
+        Every face (327680 for fsaverage; both hemispheres share them), all wound the same way
+        (:func:`brainpainter.maps.sheet.normals` turns them outwards for given positions).
+    """
+    parents = _family()["parents"].astype(np.int64)
+    edges = np.sort(parents[:LEVELS[1] - LEVELS[0]], axis=1)
+    pairs = {(int(a), int(b)) for a, b in edges}
+    faces = [(a, b, c) for a, b in sorted(pairs) for c in range(b + 1, LEVELS[0])
+             if (a, c) in pairs and (b, c) in pairs]
+    tri = _oriented(np.asarray(faces, np.int64))
+    for lo, hi in itertools.pairwise(LEVELS[:level + 1]):
+        child = np.sort(parents[lo - LEVELS[0]:hi - LEVELS[0]], axis=1)
+        keys = child[:, 0] * N_FSAVERAGE + child[:, 1]
+        order = np.argsort(keys)
+        a, b, c = tri.T
+        ab, bc, ca = (lo + order[np.searchsorted(keys, np.minimum(u, v) * N_FSAVERAGE + np.maximum(u, v),
+                                                 sorter=order)] for u, v in ((a, b), (b, c), (c, a)))
+        quarters = ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))
+        tri = np.concatenate([np.column_stack(t) for t in quarters])
+    tri.flags.writeable = False
+    return tri
+
+
+def _oriented(faces: NDArray[np.int64]) -> NDArray[np.int64]:
+    """The icosahedron's faces wound alike: a shared edge runs one way in one face, the other way in
+    the other."""
+    out = faces.copy()
+    done = {0}
+    todo = [0]
+    while todo:
+        i = todo.pop()
+        directed = {(int(out[i, k]), int(out[i, (k + 1) % 3])) for k in range(3)}
+        for j in range(len(out)):
+            if j in done:
+                continue
+            mine = {(int(out[j, k]), int(out[j, (k + 1) % 3])) for k in range(3)}
+            if mine & directed:                    # the same edge the same way: flip it
+                out[j] = out[j, ::-1]
+            elif not {(b, a) for a, b in mine} & directed:
+                continue                           # no shared edge
+            done.add(j)
+            todo.append(j)
     return out
 
 

@@ -2,11 +2,12 @@
 
 :func:`project_volume` samples a volume in MNI152 space at the MNI152 position of every
 fsaverage vertex found by registration fusion (RF-ANTs, Wu et al. 2018; see
-:mod:`brainpainter.maps.regfusion`), or a subject-space volume between that subject's white and
-pial surfaces (:mod:`brainpainter.maps.depth`). :func:`subcortical_means` gives the mean of the
-same volume inside each subcortical structure of the default template, keyed as region tables
-key them, so one NIfTI colours cortex and subcortex. :func:`volume_images` is the per-image
-form the command line uses (``--volume``).
+:mod:`brainpainter.maps.regfusion`), averaged over the cortical sheet around it (``ribbon``),
+along its normal (``line``) or not at all (``point``; :mod:`brainpainter.maps.sheet`), or a
+subject-space volume between that subject's white and pial surfaces (:mod:`brainpainter.maps.depth`).
+:func:`subcortical_means` gives the mean of the same volume inside each subcortical structure of
+the default template, keyed as region tables key them, so one NIfTI colours cortex and subcortex.
+:func:`volume_images` is the per-image form the command line uses (``--volume``).
 
 Volumes that cannot be what they are used as are refused with one line
 (:class:`~brainpainter.errors.BrainPainterError`): a 2-D image, no spatial transform, absurd
@@ -26,7 +27,10 @@ from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.maps import depth as depth_sampling
+from brainpainter.maps import sheet
+from brainpainter.maps.options import RADIUS_MM, Projection, check_projection
 from brainpainter.maps.regfusion import aseg_mni152, fsaverage_mni152
+from brainpainter.maps.trilinear import trilinear
 
 Method = Literal["linear", "nearest"]
 ORDERS = {"nearest": 0, "linear": 1}
@@ -227,16 +231,30 @@ def _sample(volume: Volume, ijk: NDArray[np.float64], inside: NDArray[np.bool_],
     if volume.n_volumes > 1 and not isinstance(data, np.ndarray) and not _is_uncompressed(data):
         data = np.asarray(data, dtype=np.float32)   # gzip cannot seek: read the series once
     series = Volume(volume.name, data, volume.affine)
-    for i in range(volume.n_volumes):
+    # a series: the interpolation's weights worked out once (a sparse matrix), not once per volume
+    matrix = trilinear(volume.shape, ijk) if order == 1 and volume.n_volumes > 1 else None
+
+    def at(grid: NDArray[np.float32]) -> NDArray[np.float32]:
+        if matrix is not None:
+            values: NDArray[np.float32] = matrix @ grid.ravel(order="F")
+            return values
+        return map_coordinates(grid, ijk, order=order, mode="nearest", prefilter=False)  # type: ignore[no-any-return]
+
+    done = False
+    if matrix is not None and isinstance(data, np.ndarray):
+        block = data.reshape(-1, volume.n_volumes, order="F")   # as the matrix ravels (NIfTI's order)
+        if np.isfinite(block).all():                     # a series in memory, no NaN: one product
+            nonzero, done = bool(np.any(block != 0)), True
+            out[:] = (matrix @ block.astype(np.float32, copy=False)).T
+    for i in range(0 if done else volume.n_volumes):
         vol = series.volume(i)
         finite = np.isfinite(vol)
         nonzero = nonzero or bool(np.any(finite & (vol != 0)))
         if order == 0 or finite.all():
-            map_coordinates(vol, ijk, output=out[i], order=order, mode="nearest", prefilter=False)
+            out[i] = at(vol)
         else:   # NaN-aware trilinear: the finite voxels around a point, weighted, renormalised
-            weight = map_coordinates(finite.astype(np.float32), ijk, order=1, mode="nearest", prefilter=False)
-            map_coordinates(np.where(finite, vol, np.float32(0)), ijk, output=out[i], order=1, mode="nearest",
-                            prefilter=False)
+            weight = at(finite.astype(np.float32))
+            out[i] = at(np.where(finite, vol, np.float32(0)))
             enough = weight >= MIN_FINITE_WEIGHT
             out[i][enough] /= weight[enough]
             out[i][~enough] = np.nan
@@ -257,7 +275,8 @@ def _layout(samples: NDArray[np.float32], four_d: bool) -> NDArray[np.float32]:
     return samples if four_d else samples[0]
 
 
-def project_volume(img: ImageLike, *, method: Method = "linear",
+def project_volume(img: ImageLike, *, method: Method = "linear", projection: Projection | None = None,
+                   radius: float = RADIUS_MM,
                    white: dict[str, depth_sampling.SurfaceLike] | None = None,
                    pial: dict[str, depth_sampling.SurfaceLike] | None = None,
                    depth: depth_sampling.Depth = "mean", n_depths: int = 6) -> dict[str, NDArray[np.float32]]:
@@ -266,12 +285,17 @@ def project_volume(img: ImageLike, *, method: Method = "linear",
     Parameters
     ----------
     img : path or nibabel image
-        A NIfTI (``.nii``, ``.nii.gz``) or MGH (``.mgz``) volume, shape (x, y, z), or a series of
-        volumes, shape (x, y, z, n_volumes). Without `white` and `pial` it must be in MNI152 space
-        (any MNI152 template: ICBM 2009c, FSL's MNI152, SPM's).
+        A NIfTI (``.nii``, ``.nii.gz``) or MGH (``.mgz``) volume, shape (x, y, z) or (x, y, z,
+        n_volumes); without `white` and `pial`, in MNI152 (ICBM 2009c, FSL's MNI152, SPM's).
     method : {"linear", "nearest"}
         Trilinear interpolation (statistical maps, probabilities), or the nearest voxel (label
         volumes: values are never mixed).
+    projection : {"ribbon", "line", "point"}, optional
+        Around each registration-fusion position: ``ribbon`` (default) the mean over the grey-matter
+        ribbon within `radius` mm; ``line`` of 10 samples along the normal, ``-radius`` to ``+radius``
+        (nilearn's ``vol_to_surf``); ``point`` the position alone (the only one for ``nearest``).
+    radius : float
+        Millimetres, 0.5-10 (:mod:`brainpainter.maps.sheet`).
     white, pial : dict, optional
         A subject's own surfaces, ``{"lh": ..., "rh": ...}`` (either or both hemispheres; nilearn's
         ``"left"``/``"right"`` also), each a FreeSurfer surface file, a GIfTI ``.surf.gii``, or
@@ -296,9 +320,9 @@ def project_volume(img: ImageLike, *, method: Method = "linear",
     Raises
     ------
     BrainPainterError
-        A 2-D image, no spatial transform, absurd voxel sizes, an extent that covers less than half
-        of the cortex (not MNI152, or surfaces of another subject), a FreeSurfer conformed volume
-        (a subject's space) without surfaces, every voxel 0 or NaN.
+        A 2-D image, no spatial transform, absurd voxel sizes, less than half of the cortex covered
+        (not MNI152, or another subject's surfaces), a FreeSurfer conformed volume without surfaces,
+        every voxel 0 or NaN; a projection or radius not allowed.
 
     Examples
     --------
@@ -308,24 +332,18 @@ def project_volume(img: ImageLike, *, method: Method = "linear",
     """
     if method not in ORDERS:
         raise choice_error("method", method, ORDERS)
+    projection = check_projection(projection, method, radius)
     if (white is None) != (pial is None):
         raise BrainPainterError("depth sampling needs both white and pial surfaces; only "
                                 f"{'white' if pial is None else 'pial'} was given.")
     volume = load_volume(img)
-    if white is None or pial is None:
-        points = fsaverage_mni152()
-        counts = {hemi: (len(xyz), 1) for hemi, xyz in points.items()}
-    else:
-        if depth not in depth_sampling.DEPTHS:
-            raise choice_error("depth", depth, depth_sampling.DEPTHS)
-        pairs = depth_sampling.surface_pairs(white, pial)
-        points = {hemi: depth_sampling.depth_points(w, p, n_depths).reshape(-1, 3)
-                  for hemi, (w, p) in pairs.items()}
-        counts = {hemi: (len(w), n_depths) for hemi, (w, _) in pairs.items()}
-        method = "nearest" if depth == "nearest" else method
+    points, counts = _where(white, pial, depth, n_depths)
+    method = "nearest" if white is not None and depth == "nearest" else method
     stacked = _fsaverage_points() if white is None else np.concatenate(list(points.values()))
     ijk, inside = _voxel_coordinates(volume, stacked)
     _check_coverage(volume, inside, subject=white is not None)
+    if white is None and projection != "point":
+        return _project_depths(volume, projection, float(radius), ORDERS[method])
     samples = _sample(volume, ijk, inside, ORDERS[method])
     out: dict[str, NDArray[np.float32]] = {}
     start = 0
@@ -336,6 +354,32 @@ def project_volume(img: ImageLike, *, method: Method = "linear",
             per_depth = part.reshape(volume.n_volumes, k, n)
             part = np.stack([depth_sampling.combine(s, depth) for s in per_depth])
         out[hemi] = _layout(part, len(volume.shape) == 4)
+    return out
+
+
+def _where(white: dict[str, Any] | None, pial: dict[str, Any] | None, depth: str,
+           n_depths: int) -> tuple[dict[str, NDArray[np.float64]], dict[str, tuple[int, int]]]:
+    """The points :func:`project_volume` samples per hemisphere, shape (n * k, 3), and (n, k): the
+    registration-fusion positions (k = 1), or `n_depths` points from a subject's white to pial."""
+    if white is None or pial is None:
+        return fsaverage_mni152(), {hemi: (len(xyz), 1) for hemi, xyz in fsaverage_mni152().items()}
+    return depth_sampling.sample_points(white, pial, depth, n_depths)
+
+
+def _project_depths(volume: Volume, projection: str, radius: float,
+                    order: int) -> dict[str, NDArray[np.float32]]:
+    """Each fsaverage vertex's mean of the finite samples at the depths of `projection` along its
+    normal (:func:`brainpainter.maps.sheet.depths`); over the sheet within `radius` for ``ribbon``."""
+    offsets = sheet.depths(projection, radius)
+    along = np.concatenate([sheet.along_normals(hemi, offsets).reshape(-1, 3) for hemi in ("lh", "rh")])
+    ijk, inside = _voxel_coordinates(volume, along)
+    samples = _sample(volume, ijk, inside, order).reshape(volume.n_volumes, 2, len(offsets), -1)
+    out: dict[str, NDArray[np.float32]] = {}
+    for i, hemi in enumerate(("lh", "rh")):
+        mean = np.stack([depth_sampling.combine(s, "mean") for s in samples[:, i]])
+        if projection == "ribbon":
+            mean = sheet.sheet_mean(mean, hemi, radius)
+        out[hemi] = _layout(mean, len(volume.shape) == 4)
     return out
 
 

@@ -31,9 +31,10 @@ from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.atlas.model import HEMI_PREFIX, Atlas
 from brainpainter.atlas.template import Template
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.maps.options import MapOptions
 from brainpainter.rendering.geometry import VertexColors
 from brainpainter.rendering.maprun import MapRun
-from brainpainter.rendering.options import Options, RenderKwargs
+from brainpainter.rendering.options import Options, RenderKwargs, option_names
 from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.settings import RGB
 
@@ -401,8 +402,7 @@ _VIEWER_JS = r"""
 EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cmap", "vmin", "vmax", "center",
                   "nan_color", "missing_color", "background", "image_column", "value", "region_column",
                   "strict", "tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_values",
-                  "tract_value", "tract_radius", "lh", "rh", "volume", "underlay", "threshold", "outline",
-                  "outline_threshold", "space", "frames", "lh_surface", "rh_surface")
+                  "tract_value", "tract_radius", *option_names(MapOptions))  # every map option
 
 
 def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:

@@ -131,3 +131,41 @@ def lightness_spread(image: NDArray[Any], background: tuple[int, int, int] = (25
     brain = ~np.all(rgb == np.asarray(background, dtype=rgb.dtype), axis=-1)
     p10, p90 = np.percentile(lightness(rgb[brain]), [10, 90])
     return float(p90 - p10)
+
+
+def to_lab(rgb: NDArray[Any]) -> NDArray[Any]:
+    """CIELAB (D65) of sRGB pixels (0-255), shape of `rgb` with its last axis 3 (alpha ignored)."""
+    lin = _srgb_to_linear(np.asarray(rgb, dtype=np.float64)[..., :3])
+    xyz = lin @ np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]]).T
+    t = xyz / np.array([0.95047, 1.0, 1.08883])
+    f = np.where(t > (6 / 29) ** 3, np.cbrt(t), t * (29 / 6) ** 2 / 3 + 4 / 29)
+    out: NDArray[Any] = np.stack([116.0 * f[..., 1] - 16.0, 500.0 * (f[..., 0] - f[..., 1]),
+                                  200.0 * (f[..., 1] - f[..., 2])], axis=-1)
+    return out
+
+
+def read_values(rgb: NDArray[Any], cmap: str, vmin: float, vmax: float, n: int = 1024) -> NDArray[Any]:
+    """The value each pixel shows: that of the colour of `cmap` nearest to it in CIELAB.
+
+    Parameters
+    ----------
+    rgb : ndarray, shape (..., 3) or (..., 4)
+        sRGB pixels 0-255.
+    cmap : str
+        A matplotlib colour map, spread over `vmin`..`vmax`.
+    n : int
+        Colours of the map compared (its resolution).
+
+    Returns
+    -------
+    ndarray of float, shape of `rgb` without its last axis
+    """
+    from matplotlib import colormaps
+    from scipy.spatial import cKDTree
+
+    t = np.linspace(0.0, 1.0, n)
+    table = to_lab(255.0 * colormaps[cmap](t)[:, :3])
+    pixels = to_lab(rgb)
+    _, nearest = cKDTree(table).query(pixels.reshape(-1, 3))
+    out: NDArray[Any] = (vmin + t[nearest] * (vmax - vmin)).reshape(pixels.shape[:-1])
+    return out

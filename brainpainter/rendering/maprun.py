@@ -135,7 +135,8 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     # that surface's vertex count, drawn as they are
     own = {hemi: n for hemi in ("lh", "rh") if (n := own_vertex_count(tpl, hemi)) is not None}
     if not surfaces:
-        maps = read_maps(data, m.lh, m.rh, m.volume, space=m.space, frames=m.frames, mesh=own or None)
+        maps = read_maps(data, m.lh, m.rh, m.volume, space=m.space, frames=m.frames, projection=m.projection,
+                         radius=m.projection_radius, mesh=own or None)
     labels = atlas_obj.template_labels if atlas_obj.template_labels in tpl.label_sets else "dk"
     meshes = {hemi: map_mesh(tpl, labels, hemi) for hemi in ("lh", "rh")}
     views = options.scene.views

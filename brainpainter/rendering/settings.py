@@ -85,7 +85,8 @@ class RenderSettings:
         Lighting preset for default shading: ``studio`` key + fill + ambient
         light that follow the camera; ``soft`` more ambient, flatter; ``sulc``
         studio plus a slight darkening of sulci (sulcal depth);
-        ``flat-studio`` unlit colours darkened in sulci.
+        ``flat-studio`` unlit colours darkened in sulci. On a map's cortex the lit presets
+        darken less (less occlusion and contrast), so its colours read as its values.
     glass_opacity : float
         Opacity of the glass brain, 0-1.
     outline_width : float

@@ -27,7 +27,8 @@ Lighting is per vertex, in linear light, from lights fixed to the camera:
 a key light from the upper left, a fill light from the right and an
 ambient term (:data:`LIGHTING`), all multiplied by the ambient occlusion
 the template has baked per vertex (an extra vertex attribute, ones for old
-templates), then an S-curve; subcortical structures get a darker outline
+templates), then an S-curve; on a map's cortex, less of the occlusion and
+the S-curve (:func:`for_maps`), so its colours read as its values; subcortical structures get a darker outline
 and the glass a Fresnel-like edge. Colours are multiplied, never mixed
 towards white or black, and the peak stays <= 1, so hues stay pure.
 """
@@ -36,7 +37,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -109,6 +110,26 @@ LIGHTING = {
                             occlusion_open=0.8),
 }
 FLAT = Lighting(ambient=1.0, key=0.0, fill=0.0, lit=False)
+#: A map's cortex (colours per vertex) under a lit preset: the share of the key light turned into
+#: ambient light (a facing surface stays as bright), and the weights kept of the occlusion (on the
+#: ambient, on the direct light) and of the S-curve. A map's colours carry its values and darkening
+#: reads as another value: ``benchmarks/map_truth.py`` reads a constant map back through the colour
+#: map in CIELAB (docs/maps.md, "Lighting").
+MAP_LIGHT = {"key_to_ambient": 0.3, "occlusion": 0.6, "occlusion_direct": 0.3, "contrast": 0.3}
+
+
+def for_maps(light: Lighting) -> Lighting:
+    """`light` as it falls on a map's cortex: the relief kept, lightness moved less (:data:`MAP_LIGHT`);
+    unlit presets (``flat-studio``, flat shading) as they are."""
+    if not light.lit:
+        return light
+    m = MAP_LIGHT
+    return replace(light, ambient=light.ambient + m["key_to_ambient"] * light.key,
+                   key=(1.0 - m["key_to_ambient"]) * light.key, occlusion=m["occlusion"] * light.occlusion,
+                   occlusion_direct=m["occlusion_direct"] * light.occlusion_direct,
+                   contrast=m["contrast"] * light.contrast)
+
+
 #: Supersampling factor per quality (per axis); ``high`` reaches here only for flat shading.
 SUPERSAMPLING = {"fast": 1, "default": 2, "high": 3}
 #: Face culling of opaque parts ("BACK": half the triangles are never rasterised; "NONE": draw all).
@@ -170,6 +191,8 @@ class GpuDraw:
         self.geometry = geometry
         self.settings = settings
         self.lighting = FLAT if settings.shading == "flat" else LIGHTING[settings.lighting]
+        #: the lighting of a map's cortex (a scene coloured per vertex); regions keep :attr:`lighting`
+        self.map_lighting = for_maps(self.lighting)
         self._batches: dict[str, Any] = {}
         self._aims: dict[View, _Aim] = {}
         self._palette_key: bytes | None = None
@@ -355,7 +378,6 @@ class GpuDraw:
         """The visible parts but the glass and `tracts`, lit, with depth; returns the bound shader."""
         import gpu
 
-        light = self.lighting
         shader = self._bind_part_shader(aim, tex)
         gpu.state.depth_test_set("LESS_EQUAL")
         gpu.state.depth_mask_set(True)
@@ -366,9 +388,15 @@ class GpuDraw:
         drawn_as_lines = {t.name for t in tracts}
         for p in aim.visible:
             if p.kind != "glass" and p.name not in drawn_as_lines:
-                shader.uniform_float("sulc_strength", light.sulc if p.kind == "cortex" else 0.0)
-                shader.uniform_float("ao_strength", light.occlusion)
-                shader.uniform_float("rim", light.rim if p.kind == "subcortical" else 0.0)
+                mapped = p.kind == "cortex" and bool(self.geometry.vertex_slots)
+                light = self.map_lighting if mapped else self.lighting
+                for name, value in (("ambient", light.ambient), ("key", light.key if light.lit else 0.0),
+                                    ("fill", light.fill if light.lit else 0.0),
+                                    ("ao_direct", light.occlusion_direct), ("contrast", light.contrast),
+                                    ("sulc_strength", light.sulc if p.kind == "cortex" else 0.0),
+                                    ("ao_strength", light.occlusion),
+                                    ("rim", light.rim if p.kind == "subcortical" else 0.0)):
+                    shader.uniform_float(name, value)
                 self._batch(p).draw(shader)
                 if mark is not None:
                     mark(f"draw {p.name}")
