@@ -168,7 +168,7 @@ class Template:
 
     def subcortical_names(self) -> tuple[str, ...]:
         """``subcortical().label_names``, read from the manifest (no mesh is loaded)."""
-        return tuple(s["name"] for s in self.manifest["subcortical"]["structures"])
+        return tuple(s["name"] for s in (self.manifest.get("subcortical") or {}).get("structures", []))
 
     def cortex(self, labels: str, hemi: str) -> CortexMesh:
         """The hemisphere `hemi` split by label set `labels`.
@@ -265,8 +265,14 @@ class Template:
         return Template(path=self.path, manifest=manifest, _cache=self._cache)
 
     def subcortical(self) -> LabelledMesh:
-        """All subcortical structures (names as in FreeSurfer's aseg LUT, or a volume atlas's keys)."""
-        entry = self.manifest["subcortical"]
+        """All subcortical structures (names as in FreeSurfer's aseg LUT, or a volume atlas's keys).
+
+        A template without them (the user's own surfaces) gives an empty mesh.
+        """
+        entry = self.manifest.get("subcortical")
+        if not entry:
+            return LabelledMesh(np.zeros((0, 3), np.float32), np.zeros((0, 3), np.int32),
+                                np.zeros(0, np.int16), ())
         names = self.subcortical_names()
         files = entry.get("parts", [entry["file"]])
         arrays = [self._npz(f) for f in files]

@@ -45,8 +45,8 @@ RENDER_OPTION_NAMES = (
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
 MAP_OPTION_NAMES = ("lh", "rh", "volume", "projection", "projection_radius", "underlay", "underlay_contrast",
-                    "threshold", "outline", "outline_threshold", "space", "frames", "contour",
-                    "contour_levels")
+                    "threshold", "outline", "outline_threshold", "space", "frames", "lh_surface",
+                    "rh_surface", "contour", "contour_levels")
 
 
 def field_option(cls: type, name: str, *decls: str, **overrides: Any) -> Callable[[F], F]:
@@ -175,6 +175,8 @@ _MAP_COLOUR_OPTIONS = [
     field_option(MapOptions, "outline_threshold"),
     field_option(MapOptions, "space"),
     field_option(MapOptions, "frames", metavar="ROWS"),
+    field_option(MapOptions, "lh_surface", type=click.Path(dir_okay=False), metavar="FILE"),
+    field_option(MapOptions, "rh_surface", type=click.Path(dir_okay=False), metavar="FILE"),
 ]
 #: ``@map_colour_options``: what colours a map's vertices (``export``, which draws no lines).
 map_colour_options = stack(_MAP_COLOUR_OPTIONS)

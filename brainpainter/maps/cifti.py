@@ -93,7 +93,7 @@ def region_key(structure: str) -> str | None:
     return f"{match.group(2).title()}-{_STRUCTURES[match.group(1)]}"
 
 
-def read_cifti(path: str | Path, frames: Any = None) -> Cifti:
+def read_cifti(path: str | Path, frames: Any = None, *, own_mesh: bool = False) -> Cifti:
     """A CIFTI-2 file's maps, cortex per hemisphere and subcortical means per structure.
 
     Parameters
@@ -102,6 +102,8 @@ def read_cifti(path: str | Path, frames: Any = None) -> Cifti:
         A ``.dscalar.nii``, ``.dlabel.nii``, ``.pscalar.nii``, ``.dtseries.nii`` or ``.ptseries.nii``.
     frames : str or sequence of int, optional
         The rows to read (``"0:100:10"``, ``"3"``, ``[0, 5]``); all when None.
+    own_mesh : bool
+        Drawn on the user's own surfaces (``--lh-surface``): any vertex count (their own) is taken.
 
     Returns
     -------
@@ -139,7 +141,8 @@ def read_cifti(path: str | Path, frames: Any = None) -> Cifti:
     rows = frame_rows(frames, len(rows_axis), what)
     nvertices = {_CORTEX[s]: int(n) for s, n in cols_axis.nvertices.items() if s in _CORTEX}
     for hemi, n in nvertices.items():
-        known_count(n, f"{what} ({hemi})")
+        if not own_mesh:
+            known_count(n, f"{what} ({hemi})")
     need = 4 * len(rows) * sum(nvertices.values())
     have = _check_size(img, (len(rows_axis), len(cols_axis)), p.stat().st_size, what)
     if need > max(GROWTH * have, _FLOOR):

@@ -43,21 +43,21 @@ class Hemi:
     fslr: bool = False  # the file's metadata names fsLR
 
 
-def read_hemi(value: Any, hemi: str, *, external: External = "folder") -> Hemi:
-    """One hemisphere's file or array, on fsaverage (see the module docstring)."""
+def read_hemi(value: Any, hemi: str, *, external: External = "folder", n: int | None = None) -> Hemi:
+    """One hemisphere's file or array (see the module docstring); `n`: its own surface's vertex count."""
     if isinstance(value, str | Path):
-        return read_file(Path(value), hemi, external=external)
+        return read_file(Path(value), hemi, external=external, n=n)
     arr = np.asarray(value, dtype=np.float64) if not isinstance(value, np.ndarray) else value
-    return Hemi(native(_as_rows(arr, f"the {hemi} array"), what=f"the {hemi} array"))
+    return Hemi(native(_as_rows(arr, f"the {hemi} array", n), what=f"the {hemi} array", n=n))
 
 
-def _as_rows(arr: NDArray[Any], what: str) -> NDArray[Any]:
-    """An array as (k images, n vertices): 1-D, (k, n) or (n, k) with n an fsaverage count."""
+def _as_rows(arr: NDArray[Any], what: str, n: int | None = None) -> NDArray[Any]:
+    """An array as (k images, n vertices): 1-D, (k, n) or (n, k) with n a known count (or `n`)."""
     a = np.asarray(arr)
-    known = {*FAMILY, *FSLR}
+    known = {*FAMILY, *FSLR} if n is None else {n}
     if a.ndim == 2 and a.shape[0] in known and a.shape[1] not in known:
         a = a.T
-    if a.ndim == 2 and 1 in a.shape and a.size in known:
+    if a.ndim == 2 and 1 in a.shape:  # one image (a column of a text file), whatever its count
         a = a.reshape(1, -1)
     if a.ndim not in (1, 2) or a.size == 0:
         raise BrainPainterError(f"{what} has shape {a.shape}; a map has one value per vertex, shape (n,) "
@@ -67,8 +67,8 @@ def _as_rows(arr: NDArray[Any], what: str) -> NDArray[Any]:
     return a.astype(np.float32)
 
 
-def read_file(path: Path, hemi: str, *, external: External = "folder") -> Hemi:
-    """Read one hemisphere's map file (any format of :data:`SUFFIXES`).
+def read_file(path: Path, hemi: str, *, external: External = "folder", n: int | None = None) -> Hemi:
+    """Read one hemisphere's map file (any format of :data:`SUFFIXES`); `n`: its own surface's count.
 
     A file whose first bytes say another format than its name (gzip data named
     ``lh.thickness``) is an error naming what was found; `external` is where a
@@ -87,30 +87,31 @@ def read_file(path: Path, hemi: str, *, external: External = "folder") -> Hemi:
                 _is_format(f.read(HEAD), name, what)
         if name.endswith(".annot"):
             labels, ctab, names = read_annot(str(path))  # type: ignore[no-untyped-call]
-            return _labels(labels, [n.decode() if isinstance(n, bytes) else str(n) for n in names],
-                           ctab[:, :3] / 255.0, what)
+            return _labels(labels, [s.decode() if isinstance(s, bytes) else str(s) for s in names],
+                           ctab[:, :3] / 255.0, what, n)
         if name.endswith(".label"):
             idx = read_label(str(path))  # type: ignore[no-untyped-call]
-            n = next((c for c in sorted(FAMILY) if c > int(idx.max(initial=-1))), N_FSAVERAGE)
-            v = np.full(n, np.nan, np.float32)
+            size = n if n is not None and n > int(idx.max(initial=-1)) else next(
+                (c for c in sorted(FAMILY) if c > int(idx.max(initial=-1))), N_FSAVERAGE)
+            v = np.full(size, np.nan, np.float32)
             v[idx] = 1.0
-            return Hemi(native(v, what=what))
+            return Hemi(native(v, what=what, n=n))
         if name.endswith((".gii", ".gii.gz")):
             img = read_gifti(path, external=external, what="map file")
-            return replace(_gifti(img, what), fslr=_gifti_says_fslr(img))
+            return replace(_gifti(img, what, n), fslr=_gifti_says_fslr(img))
         if name.endswith((".mgh", ".mgz", ".nii", ".nii.gz")):
             # read whole (no file left open by a lazy proxy), inflated if gzip, bounded
             raw = inflated(read_input(path, "map file", MAX_DATA_FILE), what)
             found = _is_format(raw[:HEAD], name, what)
             klass: Any = {MGH: nib.MGHImage, NIFTI2: nib.Nifti2Image}.get(found or "", nib.Nifti1Image)
-            frames = _surface_frames(np.asarray(klass.from_bytes(raw).dataobj), what)
-            return Hemi(native(_as_rows(frames, what), what=what))
+            frames = _surface_frames(np.asarray(klass.from_bytes(raw).dataobj), what, n)
+            return Hemi(native(_as_rows(frames, what, n), what=what, n=n))
         if name.endswith(".npy"):
-            return Hemi(native(_as_rows(np.load(path, allow_pickle=False), what), what=what))
+            return Hemi(native(_as_rows(np.load(path, allow_pickle=False), what, n), what=what, n=n))
         if name.endswith(TEXT):
             delim = "," if name.endswith(".csv") else ("\t" if name.endswith(".tsv") else None)
-            return Hemi(native(_as_rows(np.loadtxt(path, delimiter=delim, ndmin=2), what), what=what))
-        return Hemi(native(read_morph_data(str(path)), what=what))  # type: ignore[no-untyped-call]
+            return Hemi(native(_as_rows(np.loadtxt(path, delimiter=delim, ndmin=2), what, n), what=what, n=n))
+        return Hemi(native(read_morph_data(str(path)), what=what, n=n))  # type: ignore[no-untyped-call]
     except BrainPainterError:
         raise
     except Exception as exc:  # nibabel's many errors for a file that is not what its name says
@@ -151,14 +152,15 @@ _FORMATS: tuple[tuple[tuple[str, ...], tuple[str, frozenset[str | None]]], ...] 
 )
 
 
-def _surface_frames(data: NDArray[Any], what: str) -> NDArray[Any]:
+def _surface_frames(data: NDArray[Any], what: str, n: int | None = None) -> NDArray[Any]:
     """An ``.mgh``/NIfTI surface overlay as (n vertices, k frames).
 
     ``N x 1 x 1 [x k]``, or FreeSurfer's folded form for NIfTI, whose
     dimensions are limited to 32767 (fsaverage as ``27307 x 1 x 6``): the
     vertex index runs over the first three axes, first axis fastest.
     """
-    if data.ndim >= 3 and int(np.prod(data.shape[:3])) in {*FAMILY, *FSLR} and 1 in data.shape[1:3]:
+    counts = {*FAMILY, *FSLR} if n is None else {n}
+    if data.ndim >= 3 and int(np.prod(data.shape[:3])) in counts and 1 in data.shape[1:3]:
         return data.reshape((-1, int(np.prod(data.shape[3:], dtype=np.int64))), order="F")
     raise BrainPainterError(f"{what} has shape {data.shape}, not one value per vertex (N x 1 x 1) of an "
                             "fsaverage surface; a volume in MNI space goes to --volume.")
@@ -170,7 +172,7 @@ def _gifti_says_fslr(img: Any) -> bool:
     return any(names_fslr(str(v)) for m in metas if m is not None for v in m.values())
 
 
-def _gifti(img: Any, what: str) -> Hemi:
+def _gifti(img: Any, what: str, n: int | None = None) -> Hemi:
     arrays = [np.asarray(d.data) for d in img.darrays]
     if not arrays:
         raise BrainPainterError(f"{what} holds no data array; give a .func.gii or .shape.gii with values.")
@@ -182,15 +184,16 @@ def _gifti(img: Any, what: str) -> Hemi:
         code = np.searchsorted(keys, arrays[0])
         code[~np.isin(arrays[0], keys)] = -1
         rgb = np.nan_to_num(colors.astype(float), nan=0.5)
-        return _labels(code, [str(table[k]) for k in keys], rgb, what)
-    return Hemi(native(_as_rows(np.vstack([a.reshape(1, -1) for a in arrays]), what), what=what))
+        return _labels(code, [str(table[k]) for k in keys], rgb, what, n)
+    return Hemi(native(_as_rows(np.vstack([a.reshape(1, -1) for a in arrays]), what, n), what=what, n=n))
 
 
-def _labels(labels: NDArray[Any], names: list[str], colors: NDArray[Any], what: str) -> Hemi:
+def _labels(labels: NDArray[Any], names: list[str], colors: NDArray[Any], what: str,
+            n_vertices: int | None = None) -> Hemi:
     """A label map: indices into `names` per vertex (-1 = none); medial wall and unknown get none."""
     lab = np.asarray(labels).astype(np.int64)
     v = np.where(lab >= 0, lab, np.nan).astype(np.float32)
     for i, n in enumerate(names):
         if n.lower() in ("unknown", "medial_wall", "???", "corpuscallosum") or "medial_wall" in n.lower():
             v[lab == i] = np.nan
-    return Hemi(native(v, what=what), tuple(names), np.asarray(colors, float))
+    return Hemi(native(v, what=what, n=n_vertices), tuple(names), np.asarray(colors, float))

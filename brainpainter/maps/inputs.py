@@ -31,7 +31,7 @@ from brainpainter.io.gifti import External
 from brainpainter.maps.files import GIFTI_ENDINGS, SUFFIXES, Hemi, read_hemi
 from brainpainter.maps.fslr import SPACES, decide_space, names_fslr
 from brainpainter.maps.options import frame_rows
-from brainpainter.maps.resolution import to_fsaverage
+from brainpainter.maps.resolution import native, to_fsaverage
 
 if TYPE_CHECKING:
     from brainpainter.maps.volume import Method
@@ -67,6 +67,9 @@ class VertexMaps:
         The mesh family of ``values``.
     notes : tuple of str
         What the reader decided that the user should hear (``note: ...`` on the CLI).
+    own_mesh : bool
+        The values are per vertex of the user's own surfaces (``--lh-surface``, or a template
+        built from a subject), drawn as they are (:meth:`on_surface`), not on fsaverage.
     """
 
     values: dict[str, NDArray[Any]]
@@ -77,6 +80,7 @@ class VertexMaps:
     regions: dict[str, NDArray[Any]] | None = None
     space: str = "fsaverage"
     notes: tuple[str, ...] = ()
+    own_mesh: bool = False
 
     @property
     def n_images(self) -> int:
@@ -92,6 +96,13 @@ class VertexMaps:
             return resampled
         row: NDArray[Any] = to_fsaverage(self.values[hemi][image], self.categories is not None)[0]
         return row
+
+    def on_surface(self, hemi: str, image: int) -> NDArray[Any]:
+        """Image `image` of `hemi` on the surface it is drawn on: the user's own as given, else fsaverage."""
+        if self.own_mesh:
+            row: NDArray[Any] = self.values[hemi][image]
+            return row
+        return self.on_fsaverage(hemi, image)
 
     def finite(self) -> NDArray[Any]:
         """Every finite value of every image and hemisphere, shape (m,) (for the colour scale)."""
@@ -117,7 +128,8 @@ class VertexMaps:
         return {"kind": "vertex map", "source": self.source, "n_images": self.n_images,
                 "images": list(self.images), "hemis": sorted(self.values),
                 "categories": None if self.categories is None else len(self.categories),
-                "regions": sorted(self.regions or {}), "space": self.space, "notes": list(self.notes)}
+                "regions": sorted(self.regions or {}), "space": self.space, "notes": list(self.notes),
+                **({"own_mesh": True} if self.own_mesh else {})}
 
 
 def pair_of(path: str | Path) -> dict[str, Path]:
@@ -174,7 +186,8 @@ def is_map_input(data: Any) -> bool:
 
 def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = None, *,
               external: External = "folder", space: str | None = None, frames: Any = None,
-              projection: str | None = None, radius: float | None = None) -> VertexMaps:
+              projection: str | None = None, radius: float | None = None,
+              mesh: Mapping[str, int] | None = None) -> VertexMaps:
     """Any map input to :class:`VertexMaps` on fsaverage (the hook every command calls).
 
     Parameters
@@ -202,6 +215,10 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
     projection, radius : optional
         How a volume is sampled (``--projection``, ``--projection-radius``), as in
         :func:`brainpainter.maps.volume.project_volume`.
+    mesh : mapping of {"lh", "rh"} to int, optional
+        The vertex counts of the user's own surfaces (``--lh-surface``/``--rh-surface``, or a
+        template built from a subject): each hemisphere's map has exactly that many values and
+        is drawn on that surface as it is (``own_mesh``), never resampled (nor ``space``).
     """
     from brainpainter.maps import volume as volumes
     from brainpainter.maps.cifti import is_cifti, read_cifti
@@ -211,7 +228,9 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
     if space is not None and space not in SPACES:
         raise choice_error("space", space, SPACES)
     if is_cifti(data) and lh is None and rh is None and volume is None:
-        c = read_cifti(data, frames)
+        c = read_cifti(data, frames, own_mesh=mesh is not None)
+        if mesh is not None:  # its cortex on the user's own (fsLR) surfaces, as it is
+            return _cifti_on_mesh(c, Path(data).name, mesh)
         chosen, notes = decide_space({h: v.shape[1] for h, v in c.values.items()}, space, c.says_fslr,
                                      f"CIFTI file {Path(data).name!r}")
         return VertexMaps(c.values, c.images, c.categories, c.category_colors, c.source, c.regions, chosen,
@@ -223,12 +242,16 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
                                 "--lh/--rh.")
     if volume is None and data is not None and volumes.is_volume(data):
         volume, data = data, None
+    if volume is not None and mesh is not None:
+        raise BrainPainterError(VOLUME_ON_MESH)
     if volume is not None:
         if data is not None or lh is not None or rh is not None:
             raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "
                                     "volume is projected onto both hemispheres.")
         return pick_images(read_volume(volume, projection=projection, radius=radius), frames)
-    given = _given(data, lh, rh)
+    given = _given(data, lh, rh, mesh)
+    if mesh is not None:
+        return pick_images(_read_on_mesh(given, mesh, external), frames)
     hemis = {h: read_hemi(v, h, external=external) for h, v in given.items()}
     maps = _combine(hemis, given)
     says = any(h.fslr for h in hemis.values()) or any(
@@ -237,9 +260,15 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
     return pick_images(replace(maps, space=chosen, notes=notes), frames)
 
 
-def _given(data: Any, lh: Any, rh: Any) -> dict[str, Any]:
-    """The file or array of each hemisphere given (``{"lh": ..., "rh": ...}``), from `data` (a file of a
-    pair, a dict, a nilearn SurfaceImage) and `lh`/`rh`."""
+#: Why a volume is not drawn on the user's own surfaces.
+VOLUME_ON_MESH = ("a volume (--volume) is projected onto fsaverage, not onto your own surfaces (--lh-surface/"
+                  "--rh-surface, or a template built from a subject); give per-vertex maps of those surfaces "
+                  "with --lh/--rh, or leave them out.")
+
+
+def _given(data: Any, lh: Any, rh: Any, mesh: Mapping[str, int] | None) -> dict[str, Any]:
+    """Hemisphere -> file or array of a surface map input (a partner file found beside one given is
+    taken only where `mesh`, the user's own surfaces, has that hemisphere)."""
     given: dict[str, Any] = {}
     if data is not None:
         if hasattr(data, "data") and hasattr(data.data, "parts"):
@@ -251,7 +280,8 @@ def _given(data: Any, lh: Any, rh: Any) -> dict[str, Any]:
                     raise BrainPainterError(f"a map dict has keys lh/rh (or left/right); {key!r} was given.")
                 given[hemi] = value
         elif isinstance(data, str | Path):
-            given.update(pair_of(data))
+            found = pair_of(data)
+            given.update({h: p for h, p in found.items() if mesh is None or h in mesh or p == Path(data)})
         else:
             raise BrainPainterError(
                 f"a map is a file, or a dict {{'lh': array, 'rh': array}}; a {type(data).__name__} was "
@@ -262,6 +292,23 @@ def _given(data: Any, lh: Any, rh: Any) -> dict[str, Any]:
     if not given:
         raise BrainPainterError("no map given: give --lh FILE and/or --rh FILE (or a dict of arrays).")
     return given
+
+
+def _read_on_mesh(given: dict[str, Any], mesh: Mapping[str, int], external: External) -> VertexMaps:
+    """The maps `given`, each of its own surface's vertex count (`mesh`), to be drawn as they are."""
+    missing = sorted(set(given) - set(mesh))
+    if missing:
+        flag = f"--{missing[0]}-surface"
+        raise BrainPainterError(f"a map of {missing[0]} was given but no surface to draw it on ({flag}); "
+                                f"give {flag} FILE, or leave out the other surface to draw on fsaverage.")
+    hemis = {h: read_hemi(v, h, external=external, n=mesh[h]) for h, v in given.items()}
+    return replace(_combine(hemis, given), own_mesh=True)
+
+
+def _cifti_on_mesh(c: Any, name: str, mesh: Mapping[str, int]) -> VertexMaps:
+    """A CIFTI file's cortex (:func:`~brainpainter.maps.cifti.read_cifti`) on the user's own surfaces."""
+    values = {h: native(v, f"CIFTI file {name!r} ({h})", n=mesh[h]) for h, v in c.values.items() if h in mesh}
+    return VertexMaps(values, c.images, c.categories, c.category_colors, c.source, c.regions, own_mesh=True)
 
 
 def pick_images(maps: VertexMaps, frames: Any) -> VertexMaps:

@@ -15,6 +15,7 @@ The colour scale's defaults (diverging only for data of both signs) are chosen b
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import replace
 from typing import Any
 
@@ -54,7 +55,8 @@ def _drawn_categories(maps: VertexMaps) -> tuple[tuple[str, tuple[float, float, 
     assert maps.categories is not None and maps.category_colors is not None
     used: set[int] = set()
     for hemi, values in maps.values.items():
-        cortex = masks(hemi)["cortex"][: values.shape[1]]  # coarser maps: the first n vertices are shared
+        # coarser maps: the first n vertices are shared; the user's own surface: every vertex
+        cortex = np.ones(values.shape[1], bool) if maps.own_mesh else masks(hemi)["cortex"][: values.shape[1]]
         shown = values[:, cortex]
         used.update(int(c) for c in np.unique(shown[np.isfinite(shown)]))
     return tuple((name, (float(c[0]), float(c[1]), float(c[2])))
@@ -63,12 +65,13 @@ def _drawn_categories(maps: VertexMaps) -> tuple[tuple[str, tuple[float, float, 
 
 
 def underlay(hemi: str, source_vertex: NDArray[Any], kind: str, depth: NDArray[Any] | None = None,
-             contrast: float = 1.0) -> NDArray[Any]:
-    """Underlay colour of each vertex, float32 (n, 3); `source_vertex` indexes fsaverage.
+             contrast: float = 1.0, mesh_masks: Mapping[str, NDArray[Any]] | None = None) -> NDArray[Any]:
+    """Underlay colour of each vertex, float32 (n, 3); `source_vertex` indexes fsaverage (or `mesh_masks`).
 
     `depth` (shape (n,), FreeSurfer's ``sulc``: positive in sulci), for ``kind="sulc"``: greys
     scaled from it (its 2nd to 98th percentile across :data:`SULCUS_GREY` to :data:`GYRUS_GREY`
-    about their middle, times `contrast`); else two greys from fsaverage's sign masks.
+    about their middle, times `contrast`); else two greys from the sign masks of fsaverage (or of
+    the user's own surface, `mesh_masks`).
     """
     sv = np.asarray(source_vertex, np.int64)
     if kind == "none":
@@ -76,7 +79,7 @@ def underlay(hemi: str, source_vertex: NDArray[Any], kind: str, depth: NDArray[A
     elif kind == "sulc" and depth is not None and len(depth) == len(sv) and len(sv):
         grey = depth_greys(np.asarray(depth, np.float64), contrast)
     else:
-        deep = masks(hemi)[kind][sv]
+        deep = (masks(hemi) if mesh_masks is None else mesh_masks)[kind][sv]
         grey = np.where(deep, SULCUS_GREY, GYRUS_GREY).astype(np.float32)
     return np.repeat(grey[:, None], 3, axis=1)
 
@@ -100,8 +103,9 @@ def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArr
                   underlay_kind: str = "sulc", threshold: float | None = None,
                   cluster_edges: dict[str, NDArray[Any]] | None = None,
                   below: dict[str, NDArray[Any]] | None = None, opacity: float = 1.0,
-                  depth: dict[str, NDArray[Any]] | None = None,
-                  contrast: float = 1.0) -> dict[str, NDArray[Any]]:
+                  depth: dict[str, NDArray[Any]] | None = None, contrast: float = 1.0,
+                  mesh_masks: Mapping[str, Mapping[str, NDArray[Any]]] | None = None,
+                  ) -> dict[str, NDArray[Any]]:
     """The colours of one image of `maps` at the drawn vertices.
 
     Parameters
@@ -127,6 +131,9 @@ def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArr
         Sulcal depth of the drawn vertices (the mesh's ``sulc``): the underlay's greys scale with it.
     contrast : float
         How far those greys spread (``--underlay-contrast``).
+    mesh_masks : dict of str to dict of str to ndarray of bool, shape (n_surface,), optional
+        Per hemisphere, the ``cortex``, ``sulc`` and ``curv`` masks (:func:`masks`) of the surface
+        `source_vertex` indexes, when it is not fsaverage (the user's own surface).
 
     Returns
     -------
@@ -136,13 +143,14 @@ def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArr
     out: dict[str, NDArray[Any]] = {}
     for hemi, sv in source_vertex.items():
         sv = np.asarray(sv, np.int64)
-        rgb = underlay(hemi, sv, underlay_kind, None if depth is None else depth.get(hemi), contrast)
+        own = None if mesh_masks is None else mesh_masks.get(hemi)
+        rgb = underlay(hemi, sv, underlay_kind, None if depth is None else depth.get(hemi), contrast, own)
         if below is not None and hemi in below:
             under = np.asarray(below[hemi], np.float32)
             rgb = np.where(np.isnan(under), rgb, under).astype(np.float32)
         if hemi in maps.values and len(sv):
             v = _values_at(maps, hemi, image, sv)
-            show = np.isfinite(v) & masks(hemi)["cortex"][sv]
+            show = np.isfinite(v) & (masks(hemi) if own is None else own)["cortex"][sv]
             if threshold is not None and maps.categories is None:
                 show &= np.abs(np.where(show, v, 0.0)) >= threshold
             if maps.categories is not None and maps.category_colors is not None:
@@ -157,7 +165,7 @@ def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArr
 
 
 def _values_at(maps: VertexMaps, hemi: str, image: Image, sv: NDArray[Any]) -> NDArray[Any]:
-    """Image `image` of `maps` at fsaverage vertices `sv`; a blend of two (categories: nearest)."""
+    """Image `image` of `maps` at vertices `sv` of its surface; a blend of two (categories: nearest)."""
     categorical = maps.categories is not None
     n_images = len(maps.values[hemi])
     if isinstance(image, tuple):
@@ -165,10 +173,10 @@ def _values_at(maps: VertexMaps, hemi: str, image: Image, sv: NDArray[Any]) -> N
     else:
         lo = int(np.floor(image))
         hi, t = min(lo + 1, n_images - 1), float(image) - lo
-    a: NDArray[Any] = maps.on_fsaverage(hemi, lo)[sv].astype(np.float64)
+    a: NDArray[Any] = maps.on_surface(hemi, lo)[sv].astype(np.float64)
     if t == 0.0 or hi == lo:
         return a
-    b: NDArray[Any] = maps.on_fsaverage(hemi, hi)[sv].astype(np.float64)
+    b: NDArray[Any] = maps.on_surface(hemi, hi)[sv].astype(np.float64)
     if categorical:
         return a if t < 0.5 else b
     mixed: NDArray[Any] = (1.0 - t) * a + t * b

@@ -57,6 +57,8 @@ class MapKwargs(TypedDict, total=False):
     outline_threshold: bool
     space: str | None
     frames: Any
+    lh_surface: Any
+    rh_surface: Any
     contour: Any
     contour_levels: str | float | None
 
@@ -112,6 +114,9 @@ class MapOptions:
         The mesh of a 163,842-vertex map that does not say (fsaverage when neither says).
     frames : str or sequence of int, optional
         The images of a series to draw (``"0:100:10"``, ``"3"``, ``"0,5,9"``).
+    lh_surface, rh_surface : path, optional
+        The user's own surface of a hemisphere (GIfTI ``.surf.gii`` or FreeSurfer ``lh.pial``, ...):
+        the maps, of its vertex count, are drawn on it as they are (:mod:`brainpainter.atlas.surfaces`).
     contour : path, or "LH,RH" paths, optional
         A second map whose iso-lines are drawn over the map (a cluster mask, a p-map).
     contour_levels : str or float, optional
@@ -150,6 +155,12 @@ class MapOptions:
     frames: Any = field(default=None, metadata={
         "help": "Images of a map series to draw (a CIFTI dtseries' frames): start:stop:step or a comma list, "
                 "e.g. 0:100:10."})
+    lh_surface: Any = field(default=None, metadata={
+        "help": "Draw the maps on this left-hemisphere surface of your own, as they are (no resampling): "
+                "GIfTI .surf.gii (HCP, fMRIPrep) or FreeSurfer lh.pial, lh.inflated, ...; the maps have "
+                "its vertex count. See docs/maps.md."})
+    rh_surface: Any = field(default=None, metadata={"help": "Right-hemisphere surface of your own (as "
+                                                            "--lh-surface)."})
     contour: Any = field(default=None, metadata={
         "help": "A second map (FILE, or LH,RH files) whose iso-lines are drawn over the map at constant "
                 "pixel width (--outline-width): a cluster mask, a p-map."})
@@ -178,6 +189,15 @@ class MapOptions:
         if self.volume is not None and (self.lh is not None or self.rh is not None):
             raise BrainPainterError("give a volume (--volume) or surface maps (--lh/--rh), not both: the "
                                     "volume is projected onto both hemispheres.")
+        if self.surfaces and self.outline is not None:
+            raise BrainPainterError(f"--outline {self.outline} draws an atlas's borders on fsaverage; your "
+                                    "own surfaces (--lh-surface/--rh-surface) have no atlas labels: leave "
+                                    "out --outline, or the surfaces.")
+
+    @property
+    def surfaces(self) -> dict[str, Any]:
+        """The user's own surfaces given, ``{"lh": path, "rh": path}`` (either, both or none)."""
+        return {hemi: s for hemi, s in (("lh", self.lh_surface), ("rh", self.rh_surface)) if s is not None}
 
     @property
     def levels(self) -> tuple[float, ...]:
@@ -186,8 +206,8 @@ class MapOptions:
 
     @property
     def given(self) -> bool:
-        """Whether a map was given through --lh/--rh or --volume."""
-        return self.lh is not None or self.rh is not None or self.volume is not None
+        """Whether a map was given through --lh/--rh or --volume (or a surface of the user's own)."""
+        return self.lh is not None or self.rh is not None or self.volume is not None or bool(self.surfaces)
 
 
 def frame_rows(frames: Any, n: int, what: str) -> list[int]:

@@ -76,15 +76,23 @@ def known_count(n: int, what: str = "map") -> None:
         "(wb_command -metric-resample).")
 
 
-def native(values: NDArray[Any], what: str = "map") -> NDArray[Any]:
+def native(values: NDArray[Any], what: str = "map", n: int | None = None) -> NDArray[Any]:
     """`values` as float32 (k images, n vertices), `n` a count of :data:`FAMILY` or :data:`FSLR`.
 
     Maps are kept at their own resolution (a series of fsaverage5 images stays
-    small) and brought to fsaverage one image at a time, when drawn.
+    small) and brought to fsaverage one image at a time, when drawn. Given `n`
+    (the vertices of the user's own surface, ``--lh-surface``), the map must
+    have exactly that many values instead.
     """
     v = np.asarray(values, dtype=np.float32)
     v = v[None] if v.ndim == 1 else v
-    known_count(v.shape[1], what)
+    if n is None:
+        known_count(v.shape[1], what)
+    elif v.shape[1] != n:
+        raise BrainPainterError(
+            f"{what} has {v.shape[1]} values per hemisphere, but the surface it is drawn on has {n} "
+            "vertices; give the map made on that surface (the same subject and mesh), or draw fsaverage "
+            "data on fsaverage (no --lh-surface/--rh-surface, the default --template).")
     return v
 
 
@@ -187,11 +195,30 @@ def masks(hemi: str) -> dict[str, NDArray[Any]]:
             for name in ("cortex", "sulc", "curv")}
 
 
+def own_vertex_count(template: Any, hemi: str) -> int | None:
+    """The vertex count of the maps a template made from a surface other than fsaverage's family takes.
+
+    The builder records the size of the surface a template was made from
+    (``n_source_vertices``, or ``n_source_faces``: ``F / 2 + 2`` vertices); a
+    template of the user's own surfaces (:mod:`brainpainter.atlas.surfaces`)
+    records its vertices (and ``own_vertices``: whatever their count). None for
+    the fsaverage family (maps of any family member are brought to fsaverage) and
+    for a template that records no size.
+    """
+    counts = {int(e["n_source_vertices"]) if "n_source_vertices" in e else int(e["n_source_faces"]) // 2 + 2
+              for label_set in template.manifest["labels"].values()
+              for e in [label_set.get("cortex", {}).get(hemi) or {}]
+              if "base" not in e and ("n_source_vertices" in e or "n_source_faces" in e)}
+    count = counts.pop() if len(counts) == 1 else None
+    return None if count is None or (count in FAMILY and not template.manifest.get("own_vertices")) else count
+
+
 def map_mesh(template: Any, labels: str, hemi: str) -> Any:
     """The template's cortex mesh that maps are drawn on: one vertex per fsaverage vertex it keeps.
 
     The stored (not region-split) mesh of label set `labels` (or of the mesh
-    an overlay label set labels); its ``source_vertex`` indexes fsaverage.
+    an overlay label set labels); its ``source_vertex`` indexes fsaverage, or the
+    surface the template was made from where that is no fsaverage (:func:`own_vertex_count`).
 
     Returns
     -------
@@ -207,6 +234,8 @@ def map_mesh(template: Any, labels: str, hemi: str) -> Any:
         return template.cortex(labels, hemi)  # no cortex: an empty mesh
     mesh = template.base_cortex(entry.get("base", labels), hemi)
     sv = np.asarray(mesh.source_vertex)
+    if own_vertex_count(template, hemi) is not None:  # a subject's or the user's surface: maps of its own
+        return mesh
     if len(sv) and (sv.min() < 0 or sv.max() >= N_FSAVERAGE):
         raise BrainPainterError(
             f"template {template.name!r} is not made from fsaverage, so per-vertex maps cannot be drawn on "

@@ -315,7 +315,7 @@ EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cm
                   "strict", "tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_values",
                   "tract_value", "tract_radius", "lh", "rh", "volume", "projection", "projection_radius",
                   "underlay", "underlay_contrast", "threshold", "outline", "outline_threshold", "space",
-                  "frames")
+                  "frames", "lh_surface", "rh_surface")
 
 
 def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
@@ -401,8 +401,8 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
         from brainpainter.media.drawn import swatches_needed
         from brainpainter.rendering.views import parse_views
 
-        nan, missing = swatches_needed(table, [i], parse_views("lateral-left,medial-right,subcortical"),
-                                       scene.geometry)
+        views = run.views if isinstance(run, MapRun) else parse_views("lateral-left,medial-right,subcortical")
+        nan, missing = swatches_needed(table, [i], views, scene.geometry)
         bar = colorbar_image(run.scale, (420, 64 if label else 48), background=run.settings.background,
                              label=label, nan=nan, missing=missing, fontsize=9.0)
         payload = html_page(glb, title=title or table.images[i], meshes=meshes,

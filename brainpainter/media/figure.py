@@ -188,7 +188,7 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     background = run.settings.background
     # the output folder is locked from before the first render until the figure is published
     with FileTransaction(path) if path is not None else nullcontext() as tx:
-        with make_runner(painter, checked.scene.template, checked.runner, n_items=len(plan)) as runner, \
+        with make_runner(painter, run.options.scene.template, checked.runner, n_items=len(plan)) as runner, \
                 tqdm(total=len(plan), unit="img", desc="rendering", disable=not progress) as bar:
             images: dict[tuple[str, str], NDArray[Any]] = ImagesByView()
             for (i, view), pixels in paint(run, runner, plan):

@@ -241,7 +241,8 @@ def make_movie(data: Any, atlas: Atlas | str | None = None, *, out: str | Path,
                        proportional=keys.time_name is not None)
     check_frames(len(plan), path.suffix.lower(), run)
     frames = MovieFrames.of(run, keys, plan, movie)
-    runner = make_runner(frames.painter, checked.scene.template, checked.runner, n_items=len(frames.states))
+    runner = make_runner(frames.painter, run.options.scene.template, checked.runner,
+                         n_items=len(frames.states))
     size = encode(path, frames, runner, float(movie.fps), progress, on_progress)
     return MovieResult(path, len(plan), size, float(movie.fps), keys.names, keys.times,
                        time.perf_counter() - start, run.scale)

@@ -9,20 +9,21 @@ So ``render``, ``--jobs`` and Dask paint maps exactly as they paint tables.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
+from brainpainter.atlas.surfaces import Surface, read_surfaces, surface_template
 from brainpainter.atlas.template import Template, load_template
 from brainpainter.errors import BrainPainterError
 from brainpainter.maps.inputs import VertexMaps, is_map_input, read_maps
 from brainpainter.maps.layers import vertex_colors
 from brainpainter.maps.options import MapOptions
 from brainpainter.maps.outlines import Contours, mesh_edges
-from brainpainter.maps.resolution import map_mesh
+from brainpainter.maps.resolution import map_mesh, own_vertex_count
 from brainpainter.rendering.composition import RegionsBelow, map_layers
 from brainpainter.rendering.geometry import VertexColors
 from brainpainter.rendering.layers import Layer
@@ -30,6 +31,7 @@ from brainpainter.rendering.options import Options
 from brainpainter.rendering.painter import Painter, region_colors
 from brainpainter.rendering.parallel import Item
 from brainpainter.rendering.settings import outlined
+from brainpainter.rendering.sulc import convexity
 from brainpainter.rendering.views import View, parse_views
 from brainpainter.table.region_table import RegionTable, read_table
 
@@ -80,6 +82,7 @@ class MapRun:
     tract_values: None = None  # a map colours no tracts
     layers: tuple[Layer, ...] = ()
     below: RegionsBelow | None = None  # region values under the map
+    mesh_masks: dict[str, dict[str, NDArray[Any]]] | None = None  # the user's own surfaces
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
     @property
@@ -113,7 +116,7 @@ class MapRun:
             cortex = vertex_colors(self.maps, map_image, self.source_vertex, scale, m.underlay, m.threshold,
                                    cluster_edges=self.cluster_edges, below=below,
                                    opacity=self.layers[-1].opacity, depth=self.depth,
-                                   contrast=m.underlay_contrast)
+                                   contrast=m.underlay_contrast, mesh_masks=self.mesh_masks)
             # a volume's subcortical means: below --threshold a structure shows no value, as the cortex does
             means = {k: v for k, v in self.maps.region_values(map_image).items()
                      if m.threshold is None or abs(v) >= m.threshold}
@@ -139,8 +142,6 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
         table = read_table(data, atlas, **options.table.kwargs())
         data, atlas = None, table.atlas
     m = options.maps
-    maps = read_maps(data, m.lh, m.rh, m.volume, space=m.space, frames=m.frames, projection=m.projection,
-                     radius=m.projection_radius)
     outline = options.maps.outline
     if table is not None and outline is not None and outline != table.atlas.name:
         raise BrainPainterError(f"a map over region values outlines the table's atlas "
@@ -148,23 +149,44 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
                                 f"{table.atlas.name}.")
     # --outline ATLAS: the map is drawn on that atlas's mesh, whose vertices carry its labels
     atlas_obj = get_atlas(outline) if outline is not None else atlas if atlas is not None else get_atlas("dk")
+    surfaces = options.maps.surfaces
+    if surfaces:  # the user's own surfaces: the run's template, maps of their vertex counts drawn as they are
+        if table is not None or options.maps.contour is not None:
+            raise BrainPainterError("--lh-surface/--rh-surface draw per-vertex maps (--lh/--rh) on your own "
+                                    "surfaces; a region table or --contour is drawn on the template's "
+                                    "regions: leave the surfaces out, or give maps alone.")
+        read = _own_surfaces(options, surfaces)
+        maps = read_maps(data, m.lh, m.rh, m.volume, space=m.space, frames=m.frames,
+                         mesh={hemi: s.n_vertices for hemi, s in read.items()})
+        folder = surface_template(read, atlas_obj.template_labels)  # written only for maps that fit
+        options = replace(options, scene=replace(options.scene, template=str(folder)))
+    template = options.scene.template
+    tpl = template if isinstance(template, Template) else load_template(template)
+    # a template made from another surface than fsaverage's family (a subject's, the user's) takes maps of
+    # that surface's vertex count, drawn as they are
+    own = {hemi: n for hemi in ("lh", "rh") if (n := own_vertex_count(tpl, hemi)) is not None}
+    if not surfaces:
+        maps = read_maps(data, m.lh, m.rh, m.volume, space=m.space, frames=m.frames, projection=m.projection,
+                         radius=m.projection_radius, mesh=own or None)
+    labels = atlas_obj.template_labels if atlas_obj.template_labels in tpl.label_sets else "dk"
+    meshes = {hemi: map_mesh(tpl, labels, hemi) for hemi in ("lh", "rh")}
     views = options.scene.views
     if views is None:  # not given: both hemispheres; a volume also colours the subcortical structures
         views = MAP_VIEWS + (",subcortical" if maps.regions else "")
+        if len(surfaces) == 1:  # one surface of your own: the views of its hemisphere
+            side = "left" if "lh" in surfaces else "right"
+            views = f"lateral-{side},medial-{side}"
     view_list = parse_views(views if isinstance(views, str) else list(views))
-    template = options.scene.template
-    tpl = template if isinstance(template, Template) else load_template(template)
-    labels = atlas_obj.template_labels if atlas_obj.template_labels in tpl.label_sets else "dk"
-    meshes = {hemi: map_mesh(tpl, labels, hemi) for hemi in ("lh", "rh")}
     source_vertex = {hemi: np.asarray(m.source_vertex) for hemi, m in meshes.items()}
     edges = ({hemi: mesh_edges(m.faces) for hemi, m in meshes.items()} if options.maps.outline_threshold
              else None)
+    masks = {hemi: surface_masks(tpl, labels, meshes[hemi], n) for hemi, n in own.items()} if own else None
     layers, below = map_layers(options, maps, table, meshes)
     contours = read_contours(options.maps)
     depth = {hemi: np.asarray(m.sulc) for hemi, m in meshes.items() if getattr(m, "sulc", None) is not None}
     return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list,
                   outlined(options.settings, outline if contours is None else "contour"), options,
-                  source_vertex, edges, depth, contours, layers=layers, below=below)
+                  source_vertex, edges, depth, contours, layers=layers, below=below, mesh_masks=masks)
 
 
 def read_contours(options: MapOptions) -> Contours | None:
@@ -185,4 +207,47 @@ def read_contours(options: MapOptions) -> Contours | None:
                                 "Give one image (a cluster mask, a p-map).")
     values = {hemi: np.asarray(maps.on_fsaverage(hemi, 0), np.float32) for hemi in maps.values}
     return Contours(values, options.levels, regions=options.outline is not None)
+
+
+def _own_surfaces(options: Options, surfaces: dict[str, Any]) -> dict[str, Surface]:
+    """The user's surfaces read (:mod:`brainpainter.atlas.surfaces`), once the options allow them."""
+    if options.scene.surface != "pial":
+        raise BrainPainterError(
+            f"--surface {options.scene.surface} picks one of the template's surfaces; with --lh-surface/"
+            "--rh-surface your own surface file is drawn: give the inflated one there (lh.inflated, "
+            "*.inflated.surf.gii) and leave out --surface.")
+    if options.scene.tracts:
+        raise BrainPainterError("--tracts are placed on the fsaverage template, not on your own surfaces "
+                                "(--lh-surface/--rh-surface); leave out one or the other.")
+    return read_surfaces(surfaces)
+
+
+def surface_masks(template: Template, labels: str, mesh: Any, n: int) -> dict[str, NDArray[Any]]:
+    """The ``cortex``, ``sulc`` and ``curv`` masks of the `n`-vertex surface a template was made from.
+
+    At the vertices the template's mesh keeps (its ``source_vertex``), from its
+    ``sulc`` and the ``cortex`` and ``curv`` arrays found beside the user's
+    surface (:mod:`brainpainter.atlas.surfaces`); without them every vertex is
+    cortex and the deeper half of the mesh by
+    :func:`~brainpainter.rendering.sulc.convexity` is a sulcus.
+
+    Returns
+    -------
+    dict of str to ndarray of bool, shape (n,)
+    """
+    entry = template.manifest["labels"][labels]["cortex"][mesh.hemi]
+    z = template._npz(template.manifest["labels"][entry.get("base", labels)]["cortex"][mesh.hemi]["file"])
+    sv = np.asarray(mesh.source_vertex, np.int64)
+    if mesh.sulc is not None:
+        deep = np.asarray(mesh.sulc) > 0
+    else:
+        depth = convexity(mesh.vertices["pial"], mesh.faces)
+        deep = depth > np.median(depth)
+    kept = {"cortex": np.asarray(z["cortex"]) > 0 if "cortex" in z else np.ones(len(sv), bool), "sulc": deep,
+            "curv": np.asarray(z["curv"]) > 0 if "curv" in z else deep}
+    out = {}
+    for name, mask in kept.items():
+        out[name] = np.zeros(n, bool)
+        out[name][sv] = mask
+    return out
 

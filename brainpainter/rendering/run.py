@@ -348,11 +348,15 @@ def render(data: Any = None, atlas: Atlas | str | None = None, *, out: str | Pat
             f"the painter colours {painter.scene.coloring} but the data is "
             f"{'a map' if hasattr(run, 'source_vertex') else 'a region table'}; make a Painter for it "
             "(brainpainter.Painter(coloring='vertices') draws maps).")
+    elif checked.maps.surfaces and str(run.options.scene.template) != str(painter.scene.template.path):
+        raise BrainPainterError(
+            f"the maps are drawn on your own surfaces (lh_surface/rh_surface), but the painter draws "
+            f"template {painter.scene.template.name!r}; leave out painter= (or the surfaces).")
     elif painter.atlas.name != run.table.atlas.name:  # type: ignore[union-attr]
         raise BrainPainterError(
             f"the table was read with atlas {run.table.atlas.name!r} but the painter draws "
             f"{painter.atlas.name!r}; give atlas= the painter's atlas, or make a Painter for this one.")  # type: ignore[union-attr]
-    runner = make_runner(painter, checked.scene.template, checked.runner,
+    runner = make_runner(painter, run.options.scene.template, checked.runner,
                          n_items=len(chosen) * len(run.views))
     # The renderer (or every worker's) starts before any output exists: one that cannot start leaves none.
     runner.start()

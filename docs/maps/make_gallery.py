@@ -59,6 +59,7 @@ def main() -> None:
     save(brainpainter.render({"lh": one}, views="lateral-left", surface="inflated", threshold=0.05,
                              cmap="autumn", vmin=0, vmax=1, **SIZE), "single_vertex")
     fslr()
+    own_surfaces()
 
 
 def fslr() -> None:
@@ -73,6 +74,17 @@ def fslr() -> None:
     with TemporaryDirectory() as tmp:
         dlabel = _dk_dlabel(Path(tmp) / "dk.dlabel.nii")
         save(brainpainter.render(dlabel, views=views, **SIZE), "dk_dlabel_fslr32k")
+
+
+def own_surfaces() -> None:
+    """6. maps on the user's own surfaces (--lh-surface/--rh-surface), drawn as they are."""
+    nilearn = Path(nib.__file__).parents[1] / "nilearn" / "datasets" / "data" / "fsaverage5"
+    save(brainpainter.render(None, lh=nilearn / "thick_left.gii.gz", lh_surface=nilearn / "pial_left.gii.gz",
+                             views="lateral-left,medial-left", **SIZE), "own_surface_pial")
+    surf = FS / "fsaverage5" / "surf"  # a FreeSurfer subject's folder: lh.sulc beside, label/lh.cortex.label
+    save(brainpainter.render(None, lh=surf / "lh.curv", rh=surf / "rh.curv", lh_surface=surf / "lh.inflated",
+                             rh_surface=surf / "rh.inflated", views="dorsal,medial-left", **SIZE),
+         "own_surface_inflated")
 
 
 if __name__ == "__main__":

@@ -344,6 +344,25 @@ def toml(text: str) -> bytes:
 
 
 LOBES = toml('[atlas]\nbase = "dk"\n[groups]\nfrontal = ["superiorfrontal"]\n')
+def _surface(path: Path) -> None:
+    """A FreeSurfer surface of 12 vertices (an icosahedron) as ``lh.pial``."""
+    import numpy as np
+    import trimesh
+    from nibabel.freesurfer import write_geometry
+
+    ico = trimesh.creation.icosahedron()
+    write_geometry(str(path), np.asarray(ico.vertices) * 40.0, np.asarray(ico.faces, np.int32))
+
+
+#: A GIfTI surface whose point set lies in a file outside its folder (``/etc/passwd``): never to be opened.
+EXTERNAL_GIFTI = b"""<?xml version="1.0" encoding="UTF-8"?>
+<GIFTI Version="1.0" NumberOfDataArrays="2">
+<DataArray Intent="NIFTI_INTENT_POINTSET" DataType="NIFTI_TYPE_FLOAT32" ArrayIndexingOrder="RowMajorOrder" Dimensionality="2" Dim0="3" Dim1="3" Encoding="ExternalFileBinary" Endian="LittleEndian" ExternalFileName="/etc/passwd" ExternalFileOffset="0"><Data></Data></DataArray>
+<DataArray Intent="NIFTI_INTENT_TRIANGLE" DataType="NIFTI_TYPE_INT32" ArrayIndexingOrder="RowMajorOrder" Dimensionality="2" Dim0="1" Dim1="3" Encoding="ASCII" Endian="LittleEndian" ExternalFileName="" ExternalFileOffset=""><Data>0 1 2</Data></DataArray>
+</GIFTI>
+"""
+
+
 RENDER = ["--renderer", "solid", "--template", "{tiny}", "--views", "lateral-left", "--size", "32x32", "-q"]
 TEMPLATE_MANIFEST = b'{"format": "brainpainter-template", "format_version": 1}'
 RENDER_MANIFEST = b'{"software": {"brainpainter": "0.1.0"}, "files": []}'
@@ -664,6 +683,19 @@ INPROCESS: list[Case] = [
     Case("toml-empty", {"c.toml": b""}, ["add", "lobes", "--config", "c.toml"], "needs base", command="atlas"),
     Case("atlas-add-both-sources", {"c.toml": LOBES}, ["add", "lobes", "--config", "c.toml", "--annot", "x"],
          "one of them", command="atlas"),
+    # -- the user's own surfaces (--lh-surface): the map fits the surface, the surface is one whole file -------
+    Case("own-surface-count-mismatch", {"lh.pial": _surface, "lh.x.txt": b"0\n1\n2\n"},
+         ["--lh", "lh.x.txt", "--lh-surface", "lh.pial", "--out", "o", *RENDER],
+         "has 3 values per hemisphere, but the surface it is drawn on has 12 vertices", command="render"),
+    Case("own-surface-not-a-surface", {"lh.pial": b"not a surface\n", "lh.x.txt": b"0\n1\n2\n"},
+         ["--lh", "lh.x.txt", "--lh-surface", "lh.pial", "--out", "o", *RENDER], "cannot read surface file 'lh.pial'",
+         command="render"),
+    Case("own-surface-external-file", {"lh.pial.surf.gii": EXTERNAL_GIFTI, "lh.x.txt": b"0\n1\n2\n"},
+         ["--lh", "lh.x.txt", "--lh-surface", "lh.pial.surf.gii", "--out", "o", *RENDER],
+         "keeps its data in '/etc/passwd', outside its own folder", command="render"),
+    Case("own-surface-with-a-table", {"in.csv": GOOD, "lh.pial": _surface},
+         ["in.csv", "--lh-surface", "lh.pial", "--out", "o", *RENDER], "a region table is drawn on the template's",
+         command="render"),
     # -- accepted, with a stated warning -------------------------------------------------------------------------
     Case("one-row-empty-column", {"in.csv": ONE_ROW_EMPTY}, ["in.csv", "--out", "o", *RENDER],
          "drawn in the NaN colour", command="render", code=0),
