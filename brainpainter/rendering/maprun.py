@@ -153,8 +153,8 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     if surfaces:  # the user's own surfaces: the run's template, maps of their vertex counts drawn as they are
         if table is not None or options.maps.contour is not None:
             raise BrainPainterError("--lh-surface/--rh-surface draw per-vertex maps (--lh/--rh) on your own "
-                                    "surfaces; a region table or --contour is drawn on the template's "
-                                    "regions: leave the surfaces out, or give maps alone.")
+                                    "surfaces; a region table is drawn on the template's regions and "
+                                    "--contour on fsaverage: leave the surfaces out, or give maps alone.")
         read = _own_surfaces(options, surfaces)
         maps = read_maps(data, m.lh, m.rh, m.volume, space=m.space, frames=m.frames,
                          mesh={hemi: s.n_vertices for hemi, s in read.items()})
