@@ -53,13 +53,7 @@ from numpy.typing import NDArray
 from brainpainter.atlas import registry
 from brainpainter.atlas.mesh import faces_digest, smooth_crossings, split_faces
 from brainpainter.atlas.model import HEMI_PREFIX, Region, write_regions_tsv
-from brainpainter.atlas.template import (
-    FORMAT_VERSION,
-    HEMIS,
-    LABELS_FILE,
-    LABELS_FORMAT,
-    Template,
-)
+from brainpainter.atlas.template import FORMAT_VERSION, HEMIS, LABELS_FILE, LABELS_FORMAT, Template
 from brainpainter.atlas.writer import save_npz
 from brainpainter.errors import BrainPainterError
 from brainpainter.io.files import check_input
@@ -150,6 +144,12 @@ def read_label_map(path: str | Path, hemi: str) -> LabelMap:
     except Exception as exc:  # nibabel raises ValueError, struct.error, OSError, ExpatError...
         reason = " ".join(str(exc).split()) or type(exc).__name__
         raise BrainPainterError(f"cannot read {path} as a label map: {reason}") from None
+    return label_map(hemi, path, labels, list(names), colors)
+
+
+def label_map(hemi: str, path: Path, labels: NDArray[Any], names: list[str], colors: NDArray[Any]
+              ) -> LabelMap:
+    """A checked :class:`LabelMap`: `labels` (n,) index `names` (-1: none), `colors` (len(names), 3) 0-255."""
     if not names:
         raise BrainPainterError(f"{path} has no colour table, so it names no regions; give a label map "
                                 "whose colour table names its regions")

@@ -125,8 +125,8 @@ def parse_annot_options(values: list[str] | tuple[str, ...]) -> dict[str, Path]:
     return out
 
 
-def add_label_map(name: str, annots: Mapping[str, str | Path], *, template: str = "fsaverage",
-                  title: str = "", description: str = "", citation: str = "",
+def add_label_map(name: str, annots: Mapping[str, str | Path | labelset.LabelMap], *,
+                  template: str = "fsaverage", title: str = "", description: str = "", citation: str = "",
                   region_aliases: Mapping[str, tuple[str, ...]] | None = None, replace: bool = False,
                   out: str | Path | None = None) -> Path:
     """Add an atlas made from one label map per hemisphere (``.annot`` / ``.label.gii``).
@@ -135,7 +135,8 @@ def add_label_map(name: str, annots: Mapping[str, str | Path], *, template: str 
     ----------
     name : str
         Atlas name (and label-set name).
-    annots : mapping of {"lh", "rh"} to path
+    annots : mapping of {"lh", "rh"} to path or LabelMap
+        A file, or a label map already read (a CIFTI dlabel's, :mod:`brainpainter.maps.dlabel`).
     template : str
         Template the label maps were made for (registry name or folder).
     title, description, citation : str
@@ -158,7 +159,8 @@ def add_label_map(name: str, annots: Mapping[str, str | Path], *, template: str 
         check_replaceable(Path(out).expanduser(), lambda p: False, "output folder",
                           "Give a new or empty folder.")
     tpl = load_template(template)
-    maps = {h: labelset.read_label_map(annots[h], h) for h in ("lh", "rh") if h in annots}
+    maps = {h: a if isinstance(a, labelset.LabelMap) else labelset.read_label_map(a, h)
+            for h, a in annots.items() if h in ("lh", "rh")}
     label_set = labelset.build_label_set(name, tpl, maps)
     with staged_folder(name, Path(out) if out is not None else None) as stage:
         labelset.write_atlas_folder(stage, label_set, tpl, title=title, description=description,

@@ -104,6 +104,9 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, 
 @click.option("--annot", "annots", multiple=True, metavar="HEMI=FILE",
               help="Label map per hemisphere: lh=FILE and rh=FILE (FreeSurfer .annot or GIFTI .label.gii "
                    "on the template's surface).")
+@click.option("--dlabel", "dlabel", type=click.Path(path_type=Path, dir_okay=False), default=None,
+              help="CIFTI-2 label file (.dlabel.nii, e.g. Schaefer or Gordon on fsLR 32k): its label names "
+                   "and colours become the regions (fsLR resampled onto fsaverage by nearest vertex).")
 @click.option("--config", "config", type=click.Path(path_type=Path, dir_okay=False), default=None,
               help="Region-group TOML file (a base atlas and named groups of its regions).")
 @click.option("--volume", "volume", type=click.Path(path_type=Path, dir_okay=False), default=None,
@@ -111,9 +114,10 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, 
                    "subcortical views.")
 @click.option("--lut", "lut", type=click.Path(path_type=Path, dir_okay=False), default=None,
               help="Look-up table for --volume: FreeSurfer LUT, BIDS dseg.tsv or CSV of index,name.")
-@click.option("--space", default="MNI152NLin2009cAsym", show_default=True,
-              type=click.Choice(SPACES),
-              help="Space of --volume (mapped into the template's; see docs/atlases.md).")
+@click.option("--space", default=None, type=click.Choice((*SPACES, "fsLR")),
+              help="Space of --volume (mapped into the template's; see docs/atlases.md) [default: "
+                   "MNI152NLin2009cAsym]; with --dlabel, fsaverage or fsLR: the mesh of a 163842-vertex file "
+                   "that does not say.")
 @click.option("--own-template", is_flag=True,
               help="With --volume: the volume is a brain of its own (e.g. a mouse atlas): make a template of "
                    "its labels only (no cortex) in the volume's coordinates; --space is not used.")
@@ -150,18 +154,20 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, 
 @click.option("--replace", is_flag=True, help="Replace your atlas of the same name.")
 @click.option("--out", "out", type=OutPath(path_type=Path, file_okay=False), default=None,
               help="Write the atlas folder to OUT (e.g. into an atlas plugin) instead of adding it.")
-def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: Path | None, lut: Path | None,
-              space: str, own_template: bool, meshes: tuple[Path, ...], sub_meshes: tuple[Path, ...],
+def atlas_add(name: str, annots: tuple[str, ...], dlabel: Path | None, config: Path | None,
+              volume: Path | None, lut: Path | None, space: str | None, own_template: bool,
+              meshes: tuple[Path, ...], sub_meshes: tuple[Path, ...],
               also_surface: tuple[str, ...], names: Path | None, units: str | None, orientation: str | None,
               brainglobe: str | None, brainglobe_dir: Path | None, structures: str | None, depth: int | None,
               template: str, title: str,
               description: str, citation: str, replace: bool, out: Path | None) -> None:
-    """Add atlas NAME from label maps (--annot), a label volume (--volume) or region groups (--config).
+    """Add atlas NAME from label maps (--annot, --dlabel), a label volume (--volume) or groups (--config).
 
     \b
     Examples:
       brainpainter atlas add yeo7 --annot lh=lh.Yeo2011_7Networks_N1000.annot \\
                                   --annot rh=rh.Yeo2011_7Networks_N1000.annot
+      brainpainter atlas add schaefer100 --dlabel Schaefer2018_100Parcels_7Networks_order.dlabel.nii
       brainpainter atlas add lobes --config lobes.toml
       brainpainter atlas add tian_s2 --volume Tian_S2.nii.gz --lut Tian_S2.csv --space MNI152NLin6Asym
       brainpainter atlas add mymouse --meshes cortex_ply/ --subcortical-meshes deep_ply/ --units um
@@ -171,9 +177,14 @@ def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: P
     from brainpainter.atlas import registry
     from brainpainter.atlas import user as user_atlases
     mesh_input = bool(meshes or sub_meshes)
-    if sum([bool(annots), config is not None, volume is not None, mesh_input, brainglobe is not None]) != 1:
-        raise BrainPainterError("give either --annot lh=FILE --annot rh=FILE, --volume FILE --lut FILE, "
-                                "--meshes DIR, --brainglobe ATLAS_NAME or --config FILE.toml (one of them)")
+    if sum([bool(annots), dlabel is not None, config is not None, volume is not None, mesh_input,
+            brainglobe is not None]) != 1:
+        raise BrainPainterError("give either --annot lh=FILE --annot rh=FILE, --dlabel FILE.dlabel.nii, "
+                                "--volume FILE --lut FILE, --meshes DIR, --brainglobe ATLAS_NAME or --config "
+                                "FILE.toml (one of them)")
+    if space is not None and (space not in ("fsaverage", "fsLR") if dlabel else space == "fsLR"):
+        raise BrainPainterError(f"--space {space} is for {'--volume' if dlabel else '--dlabel'}; with "
+                                "--dlabel give fsaverage or fsLR (or none), with --volume an MNI space")
     if brainglobe is not None or mesh_input or names or units or orientation or brainglobe_dir or structures \
             or depth is not None or also_surface:
         from brainpainter.cli.atlas_meshes import add_from_meshes_or_brainglobe
@@ -190,9 +201,9 @@ def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: P
     if volume is not None and lut is not None:
         from brainpainter.atlas.volumes import add_volume_atlas
 
-        folder = add_volume_atlas(name, volume, lut, space=space, template=template, title=title,
-                                  description=description, citation=citation, replace=replace, out=out,
-                                  own_template=own_template)
+        folder = add_volume_atlas(name, volume, lut, space=space or "MNI152NLin2009cAsym", template=template,
+                                  title=title, description=description, citation=citation, replace=replace,
+                                  out=out, own_template=own_template)
     elif config is not None:
         if out is not None:
             raise BrainPainterError("--out is for label maps (--annot); a config is a file you can ship "
@@ -200,7 +211,8 @@ def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: P
         folder = user_atlases.add_config(name, config, replace=replace)
     else:
         folder = user_atlases.add_label_map(
-            name, user_atlases.parse_annot_options(annots), template=template, title=title,
+            name, _dlabel_maps(dlabel, template, space) if dlabel is not None else
+            user_atlases.parse_annot_options(annots), template=template, title=title,
             description=description, citation=citation, replace=replace, out=out)
     if out is not None:
         from brainpainter.atlas.model import load_atlas_dir
@@ -214,6 +226,17 @@ def atlas_add(name: str, annots: tuple[str, ...], config: Path | None, volume: P
                f"{len(a.subcortical())} subcortical; {time.perf_counter() - t0:.1f} s)")
     if out is None:
         click.echo(f"render with: brainpainter render TABLE --atlas {name} --out DIR")
+
+
+def _dlabel_maps(dlabel: Path, template: str, space: str | None) -> dict[str, Any]:
+    """A dlabel's label map per hemisphere on `template`'s surface; its notes printed."""
+    from brainpainter.atlas.template import load_template
+    from brainpainter.maps.dlabel import dlabel_label_maps
+
+    maps, notes = dlabel_label_maps(dlabel, load_template(template), space)
+    for note in notes:
+        click.echo(f"note: {note}", err=True)
+    return dict(maps)
 
 
 @atlas.command("remove", context_settings=CONTEXT)
