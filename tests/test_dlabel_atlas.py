@@ -129,3 +129,21 @@ def test_dk_dlabel_on_fslr_atlas_renders_a_table_as_dk(tmp_path):
     assert vivid[0].sum() > 0.05 * 400 * 300
     agree = vivid[0] & (np.abs(colour[0] - colour[1]).max(-1) <= 10)
     assert agree.sum() >= 0.90 * vivid[0].sum()
+
+
+def test_a_164k_dlabel_is_fsaverage_unless_space_says_fslr(tmp_path):
+    """Every 8th vertex labelled: as it is on fsaverage (a note), resampled from fsLR 164k (--space fsLR)."""
+    from brainpainter.maps.dlabel import dlabel_label_maps
+
+    n, given = 163842, np.arange(0, 163842, 8)
+    cols = (axes.BrainModelAxis.from_surface(given, n, "CortexLeft")
+            + axes.BrainModelAxis.from_surface(given, n, "CortexRight"))
+    path = _write(tmp_path / "sparse.dlabel.nii", np.repeat([[1, 3]], len(given), axis=1),
+                  axes.LabelAxis(["sparse"], [TABLE]), cols)
+    for space in (None, "fsLR"):
+        maps, notes = dlabel_label_maps(path, load_template("fsaverage"), space)
+        for hemi, name in (("lh", "L_front"), ("rh", "R_front")):
+            labelled = np.flatnonzero(np.asarray(maps[hemi].names)[maps[hemi].labels] == name)
+            assert np.array_equal(labelled, given) == (space is None)
+            assert 0.05 < len(labelled) / n < 0.2
+        assert ("does not say which" in " ".join(notes)) == (space is None)
