@@ -93,6 +93,17 @@ def test_cifti1_dlabel_is_one_line(tmp_path, tiny):
     _refused(tmp_path, tiny, cifti1, "CIFTI-1, which nibabel (and brainpainter) cannot read")
 
 
+def test_several_label_maps_or_one_hemisphere_is_one_line(tmp_path, tiny):
+    path = tiny_dlabel(tmp_path / "parts.dlabel.nii", tiny)
+    img = nib.load(str(path))
+    twice = _write(tmp_path / "two.dlabel.nii", np.repeat(np.asarray(img.dataobj), 2, axis=0),
+                   axes.LabelAxis(["a", "b"], [TABLE, TABLE]), img.header.get_axis(1))
+    _refused(tmp_path, tiny, twice, "holds 2 label maps (a, b); an atlas is one")
+    left = axes.BrainModelAxis.from_surface(np.arange(642), 642, "CortexLeft")
+    lh_only = _write(tmp_path / "lh.dlabel.nii", np.ones((1, 642)), axes.LabelAxis(["a"], [TABLE]), left)
+    _refused(tmp_path, tiny, lh_only, "has no CORTEX_RIGHT labels")
+
+
 @pytest.mark.parametrize(("renamed", "message"), [
     ({2: ("L_front", (0.1, 0.1, 0.55, 1))}, "label keys 1 and 2 are both named 'L_front' but in different"),
     ({2: ("l_FRONT", (0.1, 0.1, 0.55, 1))}, "the region names 'L_front' and 'l_FRONT' differ only in case"),
