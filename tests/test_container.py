@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from PIL import Image
-from web_support import free_port, png_pixels, wait_for
+from web_support import CLIENT, free_port, png_pixels, wait_for
 
 httpx = pytest.importorskip("httpx")
 
@@ -168,7 +168,8 @@ def test_render_without_network_matches_the_host(podman, image, tmp_path):
 
 
 def _api(port: int) -> httpx.Client:
-    return httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=30, trust_env=False)
+    """A client of the server on `port`; one token for all (uploads and jobs belong to their client)."""
+    return httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=30, trust_env=False, headers=CLIENT)
 
 
 def _healthy(client) -> bool:
