@@ -255,3 +255,49 @@ def test_html_of_the_example_table_is_a_few_mb(tmp_path):
                                tmp_path / "stage-1.html", row="stage-1")
     assert page.stat().st_size < 4_000_000  # was 12.8 MB: float32 arrays, no compression
 
+
+def test_viewer_reads_the_packed_glb_exactly_in_headless_chromium(browser, tmp_path):
+    from brainpainter.media.export import html_page
+    from brainpainter.media.glb import RegionMesh, glb_bytes, packed
+
+    rng = np.random.default_rng(1)
+    meshes = []
+    for name, n in (("small", 300), ("large", 72_000)):  # uint16 and uint32 indices
+        start = np.concatenate([np.arange(0, n, 3), rng.integers(0, n - 2, n // 3)])
+        faces = (start[rng.permutation(len(start))][:, None] + np.arange(3)).astype(np.int32)
+        # a random walk: each triangle small on screen (software WebGL draws it fast)
+        verts = np.cumsum(rng.normal(0, 0.05, (n, 3)), axis=0).astype(np.float32)
+        meshes.append(RegionMesh(name, "lh", verts, faces, np.tile(np.float32([0, 0, 1]), (n, 1)), (1, 0, 0)))
+    frame = np.float32([[-70, -70, -70], [70, 70, 70], [70, -70, 0]])
+    meshes.append(RegionMesh("frame", "lh", frame, np.int32([[0, 1, 2]]), frame, (0, 0, 1)))
+    compact = glb_bytes(meshes, compact=True)
+    page = tmp_path / "packed.html"
+    page.write_text(html_page(packed(compact), title="packed", meshes=meshes, background=None),
+                    encoding="utf-8")
+    _load(browser, page.as_uri())
+    got = browser.execute_script("""
+        const hash = (values) => values.reduce((h, v) => (h * 31 + v + 40000) % 1000000007, 0);
+        return window.brainpainterViewer.meshes.map((m) => {
+          const p = m.geometry.attributes.position, xyz = [];
+          for (let i = 0; i < p.count; i++) xyz.push(p.getX(i), p.getY(i), p.getZ(i));
+          return [m.name, hash(m.geometry.index.array), hash(xyz), m.geometry.index.array.BYTES_PER_ELEMENT];
+        });""")
+    doc, n = glb_json(compact), struct.unpack("<I", compact[12:16])[0]
+    binary = compact[20 + n + 8:]
+    assert [g[0] for g in got] == ["small", "large", "frame"] and [g[3] for g in got] == [2, 4, 2]
+    for (_, index, xyz, size), mesh in zip(got, doc["meshes"], strict=True):
+        prim = mesh["primitives"][0]
+        ia, pa = doc["accessors"][prim["indices"]], doc["accessors"][prim["attributes"]["POSITION"]]
+        want_index = np.frombuffer(binary, np.uint16 if size == 2 else np.uint32, ia["count"],
+                                   doc["bufferViews"][ia["bufferView"]]["byteOffset"])
+        want_xyz = np.frombuffer(binary, np.int16, 4 * pa["count"],
+                                 doc["bufferViews"][pa["bufferView"]]["byteOffset"]).reshape(-1, 4)[:, :3]
+        assert (index, xyz) == (_hash(want_index), _hash(want_xyz.reshape(-1)))
+
+
+def _hash(values: np.ndarray) -> int:
+    """The page's hash of a list of integers (as exact as comparing them, without sending them)."""
+    h = 0
+    for v in values.tolist():
+        h = (h * 31 + v + 40000) % 1_000_000_007
+    return h
