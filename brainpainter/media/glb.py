@@ -182,10 +182,12 @@ def glb_bytes(meshes: Sequence[RegionMesh], *, compact: bool = False) -> bytes:
             extras["value"] = m.value
         node: dict[str, Any] = {"name": m.name, "mesh": i, "extras": extras}
         primitive = _add_mesh(buf, m, node, origin, step)
-        base = [1.0] * 3 if m.vertex_colors is not None else srgb_to_linear(np.asarray(m.color)).tolist()
-        materials.append({"name": m.name, "doubleSided": True, "pbrMetallicRoughness": {
-            "baseColorFactor": [*base, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.75}})
-        gl_meshes.append({"name": m.name, "primitives": [{**primitive, "material": i}]})
+        if m.vertex_colors is None or compact:  # plain: vertex colours alone (trimesh reads them so)
+            base = [1.0] * 3 if m.vertex_colors is not None else srgb_to_linear(np.asarray(m.color)).tolist()
+            primitive["material"] = len(materials)
+            materials.append({"name": m.name, "doubleSided": True, "pbrMetallicRoughness": {
+                "baseColorFactor": [*base, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.75}})
+        gl_meshes.append({"name": m.name, "primitives": [primitive]})
         nodes.append(node)
     doc: dict[str, Any] = {
         "asset": {"version": "2.0", "generator": "brainpainter"}, "scene": 0,
