@@ -174,7 +174,9 @@ def glb_bytes(meshes: Sequence[RegionMesh], *, compact: bool = False) -> bytes:
         origin = (lo + hi) / 2
         step = max(float((hi - lo).max()), 1e-6) / POSITION_STEPS
     buf = _Buffer()
-    nodes, gl_meshes, materials = [], [], []
+    nodes: list[dict[str, Any]] = []
+    gl_meshes: list[dict[str, Any]] = []
+    materials: list[dict[str, Any]] = []
     for i, m in enumerate(meshes):
         hex_color = "#{:02x}{:02x}{:02x}".format(*(round(float(v) * 255) for v in m.color))
         extras: dict[str, Any] = {"part": m.part, "color": hex_color}
