@@ -68,7 +68,9 @@ def test_glb_has_one_named_mesh_per_region_in_its_colour(exported):
             assert np.abs(rgb - want).max() <= 6, (name, rgb, want)  # 8-bit linear colour: rounding
         assert len(mesh.faces) > 0
     nodes = {n["name"]: n for n in glb_json(glb.read_bytes())["nodes"]}
-    assert nodes["Left-precentral"]["extras"] == {"part": "lh", "color": "#00ff00"}
+    assert nodes["Left-precentral"]["extras"] == {"part": "lh", "color": "#00ff00", "value": "1"}
+    assert nodes["Left-insula"]["extras"]["value"] == "no value"
+    assert "value" not in nodes["Left-medial-wall"]["extras"]
     assert nodes["Right-insula"]["extras"]["part"] == "rh"
     # RAS millimetres turned y-up: the left hemisphere has x < 0, the top of the brain is +y
     lh = scene.geometry["Left-superiorfrontal"].vertices
@@ -196,7 +198,7 @@ def test_html_renders_in_headless_chromium(exported, browser, tmp_path):
     ActionChains(browser).move_to_element_with_offset(
         canvas, round(x - rect["x"] - rect["width"] / 2), round(y - rect["y"] - rect["height"] / 2)).perform()
     tip = browser.find_element(By.ID, "tip")
-    assert tip.is_displayed() and tip.text == "Left-superiortemporal"
+    assert tip.is_displayed() and tip.text == "Left-superiortemporal: 2"  # the region and its value
     errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
     assert not errors, errors
 
@@ -214,3 +216,88 @@ def test_html_of_a_map_shows_its_vertex_colours_in_headless_chromium(browser, tm
     assert red > 1000 and blue > 1000, (red, blue)  # per-vertex colours, unlit: exactly the scale's
     errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
     assert not errors, errors
+
+
+def test_compact_glb_is_quantised_without_normals_and_close_to_the_plain_one():
+    from brainpainter.media.glb import RegionMesh, glb_bytes
+
+    rng = np.random.default_rng(0)
+    verts = rng.uniform(-70, 70, (300, 3)).astype(np.float32)
+    faces = rng.integers(0, 300, (500, 3)).astype(np.int32)
+    normals = np.tile(np.float32([0, 0, 1]), (300, 1))
+    mesh = RegionMesh("Left-insula", "lh", verts, faces, normals, (1.0, 0.0, 0.0), value="2.5")
+    plain, compact = glb_bytes([mesh]), glb_bytes([mesh], compact=True)
+    doc = glb_json(compact)
+    assert doc["extensionsRequired"] == ["KHR_mesh_quantization"]
+    prim = doc["meshes"][0]["primitives"][0]
+    assert set(prim["attributes"]) == {"POSITION"}  # normals: computed by the viewer
+    position = doc["accessors"][prim["attributes"]["POSITION"]]
+    assert position["componentType"] == 5122 and doc["bufferViews"][position["bufferView"]]["byteStride"] == 8
+    assert doc["accessors"][prim["indices"]]["componentType"] == 5123  # uint16
+    assert doc["nodes"][0]["extras"] == {"part": "lh", "color": "#ff0000", "value": "2.5"}
+    assert len(compact) < 0.6 * len(plain)  # 8 bytes a vertex, not 24
+    # decoded by hand: the same triangles, within half a quantisation step
+    n = struct.unpack("<I", compact[12:16])[0]
+    binary = compact[20 + n + 8:]
+    view = doc["bufferViews"][position["bufferView"]]
+    q = np.frombuffer(binary, np.int16, position["count"] * 4, view["byteOffset"]).reshape(-1, 4)[:, :3]
+    iview = doc["bufferViews"][doc["accessors"][prim["indices"]]["bufferView"]]
+    idx = np.frombuffer(binary, np.uint16, 1500, iview["byteOffset"]).reshape(-1, 3)
+    node = doc["nodes"][0]
+    got = q[idx] * node["scale"][0] + node["translation"]
+    want = verts[faces] @ np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]]).T
+    step = 140 / 4096
+    assert np.abs(got - want).max() <= 0.51 * step + 1e-4
+
+
+def test_html_of_the_example_table_is_a_few_mb(tmp_path):
+    page = brainpainter.export(Path(__file__).parents[1] / "examples" / "brainpainter_dk.csv",
+                               tmp_path / "stage-1.html", row="stage-1")
+    assert page.stat().st_size < 4_000_000  # was 12.8 MB: float32 arrays, no compression
+
+
+def test_viewer_reads_the_packed_glb_exactly_in_headless_chromium(browser, tmp_path):
+    from brainpainter.media.export import html_page
+    from brainpainter.media.glb import RegionMesh, glb_bytes, packed
+
+    rng = np.random.default_rng(1)
+    meshes = []
+    for name, n in (("small", 300), ("large", 72_000)):  # uint16 and uint32 indices
+        start = np.concatenate([np.arange(0, n, 3), rng.integers(0, n - 2, n // 3)])
+        faces = (start[rng.permutation(len(start))][:, None] + np.arange(3)).astype(np.int32)
+        # a random walk: each triangle small on screen (software WebGL draws it fast)
+        verts = np.cumsum(rng.normal(0, 0.05, (n, 3)), axis=0).astype(np.float32)
+        meshes.append(RegionMesh(name, "lh", verts, faces, np.tile(np.float32([0, 0, 1]), (n, 1)), (1, 0, 0)))
+    frame = np.float32([[-70, -70, -70], [70, 70, 70], [70, -70, 0]])
+    meshes.append(RegionMesh("frame", "lh", frame, np.int32([[0, 1, 2]]), frame, (0, 0, 1)))
+    compact = glb_bytes(meshes, compact=True)
+    page = tmp_path / "packed.html"
+    page.write_text(html_page(packed(compact), title="packed", meshes=meshes, background=None),
+                    encoding="utf-8")
+    _load(browser, page.as_uri())
+    got = browser.execute_script("""
+        const hash = (values) => values.reduce((h, v) => (h * 31 + v + 40000) % 1000000007, 0);
+        return window.brainpainterViewer.meshes.map((m) => {
+          const p = m.geometry.attributes.position, xyz = [];
+          for (let i = 0; i < p.count; i++) xyz.push(p.getX(i), p.getY(i), p.getZ(i));
+          return [m.name, hash(m.geometry.index.array), hash(xyz), m.geometry.index.array.BYTES_PER_ELEMENT];
+        });""")
+    doc, n = glb_json(compact), struct.unpack("<I", compact[12:16])[0]
+    binary = compact[20 + n + 8:]
+    assert [g[0] for g in got] == ["small", "large", "frame"] and [g[3] for g in got] == [2, 4, 2]
+    for (_, index, xyz, size), mesh in zip(got, doc["meshes"], strict=True):
+        prim = mesh["primitives"][0]
+        ia, pa = doc["accessors"][prim["indices"]], doc["accessors"][prim["attributes"]["POSITION"]]
+        want_index = np.frombuffer(binary, np.uint16 if size == 2 else np.uint32, ia["count"],
+                                   doc["bufferViews"][ia["bufferView"]]["byteOffset"])
+        want_xyz = np.frombuffer(binary, np.int16, 4 * pa["count"],
+                                 doc["bufferViews"][pa["bufferView"]]["byteOffset"]).reshape(-1, 4)[:, :3]
+        assert (index, xyz) == (_hash(want_index), _hash(want_xyz.reshape(-1)))
+
+
+def _hash(values: np.ndarray) -> int:
+    """The page's hash of a list of integers (as exact as comparing them, without sending them)."""
+    h = 0
+    for v in values.tolist():
+        h = (h * 31 + v + 40000) % 1_000_000_007
+    return h

@@ -1,11 +1,12 @@
-// brainpainter's HTML export viewer (brainpainter.media.export.html_page): load the inlined GLB, light it,
-// orbit controls, a tooltip from a raycast, part toggles, flat (unlit, exact) colours.
+// brainpainter's HTML export viewer (brainpainter.media.export.html_page): inflate and load the inlined GLB
+// (gzip; quantised, without normals: computed here), light it, orbit controls, a tooltip from a raycast
+// (region and value), part toggles, flat (unlit, exact) colours.
 // window.brainpainterReady turns true once drawn.
 (function () {
   const T = window.BPTHREE;
   const cfg = JSON.parse(document.getElementById("brainpainter-config").textContent);
-  const b64 = document.getElementById("brainpainter-glb").textContent.trim();
-  const bytes = Uint8Array.from(atob(b64), (c) => c.charCodeAt(0));
+  const glbElement = document.getElementById("brainpainter-glb");
+  const bytes = Uint8Array.from(atob(glbElement.textContent.trim()), (c) => c.charCodeAt(0));
   const view = document.getElementById("view"), tip = document.getElementById("tip");
   let renderer;
   try {
@@ -44,9 +45,77 @@
     camera.up.set(0, 1, 0); controls.target.copy(home.c); controls.update(); draw();
   }
 
-  new T.GLTFLoader().parse(bytes.buffer, "", (gltf) => {
-    gltf.scene.traverse((o) => {
-      if (!o.isMesh) return;
+  function glb() {  // the GLB's bytes, inflated (DecompressionStream: Chromium 80, Firefox 113, Safari 16.4)
+    if (glbElement.dataset.encoding !== "gzip") return Promise.resolve(bytes.buffer);
+    const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream("gzip"));
+    return new Response(stream).arrayBuffer();
+  }
+  function unpack(buffer) {
+    // undo brainpainter.media.glb.packed in place: in each view whose extras name a filter, the low
+    // bytes of all values come before the high bytes; "delta": int16 (x, y, z, pad) rows as differences
+    // from the row before; "hwm": indices as the distance below the highest index before them
+    const n = new DataView(buffer).getUint32(12, true), bin = 20 + n + 8;
+    const doc = JSON.parse(new TextDecoder().decode(new Uint8Array(buffer, 20, n)));
+    (doc.bufferViews || []).forEach((view, i) => {
+      const filter = view.extras && view.extras.filter;
+      if (!filter) return;
+      const u8 = new Uint8Array(buffer, bin + (view.byteOffset || 0), view.byteLength);
+      if (filter === "delta") {
+        const rows = u8.length / 8, out = new Int16Array(rows * 4);
+        for (let c = 0; c < 4; c++) {
+          const lo = 2 * c * rows, hi = lo + rows;
+          for (let r = 0, acc = 0; r < rows; r++) {
+            acc = (acc + (u8[lo + r] | (u8[hi + r] << 8))) << 16 >> 16; out[4 * r + c] = acc;
+          }
+        }
+        u8.set(new Uint8Array(out.buffer));
+      } else if (filter === "hwm") {
+        const acc = doc.accessors.find((a) => a.bufferView === i), size = acc.componentType === 5123 ? 2 : 4;
+        const m = acc.count, out = size === 2 ? new Uint16Array(m) : new Uint32Array(m);
+        for (let j = 0, high = -1; j < m; j++) {
+          let d = 0;
+          for (let b = 0; b < size; b++) d += u8[b * m + j] * 2 ** (8 * b);
+          const f = high + 1 - d; out[j] = f; if (f > high) high = f;
+        }
+        u8.set(new Uint8Array(out.buffer));
+      }
+    });
+    return buffer;
+  }
+  function smoothNormals(objs) {
+    // vertex normals of meshes without them, summed over each part: a vertex on a region border (one
+    // position in two meshes; quantised positions are exact integers) gets one normal, so no seam shows
+    const sums = new Map(), keys = new Map(), a = new T.Vector3(), b = new T.Vector3(), c = new T.Vector3();
+    const todo = objs.filter((o) => !o.geometry.attributes.normal), parts = cfg.parts;
+    todo.forEach((o) => {
+      const p = o.geometry.attributes.position, idx = o.geometry.index.array, k = new Float64Array(p.count);
+      const base = (parts.indexOf(o.userData.part) + 1) * 2 ** 48;  // a key per part and int16 position
+      for (let i = 0; i < p.count; i++) {
+        k[i] = base + (p.getX(i) + 32768) * 2 ** 32 + (p.getY(i) + 32768) * 65536 + (p.getZ(i) + 32768);
+        if (!sums.has(k[i])) sums.set(k[i], new T.Vector3());
+      }
+      keys.set(o, k);
+      for (let f = 0; f < idx.length; f += 3) {
+        a.fromBufferAttribute(p, idx[f]); b.fromBufferAttribute(p, idx[f + 1]); c.fromBufferAttribute(p, idx[f + 2]);
+        c.sub(b); a.sub(b); c.cross(a);  // (c - b) x (a - b), area-weighted, as three.js's computeVertexNormals
+        for (let j = 0; j < 3; j++) sums.get(k[idx[f + j]]).add(c);
+      }
+    });
+    todo.forEach((o) => {
+      o.geometry.computeVertexNormals();  // the attribute (the vendored build has no BufferAttribute)
+      const k = keys.get(o), n = o.geometry.attributes.normal.array;
+      for (let i = 0; i < k.length; i++) {
+        const s = sums.get(k[i]).normalize(); n[3 * i] = s.x; n[3 * i + 1] = s.y; n[3 * i + 2] = s.z;
+      }
+      o.material.flatShading = false; o.material.needsUpdate = true;
+    });
+  }
+
+  glb().then((buffer) => new T.GLTFLoader().parse(unpack(buffer), "", (gltf) => {
+    const found = [];
+    gltf.scene.traverse((o) => { if (o.isMesh) found.push(o); });
+    smoothNormals(found);
+    found.forEach((o) => {
       meshes.push(o);
       lit.set(o, o.material);
       const m = o.material.clone();
@@ -56,11 +125,13 @@
     const box = new T.Box3().setFromObject(gltf.scene);
     const c = box.getCenter(new T.Vector3()), size = box.getSize(new T.Vector3());
     home = { c: c, d: 1.45 * Math.max(size.y, size.z) / (2 * Math.tan(camera.fov * Math.PI / 360)) };
+    if (flatBox.checked) setFlat(true);
     resize(); reset();
     window.brainpainterViewer = {
       scene: scene, camera: camera, controls: controls, meshes: meshes, renderer: renderer, draw: draw };
     window.brainpainterReady = true;
-  }, (e) => { console.error("brainpainter: cannot read the 3D model: " + e); });
+  }, (e) => { console.error("brainpainter: cannot read the 3D model: " + e); }))
+    .catch((e) => { console.error("brainpainter: cannot inflate the 3D model: " + e); });
 
   controls.addEventListener("change", draw);
   window.addEventListener("resize", resize);
@@ -72,7 +143,7 @@
   const flatBox = document.getElementById("flat");
   function setFlat(on) { meshes.forEach((o) => { o.material = on ? flat.get(o) : lit.get(o); }); draw(); }
   flatBox.addEventListener("change", () => setFlat(flatBox.checked));
-  if (location.hash === "#flat") { flatBox.checked = true; setTimeout(() => setFlat(true), 0); }
+  if (location.hash === "#flat") flatBox.checked = true;  // applied once the model is read
 
   const ray = new T.Raycaster(), ndc = new T.Vector2();
   renderer.domElement.addEventListener("pointermove", (ev) => {
@@ -81,7 +152,8 @@
     ray.setFromCamera(ndc, camera);
     const hit = ray.intersectObjects(meshes.filter((o) => o.visible), false)[0];
     if (!hit) { tip.style.display = "none"; return; }
-    tip.textContent = hit.object.name;
+    const value = hit.object.userData.value;
+    tip.textContent = hit.object.name + (value === undefined ? "" : ": " + value);
     tip.style.left = (ev.clientX + 14) + "px"; tip.style.top = (ev.clientY + 10) + "px";
     tip.style.display = "block";
   });

@@ -7,8 +7,9 @@ millimetre space. The ``.glb`` opens in Blender, MeshLab, PowerPoint, or any
 glTF viewer. The ``.html`` file inlines a three.js viewer (vendored in
 ``brainpainter/data``, MIT licence beside it) and the ``.glb``: it opens in any
 browser without a network, with rotate (drag), zoom (wheel), pan (right
-drag), a tooltip naming the region under the mouse, toggles for each part, and
-the colour bar.
+drag), a tooltip naming the region under the mouse and its value, toggles
+for each part, and the colour bar. The page embeds the compact, quantised
+``.glb`` (:mod:`brainpainter.media.glb`) gzip-compressed: a few MB.
 
 Nothing here needs Blender: the meshes come straight from the template.
 """
@@ -16,10 +17,10 @@ Nothing here needs Blender: the meshes come straight from the template.
 from __future__ import annotations
 
 import base64
+import gzip
 import html
 import json
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Unpack
@@ -31,6 +32,7 @@ from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.atlas.model import HEMI_PREFIX, Atlas
 from brainpainter.atlas.template import Template
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.media.glb import RegionMesh, glb_bytes, packed
 from brainpainter.rendering.geometry import VertexColors
 from brainpainter.rendering.maprun import MapRun
 from brainpainter.rendering.options import Options, RenderKwargs
@@ -43,40 +45,6 @@ if TYPE_CHECKING:
 FORMATS = ("glb", "html")
 #: Colour of subcortical structures the atlas does not colour (as the Blender renderer draws them).
 NEUTRAL_GREY: RGB = (0.8, 0.8, 0.8)
-#: glTF is y-up; brainpainter's templates are RAS (x right, y anterior, z superior).
-RAS_TO_GLTF = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
-
-
-@dataclass(frozen=True)
-class RegionMesh:
-    """One drawn part of the brain.
-
-    Attributes
-    ----------
-    name : str
-        Region key (``"Left-insula"``), or ``"Left-medial-wall"`` for the
-        cortex labels that are no region of the atlas.
-    part : {"lh", "rh", "subcortical"}
-    vertices : ndarray of float32, shape (n_vertices, 3)
-        RAS millimetres.
-    faces : ndarray of int32, shape (n_faces, 3)
-    normals : ndarray of float32, shape (n_vertices, 3)
-        Unit vertex normals of the whole hemisphere or structure set (no
-        seams at region borders).
-    color : tuple of float, shape (3,)
-        sRGB 0-1.
-    vertex_colors : ndarray of float, shape (n_vertices, 3), optional
-        sRGB 0-1 per vertex (a map, or white-matter tracts coloured along their length), written as the
-        mesh's ``COLOR_0``; `color` is then a fallback (for tracts their mean).
-    """
-
-    name: str
-    part: str
-    vertices: NDArray[Any]
-    faces: NDArray[Any]
-    normals: NDArray[Any]
-    color: RGB
-    vertex_colors: NDArray[Any] | None = None
 
 
 def _submesh(vertices: NDArray[Any], normals: NDArray[Any],
@@ -87,7 +55,15 @@ def _submesh(vertices: NDArray[Any], normals: NDArray[Any],
             normals[used])
 
 
-def region_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
+def value_text(value: float) -> str:
+    """A region's value for the viewer's tooltip, rounded for people: ``2.35``, ``-0.0012``, ``empty``."""
+    if not np.isfinite(value):
+        return "empty cell" if np.isnan(value) else f"{value}"
+    return "0" if value == 0 else f"{value:.4g}"
+
+
+def region_meshes(scene: Scene, colors: dict[str, RGB],
+                  values: Mapping[str, float] | None = None) -> list[RegionMesh]:
     """Split the template of `scene` into one mesh per region, coloured by `colors`.
 
     Parameters
@@ -99,6 +75,10 @@ def region_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
         Cortex labels without a colour join one ``{Left,Right}-medial-wall``
         mesh per hemisphere in ``scene.medial_wall_color``; subcortical
         structures without one are drawn light grey.
+    values : mapping of str to float, optional
+        The row's value of each region key (group values given to their
+        members): the tooltip's text of each region (``no value`` for one
+        without); None: no values (a map's structures).
 
     Returns
     -------
@@ -107,6 +87,10 @@ def region_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
     """
     template: Template = scene.template
     out: list[RegionMesh] = []
+
+    def text(key: str) -> str | None:
+        return None if values is None else value_text(values[key]) if key in values else "no value"
+
     for hemi in ("lh", "rh"):
         cm = template.cortex(scene.labels, hemi)
         verts = cm.vertices[scene.surface]
@@ -120,7 +104,7 @@ def region_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
             if key not in colors:
                 wall.append(faces)
                 continue
-            out.append(RegionMesh(key, hemi, *_submesh(verts, normals, faces), colors[key]))
+            out.append(RegionMesh(key, hemi, *_submesh(verts, normals, faces), colors[key], value=text(key)))
         if wall:
             out.append(RegionMesh(f"{HEMI_PREFIX[hemi]}medial-wall", hemi,
                                   *_submesh(verts, normals, np.concatenate(wall)), scene.medial_wall_color))
@@ -131,7 +115,7 @@ def region_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
         if key in scene.hidden or not len(faces):
             continue
         out.append(RegionMesh(key, "subcortical", *_submesh(sub.vertices, normals, faces),
-                              colors.get(key, NEUTRAL_GREY)))
+                              colors.get(key, NEUTRAL_GREY), value=text(key)))
     return out
 
 
@@ -191,45 +175,6 @@ def vertex_meshes(scene: Scene, colors: VertexColors) -> list[RegionMesh]:
     return out + [m for m in region_meshes(scene, dict(colors.regions)) if m.part == "subcortical"]
 
 
-def srgb_to_linear(c: NDArray[Any]) -> NDArray[Any]:
-    """sRGB 0-1 -> linear 0-1 (glTF material colours are linear)."""
-    c = np.asarray(c, dtype=float)
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-
-
-def glb_bytes(meshes: Sequence[RegionMesh]) -> bytes:
-    """A glTF binary: one node and mesh per region, named by its key, with a PBR colour.
-
-    The scene is y-up (glTF's convention) with the template's millimetres; each
-    node's ``extras`` holds its ``part`` (``lh``, ``rh`` or ``subcortical``) and
-    its sRGB colour as ``#rrggbb``.
-    """
-    import trimesh
-    from trimesh.visual.material import PBRMaterial
-
-    scene = trimesh.Scene()
-    for m in meshes:
-        linear = srgb_to_linear(np.asarray(m.color))
-        material = PBRMaterial(  # type: ignore[no-untyped-call]
-            name=m.name, baseColorFactor=[*linear, 1.0], metallicFactor=0.0, roughnessFactor=0.75,
-            doubleSided=True)
-        visual: Any
-        if m.vertex_colors is not None:  # glTF vertex colours are linear
-            rgba = np.ones((len(m.vertex_colors), 4))
-            rgba[:, :3] = srgb_to_linear(m.vertex_colors)
-            visual = trimesh.visual.ColorVisuals(
-                vertex_colors=np.round(rgba * 255).astype(np.uint8))
-        else:
-            visual = trimesh.visual.TextureVisuals(material=material)  # type: ignore[no-untyped-call]
-        mesh = trimesh.Trimesh(vertices=m.vertices @ RAS_TO_GLTF.T, faces=m.faces,
-                               vertex_normals=m.normals @ RAS_TO_GLTF.T, process=False, visual=visual)
-        hex_color = "#{:02x}{:02x}{:02x}".format(*(round(float(v) * 255) for v in m.color))
-        scene.add_geometry(mesh, node_name=m.name, geom_name=m.name,
-                           metadata={"part": m.part, "color": hex_color})
-    glb: bytes = scene.export(file_type="glb", include_normals=True)  # type: ignore[no-untyped-call]
-    return glb
-
-
 def _viewer_script(name: str = "three-viewer.min.js") -> str:
     """A script of the package data: three.js (``three-viewer.min.js``) or the viewer
     (``export-viewer.js``)."""
@@ -248,7 +193,10 @@ def html_page(glb: bytes, *, title: str, meshes: Sequence[RegionMesh], backgroun
     Parameters
     ----------
     glb : bytes
-        From :func:`glb_bytes`.
+        From :func:`brainpainter.media.glb.glb_bytes` (``compact=True``, then
+        :func:`brainpainter.media.glb.packed`: a page of a few MB); embedded
+        gzip-compressed (the viewer inflates it with the browser's
+        ``DecompressionStream``).
     title : str
         Shown in the page's corner and its title.
     meshes : sequence of RegionMesh
@@ -271,7 +219,8 @@ def html_page(glb: bytes, *, title: str, meshes: Sequence[RegionMesh], backgroun
                       for p in parts)
     return _PAGE.format(
         title=html.escape(title), bg=bg, fg="#eee" if dark else "#222", bar=bar, toggles=toggles,
-        three=_viewer_script(), config=_script_json(config), glb=base64.b64encode(glb).decode(),
+        three=_viewer_script(), config=_script_json(config),
+        glb=base64.b64encode(gzip.compress(glb, 9, mtime=0)).decode(),
         viewer=_viewer_script("export-viewer.js"),
     )
 
@@ -302,7 +251,7 @@ html, body {{ margin: 0; height: 100%; overflow: hidden; background: {bg}; color
 <div id="tip"></div><div id="error"></div>
 <script>{three}</script>
 <script id="brainpainter-config" type="application/json">{config}</script>
-<script id="brainpainter-glb" type="application/octet-stream">{glb}</script>
+<script id="brainpainter-glb" type="application/octet-stream" data-encoding="gzip">{glb}</script>
 <script>{viewer}</script>
 </body></html>
 """
@@ -332,7 +281,9 @@ def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
     atlas_obj, scene = load_scene(table.atlas, opts.template, opts.surface, opts.hide,
                                   tracts=opts.tract_spec(), tract_nodes=tv.nodes if tv is not None else (),
                                   tract_radius=opts.tract_radius)
-    meshes = region_meshes(scene, region_colors(table.row(i), atlas_obj, run.scale_of("regions")))
+    values = table.row(i)
+    meshes = region_meshes(scene, region_colors(values, atlas_obj, run.scale_of("regions")),
+                           atlas_obj.expand(values))
     return scene, meshes + tract_meshes(
         scene, tract_colors(tv.row(table.images[i]), run.scale_of("tracts")) if tv is not None else {})
 
@@ -392,9 +343,8 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
     scene, meshes = _row_meshes(run, i)
     if not meshes:
         raise BrainPainterError("every region is hidden (--hide); nothing is left to export.")
-    glb = glb_bytes(meshes)
     if fmt == "glb":
-        payload = glb
+        payload = glb_bytes(meshes)
     else:
         from brainpainter.io.output import png_bytes
         from brainpainter.media.colorbar import colorbar_image
@@ -405,8 +355,8 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
         nan, missing = swatches_needed(table, [i], views, scene.geometry)
         bar = colorbar_image(run.scale, (420, 64 if label else 48), background=run.settings.background,
                              label=label, nan=nan, missing=missing, fontsize=9.0)
-        payload = html_page(glb, title=title or table.images[i], meshes=meshes,
-                            background=run.settings.background,
+        payload = html_page(packed(glb_bytes(meshes, compact=True)), title=title or table.images[i],
+                            meshes=meshes, background=run.settings.background,
                             colorbar_png=png_bytes(bar)).encode("utf-8")
     out.parent.mkdir(parents=True, exist_ok=True)
     atomic_write_bytes(out, payload)
