@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import difflib
 from collections.abc import Iterable
+from typing import Any
 
 
 class BrainPainterError(Exception):
@@ -56,3 +57,12 @@ class ColumnNotFoundError(BrainPainterError):
 
 class AmbiguousColumnError(BrainPainterError):
     """A column named by an option appears more than once in a table."""
+
+
+def within(value: Any, low: float, high: float) -> bool:
+    """Whether `value` is a number (anything ``float()`` takes) from `low` to `high`, inclusive (NaN is
+    not): the test behind an option's "must be a number from ... to ..." line."""
+    try:
+        return low <= float(value) <= high
+    except (TypeError, ValueError):
+        return False

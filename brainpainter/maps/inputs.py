@@ -379,14 +379,9 @@ def read_volume(img: Any, *, method: Method = "linear", projection: str | None =
                                radius=radius)
     means = subcortical_means(img, method=method)
     k = volume.n_volumes
-    if len(volume.shape) == 3:
-        images: tuple[str, ...] = (volume.name,)
-    else:
-        width = len(str(k - 1))
-        images = tuple(f"{volume.name}_{i:0{width}d}" for i in range(k))
     values = {hemi: np.asarray(v, np.float32).reshape(k, -1) for hemi, v in projected.items()}
     regions = {key: np.asarray(v, np.float64).reshape(k) for key, v in means.items()}
-    return VertexMaps(values, images, source=f"volume={volume.name}", regions=regions)
+    return VertexMaps(values, volume.image_names, source=f"volume={volume.name}", regions=regions)
 
 
 def _combine(hemis: dict[str, Hemi], given: dict[str, Any]) -> VertexMaps:

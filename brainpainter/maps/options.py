@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Literal, TypedDict
 
-from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.errors import BrainPainterError, choice_error, within
 
 #: What shows where a map has no value: sulcal-depth greys, curvature greys, or one grey.
 UNDERLAYS = ("sulc", "curv", "none")
@@ -25,11 +25,7 @@ MAX_RADIUS_MM = 10.0
 
 def check_projection(projection: str | None, method: str, radius: float) -> Projection:
     """`projection` checked against `method` and `radius` (one line each), its default filled in."""
-    try:
-        ok = 0.5 <= float(radius) <= MAX_RADIUS_MM
-    except (TypeError, ValueError):
-        ok = False
-    if not ok:
+    if not within(radius, 0.5, MAX_RADIUS_MM):
         raise BrainPainterError(f"the projection radius must be 0.5 to {MAX_RADIUS_MM:g} mm; {radius!r} was "
                                 f"given (default {RADIUS_MM:g}).")
     if projection is None:

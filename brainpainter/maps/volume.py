@@ -66,6 +66,15 @@ class Volume:
     def n_volumes(self) -> int:
         return self.shape[3] if len(self.shape) == 4 else 1
 
+    @property
+    def image_names(self) -> tuple[str, ...]:
+        """Name of each image: the file's name for a 3-D volume; for a 4-D one, ``"{name}_{index}"``
+        per volume, the index from 0, zero-padded (``"bold_000"``)."""
+        if len(self.shape) == 3:
+            return (self.name,)
+        width = len(str(self.n_volumes - 1))
+        return tuple(f"{self.name}_{i:0{width}d}" for i in range(self.n_volumes))
+
     def volume(self, i: int) -> NDArray[np.float32]:
         """Volume `i` as float32, shape (x, y, z)."""
         data = self.dataobj if len(self.shape) == 3 else self.dataobj[..., i]

@@ -36,9 +36,7 @@ def volume_images(path: ImageLike, *, method: Method = "linear"
     maps = project_volume(path, method=method)
     if len(volume.shape) == 3:
         return [(volume.name, maps)]
-    width = len(str(volume.n_volumes - 1))
-    return [(f"{volume.name}_{i:0{width}d}", {hemi: m[i] for hemi, m in maps.items()})
-            for i in range(volume.n_volumes)]
+    return [(name, {hemi: m[i] for hemi, m in maps.items()}) for i, name in enumerate(volume.image_names)]
 
 
 def subcortical_table(img: ImageLike, *, method: Method = "linear") -> dict[str, dict[str, float]]:
@@ -65,7 +63,5 @@ def subcortical_table(img: ImageLike, *, method: Method = "linear") -> dict[str,
     means = subcortical_means(img, method=method)
     if len(volume.shape) == 3:
         return {volume.name: {k: float(v) for k, v in means.items() if np.isfinite(v)}}
-    width = len(str(volume.n_volumes - 1))
-    return {f"{volume.name}_{i:0{width}d}": {k: float(np.asarray(v)[i]) for k, v in means.items()
-                                              if np.isfinite(np.asarray(v)[i])}
-            for i in range(volume.n_volumes)}
+    return {name: {k: float(np.asarray(v)[i]) for k, v in means.items() if np.isfinite(np.asarray(v)[i])}
+            for i, name in enumerate(volume.image_names)}

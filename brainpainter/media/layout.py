@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from brainpainter.color.rgb import ColorLike
 from brainpainter.color.scale import ColourScale
-from brainpainter.errors import BrainPainterError
+from brainpainter.errors import BrainPainterError, within
 from brainpainter.media.drawn import common_crop
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -44,11 +44,7 @@ class FigureKwargs(TypedDict, total=False):
 
 def check_figure_text(font_size: float, fig_width: float | None) -> None:
     """Font size in 1..72 points, figure width in 1..40 inches (or None); finite numbers only."""
-    try:
-        ok = 1.0 <= float(font_size) <= 72.0 and (fig_width is None or 1.0 <= float(fig_width) <= 40.0)
-    except (TypeError, ValueError):
-        ok = False
-    if not ok:
+    if not (within(font_size, 1.0, 72.0) and (fig_width is None or within(fig_width, 1.0, 40.0))):
         raise BrainPainterError(
             f"font size must be 1..72 points and figure width 1..40 inches; font_size={font_size}, "
             f"fig_width={fig_width} were given."
@@ -96,11 +92,7 @@ class FigureOptions:
         "help": "Name the views (row labels in a grid, headings otherwise)."})
 
     def __post_init__(self) -> None:
-        try:
-            ok = 50 <= float(self.dpi) <= 1200
-        except (TypeError, ValueError):
-            ok = False
-        if not ok:
+        if not within(self.dpi, 50, 1200):
             raise BrainPainterError(f"dpi must be between 50 and 1200; {self.dpi} was given.")
         check_figure_text(self.font_size, self.fig_width)
 

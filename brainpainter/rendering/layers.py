@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any, TypedDict
 
 from brainpainter.color.scale import ColourScale, ScaleOptions
-from brainpainter.errors import BrainPainterError
+from brainpainter.errors import BrainPainterError, within
 
 #: The kinds of data a layer draws, in the order of their options.
 LAYER_KINDS = ("regions", "map", "tracts")
@@ -136,11 +136,7 @@ class LayerOptions:
     tracts_label: str | None = _label_field("tracts")
 
     def __post_init__(self) -> None:
-        try:
-            alpha_ok = 0.0 <= float(self.map_alpha) <= 1.0
-        except (TypeError, ValueError):
-            alpha_ok = False
-        if not alpha_ok:
+        if not within(self.map_alpha, 0.0, 1.0):
             raise BrainPainterError(f"--map-alpha must be a number from 0 (transparent) to 1 (opaque); "
                                     f"{self.map_alpha!r} was given.")
         for kind in LAYER_KINDS:

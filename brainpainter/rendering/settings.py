@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from typing import Any, TypedDict
 
 from brainpainter.color.rgb import ColorLike, to_rgb
-from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.errors import BrainPainterError, choice_error, within
 
 RGB = tuple[float, float, float]
 QUALITIES = ("fast", "default", "high")
@@ -129,13 +129,9 @@ class RenderSettings:
                 raise choice_error(name, getattr(self, name), allowed)
         object.__setattr__(self, "width", check_pixels("width", self.width))
         object.__setattr__(self, "height", check_pixels("height", self.height))
-        try:
-            opacity = float(self.glass_opacity)
-        except (TypeError, ValueError):
-            opacity = float("nan")
-        if not 0.0 <= opacity <= 1.0:
+        if not within(self.glass_opacity, 0.0, 1.0):
             raise BrainPainterError(f"glass opacity must be in [0, 1]; {self.glass_opacity} was given.")
-        object.__setattr__(self, "glass_opacity", opacity)
+        object.__setattr__(self, "glass_opacity", float(self.glass_opacity))
         try:
             width = float(self.outline_width)
         except (TypeError, ValueError):
