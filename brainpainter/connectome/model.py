@@ -1,0 +1,45 @@
+"""A connectome: nodes (names, positions, values, categories, labels) and the weights between them."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+
+@dataclass(frozen=True)
+class Connectome:
+    """Nodes in the template's space and the weights of the edges between them.
+
+    Attributes
+    ----------
+    names : tuple of str, (N,)
+        Node names (region names of the atlas, or the names given).
+    positions : ndarray, (N, 3) float64
+        Node centres in the template's space (mm), the space the meshes are in.
+    weights : ndarray, (N, N) float64
+        Edge weights; NaN where there is no edge. Symmetric unless ``directed``;
+        the diagonal is ignored.
+    directed : bool
+        Whether ``weights[i, j]`` is the edge from node i to node j only.
+    node_values : ndarray, (N,) float64, or None
+        One value per node (drawn as sphere size and/or colour); NaN where unknown.
+    node_categories : tuple of str, (N,), or None
+        A category per node (a network or module), drawn in categorical colours with a key.
+    node_labels : tuple of str, (N,), or None
+        Text drawn beside each node ("" for none).
+    """
+
+    names: tuple[str, ...]
+    positions: NDArray[np.float64]
+    weights: NDArray[np.float64]
+    directed: bool = False
+    node_values: NDArray[np.float64] | None = None
+    node_categories: tuple[str, ...] | None = None
+    node_labels: tuple[str, ...] | None = None
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of nodes N."""
+        return len(self.names)
