@@ -43,3 +43,20 @@ class Connectome:
     def n_nodes(self) -> int:
         """Number of nodes N."""
         return len(self.names)
+
+    def edges(self) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.float64]]:
+        """The edges drawn: finite off-diagonal weights (the upper triangle unless ``directed``).
+
+        Returns
+        -------
+        source, target : ndarray, (E,) intp
+            Node indices of each edge's ends.
+        weight : ndarray, (E,) float64
+            Each edge's weight.
+        """
+        keep = np.isfinite(self.weights)
+        np.fill_diagonal(keep, False)
+        if not self.directed:
+            keep = np.triu(keep)
+        source, target = np.nonzero(keep)
+        return source, target, self.weights[source, target]
