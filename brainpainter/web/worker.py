@@ -251,16 +251,12 @@ def _no_paths(message: str, store: Any) -> str:
 
 
 def _prepared(folder: Path, job: dict[str, Any]) -> Any:
+    from brainpainter.web.layer_uploads import LayerUploads
     from brainpainter.web.options import RenderOptions, prepare
 
     data = (folder / "input.bin").read_bytes()
-    tracts = (folder / TRACTS).read_bytes() if (folder / TRACTS).is_file() else None
     return data, prepare(data, job["input_name"], RenderOptions(**job["options"]),
-                         tracts=tracts, data_dir=folder.parent.parent)
-
-
-#: A job's copy of the tract upload its options name (beside ``input.bin``).
-TRACTS = "tracts.bin"
+                         data_dir=folder.parent.parent, **LayerUploads.read(folder).kwargs())
 
 
 def _media_input(data: bytes, name: str, prep: Any) -> Any:
@@ -361,13 +357,15 @@ def discard_outputs(folder: Path, published: bool = True) -> None:
 
 def _reproduced(folder: Path, job: dict[str, Any], data: bytes, prep: Any) -> dict[str, str]:
     """The command line and Python call that make a job's files again (its manifest's ``reproduce``)."""
+    from brainpainter.web.layer_uploads import LayerUploads
     from brainpainter.web.reproduce import reproduce
 
-    tracts = (folder / TRACTS).read_bytes() if (folder / TRACTS).is_file() else None
+    layers = LayerUploads.read(folder)
     params = dict(job["params"])
     if job["kind"] == "export":  # the command names the row by its image name
         params["image"] = prep.run.table.images[params.get("row", 0)]
-    return reproduce(data, job["input_name"], prep.options, tracts, job["kind"], params)
+    return reproduce(data, job["input_name"], prep.options, layers.tracts, job["kind"], params,
+                     map_upload=layers.map)
 
 
 def _media_manifest(folder: Path, job: dict[str, Any], data: bytes, prep: Any, name: str) -> list[str]:

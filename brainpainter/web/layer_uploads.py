@@ -1,0 +1,80 @@
+"""The other uploads a render draws with its main one, each a layer: tracts (option ``tracts``) and a
+map over a region table (option ``map``).
+
+Each is an upload of the same client, found by its id
+(:func:`brainpainter.web.tract_routes.layer_uploads`), and a job keeps a
+copy of each beside its ``input.bin`` (:meth:`LayerUploads.files`, :meth:`LayerUploads.read`), as
+it keeps its main upload: what it draws never changes or expires while it waits.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+#: A job's copy of each layer upload its options name (beside ``input.bin``).
+FILES = {"tracts": "tracts.bin", "map": "map.bin"}
+
+
+@dataclass(frozen=True)
+class LayerUploads:
+    """The stored bytes of the uploads a render's options name (None: not named).
+
+    Attributes
+    ----------
+    tracts : bytes, optional
+        A tract bundle (:mod:`brainpainter.web.tracts`).
+    map : bytes, optional
+        A map bundle (:mod:`brainpainter.web.maps`), drawn over the table's region colours.
+    """
+
+    tracts: bytes | None = None
+    map: bytes | None = None
+
+    def kwargs(self) -> dict[str, Any]:
+        """The keyword arguments of :func:`brainpainter.web.options.prepare` (and of previews, reports)."""
+        return {"tracts": self.tracts, "map_upload": self.map}
+
+    def files(self) -> dict[str, bytes] | None:
+        """A job's copies: file name -> bytes (None when there are none)."""
+        out = {FILES[kind]: data for kind, data in (("tracts", self.tracts), ("map", self.map))
+               if data is not None}
+        return out or None
+
+    @classmethod
+    def read(cls, folder: Path) -> LayerUploads:
+        """A job's copies, read from its folder."""
+        got = {kind: (folder / name).read_bytes() if (folder / name).is_file() else None
+               for kind, name in FILES.items()}
+        return cls(**got)
+
+
+def map_over(data: bytes, map_upload: bytes | None, tracts: bool) -> Any:
+    """The maps of option ``map``, drawn over the region colours of table `data` (as ``--lh``/``--rh``
+    beside INPUT); `tracts`: whether tracts are drawn too.
+
+    Raises
+    ------
+    BrainPainterError
+        The main upload is no region table, option ``map`` names no map upload, or tracts are drawn too.
+    """
+    from brainpainter.errors import BrainPainterError
+    from brainpainter.web.maps import bundle_header, is_bundle, read_bundle
+    from brainpainter.web.tracts import is_tract_bundle
+
+    if is_bundle(data) or is_tract_bundle(data):
+        raise BrainPainterError("option map draws a map over a region table's colours; the upload is a map "
+                                "or tractograms already. Upload a region table and give the map as option "
+                                "map, or leave option map out.")
+    if map_upload is None or not is_bundle(map_upload):
+        raise BrainPainterError("option map names no map upload (it expired, or is a table); upload the map "
+                                "again (POST /api/uploads) and give its upload_id.")
+    if tracts:
+        raise BrainPainterError("a map over region values draws no tracts; give option map or option tracts, "
+                                "not both.")
+    if bundle_header(map_upload)[0].get("kind") == "cifti":  # as the CLI: CIFTI is INPUT, never --lh/--rh
+        raise BrainPainterError("a CIFTI file is drawn alone, not over a region table (as brainpainter "
+                                "render takes it: INPUT, not --lh/--rh); give a surface map pair or a volume "
+                                "as option map, or upload the CIFTI file as the main upload.")
+    return read_bundle(map_upload)

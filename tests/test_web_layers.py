@@ -1,0 +1,142 @@
+"""Several layers from one page (issue 35, item 6): a region table with a map over it (option ``map``) or
+tracts, each layer with its own colour options (``regions_*``, ``map_*``, ``tracts_*``: the fields of
+:class:`brainpainter.rendering.layers.LayerOptions`), through the real worker and preview processes with the
+stand-in renderer (tests/test_web_maps.py's server)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import test_web_maps
+from test_web_maps import N5, morph, post, preview
+from web_support import EXAMPLE, wait_for, zip_pngs
+
+pytest.importorskip("fastapi")
+
+from brainpainter.rendering.layers import LayerOptions
+from brainpainter.rendering.options import option_names
+from brainpainter.web.options import RenderOptions
+
+#: The app of tests/test_web_maps.py (1 worker, the preview process, the stand-in renderer).
+server = test_web_maps.server
+#: Regions all red, the map all blue: a pixel of either colour is that layer's.
+LAYERS = {"regions_gradient": "red,red", "map_gradient": "blue,blue", "map_label": "thickness (mm)"}
+
+
+def upload_table(client) -> str:
+    r = client.post("/api/uploads", params={"name": "dk.csv"}, content=EXAMPLE.read_bytes(),
+                    headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 200, r.text
+    return str(r.json()["upload_id"])
+
+
+def upload_half_map(client, tmp_path) -> str:
+    """lh: 1 on the first half of fsaverage5's vertices, NaN (no value: the regions show) on the rest."""
+    lh = np.where(np.arange(N5) < N5 // 2, 1.0, np.nan)
+    r = post(client, [("lh.thickness", morph(lh, tmp_path, "lh.thickness"))])
+    assert r.status_code == 200, r.text
+    return str(r.json()["upload_id"])
+
+
+def shares(img: np.ndarray) -> tuple[float, float, float]:
+    """Shares of opaque pixels that are red (regions), blue (the map) and a mix of both (purple)."""
+    rgb = img[img[..., 3] > 0][:, :3].astype(int)
+    r, g, b = rgb[:, 0], rgb[:, 1], rgb[:, 2]
+    red = (r > 200) & (b < 60) & (g < 60)
+    blue = (b > 200) & (r < 60) & (g < 60)
+    mixed = (r > 90) & (b > 90) & (g < 60)
+    return float(red.mean()), float(blue.mean()), float(mixed.mean())
+
+
+def test_every_layer_option_is_a_web_option_with_the_core_default_and_help():
+    """The web API's layer options are LayerOptions' fields (no second definition)."""
+    from dataclasses import fields
+
+    for f in fields(LayerOptions):
+        info = RenderOptions.model_fields[f.name]
+        assert info.default == f.default and info.description == f.metadata["help"], f.name
+    assert set(option_names(LayerOptions)) <= set(RenderOptions().run_kwargs())
+    assert RenderOptions(map_alpha=0.5).layers_given() and not RenderOptions().layers_given()
+
+
+def test_a_map_over_a_table_previews_checks_and_renders_two_layers(server, tmp_path):
+    """Regions red, the map blue over half the left cortex: both show; at map_alpha 0.5 they mix; the check
+    report and the job's manifest list both layers' scales, labelled."""
+    table, lh = upload_table(server), upload_half_map(server, tmp_path)
+    options = {**LAYERS, "map": lh}
+    red, blue, _ = shares(preview(server, table, "lateral-left", **options))
+    assert red > 0.1 and blue > 0.1, (red, blue)
+    red, blue, mixed = shares(preview(server, table, "lateral-left", **options, map_alpha=0.5))
+    assert mixed > 0.1 and blue < 0.02, (red, blue, mixed)
+
+    c = server.post("/api/check", json={"upload_id": table, "options": options}).json()
+    assert [(lay["kind"], lay["label"]) for lay in c["layers"]] == [("regions", "dk.csv"),
+                                                                     ("map", "thickness (mm)")]
+    assert c["layers"][1]["scale"]["ramp"][0] == "#0000ff" and c["layers"][0]["scale"]["ramp"][0] == "#ff0000"
+    assert "--lh lh.thickness" in c["reproduce"]["command"]
+    assert "--map-gradient blue,blue" in c["reproduce"]["command"]
+
+    r = server.post("/api/jobs", json={"upload_id": table, "kind": "images", "options": {
+        **options, "map_alpha": 1, "size": "64x48", "views": "lateral-left"}})
+    assert r.status_code == 202, r.text
+    url = r.json()["url"]
+    job = wait_for(lambda: (j := server.get(url).json())["status"] in ("done", "failed") and j, 120)
+    assert job and job["status"] == "done", job
+    pngs = zip_pngs(server.get(job["files"][-1]["url"]).content)
+    assert len(pngs) == 4  # the table's 4 rows
+    red, blue, _ = shares(next(iter(pngs.values())))
+    assert red > 0.1 and blue > 0.1, (red, blue)
+    manifest = server.get(f"{url}/files/manifest.json").json()
+    layers = manifest["settings"]["layers"]
+    assert [(lay["kind"], lay["label"]) for lay in layers] == [("regions", "dk.csv"),
+                                                               ("map", "thickness (mm)")]
+    assert "--lh lh.thickness" in manifest["reproduce"]["command"]
+
+
+def test_a_table_alone_reports_its_layer_and_its_own_options(server):
+    table = upload_table(server)
+    c = server.post("/api/check", json={"upload_id": table, "options": {}}).json()
+    assert [(lay["kind"], lay["label"]) for lay in c["layers"]] == [("regions", "dk.csv")]
+    c = server.post("/api/check", json={"upload_id": table, "options": {"regions_cmap": "magma",
+                                                                          "regions_label": "tau"}}).json()
+    assert c["layers"][0]["label"] == "tau" and c["layers"][0]["scale"]["name"] == "magma"
+
+
+@pytest.mark.parametrize("options, status, message", [
+    ({"map": "0" * 32}, 404, "the map upload of option map was not found"),
+    ({"map_cmap": "magma"}, 400, "--map-cmap colours the map, but this run draws none"),
+    ({"map_alpha": 2}, 400, "--map-alpha must be a number from 0"),
+    ({"regions_cmap": "nope"}, 400, "--regions-* options"),
+    ({"tracts_label": "x" * 201}, 422, "tracts_label"),
+])
+def test_bad_layer_options_are_one_line(server, options, status, message):
+    table = upload_table(server)
+    r = server.post("/api/preview", json={"upload_id": table, "options": options})
+    assert r.status_code == status, r.text
+    err = r.json()["error"]
+    assert message in err and "\n" not in err, err
+
+
+def test_option_map_is_the_clients_own_map_and_not_a_table_or_a_map_under_a_map(server, tmp_path):
+    """Another client's map upload is not found; a table as the map, a map as the main upload: one line."""
+    table, lh = upload_table(server), upload_half_map(server, tmp_path)
+    other = {"x-brainpainter-client": "another-client-0123456789abcdef0123"}
+    mine = server.post("/api/uploads", params={"name": "t.csv"}, content=EXAMPLE.read_bytes(),
+                       headers={"content-type": "application/octet-stream", **other}).json()["upload_id"]
+    r = server.post("/api/preview", json={"upload_id": mine, "options": {"map": lh}}, headers=other)
+    assert r.status_code == 404 and "option map was not found" in r.json()["error"]
+    r = server.post("/api/preview", json={"upload_id": table, "options": {"map": table}})
+    assert r.status_code == 404 and "option map was not found" in r.json()["error"]
+    r = server.post("/api/preview", json={"upload_id": lh, "options": {"map": lh}})
+    assert r.status_code == 400 and "the upload is a map or tractograms already" in r.json()["error"]
+
+
+def test_a_job_keeps_its_own_copy_of_the_map(server, tmp_path):
+    """The map upload is copied beside the job's input and charged to the disk budget with it."""
+    table, lh = upload_table(server), upload_half_map(server, tmp_path)
+    store = server.app.state.store
+    r = server.post("/api/jobs", json={"upload_id": table, "kind": "images", "options": {
+        **LAYERS, "map": lh, "size": "32x24", "views": "lateral-left"}})
+    assert r.status_code == 202, r.text
+    folder = store.job_dir(r.json()["id"])
+    assert (folder / "map.bin").read_bytes() == store.get_upload(lh)[1]
