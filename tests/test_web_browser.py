@@ -426,7 +426,8 @@ def test_refused_uploads_keep_their_message_and_the_last_good_one(served, tmp_pa
 def test_page_draws_a_map_over_the_table_each_with_its_own_colour_bar(served, tmp_path):
     """Issue 35, item 6: the example table, then a map pair in 'Map over the table' with its own colour
     map and label: the preview (real renderer) shows the map's colours over the regions, two labelled
-    colour bars (the table's gradient and the map's magma), and the command line draws both layers."""
+    colour bars (the table's gradient and the map's magma), and the command line draws both layers; a
+    contour of a mask adds its lines and --contour."""
     import nibabel as nib
     from playwright.sync_api import expect
 
@@ -434,6 +435,8 @@ def test_page_draws_a_map_over_the_table_each_with_its_own_colour_bar(served, tm
         values = np.full(10242, np.nan, np.float32)
         values[:5000] = np.linspace(1.0, 3.0, 5000)
         nib.freesurfer.write_morph_data(str(tmp_path / f"{hemi}.thickness"), values)
+        mask = np.isfinite(values).astype(np.float32).reshape(-1, 1, 1)
+        nib.save(nib.MGHImage(mask, np.eye(4)), str(tmp_path / f"{hemi}.mask.mgh"))
     with _page(tmp_path) as (page, errors):
         page.goto(served.url + "/")
         expect(page.locator("#map_cmap option[value=magma]")).to_have_count(1)
@@ -462,5 +465,15 @@ def test_page_draws_a_map_over_the_table_each_with_its_own_colour_bar(served, tm
         assert brain.mean() > 0.1
         changed = np.abs(after[..., :3].astype(int) - before[..., :3].astype(int)).max(-1) > 40
         assert 0.05 < changed[brain].mean() < 0.95, changed[brain].mean()  # the map over part, regions beside
+        # a contour of a mask over the map: its lines on the preview, --contour in the command
+        masks = [str(tmp_path / f"{h}.mask.mgh") for h in ("lh", "rh")]
+        page.locator("#contour-files").set_input_files(masks)
+        expect(page.locator("#contour-status")).to_contain_text("OK: map: lh.mask.mgh + rh.mask.mgh")
+        expect(page.locator("#command")).to_contain_text("--contour lh.mask.mgh,rh.mask.mgh", timeout=120_000)
+        page.wait_for_function("() => !document.querySelector('#preview-status').textContent"
+                               ".includes('Rendering')", timeout=120_000)
+        lined = png_pixels(page.locator("#preview").screenshot())
+        dark = [int((img[..., :3].astype(int).max(-1) < 50).sum()) for img in (after, lined)]
+        assert dark[1] > dark[0] + 100, dark
         _shot(page, tmp_path, "layers-page.png")
         assert errors == []

@@ -5,6 +5,7 @@ stand-in renderer (tests/test_web_maps.py's server)."""
 
 from __future__ import annotations
 
+import nibabel as nib
 import numpy as np
 import pytest
 import test_web_maps
@@ -140,3 +141,77 @@ def test_a_job_keeps_its_own_copy_of_the_map(server, tmp_path):
     assert r.status_code == 202, r.text
     folder = store.job_dir(r.json()["id"])
     assert (folder / "map.bin").read_bytes() == store.get_upload(lh)[1]
+
+
+def upload_mask(client, tmp_path) -> str:
+    """A cluster mask over both hemispheres: 1 on the first half of fsaverage5's vertices, else 0."""
+    mask = (np.arange(N5) < N5 // 2).astype(float)
+    image = nib.MGHImage(mask.astype(np.float32).reshape(-1, 1, 1), np.eye(4))
+    for h in ("lh", "rh"):
+        nib.save(image, str(tmp_path / f"{h}.mask.mgh"))
+    r = post(client, [(f"{h}.mask.mgh", (tmp_path / f"{h}.mask.mgh").read_bytes()) for h in ("lh", "rh")])
+    assert r.status_code == 200, r.text
+    return str(r.json()["upload_id"])
+
+
+def test_a_contour_upload_goes_to_the_painter_the_job_and_the_command(server, tmp_path):
+    """Option contour (a map upload): its iso-lines reach the preview's painter (Contours of the mask), a job
+    keeps its copy, and the command draws it with --contour LH,RH and the levels."""
+    from brainpainter.web.config import ServerConfig
+    from brainpainter.web.pool import preview_request
+
+    table, lh, mask = upload_table(server), upload_half_map(server, tmp_path), upload_mask(server, tmp_path)
+    store = server.app.state.store
+    options = {**LAYERS, "map": lh, "contour": mask, "contour_levels": "0.5"}
+    req = preview_request(store.get_upload(table)[1], "dk.csv", RenderOptions(**options), 0, "lateral-left",
+                          ServerConfig(), map_upload=store.get_upload(lh)[1],
+                          contour_upload=store.get_upload(mask)[1])
+    contours = req["contours"]
+    assert contours.levels == (0.5,) and set(contours.values) == {"lh", "rh"}
+    assert 0.3 < float(np.mean(contours.values["lh"] > 0.5)) < 0.7
+    assert preview(server, table, "lateral-left", **options).shape == (120, 160, 4)
+    c = server.post("/api/check", json={"upload_id": table, "options": options}).json()
+    command = c["reproduce"]["command"]
+    assert "--contour lh.mask.mgh,rh.mask.mgh" in command and "--contour-levels 0.5" in command, command
+    r = server.post("/api/jobs", json={"upload_id": table, "kind": "images", "options": {
+        **options, "size": "32x24", "views": "lateral-left"}})
+    assert r.status_code == 202, r.text
+    assert (store.job_dir(r.json()["id"]) / "contour.bin").read_bytes() == store.get_upload(mask)[1]
+    r = server.post("/api/preview", json={"upload_id": table, "options": {"contour": table}})
+    assert r.status_code == 404 and "option contour was not found" in r.json()["error"]
+    r = server.post("/api/preview", json={"upload_id": table, "options": {"contour": mask}})
+    assert r.status_code == 400 and "--contour draws a second map's iso-lines over a map" in r.json()["error"]
+
+
+@pytest.mark.render
+def test_the_preview_painter_draws_the_contour_lines(tmp_path):
+    """The painter the preview process makes (PainterCache.get with the request's painter arguments, real
+    Blender) draws the mask's edge as dark lines over the map; the same map without a contour has none."""
+    pytest.importorskip("bpy")
+    from brainpainter.rendering.views import get_view
+    from brainpainter.web.maps import build_bundle
+    from brainpainter.web.options import prepare
+    from brainpainter.web.worker import PainterCache
+
+    bundles = {}
+    for name, values in (("map", np.full(N5, 2.0)), ("mask", (np.arange(N5) < N5 // 2).astype(float))):
+        for h in ("lh", "rh"):
+            nib.freesurfer.write_morph_data(str(tmp_path / f"{h}.{name}"), values.astype(np.float32))
+        work = tmp_path / name
+        work.mkdir()
+        build_bundle(work, [(h, tmp_path / f"{h}.{name}") for h in ("lh", "rh")], 10)
+        bundles[name] = (work / "bundle.bin").read_bytes()
+    painters = PainterCache("blender")
+    dark = []
+    try:
+        for contour in (None, bundles["mask"]):
+            o = RenderOptions(size="320x240", gradient="white,white", vmin=0, vmax=1,
+                              contour="0" * 32 if contour else None)
+            prep = prepare(bundles["map"], "lh.map + rh.map", o, contour_upload=contour)
+            painter = painters.get(prep.run.table.atlas, "pial", [], prep.run.settings, prep.coloring,
+                                   **prep.painter_args())
+            pixels = painter.paint_colors(prep.run.colors(0), get_view("lateral-left"))
+            dark.append(int((pixels[..., :3].astype(int).max(-1) < 60).sum()))
+    finally:
+        painters.close()
+    assert dark[0] < 20 and dark[1] > 200, dark

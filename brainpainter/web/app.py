@@ -312,7 +312,8 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
                                                                                      owner_of(request))
         report = await _check_report(data, name, o, layers)
         # the command line and the Python call that make these images again
-        report["reproduce"] = await work.run(reproduce, data, name, o, layers.tracts, map_upload=layers.map)
+        report["reproduce"] = await work.run(reproduce, data, name, o, layers.tracts, map_upload=layers.map,
+                                             contour_upload=layers.contour)
         return report
 
     async def _check_report(data: bytes, name: str, o: RenderOptions, layers: LayerUploads) -> dict[str, Any]:

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 #: A job's copy of each layer upload its options name (beside ``input.bin``).
-FILES = {"tracts": "tracts.bin", "map": "map.bin"}
+FILES = {"tracts": "tracts.bin", "map": "map.bin", "contour": "contour.bin"}
 
 
 @dataclass(frozen=True)
@@ -27,19 +27,21 @@ class LayerUploads:
         A tract bundle (:mod:`brainpainter.web.tracts`).
     map : bytes, optional
         A map bundle (:mod:`brainpainter.web.maps`), drawn over the table's region colours.
+    contour : bytes, optional
+        A map bundle whose iso-lines are drawn over the map (``--contour``).
     """
 
     tracts: bytes | None = None
     map: bytes | None = None
+    contour: bytes | None = None
 
     def kwargs(self) -> dict[str, Any]:
         """The keyword arguments of :func:`brainpainter.web.options.prepare` (and of previews, reports)."""
-        return {"tracts": self.tracts, "map_upload": self.map}
+        return {"tracts": self.tracts, "map_upload": self.map, "contour_upload": self.contour}
 
     def files(self) -> dict[str, bytes] | None:
         """A job's copies: file name -> bytes (None when there are none)."""
-        out = {FILES[kind]: data for kind, data in (("tracts", self.tracts), ("map", self.map))
-               if data is not None}
+        out = {FILES[kind]: data for kind in FILES if (data := getattr(self, kind)) is not None}
         return out or None
 
     @classmethod
@@ -78,3 +80,20 @@ def map_over(data: bytes, map_upload: bytes | None, tracts: bool) -> Any:
                                 "render takes it: INPUT, not --lh/--rh); give a surface map pair or a volume "
                                 "as option map, or upload the CIFTI file as the main upload.")
     return read_bundle(map_upload)
+
+
+def contour_maps(contour_upload: bytes | None) -> Any:
+    """The maps of option ``contour`` (a map bundle), whose iso-lines are drawn over the map (``--contour``).
+
+    Raises
+    ------
+    BrainPainterError
+        Option ``contour`` names no map upload.
+    """
+    from brainpainter.errors import BrainPainterError
+    from brainpainter.web.maps import is_bundle, read_bundle
+
+    if contour_upload is None or not is_bundle(contour_upload):
+        raise BrainPainterError("option contour names no map upload (it expired, or is a table); upload the "
+                                "map again (POST /api/uploads) and give its upload_id.")
+    return read_bundle(contour_upload)

@@ -27,7 +27,7 @@ from brainpainter.rendering.layers import LayerOptions
 from brainpainter.rendering.options import SceneOptions, option_names
 from brainpainter.rendering.settings import RenderSettings, parse_size
 from brainpainter.table.options import TableOptions as ReadOptions
-from brainpainter.web.layer_uploads import map_over
+from brainpainter.web.layer_uploads import contour_maps, map_over
 from brainpainter.web.tracts import MAX_WEB_STREAMLINES
 
 if TYPE_CHECKING:
@@ -36,8 +36,9 @@ if TYPE_CHECKING:
 
 #: The options of tracts (given to a run only with tractograms).
 TRACT_FIELDS = ("tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_radius", "tract_value")
-#: The options that name another upload drawn as a layer of the main one (a map over a table, tracts).
-LAYER_UPLOADS = ("map", "tracts")
+#: The options that name another upload drawn as a layer of the main one (a map over a table, tracts, a
+#: contour map's iso-lines).
+LAYER_UPLOADS = ("map", "tracts", "contour")
 
 #: Suffixes an uploaded file name may have (only used to sniff the format; never a path).
 UPLOAD_SUFFIXES = (".csv", ".tsv", ".tab", ".txt", ".dat", ".xlsx", ".xlsm", ".xls")
@@ -135,6 +136,11 @@ class RenderOptions(_WithLayers):
     map: str | None = Field(None, pattern="^[0-9a-f]{32}$", description=(
         "Upload id of a map (POST /api/uploads: a surface map, a volume or a CIFTI file) drawn over the "
         "table's region colours, as --lh/--rh (or --volume) beside INPUT; map_alpha is its opacity."))
+    contour: str | None = Field(None, pattern="^[0-9a-f]{32}$", description=(
+        "Upload id of a map of one image (a cluster mask, a p-map) whose iso-lines are drawn over the map, "
+        "as --contour."))
+    contour_levels: str | None = Field(None, max_length=200,
+                                       description=core(MapOptions, "contour_levels").description)
     tracts: str | None = Field(None, pattern="^[0-9a-f]{32}$", description=(
         "Upload id of tractograms (POST /api/tracts) drawn with the table, as --tracts (with the upload's "
         "table of bundle values, if it had one, as --tract-values)."))
@@ -157,7 +163,8 @@ class RenderOptions(_WithLayers):
         `tracts`: the files of the ``tracts`` upload on disk (:func:`brainpainter.web.tracts.materialise`),
         given as the CLI's ``--tracts``, ``--tract-values`` and ``--tracts-affine``.
         """
-        values = self.model_dump(exclude={"atlas", "size", "transparent", "hide", "map", *TRACT_FIELDS})
+        values = self.model_dump(exclude={"atlas", "size", "transparent", "hide", *LAYER_UPLOADS,
+                                          *TRACT_FIELDS})
         if self.size:  # none: the default size, which an atlas of another shape reshapes (as on the CLI)
             values["width"], values["height"] = parse_size(self.size)
         if self.transparent:
@@ -217,16 +224,18 @@ class Prepared:
         return "vertices" if hasattr(self.run, "source_vertex") else "regions"
 
     def painter_args(self) -> dict[str, Any]:
-        """The tract arguments of the run's painter (:meth:`brainpainter.rendering.run.Run.painter`)."""
+        """The tract and contour arguments of the run's painter (as
+        :meth:`brainpainter.rendering.run.Run.painter` gives them)."""
         scene = self.run.options.scene
         tv = getattr(self.run, "tract_values", None)
         return {"tracts": scene.tract_spec(), "tract_nodes": tv.nodes if tv is not None else (),
-                "tract_radius": scene.tract_radius}
+                "tract_radius": scene.tract_radius, "contours": getattr(self.run, "contours", None)}
 
 
 def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int | None = None,
             max_pixels: int | None = None, tracts: bytes | None = None,
-            data_dir: Path | None = None, map_upload: bytes | None = None) -> Prepared:
+            data_dir: Path | None = None, map_upload: bytes | None = None,
+            contour_upload: bytes | None = None) -> Prepared:
     """Check `options` against the uploaded table (or map) exactly as ``brainpainter render`` would.
 
     Parameters
@@ -245,8 +254,9 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
         The tract bundle that option ``tracts`` names (drawn with the table).
     data_dir : Path, optional
         The server's data folder: a tract bundle's files are written under it (``incoming/``).
-    map_upload : bytes, optional
-        The map bundle that option ``map`` names (drawn over the table's region colours).
+    map_upload, contour_upload : bytes, optional
+        The map bundles that options ``map`` (drawn over the table's region colours) and ``contour``
+        (its iso-lines drawn over the map) name.
 
     Raises
     ------
@@ -264,6 +274,8 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     kwargs = options.run_kwargs(files)
     if options.map is not None:  # a map over the table's region colours, as --lh/--rh beside INPUT
         kwargs["lh"] = map_over(data, map_upload, files is not None)
+    if options.contour is not None:
+        kwargs["contour"] = contour_maps(contour_upload)
     default = RenderSettings()
     pixels = kwargs.get("width", default.width) * kwargs.get("height", default.height)
     if max_pixels is not None and pixels > max_pixels:
@@ -454,11 +466,11 @@ def layers_report(run: Any) -> list[dict[str, Any]]:
              "scale": scale_report(layer.scale)} for layer in colorbar_layers(run.layers)]
 
 
-def table_layers(data: bytes, name: str, options: RenderOptions, tracts: bytes | None = None,
-                 data_dir: Path | None = None, map_upload: bytes | None = None) -> dict[str, Any]:
+def table_layers(data: bytes, name: str, options: RenderOptions, data_dir: Path | None = None,
+                 **uploads: Any) -> dict[str, Any]:
     """The colour scales of a table drawn with other layers (tracts, a map) or options of its own layer:
-    ``scale``, the first layer's, and ``layers`` (:func:`layers_report`)."""
-    run = prepare(data, name, options, tracts=tracts, data_dir=data_dir, map_upload=map_upload).run
+    ``scale``, the first layer's, and ``layers`` (:func:`layers_report`); `uploads`: :func:`prepare`'s."""
+    run = prepare(data, name, options, data_dir=data_dir, **uploads).run
     return {"scale": scale_report(run.scale), "layers": layers_report(run)}
 
 

@@ -186,7 +186,7 @@ def media_options(kind: str, params: dict[str, Any]) -> tuple[str, list[tuple[st
 
 def reproduce(data: bytes, name: str, options: RenderOptions, tracts: bytes | None = None,
               kind: str = "images", params: dict[str, Any] | None = None, *,
-              map_upload: bytes | None = None) -> dict[str, str]:
+              map_upload: bytes | None = None, contour_upload: bytes | None = None) -> dict[str, str]:
     """The command and the Python call that make the images of `options` from the upload `data` (named
     `name`): ``brainpainter render``, or ``figure`` / ``movie`` for those jobs (`kind`, with their
     `params`).
@@ -206,6 +206,8 @@ def reproduce(data: bytes, name: str, options: RenderOptions, tracts: bytes | No
         A figure's or movie's options.
     map_upload : bytes, optional
         The map bundle option ``map`` names (drawn over the table: its ``--lh``/``--rh`` or ``--volume``).
+    contour_upload : bytes, optional
+        The map bundle option ``contour`` names (``--contour``).
 
     Returns
     -------
@@ -218,6 +220,8 @@ def reproduce(data: bytes, name: str, options: RenderOptions, tracts: bytes | No
     if map_upload is not None:  # a map over the table: its files as --lh/--rh or --volume
         upload = "map"
         pairs += inputs(map_upload, "")[2]
+    if contour_upload is not None:  # --contour FILE, or LH,RH
+        pairs.append(("contour", ",".join(v for _, v in inputs(contour_upload, "")[2])))
     if drawn is not None:
         merged: dict[str, list[str]] = {}
         for key, value in tract_inputs(drawn, upload == "tracts"):

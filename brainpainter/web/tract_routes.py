@@ -84,7 +84,7 @@ def tracts_of(store: Store, options: RenderOptions, owner: str) -> bytes | None:
 
 
 def layer_uploads(store: Store, options: RenderOptions, owner: str) -> LayerUploads:
-    """The uploads of `owner` that `options` name (``tracts``, ``map``).
+    """The uploads of `owner` that `options` name (``tracts``, ``map``, ``contour``).
 
     Raises
     ------
@@ -93,11 +93,12 @@ def layer_uploads(store: Store, options: RenderOptions, owner: str) -> LayerUplo
     """
     from brainpainter.web.maps import is_bundle
 
-    map_data = None
-    if options.map is not None:
-        got = store.get_upload(options.map, owner)
-        if got is None or not is_bundle(got[1]):
-            raise ApiError(404, "the map upload of option map was not found (it expired, the id is wrong, or "
-                                "it is not a map); upload the map again.")
-        map_data = got[1]
-    return LayerUploads(tracts_of(store, options, owner), map_data)
+    maps: dict[str, bytes | None] = {}
+    for name in ("map", "contour"):
+        upload_id = getattr(options, name)
+        got = None if upload_id is None else store.get_upload(upload_id, owner)
+        if upload_id is not None and (got is None or not is_bundle(got[1])):
+            raise ApiError(404, f"the map upload of option {name} was not found (it expired, the id is "
+                                "wrong, or it is not a map); upload the map again.")
+        maps[name] = None if got is None else got[1]
+    return LayerUploads(tracts_of(store, options, owner), **maps)

@@ -6,7 +6,7 @@ const $ = (id) => document.getElementById(id);
 const state = { uploadId: null, files: null, name: null, report: null, meta: null, isMap: false,
                 previewCtl: null, previewTimer: null, previewUrl: null, seq: 0, scale: null,
                 tractsId: null, tractReport: null, tractFiles: null, summary: "", layers: [],
-                mapId: null, mapReport: null };
+                mapId: null, mapReport: null, contourId: null, contourReport: null };
 const DEFAULT_VIEWS = ["lateral-left", "medial-left", "subcortical"];
 const MAP_VIEWS = ["lateral-left", "medial-left", "lateral-right", "medial-right"];  // a map's default
 const TRACT_VIEWS = ["subcortical", "subcortical-dorsal"];  // tracts alone: the views that show them
@@ -234,6 +234,9 @@ function layerOptions() {
   const out = { [`${mainKind()}_label`]: textOrNull("main_label") };
   const over = overLayers();
   if (over.map) out.map = state.mapId;
+  if (state.contourId && (state.isMap || over.map)) {
+    out.contour = state.contourId; out.contour_levels = textOrNull("contour_levels");
+  }
   for (const kind of ["map", "tracts"]) {
     if (!over[kind]) continue;
     const cmap = textOrNull(`${kind}_cmap`);
@@ -268,34 +271,36 @@ function layerFields(kind, cmaps) {
   for (const ev of ["input", "change"]) box.addEventListener(ev, () => schedulePreview());
 }
 
-// A map drawn over the table: its own upload (POST /api/uploads, as the main one), option map.
-async function uploadMap(files) {
+// A map drawn over the table (option map) or a contour map (option contour): an upload of its own (POST
+// /api/uploads, as the main one); `kind` is "map" or "contour", the prefix of its fields and state.
+async function uploadLayerMap(kind, files) {
   const q = new URLSearchParams();
   for (const f of files) q.append("name", f.name);
   if (files.length > 1) for (const f of files) q.append("size", String(f.size));
   const shown = files.map((f) => f.name).join(" + ");
-  say("map-error", "");
-  $("map-status").textContent = `Checking ${shown}…`;
+  say(`${kind}-error`, "");
+  $(`${kind}-status`).textContent = `Checking ${shown}…`;
   try {
     const res = await api(`/api/uploads?${q}`, { method: "POST", body: new Blob(files.map((f) => f.blob)),
                                                  headers: { "content-type": "application/octet-stream" } });
     const j = await res.json();
     if (j.report.kind !== "map") throw new Error(`${shown} is a table; give a map here (or upload it above)`);
-    state.mapId = j.upload_id; state.mapReport = j.report;
-    $("map-status").textContent = `OK: ${j.report.summary}`;
-    $("map-clear").disabled = false;
+    state[`${kind}Id`] = j.upload_id; state[`${kind}Report`] = j.report;
+    $(`${kind}-status`).textContent = `OK: ${j.report.summary}`;
+    $(`${kind}-clear`).disabled = false;
     showFieldsets();
     schedulePreview(0);
   } catch (e) {
-    say("map-error", refused(shown, e.message));
-    $("map-status").textContent = state.mapId ? `Still drawn: ${state.mapReport.summary}` : "No map is drawn.";
+    say(`${kind}-error`, refused(shown, e.message));
+    const kept = state[`${kind}Report`];
+    $(`${kind}-status`).textContent = kept ? `Still drawn: ${kept.summary}` : `No ${kind} is drawn.`;
   }
 }
 
-function clearMap() {
-  state.mapId = null; state.mapReport = null;
-  $("map-status").textContent = ""; $("map-clear").disabled = true; $("map-files").value = "";
-  say("map-error", "");
+function clearLayerMap(kind) {
+  state[`${kind}Id`] = null; state[`${kind}Report`] = null;
+  $(`${kind}-status`).textContent = ""; $(`${kind}-clear`).disabled = true; $(`${kind}-files`).value = "";
+  say(`${kind}-error`, "");
   showFieldsets();
   schedulePreview(0);
 }
@@ -371,6 +376,7 @@ function showFieldsets() {
   $("tract-options").hidden = any && !state.tractsId;
   const over = overLayers();
   $("map-box").hidden = any && (state.isMap || mainKind() === "tracts");
+  $("contour-box").hidden = any && !state.isMap && !over.map;
   $("map-scale").hidden = !over.map; $("tracts-scale").hidden = !over.tracts;
   const maps = !any || state.isMap || over.map;
   for (const n of document.querySelectorAll("[data-map-only]")) n.hidden = !maps;
@@ -739,11 +745,14 @@ function wire() {
     if (list.length) uploadTracts(picked(list));
   });
   $("tract-clear").addEventListener("click", clearTracts);
-  $("map-files").addEventListener("change", () => {
-    const list = $("map-files").files;
-    if (list.length) uploadMap(picked(list));
-  });
-  $("map-clear").addEventListener("click", clearMap);
+  for (const kind of ["map", "contour"]) {
+    $(`${kind}-files`).addEventListener("change", () => {
+      const list = $(`${kind}-files`).files;
+      if (list.length) uploadLayerMap(kind, picked(list));
+    });
+    $(`${kind}-clear`).addEventListener("click", () => clearLayerMap(kind));
+  }
+  $("contour_levels").addEventListener("input", () => schedulePreview());
   $("subject").addEventListener("change", () => {
     if (state.tractFiles) uploadTracts(state.tractFiles, $("subject").value);
   });
