@@ -97,3 +97,16 @@ def contour_maps(contour_upload: bytes | None) -> Any:
         raise BrainPainterError("option contour names no map upload (it expired, or is a table); upload the "
                                 "map again (POST /api/uploads) and give its upload_id.")
     return read_bundle(contour_upload)
+
+
+def layer_maps(options: Any, data: bytes, tracts: bool, map_upload: bytes | None,
+               contour_upload: bytes | None) -> dict[str, Any]:
+    """The run's keywords of options ``map`` and ``contour`` (a
+    :class:`~brainpainter.web.options.RenderOptions`): ``lh``, the maps over the table (as ``--lh``/``--rh``
+    beside INPUT), and ``contour``, the maps whose iso-lines are drawn (``--contour``)."""
+    out: dict[str, Any] = {}
+    if options.map is not None:
+        out["lh"] = map_over(data, map_upload, tracts)
+    if options.contour is not None:
+        out["contour"] = contour_maps(contour_upload)
+    return out

@@ -27,7 +27,7 @@ from brainpainter.rendering.layers import LayerOptions
 from brainpainter.rendering.options import SceneOptions, option_names
 from brainpainter.rendering.settings import RenderSettings, parse_size
 from brainpainter.table.options import TableOptions as ReadOptions
-from brainpainter.web.layer_uploads import contour_maps, map_over
+from brainpainter.web.layer_uploads import layer_maps
 from brainpainter.web.tracts import MAX_WEB_STREAMLINES
 
 if TYPE_CHECKING:
@@ -255,8 +255,7 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     data_dir : Path, optional
         The server's data folder: a tract bundle's files are written under it (``incoming/``).
     map_upload, contour_upload : bytes, optional
-        The map bundles that options ``map`` (drawn over the table's region colours) and ``contour``
-        (its iso-lines drawn over the map) name.
+        The map bundles of options ``map`` (over the table) and ``contour`` (iso-lines over the map).
 
     Raises
     ------
@@ -272,10 +271,7 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     alone = is_tract_bundle(data)
     files = _tract_files(data, options, tracts, data_dir)
     kwargs = options.run_kwargs(files)
-    if options.map is not None:  # a map over the table's region colours, as --lh/--rh beside INPUT
-        kwargs["lh"] = map_over(data, map_upload, files is not None)
-    if options.contour is not None:
-        kwargs["contour"] = contour_maps(contour_upload)
+    kwargs.update(layer_maps(options, data, files is not None, map_upload, contour_upload))
     default = RenderSettings()
     pixels = kwargs.get("width", default.width) * kwargs.get("height", default.height)
     if max_pixels is not None and pixels > max_pixels:
