@@ -215,3 +215,20 @@ def test_the_preview_painter_draws_the_contour_lines(tmp_path):
     finally:
         painters.close()
     assert dark[0] < 20 and dark[1] > 200, dark
+
+
+@pytest.mark.parametrize("kind, params", [("figure", {"format": "png", "dpi": 50}),
+                                          ("movie", {"format": "gif", "frames_per_step": 1})])
+def test_figure_and_movie_jobs_draw_a_map_over_the_table(server, tmp_path, kind, params):
+    """A figure's and a movie's jobs take the layers as an images job does; their manifest's command too."""
+    table, lh = upload_table(server), upload_half_map(server, tmp_path)
+    r = server.post("/api/jobs", json={"upload_id": table, "kind": kind, kind: params, "options": {
+        **LAYERS, "map": lh, "size": "64x48", "views": "lateral-left"}})
+    assert r.status_code == 202, r.text
+    url = r.json()["url"]
+    job = wait_for(lambda: (j := server.get(url).json())["status"] in ("done", "failed") and j, 180)
+    assert job and job["status"] == "done", job
+    manifest = server.get(f"{url}/files/manifest.json").json()
+    command = manifest["reproduce"]["command"]
+    assert command.startswith(f"brainpainter {kind} dk.csv") and "--lh lh.thickness" in command, command
+    assert "--map-gradient blue,blue" in command
