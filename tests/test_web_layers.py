@@ -232,3 +232,28 @@ def test_figure_and_movie_jobs_draw_a_map_over_the_table(server, tmp_path, kind,
     command = manifest["reproduce"]["command"]
     assert command.startswith(f"brainpainter {kind} dk.csv") and "--lh lh.thickness" in command, command
     assert "--map-gradient blue,blue" in command
+
+
+def test_a_job_is_charged_for_its_copy_of_the_map(tmp_path):
+    """The job's copy of option map's upload counts against the disk budget with its input: a job that fits
+    without it is refused with it (507), and nothing of it is kept."""
+    from fastapi.testclient import TestClient
+
+    from brainpainter.web.app import create_app
+    from brainpainter.web.config import ServerConfig
+
+    with TestClient(create_app(ServerConfig(data_dir=tmp_path / "data", workers=0, preview=False))) as client:
+        table = upload_table(client)
+        noisy = np.random.default_rng(0).normal(2.0, 0.5, N5)  # 41 KB that do not compress away
+        r = post(client, [("lh.thickness", morph(noisy, tmp_path, "lh.thickness"))])
+        assert r.status_code == 200, r.text
+        store = client.app.state.store
+        sizes = [len(store.get_upload(u)[1]) for u in (table, r.json()["upload_id"])]
+        assert sizes[1] > 5 * 4096, sizes
+        store.budget.limit = store.budget.used(max_age_s=0) + 3 * 4096  # the table's copy fits, the map's not
+        job = {"upload_id": table, "kind": "images", "options": {"map": r.json()["upload_id"]}}
+        refused = client.post("/api/jobs", json=job)
+        assert refused.status_code == 507 and "storage budget" in refused.json()["error"], refused.text
+        assert not any((tmp_path / "data" / "jobs").iterdir())
+        del job["options"]["map"]
+        assert client.post("/api/jobs", json=job).status_code == 202
