@@ -108,3 +108,16 @@ def test_the_command_line_of_a_cifti_upload_names_the_file(tmp_path):
     assert got["command"].startswith("brainpainter render z.dscalar.nii -o ")
     assert "--threshold 0.5" in got["command"]
     assert got["python"].splitlines()[-1].startswith("brainpainter.render('z.dscalar.nii', out=")
+
+
+def test_a_dlabel_upload_reports_its_key_as_its_colour_bar(server, tmp_path):
+    """A label map's layer in the check report carries its categories (the page's key): names, colours."""
+    table = {0: ("???", (0, 0, 0, 0)), 1: ("red", (1, 0, 0, 1)), 2: ("blue", (0, 0, 1, 1))}
+    labels = (np.arange(N32) % 2 + 1)[None]
+    r = post(server, [("p.dlabel.nii", cifti(tmp_path, "p.dlabel.nii", labels, axes.LabelAxis(["p"], [table]),
+                                             left_cortex()))])
+    assert r.status_code == 200, r.text
+    c = server.post("/api/check", json={"upload_id": r.json()["upload_id"], "options": {}}).json()
+    assert [(lay["kind"], lay["label"]) for lay in c["layers"]] == [("map", "p.dlabel.nii")]
+    assert c["layers"][0]["scale"]["categories"] == [{"name": "red", "color": "#ff0000"},
+                                                     {"name": "blue", "color": "#0000ff"}]

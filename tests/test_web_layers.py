@@ -257,3 +257,27 @@ def test_a_job_is_charged_for_its_copy_of_the_map(tmp_path):
         assert not any((tmp_path / "data" / "jobs").iterdir())
         del job["options"]["map"]
         assert client.post("/api/jobs", json=job).status_code == 202
+
+
+def test_tracts_with_a_table_get_their_own_scale_and_colour_bar(server, tmp_path):
+    """Tracts given tracts_cmap/vmin/vmax are a layer of their own: the check report has two bars, the second
+    the tracts' (magma over 0.3-0.7, labelled), and the command carries --tracts-cmap."""
+    from test_tracts import bundle, write
+
+    write(tmp_path / "AF_L.trk", bundle(-30.0, n=20, z=30.0, length=60.0))
+    files = [("AF_L.trk", (tmp_path / "AF_L.trk").read_bytes()), ("fa.csv", b"AF_left\n0.4\n0.5\n0.6\n0.7\n")]
+    r = server.post("/api/tracts", params={"name": [n for n, _ in files], "size": [len(d) for _, d in files]},
+                    content=b"".join(d for _, d in files),
+                    headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 200, r.text
+    table, tracts = upload_table(server), r.json()["upload_id"]
+    shared = server.post("/api/check", json={"upload_id": table, "options": {"tracts": tracts}}).json()
+    assert [lay["kind"] for lay in shared["layers"]] == ["regions"]  # one scale over both: one bar
+    options = {"tracts": tracts, "tracts_cmap": "magma", "tracts_vmin": 0.3, "tracts_vmax": 0.7,
+               "tracts_label": "FA"}
+    c = server.post("/api/check", json={"upload_id": table, "options": options}).json()
+    assert [(lay["kind"], lay["label"]) for lay in c["layers"]] == [("regions", "dk.csv"), ("tracts", "FA")]
+    bar = c["layers"][1]["scale"]
+    assert (bar["name"], bar["vmin"], bar["vmax"]) == ("magma", 0.3, 0.7)
+    assert "--tracts-cmap magma" in c["reproduce"]["command"]
+    assert preview(server, table, "subcortical", **options).shape == (120, 160, 4)

@@ -103,10 +103,16 @@ def layer_maps(options: Any, data: bytes, tracts: bool, map_upload: bytes | None
                contour_upload: bytes | None) -> dict[str, Any]:
     """The run's keywords of options ``map`` and ``contour`` (a
     :class:`~brainpainter.web.options.RenderOptions`): ``lh``, the maps over the table (as ``--lh``/``--rh``
-    beside INPUT), and ``contour``, the maps whose iso-lines are drawn (``--contour``)."""
+    beside INPUT), ``contour``, the maps whose iso-lines are drawn (``--contour``), and the map's colour-bar
+    label when none was given (its files' names: ``lh.thickness + rh.thickness``)."""
+    from brainpainter.web.maps import base_of, is_bundle
+
     out: dict[str, Any] = {}
     if options.map is not None:
         out["lh"] = map_over(data, map_upload, tracts)
     if options.contour is not None:
         out["contour"] = contour_maps(contour_upload)
+    drawn = map_upload if options.map is not None else data
+    if options.map_label is None and drawn is not None and is_bundle(drawn):
+        out["map_label"] = " + ".join(base_of(drawn)["files"])  # its colour bar: the files, as uploaded
     return out
