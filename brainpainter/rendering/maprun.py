@@ -58,9 +58,8 @@ class MapTable:
 
     @property
     def values(self) -> NDArray[Any]:
-        """No NaN region values (a map's NaN vertices show the underlay): zeros, (images, regions); the
-        images are the rows of the table below, where there is one (a map of one image over them all)."""
-        return np.zeros((len(self.images), len(self.atlas.keys)))
+        """No NaN region values (a map's NaN vertices show the underlay): zeros, (images, regions)."""
+        return np.zeros((len(self.images), len(self.atlas.keys)))  # a table's rows under a map of one image
 
     def summary(self) -> dict[str, Any]:
         return self.maps.summary() if self.below is None else {**self.maps.summary(),
