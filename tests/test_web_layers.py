@@ -179,8 +179,6 @@ def test_a_contour_upload_goes_to_the_painter_the_job_and_the_command(server, tm
     assert (store.job_dir(r.json()["id"]) / "contour.bin").read_bytes() == store.get_upload(mask)[1]
     r = server.post("/api/preview", json={"upload_id": table, "options": {"contour": table}})
     assert r.status_code == 404 and "option contour was not found" in r.json()["error"]
-    r = server.post("/api/preview", json={"upload_id": table, "options": {"contour": mask}})
-    assert r.status_code == 400 and "--contour draws a second map's iso-lines over a map" in r.json()["error"]
 
 
 @pytest.mark.render
