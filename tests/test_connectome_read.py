@@ -24,6 +24,7 @@ from brainpainter.errors import BrainPainterError
 REPO = Path(__file__).resolve().parents[1]
 SCHAEFER400 = (REPO / "plugins" / "atlases" / "brainpainter-atlas-schaefer-yeo" / "bp_atlas_schaefer_yeo"
                / "data" / "schaefer400_7n")
+MOUSE = REPO / "plugins" / "atlases" / "brainpainter-atlas-mouse" / "bp_atlas_mouse" / "data" / "mouse"
 W3 = np.array([[0.0, 0.5, -0.2], [0.5, 0.0, 0.0], [-0.2, 0.0, 0.0]])
 DK3 = ["Left-precentral", "Right-precentral", "Left-insula"]
 
@@ -66,6 +67,15 @@ def test_text_matrix_without_names_and_pandas_numbered_index(tmp_path):
     m = read_matrix(tmp_path / "pd.csv")
     assert m.names is None and m.weights.shape == (3, 3)
     np.testing.assert_allclose(m.weights, W3)
+
+
+def test_xlsx_matrix_with_names_reads_as_region_tables_do(tmp_path):
+    pd = pytest.importorskip("pandas")
+    pytest.importorskip("openpyxl")
+    names = ["Left-insula", "Right-insula"]
+    pd.DataFrame([[0, 0.5], [0.5, 0]], index=names, columns=names).to_excel(tmp_path / "m.xlsx")
+    m = read_matrix(tmp_path / "m.xlsx")
+    assert m.names == tuple(names) and m.weights[0, 1] == 0.5
 
 
 def test_npy_mat_edge_and_array_read_alike(tmp_path):
@@ -164,6 +174,37 @@ def test_volume_structures_centroids_are_inside_them(tiny):
     points = region_centroids(atlas, ["Left-Hippocampus", "Right-Hippocampus", "Left-insula"], str(tiny))
     np.testing.assert_allclose(points[:2], [[-20, 0, 0], [20, 0, 0]], atol=1e-4)  # the boxes' centres
     assert points[2, 0] < -20
+
+
+def test_region_group_node_is_the_centroid_of_its_members_together(tiny):
+    from brainpainter.atlas.model import Atlas, Region
+
+    group = Region(1, "front", "lh", "cortical", (1, 2, 3))
+    members_of = (("Left-front", ("Left-insula", "Left-superiorfrontal")),)
+    atlas = Atlas("g", "g", "dk", (group,), members=members_of)
+    point = region_centroids(atlas, ["Left-front"], str(tiny))[0]
+    members = region_centroids(get_atlas("dk"), ["Left-insula", "Left-superiorfrontal"], str(tiny))
+    mesh = atlas_template(atlas, str(tiny)).cortex("dk", "lh")
+    labels = [mesh.label_names.index(n) for n in ("insula", "superiorfrontal")]
+    union = mesh.vertices["pial"][np.unique(mesh.faces[np.isin(mesh.face_label, labels)])]
+    assert np.linalg.norm(union - point, axis=1).min() <= 2.0 + 1e-6  # in (or just beneath) the group
+    assert min(np.linalg.norm(members - point, axis=1)) > 10  # neither member's own node
+
+
+def test_mouse_atlas_nodes_on_its_own_brain_inside_their_structures():
+    from brainpainter.connectome.centroids import _winding
+
+    atlas = load_atlas_dir(MOUSE)
+    _, every = node_order(atlas)
+    points = region_centroids(atlas, every)  # the atlas's own template, not fsaverage
+    sub = atlas_template(atlas).subcortical()
+    inside = []
+    for key, point in zip(every, points, strict=True):
+        if atlas.region(key).kind == "subcortical":
+            faces = sub.faces[sub.face_label == sub.label_names.index(key)]
+            inside.append(_winding(point, sub.vertices[faces].astype(float)))
+    assert len(inside) == 14 and min(inside) > 0.5
+    assert np.all(np.abs(points) < 110)  # within the mouse brain's bounds (its own units)
 
 
 # -- nodes files --------------------------------------------------------------------------------
@@ -266,6 +307,17 @@ def test_nodes_file_with_another_count_than_the_matrix(tmp_path):
     with pytest.raises(BrainPainterError) as exc:
         read_connectome(W3, nodes=tmp_path / "n.node")
     assert "has 2 nodes but" in one_line(exc) and "3 rows" in one_line(exc)
+
+
+def test_nodes_file_without_coordinates_or_names(tmp_path):
+    (tmp_path / "n.csv").write_text("name,x,y\nA,1,2\nB,3,4\n")
+    (tmp_path / "bad.csv").write_text("name,x,y,z\nA,1,2,3\nB,3,four,5\n")
+    with pytest.raises(BrainPainterError) as exc:
+        read_connectome(np.ones((2, 2)), nodes=tmp_path / "n.csv")
+    assert "needs a name column (name or label or region or node) and x, y, z" in one_line(exc)
+    with pytest.raises(BrainPainterError) as exc:
+        read_connectome(np.ones((2, 2)), nodes=tmp_path / "bad.csv")
+    assert "node 2 has y = 'four'" in one_line(exc)
 
 
 def test_empty_matrix_and_a_mat_without_a_2d_variable(tmp_path, dk):
