@@ -78,6 +78,24 @@ def test_xlsx_matrix_with_names_reads_as_region_tables_do(tmp_path):
     assert m.names == tuple(names) and m.weights[0, 1] == 0.5
 
 
+def test_text_matrix_takes_a_small_multiple_of_its_size_in_memory(tmp_path):
+    path = tmp_path / "m.csv"
+    np.savetxt(path, np.random.default_rng(0).uniform(-1, 1, (400, 400)), fmt="%.4f", delimiter=",")
+    tracemalloc.start()
+    try:
+        assert read_matrix(path).weights.shape == (400, 400)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 5 * path.stat().st_size  # a Python string per cell took 11.5x
+
+
+def test_spreadsheet_exports_with_a_separator_at_every_line_end(tmp_path):
+    (tmp_path / "m.csv").write_text(",A,B,\nA,,0.5,\nB,0.5,,\n")
+    m = read_matrix(tmp_path / "m.csv")
+    assert m.names == ("A", "B") and m.weights[0, 1] == 0.5 and np.isnan(m.weights[1, 1])
+
+
 def test_npy_mat_edge_and_array_read_alike(tmp_path):
     np.save(tmp_path / "m.npy", W3)
     scipy.io.savemat(tmp_path / "m.mat", {"W": W3, "label": "dk", "n": np.array([3])})
@@ -335,7 +353,7 @@ def test_text_cell_inside_the_matrix(tmp_path, dk):
     (tmp_path / "m.csv").write_text("0,1\n1,oops\n")
     with pytest.raises(BrainPainterError) as exc:
         read_connectome(tmp_path / "m.csv", dk)
-    assert "row 2, column 2 is 'oops'" in one_line(exc)
+    assert "line 2, column 2 is 'oops'" in one_line(exc)
 
 
 def refused(path: Path) -> tuple[str, int]:

@@ -15,6 +15,7 @@ and an uncompressed file must hold the bytes it declares), so a hostile header n
 
 from __future__ import annotations
 
+import csv
 import math
 import os
 from dataclasses import dataclass
@@ -130,68 +131,170 @@ def checked(weights: NDArray[Any], names: tuple[str, ...] | None, source: str) -
 
 # -- text ------------------------------------------------------------------------------------
 def _read_text(path: Path) -> tuple[NDArray[np.float64], tuple[str, ...] | None]:
-    """Weights and names of a text matrix; names from a header row and/or a first column."""
-    from brainpainter.io.readers import parse_bytes
+    """Weights and names of a text matrix (or a workbook); names from a header row and/or a first column.
 
+    A text file is parsed line by line, each line's numbers at once into floats, so a matrix takes 8
+    bytes a cell however it is written (not a Python string per cell).
+    """
+    from brainpainter.io.readers import decode_text, parse_bytes, sniff_separator
+
+    source = str(path)
     raw = read_input(path, WHAT, max_bytes(), hint=f"give {FORMATS}", env=ENV)
     if not raw.strip():
-        raise BrainPainterError(f"connectome matrix {str(path)!r} is empty; give an N x N matrix of weights "
+        raise BrainPainterError(f"connectome matrix {source!r} is empty; give an N x N matrix of weights "
                                 "(names, if any, in the first row and column).")
-    table = parse_bytes(raw, str(path), path.suffix.lower())
-    grid: list[list[Any]] = [list(table.header), *table.rows]
-    if _numbered_index(grid):  # pandas' to_csv of an unnamed matrix: a header and a column of 0..N-1
-        grid = [r[1:] for r in grid[1:]]
-    named_columns = any(is_text(c) for c in grid[0][1:]) or (len(grid[0]) == 1 and is_text(grid[0][0]))
-    data = grid[1:] if named_columns else grid
-    named_rows = bool(data) and all(is_text(r[0]) for r in data)
+    if raw.startswith(b"PK\x03\x04"):  # a workbook: the table reader's cells (it bounds their count)
+        table = parse_bytes(raw, source, path.suffix.lower())
+        head: list[Any] = list(table.header)
+        rows = _Rows([(i + 2, row) for i, row in enumerate(table.rows)])
+        return _grid(head, 1, rows, table.decimal_comma, source)
+    text = decode_text(raw, source)
+    del raw
+    numbered = [(i + 1, line) for i, line in enumerate(text.split("\n")) if line.strip()]
+    del text
+    sep = sniff_separator(numbered[0][1], path.suffix.lower())
+    rows = _Rows(list(numbered[1:]), sep)
+    return _grid(_fields(numbered[0][1], sep), numbered[0][0], rows, sep != ",", source)
+
+
+class _Rows:
+    """Rows of a matrix file, each split into cells when it is read (a text line's strings live only then).
+
+    Parameters
+    ----------
+    items : list of (int, str or list)
+        Each row's line number and its text line (split at `sep`) or its cells.
+    sep : str
+        Separator of the text lines (``" "``: white space).
+    """
+
+    def __init__(self, items: list[tuple[int, Any]], sep: str = ",") -> None:
+        self.items, self.sep = items, sep
+
+    def __len__(self) -> int:
+        return len(self.items)
+
+    def __getitem__(self, i: int) -> list[Any]:
+        item = self.items[i][1]
+        return _fields(item, self.sep) if isinstance(item, str) else list(item)
+
+    def line(self, i: int) -> int:
+        """File line of row `i`."""
+        return int(self.items[i][0])
+
+
+def _fields(line: str, sep: str) -> list[str]:
+    """The fields of one line (quoted ones as csv reads them)."""
+    line = line.rstrip("\r")
+    if sep == " ":
+        fields = line.split()
+    elif '"' in line:
+        try:
+            fields = next(csv.reader([line], delimiter=sep, strict=True))
+        except csv.Error:
+            fields = line.split(sep)
+    else:
+        fields = line.split(sep)
+    return [f.strip() for f in fields]
+
+
+def _trimmed(cells: list[Any]) -> list[Any]:
+    """`cells` without the empty cells at the end (trailing separators of spreadsheet exports)."""
+    end = len(cells)
+    while end > 1 and not str(cells[end - 1]).strip():
+        end -= 1
+    return cells[:end]
+
+
+def _grid(head: list[Any], head_line: int, rows: _Rows, decimal_comma: bool,
+          source: str) -> tuple[NDArray[np.float64], tuple[str, ...] | None]:
+    """Weights and names from the first row's cells (a header or a row of weights) and the other rows."""
+    named_columns = any(is_text(c) for c in head[1:]) or (len(head) == 1 and is_text(head[0]))
+    if named_columns:
+        head = _trimmed(head)
+    else:  # the first line is a row of the matrix
+        rows = _Rows([(head_line, head), *rows.items], rows.sep)
+    n_rows = len(rows)
+    if n_rows == 0:
+        raise BrainPainterError(f"connectome matrix {source!r} has names but no rows of weights; give an "
+                                "N x N matrix of weights (names, if any, in the first row and column).")
+    first = rows[0]
+    names_first = int(is_text(first[0]))
+    if len(first) - names_first != n_rows and len(_trimmed(first)) - names_first == n_rows:
+        first = _trimmed(first)  # every line ends in a separator
+    width = len(first)
+    if n_rows != width - names_first:  # refused before any row is parsed
+        raise BrainPainterError(
+            f"connectome matrix {source!r} is {n_rows} x {width - names_first}; a connectivity matrix is "
+            "square (N x N, one row and one column per node). Give the whole N x N matrix (names, if any, "
+            "in the first row and column).")
+    firsts: list[Any] = []
+    rest = np.empty((n_rows, width - 1))
+    for i in range(n_rows):
+        cells = rows[i] if i else first
+        if len(cells) > width and not any(str(c).strip() for c in cells[width:]):
+            cells = cells[:width]
+        if len(cells) != width:
+            raise BrainPainterError(
+                f"connectome matrix {source!r} line {rows.line(i)} has {len(cells)} fields but line "
+                f"{rows.line(0)} has {width}; every row needs one cell per column (check separators and "
+                "quotes).")
+        firsts.append(cells[0])
+        rest[i] = _numbers(cells[1:], decimal_comma, source, rows.line(i), 2)
+    named_rows = all(is_text(c) for c in firsts)
+    if named_rows:
+        weights = rest
+    else:
+        column = np.concatenate([_numbers([c], decimal_comma, source, rows.line(i), 1)
+                                 for i, c in enumerate(firsts)])
+        weights = np.column_stack([column, rest])
+        if not named_columns and _numbered_index(str(head[0]), weights):
+            weights = weights[1:, 1:]  # pandas' to_csv of an unnamed matrix: a header and a column of 0..N-1
+    row_names = [str(c).strip() for c in firsts] if named_rows else None
     column_names = None
     if named_columns:
-        head = [str(c).strip() for c in grid[0]]
-        column_names = head[1:] if named_rows or len(head) == len(data) + 1 else head
-    row_names = [str(r[0]).strip() for r in data] if named_rows else None
-    cells = [r[1:] for r in data] if named_rows else data
-    weights = _numbers(cells, table.decimal_comma, str(path), 1 + named_columns, 1 + named_rows)
+        header = [str(c).strip() for c in head]
+        column_names = header[1:] if len(header) == weights.shape[1] + 1 else header
     if row_names is not None and column_names is not None and row_names != column_names:
-        k = next(i for i, (a, b) in enumerate(zip(row_names, column_names, strict=False)) if a != b) \
-            if len(row_names) == len(column_names) else min(len(row_names), len(column_names))
+        k = next((i for i, (a, b) in enumerate(zip(row_names, column_names, strict=False)) if a != b),
+                 min(len(row_names), len(column_names)))
         raise BrainPainterError(
-            f"connectome matrix {str(path)!r}: its row names and column names differ (row {k + 1} is "
+            f"connectome matrix {source!r}: its row names and column names differ (row {k + 1} is "
             f"{_at(row_names, k)!r}, column {k + 1} is {_at(column_names, k)!r}); rows and columns must be "
             "the same nodes in the same order.")
     names = row_names if row_names is not None else column_names
     return weights, None if names is None else tuple(names)
 
 
-def _numbered_index(grid: list[list[Any]]) -> bool:
+def _numbered_index(corner: str, weights: NDArray[np.float64]) -> bool:
     """Whether the first row and column are an empty corner and the counts 0..N-1 (or 1..N)."""
-    if str(grid[0][0]).strip() or len(grid) != len(grid[0]):
+    if corner.strip() or weights.shape[0] != weights.shape[1] or len(weights) < 2:
         return False
-    head, first = [to_number(c) for c in grid[0][1:]], [to_number(r[0]) for r in grid[1:]]
-    n = len(head)
-    return head == first and head in ([float(i) for i in range(n)], [float(i + 1) for i in range(n)])
+    head, first = weights[0, 1:], weights[1:, 0]
+    count = np.arange(len(head), dtype=float)
+    counts = np.array_equal(head, count) or np.array_equal(head, count + 1)
+    return bool(counts and np.array_equal(head, first))
 
 
 def _at(names: list[str], k: int) -> str:
     return names[k] if k < len(names) else "(none)"
 
 
-def _numbers(cells: list[list[Any]], decimal_comma: bool, source: str, line0: int,
-             col0: int) -> NDArray[np.float64]:
-    """The cells as floats (empty cells NaN); the first cell that is no number is an error."""
+def _numbers(cells: list[Any], decimal_comma: bool, source: str, line: int, col0: int) -> NDArray[np.float64]:
+    """One row's cells as floats (empty cells NaN); a cell that is no number is an error."""
     try:
         return np.array(cells, dtype=np.float64)  # the common case: every cell a plain number
     except ValueError:
         pass
-    out = np.full((len(cells), len(cells[0]) if cells else 0), np.nan)
-    for i, row in enumerate(cells):
-        for j, cell in enumerate(row):
-            value = to_number(cell, decimal_comma)
-            if value is None:
-                raise BrainPainterError(
-                    f"connectome matrix {source!r}: row {i + line0}, column {j + col0} is "
-                    f"{str(cell)[:40]!r}, not a number; a matrix holds numbers (empty or NaN for no edge), "
-                    "with names only in its first row and column.")
-            out[i, j] = value
+    out = np.full(len(cells), np.nan)
+    for j, cell in enumerate(cells):
+        value = to_number(cell, decimal_comma)
+        if value is None:
+            raise BrainPainterError(
+                f"connectome matrix {source!r}: line {line}, column {j + col0} is {str(cell)[:40]!r}, not a "
+                "number; a matrix holds numbers (empty or NaN for no edge), with names only in its first row "
+                "and column.")
+        out[j] = value
     return out
 
 
