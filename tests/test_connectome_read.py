@@ -90,6 +90,15 @@ def test_text_matrix_takes_a_small_multiple_of_its_size_in_memory(tmp_path):
     assert peak < 5 * path.stat().st_size  # a Python string per cell took 11.5x
 
 
+@pytest.mark.parametrize("sep", [",", " "])
+def test_one_long_line_is_refused_before_it_is_split(tmp_path, sep):
+    path = tmp_path / "m.txt"
+    path.write_text(sep.join(["0.5"] * 1_000_000) + f"\n0{sep}1\n1{sep}0\n")
+    message, peak = refused(path)
+    assert "line 1 has more than 5 fields but the file has 3 lines" in message
+    assert peak < 4 * path.stat().st_size  # splitting it made a string per field: 20 times its size
+
+
 def test_spreadsheet_exports_with_a_separator_at_every_line_end(tmp_path):
     (tmp_path / "m.csv").write_text(",A,B,\nA,,0.5,\nB,0.5,,\n")
     m = read_matrix(tmp_path / "m.csv")

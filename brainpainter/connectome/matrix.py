@@ -152,9 +152,26 @@ def _read_text(path: Path) -> tuple[NDArray[np.float64], tuple[str, ...] | None]
     del raw
     numbered = [(i + 1, line) for i, line in enumerate(text.split("\n")) if line.strip()]
     del text
-    sep = sniff_separator(numbered[0][1], path.suffix.lower())
+    sep = sniff_separator(numbered[0][1][:65536], path.suffix.lower())  # a long line's start tells
+    _refuse_long_lines(numbered, sep, source)
     rows = _Rows(list(numbered[1:]), sep)
     return _grid(_fields(numbered[0][1], sep), numbered[0][0], rows, sep != ",", source)
+
+
+def _refuse_long_lines(numbered: list[tuple[int, str]], sep: str, source: str) -> None:
+    """Refuse a line with more fields than a square matrix of these lines has, before it is split.
+
+    Splitting a line makes a string per field; a line of millions of separators would take 50 times
+    its size. Fields are counted from the separators (white space: an upper bound), not split.
+    """
+    most = len(numbered) + 2  # N rows + a header line; N columns + a name column + a trailing separator
+    for number, line in numbered:
+        fields = (line.count(" ") + line.count("\t") if sep == " " else line.count(sep)) + 1
+        if fields > most and (sep != " " or len(line.split(maxsplit=most)) > most):
+            raise BrainPainterError(
+                f"connectome matrix {source!r} line {number} has more than {most} fields but the file has "
+                f"{len(numbered)} lines; a connectivity matrix is square (N x N, one row and one column per "
+                "node). Give the whole N x N matrix (names, if any, in the first row and column).")
 
 
 class _Rows:
