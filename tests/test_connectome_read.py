@@ -405,6 +405,45 @@ def test_huge_declared_mat_is_refused_before_allocating(tmp_path):
     assert "90000 x 90000" in message and peak < 5 * 2**20
 
 
+def mat_with(tmp_path: Path, compress: bool, old: bytes, new: bytes) -> Path:
+    """A .mat of a 3 x 3 matrix whose (inflated) bytes have `old` replaced by `new`."""
+    path = tmp_path / f"m{int(compress)}.mat"
+    scipy.io.savemat(path, {"W": np.arange(9.0).reshape(3, 3)}, do_compression=compress)
+    raw = path.read_bytes()
+    if not compress:
+        assert raw.count(old) == 1
+        path.write_bytes(raw.replace(old, new))
+        return path
+    import struct
+    import zlib
+
+    inner = zlib.decompress(raw[136:])
+    assert inner.count(old) == 1
+    packed = zlib.compress(inner.replace(old, new))
+    path.write_bytes(raw[:128] + struct.pack("<II", 15, len(packed)) + packed)
+    return path
+
+
+@pytest.mark.parametrize("compress", [False, True])
+def test_mat_element_that_crashed_scipy_is_refused(tmp_path, compress):
+    # the data's type tag: miDOUBLE (9), 72 bytes; an unknown type made scipy 1.17's loadmat segfault
+    tag = np.array([9, 72], "<u4").tobytes()
+    path = mat_with(tmp_path, compress, tag, np.array([216, 72], "<u4").tobytes())
+    message, _ = refused(path)
+    assert "MATLAB variable 'W' cannot be read safely (its data are of unknown type 216)" in message
+    short = mat_with(tmp_path, compress, np.array([3, 3], "<i4").tobytes(), np.array([3, 4], "<i4").tobytes())
+    message, _ = refused(short)
+    assert "72 bytes of data for a 3 x 4 array" in message
+
+
+def test_npy_with_a_broken_header_is_one_line_without_warnings(tmp_path):
+    path = tmp_path / "b.npy"
+    header = b"{'descr': '<f8', 'fortran_order': False, 'shape': (3, 3"
+    path.write_bytes(b"\x93NUMPY\x01\x00" + len(header + b"\n").to_bytes(2, "little") + header + b"\n")
+    message, _ = refused(path)  # warnings are errors in the tests: none came
+    assert "is not a readable .npy file" in message
+
+
 def test_object_npy_is_not_unpickled(tmp_path):
     np.save(tmp_path / "o.npy", np.array([[{"a": 1}]], dtype=object), allow_pickle=True)
     with pytest.raises(BrainPainterError, match="holds object values"):
@@ -431,3 +470,31 @@ def test_real_schaefer400_group_matrix_top_1_percent():
     assert len(top.edges()[0]) == 798
     assert np.nanmin(np.abs(top.weights)) >= np.nanmax(np.abs(np.where(np.isnan(top.weights), conn.weights,
                                                                          np.nan)))
+
+
+# -- any text ----------------------------------------------------------------------------------------
+def test_any_small_text_file_reads_or_is_one_line(tmp_path):
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    cells = st.sampled_from(["0", "1.5", "-2e-3", "", "NaN", "inf", "x", '"a,b"', '"', "1,5", "ctx-lh-insula",
+                             "Left-insula", "Right-insula", " ", "0x1", "1e999"])
+    seps = st.sampled_from([",", ";", "\t", " ", "|"])
+    rows = st.lists(st.lists(cells, min_size=0, max_size=4), min_size=0, max_size=4)
+
+    @settings(max_examples=300, deadline=None, database=None, derandomize=True,
+              suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @given(rows=rows, sep=seps, suffix=st.sampled_from([".csv", ".tsv", ".txt", ".edge"]))
+    def check(rows: list[list[str]], sep: str, suffix: str) -> None:
+        path = tmp_path / f"m{suffix}"
+        path.write_text("\n".join(sep.join(r) for r in rows))
+        try:
+            m = read_matrix(path)
+        except BrainPainterError as exc:
+            assert "\n" not in str(exc)
+            return
+        assert m.weights.ndim == 2 and m.weights.shape[0] == m.weights.shape[1] > 0
+        assert not np.isinf(m.weights).any()
+        assert m.names is None or len(m.names) == len(m.weights)
+
+    check()

@@ -18,6 +18,7 @@ from __future__ import annotations
 import csv
 import math
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -340,16 +341,20 @@ def read_npy(path: Path, what: str, ndim: int = 2) -> NDArray[np.float64]:
     -------
     ndarray, float64
     """
+    import io
+
     limit = max_bytes()
-    size = check_input(path, what, limit, hint=f"give a .npy file of {ndim} dimension(s)").stat().st_size
+    raw = read_input(path, what, limit, hint=f"give a .npy file of {ndim} dimension(s)", env=ENV)
     fmt: Any = np.lib.format  # numpy's header readers are untyped
     try:
-        with path.open("rb") as fh:
+        with warnings.catch_warnings():  # numpy warns on odd headers (Python 2's)
+            warnings.simplefilter("ignore")
+            fh = io.BytesIO(raw)
             version = fmt.read_magic(fh)
             reader = fmt.read_array_header_1_0 if version == (1, 0) else fmt.read_array_header_2_0
-            shape, _, dtype = reader(fh)
+            shape, fortran, dtype = reader(fh)
             offset = fh.tell()
-    except (OSError, ValueError) as exc:
+    except Exception as exc:  # numpy raises ValueError, SyntaxError, TokenError... for a broken header
         raise BrainPainterError(f"{what} {str(path)!r} is not a readable .npy file ({exc}); save "
                                 "the matrix with numpy.save.") from None
     if dtype.hasobject or dtype.kind not in "biuf":
@@ -361,17 +366,13 @@ def read_npy(path: Path, what: str, ndim: int = 2) -> NDArray[np.float64]:
         raise BrainPainterError(f"{what} {str(path)!r} holds a {len(shape)}-D array of shape "
                                 f"{tuple(shape)}; it must have {ndim} dimension(s). Save the right array "
                                 "with numpy.save.")
-    if math.prod(shape) * dtype.itemsize > size - offset:
+    if math.prod(shape) * dtype.itemsize > len(raw) - offset:
         raise BrainPainterError(
             f"{what} {str(path)!r} declares a {' x '.join(map(str, shape))} {dtype} array but holds "
-            f"only {size - offset} bytes of data; the file is cut short or broken. Save it again with "
+            f"only {len(raw) - offset} bytes of data; the file is cut short or broken. Save it again with "
             "numpy.save.")
-    try:
-        array = np.load(path, allow_pickle=False)
-    except (OSError, ValueError) as exc:
-        raise BrainPainterError(f"{what} {str(path)!r} could not be read ({exc}); save it again "
-                                "with numpy.save.") from None
-    return np.asarray(array, dtype=np.float64)
+    data = np.frombuffer(raw, dtype=dtype, count=math.prod(shape), offset=offset)
+    return data.reshape(shape, order="F" if fortran else "C").astype(np.float64)
 
 
 _MAT_NUMERIC = ("double", "single", "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64",
@@ -379,13 +380,18 @@ _MAT_NUMERIC = ("double", "single", "int8", "uint8", "int16", "uint16", "int32",
 
 
 def _read_mat(path: Path) -> NDArray[np.float64]:
-    """The one 2-D numeric variable of a MATLAB file (or its one square one), its size checked first."""
+    """The one 2-D numeric variable of a MATLAB file (or its one square one), its size and elements checked
+    (:mod:`brainpainter.connectome.matfile`) before scipy reads it."""
+    import io
+
     import scipy.io
 
+    from brainpainter.connectome.matfile import check_variable
+
     limit = max_bytes()
-    check_input(path, WHAT, limit, hint=f"give {FORMATS}")
+    raw = read_input(path, WHAT, limit, hint=f"give {FORMATS}", env=ENV)
     try:
-        variables = scipy.io.whosmat(str(path))
+        variables = scipy.io.whosmat(io.BytesIO(raw))
     except NotImplementedError:  # scipy: "Please use HDF reader for matlab v7.3 files"
         raise BrainPainterError(
             f"connectome matrix {str(path)!r} is a MATLAB v7.3 (HDF5) file, which is not read; save it with "
@@ -406,11 +412,19 @@ def _read_mat(path: Path) -> NDArray[np.float64]:
     name, shape = pick[0]
     if math.prod(shape) * 8 > limit:
         raise _limit_error(path, shape, limit)
+    if raw[126:128] in (b"IM", b"MI") and raw[124:126] != b"\x00\x00":  # v5 (a v4 file has no such header)
+        check_variable(raw, name, limit, str(path))
     try:
-        array = scipy.io.loadmat(str(path), variable_names=[name])[name]
+        with warnings.catch_warnings():  # scipy warns and returns a text for an unreadable variable
+            warnings.simplefilter("ignore")
+            array = scipy.io.loadmat(io.BytesIO(raw), variable_names=[name]).get(name)
     except Exception as exc:
         raise BrainPainterError(f"connectome matrix {str(path)!r}: variable {name!r} could not be read "
                                 f"({type(exc).__name__}: {exc}); save it again with MATLAB's save.") from None
+    if not isinstance(array, np.ndarray) or array.dtype.kind not in "biuf" or array.shape != shape:
+        raise BrainPainterError(f"connectome matrix {str(path)!r}: variable {name!r} could not be read as "
+                                f"the {' x '.join(map(str, shape))} numbers its header declares; the file is "
+                                "damaged. Save it again with MATLAB's save.")
     return np.asarray(array, dtype=np.float64)
 
 
