@@ -113,15 +113,19 @@ def test_npy_mat_edge_and_array_read_alike(tmp_path):
         np.testing.assert_array_equal(read_matrix(given).weights, W3)
 
 
-def test_pconn_names_come_from_its_parcel_axes(tmp_path):
+def write_pconn(path: Path, weights: np.ndarray = W3) -> Path:
     names = ["ctx-lh-precentral", "ctx-rh-precentral", "ctx-lh-insula"]
     parcels = nib.cifti2.cifti2_axes.ParcelsAxis(
         names, [np.zeros((0, 3), int)] * 3,
         [{"CIFTI_STRUCTURE_CORTEX_LEFT": np.array([i])} for i in range(3)],
         nvertices={"CIFTI_STRUCTURE_CORTEX_LEFT": 10})
     header = nib.cifti2.Cifti2Header.from_axes((parcels, parcels))
-    nib.save(nib.cifti2.Cifti2Image(W3.astype(np.float32), header), tmp_path / "m.pconn.nii")
-    conn = read_connectome(tmp_path / "m.pconn.nii", get_atlas("dk"))
+    nib.save(nib.cifti2.Cifti2Image(weights.astype(np.float32), header), path)
+    return path
+
+
+def test_pconn_names_come_from_its_parcel_axes(tmp_path):
+    conn = read_connectome(write_pconn(tmp_path / "m.pconn.nii"), get_atlas("dk"))
     assert conn.names == tuple(DK3)
     np.testing.assert_allclose(conn.weights[0, 1], 0.5)
 
@@ -442,6 +446,21 @@ def test_npy_with_a_broken_header_is_one_line_without_warnings(tmp_path):
     path.write_bytes(b"\x93NUMPY\x01\x00" + len(header + b"\n").to_bytes(2, "little") + header + b"\n")
     message, _ = refused(path)  # warnings are errors in the tests: none came
     assert "is not a readable .npy file" in message
+
+
+def test_damaged_pconn_headers_are_one_line_and_nibabel_prints_nothing(tmp_path, capfd):
+    path = write_pconn(tmp_path / "m.pconn.nii")
+    raw = bytearray(path.read_bytes())
+    raw[112:120] = np.array([-1.0], "<f8").tobytes()  # pixdim[1] < 0: nibabel logs a fix on stderr
+    path.write_bytes(bytes(raw))
+    np.testing.assert_allclose(read_matrix(path).weights, W3)
+    dims = np.array([3, 3], "<i8").tobytes()  # the NIfTI-2 dim[5], dim[6]: the two axes' lengths
+    assert raw[56:72] == dims
+    raw[56:72] = np.array([3, 10**9], "<i8").tobytes()
+    path.write_bytes(bytes(raw))
+    message, _ = refused(path)
+    assert "names 3 x 3 parcels but its data are 3 x 1000000000" in message
+    assert capfd.readouterr().err == ""
 
 
 def test_object_npy_is_not_unpickled(tmp_path):

@@ -15,10 +15,13 @@ and an uncompressed file must hold the bytes it declares), so a hostile header n
 
 from __future__ import annotations
 
+import contextlib
 import csv
+import logging
 import math
 import os
 import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -99,8 +102,14 @@ def _from_array(matrix: Any) -> Matrix:
         weights = np.array(matrix, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise BrainPainterError(f"the connectome matrix given ({type(matrix).__name__}) is not numbers "
-                                f"({exc}); give an (N, N) array of weights or {FORMATS} file.") from None
+                                f"({_said(exc)}); give an (N, N) array of weights or {FORMATS} "
+                                "file.") from None
     return checked(weights, names, f"the {type(matrix).__name__} given")
+
+
+def _said(exc: BaseException) -> str:
+    """A library's exception as a short part of one line."""
+    return f"{type(exc).__name__}: {' '.join(str(exc).split())[:160]}"
 
 
 def checked(weights: NDArray[Any], names: tuple[str, ...] | None, source: str) -> Matrix:
@@ -355,7 +364,7 @@ def read_npy(path: Path, what: str, ndim: int = 2) -> NDArray[np.float64]:
             shape, fortran, dtype = reader(fh)
             offset = fh.tell()
     except Exception as exc:  # numpy raises ValueError, SyntaxError, TokenError... for a broken header
-        raise BrainPainterError(f"{what} {str(path)!r} is not a readable .npy file ({exc}); save "
+        raise BrainPainterError(f"{what} {str(path)!r} is not a readable .npy file ({_said(exc)}); save "
                                 "the matrix with numpy.save.") from None
     if dtype.hasobject or dtype.kind not in "biuf":
         raise BrainPainterError(f"{what} {str(path)!r} holds {dtype} values; a matrix holds numbers "
@@ -398,7 +407,7 @@ def _read_mat(path: Path) -> NDArray[np.float64]:
             "save(FILE, 'W', '-v7'), or as CSV.") from None
     except Exception as exc:  # scipy raises many types for a broken file
         raise BrainPainterError(f"connectome matrix {str(path)!r} is not a readable MATLAB .mat file "
-                                f"({type(exc).__name__}: {exc}); save it again with MATLAB's save.") from None
+                                f"({_said(exc)}); save it again with MATLAB's save.") from None
     # MATLAB keeps every number 2-D: a scalar is 1 x 1, a vector 1 x n
     matrices = [(n, tuple(s)) for n, s, cls in variables
                 if len(s) == 2 and min(s) > 1 and cls in _MAT_NUMERIC]
@@ -420,7 +429,7 @@ def _read_mat(path: Path) -> NDArray[np.float64]:
             array = scipy.io.loadmat(io.BytesIO(raw), variable_names=[name]).get(name)
     except Exception as exc:
         raise BrainPainterError(f"connectome matrix {str(path)!r}: variable {name!r} could not be read "
-                                f"({type(exc).__name__}: {exc}); save it again with MATLAB's save.") from None
+                                f"({_said(exc)}); save it again with MATLAB's save.") from None
     if not isinstance(array, np.ndarray) or array.dtype.kind not in "biuf" or array.shape != shape:
         raise BrainPainterError(f"connectome matrix {str(path)!r}: variable {name!r} could not be read as "
                                 f"the {' x '.join(map(str, shape))} numbers its header declares; the file is "
@@ -428,39 +437,56 @@ def _read_mat(path: Path) -> NDArray[np.float64]:
     return np.asarray(array, dtype=np.float64)
 
 
+@contextlib.contextmanager
+def _quiet_nibabel() -> Iterator[None]:
+    """nibabel's warnings and log lines about a damaged header kept out (the error line says what is
+    wrong)."""
+    logger = logging.getLogger("nibabel")
+    level = logger.level
+    logger.setLevel(logging.CRITICAL)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            yield
+    finally:
+        logger.setLevel(level)
+
+
 def _read_pconn(path: Path) -> tuple[NDArray[np.float64], tuple[str, ...]]:
     """A CIFTI-2 parcel-by-parcel matrix and its parcel names (checked to be the same on both axes)."""
     import nibabel as nib
 
     limit = max_bytes()
-    size = check_input(path, WHAT, 1024 * 2**20, hint=f"give {FORMATS}").stat().st_size
-    try:
-        img: Any = nib.load(str(path))
-        axes = [img.header.get_axis(i) for i in range(2)]
-    except Exception as exc:  # nibabel raises many types for a broken header
-        raise BrainPainterError(f"connectome matrix {str(path)!r} is not a readable CIFTI-2 file "
-                                f"({type(exc).__name__}: {exc}); give a .pconn.nii (or {FORMATS}).") from None
-    if not all(isinstance(a, nib.cifti2.cifti2_axes.ParcelsAxis) for a in axes):
-        kinds = [type(a).__name__ for a in axes]
-        raise BrainPainterError(
-            f"connectome matrix {str(path)!r} is a CIFTI-2 file with axes {kinds}; a connectome is a "
-            ".pconn.nii (parcels by parcels). Give a parcellated connectivity file (wb_command "
-            "-cifti-parcellate).")
-    shape = tuple(int(s) for s in img.shape)
-    if math.prod(shape) * 8 > limit:
-        raise _limit_error(path, shape, limit)
-    if not str(path).lower().endswith(".gz") and math.prod(shape) * img.get_data_dtype().itemsize > size:
-        raise BrainPainterError(f"connectome matrix {str(path)!r} declares {' x '.join(map(str, shape))} "
-                                "values but the file is shorter; it is cut short. Save it again.")
-    rows, columns = (tuple(str(n) for n in a.name) for a in axes)
-    if rows != columns:
-        raise BrainPainterError(f"connectome matrix {str(path)!r}: its two parcel axes name different "
-                                "parcels; a connectome has the same parcels as rows and columns.")
-    try:
-        weights = np.asarray(img.get_fdata(dtype=np.float64))
-    except Exception as exc:
-        raise BrainPainterError(f"connectome matrix {str(path)!r}: the data could not be read "
-                                f"({type(exc).__name__}: {exc}); save it again.") from None
+    size = check_input(path, WHAT, limit, hint=f"give {FORMATS}").stat().st_size
+    with _quiet_nibabel():
+        try:
+            img: Any = nib.load(str(path), mmap=False)
+            axes = [img.header.get_axis(i) for i in range(2)]
+            stored = tuple(int(s) for s in img.dataobj.shape)
+        except Exception as exc:  # nibabel raises many types for a broken header
+            raise BrainPainterError(f"connectome matrix {str(path)!r} is not a readable CIFTI-2 file "
+                                    f"({_said(exc)}); give a .pconn.nii (or {FORMATS}).") from None
+        if not all(isinstance(a, nib.cifti2.cifti2_axes.ParcelsAxis) for a in axes):
+            kinds = [type(a).__name__ for a in axes]
+            raise BrainPainterError(
+                f"connectome matrix {str(path)!r} is a CIFTI-2 file with axes {kinds}; a connectome is a "
+                ".pconn.nii (parcels by parcels). Give a parcellated connectivity file (wb_command "
+                "-cifti-parcellate).")
+        shape = (len(axes[0]), len(axes[1]))
+        if math.prod(shape) * 8 > limit:
+            raise _limit_error(path, shape, limit)
+        if stored != shape or math.prod(shape) * img.get_data_dtype().itemsize > size:
+            raise BrainPainterError(
+                f"connectome matrix {str(path)!r} names {shape[0]} x {shape[1]} parcels but its data are "
+                f"{' x '.join(map(str, stored))} (of a {size}-byte file); it is damaged or cut short. Save "
+                "it again.")
+        rows, columns = (tuple(str(n) for n in a.name) for a in axes)
+        if rows != columns:
+            raise BrainPainterError(f"connectome matrix {str(path)!r}: its two parcel axes name different "
+                                    "parcels; a connectome has the same parcels as rows and columns.")
+        try:
+            weights = np.asarray(img.dataobj, dtype=np.float64)
+        except Exception as exc:
+            raise BrainPainterError(f"connectome matrix {str(path)!r}: the data could not be read "
+                                    f"({_said(exc)}); save it again.") from None
     return weights, rows
-
-
