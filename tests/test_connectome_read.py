@@ -259,6 +259,16 @@ def test_brainnet_node_edge_equal_csv_with_coordinates(tmp_path):
     assert brainnet.node_labels == csv.node_labels
 
 
+def test_node_and_vector_files_written_by_windows_tools(tmp_path):
+    nodes = "-40\t-10\t50\t1\t3\tPreCG.L\r\n40\t-10\t50\t2\t2\tPreCG.R\r\n"
+    (tmp_path / "n.node").write_bytes(nodes.encode("utf-8-sig"))
+    (tmp_path / "v.txt").write_bytes("1.5\r\n2\r\n".encode("utf-16"))
+    conn = read_connectome(np.array([[0, 1.0], [1.0, 0]]), nodes=tmp_path / "n.node",
+                           node_values=tmp_path / "v.txt")
+    assert conn.names == ("PreCG.L", "PreCG.R") and conn.positions[0, 0] == -40
+    np.testing.assert_array_equal(conn.node_values, [1.5, 2.0])
+
+
 def test_named_matrix_reorders_the_nodes_file_and_mni_is_mapped_as_tracts_are(tmp_path, tiny):
     (tmp_path / "nodes.csv").write_text("label,x,y,z\nB,1,2,3\nA,4,5,6\n")
     write_csv(tmp_path / "m.csv", np.array([[0.0, 1.0], [1.0, 0.0]]), ["A", "B"])

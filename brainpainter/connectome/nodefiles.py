@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 from brainpainter.errors import BrainPainterError
 from brainpainter.io.files import read_input
 from brainpainter.io.rawtable import max_bytes
+from brainpainter.io.readers import decode_text
 from brainpainter.table.cells import is_empty, to_number
 
 NAME_COLUMNS = ("name", "label", "region", "node")
@@ -81,7 +82,7 @@ def read_nodes(path: str | os.PathLike[str]) -> NodeTable:
 def _read_brainnet(path: Path) -> NodeTable:
     raw = read_input(path, "nodes file", max_bytes(), hint="give a BrainNet Viewer .node file", env=ENV)
     rows: list[list[str]] = []
-    for number, line in enumerate(raw.decode("utf-8", errors="replace").splitlines(), start=1):
+    for number, line in enumerate(decode_text(raw, str(path)).splitlines(), start=1):
         text = line.split("#", 1)[0].strip()
         if not text:
             continue
@@ -184,7 +185,7 @@ def _vector_file(path: Path, what: str) -> list[Any]:
         return list(read_npy(path, what, ndim=1))
     raw = read_input(path, what, max_bytes(), hint="give a file of one entry per node", env=ENV)
     cells: list[Any] = []
-    for line in raw.decode("utf-8", errors="replace").splitlines():
+    for line in decode_text(raw, str(path)).splitlines():
         text = line.strip()
         if not text or text.startswith("#"):
             continue
