@@ -207,6 +207,22 @@ def test_volume_structures_centroids_are_inside_them(tiny):
     assert points[2, 0] < -20
 
 
+@pytest.mark.usefixtures("fresh_registry")
+def test_cortex_and_volume_atlas_combined_nodes_in_the_atlas_order_inside_the_volumes(tmp_path):
+    from test_volumes import write_volume
+
+    from brainpainter.atlas.volumes import add_volume_atlas
+
+    lut = tmp_path / "lut.csv"
+    lut.write_text("1,ball-lh\n2,ball-rh\n7,box\n")
+    add_volume_atlas("balls", write_volume(tmp_path / "balls.nii.gz"), lut, space="fsaverage")
+    atlas = get_atlas("dk+balls")
+    conn = read_connectome(np.ones((71, 71)), atlas)  # 68 cortical regions, then the volume's 3
+    assert conn.names[67:] == ("Right-insula", "Left-ball", "Right-ball", "box")
+    np.testing.assert_allclose(conn.positions[68:70], [[-20, 0, 0], [20, 0, 0]], atol=0.5)  # ball centres
+    assert np.all(np.abs(conn.positions[70] - [0, 18, -6]) < [12, 6, 6])  # inside the box
+
+
 def test_region_group_node_is_the_centroid_of_its_members_together(tiny):
     from brainpainter.atlas.model import Atlas, Region
 
