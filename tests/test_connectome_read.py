@@ -99,8 +99,9 @@ def test_one_long_line_is_refused_before_it_is_split(tmp_path, sep):
     assert peak < 4 * path.stat().st_size  # splitting it made a string per field: 20 times its size
 
 
-def test_spreadsheet_exports_with_a_separator_at_every_line_end(tmp_path):
-    (tmp_path / "m.csv").write_text(",A,B,\nA,,0.5,\nB,0.5,,\n")
+@pytest.mark.parametrize("end", ["\n", "\r\n", "\r"])
+def test_spreadsheet_exports_with_a_separator_at_every_line_end(tmp_path, end):
+    (tmp_path / "m.csv").write_bytes(end.join([",A,B,", "A,,0.5,", "B,0.5,,", ""]).encode())
     m = read_matrix(tmp_path / "m.csv")
     assert m.names == ("A", "B") and m.weights[0, 1] == 0.5 and np.isnan(m.weights[1, 1])
 

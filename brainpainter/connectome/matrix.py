@@ -4,8 +4,9 @@ One loader per format, the format's library reading it:
 
 * text (``.csv``, ``.tsv``, ``.txt``, BrainNet Viewer's ``.edge``; any separator the table
   reader sniffs): with or without a header row of names and a first column of names;
-* ``.npy`` (``numpy.load(allow_pickle=False)``);
-* ``.mat`` (``scipy.io.loadmat``): the one 2-D numeric variable (or the one square one);
+* ``.npy`` (numpy's header reader; never unpickled): the data taken from the bytes read;
+* ``.mat`` (``scipy.io.loadmat``, once :mod:`brainpainter.connectome.matfile` checked the variable):
+  the one 2-D numeric variable (or the one square one);
 * CIFTI-2 ``.pconn.nii`` (nibabel): node names from its parcel axes.
 
 Every file is bounded before it is read: text by its size (``BRAINPAINTER_MAX_INPUT_MB``), a
@@ -160,7 +161,7 @@ def _read_text(path: Path) -> tuple[NDArray[np.float64], tuple[str, ...] | None]
         return _grid(head, 1, rows, table.decimal_comma, source)
     text = decode_text(raw, source)
     del raw
-    numbered = [(i + 1, line) for i, line in enumerate(text.split("\n")) if line.strip()]
+    numbered = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip()]  # CR LF, CR
     del text
     sep = sniff_separator(numbered[0][1][:65536], path.suffix.lower())  # a long line's start tells
     _refuse_long_lines(numbered, sep, source)
@@ -212,7 +213,6 @@ class _Rows:
 
 def _fields(line: str, sep: str) -> list[str]:
     """The fields of one line (quoted ones as csv reads them)."""
-    line = line.rstrip("\r")
     if sep == " ":
         fields = line.split()
     elif '"' in line:
