@@ -345,6 +345,11 @@ def test_non_square_matrix_says_its_shape(tmp_path, dk):
     with pytest.raises(BrainPainterError) as exc:
         read_connectome(path, dk)
     assert "is 3 x 4" in one_line(exc) and "square" in one_line(exc)
+    (tmp_path / "named.csv").write_text(",a,b,c,d\nx,0,1,2,3\ny,1,0,1,2\nz,2,1,0,1\n")
+    with pytest.raises(BrainPainterError) as exc:
+        read_connectome(tmp_path / "named.csv", dk)
+    assert "is 3 x 4; a connectivity matrix is square (N x N): its rows and columns must be the same nodes" \
+        in one_line(exc)
 
 
 def test_names_that_match_no_region_get_suggestions(tmp_path, dk):

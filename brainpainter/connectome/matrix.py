@@ -39,6 +39,9 @@ from brainpainter.table.cells import is_text, to_number
 FORMATS = "a CSV/TSV/text matrix, .edge, .npy, .mat or CIFTI .pconn.nii"
 WHAT = "connectome matrix"
 ENV = "BRAINPAINTER_MAX_INPUT_MB"
+#: What a matrix of another shape is told.
+SQUARE = ("a connectivity matrix is square (N x N): its rows and columns must be the same nodes in the same "
+          "order. Give the whole N x N matrix (names, if any, in the first row and column).")
 
 
 @dataclass(frozen=True)
@@ -125,9 +128,7 @@ def checked(weights: NDArray[Any], names: tuple[str, ...] | None, source: str) -
     if weights.ndim != 2 or weights.size == 0 or weights.shape[0] != weights.shape[1]:
         shape = " x ".join(str(s) for s in weights.shape) or "a single number"
         what = "is empty" if weights.size == 0 else f"is {shape}"
-        raise BrainPainterError(
-            f"connectome matrix {source!r} {what}; a connectivity matrix is square (N x N, one row and one "
-            "column per node). Give the whole N x N matrix (names, if any, in the first row and column).")
+        raise BrainPainterError(f"connectome matrix {source!r} {what}; {SQUARE}")
     if np.isinf(weights).any():
         i, j = (int(k) for k in np.argwhere(np.isinf(weights))[0])
         raise BrainPainterError(
@@ -179,10 +180,8 @@ def _refuse_long_lines(numbered: list[tuple[int, str]], sep: str, source: str) -
     for number, line in numbered:
         fields = (line.count(" ") + line.count("\t") if sep == " " else line.count(sep)) + 1
         if fields > most and (sep != " " or len(line.split(maxsplit=most)) > most):
-            raise BrainPainterError(
-                f"connectome matrix {source!r} line {number} has more than {most} fields but the file has "
-                f"{len(numbered)} lines; a connectivity matrix is square (N x N, one row and one column per "
-                "node). Give the whole N x N matrix (names, if any, in the first row and column).")
+            raise BrainPainterError(f"connectome matrix {source!r} line {number} has more than {most} fields "
+                                    f"but the file has {len(numbered)} lines; {SQUARE}")
 
 
 class _Rows:
@@ -251,10 +250,7 @@ def _grid(head: list[Any], head_line: int, rows: _Rows, decimal_comma: bool,
         first = _trimmed(first)  # every line ends in a separator
     width = len(first)
     if n_rows != width - names_first:  # refused before any row is parsed
-        raise BrainPainterError(
-            f"connectome matrix {source!r} is {n_rows} x {width - names_first}; a connectivity matrix is "
-            "square (N x N, one row and one column per node). Give the whole N x N matrix (names, if any, "
-            "in the first row and column).")
+        raise BrainPainterError(f"connectome matrix {source!r} is {n_rows} x {width - names_first}; {SQUARE}")
     firsts: list[Any] = []
     rest = np.empty((n_rows, width - 1))
     for i in range(n_rows):
