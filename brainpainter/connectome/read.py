@@ -46,7 +46,9 @@ def read_connectome(matrix: Any, atlas: Atlas | str | None = None, *,
         the matrix (reordered by name where both have names).
     node_values, node_categories, node_labels : str, path-like or sequence, optional
         A column of `nodes`, a file of one entry per node, or the entries. A ``.node`` file's
-        ``size``, ``color`` and ``label`` columns are the default ones.
+        ``size``, ``color`` and ``label`` columns are the default ones. A text that is not a column
+        is opened as a file: a caller that takes the text from someone else (a web form) passes the
+        path of what they uploaded, never their text.
     directed : bool
         ``weights[i, j]`` is the edge from node i to node j only.
     space : str
