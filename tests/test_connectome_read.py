@@ -359,6 +359,18 @@ def test_names_that_match_no_region_get_suggestions(tmp_path, dk):
     assert "'Left-precentrall' matches no region (did you mean 'Left-precentral'?)" in one_line(exc)
 
 
+@pytest.mark.parametrize(("names", "message"), [
+    (["insula", "Left-precentral"],
+     "'insula' means both ['Left-insula', 'Right-insula']; give the hemisphere"),
+    (["ctx-lh-insula", "Left-insula"],
+     "nodes 'ctx-lh-insula' and 'Left-insula' both name region 'Left-insula'"),
+])
+def test_bare_and_repeated_region_names(tmp_path, dk, names, message):
+    with pytest.raises(BrainPainterError) as exc:
+        read_connectome(write_csv(tmp_path / "m.csv", np.ones((2, 2)), names), dk)
+    assert message in one_line(exc)
+
+
 def test_unnamed_matrix_of_another_count_than_the_atlas(dk):
     with pytest.raises(BrainPainterError) as exc:
         read_connectome(np.ones((5, 5)), dk)
