@@ -309,6 +309,27 @@ def test_node_vectors_from_files_and_sequences(tmp_path, dk):
     assert conn.node_categories == ("visual", "motor") and conn.node_labels == ("L", "")
 
 
+def test_node_vectors_as_name_entry_lines_are_matched_by_name(tmp_path, dk):
+    path = write_csv(tmp_path / "m.csv", W3, DK3)
+    (tmp_path / "v.csv").write_text("region,strength\nctx-lh-insula,3\nLeft-precentral,1\n")
+    (tmp_path / "c.tsv").write_text("precentral_R\tmotor\nlh_insula\tsalience\nlh_precentral\tmotor\n")
+    conn = read_connectome(path, dk, node_values=tmp_path / "v.csv", node_categories=tmp_path / "c.tsv")
+    np.testing.assert_array_equal(conn.node_values, [1.0, np.nan, 3.0])  # Right-precentral: none given
+    assert conn.node_categories == ("motor", "motor", "salience")
+    (tmp_path / "bad.csv").write_text("Left-insulaa,3\n")
+    with pytest.raises(BrainPainterError) as exc:
+        read_connectome(path, dk, node_values=tmp_path / "bad.csv")
+    assert "'Left-insulaa', which is no node of the connectome (did you mean 'Left-insula'?)" in one_line(exc)
+
+
+def test_a_vector_file_of_far_more_entries_than_nodes_is_refused_before_it_is_split(tmp_path, dk):
+    path = write_csv(tmp_path / "m.csv", W3, DK3)
+    (tmp_path / "v.txt").write_text(",".join(["1"] * 1_000_000))
+    with pytest.raises(BrainPainterError) as exc:
+        read_connectome(path, dk, node_values=tmp_path / "v.txt")
+    assert "has more than 8 entries but the connectome has 3 nodes" in one_line(exc)
+
+
 # -- weights --------------------------------------------------------------------------------------
 def test_nan_on_the_diagonal_is_fine_nan_elsewhere_is_dropped_with_a_warning(tmp_path, dk):
     w = np.array([[np.nan, 0.4], [0.4, np.nan]])

@@ -92,9 +92,18 @@ def read_connectome(matrix: Any, atlas: Atlas | str | None = None, *,
         names = (matched_keys(m.names, atlas, m.source) if m.names is not None
                  else ordered_keys(atlas, n, m.source))
         positions = region_centroids(atlas, names, template, surface)
-    values = node_cells(_given(node_values, table, "size"), n, "node values", table)
-    categories = node_cells(_given(node_categories, table, "color"), n, "node categories", table)
-    labels = node_cells(_given(node_labels, table, "label"), n, "node labels", table)
+    key_of = None
+    if table is None and isinstance(atlas, Atlas):
+        from brainpainter.table.names import NameResolver
+
+        key_of = NameResolver.for_atlas(atlas).resolve
+
+    def cells(given: Any, column: str, what: str) -> list[Any] | None:
+        return node_cells(_given(given, table, column), n, what, table, names, key_of)
+
+    values = cells(node_values, "size", "node values")
+    categories = cells(node_categories, "color", "node categories")
+    labels = cells(node_labels, "label", "node labels")
     return Connectome(
         names=tuple(names), positions=np.asarray(positions, dtype=np.float64),
         weights=edge_weights(m.weights, directed, m.source), directed=bool(directed),
