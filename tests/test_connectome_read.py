@@ -301,7 +301,7 @@ def test_named_matrix_reorders_the_nodes_file_and_mni_is_mapped_as_tracts_are(tm
 
 def test_node_vectors_from_files_and_sequences(tmp_path, dk):
     np.save(tmp_path / "v.npy", np.array([1.0, 2.0]))
-    (tmp_path / "c.txt").write_text("visual\nmotor\n")
+    (tmp_path / "c.txt").write_text("visual,motor\n")  # two entries on a line: no node names
     path = write_csv(tmp_path / "m.csv", np.array([[0.0, 1.0], [1.0, 0.0]]), ["Left-insula", "Right-insula"])
     conn = read_connectome(path, dk, node_values=tmp_path / "v.npy", node_categories=tmp_path / "c.txt",
                            node_labels=["L", ""])
@@ -316,7 +316,7 @@ def test_node_vectors_as_name_entry_lines_are_matched_by_name(tmp_path, dk):
     conn = read_connectome(path, dk, node_values=tmp_path / "v.csv", node_categories=tmp_path / "c.tsv")
     np.testing.assert_array_equal(conn.node_values, [1.0, np.nan, 3.0])  # Right-precentral: none given
     assert conn.node_categories == ("motor", "motor", "salience")
-    (tmp_path / "bad.csv").write_text("Left-insulaa,3\n")
+    (tmp_path / "bad.csv").write_text("Left-precentral,1\nLeft-insulaa,3\n")
     with pytest.raises(BrainPainterError) as exc:
         read_connectome(path, dk, node_values=tmp_path / "bad.csv")
     assert "'Left-insulaa', which is no node of the connectome (did you mean 'Left-insula'?)" in one_line(exc)

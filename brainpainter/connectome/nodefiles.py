@@ -176,9 +176,11 @@ def node_cells(given: Any, n: int, what: str, nodes: NodeTable | None = None,
                 f"{sorted(nodes.columns)}) nor a file; give a column name or a file of one entry per node.")
         source = text
         rows = _vector_file(path, what, n)
-        named = rows and all(len(r) == 2 and is_text(r[0]) for r in rows)
-        if names is not None and named:
-            return _by_name(rows, names, key_of, what, source)
+        named = None
+        if names is not None and rows and all(len(r) == 2 and is_text(r[0]) for r in rows):
+            named = _by_name(rows, names, key_of, what, source)
+        if named is not None:
+            return named
         cells = [c for r in rows for c in r]
     else:
         source = f"the {what} given"
@@ -191,8 +193,9 @@ def node_cells(given: Any, n: int, what: str, nodes: NodeTable | None = None,
 
 
 def _by_name(rows: list[list[str]], names: Sequence[str], key_of: Callable[[str], str | None] | None,
-             what: str, source: str) -> list[Any]:
-    """Cells of ``name,entry`` rows in the nodes' order (a first row of column names is a header)."""
+             what: str, source: str) -> list[Any] | None:
+    """Cells of ``name,entry`` rows in the nodes' order (a first row of column names is a header); None
+    when no row names a node (``visual,motor``: two entries on one line)."""
     where = {name.lower(): i for i, name in enumerate(names)}
 
     def node(text: str) -> int | None:
@@ -202,6 +205,8 @@ def _by_name(rows: list[list[str]], names: Sequence[str], key_of: Callable[[str]
             hit = None if key is None else where.get(key.lower())
         return hit
 
+    if all(node(r[0]) is None for r in rows):
+        return None
     first, rest = rows[0], rows[1:]
     if node(first[0]) is None and (first[0].strip().lower() in (*NAME_COLUMNS, "roi", "parcel") or (
             rest and is_text(first[1]) and not any(is_text(r[1]) for r in rest))):
