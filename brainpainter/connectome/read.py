@@ -72,28 +72,9 @@ def read_connectome(matrix: Any, atlas: Atlas | str | None = None, *,
         raise choice_error("the nodes' space (--space)", space, SPACES)
     m = read_matrix(matrix)
     n = m.weights.shape[0]
-    table: NodeTable | None = None
-    if nodes is not None:
-        table = read_nodes(nodes)
-        order = _node_rows(m, table)
-        names = tuple(table.names[i] for i in order)
-        positions = _placed(table.positions[order], space, atlas, template)
-        table = NodeTable(names, positions, {k: [v[i] for i in order] for k, v in table.columns.items()},
-                          table.source)
-    else:
-        if atlas is None:
-            raise BrainPainterError(
-                f"connectome matrix {m.source!r}: its nodes need a place; give an atlas (its regions' "
-                "centroids) or a nodes file (name,x,y,z, or a BrainNet Viewer .node).")
-        from brainpainter.atlas.registry import get_atlas
-        from brainpainter.connectome.centroids import region_centroids
-
-        atlas = get_atlas(atlas) if isinstance(atlas, str) else atlas
-        names = (matched_keys(m.names, atlas, m.source) if m.names is not None
-                 else ordered_keys(atlas, n, m.source))
-        positions = region_centroids(atlas, names, template, surface)
+    atlas, table, names, positions = _nodes(m, atlas, nodes, space, template, surface)
     key_of = None
-    if table is None and isinstance(atlas, Atlas):
+    if table is None and atlas is not None:
         from brainpainter.table.names import NameResolver
 
         key_of = NameResolver.for_atlas(atlas).resolve
@@ -111,6 +92,32 @@ def read_connectome(matrix: Any, atlas: Atlas | str | None = None, *,
         node_categories=None if categories is None else node_texts(categories, numbers=True),
         node_labels=None if labels is None else node_texts(labels),
     )
+
+
+def _nodes(m: Matrix, atlas: Atlas | str | None, nodes: str | os.PathLike[str] | None, space: str,
+           template: Template | str, surface: str) -> tuple[Atlas | None, NodeTable | None, tuple[str, ...],
+                                                            NDArray[np.float64]]:
+    """The atlas (loaded), the nodes file (in the matrix's order), the node names and positions."""
+    if isinstance(atlas, str):
+        from brainpainter.atlas.registry import get_atlas
+
+        atlas = get_atlas(atlas)
+    if nodes is not None:
+        table = read_nodes(nodes)
+        order = _node_rows(m, table)
+        names = tuple(table.names[i] for i in order)
+        positions = _placed(table.positions[order], space, atlas, template)
+        columns = {k: [v[i] for i in order] for k, v in table.columns.items()}
+        return atlas, NodeTable(names, positions, columns, table.source), names, positions
+    if atlas is None:
+        raise BrainPainterError(
+            f"connectome matrix {m.source!r}: its nodes need a place; give an atlas (its regions' "
+            "centroids) or a nodes file (name,x,y,z, or a BrainNet Viewer .node).")
+    from brainpainter.connectome.centroids import region_centroids
+
+    names = (matched_keys(m.names, atlas, m.source) if m.names is not None
+             else ordered_keys(atlas, m.weights.shape[0], m.source))
+    return atlas, None, names, region_centroids(atlas, names, template, surface)
 
 
 def _given(given: Any, table: NodeTable | None, column: str) -> Any:
@@ -147,7 +154,7 @@ def _node_rows(m: Matrix, table: NodeTable) -> list[int]:
     return [where[name.lower()] for name in m.names]
 
 
-def _placed(positions: NDArray[np.float64], space: str, atlas: Atlas | str | None,
+def _placed(positions: NDArray[np.float64], space: str, atlas: Atlas | None,
             template: Template | str) -> NDArray[np.float64]:
     """Coordinates in `space` mapped into the template's (as tracts are)."""
     if space == "template":
@@ -155,10 +162,6 @@ def _placed(positions: NDArray[np.float64], space: str, atlas: Atlas | str | Non
     from brainpainter.atlas.volumes import space_transform
     from brainpainter.connectome.centroids import atlas_template
 
-    if isinstance(atlas, str):
-        from brainpainter.atlas.registry import get_atlas
-
-        atlas = get_atlas(atlas)
     if atlas is not None:
         tpl = atlas_template(atlas, template)
     else:
