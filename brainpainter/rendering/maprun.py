@@ -21,16 +21,14 @@ from brainpainter.atlas.template import Template, load_template
 from brainpainter.errors import BrainPainterError
 from brainpainter.maps.inputs import VertexMaps, is_map_input, read_maps
 from brainpainter.maps.layers import vertex_colors
-from brainpainter.maps.options import MapOptions
 from brainpainter.maps.outlines import Contours, mesh_edges
 from brainpainter.maps.resolution import map_mesh, own_vertex_count
-from brainpainter.rendering.composition import RegionsBelow, map_layers
+from brainpainter.rendering.composition import RegionsBelow, line_layers, map_layers
 from brainpainter.rendering.geometry import VertexColors
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import Options
 from brainpainter.rendering.painter import Painter, region_colors
 from brainpainter.rendering.parallel import Item
-from brainpainter.rendering.settings import outlined
 from brainpainter.rendering.sulc import convexity
 from brainpainter.rendering.views import View, parse_views
 from brainpainter.table.region_table import RegionTable, read_table
@@ -143,10 +141,8 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
         data, atlas = None, table.atlas
     m = options.maps
     outline = options.maps.outline
-    if table is not None and outline is not None and outline != table.atlas.name:
-        raise BrainPainterError(f"a map over region values outlines the table's atlas "
-                                f"({table.atlas.name!r}); --outline {outline!r} was given. Give --outline "
-                                f"{table.atlas.name}.")
+    contours, settings = line_layers(options, "a map over region values",
+                                     None if table is None else (table.atlas.name,))
     # --outline ATLAS: the map is drawn on that atlas's mesh, whose vertices carry its labels
     atlas_obj = get_atlas(outline) if outline is not None else atlas if atlas is not None else get_atlas("dk")
     surfaces = options.maps.surfaces
@@ -182,31 +178,9 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
              else None)
     masks = {hemi: surface_masks(tpl, labels, meshes[hemi], n) for hemi, n in own.items()} if own else None
     layers, below = map_layers(options, maps, table, meshes)
-    contours = read_contours(options.maps)
     depth = {hemi: np.asarray(m.sulc) for hemi, m in meshes.items() if getattr(m, "sulc", None) is not None}
-    return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list,
-                  outlined(options.settings, outline if contours is None else "contour"), options,
+    return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list, settings, options,
                   source_vertex, edges, depth, contours, layers=layers, below=below, mesh_masks=masks)
-
-
-def read_contours(options: MapOptions) -> Contours | None:
-    """The second map of ``--contour`` (``FILE`` or ``LH,RH``) and its levels, on fsaverage (None without)."""
-    if options.contour is None:
-        return None
-    given = options.contour
-    parts = [p.strip() for p in given.split(",")] if isinstance(given, str) else None
-    pair = parts is not None and len(parts) == 2
-    try:
-        maps = read_maps(None, parts[0], parts[1]) if parts is not None and pair else read_maps(given)
-    except BrainPainterError as exc:  # the readers speak of --lh/--rh: say which option it was
-        what = given if isinstance(given, str) else "(a map)"
-        raise BrainPainterError(f"--contour {what}: {str(exc).rstrip('.')}; --contour takes one file whose "
-                                "name says its hemisphere, or two: LH,RH.") from None
-    if maps.n_images != 1:
-        raise BrainPainterError(f"--contour takes a map of one image; {maps.source} has {maps.n_images}. "
-                                "Give one image (a cluster mask, a p-map).")
-    values = {hemi: np.asarray(maps.on_fsaverage(hemi, 0), np.float32) for hemi in maps.values}
-    return Contours(values, options.levels, regions=options.outline is not None)
 
 
 def _own_surfaces(options: Options, surfaces: dict[str, Any]) -> dict[str, Surface]:
