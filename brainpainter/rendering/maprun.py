@@ -57,7 +57,7 @@ class MapTable:
     @property
     def values(self) -> NDArray[Any]:
         """No NaN region values (a map's NaN vertices show the underlay): zeros, (images, regions)."""
-        return np.zeros((len(self.maps.images), len(self.atlas.keys)))
+        return np.zeros((len(self.images), len(self.atlas.keys)))  # a table's rows under a map of one image
 
     def summary(self) -> dict[str, Any]:
         return self.maps.summary() if self.below is None else {**self.maps.summary(),
