@@ -424,19 +424,6 @@ def colorbar_height(scale: ColourScale, width: float, *, dpi: float = 100.0, **k
     return float(outer.height) / dpi + 2 * 0.04 + 0.02
 
 
-def colorbar_width(scale: ColourScale, *, dpi: float = 100.0, fontsize: float = 8.0, **kwargs: Any) -> float:
-    """Width (inches) an upright colour bar needs for itself, its ticks, label and swatches.
-
-    Parameters as :func:`draw_colorbar` (``label``, ``ticks``, ``nan``, ``missing``).
-    """
-    fig = new_figure((6.0, 3.0), dpi)
-    ax = fig.add_axes((0.05, 0.3, 1.1 * fontsize / 72.0 / 6.0, 0.6))
-    draw_colorbar(ax, scale, orientation="vertical", fontsize=fontsize, **kwargs)
-    fig.draw_without_rendering()
-    box = decorations_bbox(ax)
-    return float(box.x1 - ax.get_window_extent().x0) / dpi + 0.02
-
-
 def colorbar_image(
     scale: ColourScale,
     size: tuple[int, int],

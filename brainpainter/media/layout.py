@@ -240,7 +240,7 @@ def compose_figure(images: Mapping[tuple[str, str], NDArray[Any]], image_names: 
     -------
     FigureLayout
     """
-    from brainpainter.media.colorbar import colorbar_height, colorbar_width, new_figure, text_color
+    from brainpainter.media.colorbar import colorbar_height, new_figure, text_color
 
     opts = opts or FigureOptions()
     crops = {v: common_crop([images[(i, v)] for i in image_names], background) for v in view_names}
@@ -344,6 +344,21 @@ def draw_bar(fig: Figure, grid: Grid, scale: ColourScale, opts: FigureOptions, n
     cb_ax.set_position((pos.x0, 1 - (cb_top + bar_h) / grid.height, pos.width, bar_h / grid.height))
     return cb_ax
 
+
+
+def colorbar_width(scale: ColourScale, *, dpi: float = 100.0, fontsize: float = 8.0, **kwargs: Any) -> float:
+    """Width (inches) an upright colour bar needs for itself, its ticks, label and swatches.
+
+    Parameters as :func:`draw_colorbar` (``label``, ``ticks``, ``nan``, ``missing``).
+    """
+    from brainpainter.media.colorbar import decorations_bbox, draw_colorbar, new_figure
+
+    fig = new_figure((6.0, 3.0), dpi)
+    ax = fig.add_axes((0.05, 0.3, 1.1 * fontsize / 72.0 / 6.0, 0.6))
+    draw_colorbar(ax, scale, orientation="vertical", fontsize=fontsize, **kwargs)
+    fig.draw_without_rendering()
+    box = decorations_bbox(ax)
+    return float(box.x1 - ax.get_window_extent().x0) / dpi + 0.02
 
 
 def draw_upright_bar(fig: Figure, grid: Grid, scale: ColourScale, opts: FigureOptions, nan: bool,
