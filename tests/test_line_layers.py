@@ -63,3 +63,31 @@ def test_an_outline_of_another_atlas_is_refused_over_region_values(tmp_path):
     message = r"^a region render outlines its own atlas's regions \('dk'\); --outline 'destrieux' was given\."
     with pytest.raises(BrainPainterError, match=message):
         prepare_run({"lh_insula": [1.0]}, outline="destrieux")
+
+
+@pytest.mark.render
+def test_a_map_with_a_contour_and_tracts_on_their_own_scale(tmp_path):
+    """The issue's scene: a map, a contour of a mask and tracts with FA on their own scale (a map run
+    drew no tracts: they were dropped without a word)."""
+    from test_tracts import bundle, write
+
+    from brainpainter import Scene
+
+    folder = tmp_path / "bundles"
+    folder.mkdir()
+    write(folder / "AF_L.trk", bundle(-25.0, n=40, z=20.0, length=60.0))
+    write(folder / "CST_R.tck", bundle(25.0, n=40, seed=1, z=20.0, length=60.0))
+    fa = tmp_path / "fa.csv"
+    fa.write_text("Image-name-unique,AF_L,CST_R\nctrl,0.3,0.7\n")
+    scene = (Scene(width=320, height=240, shading="flat", quality="fast", glass_opacity=0.0)
+             .add({"lh": np.linspace(1.5, 4, 10242), "rh": np.linspace(1.5, 4, 10242)}, cmap="viridis",
+                  vmin=1.5, vmax=4, label="thickness (mm)")
+             .add(_mask(tmp_path), outline=True)
+             .add(folder, values=fa, cmap="magma", vmin=0.3, vmax=0.7, label="FA"))
+    result = scene.render(views="subcortical-dorsal", progress=False, max_streamlines=40, tract_radius=1.5)
+    img = next(iter(result.images.values()))[..., :3].astype(int)
+    for rgb in ((0, 0, 4), (252, 253, 191)):  # FA 0.3 and 0.7: magma's ends, not viridis
+        assert (np.abs(img - rgb).max(axis=-1) <= 20).sum() > 100, rgb
+    assert [(la.kind, la.label, la.scale.name) for la in result.layers] == [
+        ("map", "thickness (mm)", "viridis"), ("tracts", "FA", "magma")]
+    assert result.manifest["settings"]["lines"] == [{"kind": "contour", "levels": [0.5]}]

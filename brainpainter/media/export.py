@@ -280,8 +280,8 @@ EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cm
 def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
     """The scene of a run and the meshes of its row `i`: a map's cortex coloured per vertex, or
     the regions, then the tracts' tubes."""
+    from brainpainter.rendering.composition import tract_colors
     from brainpainter.rendering.painter import load_scene, region_colors
-    from brainpainter.rendering.run import tract_colors
 
     opts = run.options.scene
     if isinstance(run, MapRun):

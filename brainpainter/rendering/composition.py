@@ -82,6 +82,15 @@ def layer_label(options: Options, kind: str, table: RegionTable) -> str:
     return Path(table.source).name if table.source else kind
 
 
+def tract_colors(values: Mapping[str, float], scale: ColourScale) -> dict[str, RGB]:
+    """Colour of each bundle (or bundle node) key for one image; NaN: the scale's NaN colour."""
+    keys = list(values)
+    if not keys:
+        return {}
+    rgb = scale(np.array([values[k] for k in keys], dtype=float))
+    return {k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(keys, rgb, strict=True)}
+
+
 def run_scale(options: ScaleOptions, values: NDArray[Any], measures: bool) -> ColourScale:
     """The colour scale of a run whose values (all rows) are `values`, shape any.
 
@@ -145,33 +154,50 @@ class RegionsBelow:
         return regions, {hemi: rgb[idx] for hemi, idx in self.vertex_region.items()}
 
 
-def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None,
-               meshes: Mapping[str, Any]) -> tuple[tuple[Layer, ...], RegionsBelow | None]:
-    """The layers of a map run: the map alone, or region values (`table`) with the map over them.
+def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None, meshes: Mapping[str, Any],
+               tract_values: TractValues | None = None) -> tuple[tuple[Layer, ...], RegionsBelow | None]:
+    """The layers of a map run: the map alone, or region values (`table`) with the map over them;
+    then tract values, if given.
 
     The map's scale is its own (``--map-cmap``, ...; else the automatic scale of a map,
     :func:`brainpainter.maps.layers.map_scale`); drawn over region values it covers them by
-    ``--map-alpha``. `meshes` are the meshes the map is drawn on, by hemisphere.
+    ``--map-alpha``. `meshes` are the meshes the map is drawn on, by hemisphere. Tract values take
+    their own options (``--tracts-cmap``, ...; a gradient spans their values), else the first layer's scale.
     """
     given = options.layers.label("map")
     label = given if given is not None else Path(maps.source).name or "map"
     alpha = float(options.layers.map_alpha)
     threshold = options.maps.threshold
-    options.layers.check_drawn(["map"] if table is None else ["regions", "map"])
+    tracts = ["tracts"] if tract_values is not None else []
+    options.layers.check_drawn(["map", *tracts] if table is None else ["regions", "map", *tracts])
     if table is None:
         own = options.layers.scale_options("map", options.scale, first=True)
         assert own is not None
-        return (Layer("map", map_scale(own, maps, threshold), alpha, label),), None
+        layers: tuple[Layer, ...] = (Layer("map", map_scale(own, maps, threshold), alpha, label),)
+        return layers + tract_layer(options, tract_values, layers[0]), None
     if maps.n_images not in (1, len(table.images)):
         raise BrainPainterError(
             f"a map drawn over region values has one image, or one per row of the table; the map has "
             f"{maps.n_images} and the table {len(table.images)} rows ({table.source}). Give a map of one "
             "image, or as many as the table's rows.")
-    regions = run_layers(options, table, None, False, others=("map",))[0]
+    regions = run_layers(options, table, None, False, others=("map", *tracts))[0]
     own = options.layers.scale_options("map", options.scale, first=False)
     plain = ScaleOptions(nan_color=options.scale.nan_color, missing_color=options.scale.missing_color)
     scale = map_scale(own if own is not None else plain, maps, threshold)
-    return (regions, Layer("map", scale, alpha, label)), RegionsBelow.of(table, regions.scale, meshes)
+    layers = (regions, Layer("map", scale, alpha, label))
+    return layers + tract_layer(options, tract_values, regions), RegionsBelow.of(table, regions.scale, meshes)
+
+
+def tract_layer(options: Options, tract_values: TractValues | None, first: Layer) -> tuple[Layer, ...]:
+    """The tract values' layer of a map run (none without them): their own scale, else `first`'s."""
+    if tract_values is None:
+        return ()
+    own = options.layers.scale_options("tracts", options.scale, first=False)
+    scale = first.scale if own is None else run_scale(own, tract_values.values, True)
+    given = options.layers.label("tracts")
+    scene = options.scene
+    label = given if given is not None else scene.tract_value or Path(str(scene.tract_values)).name
+    return (Layer("tracts", scale, 1.0, label, own_scale=own is not None),)
 
 
 def line_layers(options: Options, drawn: str,

@@ -23,7 +23,7 @@ from brainpainter.maps.inputs import VertexMaps, is_map_input, read_maps
 from brainpainter.maps.layers import vertex_colors
 from brainpainter.maps.outlines import Contours, mesh_edges
 from brainpainter.maps.resolution import map_mesh, own_vertex_count
-from brainpainter.rendering.composition import RegionsBelow, line_layers, map_layers
+from brainpainter.rendering.composition import RegionsBelow, line_layers, map_layers, tract_colors
 from brainpainter.rendering.geometry import VertexColors
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import Options
@@ -32,6 +32,7 @@ from brainpainter.rendering.parallel import Item
 from brainpainter.rendering.sulc import convexity
 from brainpainter.rendering.views import View, parse_views
 from brainpainter.table.region_table import RegionTable, read_table
+from brainpainter.tracts.values import TractValues, read_tract_values
 
 #: Default views of a map run: both hemispheres, outside and inside.
 MAP_VIEWS = "lateral-left,medial-left,lateral-right,medial-right"
@@ -77,7 +78,7 @@ class MapRun:
     cluster_edges: dict[str, NDArray[Any]] | None = None
     depth: dict[str, NDArray[Any]] | None = None  # sulcal depth of the drawn vertices, where the mesh has it
     contours: Contours | None = None  # a second map's iso-lines (--contour)
-    tract_values: None = None  # a map colours no tracts
+    tract_values: TractValues | None = None  # tract values drawn with the map (--tracts, --tract-values)
     layers: tuple[Layer, ...] = ()
     below: RegionsBelow | None = None  # region values under the map
     mesh_masks: dict[str, dict[str, NDArray[Any]]] | None = None  # the user's own surfaces
@@ -91,11 +92,17 @@ class MapRun:
         """The colour scale of layer `kind`; the map's where the run has no such layer."""
         return next((layer.scale for layer in self.layers if layer.kind == kind), self.scale)
 
+    def layer(self, kind: str) -> Layer:
+        """The run's layer of `kind` (``"map"``)."""
+        return next(layer for layer in self.layers if layer.kind == kind)
+
     def painter(self) -> Painter:
         """A new (not loaded) painter drawing a per-vertex scene."""
         scene = self.options.scene
+        nodes = self.tract_values.nodes if self.tract_values is not None else ()
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
-                       scene.renderer, coloring="vertices", contours=self.contours)
+                       scene.renderer, coloring="vertices", contours=self.contours, tracts=scene.tract_spec(),
+                       tract_nodes=nodes, tract_radius=scene.tract_radius)
 
     def items(self, rows: Any) -> list[tuple[int, View]]:
         return [(i, view) for i in rows for view in self.views]
@@ -108,18 +115,21 @@ class MapRun:
             map_image: float | tuple[int, int, float] = image if self.maps.n_images > 1 else 0
             regions: dict[str, Any] = {}
             below = None
+            row = round(image if not isinstance(image, tuple) else image[0] if image[2] < 0.5 else image[1])
             if self.below is not None:  # region values under the map: a movie's frame takes the nearer row
-                row = image if not isinstance(image, tuple) else image[0] if image[2] < 0.5 else image[1]
-                regions, below = self.below.colors(round(row))
+                regions, below = self.below.colors(row)
             cortex = vertex_colors(self.maps, map_image, self.source_vertex, scale, m.underlay, m.threshold,
                                    cluster_edges=self.cluster_edges, below=below,
-                                   opacity=self.layers[-1].opacity, depth=self.depth,
+                                   opacity=self.layer("map").opacity, depth=self.depth,
                                    contrast=m.underlay_contrast, mesh_masks=self.mesh_masks)
             # a volume's subcortical means: below --threshold a structure shows no value, as the cortex does
             means = {k: v for k, v in self.maps.region_values(map_image).items()
                      if m.threshold is None or abs(v) >= m.threshold}
             means_rgb = region_colors(means, self.table.atlas, scale)
             regions.update(means_rgb if self.below is None else {k: means_rgb[k] for k in means})
+            if self.tract_values is not None:  # each bundle on the tracts' own scale
+                regions.update(tract_colors(self.tract_values.row(self.table.images[row]),
+                                            self.scale_of("tracts")))
             self._cache[image] = VertexColors(regions, cortex)
         return self._cache[image]
 
@@ -177,10 +187,14 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     edges = ({hemi: mesh_edges(m.faces) for hemi, m in meshes.items()} if options.maps.outline_threshold
              else None)
     masks = {hemi: surface_masks(tpl, labels, meshes[hemi], n) for hemi, n in own.items()} if own else None
-    layers, below = map_layers(options, maps, table, meshes)
+    scene = options.scene
+    tract_values = (read_tract_values(scene.tract_values, scene.tract_value) if scene.tract_values is not None
+                    else None)
+    layers, below = map_layers(options, maps, table, meshes, tract_values)
     depth = {hemi: np.asarray(m.sulc) for hemi, m in meshes.items() if getattr(m, "sulc", None) is not None}
     return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list, settings, options,
-                  source_vertex, edges, depth, contours, layers=layers, below=below, mesh_masks=masks)
+                  source_vertex, edges, depth, contours, tract_values, layers=layers, below=below,
+                  mesh_masks=masks)
 
 
 def _own_surfaces(options: Options, surfaces: dict[str, Any]) -> dict[str, Surface]:

@@ -25,7 +25,7 @@ from brainpainter.color.scale import ColourScale
 from brainpainter.errors import BrainPainterError, NoRegionColumnError
 from brainpainter.maps.inputs import is_map_input
 from brainpainter.maps.outlines import Contours
-from brainpainter.rendering.composition import line_entries, line_layers, run_layers
+from brainpainter.rendering.composition import line_entries, line_layers, run_layers, tract_colors
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
 from brainpainter.rendering.painter import (
@@ -37,7 +37,7 @@ from brainpainter.rendering.painter import (
     shown_aspect,
 )
 from brainpainter.rendering.parallel import Item, LocalRunner, PainterSpec, Runner, SerialRunner, chunked
-from brainpainter.rendering.settings import RGB, RenderSettings, with_aspect
+from brainpainter.rendering.settings import RenderSettings, with_aspect
 from brainpainter.rendering.views import ImagesByView, View, parse_views
 from brainpainter.table.region_table import RegionTable, read_table
 from brainpainter.table.rows import select_rows
@@ -95,15 +95,6 @@ def tracts_only_table(tract_values: TractValues, atlas: Atlas | None, data: Any)
     source = str(data) if isinstance(data, str | Path) else "table"
     return RegionTable(images=tuple(images), regions=(), values=np.zeros((len(images), 0)),
                        atlas=atlas or get_atlas("dk"), source=source)
-
-
-def tract_colors(values: Mapping[str, float], scale: ColourScale) -> dict[str, RGB]:
-    """Colour of each bundle (or bundle node) key for one image; NaN: the scale's NaN colour."""
-    keys = list(values)
-    if not keys:
-        return {}
-    rgb = scale(np.array([values[k] for k in keys], dtype=float))
-    return {k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(keys, rgb, strict=True)}
 
 
 def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, bool]:
