@@ -75,3 +75,22 @@ def test_the_html_export_shows_a_bar_per_layer(tmp_path, layers, tiny):
     assert len(bars) == 2
     assert _has(bars[0], VIRIDIS_END) and not _has(bars[0], MAGMA_END)
     assert _has(bars[1], MAGMA_END) and not _has(bars[1], VIRIDIS_END)
+
+
+def test_an_export_of_a_map_has_its_tracts_too(tmp_path, layers):
+    """A map with tracts exports the tracts' tubes in their own scale's colours (the export dropped them)."""
+    from matplotlib import colormaps
+
+    from brainpainter.media.export import _row_meshes
+    from brainpainter.rendering.run import prepare_run
+
+    table, options = layers
+    fa = tmp_path / "fa.csv"
+    fa.write_text("Image-name-unique,AF_L,CST_R\nA,0.3,0.7\n")
+    options = {**options, "tract_values": str(fa), "tracts_space": "template", "cmap": None}
+    run = prepare_run({"lh": np.zeros(10242), "rh": np.zeros(10242)}, **options)
+    _, meshes = _row_meshes(run, 0)
+    tubes = [m for m in meshes if m.part == "tracts"]
+    assert {m.part for m in meshes} >= {"lh", "rh", "tracts"} and len(tubes) == 2
+    colours = {tuple(np.round(np.asarray(m.color)[..., :3].reshape(-1, 3)[0], 2)) for m in tubes}
+    assert colours == {tuple(np.round(colormaps["magma"](x)[:3], 2)) for x in (0.0, 1.0)}

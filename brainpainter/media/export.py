@@ -283,14 +283,14 @@ def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
     from brainpainter.rendering.composition import tract_colors
     from brainpainter.rendering.painter import load_scene, region_colors
 
-    opts = run.options.scene
-    if isinstance(run, MapRun):
-        _, scene = load_scene(run.table.atlas, opts.template, opts.surface, opts.hide)
-        return scene, vertex_meshes(scene, run.colors(i))
-    table, tv = run.table, run.tract_values
-    atlas_obj, scene = load_scene(table.atlas, opts.template, opts.surface, opts.hide,
+    opts, tv = run.options.scene, run.tract_values
+    atlas_obj, scene = load_scene(run.table.atlas, opts.template, opts.surface, opts.hide,
                                   tracts=opts.tract_spec(), tract_nodes=tv.nodes if tv is not None else (),
                                   tract_radius=opts.tract_radius)
+    if isinstance(run, MapRun):  # the map, then the tracts drawn with it
+        colors = run.colors(i)
+        return scene, vertex_meshes(scene, colors) + tract_meshes(scene, colors.regions)
+    table = run.table
     values = table.row(i)
     meshes = region_meshes(scene, region_colors(values, atlas_obj, run.scale_of("regions")),
                            atlas_obj.expand(values))
