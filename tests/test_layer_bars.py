@@ -84,7 +84,7 @@ def test_an_export_of_a_map_has_its_tracts_too(tmp_path, layers):
     from brainpainter.media.export import _row_meshes
     from brainpainter.rendering.run import prepare_run
 
-    table, options = layers
+    _, options = layers
     fa = tmp_path / "fa.csv"
     fa.write_text("Image-name-unique,AF_L,CST_R\nA,0.3,0.7\n")
     options = {**options, "tract_values": str(fa), "tracts_space": "template", "cmap": None}
