@@ -49,6 +49,13 @@ def test_bars_at_the_right_stand_upright_beside_the_images_each_labelled():
     assert fig.get_size_inches()[1] < bottom.figure.get_size_inches()[1]  # no bar row under the images
 
 
+def test_a_long_label_of_an_upright_bar_stays_inside_a_short_figure():
+    names, views = ["a"], ["lateral-left", "medial-left", "lateral-right", "medial-right"]
+    opts = FigureOptions(label="atrophy (SD from age-matched controls)", colorbar_position="right")
+    layout = compose_figure(_images(names, views), names, views, make_scale(vmin=0, vmax=3), opts)
+    assert layout.figure.get_size_inches()[1] < 1.5 and _inside(layout.figure, layout.colorbar_ax)
+
+
 def test_a_colorbar_position_not_known_is_one_line():
     with pytest.raises(BrainPainterError, match=r"colorbar_position must be one of \['bottom', 'right'\]; "
                                                 r"'left' was given"):

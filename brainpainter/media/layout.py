@@ -252,8 +252,17 @@ def compose_figure(images: Mapping[tuple[str, str], NDArray[Any]], image_names: 
     right = opts.colorbar_position == "right"
     if len(bars) > 1 and not right:  # narrower bars side by side: every other round tick where there are many
         bars = [(s, lb, t if t is not None else thinned_ticks(s), n, m) for s, lb, t, n, m in bars]
-    widths = [colorbar_width(s, dpi=opts.dpi, label=lb, ticks=t, nan=n, missing=m, fontsize=opts.font_size)
-              for s, lb, t, n, m in bars] if right else []
+    widths: list[float] = []
+    if right:  # each bar's width; a label longer than the images are tall on two lines
+        room = None
+        for _ in range(2):
+            measured = [colorbar_width(s, dpi=opts.dpi, label=lb, ticks=t, nan=n, missing=m,
+                                       fontsize=opts.font_size, room=room) for s, lb, t, n, m in bars]
+            widths = [w for w, _ in measured]
+            first = plan_grid(aspect, image_names, view_names, opts, lambda _: 0.0,
+                              sum(widths) + RIGHT_GAP_IN * len(widths))
+            room = first.images_bottom - first.top
+        bars = [(s, text, t, n, m) for (s, _, t, n, m), (_, text) in zip(bars, measured, strict=True)]
 
     def bar_h(usable: float) -> float:
         width = bar_width(usable, len(bars))
@@ -346,19 +355,28 @@ def draw_bar(fig: Figure, grid: Grid, scale: ColourScale, opts: FigureOptions, n
 
 
 
-def colorbar_width(scale: ColourScale, *, dpi: float = 100.0, fontsize: float = 8.0, **kwargs: Any) -> float:
-    """Width (inches) an upright colour bar needs for itself, its ticks, label and swatches.
+def colorbar_width(scale: ColourScale, *, dpi: float = 100.0, fontsize: float = 8.0,
+                   room: float | None = None, **kwargs: Any) -> tuple[float, str | None]:
+    """Width (inches) an upright colour bar needs for itself, its ticks, label and swatches, and its label
+    (on two lines where it is longer than `room` inches).
 
     Parameters as :func:`draw_colorbar` (``label``, ``ticks``, ``nan``, ``missing``).
     """
+    import textwrap
+
     from brainpainter.media.colorbar import decorations_bbox, draw_colorbar, new_figure
 
     fig = new_figure((6.0, 3.0), dpi)
     ax = fig.add_axes((0.05, 0.3, 1.1 * fontsize / 72.0 / 6.0, 0.6))
     draw_colorbar(ax, scale, orientation="vertical", fontsize=fontsize, **kwargs)
     fig.draw_without_rendering()
+    label = ax.yaxis.label
+    text = label.get_text()
+    if room is not None and " " in text and label.get_window_extent().height > room * dpi:
+        label.set_text(textwrap.fill(text, width=len(text) // 2 + 1))
+        fig.draw_without_rendering()
     box = decorations_bbox(ax)
-    return float(box.x1 - ax.get_window_extent().x0) / dpi + 0.02
+    return float(box.x1 - ax.get_window_extent().x0) / dpi + 0.02, label.get_text() or None
 
 
 def draw_upright_bar(fig: Figure, grid: Grid, scale: ColourScale, opts: FigureOptions, nan: bool,
@@ -374,4 +392,19 @@ def draw_upright_bar(fig: Figure, grid: Grid, scale: ColourScale, opts: FigureOp
                                   height))
     draw_colorbar(cb_ax, scale, label=opts.label, ticks=opts.ticks, orientation="vertical", nan=nan,
                   missing=missing, fontsize=opts.font_size, color=color)
+    fit_upright_label(cb_ax, fig.bbox.height * (1 - 2 * PAD_IN / grid.height))
     return cb_ax
+
+
+def fit_upright_label(ax: Axes, room: float) -> None:
+    """An upright bar's label longer than `room` (display pixels, its lines given by
+    :func:`colorbar_width`): smaller type, down to 5 pt."""
+    from brainpainter.media.colorbar import figure_of
+
+    label = ax.yaxis.label
+    if not label.get_text():
+        return
+    figure_of(ax).draw_without_rendering()
+    tall = label.get_window_extent().height
+    if tall > room:
+        label.set_fontsize(max(5.0, float(label.get_fontsize()) * room / tall))
