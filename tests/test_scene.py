@@ -55,6 +55,11 @@ def test_layers_become_the_command_line_options(tmp_path):
         "contour": mask, "outline_color": "white", "contour_levels": "0.05,0.01", "outline": "dk"}
     alone = Scene().add({"lh": np.zeros(N5)}, cmap="magma")
     assert alone.run_options()[0].keys() == {"lh"}  # a map alone is INPUT
+    from types import SimpleNamespace
+
+    surface_image = SimpleNamespace(data=SimpleNamespace(parts={"left": np.zeros(N5), "right": np.ones(N5)}))
+    _, under = Scene().add("table.csv").add(surface_image, kind="map").run_options()  # under a table
+    assert under.keys() == {"lh", "rh"} and under["rh"].sum() == N5
 
 
 @pytest.mark.parametrize(("add", "message"), [

@@ -100,6 +100,8 @@ def _map(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:
     from brainpainter.maps.inputs import pair_of
 
     data = layer.data
+    if hasattr(data, "data") and hasattr(data.data, "parts"):  # nilearn's SurfaceImage: its hemispheres
+        data = dict(data.data.parts)
     if isinstance(data, Mapping):
         hemis = {"left": "lh", "right": "rh"}
         return None, {**options, **{hemis.get(str(k).lower(), str(k).lower()): v for k, v in data.items()}}
