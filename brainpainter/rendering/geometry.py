@@ -321,29 +321,52 @@ class SceneGeometry:
 
         Per region, the edges between faces of two regions (hidden regions included: their
         border with what is drawn is drawn); per vertex, the lines through the midpoints of the
-        edges between vertices of two labels of the scene's label set, and a second map's
-        iso-lines (``scene.contours``).
+        edges between vertices of two labels of the scene's label set. A second map's iso-lines
+        (``scene.contours``) are added to either, drawn without the regions' borders unless
+        ``contours.regions``.
         """
-        from brainpainter.rendering.borders import face_borders, iso_lines, vertex_borders
-
-        normals = vertex_normals(verts, cm.faces)
-        if not per_vertex:
-            return face_borders(verts, cm.faces, np.asarray(cm.face_label), normals)
-        from brainpainter.maps.outlines import mesh_labels
+        from brainpainter.rendering.borders import face_borders, vertex_borders
 
         contours = getattr(scene, "contours", None)
-        lines: list[NDArray[np.float32]] = []
-        if contours is not None and hemi in contours.values and len(cm.source_vertex):
-            values = np.asarray(contours.values[hemi])[np.asarray(cm.source_vertex, np.int64)]
-            lines = [iso_lines(verts, cm.faces, values, level, normals) for level in contours.levels]
+        lines = SceneGeometry._contour_lines(scene, hemi, cm if per_vertex else None)
         if contours is not None and not contours.regions:
             return np.concatenate(lines) if lines else np.zeros((0, 2, 3), np.float32)
+        normals = vertex_normals(verts, cm.faces)
+        if not per_vertex:
+            regions: NDArray[Any] = np.concatenate([face_borders(verts, cm.faces, np.asarray(cm.face_label),
+                                                                 normals), *lines])
+            return regions
+        from brainpainter.maps.outlines import mesh_labels
+
         labels = mesh_labels(scene.template, scene.labels, hemi, cm)
         if labels is None:
             raise BrainPainterError(f"template {scene.template.name!r} has no per-vertex labels for "
                                     f"{scene.labels!r}, so its region borders cannot be drawn.")
         borders: NDArray[Any] = np.concatenate([vertex_borders(verts, cm.faces, labels, normals), *lines])
         return borders
+
+    @staticmethod
+    def _contour_lines(scene: SceneParts, hemi: str, cm: Any) -> list[NDArray[np.float32]]:
+        """A second map's iso-lines on hemisphere `hemi` (``scene.contours``), one array per level.
+
+        `cm`: the per-vertex cortex mesh drawn; None (regions drawn split at their borders): the
+        iso-lines are traced on the unsplit mesh, whose surface the split one keeps.
+        """
+        from brainpainter.rendering.borders import iso_lines
+
+        contours = getattr(scene, "contours", None)
+        if contours is None or hemi not in contours.values:
+            return []
+        if cm is None:
+            from brainpainter.maps.resolution import map_mesh
+
+            cm = map_mesh(scene.template, scene.labels, hemi)
+        if not len(cm.source_vertex):
+            return []
+        verts = cm.vertices[scene.surface]
+        normals = vertex_normals(verts, cm.faces)
+        values = np.asarray(contours.values[hemi])[np.asarray(cm.source_vertex, np.int64)]
+        return [iso_lines(verts, cm.faces, values, level, normals) for level in contours.levels]
 
     @staticmethod
     def _cortex_mesh(scene: SceneParts, hemi: str, per_vertex: bool) -> Any:
