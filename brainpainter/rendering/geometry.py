@@ -193,6 +193,14 @@ def cortex_mode(setting: str, parts: list[PartGeometry]) -> str:
     return "glass" if any(p.kind == "tract" for p in parts) else "opaque"
 
 
+def _flat_able(template: Template, meshes: Mapping[str, Any]) -> bool:
+    """Whether a per-vertex scene of these cortex meshes can draw the flat maps (fsaverage's meshes)."""
+    from brainpainter.maps.resolution import own_vertex_count
+
+    return all(len(m.source_vertex) for m in meshes.values()) and all(
+        own_vertex_count(template, hemi) is None for hemi in meshes)
+
+
 class SceneGeometry:
     """Every drawable part of a scene, built once from its template.
 
@@ -235,11 +243,9 @@ class SceneGeometry:
         self.vertex_slots: dict[str, tuple[int, int]] = {}
         self.source_vertex: dict[str, NDArray[Any]] = {}
         if per_vertex:
-            for hemi, cm in meshes.items():
-                self.vertex_slots[hemi] = (len(defaults), len(cm.source_vertex))
-                self.source_vertex[hemi] = np.asarray(cm.source_vertex, np.int32)
-                defaults.extend([defaults[MEDIAL_SLOT]] * len(cm.source_vertex))
+            self._vertex_slots(template, meshes, defaults)
         first_key = len(defaults)
+        self._scene, self._first_key = scene, first_key
 
         def slots_for(names: list[str], default: int | RGB, drop: frozenset[str]) -> NDArray[Any]:
             out = np.full(len(names), -1, dtype=np.int64)
@@ -298,6 +304,33 @@ class SceneGeometry:
         self.keys: tuple[str, ...] = tuple(keys)
         self.slot_of = slot_of
         self.default_rgb = np.asarray(defaults, dtype=np.float32)
+
+    def _vertex_slots(self, template: Template, meshes: Mapping[str, Any], defaults: list[RGB]) -> None:
+        """A per-vertex scene's slots (appended to `defaults`): each cortex vertex's, then, where the
+        template is fsaverage's, each flat-map vertex's (``flat-lh``, ``flat-rh``)."""
+        for hemi, cm in meshes.items():
+            self.vertex_slots[hemi] = (len(defaults), len(cm.source_vertex))
+            self.source_vertex[hemi] = np.asarray(cm.source_vertex, np.int32)
+            defaults.extend([defaults[MEDIAL_SLOT]] * len(cm.source_vertex))
+        if _flat_able(template, meshes):
+            from brainpainter.maps.flat import N_FLAT
+
+            for hemi in meshes:
+                self.vertex_slots[f"flat-{hemi}"] = (len(defaults), N_FLAT)
+                defaults.extend([defaults[MEDIAL_SLOT]] * N_FLAT)
+
+    @cached_property
+    def flat_parts(self) -> tuple[PartGeometry, ...]:
+        """The flat maps as parts of kind ``flat`` (``flat-lh``, ``flat-rh``), built when a flat view first
+        draws them (:func:`brainpainter.rendering.flat_parts.flat_parts`)."""
+        from brainpainter.rendering.flat_parts import flat_parts
+
+        parts = flat_parts(self._scene, self.slot_of, self.vertex_slots, self.to_ras)
+        for part in parts:
+            self._part_slots[part.name] = frozenset(int(i) for i in np.unique(part.palette_index)
+                                                    if i >= self._first_key)
+        self.__dict__.pop("part_keys", None)  # computed again with the flat parts' regions
+        return parts
 
     @cached_property
     def part_keys(self) -> dict[str, tuple[str, ...]]:
@@ -375,9 +408,14 @@ class SceneGeometry:
         BrainPainterError
             If the view draws nothing (its parts are absent from the template or all hidden).
         """
-        parts = [p for p in self.parts if framing.shows(view, p.kind, p.hemi, self.cortex)]
+        if view.content == "flat":
+            parts = [p for p in self.flat_parts if framing.shows(view, p.kind, p.hemi, self.cortex)]
+        else:
+            parts = [p for p in self.parts if framing.shows(view, p.kind, p.hemi, self.cortex)]
         kinds = {p.kind for p in self.parts}
-        if view.content == "cortex" and "cortex" not in kinds:
+        if view.content == "flat":
+            pass  # the flat maps alone (all hidden: an error below)
+        elif view.content == "cortex" and "cortex" not in kinds:
             # a brain of region meshes without an outer surface: its structures stand for it
             parts = [p for p in self.parts
                      if p.kind == "subcortical" or framing.shows(view, p.kind, p.hemi, self.cortex)]

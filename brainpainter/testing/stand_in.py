@@ -160,8 +160,8 @@ class StandInRenderer:
         default = {"subcortical": (0.8, 0.8, 0.8)}
         stripes = []
         for part, (kind, hemi) in kinds.items():
-            if not shows(view, kind, hemi, self.cortex):
-                continue
+            if not (shows(view, kind, hemi, self.cortex) or (hemi and shows(view, "flat", hemi))):
+                continue  # a flat view: the stripes of its hemispheres' cortex
             keys, labels = self.parts.get(part, ([], np.zeros(0, int)))
             slots = getattr(getattr(self.scene, "geometry", None), "vertex_slots", {}) if hemi else {}
             if getattr(self.scene, "coloring", "regions") == "vertices" and hemi in slots:
