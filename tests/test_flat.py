@@ -105,6 +105,21 @@ def test_the_camera_frames_the_sheets_left_on_the_left(dk_scene):
     assert [p.name for p in g.visible(get_view("flat-right"))] == ["flat-rh"]
 
 
+def test_a_map_scene_takes_the_sheets_palette_slots_only_when_a_flat_view_needs_them():
+    from brainpainter.rendering.geometry import Palette
+    from brainpainter.rendering.painter import load_scene
+
+    g = load_scene("dk", coloring="vertices")[1].geometry
+    n = g.n_slots
+    assert "flat-lh" not in g.vertex_slots  # a run without flat views uploads no larger palette
+    assert len(Palette({}, g, {"lh": np.zeros((g.vertex_slots["lh"][1], 3))}).rgb) == n
+    grey = np.full((N_FLAT, 3), 0.5, np.float32)
+    rgb = Palette({}, g, {"flat-lh": grey, "flat-rh": grey}).rgb
+    assert rgb.shape == (n + 2 * N_FLAT, 3) and (rgb[n:] == 0.5).all()
+    lh, rh = g.visible(get_view("flat"))
+    assert lh.palette_index[0] == n and rh.palette_index[-1] == n + 2 * N_FLAT - 1
+
+
 def test_a_template_of_your_own_surfaces_refuses_flat_views_in_one_line(tmp_path):
     from brainpainter.cli.main import main
 
