@@ -53,16 +53,18 @@ def flat_parts(scene: Any, slot_of: Mapping[str, int], vertex_slots: Mapping[str
         sheet = flat_sheet(hemi)
         verts = sheet.vertices @ to_ras  # the template's coordinates (the camera turns them back)
         names = [HEMI_PREFIX[hemi] + n for n in scene.template.cortex(scene.labels, hemi).label_names]
-        labels = flat_labels(scene.template, scene.labels, hemi)
-        label_of_face = face_labels(sheet.faces, labels)
         per_vertex = f"flat-{hemi}" in vertex_slots
+        outlined = scene.settings.outline_width > 0
+        labels = (flat_labels(scene.template, scene.labels, hemi) if outlined or not per_vertex
+                  else np.zeros(len(sheet.vertices), np.int64))  # a map's sheet needs labels for borders only
+        label_of_face = face_labels(sheet.faces, labels)
         if per_vertex:
             face_slot = np.full(len(sheet.faces), MEDIAL_SLOT, np.int64)
         else:
             slot = [-1 if k in scene.hidden else slot_of.get(k, MEDIAL_SLOT) for k in names]
             face_slot = np.asarray(slot, np.int64)[label_of_face]
         outline = None
-        if scene.settings.outline_width > 0:
+        if outlined:
             outline = _borders(scene, sheet, verts, labels, label_of_face, per_vertex, to_ras)
         part = build_part(f"flat-{hemi}", "flat", hemi, verts, sheet.faces, face_slot,
                           np.zeros(len(verts), np.float32), occlusion=False, outline=outline,
