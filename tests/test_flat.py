@@ -68,6 +68,27 @@ def test_an_fslr_32k_map_is_drawn_on_the_sheet_as_it_is(tmp_path):
     assert np.isnan(on_sheet[~roi]).all()
 
 
+def test_regions_meet_half_way_between_vertices_of_two_labels():
+    from brainpainter.rendering.flat_parts import split_at_borders
+
+    square = np.array([[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]], np.float32)
+    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    for labels in ([0, 0, 1, 1], [0, 1, 2, 2], [5, 5, 5, 5]):
+        v, f, fl = split_at_borders(square, faces, np.array(labels))
+        c = v[f][..., :2].astype(float)
+        area = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]) / 2
+        assert (area > 0).all() and area.sum() == pytest.approx(4.0)  # the same square, all facing +z
+        for label in set(labels):  # each label's area: its vertices' share, split at the midpoints
+            corners = [i for i, x in enumerate(labels) if x == label]
+            assert area[fl == label].sum() > 0 and all(np.isin(fl[(f == i).any(axis=1)], labels[i]).all()
+                                                       for i in corners)
+    v, f, fl = split_at_borders(square, faces, np.array([0, 0, 1, 1]))
+    c = v[f][..., :2].astype(float)
+    area = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]) / 2
+    assert area[fl == 0].sum() == pytest.approx(2.0)  # the border runs through the middle
+    assert len(v) == 4 + 3  # three midpoints (edges 1-2, 0-2, 0-3), shared by both triangles
+
+
 # -- views, parts, camera ---------------------------------------------------------------------------
 def test_flat_views_are_presets_that_draw_the_sheets_only():
     assert [v.name for v in parse_views("flat-left,flat-right,flat")] == ["flat-left", "flat-right", "flat"]

@@ -51,38 +51,95 @@ def flat_parts(scene: Any, slot_of: Mapping[str, int], vertex_slots: Mapping[str
     parts: list[PartGeometry] = []
     for hemi in ("lh", "rh"):
         sheet = flat_sheet(hemi)
-        verts = sheet.vertices @ to_ras  # the template's coordinates (the camera turns them back)
         names = [HEMI_PREFIX[hemi] + n for n in scene.template.cortex(scene.labels, hemi).label_names]
         per_vertex = f"flat-{hemi}" in vertex_slots
         outlined = scene.settings.outline_width > 0
         labels = (flat_labels(scene.template, scene.labels, hemi) if outlined or not per_vertex
                   else np.zeros(len(sheet.vertices), np.int64))  # a map's sheet needs labels for borders only
-        label_of_face = face_labels(sheet.faces, labels)
-        if per_vertex:
-            face_slot = np.full(len(sheet.faces), MEDIAL_SLOT, np.int64)
-        else:
+        if per_vertex:  # vertex i of the sheet is slot first + i
+            sheet_vertices, faces = sheet.vertices, sheet.faces
+            label_of_face = face_labels(faces, labels)
+            face_slot = np.full(len(faces), MEDIAL_SLOT, np.int64)
+        else:  # regions meet half-way between vertices of two labels
+            sheet_vertices, faces, label_of_face = split_at_borders(sheet.vertices, sheet.faces, labels)
             slot = [-1 if k in scene.hidden else slot_of.get(k, MEDIAL_SLOT) for k in names]
             face_slot = np.asarray(slot, np.int64)[label_of_face]
+        verts = sheet_vertices @ to_ras  # the template's coordinates (the camera turns them back)
         outline = None
         if outlined:
-            outline = _borders(scene, sheet, verts, labels, label_of_face, per_vertex, to_ras)
-        part = build_part(f"flat-{hemi}", "flat", hemi, verts, sheet.faces, face_slot,
+            outline = _borders(scene, sheet, verts, faces, labels, label_of_face, per_vertex, to_ras)
+        part = build_part(f"flat-{hemi}", "flat", hemi, verts, faces, face_slot,
                           np.zeros(len(verts), np.float32), occlusion=False, outline=outline,
                           first_slot=vertex_slots[f"flat-{hemi}"][0] if per_vertex else None)
         if part is not None:
-            drawn = np.unique(sheet.faces[face_slot >= 0])  # the hull: the sheet drawn, not its cuts
-            parts.append(replace(part, hull=sheet.vertices[drawn] @ to_ras))
+            drawn = np.unique(faces[face_slot >= 0])  # the hull: the sheet drawn, not its cuts
+            parts.append(replace(part, hull=sheet_vertices[drawn] @ to_ras))
     return tuple(parts)
 
 
-def _borders(scene: Any, sheet: FlatSheet, verts: NDArray[Any], labels: NDArray[Any],
+def split_at_borders(vertices: NDArray[Any], faces: NDArray[Any], vertex_label: NDArray[Any]
+                     ) -> tuple[NDArray[Any], NDArray[Any], NDArray[Any]]:
+    """Triangles whose vertices have two or three labels, split through their edges' midpoints (and
+    centroid), so that each piece has one label and the regions meet half-way between vertices (not
+    along a zigzag of whole triangles).
+
+    Parameters
+    ----------
+    vertices : ndarray of float, shape (n, 3)
+    faces : ndarray of int, shape (m, 3)
+        Counter-clockwise; the pieces keep the winding.
+    vertex_label : ndarray of int, shape (n,)
+
+    Returns
+    -------
+    vertices : ndarray of float32, shape (n + k, 3)
+        The midpoints of the edges between two labels and the centroids of three-label triangles after
+        the given vertices (whose indices stay).
+    faces : ndarray of int64, shape (m', 3)
+    face_label : ndarray of int64, shape (m',)
+    """
+    v, f = np.asarray(vertices, np.float32), np.asarray(faces, np.int64)
+    lab = np.asarray(vertex_label)[f]
+    same = np.stack([lab[:, 0] == lab[:, 1], lab[:, 1] == lab[:, 2], lab[:, 2] == lab[:, 0]], axis=1)
+    n_same = same.sum(axis=1)
+    edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    key = edges[:, 0] * len(v) + edges[:, 1]
+    cut = np.unique(key[np.asarray(vertex_label)[edges[:, 0]] != np.asarray(vertex_label)[edges[:, 1]]])
+
+    def mid(a: NDArray[Any], b: NDArray[Any]) -> NDArray[Any]:
+        out: NDArray[Any] = len(v) + np.searchsorted(cut, np.minimum(a, b) * len(v) + np.maximum(a, b))
+        return out
+
+    mids = (v[cut // len(v)] + v[cut % len(v)]) / 2
+    pieces, labels = [f[n_same == 3]], [lab[n_same == 3, 0]]
+    two = f[n_same == 1]
+    rot = np.argmax(same[n_same == 1], axis=1)  # the pair (0,1), (1,2) or (2,0): the odd vertex follows it
+    idx = np.stack([rot, (rot + 1) % 3, (rot + 2) % 3], axis=1)
+    p, q, r = (np.take_along_axis(two, idx[:, [k]], axis=1)[:, 0] for k in range(3))
+    mqr, mrp = mid(q, r), mid(r, p)
+    pieces += [np.stack([p, q, mqr], 1), np.stack([p, mqr, mrp], 1), np.stack([mrp, mqr, r], 1)]
+    labels += [lab[n_same == 1][np.arange(len(two)), rot]] * 2 + [np.asarray(vertex_label)[r]]
+    three = f[n_same == 0]
+    g = len(v) + len(cut) + np.arange(len(three))
+    a, b, c = three.T
+    mab, mbc, mca = mid(a, b), mid(b, c), mid(c, a)
+    for corner, m_in, m_out in ((a, mab, mca), (b, mbc, mab), (c, mca, mbc)):
+        pieces += [np.stack([corner, m_in, g], 1), np.stack([corner, g, m_out], 1)]
+        labels += [np.asarray(vertex_label)[corner]] * 2
+    centroids = v[three].mean(axis=1)
+    return (np.concatenate([v, mids.astype(np.float32), centroids.astype(np.float32)]),
+            np.concatenate(pieces), np.concatenate(labels).astype(np.int64))
+
+
+def _borders(scene: Any, sheet: FlatSheet, verts: NDArray[Any], faces: NDArray[Any], labels: NDArray[Any],
              label_of_face: NDArray[Any], per_vertex: bool, to_ras: NDArray[Any]) -> NDArray[Any]:
-    """Region borders and ``--contour``'s iso-lines on a flat sheet, lifted towards the camera (+z)."""
+    """Region borders and ``--contour``'s iso-lines on a flat sheet (`verts`, `faces`: as drawn), lifted
+    towards the camera (+z)."""
     from brainpainter.rendering.borders import face_borders, iso_lines, vertex_borders
 
     normals = np.tile(np.asarray([0.0, 0.0, 1.0]) @ to_ras, (len(verts), 1))
     if not per_vertex:
-        return face_borders(verts, sheet.faces, label_of_face, normals)
+        return face_borders(verts, faces, label_of_face, normals)
     contours = getattr(scene, "contours", None)
     lines: list[NDArray[np.float32]] = []
     if contours is not None and sheet.hemi in contours.values:
