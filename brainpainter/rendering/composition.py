@@ -147,6 +147,16 @@ class RegionsBelow:
             vertex_region[hemi] = index[label]
         return cls(table, scale, vertex_region, tuple(keys))
 
+    def on_flat(self, labels: Mapping[str, NDArray[Any]], names: Mapping[str, Sequence[str]]) -> RegionsBelow:
+        """These regions also under the flat maps' vertices (``flat-lh``, ``flat-rh``): `labels`, per
+        hemisphere, index `names` (the map mesh's label names), shape (32492,)."""
+        regions = dict(self.vertex_region)
+        for hemi, label in labels.items():
+            index = np.array([self.keys.index(k) if (k := HEMI_PREFIX[hemi] + n) in self.keys else -1
+                              for n in names[hemi]], np.int64)
+            regions[f"flat-{hemi}"] = index[np.asarray(label, np.int64)]
+        return replace(self, vertex_region=regions)
+
     def colors(self, row: int) -> tuple[dict[str, RGB], dict[str, NDArray[Any]]]:
         """Row `row`'s colours: every region key's, and each drawn vertex's (NaN: none), float32 (n, 3)."""
         regions = region_colors(self.table.row(row), self.table.atlas, self.scale)

@@ -19,6 +19,7 @@ from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.surfaces import Surface, read_surfaces, surface_template
 from brainpainter.atlas.template import Template, load_template
 from brainpainter.errors import BrainPainterError
+from brainpainter.maps.flat import check_flat, flat_labels, flat_sheet, flat_values
 from brainpainter.maps.inputs import VertexMaps, is_map_input, read_maps
 from brainpainter.maps.layers import vertex_colors
 from brainpainter.maps.outlines import Contours, mesh_edges
@@ -27,8 +28,9 @@ from brainpainter.rendering.composition import RegionsBelow, line_layers, map_la
 from brainpainter.rendering.geometry import VertexColors
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import Options
-from brainpainter.rendering.painter import Painter, region_colors
+from brainpainter.rendering.painter import Painter, flat_aspect, region_colors
 from brainpainter.rendering.parallel import Item
+from brainpainter.rendering.settings import with_aspect
 from brainpainter.rendering.sulc import convexity
 from brainpainter.rendering.views import View, parse_views
 from brainpainter.table.region_table import RegionTable, read_table
@@ -82,6 +84,7 @@ class MapRun:
     layers: tuple[Layer, ...] = ()
     below: RegionsBelow | None = None  # region values under the map
     mesh_masks: dict[str, dict[str, NDArray[Any]]] | None = None  # the user's own surfaces
+    flat: dict[str, NDArray[Any]] | None = None  # flat views: each sheet vertex's nearest fsaverage vertex
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
     @property
@@ -122,6 +125,13 @@ class MapRun:
                                    cluster_edges=self.cluster_edges, below=below,
                                    opacity=self.layer("map").opacity, depth=self.depth,
                                    contrast=m.underlay_contrast, mesh_masks=self.mesh_masks)
+            if self.flat is not None:  # the flat maps' vertices: the map's values there, the same layers
+                on_flat = vertex_colors(
+                    self.maps, map_image, self.flat, scale, m.underlay, m.threshold,
+                    below=None if below is None else {h: below[f"flat-{h}"] for h in self.flat},
+                    opacity=self.layer("map").opacity, contrast=m.underlay_contrast,
+                    sample=lambda hemi, i: flat_values(self.maps, hemi, i))
+                cortex.update({f"flat-{hemi}": rgb for hemi, rgb in on_flat.items()})
             # a volume's subcortical means: below --threshold a structure shows no value, as the cortex does
             means = {k: v for k, v in self.maps.region_values(map_image).items()
                      if m.threshold is None or abs(v) >= m.threshold}
@@ -191,10 +201,19 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     tract_values = (read_tract_values(scene.tract_values, scene.tract_value) if scene.tract_values is not None
                     else None)
     layers, below = map_layers(options, maps, table, meshes, tract_values)
+    flat = None
+    if any(v.content == "flat" for v in view_list):  # the flat maps: fsaverage's templates only
+        check_flat(tpl, labels)
+        flat = {hemi: flat_sheet(hemi).nearest for hemi in ("lh", "rh")}
+        if below is not None:
+            below = below.on_flat({hemi: flat_labels(tpl, labels, hemi) for hemi in flat},
+                                  {hemi: tpl.cortex(labels, hemi).label_names for hemi in flat})
     depth = {hemi: np.asarray(m.sulc) for hemi, m in meshes.items() if getattr(m, "sulc", None) is not None}
+    if not options.size_given and (aspect := flat_aspect(view_list)):  # flat maps: wider than a brain
+        settings = with_aspect(settings, aspect)
     return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list, settings, options,
                   source_vertex, edges, depth, contours, tract_values, layers=layers, below=below,
-                  mesh_masks=masks)
+                  mesh_masks=masks, flat=flat)
 
 
 def _own_surfaces(options: Options, surfaces: dict[str, Any]) -> dict[str, Surface]:

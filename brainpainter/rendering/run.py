@@ -32,6 +32,7 @@ from brainpainter.rendering.painter import (
     VOLUME_VIEWS,
     Painter,
     RenderResult,
+    flat_aspect,
     region_colors,
     resolve_hidden,
     shown_aspect,
@@ -236,6 +237,8 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     contours, settings = line_layers(options, "a region render", own)
     if not options.size_given and table.atlas.image_aspect:  # a brain of another shape: frame the views
         settings = with_aspect(settings, shown_aspect(table.atlas, options.scene.template, view_list))
+    elif not options.size_given and (aspect := flat_aspect(view_list)):  # flat maps: wider than a brain
+        settings = with_aspect(settings, aspect)
     layers = run_layers(options, table, tract_values, only_tracts and tract_values is not None)
     return Run(table, layers[0].scale, view_list, settings, options, tract_values, layers, contours)
 
