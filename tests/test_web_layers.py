@@ -39,6 +39,19 @@ def upload_half_map(client, tmp_path) -> str:
     return str(r.json()["upload_id"])
 
 
+def upload_tracts(client, tmp_path) -> str:
+    """AF_L.trk (20 streamlines, left) and its FA per row of the example table (0.4 to 0.7)."""
+    from test_tracts import bundle, write
+
+    write(tmp_path / "AF_L.trk", bundle(-30.0, n=20, z=30.0, length=60.0))
+    files = [("AF_L.trk", (tmp_path / "AF_L.trk").read_bytes()), ("fa.csv", b"AF_left\n0.4\n0.5\n0.6\n0.7\n")]
+    r = client.post("/api/tracts", params={"name": [n for n, _ in files], "size": [len(d) for _, d in files]},
+                    content=b"".join(d for _, d in files),
+                    headers={"content-type": "application/octet-stream"})
+    assert r.status_code == 200, r.text
+    return str(r.json()["upload_id"])
+
+
 def shares(img: np.ndarray) -> tuple[float, float, float]:
     """Shares of opaque pixels that are red (regions), blue (the map) and a mix of both (purple)."""
     rgb = img[img[..., 3] > 0][:, :3].astype(int)
@@ -260,15 +273,7 @@ def test_a_job_is_charged_for_its_copy_of_the_map(tmp_path):
 def test_tracts_with_a_table_get_their_own_scale_and_colour_bar(server, tmp_path):
     """Tracts given tracts_cmap/vmin/vmax are a layer of their own: the check report has two bars, the second
     the tracts' (magma over 0.3-0.7, labelled), and the command carries --tracts-cmap."""
-    from test_tracts import bundle, write
-
-    write(tmp_path / "AF_L.trk", bundle(-30.0, n=20, z=30.0, length=60.0))
-    files = [("AF_L.trk", (tmp_path / "AF_L.trk").read_bytes()), ("fa.csv", b"AF_left\n0.4\n0.5\n0.6\n0.7\n")]
-    r = server.post("/api/tracts", params={"name": [n for n, _ in files], "size": [len(d) for _, d in files]},
-                    content=b"".join(d for _, d in files),
-                    headers={"content-type": "application/octet-stream"})
-    assert r.status_code == 200, r.text
-    table, tracts = upload_table(server), r.json()["upload_id"]
+    table, tracts = upload_table(server), upload_tracts(server, tmp_path)
     shared = server.post("/api/check", json={"upload_id": table, "options": {"tracts": tracts}}).json()
     assert [lay["kind"] for lay in shared["layers"]] == ["regions"]  # one scale over both: one bar
     options = {"tracts": tracts, "tracts_cmap": "magma", "tracts_vmin": 0.3, "tracts_vmax": 0.7,
@@ -279,3 +284,26 @@ def test_tracts_with_a_table_get_their_own_scale_and_colour_bar(server, tmp_path
     assert (bar["name"], bar["vmin"], bar["vmax"]) == ("magma", 0.3, 0.7)
     assert "--tracts-cmap magma" in c["reproduce"]["command"]
     assert preview(server, table, "subcortical", **options).shape == (120, 160, 4)
+
+
+def test_a_table_a_map_over_it_and_tracts_are_three_layers(server, tmp_path):
+    """Regions, a map over them and tracts with their own colours: three bars, one job, one command."""
+    table, lh = upload_table(server), upload_half_map(server, tmp_path)
+    options = {**LAYERS, "map": lh, "tracts": upload_tracts(server, tmp_path), "tracts_cmap": "magma",
+               "tracts_label": "FA"}
+    c = server.post("/api/check", json={"upload_id": table, "options": options}).json()
+    assert [(lay["kind"], lay["label"]) for lay in c["layers"]] == [
+        ("regions", "dk.csv"), ("map", "thickness (mm)"), ("tracts", "FA")], c.get("error")
+    command = c["reproduce"]["command"]
+    assert "--lh lh.thickness" in command and "--tracts AF_L.trk" in command
+    assert "--tracts-cmap magma" in command
+    red, blue, _ = shares(preview(server, table, "lateral-left", **options))
+    assert red > 0.1 and blue > 0.1, (red, blue)
+    r = server.post("/api/jobs", json={"upload_id": table, "kind": "images", "options": {
+        **options, "size": "64x48", "views": "lateral-left"}})
+    assert r.status_code == 202, r.text
+    url = r.json()["url"]
+    job = wait_for(lambda: (j := server.get(url).json())["status"] in ("done", "failed") and j, 120)
+    assert job and job["status"] == "done", job
+    layers = server.get(f"{url}/files/manifest.json").json()["settings"]["layers"]
+    assert [lay["kind"] for lay in layers] == ["regions", "map", "tracts"]

@@ -52,14 +52,14 @@ class LayerUploads:
         return cls(**got)
 
 
-def map_over(data: bytes, map_upload: bytes | None, tracts: bool) -> Any:
+def map_over(data: bytes, map_upload: bytes | None) -> Any:
     """The maps of option ``map``, drawn over the region colours of table `data` (as ``--lh``/``--rh``
-    beside INPUT); `tracts`: whether tracts are drawn too.
+    beside INPUT; tracts may be drawn with them, option ``tracts``).
 
     Raises
     ------
     BrainPainterError
-        The main upload is no region table, option ``map`` names no map upload, or tracts are drawn too.
+        The main upload is no region table, or option ``map`` names no map upload (or a CIFTI file).
     """
     from brainpainter.errors import BrainPainterError
     from brainpainter.web.maps import bundle_header, is_bundle, read_bundle
@@ -72,9 +72,6 @@ def map_over(data: bytes, map_upload: bytes | None, tracts: bool) -> Any:
     if map_upload is None or not is_bundle(map_upload):
         raise BrainPainterError("option map names no map upload (it expired, or is a table); upload the map "
                                 "again (POST /api/uploads) and give its upload_id.")
-    if tracts:
-        raise BrainPainterError("a map over region values draws no tracts; give option map or option tracts, "
-                                "not both.")
     if bundle_header(map_upload)[0].get("kind") == "cifti":  # as the CLI: CIFTI is INPUT, never --lh/--rh
         raise BrainPainterError("a CIFTI file is drawn alone, not over a region table (as brainpainter "
                                 "render takes it: INPUT, not --lh/--rh); give a surface map pair or a volume "
@@ -99,7 +96,7 @@ def contour_maps(contour_upload: bytes | None) -> Any:
     return read_bundle(contour_upload)
 
 
-def layer_maps(options: Any, data: bytes, tracts: bool, map_upload: bytes | None,
+def layer_maps(options: Any, data: bytes, map_upload: bytes | None,
                contour_upload: bytes | None) -> dict[str, Any]:
     """The run's keywords of options ``map`` and ``contour`` (a
     :class:`~brainpainter.web.options.RenderOptions`): ``lh``, the maps over the table (as ``--lh``/``--rh``
@@ -109,7 +106,7 @@ def layer_maps(options: Any, data: bytes, tracts: bool, map_upload: bytes | None
 
     out: dict[str, Any] = {}
     if options.map is not None:
-        out["lh"] = map_over(data, map_upload, tracts)
+        out["lh"] = map_over(data, map_upload)
     if options.contour is not None:
         out["contour"] = contour_maps(contour_upload)
     drawn = map_upload if options.map is not None else data

@@ -271,7 +271,7 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     alone = is_tract_bundle(data)
     files = _tract_files(data, options, tracts, data_dir)
     kwargs = options.run_kwargs(files)
-    kwargs.update(layer_maps(options, data, files is not None, map_upload, contour_upload))
+    kwargs.update(layer_maps(options, data, map_upload, contour_upload))
     default = RenderSettings()
     pixels = kwargs.get("width", default.width) * kwargs.get("height", default.height)
     if max_pixels is not None and pixels > max_pixels:
