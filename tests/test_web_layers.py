@@ -39,12 +39,13 @@ def upload_half_map(client, tmp_path) -> str:
     return str(r.json()["upload_id"])
 
 
-def upload_tracts(client, tmp_path) -> str:
-    """AF_L.trk (20 streamlines, left) and its FA per row of the example table (0.4 to 0.7)."""
+def upload_tracts(client, tmp_path, rows: int = 4) -> str:
+    """AF_L.trk (20 streamlines, left) and its FA per row (0.4 to 0.7: the example table's 4 rows)."""
     from test_tracts import bundle, write
 
     write(tmp_path / "AF_L.trk", bundle(-30.0, n=20, z=30.0, length=60.0))
-    files = [("AF_L.trk", (tmp_path / "AF_L.trk").read_bytes()), ("fa.csv", b"AF_left\n0.4\n0.5\n0.6\n0.7\n")]
+    fa = "AF_left\n" + "".join(f"{v:.2f}\n" for v in np.linspace(0.4, 0.7, rows))
+    files = [("AF_L.trk", (tmp_path / "AF_L.trk").read_bytes()), ("fa.csv", fa.encode())]
     r = client.post("/api/tracts", params={"name": [n for n, _ in files], "size": [len(d) for _, d in files]},
                     content=b"".join(d for _, d in files),
                     headers={"content-type": "application/octet-stream"})
@@ -307,3 +308,14 @@ def test_a_table_a_map_over_it_and_tracts_are_three_layers(server, tmp_path):
     assert job and job["status"] == "done", job
     layers = server.get(f"{url}/files/manifest.json").json()["settings"]["layers"]
     assert [lay["kind"] for lay in layers] == ["regions", "map", "tracts"]
+
+
+def test_a_map_upload_takes_tracts_with_their_own_colours(server, tmp_path):
+    """A map with tracts (option tracts, as render lh.thickness --tracts): two layers, two bars."""
+    lh, tracts = upload_half_map(server, tmp_path), upload_tracts(server, tmp_path, rows=1)
+    options = {"tracts": tracts, "tracts_cmap": "magma", "tracts_label": "FA", "map_label": "thickness"}
+    c = server.post("/api/check", json={"upload_id": lh, "options": options}).json()
+    assert [(lay["kind"], lay["label"]) for lay in c.get("layers", [])] == [("map", "thickness"),
+                                                                             ("tracts", "FA")], c
+    assert "--tracts AF_L.trk" in c["reproduce"]["command"]
+    assert preview(server, lh, "subcortical", **options).shape == (120, 160, 4)

@@ -320,7 +320,7 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
         if is_tract_bundle(data):  # the tracts alone: their report, with the colour scale of `o`
             return await work.run(tract_check, data, name, o, data_dir=store.root)
         if is_bundle(data):
-            return await work.run(map_check, data, name, o)
+            return await work.run(map_check, data, name, o, data_dir=store.root, **layers.kwargs())
         opts = {**o.model_dump(include=set(TableOptions.model_fields)),
                 "scale": {"gradient": o.gradient, "cmap": o.cmap, "vmin": o.vmin, "vmax": o.vmax,
                           "center": o.center}}

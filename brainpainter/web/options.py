@@ -288,10 +288,7 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
         tract_table = files.values
         kwargs["tract_values"] = None
         run = prepare_run(str(tract_table), options.atlas, **kwargs)
-    elif is_bundle(data):  # a map: its files, read as the CLI reads --lh/--rh
-        if files is not None:
-            raise BrainPainterError("tracts are drawn with a region table, not with a map; upload a region "
-                                    "table, or leave option tracts out.")
+    elif is_bundle(data):  # a map: its files, read as the CLI reads --lh/--rh (tracts drawn with it)
         run = prepare_run(read_bundle(data), options.atlas, **kwargs)
     else:
         run = prepare_run(table_stream(data, name), options.atlas, **kwargs)
@@ -430,13 +427,15 @@ class MovieParams(BaseModel):
         return len(plan_frames(list(range(n_keys)), self.frames_per_step, self.easing, self.hold))
 
 
-def map_check(data: bytes, name: str, options: RenderOptions) -> dict[str, Any]:
+def map_check(data: bytes, name: str, options: RenderOptions, data_dir: Path | None = None,
+              **uploads: Any) -> dict[str, Any]:
     """The report of a map upload (:func:`brainpainter.web.maps.base_report`) with the colour scale of
-    `options` (the page's colour bar; the threshold band is marked by ``threshold``)."""
+    `options` (the page's colour bar; the threshold band is marked by ``threshold``) and its layers'
+    (`uploads`: the tracts and contour drawn with it, as :func:`prepare` takes them)."""
     from brainpainter.web.maps import base_of
 
     report = base_of(data)
-    run = prepare(data, name, options).run
+    run = prepare(data, name, options, data_dir=data_dir, **uploads).run
     report["values"]["scale"] = scale_report(run.scale)
     report["layers"] = layers_report(run)
     return report

@@ -224,10 +224,11 @@ function mainKind() {
   return state.uploadId && state.uploadId === state.tractsId ? "tracts" : "regions";
 }
 
-// Which layers are drawn over the main upload: a map over a table, or tracts with a table.
+// Which layers are drawn over the main upload: a map over a table, tracts with a table or a map.
 function overLayers() {
   const table = Boolean(state.uploadId) && mainKind() === "regions";
-  return { map: table && Boolean(state.mapId), tracts: table && Boolean(state.tractsId) };
+  return { map: table && Boolean(state.mapId),
+           tracts: Boolean(state.uploadId) && mainKind() !== "tracts" && Boolean(state.tractsId) };
 }
 
 function layerOptions() {
