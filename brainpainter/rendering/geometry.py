@@ -37,8 +37,7 @@ across each triangle.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import replace
-from functools import cached_property
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
@@ -186,6 +185,18 @@ class VertexColors(Mapping[str, RGB]):
         return len(self.regions)
 
 
+@dataclass(frozen=True)
+class _Pending:
+    """A part not built yet: its name, kind and hemisphere, whether it has faces to draw (False: all
+    its regions are hidden, or it built to nothing) and how to build it (None when nothing is left)."""
+
+    name: str
+    kind: str
+    hemi: str | None
+    drawn: bool
+    build: Callable[[], PartGeometry | None]
+
+
 def cortex_mode(setting: str, parts: list[PartGeometry]) -> str:
     """``RenderSettings.cortex`` resolved: ``auto`` is ``glass`` when `parts` hold tracts, else ``opaque``."""
     if setting != "auto":
@@ -194,7 +205,12 @@ def cortex_mode(setting: str, parts: list[PartGeometry]) -> str:
 
 
 class SceneGeometry:
-    """Every drawable part of a scene, built once from its template.
+    """Every drawable part of a scene, each built once from its template when a view first shows it.
+
+    Palette slots are numbered from the template's label names when the geometry is made; a
+    part's meshes are read and split by :meth:`visible` for the first view that shows it (a
+    lateral-left image never reads the right hemisphere, the structures or the glass), or by
+    :attr:`parts` (every part: exporters, the Cycles path).
 
     Parameters
     ----------
@@ -229,9 +245,9 @@ class SceneGeometry:
         keys: list[str] = []
         defaults: list[RGB] = [tuple(scene.medial_wall_color), NEUTRAL_GREY, GLASS_COLOR]  # type: ignore[list-item]
         slot_of: dict[str, int] = {}
-        parts: list[PartGeometry] = []
         per_vertex = getattr(scene, "coloring", "regions") == "vertices"
-        meshes = {hemi: self._cortex_mesh(scene, hemi, per_vertex) for hemi in HEMIS}
+        # a map's meshes now (their vertex counts number the slots); a region scene's when first drawn
+        meshes = {hemi: self._cortex_mesh(scene, hemi, per_vertex) for hemi in HEMIS} if per_vertex else {}
         self.vertex_slots: dict[str, tuple[int, int]] = {}
         self.source_vertex: dict[str, NDArray[Any]] = {}
         if per_vertex:
@@ -254,54 +270,108 @@ class SceneGeometry:
             return out
 
         self._part_slots: dict[str, frozenset[int]] = {}  # part name -> the region slots of its faces
-        def add(*args: Any, **kwargs: Any) -> None:  # args: name, kind, hemi, vertices, faces, face_slot, ...
-            part = build_part(*args, occlusion=settings.shading != "flat", **kwargs)
-            if part is not None:
-                parts.append(part)
-                self._part_slots[part.name] = frozenset(int(i) for i in np.unique(args[5]) if i >= first_key)
+        # Parts in drawing order: built (PartGeometry) or still to build (_Pending: built by the first
+        # visible() that shows it, or by .parts). Palette slots are numbered here, from the label
+        # names alone, so they are the same whichever parts are ever built.
+        self._entries: list[PartGeometry | _Pending] = []
 
+        def later(name: str, kind: str, hemi: str | None, drawn: bool,
+                  mesh: Callable[[], dict[str, Any]], **fixed: Any) -> None:
+            """A part to build when first shown: `mesh()` gives build_part's arrays (and ao, outline)."""
+            def build() -> PartGeometry | None:
+                m = mesh()
+                part = build_part(name, kind, hemi, m.pop("verts"), m.pop("faces"), m["face_slot"],
+                                  m.pop("sulc"), occlusion=settings.shading != "flat", **fixed,
+                                  **{k: v for k, v in m.items() if k != "face_slot"})
+                if part is not None:
+                    self._part_slots[name] = frozenset(int(i) for i in np.unique(m["face_slot"])
+                                                       if i >= first_key)
+                return part
+            self._entries.append(_Pending(name, kind, hemi, drawn, build))
+
+        if not per_vertex and scene.surface not in template.surfaces:
+            raise choice_error("surface", scene.surface, list(template.surfaces),
+                               f"Template {template.name!r} lacks it.")
         for hemi in HEMIS:
-            cm = meshes[hemi]
-            if scene.surface not in cm.vertices:
-                raise choice_error("surface", scene.surface, list(cm.vertices),
+            names = [HEMI_PREFIX[hemi] + n for n in (meshes[hemi].label_names if per_vertex
+                                                     else template.cortex_names(scene.labels, hemi))]
+            label_slot = slots_for(names, MEDIAL_SLOT, hidden)
+
+            def cortex(hemi: str = hemi, label_slot: NDArray[Any] = label_slot) -> dict[str, Any]:
+                cm = meshes[hemi] if per_vertex else self._cortex_mesh(scene, hemi, per_vertex)
+                if scene.surface not in cm.vertices:
+                    raise choice_error("surface", scene.surface, list(cm.vertices),
+                                       f"Template {template.name!r} lacks it.")
+                face_slot = label_slot[np.asarray(cm.face_label, np.int64)]
+                verts = cm.vertices[scene.surface]
+                occlusion = getattr(cm, "occlusion", None)
+                return {"verts": verts, "faces": cm.faces, "face_slot": face_slot,
+                        "sulc": self._sulc(scene, hemi, cm, verts, with_sulc),
+                        "ao": None if occlusion is None else occlusion.get(scene.surface),
+                        "outline": (self._borders(scene, hemi, cm, verts, face_slot, per_vertex)
+                                    if settings.outline_width > 0 else None)}
+
+            if per_vertex and scene.surface not in meshes[hemi].vertices:
+                raise choice_error("surface", scene.surface, list(meshes[hemi].vertices),
                                    f"Template {template.name!r} lacks it.")
-            names = [HEMI_PREFIX[hemi] + n for n in cm.label_names]
-            face_slot = slots_for(names, MEDIAL_SLOT, hidden)[np.asarray(cm.face_label, np.int64)]
-            verts = cm.vertices[scene.surface]
-            sulc = self._sulc(scene, hemi, cm, verts, with_sulc)
-            occlusion = getattr(cm, "occlusion", None)
-            outline = (self._borders(scene, hemi, cm, verts, face_slot, per_vertex)
-                       if settings.outline_width > 0 else None)
-            add(f"cortex-{hemi}", "cortex", hemi, verts, cm.faces, face_slot, sulc,
-                first_slot=self.vertex_slots[hemi][0] if per_vertex else None,
-                ao=None if occlusion is None else occlusion.get(scene.surface), outline=outline)
+            later(f"cortex-{hemi}", "cortex", hemi, bool(set(names) - hidden), cortex,
+                  first_slot=self.vertex_slots[hemi][0] if per_vertex else None)
         if template.manifest.get("subcortical"):
-            sub = template.subcortical()
-            face_slot = slots_for(list(sub.label_names), NEUTRAL_SLOT, hidden)[
-                np.asarray(sub.face_label, np.int64)]
-            add("subcortical", "subcortical", None, sub.vertices, sub.faces, face_slot,
-                np.zeros(len(sub.vertices), np.float32), ao=template.subcortical_occlusion(hidden))
+            sub_names = list(template.subcortical_names())
+            sub_slot = slots_for(sub_names, NEUTRAL_SLOT, hidden)
+
+            def subcortical() -> dict[str, Any]:
+                sub = template.subcortical()
+                return {"verts": sub.vertices, "faces": sub.faces,
+                        "face_slot": sub_slot[np.asarray(sub.face_label, np.int64)],
+                        "sulc": np.zeros(len(sub.vertices), np.float32),
+                        "ao": template.subcortical_occlusion(hidden)}
+
+            later("subcortical", "subcortical", None, bool(set(sub_names) - hidden), subcortical)
         if scene.tracts is not None:
-            parts += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for, scene.tract_radius)
+            self._entries += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for, scene.tract_radius)
         for hemi in HEMIS:
             if hemi not in template.manifest.get("glass", {}):
                 continue
-            verts, faces = template.glass(hemi)
-            add(f"glass-{hemi}", "glass", hemi, verts, faces, np.full(len(faces), GLASS_SLOT),
-                np.zeros(len(verts), np.float32))
+
+            def glass(hemi: str = hemi) -> dict[str, Any]:
+                verts, faces = template.glass(hemi)
+                return {"verts": verts, "faces": faces, "face_slot": np.full(len(faces), GLASS_SLOT),
+                        "sulc": np.zeros(len(verts), np.float32)}
+
+            later(f"glass-{hemi}", "glass", hemi, True, glass)
         check_slots(len(defaults))
         #: how cortex views draw the cortex: "opaque", "glass" or "hidden" (``settings.cortex`` resolved)
-        self.cortex: str = cortex_mode(settings.cortex, parts)
+        self.cortex: str = cortex_mode(settings.cortex,
+                                       [e for e in self._entries if isinstance(e, PartGeometry)])
         #: rotation from the template's coordinates to RAS (its anterior and superior axes)
         self.to_ras: NDArray[Any] = np.asarray(template.to_ras, dtype=float)
-        self.parts: tuple[PartGeometry, ...] = tuple(parts)
         self.keys: tuple[str, ...] = tuple(keys)
         self.slot_of = slot_of
         self.default_rgb = np.asarray(defaults, dtype=np.float32)
 
-    @cached_property
+    def _built(self, wanted: Callable[[str, str | None], bool]) -> list[PartGeometry]:
+        """The parts (of kind and hemisphere) `wanted`, built now where they were not yet, in order."""
+        out: list[PartGeometry] = []
+        for i, entry in enumerate(self._entries):
+            if not wanted(entry.kind, entry.hemi):
+                continue
+            if isinstance(entry, _Pending):
+                part = entry.build()
+                self._entries[i] = entry = part if part is not None else replace(entry, drawn=False)
+            if isinstance(entry, PartGeometry):
+                out.append(entry)
+        return out
+
+    @property
+    def parts(self) -> tuple[PartGeometry, ...]:
+        """Every part of the scene (all built now; :meth:`visible` builds only those a view shows)."""
+        return tuple(self._built(lambda kind, hemi: True))
+
+    @property
     def part_keys(self) -> dict[str, tuple[str, ...]]:
-        """Region keys each cortex, subcortical or glass part draws (its faces' regions), by part name."""
+        """Region keys each cortex, subcortical or glass part built so far draws (its faces' regions),
+        by part name (every part :meth:`visible` returned is built)."""
         key_of = {slot: key for key, slot in self.slot_of.items()}
         return {name: tuple(key_of[i] for i in sorted(slots) if i in key_of)
                 for name, slots in self._part_slots.items()}
@@ -375,18 +445,21 @@ class SceneGeometry:
         BrainPainterError
             If the view draws nothing (its parts are absent from the template or all hidden).
         """
-        parts = [p for p in self.parts if framing.shows(view, p.kind, p.hemi, self.cortex)]
-        kinds = {p.kind for p in self.parts}
+        def shown(kind: str, hemi: str | None) -> bool:
+            return framing.shows(view, kind, hemi, self.cortex)
+
+        kinds = {e.kind for e in self._entries if isinstance(e, PartGeometry) or e.drawn}
         if view.content == "cortex" and "cortex" not in kinds:
             # a brain of region meshes without an outer surface: its structures stand for it
-            parts = [p for p in self.parts
-                     if p.kind == "subcortical" or framing.shows(view, p.kind, p.hemi, self.cortex)]
-        elif view.content == "cortex" and self.cortex == "glass":
-            # the cortex as glass in its own colours (same name: a renderer's upload of it is reused)
-            parts = [replace(p, kind="glass") if p.kind == "cortex" else p for p in parts]
+            parts = self._built(lambda kind, hemi: kind == "subcortical" or shown(kind, hemi))
         elif view.content == "subcortical" and "subcortical" not in kinds:
             # ... and one without structures shows its surface (both hemispheres, no glass over it)
-            parts = [p for p in self.parts if p.kind == "cortex"]
+            parts = self._built(lambda kind, hemi: kind == "cortex")
+        else:
+            parts = self._built(shown)
+            if view.content == "cortex" and self.cortex == "glass":
+                # the cortex as glass in its own colours (same name: a renderer's upload of it is reused)
+                parts = [replace(p, kind="glass") if p.kind == "cortex" else p for p in parts]
         if not parts:
             raise BrainPainterError(
                 f"view {view.name!r} shows nothing: content={view.content!r}, hemis={list(view.hemis)}, "
