@@ -226,3 +226,31 @@ def test_a_run_keeps_mesas_shaders_in_brainpainters_cache_folder(monkeypatch):
     monkeypatch.setenv(user_cache.SWITCH_ENV, "off")
     with private_temp():
         assert os.environ["MESA_SHADER_CACHE_DISABLE"] == "true" and "MESA_SHADER_CACHE_DIR" not in os.environ
+
+
+# -- memory --------------------------------------------------------------------------------------
+def test_a_serial_run_holds_one_painted_image_besides_the_png_writers(tmp_path, tiny, monkeypatch):
+    """A chunk's images were all held until the chunk ended (8 of 1200x900: 35 MB of the peak)."""
+    import weakref
+
+    from brainpainter.rendering.painter import Painter
+    from brainpainter.rendering.run import render
+    from brainpainter.testing import stand_in
+
+    alive, most = [0], [0]
+    real = Painter.paint_colors
+
+    def counted(self, colors, view):
+        pixels = real(self, colors, view)
+        alive[0] += 1
+        most[0] = max(most[0], alive[0])
+        weakref.finalize(pixels, lambda: alive.__setitem__(0, alive[0] - 1))
+        return pixels
+
+    monkeypatch.setattr(Painter, "paint_colors", counted)
+    table = {f"r{i}": {"Left-insula": float(i)} for i in range(20)}
+    with stand_in("solid"):
+        render(table, "dk", out=tmp_path / "o", template=str(tiny), renderer="solid", progress=False,
+               views=["lateral-left", "medial-left"])
+    assert len(list((tmp_path / "o").glob("*.png"))) == 40
+    assert most[0] <= 3  # the one just painted and the PNG writer's two
