@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -254,3 +255,128 @@ def test_a_serial_run_holds_one_painted_image_besides_the_png_writers(tmp_path, 
                views=["lateral-left", "medial-left"])
     assert len(list((tmp_path / "o").glob("*.png"))) == 40
     assert most[0] <= 3  # the one just painted and the PNG writer's two
+
+
+# -- a region scene's cortex parts, kept between runs --------------------------------------------
+def _left(path, **scene):
+    """The tiny template's left cortex part, from a new template object (as a new process)."""
+    return Scene(load_template(path), "dk", **scene).geometry.visible(get_view("lateral-left"))[0]
+
+
+@pytest.fixture
+def builds(monkeypatch):
+    """How many parts were computed (not read from the cache)."""
+    from brainpainter.rendering import geometry
+
+    count = [0]
+    real = geometry.build_part
+
+    def counted(*args, **kwargs):
+        count[0] += 1
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(geometry, "build_part", counted)
+    return count
+
+
+def _same(a, b):
+    for field in ("vertices", "normals", "triangles", "palette_index", "sulc", "hull", "occlusion",
+                  "outline"):
+        x, y = getattr(a, field), getattr(b, field)
+        assert (x is None) == (y is None), field
+        if x is not None:
+            np.testing.assert_array_equal(x, y, err_msg=field)
+            assert x.dtype == y.dtype or field == "hull", field
+
+
+def test_a_second_run_reads_the_cortex_part_it_computed(tmp_path, builds):
+    path = write_tiny_template(tmp_path / "tiny")
+    first = _left(path)
+    assert builds[0] == 1 and len(list((user_cache.cache_dir() / "parts").glob("*.npz"))) == 1
+    again = _left(path)
+    assert builds[0] == 1  # read, not computed
+    _same(first, again)
+
+
+@pytest.mark.parametrize("change", ["template file", "hidden", "surface", "shading"])
+def test_the_part_cache_follows_what_the_part_depends_on(tmp_path, builds, change):
+    from brainpainter.rendering.settings import RenderSettings
+
+    path = write_tiny_template(tmp_path / "tiny")
+    _left(path)
+    scene: dict = {}
+    if change == "template file":  # the same name, size and time: the bytes differ
+        file = path / "cortex-lh-dk.npz"
+        st = os.stat(file)
+        with np.load(file) as z:
+            arrays = {k: z[k] for k in z.files}
+        arrays["pial"] = arrays["pial"] * np.float32(1.5)
+        np.savez(file, **arrays)
+        os.utime(file, ns=(st.st_atime_ns, st.st_mtime_ns))
+    elif change == "hidden":
+        scene["hidden"] = frozenset({"Left-insula"})
+    elif change == "surface":
+        scene["surface"] = "inflated"
+    else:
+        scene["settings"] = RenderSettings(shading="flat")
+    got = _left(path, **scene)
+    assert builds[0] == 2
+    with pytest.MonkeyPatch.context() as m:
+        m.setenv(user_cache.SWITCH_ENV, "off")
+        _same(got, _left(path, **scene))  # as computed without any cache
+
+
+@pytest.mark.parametrize("damage", ["truncated", "noise", "changed array", "slot out of range",
+                                   "triangle out of range", "pickle", "huge"])
+def test_a_damaged_part_file_is_computed_again(tmp_path, builds, damage):
+    from brainpainter.rendering import part_cache
+
+    path = write_tiny_template(tmp_path / "tiny")
+    first = _left(path)
+    (file,) = (user_cache.cache_dir() / "parts").glob("*.npz")
+    with np.load(file) as z:
+        arrays = {k: z[k] for k in z.files if k != "digest"}
+    if damage == "truncated":
+        file.write_bytes(file.read_bytes()[:1000])
+    elif damage == "noise":
+        file.write_bytes(os.urandom(5000))
+    elif damage == "changed array":  # the old digest
+        data = file.read_bytes()
+        with np.load(file) as z:
+            digest = z["digest"]
+        arrays["vertices"][0] += 1
+        np.savez(file, digest=digest, **arrays)
+        assert data != file.read_bytes()
+    elif damage in ("slot out of range", "triangle out of range"):  # a digest that fits: checked anyway
+        if damage == "slot out of range":
+            arrays["palette_index"][0] = 10**6
+        else:
+            arrays["triangles"][0, 0] = len(arrays["vertices"])
+        np.savez(file, digest=np.array(part_cache._digest(arrays)), **arrays)
+    elif damage == "pickle":
+        np.savez(file, digest=np.array("x"), **{**arrays, "vertices": np.array([object()], dtype=object)})
+    else:
+        file.write_bytes(b"\0" * (9 * (path / "cortex-lh-dk.npz").stat().st_size + (1 << 20)))
+    again = _left(path)
+    assert builds[0] == 2
+    _same(first, again)
+    _left(path)
+    assert builds[0] == 2  # written again, valid
+
+
+def test_caches_off_keep_no_part(tmp_path, builds, monkeypatch):
+    monkeypatch.setenv(user_cache.SWITCH_ENV, "off")
+    path = write_tiny_template(tmp_path / "tiny")
+    _left(path)
+    _left(path)
+    assert builds[0] == 2 and not (Path(os.environ["XDG_CACHE_HOME"]) / "brainpainter").exists()
+
+
+def test_the_part_cache_keeps_the_newest_files_only(tmp_path, monkeypatch):
+    from brainpainter.rendering import part_cache
+
+    monkeypatch.setattr(part_cache, "MAX_FILES", 2)
+    path = write_tiny_template(tmp_path / "tiny")
+    for hidden in ("insula", "precuneus", "superiorfrontal"):
+        _left(path, hidden=frozenset({f"Left-{hidden}"}))
+    assert len(list((user_cache.cache_dir() / "parts").glob("*.npz"))) == 2

@@ -17,8 +17,9 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 #: Environment variable holding the cache folder a run uses (set by the command line's guard).
 CACHE_ENV = "BRAINPAINTER_CACHE_DIR"
@@ -88,22 +89,30 @@ def read(name: str, key: str) -> Any | None:
 def write(name: str, key: str, value: Any) -> None:
     """Cache `value` (JSON-able) as `name` for `key`; silently nothing when the folder is not writable."""
     import json
-    import tempfile
 
     folder = cache_dir()
     if folder is None:
         return
     doc = {"key": key, "value": value, "sha256": _digest(key, value)}
+    write_atomic(folder / name, lambda f: f.write(json.dumps(doc, sort_keys=True).encode("utf-8")))
+
+
+def write_atomic(path: Path, write: Callable[[IO[bytes]], object]) -> None:
+    """Write `path` through `write(file)` into a temporary file beside it, then rename it into place
+    (a reader never sees half a file); nothing where the folder cannot be written (a read-only or
+    full disk: the next run computes the value again)."""
+    import tempfile
+
     tmp = None
     try:
-        folder.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{name}.", dir=folder)
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            json.dump(doc, f, sort_keys=True)
-        os.replace(tmp, folder / name)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+        with os.fdopen(fd, "wb") as f:
+            write(f)
+        os.replace(tmp, path)
         tmp = None
     except OSError:
-        pass  # a read-only or full disk: the next run computes it again
+        pass
     finally:
         if tmp is not None:
             try:

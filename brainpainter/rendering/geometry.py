@@ -36,8 +36,9 @@ across each triangle.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
@@ -46,6 +47,7 @@ from numpy.typing import NDArray
 from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.rendering import framing
+from brainpainter.rendering.part_cache import template_files
 from brainpainter.rendering.parts import (
     GLASS_COLOR,
     GLASS_SLOT,
@@ -55,12 +57,13 @@ from brainpainter.rendering.parts import (
     NEUTRAL_GREY,
     NEUTRAL_SLOT,
     PartGeometry,
+    PendingPart,
     build_part,
     check_slots,
     split_by_label,
 )
 from brainpainter.rendering.settings import RGB, SULC_LIGHTINGS, RenderSettings
-from brainpainter.rendering.sulc import convexity, template_sulc
+from brainpainter.rendering.sulc import part_sulc
 from brainpainter.rendering.tract_parts import tract_parts
 from brainpainter.rendering.views import View
 
@@ -185,18 +188,6 @@ class VertexColors(Mapping[str, RGB]):
         return len(self.regions)
 
 
-@dataclass(frozen=True)
-class _Pending:
-    """A part not built yet: its name, kind and hemisphere, whether it has faces to draw (False: all
-    its regions are hidden, or it built to nothing) and how to build it (None when nothing is left)."""
-
-    name: str
-    kind: str
-    hemi: str | None
-    drawn: bool
-    build: Callable[[], PartGeometry | None]
-
-
 def cortex_mode(setting: str, parts: list[PartGeometry]) -> str:
     """``RenderSettings.cortex`` resolved: ``auto`` is ``glass`` when `parts` hold tracts, else ``opaque``."""
     if setting != "auto":
@@ -270,25 +261,11 @@ class SceneGeometry:
             return out
 
         self._part_slots: dict[str, frozenset[int]] = {}  # part name -> the region slots of its faces
-        # Parts in drawing order: built (PartGeometry) or still to build (_Pending: built by the first
-        # visible() that shows it, or by .parts). Palette slots are numbered here, from the label
-        # names alone, so they are the same whichever parts are ever built.
-        self._entries: list[PartGeometry | _Pending] = []
+        # Parts in drawing order, built or pending (built by the first visible() that shows it, or by
+        # .parts); slots are numbered here from the label names, the same whichever parts are built.
+        self._entries: list[PartGeometry | PendingPart] = []
 
-        def later(name: str, kind: str, hemi: str | None, drawn: bool,
-                  mesh: Callable[[], dict[str, Any]], **fixed: Any) -> None:
-            """A part to build when first shown: `mesh()` gives build_part's arrays (and ao, outline)."""
-            def build() -> PartGeometry | None:
-                m = mesh()
-                part = build_part(name, kind, hemi, m.pop("verts"), m.pop("faces"), m["face_slot"],
-                                  m.pop("sulc"), occlusion=settings.shading != "flat", **fixed,
-                                  **{k: v for k, v in m.items() if k != "face_slot"})
-                if part is not None:
-                    self._part_slots[name] = frozenset(int(i) for i in np.unique(m["face_slot"])
-                                                       if i >= first_key)
-                return part
-            self._entries.append(_Pending(name, kind, hemi, drawn, build))
-
+        self._first_key, self._shaded = first_key, settings.shading != "flat"
         if not per_vertex and scene.surface not in template.surfaces:
             raise choice_error("surface", scene.surface, list(template.surfaces),
                                f"Template {template.name!r} lacks it.")
@@ -297,49 +274,27 @@ class SceneGeometry:
                                                      else template.cortex_names(scene.labels, hemi))]
             label_slot = slots_for(names, MEDIAL_SLOT, hidden)
 
-            def cortex(hemi: str = hemi, label_slot: NDArray[Any] = label_slot) -> dict[str, Any]:
-                cm = meshes[hemi] if per_vertex else self._cortex_mesh(scene, hemi, per_vertex)
-                if scene.surface not in cm.vertices:
-                    raise choice_error("surface", scene.surface, list(cm.vertices),
-                                       f"Template {template.name!r} lacks it.")
-                face_slot = label_slot[np.asarray(cm.face_label, np.int64)]
-                verts = cm.vertices[scene.surface]
-                occlusion = getattr(cm, "occlusion", None)
-                return {"verts": verts, "faces": cm.faces, "face_slot": face_slot,
-                        "sulc": self._sulc(scene, hemi, cm, verts, with_sulc),
-                        "ao": None if occlusion is None else occlusion.get(scene.surface),
-                        "outline": (self._borders(scene, hemi, cm, verts, face_slot, per_vertex)
-                                    if settings.outline_width > 0 else None)}
-
             if per_vertex and scene.surface not in meshes[hemi].vertices:
                 raise choice_error("surface", scene.surface, list(meshes[hemi].vertices),
                                    f"Template {template.name!r} lacks it.")
-            later(f"cortex-{hemi}", "cortex", hemi, bool(set(names) - hidden), cortex,
-                  first_slot=self.vertex_slots[hemi][0] if per_vertex else None)
+            files = [] if per_vertex else template_files(template, scene.labels, hemi)
+            facts = {"labels": scene.labels, "hemi": hemi, "surface": scene.surface, "sulc": with_sulc,
+                     "occlusion": settings.shading != "flat", "outline": settings.outline_width > 0,
+                     "slots": label_slot.tolist()}
+            cortex = functools.partial(self._cortex_arrays, scene, hemi, label_slot,
+                                       meshes.get(hemi), with_sulc)
+            self._later(f"cortex-{hemi}", "cortex", hemi, bool(set(names) - hidden), cortex,
+                        (files, facts) if files else None,  # a region scene's cortex is kept between runs
+                        first_slot=self.vertex_slots[hemi][0] if per_vertex else None)
         if template.manifest.get("subcortical"):
-            sub_names = list(template.subcortical_names())
-            sub_slot = slots_for(sub_names, NEUTRAL_SLOT, hidden)
-
-            def subcortical() -> dict[str, Any]:
-                sub = template.subcortical()
-                return {"verts": sub.vertices, "faces": sub.faces,
-                        "face_slot": sub_slot[np.asarray(sub.face_label, np.int64)],
-                        "sulc": np.zeros(len(sub.vertices), np.float32),
-                        "ao": template.subcortical_occlusion(hidden)}
-
-            later("subcortical", "subcortical", None, bool(set(sub_names) - hidden), subcortical)
+            self._later_subcortical(template, hidden, slots_for(list(template.subcortical_names()),
+                                                                NEUTRAL_SLOT, hidden))
         if scene.tracts is not None:
             self._entries += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for, scene.tract_radius)
         for hemi in HEMIS:
-            if hemi not in template.manifest.get("glass", {}):
-                continue
-
-            def glass(hemi: str = hemi) -> dict[str, Any]:
-                verts, faces = template.glass(hemi)
-                return {"verts": verts, "faces": faces, "face_slot": np.full(len(faces), GLASS_SLOT),
-                        "sulc": np.zeros(len(verts), np.float32)}
-
-            later(f"glass-{hemi}", "glass", hemi, True, glass)
+            if hemi in template.manifest.get("glass", {}):
+                self._later(f"glass-{hemi}", "glass", hemi, True, functools.partial(self._glass_arrays,
+                                                                                     template, hemi))
         check_slots(len(defaults))
         #: how cortex views draw the cortex: "opaque", "glass" or "hidden" (``settings.cortex`` resolved)
         self.cortex: str = cortex_mode(settings.cortex,
@@ -350,13 +305,72 @@ class SceneGeometry:
         self.slot_of = slot_of
         self.default_rgb = np.asarray(defaults, dtype=np.float32)
 
+    def _later(self, name: str, kind: str, hemi: str | None, drawn: bool, mesh: Callable[[], dict[str, Any]],
+               kept: tuple[list[Any], dict[str, Any]] | None = None, **fixed: Any) -> None:
+        """A part to build when first shown: `mesh()` gives build_part's arrays (and ao, outline);
+        with `kept` (its template files and what else it depends on), kept in the user's cache."""
+        def build() -> PartGeometry | None:
+            m = mesh()
+            part = build_part(name, kind, hemi, m.pop("verts"), m.pop("faces"), m["face_slot"],
+                              m.pop("sulc"), occlusion=self._shaded, **fixed,
+                              **{k: v for k, v in m.items() if k != "face_slot"})
+            if part is not None:
+                self._part_slots[name] = frozenset(int(i) for i in np.unique(m["face_slot"])
+                                                   if i >= self._first_key)
+            return part
+
+        def build_or_read() -> PartGeometry | None:
+            from brainpainter.rendering.part_cache import cached_part
+
+            assert kept is not None
+            part = cached_part(*kept, name, kind, hemi, len(self.default_rgb), build)
+            if part is not None and name not in self._part_slots:  # read: its slots from its vertices
+                self._part_slots[name] = frozenset(int(i) for i in np.unique(part.palette_index)
+                                                   if i >= self._first_key)
+            return part
+        self._entries.append(PendingPart(name, kind, hemi, drawn, build if kept is None else build_or_read))
+
+    def _later_subcortical(self, template: Template, hidden: frozenset[str], sub_slot: NDArray[Any]) -> None:
+        """The subcortical part, to build when first shown (`sub_slot`: the slot of each structure)."""
+        def subcortical() -> dict[str, Any]:
+            sub = template.subcortical()
+            return {"verts": sub.vertices, "faces": sub.faces,
+                    "face_slot": sub_slot[np.asarray(sub.face_label, np.int64)],
+                    "sulc": np.zeros(len(sub.vertices), np.float32),
+                    "ao": template.subcortical_occlusion(hidden)}
+
+        self._later("subcortical", "subcortical", None, bool((sub_slot >= 0).any()), subcortical)
+
+    @staticmethod
+    def _glass_arrays(template: Template, hemi: str) -> dict[str, Any]:
+        """A glass hull's arrays for :func:`build_part` (one slot: the glass's)."""
+        verts, faces = template.glass(hemi)
+        return {"verts": verts, "faces": faces, "face_slot": np.full(len(faces), GLASS_SLOT),
+                "sulc": np.zeros(len(verts), np.float32)}
+
+    def _cortex_arrays(self, scene: SceneParts, hemi: str, label_slot: NDArray[Any], mesh: Any,
+                       with_sulc: bool) -> dict[str, Any]:
+        """A cortex part's arrays for :func:`build_part` (`mesh`: a map's, else the template's split one)."""
+        cm = mesh if mesh is not None else self._cortex_mesh(scene, hemi, False)
+        if scene.surface not in cm.vertices:
+            raise choice_error("surface", scene.surface, list(cm.vertices),
+                               f"Template {scene.template.name!r} lacks it.")
+        face_slot = label_slot[np.asarray(cm.face_label, np.int64)]
+        verts = cm.vertices[scene.surface]
+        occlusion = getattr(cm, "occlusion", None)
+        return {"verts": verts, "faces": cm.faces, "face_slot": face_slot,
+                "sulc": part_sulc(scene.template, scene.labels, hemi, cm, verts, with_sulc),
+                "ao": None if occlusion is None else occlusion.get(scene.surface),
+                "outline": (self._borders(scene, hemi, cm, verts, face_slot, mesh is not None)
+                            if scene.settings.outline_width > 0 else None)}
+
     def _built(self, wanted: Callable[[str, str | None], bool]) -> list[PartGeometry]:
         """The parts (of kind and hemisphere) `wanted`, built now where they were not yet, in order."""
         out: list[PartGeometry] = []
         for i, entry in enumerate(self._entries):
             if not wanted(entry.kind, entry.hemi):
                 continue
-            if isinstance(entry, _Pending):
+            if isinstance(entry, PendingPart):
                 part = entry.build()
                 self._entries[i] = entry = part if part is not None else replace(entry, drawn=False)
             if isinstance(entry, PartGeometry):
@@ -375,14 +389,6 @@ class SceneGeometry:
         key_of = {slot: key for key, slot in self.slot_of.items()}
         return {name: tuple(key_of[i] for i in sorted(slots) if i in key_of)
                 for name, slots in self._part_slots.items()}
-
-    @staticmethod
-    def _sulc(scene: SceneParts, hemi: str, cm: Any, verts: NDArray[Any], with_sulc: bool) -> NDArray[Any]:
-        """Sulcal depth per vertex of a cortex part: the template's, else convexity; zeros unused."""
-        if not with_sulc:
-            return np.zeros(len(verts), np.float32)
-        sulc = template_sulc(scene.template, scene.labels, hemi, cm)
-        return sulc if sulc is not None else convexity(cm.vertices.get("pial", verts), cm.faces)
 
     @staticmethod
     def _borders(scene: SceneParts, hemi: str, cm: Any, verts: NDArray[Any], face_slot: NDArray[Any],
