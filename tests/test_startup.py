@@ -266,16 +266,16 @@ def _left(path, **scene):
 @pytest.fixture
 def builds(monkeypatch):
     """How many parts were computed (not read from the cache)."""
-    from brainpainter.rendering import geometry
+    from brainpainter.rendering import lazy_parts
 
     count = [0]
-    real = geometry.build_part
+    real = lazy_parts.build_part
 
     def counted(*args, **kwargs):
         count[0] += 1
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(geometry, "build_part", counted)
+    monkeypatch.setattr(lazy_parts, "build_part", counted)
     return count
 
 

@@ -47,7 +47,8 @@ from numpy.typing import NDArray
 from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.rendering import framing
-from brainpainter.rendering.part_cache import template_files
+from brainpainter.rendering.lazy_parts import LazyParts, cortex_arrays
+from brainpainter.rendering.part_cache import cortex_kept
 from brainpainter.rendering.parts import (
     GLASS_COLOR,
     GLASS_SLOT,
@@ -57,13 +58,10 @@ from brainpainter.rendering.parts import (
     NEUTRAL_GREY,
     NEUTRAL_SLOT,
     PartGeometry,
-    PendingPart,
-    build_part,
     check_slots,
     split_by_label,
 )
 from brainpainter.rendering.settings import RGB, SULC_LIGHTINGS, RenderSettings
-from brainpainter.rendering.sulc import part_sulc
 from brainpainter.rendering.tract_parts import tract_parts
 from brainpainter.rendering.views import View
 
@@ -151,6 +149,8 @@ class Palette(Mapping[str, RGB]):
         """sRGB 0-1 per palette slot, float32, shape (n_slots, 3)."""
         if self._rgb is None:
             g = self.geometry
+            if any(key.startswith("flat-") for key in self._vertex_rgb):
+                g.flat_slots()  # a run with a flat view: the sheets' slots (once)
             rgb = g.default_rgb.copy()
             for key, i in g.slot_of.items():
                 c = self._colors.get(key)
@@ -195,6 +195,14 @@ def cortex_mode(setting: str, parts: list[PartGeometry]) -> str:
     return "glass" if any(p.kind == "tract" for p in parts) else "opaque"
 
 
+def _flat_able(template: Template, meshes: Mapping[str, Any]) -> bool:
+    """Whether a per-vertex scene of these cortex meshes can draw the flat maps (fsaverage's meshes)."""
+    from brainpainter.maps.resolution import own_vertex_count
+
+    return all(len(m.source_vertex) for m in meshes.values()) and all(
+        own_vertex_count(template, hemi) is None for hemi in meshes)
+
+
 class SceneGeometry:
     """Every drawable part of a scene, each built once from its template when a view first shows it.
 
@@ -221,7 +229,8 @@ class SceneGeometry:
     default_rgb : ndarray of float32, shape (n_slots, 3)
         Colour of each slot when the palette gives none.
     vertex_slots : dict of str to (int, int)
-        Per-vertex scenes: first slot and number of cortex vertices of each hemisphere (else empty).
+        Per-vertex scenes: first slot and number of cortex vertices of each hemisphere (else empty),
+        and of each flat map's once it has them (``flat-lh``, ``flat-rh``: :meth:`flat_slots`).
     source_vertex : dict of str to ndarray of int32, shape (n_vertices,)
         Per-vertex scenes: the fsaverage vertex of each cortex vertex, per hemisphere.
     """
@@ -242,11 +251,10 @@ class SceneGeometry:
         self.vertex_slots: dict[str, tuple[int, int]] = {}
         self.source_vertex: dict[str, NDArray[Any]] = {}
         if per_vertex:
-            for hemi, cm in meshes.items():
-                self.vertex_slots[hemi] = (len(defaults), len(cm.source_vertex))
-                self.source_vertex[hemi] = np.asarray(cm.source_vertex, np.int32)
-                defaults.extend([defaults[MEDIAL_SLOT]] * len(cm.source_vertex))
+            self._vertex_slots(meshes, defaults)
         first_key = len(defaults)
+        self._scene, self._first_key = scene, first_key
+        self._flat_able = per_vertex and _flat_able(template, meshes)
 
         def slots_for(names: list[str], default: int | RGB, drop: frozenset[str]) -> NDArray[Any]:
             out = np.full(len(names), -1, dtype=np.int64)
@@ -260,12 +268,10 @@ class SceneGeometry:
                 out[i] = slot_of[key]
             return out
 
-        self._part_slots: dict[str, frozenset[int]] = {}  # part name -> the region slots of its faces
         # Parts in drawing order, built or pending (built by the first visible() that shows it, or by
         # .parts); slots are numbered here from the label names, the same whichever parts are built.
-        self._entries: list[PartGeometry | PendingPart] = []
-
-        self._first_key, self._shaded = first_key, settings.shading != "flat"
+        self._lazy = LazyParts(first_key, settings.shading != "flat", lambda: len(self.default_rgb))
+        self._part_slots = self._lazy.part_slots  # part name -> the region slots of its faces
         if not per_vertex and scene.surface not in template.surfaces:
             raise choice_error("surface", scene.surface, list(template.surfaces),
                                f"Template {template.name!r} lacks it.")
@@ -277,110 +283,74 @@ class SceneGeometry:
             if per_vertex and scene.surface not in meshes[hemi].vertices:
                 raise choice_error("surface", scene.surface, list(meshes[hemi].vertices),
                                    f"Template {template.name!r} lacks it.")
-            files = [] if per_vertex else template_files(template, scene.labels, hemi)
-            facts = {"labels": scene.labels, "hemi": hemi, "surface": scene.surface, "sulc": with_sulc,
-                     "occlusion": settings.shading != "flat", "outline": settings.outline_width > 0,
-                     "slots": label_slot.tolist()}
-            cortex = functools.partial(self._cortex_arrays, scene, hemi, label_slot,
-                                       meshes.get(hemi), with_sulc)
-            self._later(f"cortex-{hemi}", "cortex", hemi, bool(set(names) - hidden), cortex,
-                        (files, facts) if files else None,  # a region scene's cortex is kept between runs
-                        first_slot=self.vertex_slots[hemi][0] if per_vertex else None)
+            cortex = functools.partial(cortex_arrays, scene, hemi, label_slot, meshes.get(hemi), with_sulc,
+                                       self._cortex_mesh, self._borders)
+            self._lazy.later(f"cortex-{hemi}", "cortex", hemi, bool(set(names) - hidden), cortex,
+                             None if per_vertex else cortex_kept(scene, hemi, label_slot, with_sulc),
+                             first_slot=self.vertex_slots[hemi][0] if per_vertex else None)
         if template.manifest.get("subcortical"):
-            self._later_subcortical(template, hidden, slots_for(list(template.subcortical_names()),
-                                                                NEUTRAL_SLOT, hidden))
+            self._lazy.later_subcortical(template, hidden, slots_for(list(template.subcortical_names()),
+                                                                     NEUTRAL_SLOT, hidden))
         if scene.tracts is not None:
-            self._entries += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for, scene.tract_radius)
+            self._lazy.entries += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for,
+                                              scene.tract_radius)
         for hemi in HEMIS:
             if hemi in template.manifest.get("glass", {}):
-                self._later(f"glass-{hemi}", "glass", hemi, True, functools.partial(self._glass_arrays,
-                                                                                     template, hemi))
+                self._lazy.later_glass(template, hemi)
         check_slots(len(defaults))
         #: how cortex views draw the cortex: "opaque", "glass" or "hidden" (``settings.cortex`` resolved)
-        self.cortex: str = cortex_mode(settings.cortex,
-                                       [e for e in self._entries if isinstance(e, PartGeometry)])
+        self.cortex: str = cortex_mode(settings.cortex, self._lazy.built_parts())
         #: rotation from the template's coordinates to RAS (its anterior and superior axes)
         self.to_ras: NDArray[Any] = np.asarray(template.to_ras, dtype=float)
         self.keys: tuple[str, ...] = tuple(keys)
         self.slot_of = slot_of
         self.default_rgb = np.asarray(defaults, dtype=np.float32)
 
-    def _later(self, name: str, kind: str, hemi: str | None, drawn: bool, mesh: Callable[[], dict[str, Any]],
-               kept: tuple[list[Any], dict[str, Any]] | None = None, **fixed: Any) -> None:
-        """A part to build when first shown: `mesh()` gives build_part's arrays (and ao, outline);
-        with `kept` (its template files and what else it depends on), kept in the user's cache."""
-        def build() -> PartGeometry | None:
-            m = mesh()
-            part = build_part(name, kind, hemi, m.pop("verts"), m.pop("faces"), m["face_slot"],
-                              m.pop("sulc"), occlusion=self._shaded, **fixed,
-                              **{k: v for k, v in m.items() if k != "face_slot"})
-            if part is not None:
-                self._part_slots[name] = frozenset(int(i) for i in np.unique(m["face_slot"])
-                                                   if i >= self._first_key)
-            return part
+    def _vertex_slots(self, meshes: Mapping[str, Any], defaults: list[RGB]) -> None:
+        """A per-vertex scene's slots (appended to `defaults`): each cortex vertex's."""
+        for hemi, cm in meshes.items():
+            self.vertex_slots[hemi] = (len(defaults), len(cm.source_vertex))
+            self.source_vertex[hemi] = np.asarray(cm.source_vertex, np.int32)
+            defaults.extend([defaults[MEDIAL_SLOT]] * len(cm.source_vertex))
 
-        def build_or_read() -> PartGeometry | None:
-            from brainpainter.rendering.part_cache import cached_part
+    def flat_slots(self) -> bool:
+        """Give a per-vertex scene the flat maps' vertex slots (``vertex_slots["flat-lh"]``, ``"flat-rh"``:
+        32492 each, after every other slot), once: when a palette first carries their colours
+        (:class:`VertexColors` of a run with a flat view) or a flat view is first drawn, so that runs
+        without one upload no larger palette. False where the scene has none (a region scene, a
+        template not made from fsaverage)."""
+        if "flat-lh" in self.vertex_slots:
+            return True
+        if not self._flat_able:
+            return False
+        from brainpainter.maps.flat import N_FLAT
 
-            assert kept is not None
-            part = cached_part(*kept, name, kind, hemi, len(self.default_rgb), build)
-            if part is not None and name not in self._part_slots:  # read: its slots from its vertices
-                self._part_slots[name] = frozenset(int(i) for i in np.unique(part.palette_index)
-                                                   if i >= self._first_key)
-            return part
-        self._entries.append(PendingPart(name, kind, hemi, drawn, build if kept is None else build_or_read))
+        start = self.n_slots
+        for i, hemi in enumerate(("lh", "rh")):
+            self.vertex_slots[f"flat-{hemi}"] = (start + i * N_FLAT, N_FLAT)
+        medial = np.repeat(self.default_rgb[MEDIAL_SLOT][None], 2 * N_FLAT, axis=0)
+        self.default_rgb = np.concatenate([self.default_rgb, medial])
+        check_slots(self.n_slots)
+        return True
 
-    def _later_subcortical(self, template: Template, hidden: frozenset[str], sub_slot: NDArray[Any]) -> None:
-        """The subcortical part, to build when first shown (`sub_slot`: the slot of each structure)."""
-        def subcortical() -> dict[str, Any]:
-            sub = template.subcortical()
-            return {"verts": sub.vertices, "faces": sub.faces,
-                    "face_slot": sub_slot[np.asarray(sub.face_label, np.int64)],
-                    "sulc": np.zeros(len(sub.vertices), np.float32),
-                    "ao": template.subcortical_occlusion(hidden)}
+    @functools.cached_property
+    def flat_parts(self) -> tuple[PartGeometry, ...]:
+        """The flat maps as parts of kind ``flat`` (``flat-lh``, ``flat-rh``), built when a flat view first
+        draws them (:func:`brainpainter.rendering.flat_parts.flat_parts`)."""
+        from brainpainter.rendering.flat_parts import flat_parts
 
-        self._later("subcortical", "subcortical", None, bool((sub_slot >= 0).any()), subcortical)
-
-    @staticmethod
-    def _glass_arrays(template: Template, hemi: str) -> dict[str, Any]:
-        """A glass hull's arrays for :func:`build_part` (one slot: the glass's)."""
-        verts, faces = template.glass(hemi)
-        return {"verts": verts, "faces": faces, "face_slot": np.full(len(faces), GLASS_SLOT),
-                "sulc": np.zeros(len(verts), np.float32)}
-
-    def _cortex_arrays(self, scene: SceneParts, hemi: str, label_slot: NDArray[Any], mesh: Any,
-                       with_sulc: bool) -> dict[str, Any]:
-        """A cortex part's arrays for :func:`build_part` (`mesh`: a map's, else the template's split one)."""
-        cm = mesh if mesh is not None else self._cortex_mesh(scene, hemi, False)
-        if scene.surface not in cm.vertices:
-            raise choice_error("surface", scene.surface, list(cm.vertices),
-                               f"Template {scene.template.name!r} lacks it.")
-        face_slot = label_slot[np.asarray(cm.face_label, np.int64)]
-        verts = cm.vertices[scene.surface]
-        occlusion = getattr(cm, "occlusion", None)
-        return {"verts": verts, "faces": cm.faces, "face_slot": face_slot,
-                "sulc": part_sulc(scene.template, scene.labels, hemi, cm, verts, with_sulc),
-                "ao": None if occlusion is None else occlusion.get(scene.surface),
-                "outline": (self._borders(scene, hemi, cm, verts, face_slot, mesh is not None)
-                            if scene.settings.outline_width > 0 else None)}
-
-    def _built(self, wanted: Callable[[str, str | None], bool]) -> list[PartGeometry]:
-        """The parts (of kind and hemisphere) `wanted`, built now where they were not yet, in order."""
-        out: list[PartGeometry] = []
-        for i, entry in enumerate(self._entries):
-            if not wanted(entry.kind, entry.hemi):
-                continue
-            if isinstance(entry, PendingPart):
-                part = entry.build()
-                self._entries[i] = entry = part if part is not None else replace(entry, drawn=False)
-            if isinstance(entry, PartGeometry):
-                out.append(entry)
-        return out
+        per_vertex = self.flat_slots()
+        parts = flat_parts(self._scene, self.slot_of, self.vertex_slots, self.to_ras)
+        for part in parts:  # the regions drawn (a map's sheet: none, as a map's cortex)
+            self._part_slots[part.name] = frozenset() if per_vertex else frozenset(
+                int(i) for i in np.unique(part.palette_index) if i >= self._first_key)
+        self.__dict__.pop("part_keys", None)  # computed again with the flat parts' regions
+        return parts
 
     @property
     def parts(self) -> tuple[PartGeometry, ...]:
         """Every part of the scene (all built now; :meth:`visible` builds only those a view shows)."""
-        return tuple(self._built(lambda kind, hemi: True))
+        return tuple(self._lazy.built(lambda kind, hemi: True))
 
     @property
     def part_keys(self) -> dict[str, tuple[str, ...]]:
@@ -397,29 +367,52 @@ class SceneGeometry:
 
         Per region, the edges between faces of two regions (hidden regions included: their
         border with what is drawn is drawn); per vertex, the lines through the midpoints of the
-        edges between vertices of two labels of the scene's label set, and a second map's
-        iso-lines (``scene.contours``).
+        edges between vertices of two labels of the scene's label set. A second map's iso-lines
+        (``scene.contours``) are added to either, drawn without the regions' borders unless
+        ``contours.regions``.
         """
-        from brainpainter.rendering.borders import face_borders, iso_lines, vertex_borders
-
-        normals = vertex_normals(verts, cm.faces)
-        if not per_vertex:
-            return face_borders(verts, cm.faces, np.asarray(cm.face_label), normals)
-        from brainpainter.maps.outlines import mesh_labels
+        from brainpainter.rendering.borders import face_borders, vertex_borders
 
         contours = getattr(scene, "contours", None)
-        lines: list[NDArray[np.float32]] = []
-        if contours is not None and hemi in contours.values and len(cm.source_vertex):
-            values = np.asarray(contours.values[hemi])[np.asarray(cm.source_vertex, np.int64)]
-            lines = [iso_lines(verts, cm.faces, values, level, normals) for level in contours.levels]
+        lines = SceneGeometry._contour_lines(scene, hemi, cm if per_vertex else None)
         if contours is not None and not contours.regions:
             return np.concatenate(lines) if lines else np.zeros((0, 2, 3), np.float32)
+        normals = vertex_normals(verts, cm.faces)
+        if not per_vertex:
+            regions: NDArray[Any] = np.concatenate([face_borders(verts, cm.faces, np.asarray(cm.face_label),
+                                                                 normals), *lines])
+            return regions
+        from brainpainter.maps.outlines import mesh_labels
+
         labels = mesh_labels(scene.template, scene.labels, hemi, cm)
         if labels is None:
             raise BrainPainterError(f"template {scene.template.name!r} has no per-vertex labels for "
                                     f"{scene.labels!r}, so its region borders cannot be drawn.")
         borders: NDArray[Any] = np.concatenate([vertex_borders(verts, cm.faces, labels, normals), *lines])
         return borders
+
+    @staticmethod
+    def _contour_lines(scene: SceneParts, hemi: str, cm: Any) -> list[NDArray[np.float32]]:
+        """A second map's iso-lines on hemisphere `hemi` (``scene.contours``), one array per level.
+
+        `cm`: the per-vertex cortex mesh drawn; None (regions drawn split at their borders): the
+        iso-lines are traced on the unsplit mesh, whose surface the split one keeps.
+        """
+        from brainpainter.rendering.borders import iso_lines
+
+        contours = getattr(scene, "contours", None)
+        if contours is None or hemi not in contours.values:
+            return []
+        if cm is None:
+            from brainpainter.maps.resolution import map_mesh
+
+            cm = map_mesh(scene.template, scene.labels, hemi)
+        if not len(cm.source_vertex):
+            return []
+        verts = cm.vertices[scene.surface]
+        normals = vertex_normals(verts, cm.faces)
+        values = np.asarray(contours.values[hemi])[np.asarray(cm.source_vertex, np.int64)]
+        return [iso_lines(verts, cm.faces, values, level, normals) for level in contours.levels]
 
     @staticmethod
     def _cortex_mesh(scene: SceneParts, hemi: str, per_vertex: bool) -> Any:
@@ -454,15 +447,17 @@ class SceneGeometry:
         def shown(kind: str, hemi: str | None) -> bool:
             return framing.shows(view, kind, hemi, self.cortex)
 
-        kinds = {e.kind for e in self._entries if isinstance(e, PartGeometry) or e.drawn}
-        if view.content == "cortex" and "cortex" not in kinds:
+        kinds = self._lazy.kinds()
+        if view.content == "flat":  # the flat maps alone (all hidden: an error below)
+            parts = [p for p in self.flat_parts if shown(p.kind, p.hemi)]
+        elif view.content == "cortex" and "cortex" not in kinds:
             # a brain of region meshes without an outer surface: its structures stand for it
-            parts = self._built(lambda kind, hemi: kind == "subcortical" or shown(kind, hemi))
+            parts = self._lazy.built(lambda kind, hemi: kind == "subcortical" or shown(kind, hemi))
         elif view.content == "subcortical" and "subcortical" not in kinds:
             # ... and one without structures shows its surface (both hemispheres, no glass over it)
-            parts = self._built(lambda kind, hemi: kind == "cortex")
+            parts = self._lazy.built(lambda kind, hemi: kind == "cortex")
         else:
-            parts = self._built(shown)
+            parts = self._lazy.built(shown)
             if view.content == "cortex" and self.cortex == "glass":
                 # the cortex as glass in its own colours (same name: a renderer's upload of it is reused)
                 parts = [replace(p, kind="glass") if p.kind == "cortex" else p for p in parts]

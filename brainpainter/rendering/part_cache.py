@@ -76,6 +76,20 @@ def template_files(template: Any, labels: str, hemi: str) -> list[Path]:
     return files
 
 
+def cortex_kept(scene: Any, hemi: str, label_slot: NDArray[Any],
+                with_sulc: bool) -> tuple[list[Path], dict[str, Any]] | None:
+    """What a region scene's cortex part of `hemi` is kept under: its template files and the facts
+    it depends on (:func:`cached_part`); None where it is not kept (no cortex; a map's contours,
+    whose lines join its outline)."""
+    files = template_files(scene.template, scene.labels, hemi)
+    if not files or getattr(scene, "contours", None) is not None:
+        return None
+    s = scene.settings
+    return files, {"labels": scene.labels, "hemi": hemi, "surface": scene.surface, "sulc": with_sulc,
+                   "occlusion": s.shading != "flat", "outline": s.outline_width > 0,
+                   "slots": label_slot.tolist()}
+
+
 def part_key(files: Iterable[str | Path], **facts: Any) -> str:
     """The key of a part: SHA-256 of the bytes of `files`, of `facts` (JSON-able) and of the code.
 

@@ -24,19 +24,21 @@ from brainpainter.atlas.registry import get_atlas, load_atlas_config
 from brainpainter.color.scale import ColourScale
 from brainpainter.errors import BrainPainterError, NoRegionColumnError
 from brainpainter.maps.inputs import is_map_input
-from brainpainter.rendering.composition import run_layers
+from brainpainter.maps.outlines import Contours
+from brainpainter.rendering.composition import line_entries, line_layers, run_layers, tract_colors
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
 from brainpainter.rendering.painter import (
     VOLUME_VIEWS,
     Painter,
     RenderResult,
+    flat_aspect,
     region_colors,
     resolve_hidden,
     shown_aspect,
 )
 from brainpainter.rendering.parallel import Item, LocalRunner, PainterSpec, Runner, SerialRunner, chunked
-from brainpainter.rendering.settings import RGB, RenderSettings, outlined, with_aspect
+from brainpainter.rendering.settings import RenderSettings, with_aspect
 from brainpainter.rendering.views import ImagesByView, View, parse_views
 from brainpainter.table.region_table import RegionTable, read_table
 from brainpainter.table.rows import select_rows
@@ -62,6 +64,7 @@ class Run:
     options: Options
     tract_values: TractValues | None = None
     layers: tuple[Layer, ...] = ()
+    contours: Contours | None = None  # a second map's iso-lines (--contour)
 
     def scale_of(self, kind: str) -> ColourScale:
         """The colour scale of layer `kind` (``"regions"``, ``"tracts"``); the run's scale if it has none."""
@@ -73,7 +76,7 @@ class Run:
         nodes = self.tract_values.nodes if self.tract_values is not None else ()
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
                        scene.renderer, tracts=scene.tract_spec(), tract_nodes=nodes,
-                       tract_radius=scene.tract_radius)
+                       tract_radius=scene.tract_radius, contours=self.contours)
 
     def items(self, rows: Sequence[int]) -> list[tuple[int, View]]:
         """The images of `rows`: ``(row, view)`` for every row and view, row by row."""
@@ -93,15 +96,6 @@ def tracts_only_table(tract_values: TractValues, atlas: Atlas | None, data: Any)
     source = str(data) if isinstance(data, str | Path) else "table"
     return RegionTable(images=tuple(images), regions=(), values=np.zeros((len(images), 0)),
                        atlas=atlas or get_atlas("dk"), source=source)
-
-
-def tract_colors(values: Mapping[str, float], scale: ColourScale) -> dict[str, RGB]:
-    """Colour of each bundle (or bundle node) key for one image; NaN: the scale's NaN colour."""
-    keys = list(values)
-    if not keys:
-        return {}
-    rgb = scale(np.array([values[k] for k in keys], dtype=float))
-    return {k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(keys, rgb, strict=True)}
 
 
 def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, bool]:
@@ -219,9 +213,6 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
         from brainpainter.rendering.maprun import prepare_map_run
 
         return prepare_map_run(data, atlas_obj, options)  # type: ignore[return-value]
-    if options.maps.contour is not None:
-        raise BrainPainterError("--contour draws a second map's iso-lines over a map; give the map too "
-                                "(--lh/--rh or --volume), or draw region borders with --outline ATLAS.")
     views = options.scene.views
     if views is not None:  # a given option's errors before a big input file is read
         view_list = parse_views(views if isinstance(views, str) else list(views))
@@ -242,16 +233,14 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
                                       f"{sorted(bundle_names(spec))[:6]}.") from None
     if views is None:
         view_list = parse_views(default_views(table.atlas, only_tracts))
-    outline = options.maps.outline
-    if outline is not None and outline not in (table.atlas.name, table.atlas.template_labels):
-        raise BrainPainterError(
-            f"a region render outlines its own atlas's regions ({table.atlas.name!r}); --outline "
-            f"{outline!r} was given. Give --outline {table.atlas.name}, or draw a map (--lh/--rh).")
-    settings = outlined(options.settings, outline)
+    own = (table.atlas.name, table.atlas.template_labels)
+    contours, settings = line_layers(options, "a region render", own)
     if not options.size_given and table.atlas.image_aspect:  # a brain of another shape: frame the views
         settings = with_aspect(settings, shown_aspect(table.atlas, options.scene.template, view_list))
+    elif not options.size_given and (aspect := flat_aspect(view_list)):  # flat maps: wider than a brain
+        settings = with_aspect(settings, aspect)
     layers = run_layers(options, table, tract_values, only_tracts and tract_values is not None)
-    return Run(table, layers[0].scale, view_list, settings, options, tract_values, layers)
+    return Run(table, layers[0].scale, view_list, settings, options, tract_values, layers, contours)
 
 
 def default_views(atlas: Atlas, only_tracts: bool) -> tuple[str, ...] | None:
@@ -395,10 +384,11 @@ def painter_options(painter: Painter, options: Options) -> Options:
 
 def run_settings(run: Run, painter: Painter) -> dict[str, Any]:
     """The settings of a run as the manifest and every PNG's metadata record them."""
+    lines = line_entries(run.options, run.contours)
     return {
         "atlas": run.table.atlas.name, "template": painter.scene.template.name, "surface": painter.surface,
         "views": [v.to_dict() for v in run.views], "scale": run.scale.to_dict(),
-        "layers": [layer.to_dict() for layer in run.layers],
+        "layers": [layer.to_dict() for layer in run.layers], **({"lines": lines} if lines else {}),
         "hidden": sorted(painter.scene.hidden), "renderer": painter.renderer, **run.settings.to_dict(),
     }
 
