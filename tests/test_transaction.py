@@ -301,7 +301,8 @@ def test_a_cycle_of_group_atlases_is_one_short_line(tmp_path, monkeypatch):
 
 @pytest.mark.render
 def test_real_render_writes_nothing_outside_the_output_folder(tmp_path):
-    """Blender and matplotlib caches go to the run's temporary folder, which is removed."""
+    """Blender and matplotlib caches go to the run's temporary folder, which is removed; only
+    brainpainter's own cache folder (the installed plugins, Mesa's compiled shaders) is kept."""
     import subprocess
     import sys
 
@@ -315,7 +316,10 @@ def test_real_render_writes_nothing_outside_the_output_folder(tmp_path):
                           env={**env, "HOME": str(home), "TMPDIR": str(tmp)}, capture_output=True, text=True,
                           timeout=600)
     assert proc.returncode == 0, proc.stderr
-    assert list(home.rglob("*")) == [] and list(tmp.rglob("*")) == []
+    kept = home / ".cache" / "brainpainter"
+    assert {p for p in home.rglob("*") if not p.is_relative_to(kept)} == {home / ".cache"}
+    assert (kept / "entry-points.json").is_file() and any((kept / "mesa-shaders").rglob("*"))
+    assert list(tmp.rglob("*")) == []
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["A_lateral-left.png", "manifest.json"]
 
 

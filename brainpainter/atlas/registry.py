@@ -15,13 +15,13 @@ from __future__ import annotations
 
 import functools
 import importlib
-import importlib.metadata as md
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
+from brainpainter.atlas import installed
 from brainpainter.atlas.config import read_atlas_config
 from brainpainter.atlas.model import Atlas, combine_atlases, load_atlas_dir
 from brainpainter.errors import BrainPainterError, PluginError, choice_error
@@ -103,13 +103,12 @@ class Registry:
         by_target: dict[tuple[str, str], list[tuple[str, str]]] = {}
         clashes: dict[str, list[str]] = {}
         seen: dict[str, str] = {}
-        for ep in md.entry_points(group=self.group):
-            dist = ep.dist.name if ep.dist is not None else "?"
-            if ep.name in seen and seen[ep.name] != ep.value:
-                clashes.setdefault(ep.name, [seen[ep.name]]).append(ep.value)
+        for ep_name, value, dist in installed.entry_points(self.group, GROUPS):  # cached per environment
+            if ep_name in seen and seen[ep_name] != value:
+                clashes.setdefault(ep_name, [seen[ep_name]]).append(value)
                 continue
-            seen[ep.name] = ep.value
-            by_target.setdefault((ep.value, dist), []).append((ep.name, dist))
+            seen[ep_name] = value
+            by_target.setdefault((value, dist), []).append((ep_name, dist))
         entries: dict[str, Entry] = {}
         for (target, dist), named in by_target.items():
             names = sorted({n for n, _ in named})
@@ -238,6 +237,7 @@ class Registry:
 
     def reset(self) -> None:
         """Forget discovery and loaded objects (after installing a plugin)."""
+        installed.forget()
         self._entries = None
         self._alias.clear()
         self._loaded.clear()

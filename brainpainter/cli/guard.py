@@ -15,7 +15,9 @@
 While a command runs, caches and temporary files of the libraries it loads
 (matplotlib's font cache, fontconfig, Blender's user folders, ffmpeg's and
 Python's temporary files) go to one temporary folder that is removed when the
-command ends, so a run writes nothing outside its output folder. The folder
+command ends, so a run writes nothing outside its output folder but
+brainpainter's own cache folder (:mod:`brainpainter.io.user_cache`: the
+installed plugins, Mesa's compiled shaders; ``BRAINPAINTER_CACHE=off`` for none). The folder
 holds a lock (``flock`` on :data:`RUN_LOCK`) while its process lives; a
 process killed with ``kill -9`` cannot remove its folder, so every run first
 removes the ``brainpainter-run-*`` folders whose lock nobody holds
@@ -61,9 +63,26 @@ RUN_PREFIX = "brainpainter-run-"
 #: The lock file of a run's temporary folder, held (``flock``) by the process that made it while it lives.
 RUN_LOCK = ".owner.lock"
 
-#: Caches that would only be written into the run's temporary folder and thrown away with it; Mesa's
-#: shader cache thread also kept writing there after a Ctrl-C had removed it ("Failed to create ...").
+#: Mesa's shader cache (llvmpipe's compiled shaders: 0.2-0.3 s of every cold first image) goes to
+#: brainpainter's own cache folder, which outlives the run (:mod:`brainpainter.io.user_cache`); with
+#: caches off (``BRAINPAINTER_CACHE=off``) it is disabled, as it would only be written into the run's
+#: temporary folder (whose removal its writer thread once outlived: "Failed to create ...").
+SHADER_CACHE = {"MESA_SHADER_CACHE_DIR": "mesa-shaders"}
 NO_DISK_CACHE = {"MESA_SHADER_CACHE_DISABLE": "true"}
+
+
+def _persistent_caches() -> dict[str, str]:
+    """The environment that keeps brainpainter's caches (and Mesa's shaders) in the user's cache
+    folder while ``XDG_CACHE_HOME`` points into the run's temporary folder; the user's own settings
+    stay."""
+    from brainpainter.io import user_cache
+
+    folder = user_cache.cache_dir()
+    if folder is None:
+        return dict(NO_DISK_CACHE)
+    out = {user_cache.CACHE_ENV: str(folder)}
+    out.update({var: str(folder / sub) for var, sub in SHADER_CACHE.items()})
+    return out
 
 
 class Stopped(BaseException):
@@ -147,13 +166,14 @@ def private_temp() -> Iterator[str]:
     remove_dead_runs()
     root = tempfile.mkdtemp(prefix=RUN_PREFIX)
     lock = _hold_lock(root)
-    saved = {k: os.environ.get(k) for k in (*CACHE_VARIABLES, *NO_DISK_CACHE, "TMPDIR")}
+    persistent = _persistent_caches()  # before XDG_CACHE_HOME points into the run's folder
+    saved = {k: os.environ.get(k) for k in (*CACHE_VARIABLES, *persistent, "TMPDIR")}
     saved_tempdir = tempfile.tempdir
     try:
         for var, sub in CACHE_VARIABLES.items():
             if not os.environ.get(var):
                 os.environ[var] = os.path.join(root, sub)
-        for var, value in NO_DISK_CACHE.items():
+        for var, value in persistent.items():
             os.environ.setdefault(var, value)
         tmp = os.path.join(root, "tmp")
         os.makedirs(tmp)

@@ -36,9 +36,9 @@ across each triangle.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import replace
-from functools import cached_property
 from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
@@ -47,6 +47,8 @@ from numpy.typing import NDArray
 from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.rendering import framing
+from brainpainter.rendering.lazy_parts import LazyParts, cortex_arrays
+from brainpainter.rendering.part_cache import cortex_kept
 from brainpainter.rendering.parts import (
     GLASS_COLOR,
     GLASS_SLOT,
@@ -56,12 +58,10 @@ from brainpainter.rendering.parts import (
     NEUTRAL_GREY,
     NEUTRAL_SLOT,
     PartGeometry,
-    build_part,
     check_slots,
     split_by_label,
 )
 from brainpainter.rendering.settings import RGB, SULC_LIGHTINGS, RenderSettings
-from brainpainter.rendering.sulc import convexity, template_sulc
 from brainpainter.rendering.tract_parts import tract_parts
 from brainpainter.rendering.views import View
 
@@ -204,7 +204,12 @@ def _flat_able(template: Template, meshes: Mapping[str, Any]) -> bool:
 
 
 class SceneGeometry:
-    """Every drawable part of a scene, built once from its template.
+    """Every drawable part of a scene, each built once from its template when a view first shows it.
+
+    Palette slots are numbered from the template's label names when the geometry is made; a
+    part's meshes are read and split by :meth:`visible` for the first view that shows it (a
+    lateral-left image never reads the right hemisphere, the structures or the glass), or by
+    :attr:`parts` (every part: exporters, the Cycles path).
 
     Parameters
     ----------
@@ -240,9 +245,9 @@ class SceneGeometry:
         keys: list[str] = []
         defaults: list[RGB] = [tuple(scene.medial_wall_color), NEUTRAL_GREY, GLASS_COLOR]  # type: ignore[list-item]
         slot_of: dict[str, int] = {}
-        parts: list[PartGeometry] = []
         per_vertex = getattr(scene, "coloring", "regions") == "vertices"
-        meshes = {hemi: self._cortex_mesh(scene, hemi, per_vertex) for hemi in HEMIS}
+        # a map's meshes now (their vertex counts number the slots); a region scene's when first drawn
+        meshes = {hemi: self._cortex_mesh(scene, hemi, per_vertex) for hemi in HEMIS} if per_vertex else {}
         self.vertex_slots: dict[str, tuple[int, int]] = {}
         self.source_vertex: dict[str, NDArray[Any]] = {}
         if per_vertex:
@@ -263,48 +268,40 @@ class SceneGeometry:
                 out[i] = slot_of[key]
             return out
 
-        self._part_slots: dict[str, frozenset[int]] = {}  # part name -> the region slots of its faces
-        def add(*args: Any, **kwargs: Any) -> None:  # args: name, kind, hemi, vertices, faces, face_slot, ...
-            part = build_part(*args, occlusion=settings.shading != "flat", **kwargs)
-            if part is not None:
-                parts.append(part)
-                self._part_slots[part.name] = frozenset(int(i) for i in np.unique(args[5]) if i >= first_key)
+        # Parts in drawing order, built or pending (built by the first visible() that shows it, or by
+        # .parts); slots are numbered here from the label names, the same whichever parts are built.
+        self._lazy = LazyParts(first_key, settings.shading != "flat", lambda: len(self.default_rgb))
+        self._part_slots = self._lazy.part_slots  # part name -> the region slots of its faces
+        if not per_vertex and scene.surface not in template.surfaces:
+            raise choice_error("surface", scene.surface, list(template.surfaces),
+                               f"Template {template.name!r} lacks it.")
+        for hemi in HEMIS:
+            names = [HEMI_PREFIX[hemi] + n for n in (meshes[hemi].label_names if per_vertex
+                                                     else template.cortex_names(scene.labels, hemi))]
+            label_slot = slots_for(names, MEDIAL_SLOT, hidden)
 
-        for hemi in HEMIS:
-            cm = meshes[hemi]
-            if scene.surface not in cm.vertices:
-                raise choice_error("surface", scene.surface, list(cm.vertices),
+            if per_vertex and scene.surface not in meshes[hemi].vertices:
+                raise choice_error("surface", scene.surface, list(meshes[hemi].vertices),
                                    f"Template {template.name!r} lacks it.")
-            names = [HEMI_PREFIX[hemi] + n for n in cm.label_names]
-            face_slot = slots_for(names, MEDIAL_SLOT, hidden)[np.asarray(cm.face_label, np.int64)]
-            verts = cm.vertices[scene.surface]
-            sulc = self._sulc(scene, hemi, cm, verts, with_sulc)
-            occlusion = getattr(cm, "occlusion", None)
-            outline = (self._borders(scene, hemi, cm, verts, face_slot, per_vertex)
-                       if settings.outline_width > 0 else None)
-            add(f"cortex-{hemi}", "cortex", hemi, verts, cm.faces, face_slot, sulc,
-                first_slot=self.vertex_slots[hemi][0] if per_vertex else None,
-                ao=None if occlusion is None else occlusion.get(scene.surface), outline=outline)
+            cortex = functools.partial(cortex_arrays, scene, hemi, label_slot, meshes.get(hemi), with_sulc,
+                                       self._cortex_mesh, self._borders)
+            self._lazy.later(f"cortex-{hemi}", "cortex", hemi, bool(set(names) - hidden), cortex,
+                             None if per_vertex else cortex_kept(scene, hemi, label_slot, with_sulc),
+                             first_slot=self.vertex_slots[hemi][0] if per_vertex else None)
         if template.manifest.get("subcortical"):
-            sub = template.subcortical()
-            face_slot = slots_for(list(sub.label_names), NEUTRAL_SLOT, hidden)[
-                np.asarray(sub.face_label, np.int64)]
-            add("subcortical", "subcortical", None, sub.vertices, sub.faces, face_slot,
-                np.zeros(len(sub.vertices), np.float32), ao=template.subcortical_occlusion(hidden))
+            self._lazy.later_subcortical(template, hidden, slots_for(list(template.subcortical_names()),
+                                                                     NEUTRAL_SLOT, hidden))
         if scene.tracts is not None:
-            parts += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for, scene.tract_radius)
+            self._lazy.entries += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for,
+                                              scene.tract_radius)
         for hemi in HEMIS:
-            if hemi not in template.manifest.get("glass", {}):
-                continue
-            verts, faces = template.glass(hemi)
-            add(f"glass-{hemi}", "glass", hemi, verts, faces, np.full(len(faces), GLASS_SLOT),
-                np.zeros(len(verts), np.float32))
+            if hemi in template.manifest.get("glass", {}):
+                self._lazy.later_glass(template, hemi)
         check_slots(len(defaults))
         #: how cortex views draw the cortex: "opaque", "glass" or "hidden" (``settings.cortex`` resolved)
-        self.cortex: str = cortex_mode(settings.cortex, parts)
+        self.cortex: str = cortex_mode(settings.cortex, self._lazy.built_parts())
         #: rotation from the template's coordinates to RAS (its anterior and superior axes)
         self.to_ras: NDArray[Any] = np.asarray(template.to_ras, dtype=float)
-        self.parts: tuple[PartGeometry, ...] = tuple(parts)
         self.keys: tuple[str, ...] = tuple(keys)
         self.slot_of = slot_of
         self.default_rgb = np.asarray(defaults, dtype=np.float32)
@@ -336,7 +333,7 @@ class SceneGeometry:
         check_slots(self.n_slots)
         return True
 
-    @cached_property
+    @functools.cached_property
     def flat_parts(self) -> tuple[PartGeometry, ...]:
         """The flat maps as parts of kind ``flat`` (``flat-lh``, ``flat-rh``), built when a flat view first
         draws them (:func:`brainpainter.rendering.flat_parts.flat_parts`)."""
@@ -350,20 +347,18 @@ class SceneGeometry:
         self.__dict__.pop("part_keys", None)  # computed again with the flat parts' regions
         return parts
 
-    @cached_property
+    @property
+    def parts(self) -> tuple[PartGeometry, ...]:
+        """Every part of the scene (all built now; :meth:`visible` builds only those a view shows)."""
+        return tuple(self._lazy.built(lambda kind, hemi: True))
+
+    @property
     def part_keys(self) -> dict[str, tuple[str, ...]]:
-        """Region keys each cortex, subcortical or glass part draws (its faces' regions), by part name."""
+        """Region keys each cortex, subcortical or glass part built so far draws (its faces' regions),
+        by part name (every part :meth:`visible` returned is built)."""
         key_of = {slot: key for key, slot in self.slot_of.items()}
         return {name: tuple(key_of[i] for i in sorted(slots) if i in key_of)
                 for name, slots in self._part_slots.items()}
-
-    @staticmethod
-    def _sulc(scene: SceneParts, hemi: str, cm: Any, verts: NDArray[Any], with_sulc: bool) -> NDArray[Any]:
-        """Sulcal depth per vertex of a cortex part: the template's, else convexity; zeros unused."""
-        if not with_sulc:
-            return np.zeros(len(verts), np.float32)
-        sulc = template_sulc(scene.template, scene.labels, hemi, cm)
-        return sulc if sulc is not None else convexity(cm.vertices.get("pial", verts), cm.faces)
 
     @staticmethod
     def _borders(scene: SceneParts, hemi: str, cm: Any, verts: NDArray[Any], face_slot: NDArray[Any],
@@ -449,23 +444,23 @@ class SceneGeometry:
         BrainPainterError
             If the view draws nothing (its parts are absent from the template or all hidden).
         """
-        if view.content == "flat":
-            parts = [p for p in self.flat_parts if framing.shows(view, p.kind, p.hemi, self.cortex)]
-        else:
-            parts = [p for p in self.parts if framing.shows(view, p.kind, p.hemi, self.cortex)]
-        kinds = {p.kind for p in self.parts}
-        if view.content == "flat":
-            pass  # the flat maps alone (all hidden: an error below)
+        def shown(kind: str, hemi: str | None) -> bool:
+            return framing.shows(view, kind, hemi, self.cortex)
+
+        kinds = self._lazy.kinds()
+        if view.content == "flat":  # the flat maps alone (all hidden: an error below)
+            parts = [p for p in self.flat_parts if shown(p.kind, p.hemi)]
         elif view.content == "cortex" and "cortex" not in kinds:
             # a brain of region meshes without an outer surface: its structures stand for it
-            parts = [p for p in self.parts
-                     if p.kind == "subcortical" or framing.shows(view, p.kind, p.hemi, self.cortex)]
-        elif view.content == "cortex" and self.cortex == "glass":
-            # the cortex as glass in its own colours (same name: a renderer's upload of it is reused)
-            parts = [replace(p, kind="glass") if p.kind == "cortex" else p for p in parts]
+            parts = self._lazy.built(lambda kind, hemi: kind == "subcortical" or shown(kind, hemi))
         elif view.content == "subcortical" and "subcortical" not in kinds:
             # ... and one without structures shows its surface (both hemispheres, no glass over it)
-            parts = [p for p in self.parts if p.kind == "cortex"]
+            parts = self._lazy.built(lambda kind, hemi: kind == "cortex")
+        else:
+            parts = self._lazy.built(shown)
+            if view.content == "cortex" and self.cortex == "glass":
+                # the cortex as glass in its own colours (same name: a renderer's upload of it is reused)
+                parts = [replace(p, kind="glass") if p.kind == "cortex" else p for p in parts]
         if not parts:
             raise BrainPainterError(
                 f"view {view.name!r} shows nothing: content={view.content!r}, hemis={list(view.hemis)}, "

@@ -249,6 +249,11 @@ class SerialRunner(Runner):
 
     painter: Any = None
 
+    def chunk_size(self, n_items: int) -> int:
+        """One image a chunk: nothing is spread, and a chunk's images are all held until it ends
+        (8 of 1200x900 were 35 MB of a run's peak memory)."""
+        return 1
+
     def _start(self) -> None:
         t0 = time.perf_counter()
         self.painter.load()

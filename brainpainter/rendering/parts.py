@@ -6,6 +6,7 @@ from these; the palette slots ``0, 1, 2`` are fixed (medial wall, neutral grey, 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -97,6 +98,18 @@ class PartGeometry:
     occlusion: NDArray[Any] | None = None
     outline: NDArray[Any] | None = None
     centrelines: Centrelines | None = None
+
+
+@dataclass(frozen=True)
+class PendingPart:
+    """A part not built yet: its name, kind and hemisphere, whether it has faces to draw (False: all
+    its regions are hidden, or it built to nothing) and how to build it (None when nothing is left)."""
+
+    name: str
+    kind: str
+    hemi: str | None
+    drawn: bool
+    build: Callable[[], PartGeometry | None]
 
 
 def split_by_label(vertices: NDArray[Any], faces: NDArray[Any], face_slot: NDArray[Any],

@@ -74,3 +74,12 @@ def template_sulc(template: Template, labels: str, hemi: str, cm: Any) -> NDArra
     if raw is None or len(raw) != len(cm.source_vertex):
         return None
     return _depth_0_1(np.asarray(raw, dtype=np.float64))  # FreeSurfer's sulc: sulci positive
+
+
+def part_sulc(template: Template, labels: str, hemi: str, cm: Any, verts: NDArray[Any],
+              with_sulc: bool) -> NDArray[Any]:
+    """Sulcal depth per vertex of a cortex part: the template's, else convexity; zeros when unused."""
+    if not with_sulc:
+        return np.zeros(len(verts), np.float32)
+    sulc = template_sulc(template, labels, hemi, cm)
+    return sulc if sulc is not None else convexity(cm.vertices.get("pial", verts), cm.faces)
