@@ -29,6 +29,10 @@ _POLE_TOLERANCE = 1e-6
 PART_KINDS = ("cortex", "subcortical", "glass", "tract")
 
 
+#: Kinds of parts that lie inside the cortex (tracts, a connectome's nodes and edges): drawn where tracts are.
+INSIDE = ("tract", "node", "edge")
+
+
 def shows(view: View, kind: str, hemi: str | None, cortex: str = "opaque") -> bool:
     """Whether `view` draws the part of this kind (and hemisphere).
 
@@ -43,7 +47,8 @@ def shows(view: View, kind: str, hemi: str | None, cortex: str = "opaque") -> bo
     Parameters
     ----------
     view : View
-    kind : {"cortex", "subcortical", "glass", "tract"}
+    kind : {"cortex", "subcortical", "glass", "tract", "node", "edge"}
+        Nodes and edges are drawn as tracts are.
     hemi : {"lh", "rh"} or None
         None for the subcortical part and for commissural tracts.
     cortex : {"opaque", "glass", "hidden"}
@@ -54,7 +59,7 @@ def shows(view: View, kind: str, hemi: str | None, cortex: str = "opaque") -> bo
     """
     if kind == "glass":
         return hemi in view.glass
-    if kind == "tract":
+    if kind in INSIDE:
         if view.content == "subcortical":
             return True
         return cortex != "opaque" and (hemi is None or hemi in view.hemis)

@@ -25,6 +25,11 @@ and ``tracts`` for commissural bundles): triangle tubes built here
 draws any opaque part.
 (:attr:`SceneGeometry.keys`).
 
+A connectome's nodes and edges are the parts ``nodes`` (kind ``node``: spheres) and
+``edges`` (kind ``edge``: cylinders), one slot per node (``node:i``) and per edge
+(``edge:k``) after the tracts' (:mod:`brainpainter.rendering.connectome_parts`); they
+are drawn where tracts are (:data:`brainpainter.rendering.framing.INSIDE`), as opaque parts.
+
 A scene coloured per vertex (``Scene.coloring == "vertices"``, a map) keeps
 one drawing path: its cortex parts are the template's stored meshes, not
 split by region, and every cortex vertex has a palette slot of its own
@@ -47,6 +52,7 @@ from numpy.typing import NDArray
 from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.rendering import framing
+from brainpainter.rendering.connectome_parts import connectome_parts
 from brainpainter.rendering.parts import (
     GLASS_COLOR,
     GLASS_SLOT,
@@ -67,6 +73,7 @@ from brainpainter.rendering.views import View
 
 if TYPE_CHECKING:
     from brainpainter.atlas.template import Template
+    from brainpainter.connectome.model import Connectome
     from brainpainter.tracts.model import Tracts
 
 
@@ -103,6 +110,8 @@ class SceneParts(Protocol):
     def tract_radius(self) -> float | None: ...
     @property
     def coloring(self) -> str: ...
+    @property
+    def connectome(self) -> Connectome | None: ...
 
 class Palette(Mapping[str, RGB]):
     """The colours of one image: a mapping region key -> sRGB, and the slot array renderers draw.
@@ -187,10 +196,12 @@ class VertexColors(Mapping[str, RGB]):
 
 
 def cortex_mode(setting: str, parts: list[PartGeometry]) -> str:
-    """``RenderSettings.cortex`` resolved: ``auto`` is ``glass`` when `parts` hold tracts, else ``opaque``."""
+    """``RenderSettings.cortex`` resolved: ``auto`` is ``glass`` when `parts` hold what lies inside the
+    cortex (tracts, a connectome's nodes and edges: :data:`~brainpainter.rendering.framing.INSIDE`),
+    else ``opaque``."""
     if setting != "auto":
         return setting
-    return "glass" if any(p.kind == "tract" for p in parts) else "opaque"
+    return "glass" if any(p.kind in framing.INSIDE for p in parts) else "opaque"
 
 
 class SceneGeometry:
@@ -223,8 +234,7 @@ class SceneGeometry:
         from brainpainter.atlas.model import HEMI_PREFIX
         from brainpainter.atlas.template import HEMIS
 
-        template, hidden = scene.template, frozenset(scene.hidden)
-        settings = scene.settings
+        template, hidden, settings = scene.template, frozenset(scene.hidden), scene.settings
         with_sulc = settings.shading != "flat" and settings.lighting in SULC_LIGHTINGS
         keys: list[str] = []
         defaults: list[RGB] = [tuple(scene.medial_wall_color), NEUTRAL_GREY, GLASS_COLOR]  # type: ignore[list-item]
@@ -283,6 +293,7 @@ class SceneGeometry:
                 np.zeros(len(sub.vertices), np.float32), ao=template.subcortical_occlusion(hidden))
         if scene.tracts is not None:
             parts += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for, scene.tract_radius)
+        parts += connectome_parts(getattr(scene, "connectome", None), slots_for)
         for hemi in HEMIS:
             if hemi not in template.manifest.get("glass", {}):
                 continue
