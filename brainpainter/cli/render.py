@@ -91,6 +91,7 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
 
     Several INPUTs (e.g. lh and rh aparcstats2table files) are merged by image name.
     Per-vertex maps (thickness, .mgh, .gii, ...) are given with --lh FILE --rh FILE (docs/maps.md).
+    A connectivity matrix (--connectome FILE) is drawn as nodes and edges inside the glass cortex.
     """
     from brainpainter.rendering.run import render as run
 
@@ -115,6 +116,10 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
         f"({rendered} row(s){of}; {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
         f"{len(s['unmatched_columns'])} unmatched column(s))"
     )
+    connectome = result.manifest.get("connectome")
+    if connectome:
+        click.echo(f"connectome: {connectome['n_nodes']} node(s), {connectome['n_edges']} edge(s) drawn"
+                   + (" (directed)" if connectome["directed"] else ""))
     tracts = result.manifest.get("tracts")
     if tracts:
         drawn = sum(b["drawn"] for b in tracts["bundles"])

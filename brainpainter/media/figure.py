@@ -184,6 +184,8 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     chosen = select_rows(table.images, rows)
     painter = run.painter()
     nan, missing = swatches_needed(table, chosen, run.views, painter.scene.geometry)
+    if run.layers[0].kind == "edges":  # a connectome alone: its first bar is the edges', no region swatches
+        nan = missing = False
     plan = run.items(chosen)
     background = run.settings.background
     # the output folder is locked from before the first render until the figure is published
