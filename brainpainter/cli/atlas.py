@@ -79,12 +79,15 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, 
         if not as_json:
             click.echo(f"reference image of {a.name} written to {image}")
             return
+    from brainpainter.connectome.order import describe_order, node_order
+
     if as_json:
-        echo_json(a.to_dict())
+        echo_json({**a.to_dict(), "connectome_order": list(node_order(a)[1])})
         return
     click.echo(f"{a.name}: {a.title}")
     if a.description:
         click.echo(f"  {a.description}")
+    click.echo(f"  Node order: {describe_order(a)}.")
     for hemi in ("lh", "rh"):
         regs = a.cortical(hemi)
         click.echo(f"\ncortical, {'left' if hemi == 'lh' else 'right'} hemisphere ({len(regs)}):")
