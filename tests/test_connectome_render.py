@@ -107,3 +107,124 @@ def test_bar_two_precentral_nodes_one_edge_seen_from_above(tmp_path):
     assert edge.sum() > 100
     cols = np.nonzero(edge)[1]
     assert cols.min() < img.shape[1] / 2 < cols.max()  # it runs across the midline
+
+
+# -- the command ---------------------------------------------------------------------------------
+TINY_DK = ["Left-insula", "Left-precuneus", "Left-superiorfrontal", "Right-insula", "Right-precuneus",
+           "Right-superiorfrontal"]
+
+
+def write_matrix(path, weights: np.ndarray, names: list[str]) -> str:
+    rows = [",".join(["", *names])] + [",".join([n, *("" if np.isnan(v) else repr(float(v)) for v in row)])
+                                       for n, row in zip(names, weights, strict=True)]
+    path.write_text("\n".join(rows) + "\n")
+    return str(path)
+
+
+def six_node_matrix(tmp_path) -> str:
+    """The tiny template's six DK regions, every pair an edge of a distinct |weight| (15 edges)."""
+    rng = np.random.default_rng(3)
+    w = np.zeros((6, 6))
+    iu = np.triu_indices(6, 1)
+    w[iu] = rng.permutation(np.arange(1, 16)) / 15 * rng.choice([-1, 1], 15)
+    return write_matrix(tmp_path / "m.csv", w + w.T, TINY_DK)
+
+
+@pytest.fixture
+def cli(tmp_path, tiny, capsys):
+    """``brainpainter render`` with the stand-in on the tiny template: (exit code, stdout and stderr)."""
+    from brainpainter.cli.main import main
+    from brainpainter.testing import stand_in
+
+    def run(*args: str) -> tuple[int, str]:
+        with stand_in() as renderer, pytest.raises(SystemExit) as exit_:
+            main(["render", "--atlas", "dk", "--template", str(tiny), "--renderer", renderer, "--size",
+                  "80x60", "-q", "--out", str(tmp_path / "out"), *args])
+        out = capsys.readouterr()
+        return exit_.value.code or 0, out.out + out.err
+
+    return run
+
+
+@pytest.mark.parametrize(("args", "n_edges"), [((), 15), (("--top-edges", "4"), 4),
+                                               (("--edge-threshold", "80%"), 3),
+                                               (("--edge-threshold", "0.5"), 8),
+                                               (("--edges-of", "left-insula"), 5),
+                                               (("--edges-of", "Left-insula", "--top-edges", "2"), 2)])
+def test_the_edges_drawn_are_counted_in_the_manifest(tmp_path, cli, args, n_edges):
+    code, output = cli("--connectome", six_node_matrix(tmp_path), *args)
+    assert code == 0, output
+    manifest = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    assert manifest["connectome"]["n_edges"] == n_edges
+    assert [n["name"] for n in manifest["connectome"]["nodes"]] == TINY_DK
+    assert f"connectome: 6 node(s), {n_edges} edge(s) drawn" in output
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["m_dorsal.png", "m_lateral-left.png",
+                                                                   "manifest.json"]
+
+
+def test_node_values_and_categories_files_give_the_node_layer(tmp_path, cli):
+    (tmp_path / "values.csv").write_text("".join(f"{k}\n" for k in range(6)))
+    nets = "".join(f"{'DMN' if 'precuneus' in n else 'other'}\n" for n in TINY_DK)
+    (tmp_path / "nets.csv").write_text(nets)
+    code, output = cli("--connectome", six_node_matrix(tmp_path), "--node-values",
+                       str(tmp_path / "values.csv"), "--node-categories", str(tmp_path / "nets.csv"),
+                       "--nodes-label", "network")
+    assert code == 0, output
+    manifest = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    nodes = manifest["connectome"]["nodes"]
+    assert [n["value"] for n in nodes] == [0, 1, 2, 3, 4, 5]
+    assert [n["category"] for n in nodes][:2] == ["other", "DMN"]
+    assert [(la["kind"], la["label"]) for la in manifest["settings"]["layers"]] == [("edges", "m.csv"),
+                                                                                   ("nodes", "network")]
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (("--connectome", "{m34}"), "rows and columns must be the same nodes"),
+    (("--connectome", "{m6}", "--nodes-cmap", "magma"), "--nodes-cmap colours node values"),
+    (("--connectome", "{m6}", "--edge-threshold", "95 percent"), "the edge threshold must be a number"),
+    (("--connectome", "{m6}", "--edges-of", "Left-insular"), "did you mean 'Left-insula'"),
+    (("{table}", "--top-edges", "3"), "no --connectome was given"),
+])
+def test_bad_connectome_input_is_one_line_exit_2_nothing_written(tmp_path, cli, args, message):
+    m34 = tmp_path / "m34.csv"
+    m34.write_text(",a,b,c,d\nx,0,1,2,3\ny,1,0,1,2\nz,2,1,0,1\n")
+    (tmp_path / "t.csv").write_text("Left-insula\n1\n")
+    subs = {"{m34}": str(m34), "{m6}": six_node_matrix(tmp_path), "{table}": str(tmp_path / "t.csv")}
+    code, output = cli(*(subs.get(a, a) for a in args))
+    assert code == 2, output
+    lines = [line for line in output.splitlines() if line.strip()]
+    assert len(lines) == 1 and message in lines[0] and "Traceback" not in output, output
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.render
+@pytest.mark.integration
+def test_bar_the_command_draws_two_precentral_nodes_and_their_edge(tmp_path):
+    """The first bar through the command: DK names, centroids from the atlas, node values from a file."""
+    from click.testing import CliRunner
+    from PIL import Image
+
+    from brainpainter.cli.main import cli as command
+
+    names = ["Left-precentral", "Right-precentral"]
+    matrix = write_matrix(tmp_path / "pair.csv", np.array([[0.0, -0.7], [-0.7, 0.0]]), names)
+    (tmp_path / "v.csv").write_text("1\n4\n")
+    result = CliRunner().invoke(command, [
+        "render", "--connectome", matrix, "--atlas", "dk", "--node-values", str(tmp_path / "v.csv"),
+        "--views", "dorsal", "--size", "480x400", "--shading", "flat", "--quality", "fast",
+        "--glass-opacity", "0", "-q", "--out", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    img = np.asarray(Image.open(tmp_path / "out" / "pair_dorsal.png").convert("RGBA"))
+    manifest = json.loads((tmp_path / "out" / "manifest.json").read_text())
+    scales = {la["kind"]: la["scale"] for la in manifest["settings"]["layers"]}
+    from brainpainter.color.scale import make_scale
+
+    edge_rgb = make_scale(cmap="RdBu_r", vmin=-0.7, vmax=0.7, center=0.0)(np.array([-0.7]))[0]
+    assert (scales["edges"]["vmin"], scales["edges"]["vmax"]) == (-0.7, 0.7)
+    node = make_scale(cmap="viridis", vmin=scales["nodes"]["vmin"], vmax=scales["nodes"]["vmax"])
+    small, large = (_near(img, node(np.array([v]))[0]) for v in (1.0, 4.0))
+    edge = _near(img, edge_rgb)
+    assert edge.sum() > 100 and small.sum() > 20 and large.sum() > 3 * small.sum()
+    assert np.nonzero(small)[1].mean() < img.shape[1] / 2 < np.nonzero(large)[1].mean()
+    positions = [n["position"] for n in manifest["connectome"]["nodes"]]
+    assert positions[0][0] < -20 and positions[1][0] > 20  # the atlas's centroids, left and right

@@ -9,14 +9,16 @@ export) are made from these fields (:mod:`brainpainter.rendering.options`);
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypedDict
 
+from brainpainter.atlas.model import SPACES
+from brainpainter.connectome.edges import parse_threshold, select_edges
 from brainpainter.connectome.model import Connectome
-from brainpainter.errors import BrainPainterError
+from brainpainter.errors import BrainPainterError, choice_error
 
 if TYPE_CHECKING:
     from brainpainter.atlas.model import Atlas
+    from brainpainter.atlas.template import Template
 
 
 class ConnectomeKwargs(TypedDict, total=False):
@@ -30,6 +32,7 @@ class ConnectomeKwargs(TypedDict, total=False):
     edge_threshold: str | float | None
     top_edges: int | None
     edges_of: str | None
+    nodes_space: str
 
 
 @dataclass(frozen=True)
@@ -56,6 +59,8 @@ class ConnectomeOptions:
         The K strongest edges (by ``|weight|``) kept.
     edges_of : str, optional
         Only the edges of this node.
+    nodes_space : str
+        Space of the nodes file's coordinates (MNI152 is mapped into the template as tracts are).
     """
 
     connectome: Any = field(default=None, metadata={
@@ -65,9 +70,11 @@ class ConnectomeOptions:
         "help": "Node coordinates (CSV name,x,y,z in the template's space, or BrainNet Viewer .node). "
                 "Default: the centroids of the atlas's regions, in the matrix's order."})
     node_values: Any = field(default=None, metadata={
-        "help": "A value per node (CSV name,value, or one column): sphere size (2-6 mm) and colour."})
+        "help": "A value per node: a file of one per node in the matrix's order, or a column of --nodes; "
+                "drawn as sphere size (2-6 mm) and colour."})
     node_categories: Any = field(default=None, metadata={
-        "help": "A network or module per node (CSV name,category): categorical colours with a key."})
+        "help": "A network or module per node: a file of one per node in the matrix's order, or a column "
+                "of --nodes; drawn in categorical colours with a key."})
     directed: bool = field(default=False, metadata={
         "help": "The matrix is directed (row = source); default: undirected, its upper triangle drawn."})
     edge_threshold: str | float | None = field(default=None, metadata={
@@ -77,6 +84,8 @@ class ConnectomeOptions:
         "help": "Only the K strongest edges (by |weight|) are drawn."})
     edges_of: str | None = field(default=None, metadata={
         "help": "Only the edges of this node (Left-precentral) are drawn."})
+    nodes_space: str = field(default="template", metadata={
+        "choices": SPACES, "help": "Space of the --nodes coordinates (MNI152 is mapped to the template)."})
 
     def __post_init__(self) -> None:
         if self.connectome is None:
@@ -86,14 +95,26 @@ class ConnectomeOptions:
             if given:
                 raise BrainPainterError(f"{given[0]} describes a connectome's nodes or edges, but no "
                                         "--connectome was given; give the matrix with --connectome FILE.")
+        if self.nodes_space not in SPACES:
+            raise choice_error("--nodes-space", self.nodes_space, SPACES)
+        if self.edge_threshold is not None:
+            parse_threshold(self.edge_threshold)  # a bad threshold fails before the matrix is read
+        if self.top_edges is not None and (isinstance(self.top_edges, bool) or int(self.top_edges) < 0
+                                           or int(self.top_edges) != self.top_edges):
+            raise BrainPainterError(f"--top-edges must be a whole number >= 0; {self.top_edges!r} was given.")
 
     @property
     def given(self) -> bool:
         """Whether a connectome is drawn."""
         return self.connectome is not None
 
-    def load(self, atlas: Atlas | None) -> Connectome | None:
-        """The connectome to draw (None: none given): its nodes placed in `atlas`'s template, edges chosen.
+    def load(self, atlas: Atlas | None, template: Template | str = "fsaverage",
+             surface: str = "pial") -> Connectome | None:
+        """The connectome to draw (None: none given), its nodes placed in `template`, its edges chosen.
+
+        A matrix is read by :func:`~brainpainter.connectome.read.read_connectome` (nodes at the
+        centroids of `atlas`'s regions on `surface`, or from ``nodes``); the edges drawn are chosen by
+        :func:`~brainpainter.connectome.edges.select_edges`.
 
         Raises
         ------
@@ -103,7 +124,20 @@ class ConnectomeOptions:
         if self.connectome is None:
             return None
         if isinstance(self.connectome, Connectome):
-            return self.connectome
-        source = self.connectome if isinstance(self.connectome, str | Path) else "the matrix given"
-        raise BrainPainterError(f"reading a connectivity matrix from {source} needs "
-                                "brainpainter.connectome.read (issue 36); give a Connectome object.")
+            given = [name for name in ("nodes", "node_values", "node_categories")
+                     if getattr(self, name) is not None]
+            if given:
+                raise BrainPainterError(f"{given[0]}= describes the nodes of a matrix read from a file; a "
+                                        "Connectome given carries its own (Connectome(node_values=...)).")
+            connectome = self.connectome
+        else:
+            from brainpainter.connectome.read import read_connectome
+
+            connectome = read_connectome(
+                self.connectome, atlas, nodes=self.nodes, node_values=self.node_values,
+                node_categories=self.node_categories, directed=bool(self.directed), space=self.nodes_space,
+                template=template, surface=surface)
+        if self.edge_threshold is None and self.top_edges is None and self.edges_of is None:
+            return connectome
+        return select_edges(connectome, threshold=self.edge_threshold, top=self.top_edges,
+                            edges_of=self.edges_of)

@@ -271,7 +271,7 @@ def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
     """The scene of a run and the meshes of its row `i`: a map's cortex coloured per vertex, or
     the regions, then the tracts' tubes."""
     from brainpainter.rendering.painter import load_scene, region_colors
-    from brainpainter.rendering.run import tract_colors
+    from brainpainter.rendering.tract_run import tract_colors
 
     opts = run.options.scene
     if isinstance(run, MapRun):

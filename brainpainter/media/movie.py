@@ -58,7 +58,9 @@ from brainpainter.media.timeline import (
 from brainpainter.rendering.options import Options, RenderKwargs, take
 from brainpainter.rendering.painter import region_colors
 from brainpainter.rendering.parallel import Item, Runner
-from brainpainter.rendering.run import Run, make_runner, prepare_run, tract_colors
+from brainpainter.rendering.run import Run, make_runner, prepare_run
+from brainpainter.rendering.connectome_layers import connectome_colors
+from brainpainter.rendering.tract_run import tract_colors
 from brainpainter.rendering.views import View
 from brainpainter.table.rows import select_rows
 
@@ -372,6 +374,9 @@ class MovieFrames:
                     tvals = interpolate(np.array(list(ra.values())), np.array(list(rb.values())), weight)
                     colors.update(tract_colors(dict(zip(ra, tvals.tolist(), strict=True)),
                                                  self.run.scale_of("tracts")))
+                connectome = getattr(self.run, "connectome", None)
+                if connectome is not None:  # the same nodes and edges in every frame
+                    colors.update(connectome_colors(connectome, self.run.layers))
             label = names[a] if a == b else f"{names[a]} {ARROW} {names[b]} ({weight:.3f})"
             yield [Item(colors, view, label=label) for view in state_views]
 

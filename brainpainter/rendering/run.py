@@ -168,7 +168,7 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
                 raise
             raise NoRegionColumnError(f"{exc} Nor does any column name a bundle of --tracts "
                                       f"{sorted(bundle_names(spec))[:6]}.") from None
-    connectome = options.connectome.load(table.atlas)
+    connectome = options.connectome.load(table.atlas, options.scene.template, options.scene.surface)
     if views is None:
         view_list = parse_views(CONNECTOME_VIEWS if only_connectome
                                 else default_views(table.atlas, only_tracts))
