@@ -228,3 +228,19 @@ def test_bar_the_command_draws_two_precentral_nodes_and_their_edge(tmp_path):
     assert np.nonzero(small)[1].mean() < img.shape[1] / 2 < np.nonzero(large)[1].mean()
     positions = [n["position"] for n in manifest["connectome"]["nodes"]]
     assert positions[0][0] < -20 and positions[1][0] > 20  # the atlas's centroids, left and right
+
+
+def test_a_figure_has_a_bar_per_layer_and_a_node_size_legend(tiny):
+    from brainpainter.testing import stand_in
+
+    with stand_in() as renderer:
+        fig = brainpainter.figure(None, connectome=tiny_connectome(), template=str(tiny), renderer=renderer,
+                                  width=80, height=60, progress=False)
+    edges_ax, nodes_ax = fig.colorbar_axes
+    assert edges_ax.xaxis.get_label().get_text() == "edge weight"
+    assert nodes_ax.xaxis.get_label().get_text() == "node value"
+    assert not edges_ax.collections  # the edges' bar has no circles
+    (circles,) = nodes_ax.collections
+    sizes = circles.get_sizes()
+    # the smallest, middle and largest value, their diameters as the spheres' radii (2, 4, 6 mm)
+    np.testing.assert_allclose(np.sqrt(sizes) / np.sqrt(sizes[-1]), [2 / 6, 4 / 6, 1.0])

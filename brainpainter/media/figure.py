@@ -172,7 +172,8 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     from tqdm.auto import tqdm
 
     from brainpainter.io.transaction import FileTransaction
-    from brainpainter.media.colorbar import resolve_ticks
+    from brainpainter.media.colorbar import resolve_ticks, text_color
+    from brainpainter.media.node_sizes import draw_node_sizes
 
     kwargs: dict[str, Any] = dict(options)
     figure_opts = FigureOptions(**take(kwargs, FigureOptions))
@@ -204,6 +205,11 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
         layout = compose_figure(images, [table.images[i] for i in chosen], [v.name for v in run.views],
                                 run.scale, figure_opts, nan=nan, missing=missing, background=background,
                                 more_bars=more)
+        if run.connectome is not None and run.connectome.node_values is not None:  # the spheres' sizes
+            kinds = [layer.kind for layer in colorbar_layers(run.layers)]
+            if "nodes" in kinds:
+                draw_node_sizes(layout.colorbar_axes[kinds.index("nodes")], run.scale_of("nodes"),
+                                run.connectome.node_values, text_color(background), figure_opts.font_size)
         if tx is not None and path is not None:
             tx.tmp.write_bytes(figure_bytes(layout.figure, path, figure_opts.dpi,
                                             transparent=background is None))

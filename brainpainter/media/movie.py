@@ -55,11 +55,11 @@ from brainpainter.media.timeline import (
     plan_frames,
     read_times,
 )
+from brainpainter.rendering.connectome_layers import connectome_colors
 from brainpainter.rendering.options import Options, RenderKwargs, take
 from brainpainter.rendering.painter import region_colors
 from brainpainter.rendering.parallel import Item, Runner
 from brainpainter.rendering.run import Run, make_runner, prepare_run
-from brainpainter.rendering.connectome_layers import connectome_colors
 from brainpainter.rendering.tract_run import tract_colors
 from brainpainter.rendering.views import View
 from brainpainter.table.rows import select_rows
