@@ -16,9 +16,12 @@ from numpy.typing import NDArray
 from brainpainter.rendering.connectome_parts import NODE_RADIUS, node_radii
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from matplotlib.axes import Axes
 
     from brainpainter.color.scale import ColourScale
+    from brainpainter.rendering.run import Run
 
 #: Diameter of the largest circle, points.
 LARGEST_PT = 8.0
@@ -56,3 +59,16 @@ def draw_node_sizes(ax: Axes, scale: ColourScale, values: NDArray[Any], color: A
             ax.annotate(f"{v:.3g}", (x, y), xycoords=transform, xytext=(d / 2 + 2, 0),
                         textcoords="offset points", va="center", fontsize=fontsize - 2, color=color)
     return True
+
+
+def node_size_legend(run: Run, bar_axes: Sequence[Axes], color: Any, fontsize: float) -> bool:
+    """The node-size legend over the nodes' bar of a figure of `run` (`bar_axes`: one per colour bar),
+    where its connectome's nodes have values; False where there is none."""
+    from brainpainter.rendering.layers import colorbar_layers
+
+    connectome = getattr(run, "connectome", None)
+    kinds = [layer.kind for layer in colorbar_layers(run.layers)]
+    if connectome is None or connectome.node_values is None or "nodes" not in kinds:
+        return False
+    return draw_node_sizes(bar_axes[kinds.index("nodes")], run.scale_of("nodes"), connectome.node_values,
+                           color, fontsize)
