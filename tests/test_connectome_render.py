@@ -143,6 +143,7 @@ def cli(tmp_path, tiny, capsys):
         out = capsys.readouterr()
         return exit_.value.code or 0, out.out + out.err
 
+    run.tiny = tiny  # type: ignore[attr-defined]
     return run
 
 
@@ -244,3 +245,38 @@ def test_a_figure_has_a_bar_per_layer_and_a_node_size_legend(tiny):
     sizes = circles.get_sizes()
     # the smallest, middle and largest value, their diameters as the spheres' radii (2, 4, 6 mm)
     np.testing.assert_allclose(np.sqrt(sizes) / np.sqrt(sizes[-1]), [2 / 6, 4 / 6, 1.0])
+
+
+@pytest.mark.render
+def test_brainnet_node_and_edge_files_draw_the_same_picture_as_a_csv_with_coordinates(tmp_path, cli):
+    """Issue 36's bar: BrainNet Viewer's .node/.edge pair and the same data as a named CSV matrix with
+    a coordinates file, node values and categories give the same pixels."""
+    from PIL import Image
+
+    from brainpainter.cli.main import main
+
+    xyz = np.array([[-35.0, 10.0, 20.0], [-50.0, -20.0, 0.0], [35.0, 10.0, 20.0], [50.0, -20.0, 0.0]])
+    names, sizes, modules = ["a", "b", "c", "d"], [1.0, 2.0, 3.0, 4.0], [1, 1, 2, 2]
+    w = np.array([[0, 0.5, -0.3, 0], [0.5, 0, 0, 0.8], [-0.3, 0, 0, 0.2], [0, 0.8, 0.2, 0]])
+    (tmp_path / "net.node").write_text("".join(f"{x:g} {y:g} {z:g} {m} {s:g} {n}\n" for (x, y, z), m, s, n
+                                               in zip(xyz, modules, sizes, names, strict=True)))
+    (tmp_path / "net.edge").write_text("".join(" ".join(f"{v:g}" for v in row) + "\n" for row in w))
+    rows = [f"{n},{x:g},{y:g},{z:g}\n" for n, (x, y, z) in zip(names, xyz, strict=True)]
+    (tmp_path / "xyz.csv").write_text("name,x,y,z\n" + "".join(rows))
+    (tmp_path / "size.txt").write_text("\n".join(f"{s:g}" for s in sizes) + "\n")
+    (tmp_path / "module.txt").write_text("\n".join(str(m) for m in modules) + "\n")
+    matrix = write_matrix(tmp_path / "net.csv", w, names)
+    images = []
+    brainnet = ["--connectome", str(tmp_path / "net.edge"), "--nodes", str(tmp_path / "net.node")]
+    csv = ["--connectome", matrix, "--nodes", str(tmp_path / "xyz.csv"), "--node-values",
+           str(tmp_path / "size.txt"), "--node-categories", str(tmp_path / "module.txt")]
+    for k, args in enumerate((brainnet, csv)):
+        with pytest.raises(SystemExit) as exit_:
+            main(["render", *args, "--template", str(cli.tiny), "--views", "dorsal", "--size", "240x180",
+                  "-q", "--out", str(tmp_path / f"out{k}")])
+        assert not exit_.value.code
+        images.append(np.asarray(Image.open(tmp_path / f"out{k}" / "net_dorsal.png")))
+        manifest = json.loads((tmp_path / f"out{k}" / "manifest.json").read_text())
+        assert manifest["connectome"]["n_edges"] == 4
+    assert (images[0] != 255).any()
+    np.testing.assert_array_equal(images[0], images[1])

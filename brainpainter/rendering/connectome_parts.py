@@ -32,8 +32,9 @@ NODE_RADIUS = (2.0, 6.0)
 PLAIN_NODE_RADIUS = 3.0
 #: Edge radius at weight 0 and at the largest |weight|, millimetres.
 EDGE_RADIUS = (0.3, 1.5)
-#: Subdivisions of the nodes' icosphere (2: 162 vertices, 320 triangles) and sides of the edges' cylinder.
-SPHERE_SUBDIVISIONS = 2
+#: Subdivisions of the nodes' icosphere (2: 162 vertices, 320 triangles; 1: 42, 80), by the most nodes
+#: drawn so (level of detail: 1,000 nodes of 320 triangles are 320,000 triangles, most of a cortex).
+SPHERE_SUBDIVISIONS = ((500, 2), (None, 1))
 CYLINDER_SIDES = 12
 #: Colour of nodes without a value or category (sRGB).
 NODE_COLOR: RGB = (0.25, 0.25, 0.30)
@@ -78,12 +79,17 @@ def edge_radii(weights: NDArray[Any]) -> NDArray[np.float64]:
     return radii
 
 
+def sphere_subdivisions(n: int) -> int:
+    """Subdivisions of the icosphere of `n` nodes (:data:`SPHERE_SUBDIVISIONS`)."""
+    return next(k for most, k in SPHERE_SUBDIVISIONS if most is None or n <= most)
+
+
 @cache
-def unit_sphere() -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+def unit_sphere(subdivisions: int = 2) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """The icosphere every node is drawn with: vertices (unit length, also the normals) and triangles."""
     import trimesh
 
-    mesh = trimesh.creation.icosphere(subdivisions=SPHERE_SUBDIVISIONS)
+    mesh = trimesh.creation.icosphere(subdivisions=subdivisions)
     vertices = np.asarray(mesh.vertices, dtype=float)
     return vertices / np.linalg.norm(vertices, axis=1, keepdims=True), np.asarray(mesh.faces, np.int64)
 
@@ -124,11 +130,11 @@ def sphere_mesh(centres: NDArray[Any], radii: NDArray[Any], slots: NDArray[Any])
 
     Returns
     -------
-    vertices, normals : ndarray of float32, shape (n * 162, 3)
-    triangles : ndarray of uint32, shape (n * 320, 3)
+    vertices, normals : ndarray of float32, shape (n * 162, 3) (42 for more than 500 nodes)
+    triangles : ndarray of uint32, shape (n * 320, 3) (80)
     palette_index : ndarray of int32, shape (n * 162,)
     """
-    unit, triangles = unit_sphere()
+    unit, triangles = unit_sphere(sphere_subdivisions(len(centres)))
     centres = np.asarray(centres, dtype=float)
     vertices = centres[:, None, :] + np.asarray(radii, dtype=float)[:, None, None] * unit[None]
     return _instances(unit, triangles, vertices, np.broadcast_to(unit, vertices.shape), slots)
