@@ -280,3 +280,30 @@ def test_brainnet_node_and_edge_files_draw_the_same_picture_as_a_csv_with_coordi
         assert manifest["connectome"]["n_edges"] == 4
     assert (images[0] != 255).any()
     np.testing.assert_array_equal(images[0], images[1])
+
+
+def test_a_connectome_travels_to_jobs_workers(tmp_path, tiny):
+    """``--jobs``: the workers' painters are built from the pickled PainterSpec, the connectome in it."""
+    from brainpainter.testing import stand_in
+
+    table = tmp_path / "t.csv"
+    table.write_text("Image-name-unique,Left-insula,Right-insula\n" + "".join(f"S{i},{i},{3 - i}\n"
+                                                                              for i in range(4)))
+    kw = {"template": str(tiny), "views": "dorsal", "width": 80, "height": 60, "progress": False}
+    with stand_in() as renderer:
+        serial = brainpainter.render(table, "dk", out=tmp_path / "serial", renderer=renderer,
+                                     connectome=tiny_connectome(), **kw)
+        jobs = brainpainter.render(table, "dk", out=tmp_path / "jobs", renderer=renderer, jobs=2,
+                                   connectome=tiny_connectome(), **kw)
+        plain = brainpainter.render(table, "dk", renderer=renderer, cortex="glass", **kw)
+    assert jobs.workers["backend"] == "LocalRunner"
+    assert jobs.manifest["connectome"] == serial.manifest["connectome"]
+    for path in serial.files:
+        assert (tmp_path / "jobs" / path.name).read_bytes() == path.read_bytes()
+    # the workers drew the nodes and the edge (the stand-in: a stripe each in their colours)
+    from PIL import Image
+
+    with Image.open(tmp_path / "jobs" / "S1_dorsal.png") as png:
+        drawn = np.asarray(png)
+    edge = serial.layers[1].scale(np.array([0.8]))[0]
+    assert _near(drawn, edge, 1).any() and not _near(plain.images[("S1", "dorsal")], edge, 1).any()
