@@ -307,3 +307,21 @@ def test_a_connectome_travels_to_jobs_workers(tmp_path, tiny):
         drawn = np.asarray(png)
     edge = serial.layers[1].scale(np.array([0.8]))[0]
     assert _near(drawn, edge, 1).any() and not _near(plain.images[("S1", "dorsal")], edge, 1).any()
+
+
+def test_the_export_names_each_node_and_edge_with_its_value_for_the_tooltip(tmp_path, tiny):
+    """GLB/HTML: a mesh per node (its name, its value) and per edge ('a – b', its weight), part
+    'connectome'; the page draws the cortex as glass over it."""
+    import struct
+
+    c = tiny_connectome()
+    glb = brainpainter.export(None, tmp_path / "c.glb", connectome=c, template=str(tiny)).read_bytes()
+    doc = json.loads(glb[20:20 + struct.unpack("<I", glb[12:16])[0]])
+    extras = {node["name"]: node["extras"] for node in doc["nodes"] if node["extras"]["part"] == "connectome"}
+    assert {name: (e["name"], e["value"]) for name, e in extras.items()} == {
+        "left": ("left", "1"), "right": ("right", "4"), "left \u2013 right": ("left \u2013 right", "0.8")}
+    page = brainpainter.export(None, tmp_path / "c.html", connectome=c, template=str(tiny)).read_text()
+    tag = 'id="brainpainter-config" type="application/json">'
+    config = json.loads(page.split(tag)[1].split("</script>")[0])
+    assert config["parts"][-1] == "connectome" and config["glass"] == ["lh", "rh"]
+    assert 'data-part="connectome"' in page
