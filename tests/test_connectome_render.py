@@ -159,6 +159,7 @@ def test_the_edges_drawn_are_counted_in_the_manifest(tmp_path, cli, args, n_edge
     assert manifest["connectome"]["n_edges"] == n_edges
     assert [n["name"] for n in manifest["connectome"]["nodes"]] == TINY_DK
     assert f"connectome: 6 node(s), {n_edges} edge(s) drawn" in output
+    assert "input:" not in output and "regions matched" not in output  # no table to report
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["m_dorsal.png", "m_lateral-left.png",
                                                                    "manifest.json"]
 

@@ -108,15 +108,18 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
         echo_scale(result.scale, result.layers)
         return
     s = result.manifest["input"]
-    echo_input(s)
-    rendered = len({f["row"] for f in result.manifest["files"]})  # --rows may choose some of the rows
-    of = f" of {s['n_images']}" if rendered != s["n_images"] else ""
-    click.echo(
-        f"{len(result.files)} image(s) written to {out} "
-        f"({rendered} row(s){of}; {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
-        f"{len(s['unmatched_columns'])} unmatched column(s))"
-    )
     connectome = result.manifest.get("connectome")
+    rendered = len({f["row"] for f in result.manifest["files"]})  # --rows may choose some of the rows
+    if connectome and not inputs:  # a connectome alone: no table to report
+        click.echo(f"{len(result.files)} image(s) written to {out}")
+    else:
+        echo_input(s)
+        of = f" of {s['n_images']}" if rendered != s["n_images"] else ""
+        click.echo(
+            f"{len(result.files)} image(s) written to {out} "
+            f"({rendered} row(s){of}; {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
+            f"{len(s['unmatched_columns'])} unmatched column(s))"
+        )
     if connectome:
         click.echo(f"connectome: {connectome['n_nodes']} node(s), {connectome['n_edges']} edge(s) drawn"
                    + (" (directed)" if connectome["directed"] else ""))
