@@ -326,3 +326,26 @@ def test_the_export_names_each_node_and_edge_with_its_value_for_the_tooltip(tmp_
     config = json.loads(page.split(tag)[1].split("</script>")[0])
     assert config["parts"][-1] == "connectome" and config["glass"] == ["lh", "rh"]
     assert 'data-part="connectome"' in page
+
+
+@pytest.mark.render
+@pytest.mark.integration
+def test_a_connectome_inside_a_map_drawn_as_glass(tmp_path):
+    """A map (--lh/--rh) with a connectome: the map on the glass cortex, the nodes and edge inside it,
+    the map's own scale and opacity kept, the connectome's two layers after it."""
+    from PIL import Image
+
+    rng = np.random.default_rng(0)
+    maps = {"lh": rng.uniform(1.5, 4, 10242), "rh": rng.uniform(1.5, 4, 10242)}
+    kw = {"views": "dorsal", "width": 400, "height": 320, "progress": False}
+    with_c = brainpainter.render(maps, connectome=precentral_pair(), map_alpha=1.0, **kw)
+    alone = brainpainter.render(maps, cortex="glass", **kw)
+    assert [layer.kind for layer in with_c.layers] == ["map", "edges", "nodes"]
+    assert with_c.layers[0].scale.to_dict() == alone.layers[0].scale.to_dict()
+    assert with_c.manifest["connectome"]["n_edges"] == 1
+    (key,) = with_c.images
+    img = with_c.images[key]
+    Image.fromarray(img).save(tmp_path / "map_connectome.png")
+    # the large node: its colour on the nodes' scale, through the glass, where the map alone has none
+    node = with_c.layers[2].scale(np.array([4.0]))[0]
+    assert _near(img, node, 40).sum() > 50 and _near(alone.images[key], node, 40).sum() < 5

@@ -141,19 +141,20 @@ class RegionsBelow:
         return regions, {hemi: rgb[idx] for hemi, idx in self.vertex_region.items()}
 
 
-def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None,
-               meshes: Mapping[str, Any]) -> tuple[tuple[Layer, ...], RegionsBelow | None]:
+def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None, meshes: Mapping[str, Any],
+               others: Sequence[str] = ()) -> tuple[tuple[Layer, ...], RegionsBelow | None]:
     """The layers of a map run: the map alone, or region values (`table`) with the map over them.
 
     The map's scale is its own (``--map-cmap``, ...; else the automatic scale of a map,
     :func:`brainpainter.maps.layers.map_scale`); drawn over region values it covers them by
-    ``--map-alpha``. `meshes` are the meshes the map is drawn on, by hemisphere.
+    ``--map-alpha``. `meshes` are the meshes the map is drawn on, by hemisphere; `others` the
+    kinds the run draws besides (a connectome's edges and nodes).
     """
     given = options.layers.label("map")
     label = given if given is not None else Path(maps.source).name or "map"
     alpha = float(options.layers.map_alpha)
     threshold = options.maps.threshold
-    options.layers.check_drawn(["map"] if table is None else ["regions", "map"])
+    options.layers.check_drawn([*(["map"] if table is None else ["regions", "map"]), *others])
     if table is None:
         own = options.layers.scale_options("map", options.scale, first=True)
         assert own is not None
@@ -163,7 +164,7 @@ def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None,
             f"a map drawn over region values has one image, or one per row of the table; the map has "
             f"{maps.n_images} and the table {len(table.images)} rows ({table.source}). Give a map of one "
             "image, or as many as the table's rows.")
-    regions = run_layers(options, table, None, False, others=("map",))[0]
+    regions = run_layers(options, table, None, False, others=("map", *others))[0]
     own = options.layers.scale_options("map", options.scale, first=False)
     plain = ScaleOptions(nan_color=options.scale.nan_color, missing_color=options.scale.missing_color)
     scale = map_scale(own if own is not None else plain, maps, threshold)

@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.surfaces import Surface, read_surfaces, surface_template
 from brainpainter.atlas.template import Template, load_template
+from brainpainter.connectome.model import Connectome
 from brainpainter.errors import BrainPainterError
 from brainpainter.maps.inputs import VertexMaps, is_map_input, read_maps
 from brainpainter.maps.layers import vertex_colors
@@ -25,6 +26,7 @@ from brainpainter.maps.options import MapOptions
 from brainpainter.maps.outlines import Contours, mesh_edges
 from brainpainter.maps.resolution import map_mesh, own_vertex_count
 from brainpainter.rendering.composition import RegionsBelow, map_layers
+from brainpainter.rendering.connectome_layers import connectome_colors, connectome_kinds, connectome_layers
 from brainpainter.rendering.geometry import VertexColors
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import Options
@@ -83,6 +85,7 @@ class MapRun:
     layers: tuple[Layer, ...] = ()
     below: RegionsBelow | None = None  # region values under the map
     mesh_masks: dict[str, dict[str, NDArray[Any]]] | None = None  # the user's own surfaces
+    connectome: Connectome | None = None  # nodes and edges inside the cortex, drawn as glass
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
     @property
@@ -93,11 +96,17 @@ class MapRun:
         """The colour scale of layer `kind`; the map's where the run has no such layer."""
         return next((layer.scale for layer in self.layers if layer.kind == kind), self.scale)
 
+    @property
+    def map_layer(self) -> Layer:
+        """The map's layer (after the region values under it, before a connectome's)."""
+        return next(layer for layer in self.layers if layer.kind == "map")
+
     def painter(self) -> Painter:
         """A new (not loaded) painter drawing a per-vertex scene."""
         scene = self.options.scene
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
-                       scene.renderer, coloring="vertices", contours=self.contours)
+                       scene.renderer, coloring="vertices", contours=self.contours,
+                       connectome=self.connectome)
 
     def items(self, rows: Any) -> list[tuple[int, View]]:
         return [(i, view) for i in rows for view in self.views]
@@ -115,13 +124,15 @@ class MapRun:
                 regions, below = self.below.colors(round(row))
             cortex = vertex_colors(self.maps, map_image, self.source_vertex, scale, m.underlay, m.threshold,
                                    cluster_edges=self.cluster_edges, below=below,
-                                   opacity=self.layers[-1].opacity, depth=self.depth,
+                                   opacity=self.map_layer.opacity, depth=self.depth,
                                    contrast=m.underlay_contrast, mesh_masks=self.mesh_masks)
             # a volume's subcortical means: below --threshold a structure shows no value, as the cortex does
             means = {k: v for k, v in self.maps.region_values(map_image).items()
                      if m.threshold is None or abs(v) >= m.threshold}
             means_rgb = region_colors(means, self.table.atlas, scale)
             regions.update(means_rgb if self.below is None else {k: means_rgb[k] for k in means})
+            if self.connectome is not None:
+                regions.update(connectome_colors(self.connectome, self.layers))
             self._cache[image] = VertexColors(regions, cortex)
         return self._cache[image]
 
@@ -181,12 +192,15 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     edges = ({hemi: mesh_edges(m.faces) for hemi, m in meshes.items()} if options.maps.outline_threshold
              else None)
     masks = {hemi: surface_masks(tpl, labels, meshes[hemi], n) for hemi, n in own.items()} if own else None
-    layers, below = map_layers(options, maps, table, meshes)
+    connectome = options.connectome.load(atlas_obj if atlas is None else atlas, tpl, options.scene.surface)
+    layers, below = map_layers(options, maps, table, meshes, others=connectome_kinds(connectome))
+    layers += connectome_layers(options, connectome, first=False) if connectome is not None else ()
     contours = read_contours(options.maps)
     depth = {hemi: np.asarray(m.sulc) for hemi, m in meshes.items() if getattr(m, "sulc", None) is not None}
     return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list,
                   outlined(options.settings, outline if contours is None else "contour"), options,
-                  source_vertex, edges, depth, contours, layers=layers, below=below, mesh_masks=masks)
+                  source_vertex, edges, depth, contours, layers=layers, below=below, mesh_masks=masks,
+                  connectome=connectome)
 
 
 def read_contours(options: MapOptions) -> Contours | None:

@@ -139,9 +139,6 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     if options.maps.given or is_map_input(data):  # per-vertex maps: the same run, coloured per vertex
         from brainpainter.rendering.maprun import prepare_map_run
 
-        if options.connectome.given:
-            raise BrainPainterError("a connectome is drawn with region values, tracts or alone, not over a "
-                                    "map (--lh/--rh/--volume) yet; leave out the map or --connectome.")
 
         return prepare_map_run(data, atlas_obj, options)  # type: ignore[return-value]
     if options.maps.contour is not None:
