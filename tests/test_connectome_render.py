@@ -349,3 +349,44 @@ def test_a_connectome_inside_a_map_drawn_as_glass(tmp_path):
     # the large node: its colour on the nodes' scale, through the glass, where the map alone has none
     node = with_c.layers[2].scale(np.array([4.0]))[0]
     assert _near(img, node, 40).sum() > 50 and _near(alone.images[key], node, 40).sum() < 5
+
+
+@pytest.mark.render
+@pytest.mark.integration
+def test_bar_schaefer400_top_1_percent_inside_the_cortex(tmp_path):
+    """Issue 36's second bar (the drawing side): a real 400 x 400 resting-state matrix on Schaefer-400,
+    top 1 % of its edges: 798 edges drawn, the nodes inside the brain, the edges in the edge scale's
+    colours through the glass cortex."""
+    import importlib.metadata
+    from pathlib import Path
+
+    from PIL import Image
+
+    from brainpainter.atlas.model import load_atlas_dir
+
+    try:
+        dist = importlib.metadata.distribution("brainspace")
+    except importlib.metadata.PackageNotFoundError:
+        pytest.skip("brainspace (a test extra) is not installed")
+    matrix = dist.locate_file("brainspace/datasets/matrices/holdout_group/"
+                              "schaefer_400_mean_connectivity_matrix.csv")
+    atlas = load_atlas_dir(Path(__file__).resolve().parents[1] / "plugins" / "atlases"
+                           / "brainpainter-atlas-schaefer-yeo" / "bp_atlas_schaefer_yeo" / "data"
+                           / "schaefer400_7n")
+    result = brainpainter.render(None, atlas, connectome=str(matrix), edge_threshold="99%", views="dorsal",
+                                 width=600, height=500, progress=False, glass_opacity=0.0, shading="flat",
+                                 quality="fast")
+    c = result.manifest["connectome"]
+    assert c["n_nodes"] == 400 and c["n_edges"] == round(0.01 * 400 * 399 / 2)
+    positions = np.array([n["position"] for n in c["nodes"]])
+    assert (np.sign(positions[:200, 0]) < 0).all() and (np.sign(positions[200:, 0]) > 0).all()
+    (key,) = result.images
+    img = result.images[key]
+    Image.fromarray(img).save(tmp_path / "schaefer400.png")
+    edges = result.layers[0].scale
+    lo, hi = c["weight_range"]
+    drawn = sum(_near(img, edges(np.array([w]))[0], 3) for w in np.linspace(lo, hi, 12)).astype(bool)
+    assert drawn.sum() > 2000  # edge pixels in the edge scale's colours
+    nodes = _near(img, (0.25, 0.25, 0.30), 2)  # the nodes' grey (no node values)
+    xs = np.nonzero(nodes)[1]
+    assert nodes.sum() > 2000 and xs.min() > 0.05 * img.shape[1] and xs.max() < 0.95 * img.shape[1]
