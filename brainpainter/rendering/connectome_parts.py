@@ -31,7 +31,7 @@ NODE_RADIUS = (2.0, 6.0)
 #: Radius of every node when the nodes have no values, millimetres.
 PLAIN_NODE_RADIUS = 3.0
 #: Edge radius at weight 0 and at the largest |weight|, millimetres.
-EDGE_RADIUS = (0.3, 1.5)
+EDGE_RADIUS = (0.25, 1.0)
 #: Subdivisions of the nodes' icosphere (2: 162 vertices, 320 triangles; 1: 42, 80), by the most nodes
 #: drawn so (level of detail: 1,000 nodes of 320 triangles are 320,000 triangles, most of a cortex).
 SPHERE_SUBDIVISIONS = ((500, 2), (None, 1))
