@@ -283,8 +283,19 @@ def test_brainnet_node_and_edge_files_draw_the_same_picture_as_a_csv_with_coordi
     np.testing.assert_array_equal(images[0], images[1])
 
 
-def test_a_connectome_travels_to_jobs_workers(tmp_path, tiny):
-    """``--jobs``: the workers' painters are built from the pickled PainterSpec, the connectome in it."""
+@pytest.fixture(scope="module")
+def cluster():
+    """A Dask cluster of two worker processes (as tests/test_parallel.py's)."""
+    distributed = pytest.importorskip("distributed")
+    from test_parallel import local_cluster
+
+    with local_cluster(distributed) as c, distributed.Client(c, set_as_default=False) as client:
+        yield client
+
+
+def test_a_connectome_travels_to_jobs_and_dask_workers(tmp_path, tiny, cluster):
+    """``--jobs`` and Dask: the workers' painters are built from the pickled PainterSpec, the
+    connectome in it."""
     from brainpainter.testing import stand_in
 
     table = tmp_path / "t.csv"
@@ -296,11 +307,15 @@ def test_a_connectome_travels_to_jobs_workers(tmp_path, tiny):
                                      connectome=tiny_connectome(), **kw)
         jobs = brainpainter.render(table, "dk", out=tmp_path / "jobs", renderer=renderer, jobs=2,
                                    connectome=tiny_connectome(), **kw)
+        dask = brainpainter.render(table, "dk", out=tmp_path / "dask", renderer=renderer, client=cluster,
+                                   connectome=tiny_connectome(), **kw)
         plain = brainpainter.render(table, "dk", renderer=renderer, cortex="glass", **kw)
     assert jobs.workers["backend"] == "LocalRunner"
     assert jobs.manifest["connectome"] == serial.manifest["connectome"]
+    assert dask.workers["backend"] == "DaskRunner"
     for path in serial.files:
         assert (tmp_path / "jobs" / path.name).read_bytes() == path.read_bytes()
+        assert (tmp_path / "dask" / path.name).read_bytes() == path.read_bytes()
     # the workers drew the nodes and the edge (the stand-in: a stripe each in their colours)
     from PIL import Image
 
