@@ -405,3 +405,17 @@ def test_bar_schaefer400_top_1_percent_inside_the_cortex(tmp_path):
     nodes = _near(img, (0.25, 0.25, 0.30), 2)  # the nodes' grey (no node values)
     xs = np.nonzero(nodes)[1]
     assert nodes.sum() > 2000 and xs.min() > 0.05 * img.shape[1] and xs.max() < 0.95 * img.shape[1]
+
+
+@pytest.mark.integration
+def test_a_map_over_regions_keeps_its_opacity_beside_a_connectome():
+    """The map's --map-alpha is its layer's, not the last layer's (a connectome's come after it)."""
+    from brainpainter.rendering.run import prepare_run
+
+    kw = {"lh": np.linspace(0, 1, 10242), "rh": np.linspace(1, 0, 10242), "map_alpha": 0.5}
+    plain = prepare_run({"Left-insula": 1.0, "Right-insula": 2.0}, "dk", **kw)
+    with_c = prepare_run({"Left-insula": 1.0, "Right-insula": 2.0}, "dk", connectome=tiny_connectome(), **kw)
+    assert [layer.kind for layer in with_c.layers] == ["regions", "map", "edges", "nodes"]
+    for hemi in ("lh", "rh"):
+        np.testing.assert_array_equal(with_c.colors(0).vertices[hemi], plain.colors(0).vertices[hemi])
+    assert set(with_c.colors(0)) - set(plain.colors(0)) == {"node:0", "node:1", "edge:0"}
