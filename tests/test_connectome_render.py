@@ -419,3 +419,39 @@ def test_a_map_over_regions_keeps_its_opacity_beside_a_connectome():
     for hemi in ("lh", "rh"):
         np.testing.assert_array_equal(with_c.colors(0).vertices[hemi], plain.colors(0).vertices[hemi])
     assert set(with_c.colors(0)) - set(plain.colors(0)) == {"node:0", "node:1", "edge:0"}
+
+
+@pytest.fixture(scope="module")
+def chromium():
+    """Headless Chromium (tests/test_export.py's ``browser``)."""
+    from test_export import browser
+
+    yield from browser.__wrapped__()  # type: ignore[attr-defined]
+
+
+def test_hovering_a_node_through_the_glass_names_it_in_headless_chromium(tmp_path, tiny, chromium):
+    """The HTML export's tooltip names the node under the mouse (with its value), not the glass cortex
+    in front of it, and an edge with its weight."""
+    import time
+
+    from test_export import _load
+
+    # seen from the left (the page's first view) the nodes and the edge between them lie apart
+    c = Connectome(("left", "right"), np.array([[-35.0, -20.0, 10.0], [35.0, 20.0, 30.0]]),
+                   np.array([[np.nan, -0.8], [-0.8, np.nan]]), node_values=np.array([1.0, 4.0]))
+    page = brainpainter.export(None, tmp_path / "c.html", connectome=c, template=str(tiny))
+    driver = chromium
+    _load(driver, page.as_uri())
+    for name, expected in (("left", "left: 1"), ("right", "right: 4"),
+                           ("left \u2013 right", "left \u2013 right: -0.8")):
+        x, y = driver.execute_script("""
+            const v = window.brainpainterViewer, T = window.BPTHREE;
+            const m = v.meshes.find((o) => o.userData.name === arguments[0]);
+            const c = new T.Box3().setFromObject(m).getCenter(new T.Vector3()).project(v.camera);
+            const r = v.renderer.domElement.getBoundingClientRect();
+            return [r.left + (c.x + 1) / 2 * r.width, r.top + (1 - c.y) / 2 * r.height];""", name)
+        driver.execute_script("""
+            const e = new PointerEvent("pointermove", {clientX: arguments[0], clientY: arguments[1]});
+            window.brainpainterViewer.renderer.domElement.dispatchEvent(e);""", x, y)
+        time.sleep(0.2)
+        assert driver.execute_script("return document.getElementById('tip').textContent") == expected
