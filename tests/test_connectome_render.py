@@ -455,3 +455,19 @@ def test_hovering_a_node_through_the_glass_names_it_in_headless_chromium(tmp_pat
             window.brainpainterViewer.renderer.domElement.dispatchEvent(e);""", x, y)
         time.sleep(0.2)
         assert driver.execute_script("return document.getElementById('tip').textContent") == expected
+
+
+def test_a_connectome_alone_turns_in_a_movie(tmp_path, tiny):
+    """A movie of one image with --orbit is a rotation (a connectome alone has one image)."""
+    from brainpainter.media.movie import make_movie
+    from brainpainter.testing.stand_in import StandInRenderer, stand_in
+
+    with stand_in() as renderer:
+        result = make_movie(None, connectome=tiny_connectome(), out=tmp_path / "turn.gif", orbit=360,
+                            views="camera:180:20", frames_per_step=4, template=str(tiny), renderer=renderer,
+                            width=64, height=48, progress=False)
+        azimuths = [view.azimuth for _, view in StandInRenderer.calls]
+    assert result.n_frames == 5
+    assert azimuths == [180.0, 252.0, 324.0, 36.0, 108.0]  # the camera turns a full circle in 5 frames
+    edge = result.scale(np.array([0.8]))[0]
+    assert all(np.allclose(colors["edge:0"], edge[:3]) for colors, _ in StandInRenderer.calls)

@@ -295,7 +295,10 @@ class MovieKeys:
                     f"--strict: column {unmatched[0]!r} matches no region of atlas {table.atlas.name!r} "
                     f"({len(unmatched)} such name(s)); see 'brainpainter check' for the closest names."
                 )
-        rows, key_times = key_frames(table, chosen, times, time_name)
+        if len(chosen) == 1 and movie.orbit and times is None:  # one image turning (a connectome alone)
+            rows, key_times = [chosen[0], chosen[0]], [0.0, 1.0]
+        else:
+            rows, key_times = key_frames(table, chosen, times, time_name)
         return cls(rows, [table.images[i] for i in rows], key_times, time_name)
 
     def caption(self, f: FramePlan) -> str:
@@ -303,7 +306,7 @@ class MovieKeys:
         if self.time_name is not None:
             return f"{self.time_name}: {format_clock(f.clock, self.times)}"
         names = self.names
-        return names[f.a] if f.a == f.b else f"{names[f.a]} {ARROW} {names[f.b]}"
+        return names[f.a] if f.a == f.b or names[f.a] == names[f.b] else f"{names[f.a]} {ARROW} {names[f.b]}"
 
 
 @dataclass
@@ -332,7 +335,8 @@ class MovieFrames:
     @classmethod
     def of(cls, run: Run, keys: MovieKeys, plan: list[FramePlan], movie: MovieOptions) -> MovieFrames:
         painter = run.painter()
-        nan, missing = swatches_needed(run.table, keys.rows, run.views, painter.scene.geometry)
+        nan, missing = ((False, False) if run.layers[0].kind == "edges"  # a connectome alone: no swatch
+                        else swatches_needed(run.table, keys.rows, run.views, painter.scene.geometry))
         w, h = run.settings.width, run.settings.height
         assert run.settings.background is not None
         composer = FrameComposer(len(run.views), (w, h), run.scale, keys.times,
