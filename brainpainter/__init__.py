@@ -19,6 +19,7 @@ __all__ = [
     "Painter",
     "RenderResult",
     "RenderSettings",
+    "Scene",
     "__version__",
     "export",
     "figure",
@@ -50,6 +51,7 @@ if TYPE_CHECKING:
     from brainpainter.media.figure import make_figure as figure
     from brainpainter.media.movie import make_movie as movie
     from brainpainter.media.plot import plot
+    from brainpainter.media.scene import Scene
     from brainpainter.rendering.painter import Painter, RenderResult
     from brainpainter.rendering.run import render
     from brainpainter.rendering.settings import RenderSettings
@@ -61,6 +63,7 @@ _LAZY = {
     "Painter": ("brainpainter.rendering.painter", "Painter"),
     "RenderResult": ("brainpainter.rendering.painter", "RenderResult"),
     "RenderSettings": ("brainpainter.rendering.settings", "RenderSettings"),
+    "Scene": ("brainpainter.media.scene", "Scene"),
     "export": ("brainpainter.media.export", "export"),
     "figure": ("brainpainter.media.figure", "make_figure"),
     "get_atlas": ("brainpainter.atlas.registry", "get_atlas"),

@@ -24,6 +24,7 @@ from brainpainter.errors import BrainPainterError
 REPO = Path(__file__).resolve().parents[1]
 SCHAEFER400 = (REPO / "plugins" / "atlases" / "brainpainter-atlas-schaefer-yeo" / "bp_atlas_schaefer_yeo"
                / "data" / "schaefer400_7n")
+MOUSE = REPO / "plugins" / "atlases" / "brainpainter-atlas-mouse" / "bp_atlas_mouse" / "data" / "mouse"
 W3 = np.array([[0.0, 0.5, -0.2], [0.5, 0.0, 0.0], [-0.2, 0.0, 0.0]])
 DK3 = ["Left-precentral", "Right-precentral", "Left-insula"]
 
@@ -68,6 +69,43 @@ def test_text_matrix_without_names_and_pandas_numbered_index(tmp_path):
     np.testing.assert_allclose(m.weights, W3)
 
 
+def test_xlsx_matrix_with_names_reads_as_region_tables_do(tmp_path):
+    pd = pytest.importorskip("pandas")
+    pytest.importorskip("openpyxl")
+    names = ["Left-insula", "Right-insula"]
+    pd.DataFrame([[0, 0.5], [0.5, 0]], index=names, columns=names).to_excel(tmp_path / "m.xlsx")
+    m = read_matrix(tmp_path / "m.xlsx")
+    assert m.names == tuple(names) and m.weights[0, 1] == 0.5
+
+
+def test_text_matrix_takes_a_small_multiple_of_its_size_in_memory(tmp_path):
+    path = tmp_path / "m.csv"
+    np.savetxt(path, np.random.default_rng(0).uniform(-1, 1, (400, 400)), fmt="%.4f", delimiter=",")
+    tracemalloc.start()
+    try:
+        assert read_matrix(path).weights.shape == (400, 400)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 5 * path.stat().st_size  # a Python string per cell took 11.5x
+
+
+@pytest.mark.parametrize("sep", [",", " "])
+def test_one_long_line_is_refused_before_it_is_split(tmp_path, sep):
+    path = tmp_path / "m.txt"
+    path.write_text(sep.join(["0.5"] * 1_000_000) + f"\n0{sep}1\n1{sep}0\n")
+    message, peak = refused(path)
+    assert "line 1 has more than 5 fields but the file has 3 lines" in message
+    assert peak < 4 * path.stat().st_size  # splitting it made a string per field: 20 times its size
+
+
+@pytest.mark.parametrize("end", ["\n", "\r\n", "\r"])
+def test_spreadsheet_exports_with_a_separator_at_every_line_end(tmp_path, end):
+    (tmp_path / "m.csv").write_bytes(end.join([",A,B,", "A,,0.5,", "B,0.5,,", ""]).encode())
+    m = read_matrix(tmp_path / "m.csv")
+    assert m.names == ("A", "B") and m.weights[0, 1] == 0.5 and np.isnan(m.weights[1, 1])
+
+
 def test_npy_mat_edge_and_array_read_alike(tmp_path):
     np.save(tmp_path / "m.npy", W3)
     scipy.io.savemat(tmp_path / "m.mat", {"W": W3, "label": "dk", "n": np.array([3])})
@@ -76,15 +114,19 @@ def test_npy_mat_edge_and_array_read_alike(tmp_path):
         np.testing.assert_array_equal(read_matrix(given).weights, W3)
 
 
-def test_pconn_names_come_from_its_parcel_axes(tmp_path):
+def write_pconn(path: Path, weights: np.ndarray = W3) -> Path:
     names = ["ctx-lh-precentral", "ctx-rh-precentral", "ctx-lh-insula"]
     parcels = nib.cifti2.cifti2_axes.ParcelsAxis(
         names, [np.zeros((0, 3), int)] * 3,
         [{"CIFTI_STRUCTURE_CORTEX_LEFT": np.array([i])} for i in range(3)],
         nvertices={"CIFTI_STRUCTURE_CORTEX_LEFT": 10})
     header = nib.cifti2.Cifti2Header.from_axes((parcels, parcels))
-    nib.save(nib.cifti2.Cifti2Image(W3.astype(np.float32), header), tmp_path / "m.pconn.nii")
-    conn = read_connectome(tmp_path / "m.pconn.nii", get_atlas("dk"))
+    nib.save(nib.cifti2.Cifti2Image(weights.astype(np.float32), header), path)
+    return path
+
+
+def test_pconn_names_come_from_its_parcel_axes(tmp_path):
+    conn = read_connectome(write_pconn(tmp_path / "m.pconn.nii"), get_atlas("dk"))
     assert conn.names == tuple(DK3)
     np.testing.assert_allclose(conn.weights[0, 1], 0.5)
 
@@ -166,6 +208,53 @@ def test_volume_structures_centroids_are_inside_them(tiny):
     assert points[2, 0] < -20
 
 
+@pytest.mark.usefixtures("fresh_registry")
+def test_cortex_and_volume_atlas_combined_nodes_in_the_atlas_order_inside_the_volumes(tmp_path):
+    from test_volumes import write_volume
+
+    from brainpainter.atlas.volumes import add_volume_atlas
+
+    lut = tmp_path / "lut.csv"
+    lut.write_text("1,ball-lh\n2,ball-rh\n7,box\n")
+    add_volume_atlas("balls", write_volume(tmp_path / "balls.nii.gz"), lut, space="fsaverage")
+    atlas = get_atlas("dk+balls")
+    conn = read_connectome(np.ones((71, 71)), atlas)  # 68 cortical regions, then the volume's 3
+    assert conn.names[67:] == ("Right-insula", "Left-ball", "Right-ball", "box")
+    np.testing.assert_allclose(conn.positions[68:70], [[-20, 0, 0], [20, 0, 0]], atol=0.5)  # ball centres
+    assert np.all(np.abs(conn.positions[70] - [0, 18, -6]) < [12, 6, 6])  # inside the box
+
+
+def test_region_group_node_is_the_centroid_of_its_members_together(tiny):
+    from brainpainter.atlas.model import Atlas, Region
+
+    group = Region(1, "front", "lh", "cortical", (1, 2, 3))
+    members_of = (("Left-front", ("Left-insula", "Left-superiorfrontal")),)
+    atlas = Atlas("g", "g", "dk", (group,), members=members_of)
+    point = region_centroids(atlas, ["Left-front"], str(tiny))[0]
+    members = region_centroids(get_atlas("dk"), ["Left-insula", "Left-superiorfrontal"], str(tiny))
+    mesh = atlas_template(atlas, str(tiny)).cortex("dk", "lh")
+    labels = [mesh.label_names.index(n) for n in ("insula", "superiorfrontal")]
+    union = mesh.vertices["pial"][np.unique(mesh.faces[np.isin(mesh.face_label, labels)])]
+    assert np.linalg.norm(union - point, axis=1).min() <= 2.0 + 1e-6  # in (or just beneath) the group
+    assert min(np.linalg.norm(members - point, axis=1)) > 10  # neither member's own node
+
+
+def test_mouse_atlas_nodes_on_its_own_brain_inside_their_structures():
+    from brainpainter.connectome.centroids import _winding
+
+    atlas = load_atlas_dir(MOUSE)
+    _, every = node_order(atlas)
+    points = region_centroids(atlas, every)  # the atlas's own template, not fsaverage
+    sub = atlas_template(atlas).subcortical()
+    inside = []
+    for key, point in zip(every, points, strict=True):
+        if atlas.region(key).kind == "subcortical":
+            faces = sub.faces[sub.face_label == sub.label_names.index(key)]
+            inside.append(_winding(point, sub.vertices[faces].astype(float)))
+    assert len(inside) == 14 and min(inside) > 0.5
+    assert np.all(np.abs(points) < 110)  # within the mouse brain's bounds (its own units)
+
+
 # -- nodes files --------------------------------------------------------------------------------
 def test_brainnet_node_edge_equal_csv_with_coordinates(tmp_path):
     xyz = np.array([[-40.0, -10, 50], [40, -10, 50], [-35, 5, 2]])
@@ -187,6 +276,16 @@ def test_brainnet_node_edge_equal_csv_with_coordinates(tmp_path):
     assert brainnet.node_labels == csv.node_labels
 
 
+def test_node_and_vector_files_written_by_windows_tools(tmp_path):
+    nodes = "-40\t-10\t50\t1\t3\tPreCG.L\r\n40\t-10\t50\t2\t2\tPreCG.R\r\n"
+    (tmp_path / "n.node").write_bytes(nodes.encode("utf-8-sig"))
+    (tmp_path / "v.txt").write_bytes("1.5\r\n2\r\n".encode("utf-16"))
+    conn = read_connectome(np.array([[0, 1.0], [1.0, 0]]), nodes=tmp_path / "n.node",
+                           node_values=tmp_path / "v.txt")
+    assert conn.names == ("PreCG.L", "PreCG.R") and conn.positions[0, 0] == -40
+    np.testing.assert_array_equal(conn.node_values, [1.5, 2.0])
+
+
 def test_named_matrix_reorders_the_nodes_file_and_mni_is_mapped_as_tracts_are(tmp_path, tiny):
     (tmp_path / "nodes.csv").write_text("label,x,y,z\nB,1,2,3\nA,4,5,6\n")
     write_csv(tmp_path / "m.csv", np.array([[0.0, 1.0], [1.0, 0.0]]), ["A", "B"])
@@ -202,12 +301,33 @@ def test_named_matrix_reorders_the_nodes_file_and_mni_is_mapped_as_tracts_are(tm
 
 def test_node_vectors_from_files_and_sequences(tmp_path, dk):
     np.save(tmp_path / "v.npy", np.array([1.0, 2.0]))
-    (tmp_path / "c.txt").write_text("visual\nmotor\n")
+    (tmp_path / "c.txt").write_text("visual,motor\n")  # two entries on a line: no node names
     path = write_csv(tmp_path / "m.csv", np.array([[0.0, 1.0], [1.0, 0.0]]), ["Left-insula", "Right-insula"])
     conn = read_connectome(path, dk, node_values=tmp_path / "v.npy", node_categories=tmp_path / "c.txt",
                            node_labels=["L", ""])
     np.testing.assert_array_equal(conn.node_values, [1.0, 2.0])
     assert conn.node_categories == ("visual", "motor") and conn.node_labels == ("L", "")
+
+
+def test_node_vectors_as_name_entry_lines_are_matched_by_name(tmp_path, dk):
+    path = write_csv(tmp_path / "m.csv", W3, DK3)
+    (tmp_path / "v.csv").write_text("region,strength\nctx-lh-insula,3\nLeft-precentral,1\n")
+    (tmp_path / "c.tsv").write_text("precentral_R\tmotor\nlh_insula\tsalience\nlh_precentral\tmotor\n")
+    conn = read_connectome(path, dk, node_values=tmp_path / "v.csv", node_categories=tmp_path / "c.tsv")
+    np.testing.assert_array_equal(conn.node_values, [1.0, np.nan, 3.0])  # Right-precentral: none given
+    assert conn.node_categories == ("motor", "motor", "salience")
+    (tmp_path / "bad.csv").write_text("Left-precentral,1\nLeft-insulaa,3\n")
+    with pytest.raises(BrainPainterError) as exc:
+        read_connectome(path, dk, node_values=tmp_path / "bad.csv")
+    assert "'Left-insulaa', which is no node of the connectome (did you mean 'Left-insula'?)" in one_line(exc)
+
+
+def test_a_vector_file_of_far_more_entries_than_nodes_is_refused_before_it_is_split(tmp_path, dk):
+    path = write_csv(tmp_path / "m.csv", W3, DK3)
+    (tmp_path / "v.txt").write_text(",".join(["1"] * 1_000_000))
+    with pytest.raises(BrainPainterError) as exc:
+        read_connectome(path, dk, node_values=tmp_path / "v.txt")
+    assert "has more than 8 entries but the connectome has 3 nodes" in one_line(exc)
 
 
 # -- weights --------------------------------------------------------------------------------------
@@ -246,6 +366,11 @@ def test_non_square_matrix_says_its_shape(tmp_path, dk):
     with pytest.raises(BrainPainterError) as exc:
         read_connectome(path, dk)
     assert "is 3 x 4" in one_line(exc) and "square" in one_line(exc)
+    (tmp_path / "named.csv").write_text(",a,b,c,d\nx,0,1,2,3\ny,1,0,1,2\nz,2,1,0,1\n")
+    with pytest.raises(BrainPainterError) as exc:
+        read_connectome(tmp_path / "named.csv", dk)
+    assert "is 3 x 4; a connectivity matrix is square (N x N): its rows and columns must be the same nodes" \
+        in one_line(exc)
 
 
 def test_names_that_match_no_region_get_suggestions(tmp_path, dk):
@@ -253,6 +378,18 @@ def test_names_that_match_no_region_get_suggestions(tmp_path, dk):
     with pytest.raises(BrainPainterError) as exc:
         read_connectome(path, dk)
     assert "'Left-precentrall' matches no region (did you mean 'Left-precentral'?)" in one_line(exc)
+
+
+@pytest.mark.parametrize(("names", "message"), [
+    (["insula", "Left-precentral"],
+     "'insula' means both ['Left-insula', 'Right-insula']; give the hemisphere"),
+    (["ctx-lh-insula", "Left-insula"],
+     "nodes 'ctx-lh-insula' and 'Left-insula' both name region 'Left-insula'"),
+])
+def test_bare_and_repeated_region_names(tmp_path, dk, names, message):
+    with pytest.raises(BrainPainterError) as exc:
+        read_connectome(write_csv(tmp_path / "m.csv", np.ones((2, 2)), names), dk)
+    assert message in one_line(exc)
 
 
 def test_unnamed_matrix_of_another_count_than_the_atlas(dk):
@@ -266,6 +403,17 @@ def test_nodes_file_with_another_count_than_the_matrix(tmp_path):
     with pytest.raises(BrainPainterError) as exc:
         read_connectome(W3, nodes=tmp_path / "n.node")
     assert "has 2 nodes but" in one_line(exc) and "3 rows" in one_line(exc)
+
+
+def test_nodes_file_without_coordinates_or_names(tmp_path):
+    (tmp_path / "n.csv").write_text("name,x,y\nA,1,2\nB,3,4\n")
+    (tmp_path / "bad.csv").write_text("name,x,y,z\nA,1,2,3\nB,3,four,5\n")
+    with pytest.raises(BrainPainterError) as exc:
+        read_connectome(np.ones((2, 2)), nodes=tmp_path / "n.csv")
+    assert "needs a name column (name or label or region or node) and x, y, z" in one_line(exc)
+    with pytest.raises(BrainPainterError) as exc:
+        read_connectome(np.ones((2, 2)), nodes=tmp_path / "bad.csv")
+    assert "node 2 has y = 'four'" in one_line(exc)
 
 
 def test_empty_matrix_and_a_mat_without_a_2d_variable(tmp_path, dk):
@@ -283,7 +431,7 @@ def test_text_cell_inside_the_matrix(tmp_path, dk):
     (tmp_path / "m.csv").write_text("0,1\n1,oops\n")
     with pytest.raises(BrainPainterError) as exc:
         read_connectome(tmp_path / "m.csv", dk)
-    assert "row 2, column 2 is 'oops'" in one_line(exc)
+    assert "line 2, column 2 is 'oops'" in one_line(exc)
 
 
 def refused(path: Path) -> tuple[str, int]:
@@ -326,6 +474,60 @@ def test_huge_declared_mat_is_refused_before_allocating(tmp_path):
     assert "90000 x 90000" in message and peak < 5 * 2**20
 
 
+def mat_with(tmp_path: Path, compress: bool, old: bytes, new: bytes) -> Path:
+    """A .mat of a 3 x 3 matrix whose (inflated) bytes have `old` replaced by `new`."""
+    path = tmp_path / f"m{int(compress)}.mat"
+    scipy.io.savemat(path, {"W": np.arange(9.0).reshape(3, 3)}, do_compression=compress)
+    raw = path.read_bytes()
+    if not compress:
+        assert raw.count(old) == 1
+        path.write_bytes(raw.replace(old, new))
+        return path
+    import struct
+    import zlib
+
+    inner = zlib.decompress(raw[136:])
+    assert inner.count(old) == 1
+    packed = zlib.compress(inner.replace(old, new))
+    path.write_bytes(raw[:128] + struct.pack("<II", 15, len(packed)) + packed)
+    return path
+
+
+@pytest.mark.parametrize("compress", [False, True])
+def test_mat_element_that_crashed_scipy_is_refused(tmp_path, compress):
+    # the data's type tag: miDOUBLE (9), 72 bytes; an unknown type made scipy 1.17's loadmat segfault
+    tag = np.array([9, 72], "<u4").tobytes()
+    path = mat_with(tmp_path, compress, tag, np.array([216, 72], "<u4").tobytes())
+    message, _ = refused(path)
+    assert "MATLAB variable 'W' cannot be read safely (its data are of unknown type 216)" in message
+    short = mat_with(tmp_path, compress, np.array([3, 3], "<i4").tobytes(), np.array([3, 4], "<i4").tobytes())
+    message, _ = refused(short)
+    assert "72 bytes of data for a 3 x 4 array" in message
+
+
+def test_npy_with_a_broken_header_is_one_line_without_warnings(tmp_path):
+    path = tmp_path / "b.npy"
+    header = b"{'descr': '<f8', 'fortran_order': False, 'shape': (3, 3"
+    path.write_bytes(b"\x93NUMPY\x01\x00" + len(header + b"\n").to_bytes(2, "little") + header + b"\n")
+    message, _ = refused(path)  # warnings are errors in the tests: none came
+    assert "is not a readable .npy file" in message
+
+
+def test_damaged_pconn_headers_are_one_line_and_nibabel_prints_nothing(tmp_path, capfd):
+    path = write_pconn(tmp_path / "m.pconn.nii")
+    raw = bytearray(path.read_bytes())
+    raw[112:120] = np.array([-1.0], "<f8").tobytes()  # pixdim[1] < 0: nibabel logs a fix on stderr
+    path.write_bytes(bytes(raw))
+    np.testing.assert_allclose(read_matrix(path).weights, W3)
+    dims = np.array([3, 3], "<i8").tobytes()  # the NIfTI-2 dim[5], dim[6]: the two axes' lengths
+    assert raw[56:72] == dims
+    raw[56:72] = np.array([3, 10**9], "<i8").tobytes()
+    path.write_bytes(bytes(raw))
+    message, _ = refused(path)
+    assert "names 3 x 3 parcels but its data are 3 x 1000000000" in message
+    assert capfd.readouterr().err == ""
+
+
 def test_object_npy_is_not_unpickled(tmp_path):
     np.save(tmp_path / "o.npy", np.array([[{"a": 1}]], dtype=object), allow_pickle=True)
     with pytest.raises(BrainPainterError, match="holds object values"):
@@ -352,3 +554,31 @@ def test_real_schaefer400_group_matrix_top_1_percent():
     assert len(top.edges()[0]) == 798
     assert np.nanmin(np.abs(top.weights)) >= np.nanmax(np.abs(np.where(np.isnan(top.weights), conn.weights,
                                                                          np.nan)))
+
+
+# -- any text ----------------------------------------------------------------------------------------
+def test_any_small_text_file_reads_or_is_one_line(tmp_path):
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    cells = st.sampled_from(["0", "1.5", "-2e-3", "", "NaN", "inf", "x", '"a,b"', '"', "1,5", "ctx-lh-insula",
+                             "Left-insula", "Right-insula", " ", "0x1", "1e999"])
+    seps = st.sampled_from([",", ";", "\t", " ", "|"])
+    rows = st.lists(st.lists(cells, min_size=0, max_size=4), min_size=0, max_size=4)
+
+    @settings(max_examples=300, deadline=None, database=None, derandomize=True,
+              suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @given(rows=rows, sep=seps, suffix=st.sampled_from([".csv", ".tsv", ".txt", ".edge"]))
+    def check(rows: list[list[str]], sep: str, suffix: str) -> None:
+        path = tmp_path / f"m{suffix}"
+        path.write_text("\n".join(sep.join(r) for r in rows))
+        try:
+            m = read_matrix(path)
+        except BrainPainterError as exc:
+            assert "\n" not in str(exc)
+            return
+        assert m.weights.ndim == 2 and m.weights.shape[0] == m.weights.shape[1] > 0
+        assert not np.isinf(m.weights).any()
+        assert m.names is None or len(m.names) == len(m.weights)
+
+    check()

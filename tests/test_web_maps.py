@@ -129,6 +129,15 @@ def test_map_pair_upload_preview_and_render_job(server, tmp_path):
     assert manifest["input"]["kind"] == "vertex map"
 
 
+def test_a_flat_view_previews_the_map_on_the_flat_maps(server, tmp_path):
+    """The preview of a flat view (not among the options' views) colours the sheets' vertices."""
+    files = [("lh.thickness", morph(np.full(N5, 2.0), tmp_path, "lh.thickness")),
+             ("rh.thickness", morph(np.full(N5, -2.0), tmp_path, "rh.thickness"))]
+    uid = post(server, files).json()["upload_id"]
+    assert colourful(preview(server, uid, "flat", views="lateral-left")) > 0.5
+    assert colourful(preview(server, uid, "flat-left")) > 0.5
+
+
 def test_one_hemisphere_and_a_figure_job(server, tmp_path):
     v = np.linspace(0, 1, N5)
     gii = nib.gifti.GiftiImage(darrays=[nib.gifti.GiftiDataArray(a.astype(np.float32)) for a in (v, 1 - v)])

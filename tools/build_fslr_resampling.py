@@ -34,7 +34,25 @@ hemisphere at 32k).
 There is no deformed 59k sphere in HCP's ``resample_fsaverage`` folder, so 59k
 is not built (and is refused by :mod:`brainpainter.maps.fslr`).
 
+It also builds ``brainpainter/data/fslr-flat.npz``, the flat maps (views
+``flat-left``, ``flat-right``, ``flat``: :mod:`brainpainter.maps.flat`): HCP's
+Colin flat fsLR 32k surfaces (``colin.cerebral.{L,R}.flat.32k_fs_LR.surf.gii``)
+and where each of their vertices lies on fsaverage:
+
+``H_xy`` int16 (32492, 2), ``xy_scale`` float64 ()
+    The flat positions in units of ``xy_scale`` mm, each hemisphere centred,
+    lh then shifted left and rh right by half its width plus half of
+    :data:`FLAT_GAP` (the two sit side by side, left on the left).
+``H_faces`` uint16 (n_faces, 3)
+    The flat sheet's triangles (the cuts are absent), counter-clockwise seen
+    from +z (the few folded-over ones turned).
+``H_fsaverage`` int32 (32492, 3), ``H_fsaverage_weights`` uint16 (32492, 3)
+    The fsaverage triangle each fsLR 32k vertex lies in on the fsLR sphere
+    deformed to fsaverage, and its barycentric weights in units of 1/65535
+    (values: the weighted mean; labels: the vertex of largest weight).
+
 Usage: ``python tools/build_fslr_resampling.py ../shared/data/fslr ../shared/data/freesurfer/subjects``
+(``--flat-only``: the flat maps alone)
 """
 
 from __future__ import annotations
@@ -48,7 +66,10 @@ from scipy import sparse
 from scipy.spatial import cKDTree
 
 OUT = Path(__file__).resolve().parents[1] / "brainpainter" / "data" / "fslr-fsaverage.npz"
+FLAT_OUT = OUT.with_name("fslr-flat.npz")
 RESOLUTIONS = ("32k", "164k")
+#: Millimetres between the two hemispheres' flat maps, and the flat positions' quantum.
+FLAT_GAP, FLAT_QUANTUM = 20.0, 0.02
 
 
 def unit(xyz: np.ndarray) -> np.ndarray:
@@ -113,13 +134,62 @@ def gifti(path: Path) -> list[np.ndarray]:
     return [np.asarray(d.data) for d in nib.load(str(path)).darrays]
 
 
+def flat(fslr: Path, fsavg: dict[str, tuple[np.ndarray, np.ndarray]]) -> None:
+    """Write :data:`FLAT_OUT` (the flat sheets and their fsaverage weights; see the module docstring)."""
+    arrays: dict[str, np.ndarray] = {"xy_scale": np.float64(FLAT_QUANTUM)}
+    for hemi, side in (("lh", "L"), ("rh", "R")):
+        xyz, faces = gifti(fslr / f"colin.cerebral.{side}.flat.32k_fs_LR.surf.gii")
+        xy = np.asarray(xyz, np.float64)[:, :2]
+        faces = np.asarray(faces, np.int64)
+        used = np.unique(faces)
+        centre = (xy[used].min(axis=0) + xy[used].max(axis=0)) / 2
+        half_width = np.ptp(xy[used, 0]) / 2
+        shift = (half_width + FLAT_GAP / 2) * (-1 if hemi == "lh" else 1)
+        q = np.round((xy - centre + [shift, 0.0]) / FLAT_QUANTUM)
+        corner = q[faces]
+        area = np.cross(corner[:, 1] - corner[:, 0], corner[:, 2] - corner[:, 0])
+        faces[area < 0] = faces[area < 0][:, ::-1]  # folded-over triangles face the camera too
+        xy = q * FLAT_QUANTUM
+        arrays[f"{hemi}_xy"] = q.astype(np.int16)
+        arrays[f"{hemi}_faces"] = faces.astype(np.uint16)
+        deformed = f"fs_LR-deformed_to-fsaverage.{side}.sphere.32k_fs_LR.surf.gii"
+        sphere, _ = gifti(fslr / "resample_fsaverage" / deformed)
+        vertices, weights = barycentric(*fsavg[hemi], unit(sphere))
+        arrays[f"{hemi}_fsaverage"] = vertices.astype(np.int32)
+        arrays[f"{hemi}_fsaverage_weights"] = np.round(weights * 65535).astype(np.uint16)
+        print(f"  {hemi} flat: {len(used)} of {len(xy)} vertices, {len(faces)} triangles "
+              f"({int((area < 0).sum())} turned), {np.ptp(xy[used], axis=0).round(1)} mm")
+    validate_flat(arrays)
+    np.savez_compressed(FLAT_OUT, **arrays)
+    print(f"wrote {FLAT_OUT} ({FLAT_OUT.stat().st_size // 1024} KiB)")
+
+
+def validate_flat(arrays: dict[str, np.ndarray]) -> None:
+    """Every triangle faces +z, lh lies left of rh, the weights sum to 1 (to a quantum each)."""
+    scale = float(arrays["xy_scale"])
+    for hemi in ("lh", "rh"):
+        xy, faces = arrays[f"{hemi}_xy"].astype(np.float64) * scale, arrays[f"{hemi}_faces"].astype(np.int64)
+        corner = xy[faces]
+        area = np.cross(corner[:, 1] - corner[:, 0], corner[:, 2] - corner[:, 0])
+        assert (area >= 0).all(), f"{hemi}: {(area < 0).sum()} triangles face away"
+        sums = arrays[f"{hemi}_fsaverage_weights"].astype(np.int64).sum(axis=1)
+        assert np.abs(sums - 65535).max() <= 2, f"{hemi}: weights do not sum to 1"
+        assert arrays[f"{hemi}_fsaverage"].max() < 163842
+    lh_right = arrays["lh_xy"][np.unique(arrays["lh_faces"]), 0].max()
+    rh_left = arrays["rh_xy"][np.unique(arrays["rh_faces"]), 0].min()
+    assert lh_right < 0 < rh_left, "the left flat map must lie left of the right one"
+
+
 def main(fslr: Path, subjects: Path) -> None:
     resample = fslr / "resample_fsaverage"
     arrays: dict[str, np.ndarray] = {}
+    spheres: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     for hemi, side in (("lh", "L"), ("rh", "R")):
         sphere = subjects / "fsaverage" / "surf" / f"{hemi}.sphere"
         fs_xyz, fs_faces = nib.freesurfer.read_geometry(str(sphere))
-        fsavg = (unit(fs_xyz), fs_faces.astype(np.int64))
+        fsavg = spheres[hemi] = (unit(fs_xyz), fs_faces.astype(np.int64))
+        if "--flat-only" in sys.argv:
+            continue
         for res in RESOLUTIONS:
             print(f"{hemi} {res}")
             xyz, faces = gifti(resample / f"fs_LR-deformed_to-fsaverage.{side}.sphere.{res}_fs_LR.surf.gii")
@@ -131,11 +201,13 @@ def main(fslr: Path, subjects: Path) -> None:
             arrays[f"{hemi}_{res}_indices"] = w.indices.astype(np.int32)
             arrays[f"{hemi}_{res}_weights"] = np.round(w.data * 65535).astype(np.uint16)
             arrays[f"{hemi}_{res}_roi"] = np.packbits(roi > 0)
-    np.savez_compressed(OUT, **arrays)
-    print(f"wrote {OUT} ({OUT.stat().st_size // 1024} KiB)")
+    if arrays:
+        np.savez_compressed(OUT, **arrays)
+        print(f"wrote {OUT} ({OUT.stat().st_size // 1024} KiB)")
+    flat(fslr, spheres)
 
 
 if __name__ == "__main__":
-    args = sys.argv[1:]
+    args = [a for a in sys.argv[1:] if a != "--flat-only"]
     main(Path(args[0]) if args else Path("../shared/data/fslr"),
          Path(args[1]) if len(args) > 1 else Path("../shared/data/freesurfer/subjects"))

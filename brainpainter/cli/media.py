@@ -43,7 +43,8 @@ def _rows(value: str | None) -> list[str] | None:
 @option_group(FigureOptions, ("grid",))
 @click.option("--rows", default=None,
               help="Image names to show, comma-separated, in this order (default: all rows).")
-@option_group(FigureOptions, ("title", "label", "ticks", "dpi", "fig_width", "font_size", "view_labels"))
+@option_group(FigureOptions, ("title", "label", "ticks", "dpi", "fig_width", "font_size", "view_labels",
+                              "colorbar_position"))
 @render_options
 @map_options
 @input_options
@@ -51,7 +52,7 @@ def _rows(value: str | None) -> list[str] | None:
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, title: str | None,
            label: str | None, ticks: str | None, dpi: float, fig_width: float | None, font_size: float,
-           view_labels: bool, quiet: bool, **options: Any) -> None:
+           view_labels: bool, colorbar_position: str, quiet: bool, **options: Any) -> None:
     """A publication figure of INPUT rows (or maps, --lh/--rh): renders, titles and one colour bar.
 
     \b
@@ -71,7 +72,8 @@ def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, ti
     result = make_figure(
         tables_or_maps(inputs, kwargs), out=out, rows=_rows(rows), grid=grid, title=title, label=label,
         ticks=ticks,
-        dpi=dpi, fig_width=fig_width, font_size=font_size, view_labels=view_labels, progress=not quiet,
+        dpi=dpi, fig_width=fig_width, font_size=font_size, view_labels=view_labels,
+        colorbar_position=colorbar_position, progress=not quiet,
         **kwargs,
     )
     w, h = result.figure.get_size_inches()

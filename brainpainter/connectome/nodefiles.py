@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,10 +23,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from brainpainter.errors import BrainPainterError
+from brainpainter.errors import BrainPainterError, nearest
 from brainpainter.io.files import read_input
 from brainpainter.io.rawtable import max_bytes
-from brainpainter.table.cells import is_empty, to_number
+from brainpainter.io.readers import decode_text
+from brainpainter.table.cells import is_empty, is_text, to_number
 
 NAME_COLUMNS = ("name", "label", "region", "node")
 BRAINNET_COLUMNS = ("color", "size", "label")
@@ -81,7 +82,7 @@ def read_nodes(path: str | os.PathLike[str]) -> NodeTable:
 def _read_brainnet(path: Path) -> NodeTable:
     raw = read_input(path, "nodes file", max_bytes(), hint="give a BrainNet Viewer .node file", env=ENV)
     rows: list[list[str]] = []
-    for number, line in enumerate(raw.decode("utf-8", errors="replace").splitlines(), start=1):
+    for number, line in enumerate(decode_text(raw, str(path)).splitlines(), start=1):
         text = line.split("#", 1)[0].strip()
         if not text:
             continue
@@ -136,23 +137,31 @@ def _coordinates(rows: list[list[Any]], source: str, decimal_comma: bool = False
 
 
 # -- vectors -------------------------------------------------------------------------------------
-def node_cells(given: Any, n: int, what: str, nodes: NodeTable | None = None) -> list[Any] | None:
+def node_cells(given: Any, n: int, what: str, nodes: NodeTable | None = None,
+               names: Sequence[str] | None = None, key_of: Callable[[str], str | None] | None = None
+               ) -> list[Any] | None:
     """One cell per node from a column of `nodes`, a vector file or a sequence; None when not given.
 
     Parameters
     ----------
     given : str, path-like, sequence or None
-        A column name of `nodes` (case-insensitive), a file, or the cells.
+        A column name of `nodes` (case-insensitive), a file, or the cells. A text file of one entry
+        per line is in the matrix's order; one of ``name,entry`` lines (a header line allowed) is
+        matched to the nodes by name (nodes it lacks get an empty cell).
     n : int
         Number of nodes.
     what : str
         ``"node values"``, ``"node categories"``, ``"node labels"``, for messages.
     nodes : NodeTable, optional
+    names : sequence of str, (N,), optional
+        The nodes' names, for a file of ``name,entry`` lines.
+    key_of : callable, optional
+        The node name another spelling means (an atlas's region names), or None.
 
     Raises
     ------
     BrainPainterError
-        Not a column nor a file, or another count than `n`.
+        Not a column nor a file, another count than `n`, or names that are no node.
     """
     if given is None:
         return None
@@ -166,31 +175,80 @@ def node_cells(given: Any, n: int, what: str, nodes: NodeTable | None = None) ->
                 f"{what} {text!r} is neither a column of {nodes.source!r} (it has "
                 f"{sorted(nodes.columns)}) nor a file; give a column name or a file of one entry per node.")
         source = text
-        cells = _vector_file(path, what)
+        rows = _vector_file(path, what, n)
+        named = None
+        if names is not None and rows and all(len(r) == 2 and is_text(r[0]) for r in rows):
+            named = _by_name(rows, names, key_of, what, source)
+        if named is not None:
+            return named
+        cells = [c for r in rows for c in r]
     else:
         source = f"the {what} given"
         cells = list(np.asarray(given, dtype=object).ravel()) if not isinstance(given, list) else list(given)
     if len(cells) != n:
         raise BrainPainterError(
             f"{what} {source!r} has {len(cells)} entries but the connectome has {n} nodes; give one "
-            "entry per node, in the matrix's order.")
+            "entry per node, in the matrix's order (or name,entry lines).")
     return cells
 
 
-def _vector_file(path: Path, what: str) -> list[Any]:
+def _by_name(rows: list[list[str]], names: Sequence[str], key_of: Callable[[str], str | None] | None,
+             what: str, source: str) -> list[Any] | None:
+    """Cells of ``name,entry`` rows in the nodes' order (a first row of column names is a header); None
+    when no row names a node (``visual,motor``: two entries on one line)."""
+    where = {name.lower(): i for i, name in enumerate(names)}
+
+    def node(text: str) -> int | None:
+        hit = where.get(text.strip().lower())
+        if hit is None and key_of is not None:
+            key = key_of(text)
+            hit = None if key is None else where.get(key.lower())
+        return hit
+
+    if all(node(r[0]) is None for r in rows):
+        return None
+    first, rest = rows[0], rows[1:]
+    if node(first[0]) is None and (first[0].strip().lower() in (*NAME_COLUMNS, "roi", "parcel") or (
+            rest and is_text(first[1]) and not any(is_text(r[1]) for r in rest))):
+        rows = rest  # a header: "region,strength"
+    cells: list[Any] = [""] * len(names)
+    seen: dict[int, str] = {}
+    for name, cell in rows:
+        i = node(name)
+        if i is None:
+            close = nearest(name, names)
+            raise BrainPainterError(
+                f"{what} {source!r} names {name!r}, which is no node of the connectome"
+                + (f" (did you mean {close[0]!r}?)" if close else "") + "; give the nodes' names.")
+        if i in seen:
+            raise BrainPainterError(f"{what} {source!r} names node {names[i]!r} twice ({seen[i]!r} and "
+                                    f"{name!r}); give each node once.")
+        seen[i] = name
+        cells[i] = cell
+    return cells
+
+
+def _vector_file(path: Path, what: str, n: int) -> list[list[Any]]:
+    """The entries of a vector file, line by line; more than two per node is refused before splitting."""
     if path.suffix.lower() == ".npy":
         from brainpainter.connectome.matrix import read_npy
 
-        return list(read_npy(path, what, ndim=1))
+        return [[v] for v in read_npy(path, what, ndim=1)]
     raw = read_input(path, what, max_bytes(), hint="give a file of one entry per node", env=ENV)
-    cells: list[Any] = []
-    for line in raw.decode("utf-8", errors="replace").splitlines():
+    rows: list[list[Any]] = []
+    most, count = 2 * n + 2, 0  # name,entry lines and a header
+    for line in decode_text(raw, str(path)).splitlines():
         text = line.strip()
         if not text or text.startswith("#"):
             continue
-        cells.extend(c.strip() for c in (text.split(",") if "," in text else text.split("\t") if "\t" in text
-                                         else text.split()))
-    return cells
+        sep = "," if "," in text else "\t" if "\t" in text else None
+        count += (text.count(sep) if sep else text.count(" ")) + 1
+        if count > most:
+            raise BrainPainterError(
+                f"{what} {str(path)!r} has more than {most} entries but the connectome has {n} nodes; give "
+                "one entry per node, in the matrix's order (or name,entry lines).")
+        rows.append([c.strip() for c in text.split(sep)])
+    return rows
 
 
 def node_values(cells: Sequence[Any], source: str) -> NDArray[np.float64]:

@@ -46,7 +46,9 @@ def read_connectome(matrix: Any, atlas: Atlas | str | None = None, *,
         the matrix (reordered by name where both have names).
     node_values, node_categories, node_labels : str, path-like or sequence, optional
         A column of `nodes`, a file of one entry per node, or the entries. A ``.node`` file's
-        ``size``, ``color`` and ``label`` columns are the default ones.
+        ``size``, ``color`` and ``label`` columns are the default ones. A text that is not a column
+        is opened as a file: a caller that takes the text from someone else (a web form) passes the
+        path of what they uploaded, never their text.
     directed : bool
         ``weights[i, j]`` is the edge from node i to node j only.
     space : str
@@ -70,29 +72,19 @@ def read_connectome(matrix: Any, atlas: Atlas | str | None = None, *,
         raise choice_error("the nodes' space (--space)", space, SPACES)
     m = read_matrix(matrix)
     n = m.weights.shape[0]
-    table: NodeTable | None = None
-    if nodes is not None:
-        table = read_nodes(nodes)
-        order = _node_rows(m, table)
-        names = tuple(table.names[i] for i in order)
-        positions = _placed(table.positions[order], space, atlas, template)
-        table = NodeTable(names, positions, {k: [v[i] for i in order] for k, v in table.columns.items()},
-                          table.source)
-    else:
-        if atlas is None:
-            raise BrainPainterError(
-                f"connectome matrix {m.source!r}: its nodes need a place; give an atlas (its regions' "
-                "centroids) or a nodes file (name,x,y,z, or a BrainNet Viewer .node).")
-        from brainpainter.atlas.registry import get_atlas
-        from brainpainter.connectome.centroids import region_centroids
+    atlas, table, names, positions = _nodes(m, atlas, nodes, space, template, surface)
+    key_of = None
+    if table is None and atlas is not None:
+        from brainpainter.table.names import NameResolver
 
-        atlas = get_atlas(atlas) if isinstance(atlas, str) else atlas
-        names = (matched_keys(m.names, atlas, m.source) if m.names is not None
-                 else ordered_keys(atlas, n, m.source))
-        positions = region_centroids(atlas, names, template, surface)
-    values = node_cells(_given(node_values, table, "size"), n, "node values", table)
-    categories = node_cells(_given(node_categories, table, "color"), n, "node categories", table)
-    labels = node_cells(_given(node_labels, table, "label"), n, "node labels", table)
+        key_of = NameResolver.for_atlas(atlas).resolve
+
+    def cells(given: Any, column: str, what: str) -> list[Any] | None:
+        return node_cells(_given(given, table, column), n, what, table, names, key_of)
+
+    values = cells(node_values, "size", "node values")
+    categories = cells(node_categories, "color", "node categories")
+    labels = cells(node_labels, "label", "node labels")
     return Connectome(
         names=tuple(names), positions=np.asarray(positions, dtype=np.float64),
         weights=edge_weights(m.weights, directed, m.source), directed=bool(directed),
@@ -100,6 +92,32 @@ def read_connectome(matrix: Any, atlas: Atlas | str | None = None, *,
         node_categories=None if categories is None else node_texts(categories, numbers=True),
         node_labels=None if labels is None else node_texts(labels),
     )
+
+
+def _nodes(m: Matrix, atlas: Atlas | str | None, nodes: str | os.PathLike[str] | None, space: str,
+           template: Template | str, surface: str) -> tuple[Atlas | None, NodeTable | None, tuple[str, ...],
+                                                            NDArray[np.float64]]:
+    """The atlas (loaded), the nodes file (in the matrix's order), the node names and positions."""
+    if isinstance(atlas, str):
+        from brainpainter.atlas.registry import get_atlas
+
+        atlas = get_atlas(atlas)
+    if nodes is not None:
+        table = read_nodes(nodes)
+        order = _node_rows(m, table)
+        names = tuple(table.names[i] for i in order)
+        positions = _placed(table.positions[order], space, atlas, template)
+        columns = {k: [v[i] for i in order] for k, v in table.columns.items()}
+        return atlas, NodeTable(names, positions, columns, table.source), names, positions
+    if atlas is None:
+        raise BrainPainterError(
+            f"connectome matrix {m.source!r}: its nodes need a place; give an atlas (its regions' "
+            "centroids) or a nodes file (name,x,y,z, or a BrainNet Viewer .node).")
+    from brainpainter.connectome.centroids import region_centroids
+
+    names = (matched_keys(m.names, atlas, m.source) if m.names is not None
+             else ordered_keys(atlas, m.weights.shape[0], m.source))
+    return atlas, None, names, region_centroids(atlas, names, template, surface)
 
 
 def _given(given: Any, table: NodeTable | None, column: str) -> Any:
@@ -136,7 +154,7 @@ def _node_rows(m: Matrix, table: NodeTable) -> list[int]:
     return [where[name.lower()] for name in m.names]
 
 
-def _placed(positions: NDArray[np.float64], space: str, atlas: Atlas | str | None,
+def _placed(positions: NDArray[np.float64], space: str, atlas: Atlas | None,
             template: Template | str) -> NDArray[np.float64]:
     """Coordinates in `space` mapped into the template's (as tracts are)."""
     if space == "template":
@@ -144,10 +162,6 @@ def _placed(positions: NDArray[np.float64], space: str, atlas: Atlas | str | Non
     from brainpainter.atlas.volumes import space_transform
     from brainpainter.connectome.centroids import atlas_template
 
-    if isinstance(atlas, str):
-        from brainpainter.atlas.registry import get_atlas
-
-        atlas = get_atlas(atlas)
     if atlas is not None:
         tpl = atlas_template(atlas, template)
     else:

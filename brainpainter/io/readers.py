@@ -161,6 +161,23 @@ def _decode(raw: bytes, source: str) -> tuple[str, str]:
     return text, encoding
 
 
+def decode_text(raw: bytes, source: str) -> str:
+    """The text of a text file's bytes (UTF-8 with or without BOM, UTF-16, Windows-1252); binary refused.
+
+    Raises
+    ------
+    BrainPainterError
+        NUL bytes, control characters throughout, or an unknown encoding.
+    """
+    return _decode(raw, source)[0]
+
+
+def sniff_separator(first_line: str, suffix: str = "") -> str:
+    """The separator of a table's lines, from its first line: tab, ``;``, ``,``, ``|`` or ``" "`` (white
+    space)."""
+    return _sniff_separator(first_line, suffix)
+
+
 _SEPARATORS = {"\t": "tab-separated", ";": "';'-separated", ",": "comma-separated", "|": "'|'-separated"}
 
 

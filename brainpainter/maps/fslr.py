@@ -121,6 +121,11 @@ def _weights(hemi: str, res: str) -> tuple[Any, NDArray[np.bool_]]:
     return matrix, np.unpackbits(roi_bits)[:n].astype(bool)
 
 
+def cortex_roi(hemi: str, res: str) -> NDArray[np.bool_]:
+    """HCP's cortex of fsLR mesh `res` (``atlasroi``: False on the medial wall), bool (n_fsLR,)."""
+    return _weights(hemi, res)[1]
+
+
 @cache
 def _nearest(hemi: str, res: str) -> NDArray[np.int64]:
     """For each fsaverage vertex, the fsLR vertex of largest weight (the nearest), (163842,): its label."""

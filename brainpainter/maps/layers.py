@@ -15,7 +15,7 @@ The colour scale's defaults (diverging only for data of both signs) are chosen b
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import replace
 from typing import Any
 
@@ -105,6 +105,7 @@ def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArr
                   below: dict[str, NDArray[Any]] | None = None, opacity: float = 1.0,
                   depth: dict[str, NDArray[Any]] | None = None, contrast: float = 1.0,
                   mesh_masks: Mapping[str, Mapping[str, NDArray[Any]]] | None = None,
+                  sample: Callable[[str, int], NDArray[Any]] | None = None,
                   ) -> dict[str, NDArray[Any]]:
     """The colours of one image of `maps` at the drawn vertices.
 
@@ -134,6 +135,11 @@ def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArr
     mesh_masks : dict of str to dict of str to ndarray of bool, shape (n_surface,), optional
         Per hemisphere, the ``cortex``, ``sulc`` and ``curv`` masks (:func:`masks`) of the surface
         `source_vertex` indexes, when it is not fsaverage (the user's own surface).
+    sample : callable, optional
+        ``sample(hemi, i)``: image ``i`` of `hemi` at the drawn vertices, shape (n_hemi,), where they
+        are not `source_vertex`'s on the map's surface (the flat maps:
+        :func:`brainpainter.maps.flat.flat_values`); `source_vertex` then names the fsaverage
+        vertex whose underlay and cortex mask each takes.
 
     Returns
     -------
@@ -149,7 +155,7 @@ def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArr
             under = np.asarray(below[hemi], np.float32)
             rgb = np.where(np.isnan(under), rgb, under).astype(np.float32)
         if hemi in maps.values and len(sv):
-            v = _values_at(maps, hemi, image, sv)
+            v = _values_at(maps, hemi, image, sv, sample)
             show = np.isfinite(v) & (masks(hemi) if own is None else own)["cortex"][sv]
             if threshold is not None and maps.categories is None:
                 show &= np.abs(np.where(show, v, 0.0)) >= threshold
@@ -164,8 +170,13 @@ def vertex_colors(maps: VertexMaps, image: Image, source_vertex: dict[str, NDArr
     return out
 
 
-def _values_at(maps: VertexMaps, hemi: str, image: Image, sv: NDArray[Any]) -> NDArray[Any]:
-    """Image `image` of `maps` at vertices `sv` of its surface; a blend of two (categories: nearest)."""
+def _values_at(maps: VertexMaps, hemi: str, image: Image, sv: NDArray[Any],
+               sample: Callable[[str, int], NDArray[Any]] | None = None) -> NDArray[Any]:
+    """Image `image` of `maps` at vertices `sv` of its surface (or as `sample` gives it); a blend of two
+    (categories: nearest)."""
+    def at(i: int) -> NDArray[Any]:
+        return maps.on_surface(hemi, i)[sv] if sample is None else sample(hemi, i)
+
     categorical = maps.categories is not None
     n_images = len(maps.values[hemi])
     if isinstance(image, tuple):
@@ -173,10 +184,10 @@ def _values_at(maps: VertexMaps, hemi: str, image: Image, sv: NDArray[Any]) -> N
     else:
         lo = int(np.floor(image))
         hi, t = min(lo + 1, n_images - 1), float(image) - lo
-    a: NDArray[Any] = maps.on_surface(hemi, lo)[sv].astype(np.float64)
+    a: NDArray[Any] = at(lo).astype(np.float64)
     if t == 0.0 or hi == lo:
         return a
-    b: NDArray[Any] = maps.on_surface(hemi, hi)[sv].astype(np.float64)
+    b: NDArray[Any] = at(hi).astype(np.float64)
     if categorical:
         return a if t < 0.5 else b
     mixed: NDArray[Any] = (1.0 - t) * a + t * b

@@ -451,10 +451,19 @@ def is_volume(data: Any) -> bool:
         if not path.name.lower().endswith(VOLUME_SUFFIXES) or not path.is_file():
             return False
         try:
+            if path.name.lower().endswith(".mgh"):  # its header only: nib.load leaves an .mgh file open
+                with path.open("rb") as f:
+                    header = nib.freesurfer.mghformat.MGHHeader.from_fileobj(f)  # type: ignore[no-untyped-call]
+                    return _solid(tuple(header.get_data_shape()))
             image = nib.load(str(path))
         except Exception:  # not readable: the map readers say why
             return False
     if not (hasattr(image, "dataobj") and hasattr(image, "affine") and hasattr(image, "shape")):
         return False
-    return sum(int(s) > 1 for s in tuple(image.shape)[:3]) >= 2
+    return _solid(tuple(image.shape))
+
+
+def _solid(shape: tuple[int, ...]) -> bool:
+    """Whether an image of `shape` has two or more spatial axes of more than one voxel."""
+    return sum(int(s) > 1 for s in tuple(shape)[:3]) >= 2
 

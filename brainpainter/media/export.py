@@ -34,8 +34,9 @@ from brainpainter.atlas.template import Template
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.media.glb import RegionMesh, glb_bytes, packed
 from brainpainter.rendering.geometry import VertexColors
+from brainpainter.rendering.layers import LayerOptions
 from brainpainter.rendering.maprun import MapRun
-from brainpainter.rendering.options import Options, RenderKwargs
+from brainpainter.rendering.options import Options, RenderKwargs, option_names
 from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.settings import RGB
 
@@ -236,7 +237,8 @@ def _script_json(obj: Any) -> str:
 
 
 def html_page(glb: bytes, *, title: str, meshes: Sequence[RegionMesh], background: RGB | None,
-              colorbar_png: bytes | None = None, azimuth: float = 180.0) -> str:
+              colorbar_png: bytes | None = None, azimuth: float = 180.0,
+              more_bars: Sequence[bytes] = ()) -> str:
     """One self-contained HTML page showing `glb` with three.js (no network needed).
 
     Parameters
@@ -256,6 +258,8 @@ def html_page(glb: bytes, *, title: str, meshes: Sequence[RegionMesh], backgroun
         A colour bar image shown under the title.
     azimuth : float
         Start view, degrees as in :mod:`brainpainter.rendering.views` (180: from the left).
+    more_bars : sequence of bytes
+        The colour bars (PNG) of further layers with scales of their own, under the first.
     """
     bg = "#{:02x}{:02x}{:02x}".format(*(round(v * 255) for v in (background or (1.0, 1.0, 1.0))))
     dark = background is not None and sum(background) < 1.5
@@ -264,8 +268,14 @@ def html_page(glb: bytes, *, title: str, meshes: Sequence[RegionMesh], backgroun
     # what lies inside the cortex shows through it: the cortex drawn as glass
     glass = [p for p in ("lh", "rh") if p in parts and "connectome" in parts]
     config = {"azimuth": azimuth, "parts": parts, "background": bg, "glass": glass}
-    bar = (f'<img id="colorbar" alt="colour bar" src="data:image/png;base64,'
-           f'{base64.b64encode(colorbar_png).decode()}">' if colorbar_png else "")
+    attrs = ['id="colorbar"', *['class="colorbar"'] * len(more_bars)]
+
+    def b64(png: bytes) -> str:
+        return base64.b64encode(png).decode()
+
+    bar = "".join(f'<img {attr} alt="colour bar" src="data:image/png;base64,{b64(png)}">'
+                  for attr, png in zip(attrs, [colorbar_png, *more_bars], strict=True)
+                  if png)
     names = {"lh": "left cortex", "rh": "right cortex", "subcortical": "subcortical", "tracts": "tracts",
              "connectome": "connectome"}
     toggles = "".join(f'<label><input type="checkbox" data-part="{p}" checked> {names[p]}</label>'
@@ -290,7 +300,7 @@ html, body {{ margin: 0; height: 100%; overflow: hidden; background: {bg}; color
 #panel {{ position: absolute; left: 12px; top: 10px; max-width: 60%; }}
 #panel h1 {{ font-size: 16px; margin: 0 0 4px 0; font-weight: 600; }}
 #panel label {{ margin-right: 10px; user-select: none; }}
-#colorbar {{ display: block; max-width: 100%; margin: 4px 0; }}
+#colorbar, .colorbar {{ display: block; max-width: 100%; margin: 4px 0; }}
 #help {{ position: absolute; left: 12px; bottom: 8px; opacity: 0.7; font-size: 12px; }}
 #tip {{ position: absolute; pointer-events: none; display: none; padding: 2px 6px; border-radius: 3px;
   background: rgba(0, 0, 0, 0.78); color: #fff; font-size: 13px; white-space: nowrap; }}
@@ -317,32 +327,34 @@ EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cm
                   "strict", "tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_values",
                   "tract_value", "tract_radius", "lh", "rh", "volume", "projection", "projection_radius",
                   "underlay", "underlay_contrast", "threshold", "outline", "outline_threshold", "space",
-                  "frames", "lh_surface", "rh_surface", "connectome", "nodes", "node_values",
-                  "node_categories", "directed", "edge_threshold", "top_edges", "edges_of", "nodes_space")
+                  "frames", "lh_surface", "rh_surface", *option_names(LayerOptions),  # each layer's own scale
+                  "connectome", "nodes", "node_values", "node_categories", "directed", "edge_threshold",
+                  "top_edges", "edges_of", "nodes_space")
 
 
 def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
     """The scene of a run and the meshes of its row `i`: a map's cortex coloured per vertex, or
     the regions, then the tracts' tubes."""
+    from brainpainter.rendering.composition import tract_colors
     from brainpainter.rendering.connectome_layers import connectome_colors
     from brainpainter.rendering.painter import load_scene, region_colors
-    from brainpainter.rendering.tract_run import tract_colors
 
-    opts = run.options.scene
-    if isinstance(run, MapRun):
-        _, scene = load_scene(run.table.atlas, opts.template, opts.surface, opts.hide)
-        return scene, vertex_meshes(scene, run.colors(i))
-    table, tv = run.table, run.tract_values
-    atlas_obj, scene = load_scene(table.atlas, opts.template, opts.surface, opts.hide,
+    opts, tv = run.options.scene, run.tract_values
+    atlas_obj, scene = load_scene(run.table.atlas, opts.template, opts.surface, opts.hide,
                                   tracts=opts.tract_spec(), tract_nodes=tv.nodes if tv is not None else (),
                                   tract_radius=opts.tract_radius, connectome=run.connectome)
+    inside = connectome_meshes(scene, run.connectome, connectome_colors(run.connectome, run.layers)
+                               if run.connectome is not None else {})  # a connectome's nodes and edges
+    if isinstance(run, MapRun):  # the map, then the tracts drawn with it
+        colors = run.colors(i)
+        return scene, vertex_meshes(scene, colors) + tract_meshes(scene, colors.regions) + inside
+    table = run.table
     values = table.row(i)
     meshes = region_meshes(scene, region_colors(values, atlas_obj, run.scale_of("regions")),
                            atlas_obj.expand(values))
     meshes += tract_meshes(
         scene, tract_colors(tv.row(table.images[i]), run.scale_of("tracts")) if tv is not None else {})
-    return scene, meshes + connectome_meshes(scene, run.connectome, connectome_colors(
-        run.connectome, run.layers) if run.connectome is not None else {})
+    return scene, meshes + inside
 
 
 def export(data: Any, out: str | Path, *, format: str | None = None, row: str | int | None = None,
@@ -366,7 +378,7 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
     title : str, optional
         HTML heading; default the row's image name.
     label : str, optional
-        Colour-bar label in the HTML page.
+        Colour-bar label in the HTML page (its first bar's: one per scaled layer, each labelled).
     **options
         The options of :data:`EXPORT_OPTIONS`, as for :func:`brainpainter.render`
         (:class:`brainpainter.rendering.options.Options`); the colour scale spans
@@ -406,15 +418,22 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
         from brainpainter.io.output import png_bytes
         from brainpainter.media.colorbar import colorbar_image
         from brainpainter.media.drawn import swatches_needed
+        from brainpainter.rendering.layers import colorbar_layers
         from brainpainter.rendering.views import parse_views
 
         views = run.views if isinstance(run, MapRun) else parse_views("lateral-left,medial-right,subcortical")
         nan, missing = swatches_needed(table, [i], views, scene.geometry)
-        bar = colorbar_image(run.scale, (420, 64 if label else 48), background=run.settings.background,
-                             label=label, nan=nan, missing=missing, fontsize=9.0)
+        layers = colorbar_layers(run.layers)
+        if label is None and len(layers) > 1:  # several bars: each names its layer
+            label = layers[0].label
+        bars = [colorbar_image(layer.scale, (420, 64 if lb else 48), background=run.settings.background,
+                               label=lb, fontsize=9.0, **({"nan": nan, "missing": missing} if k == 0 else {}))
+                for k, (layer, lb) in enumerate(zip(layers, [label, *(la.label for la in layers[1:])],
+                                                    strict=True))]
         payload = html_page(packed(glb_bytes(meshes, compact=True)), title=title or table.images[i],
                             meshes=meshes, background=run.settings.background,
-                            colorbar_png=png_bytes(bar)).encode("utf-8")
+                            colorbar_png=png_bytes(bars[0]),
+                            more_bars=[png_bytes(b) for b in bars[1:]]).encode("utf-8")
     out.parent.mkdir(parents=True, exist_ok=True)
     atomic_write_bytes(out, payload)
     return out

@@ -71,12 +71,14 @@ class FrameComposer:
         For the colour bar.
     title : str, optional
         A line above the views.
+    more_bars : sequence of (ColourScale, str)
+        Colour bars of further layers and their labels, one under the other below the first.
     """
 
     def __init__(self, n_views: int, size: tuple[int, int], scale: ColourScale, key_clock: Sequence[float],
                  *, background: ColorLike = "white", label: str | None = None,
                  ticks: Sequence[float] | str | None = None, nan: bool = False, missing: bool = False,
-                 title: str | None = None) -> None:
+                 title: str | None = None, more_bars: Sequence[tuple[ColourScale, str]] = ()) -> None:
         from brainpainter.media.colorbar import colorbar_height, colorbar_image, text_color
 
         w, h = size
@@ -94,9 +96,14 @@ class FrameComposer:
         self.header = round(52 * u) if title else 0
         cb_w = min(width - 2 * pad, max(round(520 * u), 240))
         side = width >= cb_w + max(round(360 * u), 200) + 3 * pad
-        cb_args: dict[str, Any] = {"label": label, "ticks": ticks, "nan": nan, "missing": missing,
-                                   "fontsize": max(6.0, 16.0 * u)}
-        cb_h = max(56, round(110 * u), math.ceil(colorbar_height(scale, cb_w / 100.0, **cb_args) * 100))
+        fontsize = max(6.0, 16.0 * u)
+        first: dict[str, Any] = {"label": label, "ticks": ticks, "nan": nan, "missing": missing,
+                                 "fontsize": fontsize}
+        bars: list[tuple[ColourScale, dict[str, Any]]] = [
+            (scale, first), *((s, {"label": lb, "fontsize": fontsize}) for s, lb in more_bars)]
+        bar_h = [max(56, round(110 * u), math.ceil(colorbar_height(s, cb_w / 100.0, **args) * 100))
+                 for s, args in bars]
+        cb_h = sum(bar_h)
         cb_h += cb_h % 2
         caption_h = round(92 * u)
         footer = max(cb_h, caption_h) if side else cb_h + caption_h
@@ -105,10 +112,12 @@ class FrameComposer:
         W, H = self.size
         canvas = np.empty((H, W, 3), np.uint8)
         canvas[:] = self.bg
-        cb = colorbar_image(scale, (cb_w, cb_h), background=background, **cb_args)
         y0 = self.header + h + (footer - cb_h if side else caption_h)
         x0 = W - cb_w - pad if side else (W - cb_w) // 2
-        canvas[y0:y0 + cb_h, x0:x0 + cb_w] = _over(cb, self.bg)
+        for (s, args), bh in zip(bars, bar_h, strict=True):  # one bar per scaled layer, one under the other
+            cb = colorbar_image(s, (cb_w, bh), background=background, **args)
+            canvas[y0:y0 + bh, x0:x0 + cb_w] = _over(cb, self.bg)
+            y0 += bh
         self.caption_box = (pad, self.header + h, (x0 - pad) if side else (W - pad),
                             self.header + h + caption_h)
         if title:

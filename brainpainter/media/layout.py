@@ -1,9 +1,10 @@
-"""Figure layout: renders, headings and one colour bar placed at the figure's printed size.
+"""Figure layout: renders, headings and colour bars placed at the figure's printed size.
 
 :class:`FigureOptions` is the one definition of the figure options (``--grid``,
 ``--title``, ``--label``, ``--ticks``, ``--dpi``, ``--fig-width``,
-``--font-size``, ``--view-labels``), checked when made; :func:`compose_figure`
-lays out the renders with them.
+``--font-size``, ``--view-labels``, ``--colorbar-position``), checked when made;
+:func:`compose_figure` lays out the renders with them: one colour bar per scaled
+layer, horizontal side by side under the images, or upright in a column at their right.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from numpy.typing import NDArray
 
 from brainpainter.color.rgb import ColorLike
 from brainpainter.color.scale import ColourScale
-from brainpainter.errors import BrainPainterError, within
+from brainpainter.errors import BrainPainterError, choice_error, within
 from brainpainter.media.drawn import common_crop
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -27,6 +28,9 @@ ONE_COLUMN_IN = 3.5  # inches; journals: 85-90 mm single column, 170-183 mm doub
 TWO_COLUMN_IN = 7.2
 GAP_IN, PAD_IN = 0.04, 0.05  # between images, around the figure
 BAR_GAP_IN = 0.3  # between colour bars side by side
+RIGHT_GAP_IN = 0.12  # between the images and upright colour bars at their right, and between those bars
+#: Where a figure's colour bars go (``--colorbar-position``).
+COLORBAR_POSITIONS = ("bottom", "right")
 
 
 class FigureKwargs(TypedDict, total=False):
@@ -40,6 +44,7 @@ class FigureKwargs(TypedDict, total=False):
     fig_width: float | None
     font_size: float
     view_labels: bool
+    colorbar_position: str
 
 
 def check_figure_text(font_size: float, fig_width: float | None) -> None:
@@ -75,6 +80,8 @@ class FigureOptions:
         title two more).
     view_labels : bool
         Name the views (row labels in a grid, column headings otherwise).
+    colorbar_position : {"bottom", "right"}
+        The colour bars horizontal under the images, or upright at their right.
     """
 
     grid: bool = field(default=False, metadata={
@@ -90,8 +97,14 @@ class FigureOptions:
     font_size: float = field(default=8.0, metadata={"help": "Text size in points."})
     view_labels: bool = field(default=False, metadata={
         "help": "Name the views (row labels in a grid, headings otherwise)."})
+    colorbar_position: str = field(default="bottom", metadata={
+        "choices": COLORBAR_POSITIONS,
+        "help": "Where the colour bars go, one per scaled layer, each labelled: horizontal under the images, "
+                "or upright at their right."})
 
     def __post_init__(self) -> None:
+        if self.colorbar_position not in COLORBAR_POSITIONS:
+            raise choice_error("colorbar_position", self.colorbar_position, COLORBAR_POSITIONS)
         if not within(self.dpi, 50, 1200):
             raise BrainPainterError(f"dpi must be between 50 and 1200; {self.dpi} was given.")
         check_figure_text(self.font_size, self.fig_width)
@@ -163,11 +176,12 @@ class Grid:
 
 
 def plan_grid(aspect: Mapping[str, float], image_names: Sequence[str], view_names: Sequence[str],
-              opts: FigureOptions, colorbar_h: Callable[[float], float]) -> Grid:
+              opts: FigureOptions, colorbar_h: Callable[[float], float], colorbar_w: float = 0.0) -> Grid:
     """Sizes of the figure: `aspect` is each view's height / width after cropping.
 
-    `colorbar_h` gives the colour bar's height (with its label) for the width
-    of the image area, inches.
+    `colorbar_h` gives the colour bars' height (with their labels) for the width of the image
+    area, inches; with ``opts.colorbar_position == "right"`` the bars take `colorbar_w` inches
+    at the images' right instead.
     """
     grid = opts.grid
     n_cols = len(image_names) if grid else len(view_names)
@@ -179,7 +193,8 @@ def plan_grid(aspect: Mapping[str, float], image_names: Sequence[str], view_name
     left = PAD_IN + (1.5 * pt if row_heads else 0.0)
     top = (PAD_IN + (1.6 * (opts.font_size + 2) / 72.0 if opts.title else 0.0)
            + (1.5 * pt if col_heads else 0.0))
-    usable = width - left - PAD_IN
+    right = opts.colorbar_position == "right"
+    usable = width - left - PAD_IN - (colorbar_w if right else 0.0)
     if grid:
         cw = (usable - GAP_IN * (n_cols - 1)) / n_cols
         col_w, row_h = [cw] * n_cols, [cw * aspect[v] for v in view_names]
@@ -192,7 +207,7 @@ def plan_grid(aspect: Mapping[str, float], image_names: Sequence[str], view_name
             f"the figure is too narrow for {n_cols} image columns at {width:g} in; give a larger "
             "figure width (--fig-width) or fewer rows/views."
         )
-    bottom = 0.08 + colorbar_h(usable)
+    bottom = PAD_IN if right else 0.08 + colorbar_h(usable)
     height = top + sum(row_h) + GAP_IN * (len(row_h) - 1) + bottom
     return Grid(width, height, left, top, usable, col_w, row_h, row_heads, col_heads)
 
@@ -234,25 +249,42 @@ def compose_figure(images: Mapping[tuple[str, str], NDArray[Any]], image_names: 
 
     bars = [(scale, opts.label, opts.ticks, nan, missing),
             *((s, lb, None, False, False) for s, lb in more_bars)]
-    if len(bars) > 1:  # narrower bars side by side: every other round tick where there are many
+    right = opts.colorbar_position == "right"
+    if len(bars) > 1 and not right:  # narrower bars side by side: every other round tick where there are many
         bars = [(s, lb, t if t is not None else thinned_ticks(s), n, m) for s, lb, t, n, m in bars]
+    widths: list[float] = []
+    if right:  # each bar's width; a label longer than the images are tall on two lines
+        room = None
+        for _ in range(2):
+            measured = [colorbar_width(s, dpi=opts.dpi, label=lb, ticks=t, nan=n, missing=m,
+                                       fontsize=opts.font_size, room=room) for s, lb, t, n, m in bars]
+            widths = [w for w, _ in measured]
+            first = plan_grid(aspect, image_names, view_names, opts, lambda _: 0.0,
+                              sum(widths) + RIGHT_GAP_IN * len(widths))
+            room = first.images_bottom - first.top
+        bars = [(s, text, t, n, m) for (s, _, t, n, m), (_, text) in zip(bars, measured, strict=True)]
 
     def bar_h(usable: float) -> float:
         width = bar_width(usable, len(bars))
         return max(colorbar_height(s, width, dpi=opts.dpi, label=lb, ticks=t, nan=n, missing=m,
                                    fontsize=opts.font_size) for s, lb, t, n, m in bars)
 
-    grid = plan_grid(aspect, image_names, view_names, opts, bar_h)
+    grid = plan_grid(aspect, image_names, view_names, opts, bar_h, sum(widths) + RIGHT_GAP_IN * len(widths))
     fig = new_figure((grid.width, grid.height), opts.dpi, background)
     layout = FigureLayout(fig)
     color = text_color(background)
     draw_images(layout, grid, images, crops, image_names, view_names, opts.grid)
     draw_headings(fig, grid, opts, color)
     width = bar_width(grid.usable, len(bars))
+    x = grid.left + grid.usable
     for k, (s, label, ticks, n, m) in enumerate(bars):
-        x = grid.left + k * (width + BAR_GAP_IN)
         bar_opts = replace(opts, label=label, ticks=ticks)
-        slot = (x, width, 1.0 / len(bars))
+        if right:
+            x += RIGHT_GAP_IN
+            layout.colorbar_axes.append(draw_upright_bar(fig, grid, s, bar_opts, n, m, color, x))
+            x += widths[k]
+            continue
+        slot = (grid.left + k * (width + BAR_GAP_IN), width, 1.0 / len(bars))
         layout.colorbar_axes.append(draw_bar(fig, grid, s, bar_opts, n, m, color, slot))
     layout.colorbar_ax = layout.colorbar_axes[0]
     return layout
@@ -321,3 +353,58 @@ def draw_bar(fig: Figure, grid: Grid, scale: ColourScale, opts: FigureOptions, n
     cb_ax.set_position((pos.x0, 1 - (cb_top + bar_h) / grid.height, pos.width, bar_h / grid.height))
     return cb_ax
 
+
+
+def colorbar_width(scale: ColourScale, *, dpi: float = 100.0, fontsize: float = 8.0,
+                   room: float | None = None, **kwargs: Any) -> tuple[float, str | None]:
+    """Width (inches) an upright colour bar needs for itself, its ticks, label and swatches, and its label
+    (on two lines where it is longer than `room` inches).
+
+    Parameters as :func:`draw_colorbar` (``label``, ``ticks``, ``nan``, ``missing``).
+    """
+    import textwrap
+
+    from brainpainter.media.colorbar import decorations_bbox, draw_colorbar, new_figure
+
+    fig = new_figure((6.0, 3.0), dpi)
+    ax = fig.add_axes((0.05, 0.3, 1.1 * fontsize / 72.0 / 6.0, 0.6))
+    draw_colorbar(ax, scale, orientation="vertical", fontsize=fontsize, **kwargs)
+    fig.draw_without_rendering()
+    label = ax.yaxis.label
+    text = label.get_text()
+    if room is not None and " " in text and label.get_window_extent().height > room * dpi:
+        label.set_text(textwrap.fill(text, width=len(text) // 2 + 1))
+        fig.draw_without_rendering()
+    box = decorations_bbox(ax)
+    return float(box.x1 - ax.get_window_extent().x0) / dpi + 0.02, label.get_text() or None
+
+
+def draw_upright_bar(fig: Figure, grid: Grid, scale: ColourScale, opts: FigureOptions, nan: bool,
+                     missing: bool, color: str, x: float) -> Axes:
+    """An upright colour bar at `x` inches from the left, beside the images (its ticks, label and
+    swatches to its right and below it); returns its axes."""
+    from brainpainter.media.colorbar import draw_colorbar
+
+    thickness = 1.1 * opts.font_size / 72.0  # as a horizontal bar is tall
+    tall = grid.images_bottom - grid.top
+    height = tall * (0.7 if nan or missing else 0.9)  # swatches below the bar
+    cb_ax = fig.add_axes(grid.box(x, grid.top + (tall - height) / (4 if nan or missing else 2), thickness,
+                                  height))
+    draw_colorbar(cb_ax, scale, label=opts.label, ticks=opts.ticks, orientation="vertical", nan=nan,
+                  missing=missing, fontsize=opts.font_size, color=color)
+    fit_upright_label(cb_ax, fig.bbox.height * (1 - 2 * PAD_IN / grid.height))
+    return cb_ax
+
+
+def fit_upright_label(ax: Axes, room: float) -> None:
+    """An upright bar's label longer than `room` (display pixels, its lines given by
+    :func:`colorbar_width`): smaller type, down to 5 pt."""
+    from brainpainter.media.colorbar import figure_of
+
+    label = ax.yaxis.label
+    if not label.get_text():
+        return
+    figure_of(ax).draw_without_rendering()
+    tall = label.get_window_extent().height
+    if tall > room:
+        label.set_fontsize(max(5.0, float(label.get_fontsize()) * room / tall))

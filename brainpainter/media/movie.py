@@ -55,12 +55,13 @@ from brainpainter.media.timeline import (
     plan_frames,
     read_times,
 )
+from brainpainter.rendering.composition import tract_colors
 from brainpainter.rendering.connectome_layers import connectome_colors
+from brainpainter.rendering.layers import colorbar_layers
 from brainpainter.rendering.options import Options, RenderKwargs, take
 from brainpainter.rendering.painter import region_colors
 from brainpainter.rendering.parallel import Item, Runner
 from brainpainter.rendering.run import Run, make_runner, prepare_run
-from brainpainter.rendering.tract_run import tract_colors
 from brainpainter.rendering.views import View
 from brainpainter.table.rows import select_rows
 
@@ -339,9 +340,12 @@ class MovieFrames:
                         else swatches_needed(run.table, keys.rows, run.views, painter.scene.geometry))
         w, h = run.settings.width, run.settings.height
         assert run.settings.background is not None
+        more = [(layer.scale, layer.label) for layer in colorbar_layers(run.layers)[1:]]
+        # several bars: each names its layer
+        label = movie.label if movie.label is not None or not more else run.layers[0].label
         composer = FrameComposer(len(run.views), (w, h), run.scale, keys.times,
-                                 background=run.settings.background, label=movie.label, ticks=movie.ticks,
-                                 nan=nan, missing=missing, title=movie.title)
+                                 background=run.settings.background, label=label, ticks=movie.ticks,
+                                 nan=nan, missing=missing, title=movie.title, more_bars=more)
         n = len(plan)
         azimuths = [float(movie.orbit) * i / n for i in range(n)]
         if movie.orbit:

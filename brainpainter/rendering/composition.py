@@ -1,9 +1,11 @@
-"""The layers of a run, each with its colour scale: region values, then tract values or a map over them.
+"""The layers of a run, each with its colour scale: region values, then tract values or a map over them,
+then lines (an atlas's outline, a second map's contour).
 
 :func:`run_layers` is where a run's scales are made (:func:`run_scale` over all rows): the first
 layer's from the plain scale options and its own, a later layer's from its own options
 (:class:`~brainpainter.rendering.layers.LayerOptions`) or, given none, the first layer's shared.
-:class:`RegionsBelow` gives a map run its region values underneath, per vertex.
+:class:`RegionsBelow` gives a map run its region values underneath, per vertex. :func:`line_layers`
+is where ``--outline ATLAS`` and ``--contour FILE`` enter every run (of regions or of a map).
 """
 
 from __future__ import annotations
@@ -19,12 +21,14 @@ from numpy.typing import NDArray
 from brainpainter.atlas.model import HEMI_PREFIX
 from brainpainter.color.scale import ColourScale, ScaleOptions, widen
 from brainpainter.errors import BrainPainterError
-from brainpainter.maps.inputs import VertexMaps
+from brainpainter.maps.inputs import VertexMaps, read_maps
 from brainpainter.maps.layers import map_scale
+from brainpainter.maps.options import MapOptions
+from brainpainter.maps.outlines import Contours
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import Options
 from brainpainter.rendering.painter import region_colors
-from brainpainter.rendering.settings import RGB
+from brainpainter.rendering.settings import RGB, RenderSettings, outlined
 from brainpainter.table.region_table import RegionTable
 from brainpainter.tracts.values import TractValues
 
@@ -76,6 +80,15 @@ def layer_label(options: Options, kind: str, table: RegionTable) -> str:
         if table.regions:  # bundle columns beside region columns in one table
             return f"{Path(table.source).name} (tracts)"
     return Path(table.source).name if table.source else kind
+
+
+def tract_colors(values: Mapping[str, float], scale: ColourScale) -> dict[str, RGB]:
+    """Colour of each bundle (or bundle node) key for one image; NaN: the scale's NaN colour."""
+    keys = list(values)
+    if not keys:
+        return {}
+    rgb = scale(np.array([values[k] for k in keys], dtype=float))
+    return {k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(keys, rgb, strict=True)}
 
 
 def run_scale(options: ScaleOptions, values: NDArray[Any], measures: bool) -> ColourScale:
@@ -134,6 +147,16 @@ class RegionsBelow:
             vertex_region[hemi] = index[label]
         return cls(table, scale, vertex_region, tuple(keys))
 
+    def on_flat(self, labels: Mapping[str, NDArray[Any]], names: Mapping[str, Sequence[str]]) -> RegionsBelow:
+        """These regions also under the flat maps' vertices (``flat-lh``, ``flat-rh``): `labels`, per
+        hemisphere, index `names` (the map mesh's label names), shape (32492,)."""
+        regions = dict(self.vertex_region)
+        for hemi, label in labels.items():
+            index = np.array([self.keys.index(k) if (k := HEMI_PREFIX[hemi] + n) in self.keys else -1
+                              for n in names[hemi]], np.int64)
+            regions[f"flat-{hemi}"] = index[np.asarray(label, np.int64)]
+        return replace(self, vertex_region=regions)
+
     def colors(self, row: int) -> tuple[dict[str, RGB], dict[str, NDArray[Any]]]:
         """Row `row`'s colours: every region key's, and each drawn vertex's (NaN: none), float32 (n, 3)."""
         regions = region_colors(self.table.row(row), self.table.atlas, self.scale)
@@ -142,30 +165,108 @@ class RegionsBelow:
 
 
 def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None, meshes: Mapping[str, Any],
+               tract_values: TractValues | None = None,
                others: Sequence[str] = ()) -> tuple[tuple[Layer, ...], RegionsBelow | None]:
-    """The layers of a map run: the map alone, or region values (`table`) with the map over them.
+    """The layers of a map run: the map alone, or region values (`table`) with the map over them;
+    then tract values, if given.
 
     The map's scale is its own (``--map-cmap``, ...; else the automatic scale of a map,
     :func:`brainpainter.maps.layers.map_scale`); drawn over region values it covers them by
-    ``--map-alpha``. `meshes` are the meshes the map is drawn on, by hemisphere; `others` the
-    kinds the run draws besides (a connectome's edges and nodes).
+    ``--map-alpha``. `meshes` are the meshes the map is drawn on, by hemisphere. Tract values take
+    their own options (``--tracts-cmap``, ...; a gradient spans their values), else the first layer's scale.
+    `others`: the kinds the run draws besides (a connectome's edges and nodes).
     """
     given = options.layers.label("map")
     label = given if given is not None else Path(maps.source).name or "map"
     alpha = float(options.layers.map_alpha)
     threshold = options.maps.threshold
-    options.layers.check_drawn([*(["map"] if table is None else ["regions", "map"]), *others])
+    tracts = ["tracts"] if tract_values is not None else []
+    drawn = ["map", *tracts] if table is None else ["regions", "map", *tracts]
+    options.layers.check_drawn([*drawn, *others])
     if table is None:
         own = options.layers.scale_options("map", options.scale, first=True)
         assert own is not None
-        return (Layer("map", map_scale(own, maps, threshold), alpha, label),), None
+        layers: tuple[Layer, ...] = (Layer("map", map_scale(own, maps, threshold), alpha, label),)
+        return layers + tract_layer(options, tract_values, layers[0]), None
     if maps.n_images not in (1, len(table.images)):
         raise BrainPainterError(
             f"a map drawn over region values has one image, or one per row of the table; the map has "
             f"{maps.n_images} and the table {len(table.images)} rows ({table.source}). Give a map of one "
             "image, or as many as the table's rows.")
-    regions = run_layers(options, table, None, False, others=("map", *others))[0]
+    regions = run_layers(options, table, None, False, others=("map", *tracts, *others))[0]
     own = options.layers.scale_options("map", options.scale, first=False)
     plain = ScaleOptions(nan_color=options.scale.nan_color, missing_color=options.scale.missing_color)
     scale = map_scale(own if own is not None else plain, maps, threshold)
-    return (regions, Layer("map", scale, alpha, label)), RegionsBelow.of(table, regions.scale, meshes)
+    layers = (regions, Layer("map", scale, alpha, label))
+    return layers + tract_layer(options, tract_values, regions), RegionsBelow.of(table, regions.scale, meshes)
+
+
+def tract_layer(options: Options, tract_values: TractValues | None, first: Layer) -> tuple[Layer, ...]:
+    """The tract values' layer of a map run (none without them): their own scale, else `first`'s."""
+    if tract_values is None:
+        return ()
+    own = options.layers.scale_options("tracts", options.scale, first=False)
+    scale = first.scale if own is None else run_scale(own, tract_values.values, True)
+    given = options.layers.label("tracts")
+    scene = options.scene
+    label = given if given is not None else scene.tract_value or Path(str(scene.tract_values)).name
+    return (Layer("tracts", scale, 1.0, label, own_scale=own is not None),)
+
+
+def line_layers(options: Options, drawn: str,
+                outlines: Sequence[str] | None) -> tuple[Contours | None, RenderSettings]:
+    """The lines of a run: ``--outline ATLAS`` (its region borders) and ``--contour FILE`` (iso-lines).
+
+    Both are drawn at ``--outline-width`` pixels in ``--outline-color``
+    (:mod:`brainpainter.rendering.borders`), over region values or a map alike.
+
+    Parameters
+    ----------
+    options : Options
+    drawn : str
+        What the run draws, for the message about an outline it cannot draw (``a region render``).
+    outlines : sequence of str, optional
+        The one atlas whose borders the run can draw (a region table's: its name, its label set's);
+        None: any (a map alone is drawn on the outline atlas's mesh).
+
+    Returns
+    -------
+    contours : Contours or None
+        The contour map on fsaverage and its levels (``regions``: the atlas's borders drawn too).
+    settings : RenderSettings
+        The image settings, with a line width where lines are drawn.
+    """
+    outline = options.maps.outline
+    if outline is not None and outlines is not None and outline not in outlines:
+        raise BrainPainterError(
+            f"{drawn} outlines its own atlas's regions ({outlines[0]!r}); --outline {outline!r} was given. "
+            f"Give --outline {outlines[0]}, or draw a map alone (--lh/--rh).")
+    contours = read_contours(options.maps)
+    return contours, outlined(options.settings, outline if contours is None else "contour")
+
+
+def line_entries(options: Options, contours: Contours | None) -> list[dict[str, Any]]:
+    """The manifest's ``lines``: the outline's atlas and the contour's levels, as drawn."""
+    outline = options.maps.outline
+    return ([{"kind": "outline", "atlas": outline}] if outline is not None else []) + (
+        [{"kind": "contour", "levels": list(contours.levels)}] if contours is not None else [])
+
+
+def read_contours(options: MapOptions) -> Contours | None:
+    """The second map of ``--contour`` (``FILE`` or ``LH,RH``) and its levels, on fsaverage (None without)."""
+    if options.contour is None:
+        return None
+    given = options.contour
+    parts = [p.strip() for p in given.split(",")] if isinstance(given, str) else None
+    pair = parts is not None and len(parts) == 2
+    try:
+        maps = read_maps(None, parts[0], parts[1]) if parts is not None and pair else read_maps(given)
+    except BrainPainterError as exc:  # the readers speak of --lh/--rh: say which option it was
+        what = given if isinstance(given, str) else "(a map)"
+        raise BrainPainterError(f"--contour {what}: {str(exc).rstrip('.')}; --contour takes one file whose "
+                                "name says its hemisphere, or two: LH,RH.") from None
+    if maps.n_images != 1:
+        raise BrainPainterError(f"--contour takes a map of one image; {maps.source} has {maps.n_images}. "
+                                "Give one image (a cluster mask, a p-map).")
+    values = {hemi: np.asarray(maps.on_fsaverage(hemi, 0), np.float32) for hemi in maps.values}
+    return Contours(values, options.levels, regions=options.outline is not None)

@@ -25,8 +25,11 @@ from brainpainter.rendering.views import View
 MARGIN = 0.04
 _POLE_TOLERANCE = 1e-6
 #: Kinds of scene part: cortex of one hemisphere, all subcortical structures, one glass hull, the
-#: white-matter tracts of one hemisphere (or the commissural and midline ones: hemi None).
-PART_KINDS = ("cortex", "subcortical", "glass", "tract")
+#: white-matter tracts of one hemisphere (or the commissural and midline ones: hemi None), the flat
+#: map of one hemisphere (drawn unlit, by flat views only), a connectome's nodes and its edges.
+PART_KINDS = ("cortex", "subcortical", "glass", "tract", "flat", "node", "edge")
+#: Least depth a camera frames, millimetres: a flat map (no depth) keeps its borders, lifted off it, in view.
+MIN_DEPTH = 1.0
 
 
 #: Kinds of parts that lie inside the cortex (tracts, a connectome's nodes and edges): drawn where tracts are.
@@ -42,12 +45,13 @@ def shows(view: View, kind: str, hemi: str | None, cortex: str = "opaque") -> bo
     ``cortex`` views draw those of ``view.hemis`` and the commissural ones
     (`hemi` None) when the cortex is drawn as glass or hidden, and none under
     an opaque cortex (it hides them; the other hemisphere's would stand in
-    front of a medial wall).
+    front of a medial wall). ``flat`` views draw the flat maps of
+    ``view.hemis`` and nothing else; no other view draws a flat map.
 
     Parameters
     ----------
     view : View
-    kind : {"cortex", "subcortical", "glass", "tract", "node", "edge"}
+    kind : {"cortex", "subcortical", "glass", "tract", "flat", "node", "edge"}
         Nodes and edges are drawn as tracts are.
     hemi : {"lh", "rh"} or None
         None for the subcortical part and for commissural tracts.
@@ -57,6 +61,8 @@ def shows(view: View, kind: str, hemi: str | None, cortex: str = "opaque") -> bo
         draws it (as glass: :meth:`~brainpainter.rendering.geometry.SceneGeometry.visible`),
         ``hidden`` does not.
     """
+    if view.content == "flat" or kind == "flat":
+        return view.content == "flat" and kind == "flat" and hemi in view.hemis
     if kind == "glass":
         return hemi in view.glass
     if kind in INSIDE:
@@ -196,7 +202,7 @@ def frame(points: NDArray[Any], azimuth: float, elevation: float, zoom: float,
     width = max(u1 - u0, 1e-6) * (1 + 2 * margin)
     height = max(v1 - v0, 1e-6) * (1 + 2 * margin)
     scale = max(width, height * aspect) / zoom
-    depth = max(w1 - w0, 1e-3)
+    depth = max(w1 - w0, MIN_DEPTH)
     centre = right * (u0 + u1) / 2 + up * (v0 + v1) / 2
     # Sit one depth beyond the nearest point so nothing is clipped.
     location = centre + back * (w1 + depth)

@@ -22,13 +22,7 @@ profile, ``tract-direction:i`` for the fixed direction colours).
 White-matter tracts are parts of kind ``tract`` (``tracts-lh``, ``tracts-rh``
 and ``tracts`` for commissural bundles): triangle tubes built here
 (:func:`brainpainter.tracts.tubes.tube_mesh`), so a renderer draws them as it
-draws any opaque part.
-(:attr:`SceneGeometry.keys`).
-
-A connectome's nodes and edges are the parts ``nodes`` (kind ``node``: spheres) and
-``edges`` (kind ``edge``: cylinders), one slot per node (``node:i``) and per edge
-(``edge:k``) after the tracts' (:mod:`brainpainter.rendering.connectome_parts`); they
-are drawn where tracts are (:data:`brainpainter.rendering.framing.INSIDE`), as opaque parts.
+draws any opaque part; so are a connectome's ``nodes`` and ``edges`` (:mod:`.connectome_parts`).
 
 A scene coloured per vertex (``Scene.coloring == "vertices"``, a map) keeps
 one drawing path: its cortex parts are the template's stored meshes, not
@@ -73,7 +67,6 @@ from brainpainter.rendering.views import View
 
 if TYPE_CHECKING:
     from brainpainter.atlas.template import Template
-    from brainpainter.connectome.model import Connectome
     from brainpainter.tracts.model import Tracts
 
 
@@ -110,8 +103,6 @@ class SceneParts(Protocol):
     def tract_radius(self) -> float | None: ...
     @property
     def coloring(self) -> str: ...
-    @property
-    def connectome(self) -> Connectome | None: ...
 
 class Palette(Mapping[str, RGB]):
     """The colours of one image: a mapping region key -> sRGB, and the slot array renderers draw.
@@ -158,6 +149,8 @@ class Palette(Mapping[str, RGB]):
         """sRGB 0-1 per palette slot, float32, shape (n_slots, 3)."""
         if self._rgb is None:
             g = self.geometry
+            if any(key.startswith("flat-") for key in self._vertex_rgb):
+                g.flat_slots()  # a run with a flat view: the sheets' slots (once)
             rgb = g.default_rgb.copy()
             for key, i in g.slot_of.items():
                 c = self._colors.get(key)
@@ -196,12 +189,18 @@ class VertexColors(Mapping[str, RGB]):
 
 
 def cortex_mode(setting: str, parts: list[PartGeometry]) -> str:
-    """``RenderSettings.cortex`` resolved: ``auto`` is ``glass`` when `parts` hold what lies inside the
-    cortex (tracts, a connectome's nodes and edges: :data:`~brainpainter.rendering.framing.INSIDE`),
-    else ``opaque``."""
+    """``RenderSettings.cortex`` resolved: ``auto`` is ``glass`` when `parts` hold tracts or a connectome."""
     if setting != "auto":
         return setting
     return "glass" if any(p.kind in framing.INSIDE for p in parts) else "opaque"
+
+
+def _flat_able(template: Template, meshes: Mapping[str, Any]) -> bool:
+    """Whether a per-vertex scene of these cortex meshes can draw the flat maps (fsaverage's meshes)."""
+    from brainpainter.maps.resolution import own_vertex_count
+
+    return all(len(m.source_vertex) for m in meshes.values()) and all(
+        own_vertex_count(template, hemi) is None for hemi in meshes)
 
 
 class SceneGeometry:
@@ -225,7 +224,8 @@ class SceneGeometry:
     default_rgb : ndarray of float32, shape (n_slots, 3)
         Colour of each slot when the palette gives none.
     vertex_slots : dict of str to (int, int)
-        Per-vertex scenes: first slot and number of cortex vertices of each hemisphere (else empty).
+        Per-vertex scenes: first slot and number of cortex vertices of each hemisphere (else empty),
+        and of each flat map's once it has them (``flat-lh``, ``flat-rh``: :meth:`flat_slots`).
     source_vertex : dict of str to ndarray of int32, shape (n_vertices,)
         Per-vertex scenes: the fsaverage vertex of each cortex vertex, per hemisphere.
     """
@@ -245,11 +245,10 @@ class SceneGeometry:
         self.vertex_slots: dict[str, tuple[int, int]] = {}
         self.source_vertex: dict[str, NDArray[Any]] = {}
         if per_vertex:
-            for hemi, cm in meshes.items():
-                self.vertex_slots[hemi] = (len(defaults), len(cm.source_vertex))
-                self.source_vertex[hemi] = np.asarray(cm.source_vertex, np.int32)
-                defaults.extend([defaults[MEDIAL_SLOT]] * len(cm.source_vertex))
+            self._vertex_slots(meshes, defaults)
         first_key = len(defaults)
+        self._scene, self._first_key = scene, first_key
+        self._flat_able = per_vertex and _flat_able(template, meshes)
 
         def slots_for(names: list[str], default: int | RGB, drop: frozenset[str]) -> NDArray[Any]:
             out = np.full(len(names), -1, dtype=np.int64)
@@ -310,6 +309,47 @@ class SceneGeometry:
         self.slot_of = slot_of
         self.default_rgb = np.asarray(defaults, dtype=np.float32)
 
+    def _vertex_slots(self, meshes: Mapping[str, Any], defaults: list[RGB]) -> None:
+        """A per-vertex scene's slots (appended to `defaults`): each cortex vertex's."""
+        for hemi, cm in meshes.items():
+            self.vertex_slots[hemi] = (len(defaults), len(cm.source_vertex))
+            self.source_vertex[hemi] = np.asarray(cm.source_vertex, np.int32)
+            defaults.extend([defaults[MEDIAL_SLOT]] * len(cm.source_vertex))
+
+    def flat_slots(self) -> bool:
+        """Give a per-vertex scene the flat maps' vertex slots (``vertex_slots["flat-lh"]``, ``"flat-rh"``:
+        32492 each, after every other slot), once: when a palette first carries their colours
+        (:class:`VertexColors` of a run with a flat view) or a flat view is first drawn, so that runs
+        without one upload no larger palette. False where the scene has none (a region scene, a
+        template not made from fsaverage)."""
+        if "flat-lh" in self.vertex_slots:
+            return True
+        if not self._flat_able:
+            return False
+        from brainpainter.maps.flat import N_FLAT
+
+        start = self.n_slots
+        for i, hemi in enumerate(("lh", "rh")):
+            self.vertex_slots[f"flat-{hemi}"] = (start + i * N_FLAT, N_FLAT)
+        medial = np.repeat(self.default_rgb[MEDIAL_SLOT][None], 2 * N_FLAT, axis=0)
+        self.default_rgb = np.concatenate([self.default_rgb, medial])
+        check_slots(self.n_slots)
+        return True
+
+    @cached_property
+    def flat_parts(self) -> tuple[PartGeometry, ...]:
+        """The flat maps as parts of kind ``flat`` (``flat-lh``, ``flat-rh``), built when a flat view first
+        draws them (:func:`brainpainter.rendering.flat_parts.flat_parts`)."""
+        from brainpainter.rendering.flat_parts import flat_parts
+
+        per_vertex = self.flat_slots()
+        parts = flat_parts(self._scene, self.slot_of, self.vertex_slots, self.to_ras)
+        for part in parts:  # the regions drawn (a map's sheet: none, as a map's cortex)
+            self._part_slots[part.name] = frozenset() if per_vertex else frozenset(
+                int(i) for i in np.unique(part.palette_index) if i >= self._first_key)
+        self.__dict__.pop("part_keys", None)  # computed again with the flat parts' regions
+        return parts
+
     @cached_property
     def part_keys(self) -> dict[str, tuple[str, ...]]:
         """Region keys each cortex, subcortical or glass part draws (its faces' regions), by part name."""
@@ -332,29 +372,52 @@ class SceneGeometry:
 
         Per region, the edges between faces of two regions (hidden regions included: their
         border with what is drawn is drawn); per vertex, the lines through the midpoints of the
-        edges between vertices of two labels of the scene's label set, and a second map's
-        iso-lines (``scene.contours``).
+        edges between vertices of two labels of the scene's label set. A second map's iso-lines
+        (``scene.contours``) are added to either, drawn without the regions' borders unless
+        ``contours.regions``.
         """
-        from brainpainter.rendering.borders import face_borders, iso_lines, vertex_borders
-
-        normals = vertex_normals(verts, cm.faces)
-        if not per_vertex:
-            return face_borders(verts, cm.faces, np.asarray(cm.face_label), normals)
-        from brainpainter.maps.outlines import mesh_labels
+        from brainpainter.rendering.borders import face_borders, vertex_borders
 
         contours = getattr(scene, "contours", None)
-        lines: list[NDArray[np.float32]] = []
-        if contours is not None and hemi in contours.values and len(cm.source_vertex):
-            values = np.asarray(contours.values[hemi])[np.asarray(cm.source_vertex, np.int64)]
-            lines = [iso_lines(verts, cm.faces, values, level, normals) for level in contours.levels]
+        lines = SceneGeometry._contour_lines(scene, hemi, cm if per_vertex else None)
         if contours is not None and not contours.regions:
             return np.concatenate(lines) if lines else np.zeros((0, 2, 3), np.float32)
+        normals = vertex_normals(verts, cm.faces)
+        if not per_vertex:
+            regions: NDArray[Any] = np.concatenate([face_borders(verts, cm.faces, np.asarray(cm.face_label),
+                                                                 normals), *lines])
+            return regions
+        from brainpainter.maps.outlines import mesh_labels
+
         labels = mesh_labels(scene.template, scene.labels, hemi, cm)
         if labels is None:
             raise BrainPainterError(f"template {scene.template.name!r} has no per-vertex labels for "
                                     f"{scene.labels!r}, so its region borders cannot be drawn.")
         borders: NDArray[Any] = np.concatenate([vertex_borders(verts, cm.faces, labels, normals), *lines])
         return borders
+
+    @staticmethod
+    def _contour_lines(scene: SceneParts, hemi: str, cm: Any) -> list[NDArray[np.float32]]:
+        """A second map's iso-lines on hemisphere `hemi` (``scene.contours``), one array per level.
+
+        `cm`: the per-vertex cortex mesh drawn; None (regions drawn split at their borders): the
+        iso-lines are traced on the unsplit mesh, whose surface the split one keeps.
+        """
+        from brainpainter.rendering.borders import iso_lines
+
+        contours = getattr(scene, "contours", None)
+        if contours is None or hemi not in contours.values:
+            return []
+        if cm is None:
+            from brainpainter.maps.resolution import map_mesh
+
+            cm = map_mesh(scene.template, scene.labels, hemi)
+        if not len(cm.source_vertex):
+            return []
+        verts = cm.vertices[scene.surface]
+        normals = vertex_normals(verts, cm.faces)
+        values = np.asarray(contours.values[hemi])[np.asarray(cm.source_vertex, np.int64)]
+        return [iso_lines(verts, cm.faces, values, level, normals) for level in contours.levels]
 
     @staticmethod
     def _cortex_mesh(scene: SceneParts, hemi: str, per_vertex: bool) -> Any:
@@ -386,9 +449,14 @@ class SceneGeometry:
         BrainPainterError
             If the view draws nothing (its parts are absent from the template or all hidden).
         """
-        parts = [p for p in self.parts if framing.shows(view, p.kind, p.hemi, self.cortex)]
+        if view.content == "flat":
+            parts = [p for p in self.flat_parts if framing.shows(view, p.kind, p.hemi, self.cortex)]
+        else:
+            parts = [p for p in self.parts if framing.shows(view, p.kind, p.hemi, self.cortex)]
         kinds = {p.kind for p in self.parts}
-        if view.content == "cortex" and "cortex" not in kinds:
+        if view.content == "flat":
+            pass  # the flat maps alone (all hidden: an error below)
+        elif view.content == "cortex" and "cortex" not in kinds:
             # a brain of region meshes without an outer surface: its structures stand for it
             parts = [p for p in self.parts
                      if p.kind == "subcortical" or framing.shows(view, p.kind, p.hemi, self.cortex)]

@@ -20,22 +20,23 @@ from brainpainter.atlas.surfaces import Surface, read_surfaces, surface_template
 from brainpainter.atlas.template import Template, load_template
 from brainpainter.connectome.model import Connectome
 from brainpainter.errors import BrainPainterError
+from brainpainter.maps.flat import check_flat, flat_labels, flat_sheet, flat_values
 from brainpainter.maps.inputs import VertexMaps, is_map_input, read_maps
 from brainpainter.maps.layers import vertex_colors
-from brainpainter.maps.options import MapOptions
 from brainpainter.maps.outlines import Contours, mesh_edges
 from brainpainter.maps.resolution import map_mesh, own_vertex_count
-from brainpainter.rendering.composition import RegionsBelow, map_layers
+from brainpainter.rendering.composition import RegionsBelow, line_layers, map_layers, tract_colors
 from brainpainter.rendering.connectome_layers import connectome_colors, connectome_kinds, connectome_layers
 from brainpainter.rendering.geometry import VertexColors
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import Options
-from brainpainter.rendering.painter import Painter, region_colors
+from brainpainter.rendering.painter import Painter, flat_aspect, region_colors
 from brainpainter.rendering.parallel import Item
-from brainpainter.rendering.settings import outlined
+from brainpainter.rendering.settings import with_aspect
 from brainpainter.rendering.sulc import convexity
 from brainpainter.rendering.views import View, parse_views
 from brainpainter.table.region_table import RegionTable, read_table
+from brainpainter.tracts.values import TractValues, read_tract_values
 
 #: Default views of a map run: both hemispheres, outside and inside.
 MAP_VIEWS = "lateral-left,medial-left,lateral-right,medial-right"
@@ -61,7 +62,7 @@ class MapTable:
     @property
     def values(self) -> NDArray[Any]:
         """No NaN region values (a map's NaN vertices show the underlay): zeros, (images, regions)."""
-        return np.zeros((len(self.maps.images), len(self.atlas.keys)))
+        return np.zeros((len(self.images), len(self.atlas.keys)))  # a table's rows under a map of one image
 
     def summary(self) -> dict[str, Any]:
         return self.maps.summary() if self.below is None else {**self.maps.summary(),
@@ -81,10 +82,11 @@ class MapRun:
     cluster_edges: dict[str, NDArray[Any]] | None = None
     depth: dict[str, NDArray[Any]] | None = None  # sulcal depth of the drawn vertices, where the mesh has it
     contours: Contours | None = None  # a second map's iso-lines (--contour)
-    tract_values: None = None  # a map colours no tracts
+    tract_values: TractValues | None = None  # tract values drawn with the map (--tracts, --tract-values)
     layers: tuple[Layer, ...] = ()
     below: RegionsBelow | None = None  # region values under the map
     mesh_masks: dict[str, dict[str, NDArray[Any]]] | None = None  # the user's own surfaces
+    flat: dict[str, NDArray[Any]] | None = None  # flat views: each sheet vertex's nearest fsaverage vertex
     connectome: Connectome | None = None  # nodes and edges inside the cortex, drawn as glass
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
@@ -96,17 +98,17 @@ class MapRun:
         """The colour scale of layer `kind`; the map's where the run has no such layer."""
         return next((layer.scale for layer in self.layers if layer.kind == kind), self.scale)
 
-    @property
-    def map_layer(self) -> Layer:
-        """The map's layer (after the region values under it, before a connectome's)."""
-        return next(layer for layer in self.layers if layer.kind == "map")
+    def layer(self, kind: str) -> Layer:
+        """The run's layer of `kind` (``"map"``)."""
+        return next(layer for layer in self.layers if layer.kind == kind)
 
     def painter(self) -> Painter:
         """A new (not loaded) painter drawing a per-vertex scene."""
         scene = self.options.scene
+        nodes = self.tract_values.nodes if self.tract_values is not None else ()
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
-                       scene.renderer, coloring="vertices", contours=self.contours,
-                       connectome=self.connectome)
+                       scene.renderer, coloring="vertices", contours=self.contours, tracts=scene.tract_spec(),
+                       tract_nodes=nodes, tract_radius=scene.tract_radius, connectome=self.connectome)
 
     def items(self, rows: Any) -> list[tuple[int, View]]:
         return [(i, view) for i in rows for view in self.views]
@@ -119,18 +121,28 @@ class MapRun:
             map_image: float | tuple[int, int, float] = image if self.maps.n_images > 1 else 0
             regions: dict[str, Any] = {}
             below = None
+            row = round(image if not isinstance(image, tuple) else image[0] if image[2] < 0.5 else image[1])
             if self.below is not None:  # region values under the map: a movie's frame takes the nearer row
-                row = image if not isinstance(image, tuple) else image[0] if image[2] < 0.5 else image[1]
-                regions, below = self.below.colors(round(row))
+                regions, below = self.below.colors(row)
             cortex = vertex_colors(self.maps, map_image, self.source_vertex, scale, m.underlay, m.threshold,
                                    cluster_edges=self.cluster_edges, below=below,
-                                   opacity=self.map_layer.opacity, depth=self.depth,
+                                   opacity=self.layer("map").opacity, depth=self.depth,
                                    contrast=m.underlay_contrast, mesh_masks=self.mesh_masks)
+            if self.flat is not None:  # the flat maps' vertices: the map's values there, the same layers
+                on_flat = vertex_colors(
+                    self.maps, map_image, self.flat, scale, m.underlay, m.threshold,
+                    below=None if below is None else {h: below[f"flat-{h}"] for h in self.flat},
+                    opacity=self.layer("map").opacity, contrast=m.underlay_contrast,
+                    sample=lambda hemi, i: flat_values(self.maps, hemi, i))
+                cortex.update({f"flat-{hemi}": rgb for hemi, rgb in on_flat.items()})
             # a volume's subcortical means: below --threshold a structure shows no value, as the cortex does
             means = {k: v for k, v in self.maps.region_values(map_image).items()
                      if m.threshold is None or abs(v) >= m.threshold}
             means_rgb = region_colors(means, self.table.atlas, scale)
             regions.update(means_rgb if self.below is None else {k: means_rgb[k] for k in means})
+            if self.tract_values is not None:  # each bundle on the tracts' own scale
+                regions.update(tract_colors(self.tract_values.row(self.table.images[row]),
+                                            self.scale_of("tracts")))
             if self.connectome is not None:
                 regions.update(connectome_colors(self.connectome, self.layers))
             self._cache[image] = VertexColors(regions, cortex)
@@ -154,10 +166,8 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
         data, atlas = None, table.atlas
     m = options.maps
     outline = options.maps.outline
-    if table is not None and outline is not None and outline != table.atlas.name:
-        raise BrainPainterError(f"a map over region values outlines the table's atlas "
-                                f"({table.atlas.name!r}); --outline {outline!r} was given. Give --outline "
-                                f"{table.atlas.name}.")
+    contours, settings = line_layers(options, "a map over region values",
+                                     None if table is None else (table.atlas.name,))
     # --outline ATLAS: the map is drawn on that atlas's mesh, whose vertices carry its labels
     atlas_obj = get_atlas(outline) if outline is not None else atlas if atlas is not None else get_atlas("dk")
     surfaces = options.maps.surfaces
@@ -192,35 +202,26 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     edges = ({hemi: mesh_edges(m.faces) for hemi, m in meshes.items()} if options.maps.outline_threshold
              else None)
     masks = {hemi: surface_masks(tpl, labels, meshes[hemi], n) for hemi, n in own.items()} if own else None
+    scene = options.scene
+    tract_values = (read_tract_values(scene.tract_values, scene.tract_value) if scene.tract_values is not None
+                    else None)
     connectome = options.connectome.load(atlas_obj if atlas is None else atlas, tpl, options.scene.surface)
-    layers, below = map_layers(options, maps, table, meshes, others=connectome_kinds(connectome))
+    layers, below = map_layers(options, maps, table, meshes, tract_values,
+                               others=connectome_kinds(connectome))
     layers += connectome_layers(options, connectome, first=False) if connectome is not None else ()
-    contours = read_contours(options.maps)
+    flat = None
+    if any(v.content == "flat" for v in view_list):  # the flat maps: fsaverage's templates only
+        check_flat(tpl, labels)
+        flat = {hemi: flat_sheet(hemi).nearest for hemi in ("lh", "rh")}
+        if below is not None:
+            below = below.on_flat({hemi: flat_labels(tpl, labels, hemi) for hemi in flat},
+                                  {hemi: tpl.cortex(labels, hemi).label_names for hemi in flat})
     depth = {hemi: np.asarray(m.sulc) for hemi, m in meshes.items() if getattr(m, "sulc", None) is not None}
-    return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list,
-                  outlined(options.settings, outline if contours is None else "contour"), options,
-                  source_vertex, edges, depth, contours, layers=layers, below=below, mesh_masks=masks,
-                  connectome=connectome)
-
-
-def read_contours(options: MapOptions) -> Contours | None:
-    """The second map of ``--contour`` (``FILE`` or ``LH,RH``) and its levels, on fsaverage (None without)."""
-    if options.contour is None:
-        return None
-    given = options.contour
-    parts = [p.strip() for p in given.split(",")] if isinstance(given, str) else None
-    pair = parts is not None and len(parts) == 2
-    try:
-        maps = read_maps(None, parts[0], parts[1]) if parts is not None and pair else read_maps(given)
-    except BrainPainterError as exc:  # the readers speak of --lh/--rh: say which option it was
-        what = given if isinstance(given, str) else "(a map)"
-        raise BrainPainterError(f"--contour {what}: {str(exc).rstrip('.')}; --contour takes one file whose "
-                                "name says its hemisphere, or two: LH,RH.") from None
-    if maps.n_images != 1:
-        raise BrainPainterError(f"--contour takes a map of one image; {maps.source} has {maps.n_images}. "
-                                "Give one image (a cluster mask, a p-map).")
-    values = {hemi: np.asarray(maps.on_fsaverage(hemi, 0), np.float32) for hemi in maps.values}
-    return Contours(values, options.levels, regions=options.outline is not None)
+    if not options.size_given and (aspect := flat_aspect(view_list)):  # flat maps: wider than a brain
+        settings = with_aspect(settings, aspect)
+    return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list, settings, options,
+                  source_vertex, edges, depth, contours, tract_values, layers=layers, below=below,
+                  mesh_masks=masks, flat=flat, connectome=connectome)
 
 
 def _own_surfaces(options: Options, surfaces: dict[str, Any]) -> dict[str, Surface]:

@@ -45,7 +45,7 @@ from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.maps.options import MapKwargs, MapOptions
 from brainpainter.rendering.layers import LayerKwargs, LayerOptions
 from brainpainter.rendering.settings import RenderSettings, SettingsKwargs
-from brainpainter.rendering.views import parse_views
+from brainpainter.rendering.views import PRESETS, parse_views
 from brainpainter.table.options import TableKwargs, TableOptions
 from brainpainter.tracts.model import DEFAULT_SPACE, MAX_STREAMLINES, TractSpec
 
@@ -129,8 +129,9 @@ class SceneOptions:
     """
 
     views: str | Sequence[str] | None = field(default=None, metadata={
-        "help": "Comma-separated views, 'all', or camera:AZ:EL[:ZOOM]. Default: " + DEFAULT_VIEWS
-                + "; maps: lateral and medial of both hemispheres (and subcortical for a volume)."})
+        "help": "Comma-separated views (" + ", ".join(PRESETS) + "), 'all', or camera:AZ:EL[:ZOOM]. "
+                "Default: " + DEFAULT_VIEWS + "; maps: lateral and medial of both hemispheres (and "
+                "subcortical for a volume). flat-left, flat-right, flat: HCP's flat maps."})
     template: Template | str = field(default="fsaverage", metadata={"help": "Template name or folder."})
     surface: str = field(default="pial", metadata={"choices": SURFACES, "help": "Cortical surface to draw."})
     hide: tuple[str, ...] = field(default=(), metadata={

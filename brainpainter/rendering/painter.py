@@ -89,6 +89,20 @@ def region_colors(values: Mapping[str, float], atlas: Atlas, scale: ColourScale)
 VOLUME_VIEWS = ("subcortical", "subcortical-dorsal")
 
 
+def flat_aspect(views: Iterable[View]) -> float | None:
+    """Image width / height that frames the flat maps (:mod:`brainpainter.maps.flat`) of `views` when all
+    are flat views (both sheets side by side: 2, the widest; one: about 1.4), else None."""
+    from brainpainter.maps.flat import flat_sheet
+    from brainpainter.rendering.framing import views_aspect
+
+    views = list(views)
+    if not views or any(v.content != "flat" for v in views):
+        return None
+    shapes = [views_aspect(np.vstack([flat_sheet(h).vertices[flat_sheet(h).used] for h in v.hemis]),
+                           [(v.azimuth, v.elevation)]) for v in views]
+    return float(np.exp(np.mean(np.log(shapes))))
+
+
 def shown_aspect(atlas: Atlas, template: Template | str, views: Iterable[View]) -> float:
     """Image width / height that frames `atlas`'s brain in `views` (a brain of another shape than a
     human's, :attr:`Atlas.image_aspect`, drawn at no size given): its side views wide, its top view tall.

@@ -25,7 +25,8 @@ from brainpainter.color.scale import ColourScale
 from brainpainter.connectome.model import Connectome
 from brainpainter.errors import BrainPainterError, NoRegionColumnError
 from brainpainter.maps.inputs import is_map_input
-from brainpainter.rendering.composition import run_layers
+from brainpainter.maps.outlines import Contours
+from brainpainter.rendering.composition import line_entries, line_layers, run_layers, tract_colors
 from brainpainter.rendering.connectome_layers import (
     connectome_colors,
     connectome_kinds,
@@ -38,16 +39,16 @@ from brainpainter.rendering.painter import (
     VOLUME_VIEWS,
     Painter,
     RenderResult,
+    flat_aspect,
     region_colors,
     resolve_hidden,
     shown_aspect,
 )
 from brainpainter.rendering.parallel import Item, LocalRunner, PainterSpec, Runner, SerialRunner, chunked
-from brainpainter.rendering.settings import RenderSettings, outlined, with_aspect
+from brainpainter.rendering.settings import RenderSettings, with_aspect
 from brainpainter.rendering.tract_run import (
     bundle_names,
     run_tract_values,
-    tract_colors,
     tracts_only_table,
     without_bundle_columns,
 )
@@ -75,6 +76,7 @@ class Run:
     options: Options
     tract_values: TractValues | None = None
     layers: tuple[Layer, ...] = ()
+    contours: Contours | None = None  # a second map's iso-lines (--contour)
     connectome: Connectome | None = None
 
     def scale_of(self, kind: str) -> ColourScale:
@@ -87,7 +89,7 @@ class Run:
         nodes = self.tract_values.nodes if self.tract_values is not None else ()
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
                        scene.renderer, tracts=scene.tract_spec(), tract_nodes=nodes,
-                       tract_radius=scene.tract_radius, connectome=self.connectome)
+                       tract_radius=scene.tract_radius, contours=self.contours, connectome=self.connectome)
 
     def items(self, rows: Sequence[int]) -> list[tuple[int, View]]:
         """The images of `rows`: ``(row, view)`` for every row and view, row by row."""
@@ -139,11 +141,7 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     if options.maps.given or is_map_input(data):  # per-vertex maps: the same run, coloured per vertex
         from brainpainter.rendering.maprun import prepare_map_run
 
-
         return prepare_map_run(data, atlas_obj, options)  # type: ignore[return-value]
-    if options.maps.contour is not None:
-        raise BrainPainterError("--contour draws a second map's iso-lines over a map; give the map too "
-                                "(--lh/--rh or --volume), or draw region borders with --outline ATLAS.")
     views = options.scene.views
     if views is not None:  # a given option's errors before a big input file is read
         view_list = parse_views(views if isinstance(views, str) else list(views))
@@ -169,14 +167,12 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     if views is None:
         view_list = parse_views(CONNECTOME_VIEWS if only_connectome
                                 else default_views(table.atlas, only_tracts))
-    outline = options.maps.outline
-    if outline is not None and outline not in (table.atlas.name, table.atlas.template_labels):
-        raise BrainPainterError(
-            f"a region render outlines its own atlas's regions ({table.atlas.name!r}); --outline "
-            f"{outline!r} was given. Give --outline {table.atlas.name}, or draw a map (--lh/--rh).")
-    settings = outlined(options.settings, outline)
+    own = (table.atlas.name, table.atlas.template_labels)
+    contours, settings = line_layers(options, "a region render", own)
     if not options.size_given and table.atlas.image_aspect:  # a brain of another shape: frame the views
         settings = with_aspect(settings, shown_aspect(table.atlas, options.scene.template, view_list))
+    elif not options.size_given and (aspect := flat_aspect(view_list)):  # flat maps: wider than a brain
+        settings = with_aspect(settings, aspect)
     if only_connectome:
         options.layers.check_drawn(connectome_kinds(connectome))
         layers = connectome_layers(options, connectome, first=True)  # type: ignore[arg-type]
@@ -184,7 +180,8 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
         layers = run_layers(options, table, tract_values, only_tracts and tract_values is not None,
                             others=connectome_kinds(connectome))
         layers += connectome_layers(options, connectome, first=False) if connectome is not None else ()
-    return Run(table, layers[0].scale, view_list, settings, options, tract_values, layers, connectome)
+    return Run(table, layers[0].scale, view_list, settings, options, tract_values, layers, contours,
+               connectome)
 
 
 #: The views of a connectome drawn alone: from above and from the left, through the glass cortex.
@@ -340,10 +337,11 @@ def painter_options(painter: Painter, options: Options) -> Options:
 
 def run_settings(run: Run, painter: Painter) -> dict[str, Any]:
     """The settings of a run as the manifest and every PNG's metadata record them."""
+    lines = line_entries(run.options, run.contours)
     return {
         "atlas": run.table.atlas.name, "template": painter.scene.template.name, "surface": painter.surface,
         "views": [v.to_dict() for v in run.views], "scale": run.scale.to_dict(),
-        "layers": [layer.to_dict() for layer in run.layers],
+        "layers": [layer.to_dict() for layer in run.layers], **({"lines": lines} if lines else {}),
         "hidden": sorted(painter.scene.hidden), "renderer": painter.renderer, **run.settings.to_dict(),
     }
 

@@ -1,13 +1,13 @@
-"""The tract values of a run: bundle columns of the main table or ``--tract-values``, and their colours.
+"""The tract values of a run: bundle columns of the main table or ``--tract-values``.
 
 :func:`run_tract_values` finds them (:func:`prepare_run <brainpainter.rendering.run.prepare_run>`
 calls it before reading the region table, which then leaves the bundle columns out:
-:func:`without_bundle_columns`); :func:`tract_colors` colours one image's bundles.
+:func:`without_bundle_columns`); :func:`brainpainter.rendering.composition.tract_colors` colours
+one image's bundles.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -15,10 +15,8 @@ import numpy as np
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.registry import get_atlas
-from brainpainter.color.scale import ColourScale
 from brainpainter.errors import BrainPainterError
 from brainpainter.rendering.options import Options
-from brainpainter.rendering.settings import RGB
 from brainpainter.table.region_table import RegionTable
 from brainpainter.tracts.model import TractSpec
 from brainpainter.tracts.values import TractValues, is_profile, read_tract_values
@@ -30,15 +28,6 @@ def tracts_only_table(tract_values: TractValues, atlas: Atlas | None, data: Any)
     source = str(data) if isinstance(data, str | Path) else "table"
     return RegionTable(images=tuple(images), regions=(), values=np.zeros((len(images), 0)),
                        atlas=atlas or get_atlas("dk"), source=source)
-
-
-def tract_colors(values: Mapping[str, float], scale: ColourScale) -> dict[str, RGB]:
-    """Colour of each bundle (or bundle node) key for one image; NaN: the scale's NaN colour."""
-    keys = list(values)
-    if not keys:
-        return {}
-    rgb = scale(np.array([values[k] for k in keys], dtype=float))
-    return {k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(keys, rgb, strict=True)}
 
 
 def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, bool]:

@@ -6,6 +6,10 @@ counter-clockwise from +x seen from above: 0 = from the right, 90 = from the
 front, 180 = from the left, 270 = from behind. ``elevation`` is the angle
 above the horizontal plane: 90 = from above, -90 = from below. The image's
 up is superior, except straight from above or below where it is anterior.
+
+The flat views (``flat-left``, ``flat-right``, ``flat``) look straight down
+at HCP's flat maps (:mod:`brainpainter.maps.flat`), which lie in the plane
+z = 0, the left hemisphere's left of the right one's.
 """
 
 from __future__ import annotations
@@ -23,9 +27,10 @@ class View:
     Attributes
     ----------
     name : str
-    content : {"cortex", "subcortical"}
+    content : {"cortex", "subcortical", "flat"}
         ``cortex`` draws the cortical hemispheres in `hemis`; ``subcortical``
-        draws all subcortical structures plus the cortex of `glass` as glass.
+        draws all subcortical structures plus the cortex of `glass` as glass;
+        ``flat`` the flat maps of `hemis` (a 2-D view: no subcortical parts).
     hemis : tuple of {"lh", "rh"}
         Cortical hemispheres drawn opaque.
     glass : tuple of {"lh", "rh"}
@@ -68,6 +73,9 @@ PRESETS: dict[str, View] = {
         View("subcortical-left", "subcortical", (), 180.0, 0.0, glass=("rh",)),
         View("subcortical-dorsal", "subcortical", (), 0.0, 90.0, glass=_BOTH),
         View("subcortical-ventral", "subcortical", (), 0.0, -90.0, glass=_BOTH),
+        View("flat-left", "flat", ("lh",), 0.0, 90.0),
+        View("flat-right", "flat", ("rh",), 0.0, 90.0),
+        View("flat", "flat", _BOTH, 0.0, 90.0),
     )
 }
 DEFAULT_VIEWS = ("lateral-left", "medial-left", "subcortical")
@@ -91,6 +99,9 @@ ALIASES: dict[str, str] = {
     "left-medial": "medial-left",
     "right-lateral": "lateral-right",
     "right-medial": "medial-right",
+    "left-flat": "flat-left",
+    "right-flat": "flat-right",
+    "flatmap": "flat",
 }
 
 

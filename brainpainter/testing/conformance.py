@@ -177,13 +177,14 @@ def _per_view(run: _Run, scene: Any, view: Any, img: NDArray[np.uint8]) -> float
 
 
 def _views(run: _Run) -> None:
-    """orientation, no_holes, flat colours per view and repeatable, over every preset view."""
+    """orientation, no_holes, flat colours per view and repeatable, over every preset view but the flat
+    maps' (the tiny template has none: they need fsaverage's)."""
     from brainpainter.rendering.views import PRESETS, get_view
 
     scene, r = run.make(quality="fast", shading="flat", glass_opacity=0.0, background=WHITE)
     try:
         worst = max(_per_view(run, scene, view, run.paint(scene, r, COLORS, view))
-                    for view in PRESETS.values())
+                    for view in PRESETS.values() if view.content != "flat")  # flat maps need fsaverage
         run.report["orientation_worst_px"] = round(worst, 2)
         if "repeatable" in run.checks:
             a = run.paint(scene, r, COLORS, get_view("lateral-left"))

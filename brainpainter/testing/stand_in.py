@@ -166,10 +166,12 @@ class StandInRenderer:
         default = {"subcortical": (0.8, 0.8, 0.8)}
         stripes = []
         for part, (kind, hemi) in kinds.items():
-            if not shows(view, kind, hemi, self.cortex):
-                continue
+            if not (shows(view, kind, hemi, self.cortex) or (hemi and shows(view, "flat", hemi))):
+                continue  # a flat view: the stripes of its hemispheres' cortex
             keys, labels = self.parts.get(part, ([], np.zeros(0, int)))
             slots = getattr(getattr(self.scene, "geometry", None), "vertex_slots", {}) if hemi else {}
+            if view.content == "flat" and hemi and self.scene.geometry.flat_slots():
+                hemi = f"flat-{hemi}"  # a map on a flat view: the sheet's per-vertex colours
             if getattr(self.scene, "coloring", "regions") == "vertices" and hemi in slots:
                 start, n = slots[hemi]  # a map: the cortex's per-vertex colours, in vertex order
                 stripes += [tuple(c) for c in colors.rgb[start:start + n]]  # type: ignore[attr-defined]

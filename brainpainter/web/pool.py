@@ -264,6 +264,9 @@ def preview_request(data: bytes, name: str, options: Any, row: int | str, view: 
     from brainpainter.rendering.views import parse_views
     from brainpainter.web.options import prepare
 
+    views = parse_views(view)
+    if views[0].content == "flat":  # a map's run colours the flat maps' vertices when it draws a flat view
+        options = options.model_copy(update={"views": views[0].name})
     prep = prepare(data, name, options, max_pixels=config.max_pixels, tracts=tracts,
                    data_dir=data_dir)
     table = prep.run.table
@@ -276,7 +279,6 @@ def preview_request(data: bytes, name: str, options: Any, row: int | str, view: 
     else:
         raise BrainPainterError(f"row {str(row)[:100]!r} is not an image of the table; it has "
                                 f"{list(table.images[:5])}{'...' if len(table.images) > 5 else ''}.")
-    views = parse_views(view)
     colors = (prep.run.colors(i) if prep.coloring == "vertices"  # type: ignore[attr-defined]
               else prep.run.item(i, views[0]).colors)  # regions and bundles, as render colours them
     return {"atlas": table.atlas.name, "surface": options.surface, "hidden": prep.hidden,

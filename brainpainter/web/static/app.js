@@ -117,7 +117,7 @@ function viewIcon(name) {
   } else {
     const mark = document.createElementNS(ns, "text");
     mark.setAttribute("text-anchor", "middle"); mark.setAttribute("dy", "3.5"); mark.setAttribute("font-size", "9");
-    mark.textContent = name.includes("dorsal") ? "↓" : "↑";
+    mark.textContent = name.startsWith("flat") ? "▭" : name.includes("dorsal") ? "↓" : "↑";
     svg.append(mark);
   }
   return svg;

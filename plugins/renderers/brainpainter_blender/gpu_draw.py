@@ -28,7 +28,8 @@ a key light from the upper left, a fill light from the right and an
 ambient term (:data:`LIGHTING`), all multiplied by the ambient occlusion
 the template has baked per vertex (an extra vertex attribute, ones for old
 templates), then an S-curve; on a map's cortex, less of the occlusion and
-the S-curve (:func:`for_maps`), so its colours read as its values; subcortical structures get a darker outline
+the S-curve (:func:`for_maps`), so its colours read as its values; a flat map (a part of kind
+``flat``) is unlit (:data:`FLAT`); subcortical structures get a darker outline
 and the glass a Fresnel-like edge. Colours are multiplied, never mixed
 towards white or black, and the peak stays <= 1, so hues stay pure.
 """
@@ -389,7 +390,8 @@ class GpuDraw:
         for p in aim.visible:
             if p.kind != "glass" and p.name not in drawn_as_lines:
                 mapped = p.kind == "cortex" and bool(self.geometry.vertex_slots)
-                light = self.map_lighting if mapped else self.lighting
+                # a flat map is a 2-D picture: unlit, its colours exact
+                light = FLAT if p.kind == "flat" else self.map_lighting if mapped else self.lighting
                 for name, value in (("ambient", light.ambient), ("key", light.key if light.lit else 0.0),
                                     ("fill", light.fill if light.lit else 0.0),
                                     ("ao_direct", light.occlusion_direct), ("contrast", light.contrast),

@@ -130,6 +130,10 @@ class BlenderRenderer:
             if self._gpu is not None:
                 pixels = self._gpu.render(palette.rgb, view)
             else:
+                if view.content == "flat":
+                    raise BrainPainterError(
+                        f"view {view.name!r} (a flat map) is drawn by the gpu path, not by Cycles (--quality "
+                        "high with smooth shading); use --quality default, or --quality high --shading flat.")
                 self._show(view)
                 self._recolor(palette)
                 self._aim(view)

@@ -1,0 +1,96 @@
+"""A colour bar per scaled layer (issue 35) in movies and in the HTML export, as in figures."""
+
+from __future__ import annotations
+
+import base64
+import re
+
+import numpy as np
+import pytest
+from test_tracts import bundle, write
+
+from brainpainter.color.scale import make_scale
+
+MAGMA_END, VIRIDIS_END = (252, 253, 191), (253, 231, 37)
+
+
+def _has(pixels, rgb, tol=6) -> bool:
+    return bool((np.abs(pixels[..., :3].astype(int) - np.asarray(rgb)).max(axis=-1) <= tol).sum() >= 20)
+
+
+@pytest.fixture
+def layers(tmp_path):
+    """Thickness on regions, FA on two bundles: the table, and the options that give FA its own scale."""
+    folder = tmp_path / "bundles"
+    folder.mkdir()
+    write(folder / "AF_L.trk", bundle(-25.0))
+    write(folder / "CST_R.tck", bundle(25.0, seed=1))
+    table = tmp_path / "thick.csv"
+    table.write_text("Image-name-unique,Left-insula,Left-precuneus,AF_L,CST_R\nA,1.5,4,0.3,0.7\nB,2,3,0.4,0.6\n")
+    return table, {"tracts": [str(folder)], "tracts_space": "template", "cmap": "viridis", "vmin": 1.5,
+                   "vmax": 4, "tracts_cmap": "magma", "tracts_vmin": 0.3, "tracts_vmax": 0.7,
+                   "tracts_label": "FA", "max_streamlines": 20}
+
+
+def test_movie_frames_draw_one_bar_per_layer_one_under_the_other():
+    from brainpainter.media.frames import FrameComposer
+
+    thick, fa = make_scale(cmap="viridis", vmin=1.5, vmax=4), make_scale(cmap="magma", vmin=0.3, vmax=0.7)
+    one = FrameComposer(1, (320, 240), thick, [0.0, 1.0], label="thickness")
+    two = FrameComposer(1, (320, 240), thick, [0.0, 1.0], label="thickness", more_bars=[(fa, "FA")])
+    assert _has(one.canvas, VIRIDIS_END) and not _has(one.canvas, MAGMA_END)
+    assert _has(two.canvas, VIRIDIS_END) and _has(two.canvas, MAGMA_END)
+    assert two.size[1] > one.size[1] and two.size[0] == one.size[0]
+
+
+def test_a_movie_of_regions_and_tracts_shows_both_bars(tmp_path, layers, tiny):
+    from PIL import Image
+
+    from brainpainter.media.movie import make_movie
+    from brainpainter.testing import stand_in
+
+    table, options = layers
+    with stand_in() as renderer:
+        result = make_movie(table, "dk", out=tmp_path / "m.gif", views="lateral-left", frames_per_step=2,
+                            template=str(tiny), renderer=renderer, width=160, height=120, progress=False,
+                            **options)
+    with Image.open(result.path) as gif:
+        frame = np.asarray(gif.convert("RGB"))
+    footer = frame[120:]  # under the render: caption, timeline and the bars
+    assert _has(footer, VIRIDIS_END, 12) and _has(footer, MAGMA_END, 12)
+
+
+def test_the_html_export_shows_a_bar_per_layer(tmp_path, layers, tiny):
+    from io import BytesIO
+
+    from PIL import Image
+
+    from brainpainter.media.export import export
+
+    table, options = layers
+    page = export(table, tmp_path / "p.html", row="A", template=str(tiny), **options).read_text()
+    bars = [np.asarray(Image.open(BytesIO(base64.b64decode(png))).convert("RGB"))
+            for png in re.findall(r'<img (?:id|class)="colorbar" alt="colour bar" src="data:image/png;base64,'
+                                  r'([A-Za-z0-9+/=]+)"', page)]
+    assert len(bars) == 2
+    assert _has(bars[0], VIRIDIS_END) and not _has(bars[0], MAGMA_END)
+    assert _has(bars[1], MAGMA_END) and not _has(bars[1], VIRIDIS_END)
+
+
+def test_an_export_of_a_map_has_its_tracts_too(tmp_path, layers):
+    """A map with tracts exports the tracts' tubes in their own scale's colours (the export dropped them)."""
+    from matplotlib import colormaps
+
+    from brainpainter.media.export import _row_meshes
+    from brainpainter.rendering.run import prepare_run
+
+    _, options = layers
+    fa = tmp_path / "fa.csv"
+    fa.write_text("Image-name-unique,AF_L,CST_R\nA,0.3,0.7\n")
+    options = {**options, "tract_values": str(fa), "tracts_space": "template", "cmap": None}
+    run = prepare_run({"lh": np.zeros(10242), "rh": np.zeros(10242)}, **options)
+    _, meshes = _row_meshes(run, 0)
+    tubes = [m for m in meshes if m.part == "tracts"]
+    assert {m.part for m in meshes} >= {"lh", "rh", "tracts"} and len(tubes) == 2
+    colours = {tuple(np.round(np.asarray(m.color)[..., :3].reshape(-1, 3)[0], 2)) for m in tubes}
+    assert colours == {tuple(np.round(colormaps["magma"](x)[:3], 2)) for x in (0.0, 1.0)}
