@@ -471,3 +471,25 @@ def test_a_connectome_alone_turns_in_a_movie(tmp_path, tiny):
     assert azimuths == [180.0, 252.0, 324.0, 36.0, 108.0]  # the camera turns a full circle in 5 frames
     edge = result.scale(np.array([0.8]))[0]
     assert all(np.allclose(colors["edge:0"], edge[:3]) for colors, _ in StandInRenderer.calls)
+
+
+def test_scene_add_a_connectome_draws_as_the_command_line(tmp_path, tiny):
+    """``Scene.add``: a Connectome is inferred, a matrix file given kind="connectome"; its keywords
+    become the command line's options and the same pixels."""
+    from brainpainter import Scene
+    from brainpainter.testing import stand_in
+
+    with stand_in() as renderer:
+        kw = {"template": str(tiny), "renderer": renderer, "width": 80, "height": 60}
+        scene = Scene("dk", **kw).add({"Left-insula": 1.0}).add(tiny_connectome(), cmap="magma", label="FC")
+        assert scene.layers[1].kind == "connectome"
+        assert scene.run_options()[1]["edges_cmap"] == "magma"
+        drawn = scene.render(views="dorsal", progress=False)
+        cli = brainpainter.render({"Left-insula": 1.0}, "dk", connectome=tiny_connectome(),
+                                  edges_cmap="magma", edges_label="FC", views="dorsal", progress=False, **kw)
+        matrix = six_node_matrix(tmp_path)
+        from_file = Scene("dk", **kw).add(matrix, kind="connectome", top_edges=2).render(views="dorsal",
+                                                                                          progress=False)
+    assert [la.kind for la in drawn.layers] == ["regions", "edges", "nodes"] and drawn.layers[1].label == "FC"
+    np.testing.assert_array_equal(drawn.images[("1", "dorsal")], cli.images[("1", "dorsal")])
+    assert from_file.manifest["connectome"]["n_edges"] == 2
