@@ -9,6 +9,7 @@ and takes a screenshot (``BRAINPAINTER_SCREENSHOT=path`` keeps a copy).
 from __future__ import annotations
 
 import os
+import re
 import shutil
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -419,4 +420,60 @@ def test_refused_uploads_keep_their_message_and_the_last_good_one(served, tmp_pa
         expect(status).to_contain_text("lateral-left · rendered in", timeout=60_000)
         expect(tract_error).to_be_visible()
         _shot(page, tmp_path, "page-refused.png")
+        assert errors == []
+
+
+def test_page_draws_a_map_over_the_table_each_with_its_own_colour_bar(served, tmp_path):
+    """Issue 35, item 6: the example table, then a map pair in 'Map over the table' with its own colour
+    map and label: the preview (real renderer) shows the map's colours over the regions, two labelled
+    colour bars (the table's gradient and the map's magma), and the command line draws both layers; a
+    contour of a mask adds its lines and --contour."""
+    import nibabel as nib
+    from playwright.sync_api import expect
+
+    for hemi in ("lh", "rh"):  # the front half of each hemisphere: 1 to 3, the back: no value
+        values = np.full(10242, np.nan, np.float32)
+        values[:5000] = np.linspace(1.0, 3.0, 5000)
+        nib.freesurfer.write_morph_data(str(tmp_path / f"{hemi}.thickness"), values)
+        mask = np.isfinite(values).astype(np.float32).reshape(-1, 1, 1)
+        nib.save(nib.MGHImage(mask, np.eye(4)), str(tmp_path / f"{hemi}.mask.mgh"))
+    with _page(tmp_path) as (page, errors):
+        page.goto(served.url + "/")
+        expect(page.locator("#map_cmap option[value=magma]")).to_have_count(1)
+        page.locator("#size").fill("320x240")
+        page.get_by_role("button", name="Use the example table").click()
+        expect(page.locator("#preview-status")).to_contain_text("rendered in", timeout=120_000)
+        expect(page.locator(".cbar:visible")).to_have_count(1)
+        before = png_pixels(page.locator("#preview").screenshot())
+        page.locator("#map-files").set_input_files([str(tmp_path / f"{h}.thickness") for h in ("lh", "rh")])
+        expect(page.locator("#map-status")).to_contain_text("OK: map: lh.thickness + rh.thickness")
+        expect(page.locator("#map_cmap")).to_be_visible()
+        page.locator("#map_cmap").select_option("magma")
+        page.locator("#map_label").fill("thickness (mm)")
+        bars = page.locator(".cbar:visible")
+        expect(bars).to_have_count(2, timeout=120_000)
+        expect(bars.nth(0).locator(".cbar-label")).to_have_text("Regions: brainpainter_dk.csv")
+        expect(bars.nth(1).locator(".cbar-label")).to_have_text("Map: thickness (mm)", timeout=120_000)
+        expect(bars.nth(1)).to_have_attribute("aria-label", re.compile("magma"))
+        expect(page.locator("#command")).to_contain_text("--lh lh.thickness --rh rh.thickness")
+        expect(page.locator("#command")).to_contain_text("--map-cmap magma")
+        expect(page.locator("#preview-status")).to_contain_text("rendered in", timeout=120_000)
+        page.wait_for_function("() => !document.querySelector('#preview-status').textContent"
+                               ".includes('Rendering')", timeout=120_000)
+        after = png_pixels(page.locator("#preview").screenshot())
+        brain = _brain(after)
+        assert brain.mean() > 0.1
+        changed = np.abs(after[..., :3].astype(int) - before[..., :3].astype(int)).max(-1) > 40
+        assert 0.05 < changed[brain].mean() < 0.95, changed[brain].mean()  # the map over part, regions beside
+        # a contour of a mask over the map: its lines on the preview, --contour in the command
+        masks = [str(tmp_path / f"{h}.mask.mgh") for h in ("lh", "rh")]
+        page.locator("#contour-files").set_input_files(masks)
+        expect(page.locator("#contour-status")).to_contain_text("OK: map: lh.mask.mgh + rh.mask.mgh")
+        expect(page.locator("#command")).to_contain_text("--contour lh.mask.mgh,rh.mask.mgh", timeout=120_000)
+        page.wait_for_function("() => !document.querySelector('#preview-status').textContent"
+                               ".includes('Rendering')", timeout=120_000)
+        lined = png_pixels(page.locator("#preview").screenshot())
+        dark = [int((img[..., :3].astype(int).max(-1) < 50).sum()) for img in (after, lined)]
+        assert dark[1] > dark[0] + 100, dark
+        _shot(page, tmp_path, "layers-page.png")
         assert errors == []

@@ -129,3 +129,25 @@ def test_figure_movie_and_export_commands_parse_with_their_cli_commands():
             assert all(given[k] == v for k, v in params.items() if k != "format"), (params, given)
         args, kwargs = called(got["python"].replace(f"brainpainter.{kind}(", "brainpainter.render("))
         assert args == ["t.csv"] and kwargs["cmap"] == "viridis"
+
+
+def test_a_map_over_a_table_is_the_same_layers_on_the_command_line_and_in_python(tmp_path):
+    """Option map (a map upload drawn over the table) is --lh/--rh beside INPUT, with each layer's options."""
+    import nibabel as nib
+
+    from brainpainter.web.maps import build_bundle
+
+    for hemi in ("lh", "rh"):
+        nib.freesurfer.write_morph_data(str(tmp_path / f"{hemi}.thickness"), np.ones(10242, np.float32))
+    work = tmp_path / "map"
+    work.mkdir()
+    build_bundle(work, [("lh", tmp_path / "lh.thickness"), ("rh", tmp_path / "rh.thickness")], 10)
+    o = RenderOptions(map="0" * 32, map_cmap="magma", map_vmin=1.5, map_alpha=0.5, map_label="thickness (mm)",
+                      regions_label="tau", threshold=0.5)
+    got = reproduce(TABLE, "t.csv", o, map_upload=(work / "bundle.bin").read_bytes())
+    inputs, cli = parsed(got["command"])
+    assert inputs == ["t.csv"]
+    assert cli == {"lh": "lh.thickness", "rh": "rh.thickness", "map_cmap": "magma", "map_vmin": 1.5,
+                   "map_alpha": 0.5, "map_label": "thickness (mm)", "regions_label": "tau", "threshold": 0.5}
+    args, kwargs = called(got["python"])
+    assert args == ["t.csv"] and kwargs.pop("out") == OUT and kwargs == cli

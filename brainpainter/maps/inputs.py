@@ -199,7 +199,8 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
         an MNI152 volume (a 3-D/4-D NIfTI file or nibabel image), or maps
         already read (returned as they are).
     lh, rh : path or ndarray, optional
-        One hemisphere each (``--lh FILE --rh FILE``).
+        One hemisphere each (``--lh FILE --rh FILE``); `lh` alone may be maps already read
+        (VertexMaps of both hemispheres, e.g. beside a region table).
     volume : path or nibabel image, optional
         An MNI152 volume (``--volume FILE``), projected by
         :func:`read_volume`.
@@ -223,6 +224,8 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
     from brainpainter.maps import volume as volumes
     from brainpainter.maps.cifti import is_cifti, read_cifti
 
+    if isinstance(lh, VertexMaps) and data is None and rh is None and volume is None:
+        data, lh = lh, None  # both hemispheres already read, as --lh beside a region table (the web server)
     if isinstance(data, VertexMaps) and lh is None and rh is None and volume is None:
         return pick_images(data, frames)  # already read (e.g. kept by the web server)
     if space is not None and space not in SPACES:

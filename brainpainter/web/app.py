@@ -64,6 +64,7 @@ from brainpainter.web.http import (
     require_octet_stream,
     validation_line,
 )
+from brainpainter.web.layer_uploads import LayerUploads
 from brainpainter.web.maps import file_name, is_bundle, is_map_upload
 from brainpainter.web.options import (
     ExportParams,
@@ -75,14 +76,14 @@ from brainpainter.web.options import (
     figure_pixels,
     map_check,
     prepare,
-    table_tract_scale,
+    table_layers,
     tract_check,
     upload_name,
 )
 from brainpainter.web.pool import MAX_PREVIEW_WAITING, Pool, PreviewBusy, PreviewUnavailable, preview_request
 from brainpainter.web.reproduce import reproduce
 from brainpainter.web.store import LimitError, Store, valid_id
-from brainpainter.web.tract_routes import add_tracts_route, tracts_of
+from brainpainter.web.tract_routes import add_tracts_route, layer_uploads
 from brainpainter.web.tracts import is_tract_bundle, is_tract_upload
 from brainpainter.web.upload import (
     check_table,
@@ -307,26 +308,32 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
         """The ``check`` report of an upload with these options (the colour scale included)."""
         name, data = await run_in_threadpool(_upload, store, body.upload_id, owner_of(request))
         o = body.options
-        tracts = None if is_tract_bundle(data) else await run_in_threadpool(tracts_of, store, o,
-                                                                            owner_of(request))
-        report = await _check_report(data, name, o, tracts)
+        layers = LayerUploads() if is_tract_bundle(data) else await run_in_threadpool(layer_uploads, store, o,
+                                                                                     owner_of(request))
+        report = await _check_report(data, name, o, layers)
         # the command line and the Python call that make these images again
-        report["reproduce"] = await work.run(reproduce, data, name, o, tracts)
+        report["reproduce"] = await work.run(reproduce, data, name, o, layers.tracts, map_upload=layers.map,
+                                             contour_upload=layers.contour)
         return report
 
-    async def _check_report(data: bytes, name: str, o: RenderOptions, tracts: bytes | None) -> dict[str, Any]:
+    async def _check_report(data: bytes, name: str, o: RenderOptions, layers: LayerUploads) -> dict[str, Any]:
         if is_tract_bundle(data):  # the tracts alone: their report, with the colour scale of `o`
             return await work.run(tract_check, data, name, o, data_dir=store.root)
         if is_bundle(data):
-            return await work.run(map_check, data, name, o)
+            return await work.run(map_check, data, name, o, data_dir=store.root, **layers.kwargs())
         opts = {**o.model_dump(include=set(TableOptions.model_fields)),
                 "scale": {"gradient": o.gradient, "cmap": o.cmap, "vmin": o.vmin, "vmax": o.vmax,
                           "center": o.center}}
         # read on a work thread: the upload was read within the time limit already (as preview and
         # job submission read it)
         report: dict[str, Any] = (await work.run(check_table, data, name, opts, config.max_rows))[0]
-        if tracts is not None:  # one scale over the regions' and the bundles' values, as drawn
-            report["values"]["scale"] = await work.run(table_tract_scale, data, name, o, tracts, store.root)
+        if layers.files() or o.layers_given():
+            # the scales as drawn: each layer's, the regions' over the bundles' values too where they share it
+            drawn = await work.run(table_layers, data, name, o, data_dir=store.root, **layers.kwargs())
+            report["values"]["scale"], report["layers"] = drawn["scale"], drawn["layers"]
+        else:
+            report["layers"] = [{"kind": "regions", "label": name, "opacity": 1.0,
+                                 "scale": report["values"]["scale"]}]
         return report
 
     # -- preview -------------------------------------------------------------------------------
@@ -334,9 +341,9 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
     async def preview(body: PreviewRequest, request: Request) -> Response:
         """One row from one view, small, rendered by the warm preview painter."""
         name, data = await run_in_threadpool(_upload, store, body.upload_id, owner_of(request))
-        tracts = await run_in_threadpool(tracts_of, store, body.options, owner_of(request))
+        layers = await run_in_threadpool(layer_uploads, store, body.options, owner_of(request))
         req = await work.run(preview_request, data, name, body.options, body.row, body.view, config,
-                             tracts, store.root)
+                             data_dir=store.root, **layers.kwargs())
         if previews.borrowed_tokens >= previews.total_tokens:  # never queue without bound
             raise ApiError(503, f"{MAX_PREVIEW_WAITING} previews are waiting; try again in a moment",
                            {"retry-after": "2"})
@@ -358,14 +365,11 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
         """Queue a job: ``images`` (every row from every view, as PNGs plus a zip), ``figure`` (PDF/PNG),
         ``export`` (one row as an interactive 3D page, HTML)
         or ``movie`` (MP4/GIF)."""
-        from brainpainter.web.worker import TRACTS
-
         name, data = await run_in_threadpool(_upload, store, body.upload_id, owner_of(request))
         await disk_budget(store, config)
-        tracts = await run_in_threadpool(tracts_of, store, body.options, owner_of(request))
+        layers = await run_in_threadpool(layer_uploads, store, body.options, owner_of(request))
         prep = await work.run(prepare, data, name, body.options, max_images=config.max_images,
-                              max_pixels=config.max_pixels, tracts=tracts,
-                              data_dir=store.root)
+                              max_pixels=config.max_pixels, data_dir=store.root, **layers.kwargs())
         n_rows, n_views = len(prep.run.table.images), len(prep.run.views)
         if body.kind == "movie" and n_rows < 2:
             raise BrainPainterError(f"a movie needs at least 2 rows (key frames); the table has {n_rows}.")
@@ -384,7 +388,7 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
             job_id = await run_in_threadpool(
                 store.submit, client_of(request), body.kind, body.options.model_dump(), params, name, data,
                 total, max_per_client=config.max_jobs_per_client, max_queued=config.max_queued,
-                extra={TRACTS: tracts} if tracts is not None else None, owner=owner_of(request))
+                extra=layers.files(), owner=owner_of(request))
         except LimitError as exc:
             raise ApiError(exc.status, str(exc), {"retry-after": str(exc.retry_after)}) from None
         return _public(await run_in_threadpool(store.get, job_id))

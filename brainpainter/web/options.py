@@ -12,19 +12,22 @@ checks a server adds (no paths, size limits). Nothing here imports bpy.
 from __future__ import annotations
 
 import io
+import typing
 from collections import Counter
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, FiniteFloat, PositiveFloat
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, FiniteFloat, PositiveFloat, create_model
 
 from brainpainter.color.scale import ScaleOptions
 from brainpainter.errors import BrainPainterError
 from brainpainter.maps.options import MapOptions
+from brainpainter.rendering.layers import LayerOptions
 from brainpainter.rendering.options import SceneOptions, option_names
 from brainpainter.rendering.settings import RenderSettings, parse_size
 from brainpainter.table.options import TableOptions as ReadOptions
+from brainpainter.web.layer_uploads import layer_maps
 from brainpainter.web.tracts import MAX_WEB_STREAMLINES
 
 if TYPE_CHECKING:
@@ -33,6 +36,9 @@ if TYPE_CHECKING:
 
 #: The options of tracts (given to a run only with tractograms).
 TRACT_FIELDS = ("tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_radius", "tract_value")
+#: The options that name another upload drawn as a layer of the main one (a map over a table, tracts, a
+#: contour map's iso-lines).
+LAYER_UPLOADS = ("map", "tracts", "contour")
 
 #: Suffixes an uploaded file name may have (only used to sniff the format; never a path).
 UPLOAD_SUFFIXES = (".csv", ".tsv", ".tab", ".txt", ".dat", ".xlsx", ".xlsm", ".xls")
@@ -75,11 +81,29 @@ class TableOptions(BaseModel):
     strict: bool = core(ReadOptions, "strict")
 
 
-class RenderOptions(TableOptions):
+def _layer_fields() -> dict[str, Any]:
+    """Each layer's own colour options (``regions_cmap``, ``map_vmin``, ``map_alpha``, ``tracts_label``...):
+    the fields of :class:`~brainpainter.rendering.layers.LayerOptions`, with their defaults and help."""
+    hints = typing.get_type_hints(LayerOptions)
+    kinds: dict[Any, Any] = {float | None: FiniteFloat | None, float: FiniteFloat,
+                             str | None: Annotated[str | None, Field(max_length=200)]}
+    return {name: (kinds[hints[name]], core(LayerOptions, name)) for name in option_names(LayerOptions)}
+
+
+if TYPE_CHECKING:
+    _WithLayers = TableOptions
+else:  # the table's options and each layer's, then render's own
+    _WithLayers = create_model("_WithLayers", __base__=TableOptions, **_layer_fields())
+
+
+class RenderOptions(_WithLayers):
     """The options of ``brainpainter render``, with the defaults and help of the core option classes.
 
     See :class:`brainpainter.rendering.options.Options`; ``size`` is
-    ``WIDTHxHEIGHT`` and ``transparent`` replaces the background, as in the CLI.
+    ``WIDTHxHEIGHT`` and ``transparent`` replaces the background, as in the CLI. Each layer's
+    colour options (``regions_*``, ``map_*``, ``tracts_*``) are those of
+    :class:`~brainpainter.rendering.layers.LayerOptions`; ``map`` and ``tracts`` name other uploads
+    drawn with the table.
     """
 
     views: str | None = core(SceneOptions, "views")  # None: the run's own (a table's, a map's)
@@ -109,6 +133,14 @@ class RenderOptions(TableOptions):
                                        description=core(RenderSettings, "outline_width").description)
     outline_color: str = core(RenderSettings, "outline_color")
     cortex: Annotated[str, one_of(RenderSettings, "cortex")] = core(RenderSettings, "cortex")
+    map: str | None = Field(None, pattern="^[0-9a-f]{32}$", description=(
+        "Upload id of a map (POST /api/uploads: a surface map, a volume or a CIFTI file) drawn over the "
+        "table's region colours, as --lh/--rh (or --volume) beside INPUT; map_alpha is its opacity."))
+    contour: str | None = Field(None, pattern="^[0-9a-f]{32}$", description=(
+        "Upload id of a map of one image (a cluster mask, a p-map) whose iso-lines are drawn over the map, "
+        "as --contour."))
+    contour_levels: str | None = Field(None, max_length=200,
+                                       description=core(MapOptions, "contour_levels").description)
     tracts: str | None = Field(None, pattern="^[0-9a-f]{32}$", description=(
         "Upload id of tractograms (POST /api/tracts) drawn with the table, as --tracts (with the upload's "
         "table of bundle values, if it had one, as --tract-values)."))
@@ -131,7 +163,8 @@ class RenderOptions(TableOptions):
         `tracts`: the files of the ``tracts`` upload on disk (:func:`brainpainter.web.tracts.materialise`),
         given as the CLI's ``--tracts``, ``--tract-values`` and ``--tracts-affine``.
         """
-        values = self.model_dump(exclude={"atlas", "size", "transparent", "hide", *TRACT_FIELDS})
+        values = self.model_dump(exclude={"atlas", "size", "transparent", "hide", *LAYER_UPLOADS,
+                                          *TRACT_FIELDS})
         if self.size:  # none: the default size, which an atlas of another shape reshapes (as on the CLI)
             values["width"], values["height"] = parse_size(self.size)
         if self.transparent:
@@ -145,6 +178,10 @@ class RenderOptions(TableOptions):
                 tracts_affine=None if not (self.tracts_affine or "").strip() else str(
                     tracts.affine_file(self.tracts_affine or "")))
         return values
+
+    def layers_given(self) -> bool:
+        """Whether any layer's own colour option (``regions_cmap``, ``map_alpha``, ...) was given."""
+        return bool(self.model_dump(include=set(option_names(LayerOptions)), exclude_defaults=True))
 
     def hide_tokens(self) -> list[str]:
         return [h.strip() for item in self.hide for h in item.split(",") if h.strip()]
@@ -187,16 +224,18 @@ class Prepared:
         return "vertices" if hasattr(self.run, "source_vertex") else "regions"
 
     def painter_args(self) -> dict[str, Any]:
-        """The tract arguments of the run's painter (:meth:`brainpainter.rendering.run.Run.painter`)."""
+        """The tract and contour arguments of the run's painter (as
+        :meth:`brainpainter.rendering.run.Run.painter` gives them)."""
         scene = self.run.options.scene
         tv = getattr(self.run, "tract_values", None)
         return {"tracts": scene.tract_spec(), "tract_nodes": tv.nodes if tv is not None else (),
-                "tract_radius": scene.tract_radius}
+                "tract_radius": scene.tract_radius, "contours": getattr(self.run, "contours", None)}
 
 
 def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int | None = None,
             max_pixels: int | None = None, tracts: bytes | None = None,
-            data_dir: Path | None = None) -> Prepared:
+            data_dir: Path | None = None, map_upload: bytes | None = None,
+            contour_upload: bytes | None = None) -> Prepared:
     """Check `options` against the uploaded table (or map) exactly as ``brainpainter render`` would.
 
     Parameters
@@ -215,6 +254,8 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
         The tract bundle that option ``tracts`` names (drawn with the table).
     data_dir : Path, optional
         The server's data folder: a tract bundle's files are written under it (``incoming/``).
+    map_upload, contour_upload : bytes, optional
+        The map bundles of options ``map`` (over the table) and ``contour`` (iso-lines over the map).
 
     Raises
     ------
@@ -230,6 +271,7 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     alone = is_tract_bundle(data)
     files = _tract_files(data, options, tracts, data_dir)
     kwargs = options.run_kwargs(files)
+    kwargs.update(layer_maps(options, data, map_upload, contour_upload))
     default = RenderSettings()
     pixels = kwargs.get("width", default.width) * kwargs.get("height", default.height)
     if max_pixels is not None and pixels > max_pixels:
@@ -246,10 +288,7 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
         tract_table = files.values
         kwargs["tract_values"] = None
         run = prepare_run(str(tract_table), options.atlas, **kwargs)
-    elif is_bundle(data):  # a map: its files, read as the CLI reads --lh/--rh
-        if files is not None:
-            raise BrainPainterError("tracts are drawn with a region table, not with a map; upload a region "
-                                    "table, or leave option tracts out.")
+    elif is_bundle(data):  # a map: its files, read as the CLI reads --lh/--rh (tracts drawn with it)
         run = prepare_run(read_bundle(data), options.atlas, **kwargs)
     else:
         run = prepare_run(table_stream(data, name), options.atlas, **kwargs)
@@ -388,29 +427,46 @@ class MovieParams(BaseModel):
         return len(plan_frames(list(range(n_keys)), self.frames_per_step, self.easing, self.hold))
 
 
-def map_check(data: bytes, name: str, options: RenderOptions) -> dict[str, Any]:
+def map_check(data: bytes, name: str, options: RenderOptions, data_dir: Path | None = None,
+              **uploads: Any) -> dict[str, Any]:
     """The report of a map upload (:func:`brainpainter.web.maps.base_report`) with the colour scale of
-    `options` (the page's colour bar; the threshold band is marked by ``threshold``)."""
+    `options` (the page's colour bar; the threshold band is marked by ``threshold``) and its layers'
+    (`uploads`: the tracts and contour drawn with it, as :func:`prepare` takes them)."""
     from brainpainter.web.maps import base_of
 
     report = base_of(data)
-    scale = prepare(data, name, options).run.scale
-    report["values"]["scale"] = scale_report(scale)
+    run = prepare(data, name, options, data_dir=data_dir, **uploads).run
+    report["values"]["scale"] = scale_report(run.scale)
+    report["layers"] = layers_report(run)
     return report
 
 
 def scale_report(scale: Any) -> dict[str, Any]:
-    """A run's colour scale as the check report gives it (the page's colour bar: ``ramp``, ``ticks``)."""
+    """A run's colour scale as the check report gives it (the page's colour bar: ``ramp``, ``ticks``; a
+    label map's ``categories``, its key: ``name`` and ``color`` each)."""
+    from brainpainter.color.rgb import to_hex
     from brainpainter.table.report import colour_bar
 
     return {"name": scale.name, "vmin": scale.vmin, "vmax": scale.vmax, "center": scale.center,
-            "threshold": getattr(scale, "threshold", None), **colour_bar(scale)}
+            "threshold": getattr(scale, "threshold", None), **colour_bar(scale),
+            "categories": [{"name": n, "color": to_hex(c)} for n, c in scale.categories]}
 
 
-def table_tract_scale(data: bytes, name: str, options: RenderOptions, tracts: bytes,
-                      data_dir: Path | None = None) -> dict[str, Any]:
-    """The colour scale of a table drawn with tracts: over the region and the bundle values together."""
-    return scale_report(prepare(data, name, options, tracts=tracts, data_dir=data_dir).run.scale)
+def layers_report(run: Any) -> list[dict[str, Any]]:
+    """The colour bars of a run: one per layer with a scale of its own (``kind``, ``label``, ``opacity``,
+    ``scale`` as :func:`scale_report`), the first layer's first, as ``render``'s figures draw them."""
+    from brainpainter.rendering.layers import colorbar_layers
+
+    return [{"kind": layer.kind, "label": layer.label, "opacity": layer.opacity,
+             "scale": scale_report(layer.scale)} for layer in colorbar_layers(run.layers)]
+
+
+def table_layers(data: bytes, name: str, options: RenderOptions, data_dir: Path | None = None,
+                 **uploads: Any) -> dict[str, Any]:
+    """The colour scales of a table drawn with other layers (tracts, a map) or options of its own layer:
+    ``scale``, the first layer's, and ``layers`` (:func:`layers_report`); `uploads`: :func:`prepare`'s."""
+    run = prepare(data, name, options, data_dir=data_dir, **uploads).run
+    return {"scale": scale_report(run.scale), "layers": layers_report(run)}
 
 
 def tract_check(data: bytes, name: str, options: RenderOptions, *,
@@ -420,5 +476,8 @@ def tract_check(data: bytes, name: str, options: RenderOptions, *,
     from brainpainter.web.tracts import report_of
 
     report = report_of(data)
-    report["scale"] = scale_report(prepare(data, name, options, data_dir=data_dir).run.scale)
+    run = prepare(data, name, options, data_dir=data_dir).run
+    report["scale"] = scale_report(run.scale)
+    report["layers"] = layers_report(run)
     return report
+

@@ -17,7 +17,7 @@ import shlex
 from pathlib import PurePosixPath
 from typing import Any
 
-from brainpainter.web.options import TRACT_FIELDS, RenderOptions
+from brainpainter.web.options import LAYER_UPLOADS, TRACT_FIELDS, RenderOptions
 
 #: Options that apply to per-vertex maps only (left out of a table's command).
 MAP_ONLY = ("underlay", "threshold", "outline_threshold")
@@ -50,7 +50,7 @@ def changed(options: RenderOptions, *, kind: str, tracts: bool) -> list[tuple[st
     ----------
     options : RenderOptions
     kind : {"table", "map", "tracts"}
-        What was uploaded (map options are left out of a table's command).
+        What is drawn (map options are left out of a table's command; a table with a map over it: map).
     tracts : bool
         Whether tracts are drawn (tract options are left out otherwise).
 
@@ -62,7 +62,8 @@ def changed(options: RenderOptions, *, kind: str, tracts: bool) -> list[tuple[st
     out: list[tuple[str, Any]] = []
     for name, info in RenderOptions.model_fields.items():
         value = getattr(options, name)
-        if name == "tracts" or (name in TRACT_FIELDS and not tracts) or (name in MAP_ONLY and kind != "map"):
+        if name in LAYER_UPLOADS or (name in TRACT_FIELDS and not tracts) or (
+                name in MAP_ONLY and kind != "map"):
             continue
         if name == "hide":
             value = options.hide_tokens()
@@ -85,7 +86,7 @@ def inputs(data: bytes, name: str) -> tuple[str, list[str], list[tuple[str, str]
     -------
     kind : {"table", "map", "tracts"}
     positional : list of str
-        The table (or the tracts' values table, tracts alone).
+        The table (or the tracts' values table, tracts alone; or a CIFTI file).
     options : list of (str, str)
         ``("lh", name)``, ``("rh", name)``, ``("volume", name)`` of a map.
     """
@@ -98,7 +99,8 @@ def inputs(data: bytes, name: str) -> tuple[str, list[str], list[tuple[str, str]
     if is_bundle(data):
         source = str(bundle_header(data)[0].get("source", ""))
         pairs = [part.strip().split("=", 1) for part in source.split(",") if "=" in part]
-        return "map", [], [(k, v) for k, v in pairs if k in ("lh", "rh", "volume")]
+        cifti = [v for k, v in pairs if k == "cifti"]  # one CIFTI file is INPUT, as on the command line
+        return "map", cifti[:1], [(k, v) for k, v in pairs if k in ("lh", "rh", "volume")]
     return "table", [name], []
 
 
@@ -183,7 +185,8 @@ def media_options(kind: str, params: dict[str, Any]) -> tuple[str, list[tuple[st
 
 
 def reproduce(data: bytes, name: str, options: RenderOptions, tracts: bytes | None = None,
-              kind: str = "images", params: dict[str, Any] | None = None) -> dict[str, str]:
+              kind: str = "images", params: dict[str, Any] | None = None, *,
+              map_upload: bytes | None = None, contour_upload: bytes | None = None) -> dict[str, str]:
     """The command and the Python call that make the images of `options` from the upload `data` (named
     `name`): ``brainpainter render``, or ``figure`` / ``movie`` for those jobs (`kind`, with their
     `params`).
@@ -201,6 +204,10 @@ def reproduce(data: bytes, name: str, options: RenderOptions, tracts: bytes | No
         The job the command makes (images: ``brainpainter render``).
     params : dict, optional
         A figure's or movie's options.
+    map_upload : bytes, optional
+        The map bundle option ``map`` names (drawn over the table: its ``--lh``/``--rh`` or ``--volume``).
+    contour_upload : bytes, optional
+        The map bundle option ``contour`` names (``--contour``).
 
     Returns
     -------
@@ -210,6 +217,11 @@ def reproduce(data: bytes, name: str, options: RenderOptions, tracts: bytes | No
     upload, positional, given = inputs(data, name)
     drawn = data if upload == "tracts" else tracts
     pairs: list[tuple[str, Any]] = list(given)
+    if map_upload is not None:  # a map over the table: its files as --lh/--rh or --volume
+        upload = "map"
+        pairs += inputs(map_upload, "")[2]
+    if contour_upload is not None:  # --contour FILE, or LH,RH
+        pairs.append(("contour", ",".join(v for _, v in inputs(contour_upload, "")[2])))
     if drawn is not None:
         merged: dict[str, list[str]] = {}
         for key, value in tract_inputs(drawn, upload == "tracts"):

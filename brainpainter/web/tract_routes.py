@@ -1,4 +1,5 @@
-"""The route of tractogram uploads (``POST /api/tracts``) and the tract upload a render's options name."""
+"""The route of tractogram uploads (``POST /api/tracts``) and the uploads a render's options name (tracts, a
+map over a table: :class:`~brainpainter.web.layer_uploads.LayerUploads`)."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from brainpainter.web.http import (
     receive_body,
     require_octet_stream,
 )
+from brainpainter.web.layer_uploads import LayerUploads
 from brainpainter.web.options import RenderOptions
 from brainpainter.web.store import Store
 from brainpainter.web.tracts import is_tract_bundle, is_tract_upload
@@ -79,3 +81,24 @@ def tracts_of(store: Store, options: RenderOptions, owner: str) -> bytes | None:
         raise ApiError(404, "the tract upload of option tracts was not found (it expired, or the id is "
                             "wrong); upload the tractograms again.")
     return got[1]
+
+
+def layer_uploads(store: Store, options: RenderOptions, owner: str) -> LayerUploads:
+    """The uploads of `owner` that `options` name (``tracts``, ``map``, ``contour``).
+
+    Raises
+    ------
+    ApiError
+        404 when one is not found (expired, a wrong id, another client's) or is not of its kind.
+    """
+    from brainpainter.web.maps import is_bundle
+
+    maps: dict[str, bytes | None] = {}
+    for name in ("map", "contour"):
+        upload_id = getattr(options, name)
+        got = None if upload_id is None else store.get_upload(upload_id, owner)
+        if upload_id is not None and (got is None or not is_bundle(got[1])):
+            raise ApiError(404, f"the map upload of option {name} was not found (it expired, the id is "
+                                "wrong, or it is not a map); upload the map again.")
+        maps[name] = None if got is None else got[1]
+    return LayerUploads(tracts_of(store, options, owner), **maps)

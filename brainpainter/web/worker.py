@@ -48,18 +48,21 @@ class PainterCache:
 
     def get(self, atlas: Any, surface: str, hidden: list[str], settings: Any,
             coloring: str = "regions", tracts: Any = None, tract_nodes: Any = (),
-            tract_radius: float | None = None) -> Any:
+            tract_radius: float | None = None, contours: Any = None) -> Any:
         """A loaded painter; `coloring` ``"vertices"`` for a map run (a per-vertex scene); `tracts` (a
-        :class:`~brainpainter.tracts.model.TractSpec`), `tract_nodes` and `tract_radius` as
-        :class:`~brainpainter.rendering.painter.Painter` takes them (part of the key: the spec names
-        content-addressed files, so two tract uploads never share a painter)."""
+        :class:`~brainpainter.tracts.model.TractSpec`), `tract_nodes`, `tract_radius` and `contours` (a
+        :class:`~brainpainter.maps.outlines.Contours`) as :class:`~brainpainter.rendering.painter.Painter`
+        takes them (part of the key: the spec names content-addressed files, the contours by a digest of
+        their values, so two uploads never share a painter)."""
         from brainpainter.rendering.painter import Painter
 
-        key = painter_key(atlas.name, surface, hidden, settings, coloring, tracts, tract_nodes, tract_radius)
+        key = painter_key(atlas.name, surface, hidden, settings, coloring, tracts, tract_nodes, tract_radius,
+                          contours)
         painter = self._painters.get(key)
         if painter is None:
             painter = Painter(atlas, "fsaverage", surface, hidden, settings, self.renderer, coloring=coloring,
-                              tracts=tracts, tract_nodes=tract_nodes, tract_radius=tract_radius)
+                              tracts=tracts, tract_nodes=tract_nodes, tract_radius=tract_radius,
+                              contours=contours)
             painter.load()
             self._painters[key] = painter
             while len(self._painters) > self.size:
@@ -83,10 +86,14 @@ class PainterCache:
 
 def painter_key(atlas: str, surface: str, hidden: list[str], settings: Any, coloring: str = "regions",
                 tracts: Any = None, tract_nodes: Any = (),
-                tract_radius: float | None = None) -> tuple[Any, ...]:
+                tract_radius: float | None = None, contours: Any = None) -> tuple[Any, ...]:
     """What makes a painter's scene: a cached painter is reused only for the same key."""
+    import hashlib
+
+    drawn = None if contours is None else (contours.levels, contours.regions, hashlib.sha256(b"".join(
+        h.encode() + v.tobytes() for h, v in sorted(contours.values.items()))).hexdigest())
     return (atlas, surface, tuple(sorted(hidden)), settings, coloring, tracts,
-            tuple((str(n), int(k)) for n, k in tract_nodes), tract_radius)
+            tuple((str(n), int(k)) for n, k in tract_nodes), tract_radius, drawn)
 
 
 def _orphaned(parent: int) -> bool:
@@ -251,16 +258,12 @@ def _no_paths(message: str, store: Any) -> str:
 
 
 def _prepared(folder: Path, job: dict[str, Any]) -> Any:
+    from brainpainter.web.layer_uploads import LayerUploads
     from brainpainter.web.options import RenderOptions, prepare
 
     data = (folder / "input.bin").read_bytes()
-    tracts = (folder / TRACTS).read_bytes() if (folder / TRACTS).is_file() else None
     return data, prepare(data, job["input_name"], RenderOptions(**job["options"]),
-                         tracts=tracts, data_dir=folder.parent.parent)
-
-
-#: A job's copy of the tract upload its options name (beside ``input.bin``).
-TRACTS = "tracts.bin"
+                         data_dir=folder.parent.parent, **LayerUploads.read(folder).kwargs())
 
 
 def _media_input(data: bytes, name: str, prep: Any) -> Any:
@@ -361,13 +364,15 @@ def discard_outputs(folder: Path, published: bool = True) -> None:
 
 def _reproduced(folder: Path, job: dict[str, Any], data: bytes, prep: Any) -> dict[str, str]:
     """The command line and Python call that make a job's files again (its manifest's ``reproduce``)."""
+    from brainpainter.web.layer_uploads import LayerUploads
     from brainpainter.web.reproduce import reproduce
 
-    tracts = (folder / TRACTS).read_bytes() if (folder / TRACTS).is_file() else None
+    layers = LayerUploads.read(folder)
     params = dict(job["params"])
     if job["kind"] == "export":  # the command names the row by its image name
         params["image"] = prep.run.table.images[params.get("row", 0)]
-    return reproduce(data, job["input_name"], prep.options, tracts, job["kind"], params)
+    return reproduce(data, job["input_name"], prep.options, layers.tracts, job["kind"], params,
+                     map_upload=layers.map, contour_upload=layers.contour)
 
 
 def _media_manifest(folder: Path, job: dict[str, Any], data: bytes, prep: Any, name: str) -> list[str]:
@@ -482,7 +487,8 @@ def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int
                 atlas = get_atlas(req["atlas"])
                 painter = painters.get(atlas, req["surface"], req["hidden"], req["settings"],
                                        req.get("coloring", "regions"), req.get("tracts"),
-                                       req.get("tract_nodes", ()), req.get("tract_radius"))
+                                       req.get("tract_nodes", ()), req.get("tract_radius"),
+                                       req.get("contours"))
                 pixels = painter.paint_colors(req["colors"], req["view"])
                 conn.send(("ok", png_bytes(pixels), int((time.perf_counter() - t0) * 1000)))
             except BrainPainterError as exc:

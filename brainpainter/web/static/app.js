@@ -5,7 +5,8 @@
 const $ = (id) => document.getElementById(id);
 const state = { uploadId: null, files: null, name: null, report: null, meta: null, isMap: false,
                 previewCtl: null, previewTimer: null, previewUrl: null, seq: 0, scale: null,
-                tractsId: null, tractReport: null, tractFiles: null, summary: "" };
+                tractsId: null, tractReport: null, tractFiles: null, summary: "", layers: [],
+                mapId: null, mapReport: null, contourId: null, contourReport: null };
 const DEFAULT_VIEWS = ["lateral-left", "medial-left", "subcortical"];
 const MAP_VIEWS = ["lateral-left", "medial-left", "lateral-right", "medial-right"];  // a map's default
 const TRACT_VIEWS = ["subcortical", "subcortical-dorsal"];  // tracts alone: the views that show them
@@ -69,19 +70,48 @@ function fieldError(message) {
   return text;
 }
 
-// The colour bar under the preview: the scale of the check report (colours from vmin to vmax, ticks).
-function showBar(scale) {
-  const bar = $("preview-bar");
-  if (!scale || !scale.ramp) { bar.hidden = true; return; }
-  bar.querySelector(".ramp").style.background = `linear-gradient(to right, ${scale.ramp.join(", ")})`;
-  const ticks = bar.querySelector(".ticks");
-  ticks.replaceChildren(...scale.ticks.map((t) => {
+// The colour bars under the preview, one per layer with a scale of its own (the check report's layers,
+// as render's figures draw them): its label, colours from vmin to vmax and ticks, or a label map's key.
+function showBars(layers) {
+  const shown = (layers || []).filter((l) => l.scale && l.scale.ramp);
+  const extra = $("layer-bars");
+  extra.replaceChildren();
+  if (!shown.length) { $("preview-bar").hidden = true; return; }
+  fillBar($("preview-bar"), shown[0]);
+  for (const layer of shown.slice(1)) {
+    const bar = el("div", { class: "cbar", role: "img" }, el("div", { class: "cbar-label" }),
+                   el("div", { class: "ramp" }), el("div", { class: "ticks" }));
+    fillBar(bar, layer);
+    extra.append(bar);
+  }
+}
+
+function fillBar(bar, layer) {
+  const scale = layer.scale;
+  bar.querySelector(".cbar-label").textContent = shownLabel(layer);
+  const ramp = bar.querySelector(".ramp"), ticks = bar.querySelector(".ticks");
+  const key = (scale.categories || []).length > 0;
+  ramp.hidden = key;
+  ramp.style.background = `linear-gradient(to right, ${scale.ramp.join(", ")})`;
+  ticks.className = key ? "key" : "ticks";
+  ticks.replaceChildren(...(key ? scale.categories.slice(0, 40).map((c) => {
+    const span = el("span", { text: c.name });
+    span.style.setProperty("--swatch", c.color);
+    return span;
+  }) : scale.ticks.map((t) => {
     const span = el("span", { text: t.label });
     span.style.left = `${(100 * t.at).toFixed(2)}%`;
     return span;
-  }));
-  bar.setAttribute("aria-label", `Colour bar ${scale.name}: ${scale.ticks.map((t) => t.label).join(", ")}`);
+  })));
+  const said = key ? `key of ${scale.categories.length} labels` : scale.ticks.map((t) => t.label).join(", ");
+  bar.setAttribute("aria-label", `Colour bar of ${shownLabel(layer)} (${scale.name}): ${said}`);
   bar.hidden = !$("preview").src;
+}
+
+// a layer's label as the page shows it: the layer's kind with its label (a file name, or the one given)
+function shownLabel(layer) {
+  const kind = { regions: "Regions", map: "Map", tracts: "Tracts" }[layer.kind] || layer.kind;
+  return layer.label ? `${kind}: ${layer.label}` : kind;
 }
 
 async function api(path, opts = {}) {
@@ -127,6 +157,7 @@ function fillForm(meta) {
   for (const a of meta.atlases) $("atlas").append(el("option", { value: a, text: a }));
   for (const a of meta.atlases) $("outline").append(el("option", { value: a, text: a }));
   for (const c of meta.cmaps) $("cmap").append(el("option", { value: c, text: c, selected: c === "viridis" }));
+  for (const kind of ["map", "tracts"]) layerFields(kind, meta.cmaps);
   const views = $("views");
   for (const v of meta.views) {
     const box = el("input", { type: "checkbox", name: "views", value: v, checked: DEFAULT_VIEWS.includes(v) });
@@ -180,7 +211,99 @@ function options() {
     tracts_space: $("tracts_space").value || undefined, cortex: $("cortex").value || undefined,
     tracts_affine: textOrNull("tracts_affine"), max_streamlines: numberOrNull("max_streamlines") ?? undefined,
     tract_radius: numberOrNull("tract_radius"), tract_value: textOrNull("tract_value"),
+    ...layerOptions(),
   };
+}
+
+// -- layers: each upload's own colours (regions_*, map_*, tracts_*: the API's LayerOptions fields) ------
+const LAYER_NAMES = { map: "Map", tracts: "Tracts" };
+
+// The first layer: what the main upload is (its colours are the plain ones).
+function mainKind() {
+  if (state.isMap) return "map";
+  return state.uploadId && state.uploadId === state.tractsId ? "tracts" : "regions";
+}
+
+// Which layers are drawn over the main upload: a map over a table, tracts with a table or a map.
+function overLayers() {
+  const table = Boolean(state.uploadId) && mainKind() === "regions";
+  return { map: table && Boolean(state.mapId),
+           tracts: Boolean(state.uploadId) && mainKind() !== "tracts" && Boolean(state.tractsId) };
+}
+
+function layerOptions() {
+  const out = { [`${mainKind()}_label`]: textOrNull("main_label") };
+  const over = overLayers();
+  if (over.map) out.map = state.mapId;
+  if (state.contourId && (state.isMap || over.map)) {
+    out.contour = state.contourId; out.contour_levels = textOrNull("contour_levels");
+  }
+  for (const kind of ["map", "tracts"]) {
+    if (!over[kind]) continue;
+    const cmap = textOrNull(`${kind}_cmap`);
+    Object.assign(out, { [`${kind}_cmap`]: cmap, [`${kind}_vmin`]: numberOrNull(`${kind}_vmin`),
+                         [`${kind}_vmax`]: numberOrNull(`${kind}_vmax`),
+                         [`${kind}_center`]: numberOrNull(`${kind}_center`),
+                         [`${kind}_label`]: textOrNull(`${kind}_label`) });
+    if (kind === "map") out.map_alpha = Number($("map_alpha").value || 1);
+  }
+  return out;
+}
+
+// A layer's colour fields beside its upload: colour map (empty: the plain colours), range, label.
+function layerFields(kind, cmaps) {
+  const name = LAYER_NAMES[kind];
+  const box = $(`${kind}-scale`);
+  const field = (id, text, input) => el("div", {}, el("label", { for: id, text }), input);
+  const cmap = el("select", { id: `${kind}_cmap`, name: `${kind}_cmap` },
+                  el("option", { value: "", text: "as the main colours" }),
+                  ...cmaps.map((c) => el("option", { value: c, text: c })));
+  const number = (suffix, extra = {}) => el("input", { id: `${kind}_${suffix}`, name: `${kind}_${suffix}`,
+                                                       type: "number", step: "any", ...extra });
+  box.append(el("p", { class: "label", text: `${name}: its own colours` }),
+    el("div", { class: "grid2" },
+      field(`${kind}_cmap`, `${name} colour map`, cmap),
+      field(`${kind}_label`, `${name} colour-bar label`,
+            el("input", { id: `${kind}_label`, name: `${kind}_label`, maxlength: "200" })),
+      field(`${kind}_vmin`, `${name} vmin`, number("vmin")), field(`${kind}_vmax`, `${name} vmax`, number("vmax")),
+      field(`${kind}_center`, `${name} centre`, number("center")),
+      ...(kind === "map" ? [field("map_alpha", "Map opacity (0-1)",
+                                  number("alpha", { min: "0", max: "1", step: "0.05", value: "1" }))] : [])));
+  for (const ev of ["input", "change"]) box.addEventListener(ev, () => schedulePreview());
+}
+
+// A map drawn over the table (option map) or a contour map (option contour): an upload of its own (POST
+// /api/uploads, as the main one); `kind` is "map" or "contour", the prefix of its fields and state.
+async function uploadLayerMap(kind, files) {
+  const q = new URLSearchParams();
+  for (const f of files) q.append("name", f.name);
+  if (files.length > 1) for (const f of files) q.append("size", String(f.size));
+  const shown = files.map((f) => f.name).join(" + ");
+  say(`${kind}-error`, "");
+  $(`${kind}-status`).textContent = `Checking ${shown}…`;
+  try {
+    const res = await api(`/api/uploads?${q}`, { method: "POST", body: new Blob(files.map((f) => f.blob)),
+                                                 headers: { "content-type": "application/octet-stream" } });
+    const j = await res.json();
+    if (j.report.kind !== "map") throw new Error(`${shown} is a table; give a map here (or upload it above)`);
+    state[`${kind}Id`] = j.upload_id; state[`${kind}Report`] = j.report;
+    $(`${kind}-status`).textContent = `OK: ${j.report.summary}`;
+    $(`${kind}-clear`).disabled = false;
+    showFieldsets();
+    schedulePreview(0);
+  } catch (e) {
+    say(`${kind}-error`, refused(shown, e.message));
+    const kept = state[`${kind}Report`];
+    $(`${kind}-status`).textContent = kept ? `Still drawn: ${kept.summary}` : `No ${kind} is drawn.`;
+  }
+}
+
+function clearLayerMap(kind) {
+  state[`${kind}Id`] = null; state[`${kind}Report`] = null;
+  $(`${kind}-status`).textContent = ""; $(`${kind}-clear`).disabled = true; $(`${kind}-files`).value = "";
+  say(`${kind}-error`, "");
+  showFieldsets();
+  schedulePreview(0);
 }
 
 // -- upload and the check report ----------------------------------------------------------
@@ -242,7 +365,7 @@ async function upload(files) {
 
 // Nothing to draw: no image, no colour bar, no command, and a caption that says so.
 function noUpload() {
-  $("preview").hidden = true; $("preview-bar").hidden = true; $("reproduce").hidden = true;
+  $("preview").hidden = true; showBars([]); $("reproduce").hidden = true;
   $("preview-status").textContent = "No table or map in use: upload one to see a preview.";
   $("row").replaceChildren();
   setReady(false);
@@ -252,7 +375,11 @@ function noUpload() {
 function showFieldsets() {
   const any = Boolean(state.uploadId || state.tractsId);
   $("tract-options").hidden = any && !state.tractsId;
-  const maps = !any || state.isMap;
+  const over = overLayers();
+  $("map-box").hidden = any && (state.isMap || mainKind() === "tracts");
+  $("contour-box").hidden = any && !state.isMap && !over.map;
+  $("map-scale").hidden = !over.map; $("tracts-scale").hidden = !over.tracts;
+  const maps = !any || state.isMap || over.map;
   for (const n of document.querySelectorAll("[data-map-only]")) n.hidden = !maps;
   $("map-options").querySelector("legend").textContent = maps ? "Maps and outlines" : "Outlines";
 }
@@ -269,7 +396,8 @@ function showReport(r) {
   const box = $("report");
   box.replaceChildren();
   state.scale = r.values ? r.values.scale : null;
-  showBar(state.scale);
+  state.layers = r.layers || (state.scale ? [{ kind: mainKind(), label: "", scale: state.scale }] : []);
+  showBars(state.layers);
   showReproduce(r.reproduce);
   if (state.summary !== r.summary) {  // the live region says one line, and only when it changes
     state.summary = r.summary;
@@ -347,7 +475,8 @@ function showMapReport(r, box, dl, add) {
 
 function showTractReport(r, box, dl, add) {
   state.scale = r.scale || null;
-  showBar(state.scale);
+  state.layers = r.layers || (state.scale ? [{ kind: "tracts", label: "", scale: state.scale }] : []);
+  showBars(state.layers);
   add("bundles", r.bundles.map((b) => `${b.name} (${b.drawn} of ${b.streamlines})`).join(", "));
   if (r.values) add("values", `${r.values.file}: ${r.values.nodes ? `profiles of ${r.values.nodes} nodes` : "one value per bundle"}`);
   if (r.scale) add("scale", `${r.scale.name}: ${fmt(r.scale.vmin)} .. ${fmt(r.scale.vmax)}`);
@@ -458,7 +587,7 @@ async function preview() {
     state.previewUrl = URL.createObjectURL(blob);
     const img = $("preview");
     img.src = state.previewUrl; img.hidden = false;
-    showBar(state.scale);
+    showBars(state.layers);
     img.dataset.seq = String(seq);
     img.alt = `Preview of ${$("row").selectedOptions[0]?.textContent || "row"} from ${body.view}`;
     $("preview-status").textContent =
@@ -617,6 +746,14 @@ function wire() {
     if (list.length) uploadTracts(picked(list));
   });
   $("tract-clear").addEventListener("click", clearTracts);
+  for (const kind of ["map", "contour"]) {
+    $(`${kind}-files`).addEventListener("change", () => {
+      const list = $(`${kind}-files`).files;
+      if (list.length) uploadLayerMap(kind, picked(list));
+    });
+    $(`${kind}-clear`).addEventListener("click", () => clearLayerMap(kind));
+  }
+  $("contour_levels").addEventListener("input", () => schedulePreview());
   $("subject").addEventListener("change", () => {
     if (state.tractFiles) uploadTracts(state.tractFiles, $("subject").value);
   });
