@@ -20,6 +20,7 @@ import click
 
 from brainpainter.cli.params import FINITE, split_commas
 from brainpainter.color.scale import ScaleOptions
+from brainpainter.connectome.options import ConnectomeOptions
 from brainpainter.maps.options import MapOptions
 from brainpainter.rendering.layers import LayerOptions
 from brainpainter.rendering.options import DEFAULT_VIEWS, RunnerOptions, SceneOptions
@@ -40,7 +41,8 @@ RENDER_OPTION_NAMES = (
     "missing_color", "hide", "background", "transparent", "size", "quality", "shading", "lighting",
     "glass_opacity", "cortex", "outline_width", "outline_color", "renderer", "atlas_config", "tracts",
     "tracts_space", "tracts_affine", "max_streamlines", "tract_values", "tract_value", "tract_radius",
-    *(f.name for f in fields(LayerOptions)),
+    "connectome", "nodes", "node_values", "node_categories", "directed", "edge_threshold", "top_edges",
+    "edges_of", "nodes_space", *(f.name for f in fields(LayerOptions)),
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
@@ -126,6 +128,13 @@ def render_option_list(views: str | None = None, size: str = DEFAULT_SIZE) -> di
         "tract_values": field_option(scene, "tract_values", type=click.Path(dir_okay=False)),
         "tract_value": field_option(scene, "tract_value"),
         "tract_radius": field_option(scene, "tract_radius"),
+        **{name: field_option(ConnectomeOptions, name, type=click.Path(dir_okay=False), metavar="FILE")
+           for name in ("connectome", "nodes", "node_values", "node_categories")},
+        "directed": field_option(ConnectomeOptions, "directed"),
+        "edge_threshold": field_option(ConnectomeOptions, "edge_threshold", type=str, metavar="W|P%"),
+        "top_edges": field_option(ConnectomeOptions, "top_edges", type=click.IntRange(min=1), metavar="K"),
+        "edges_of": field_option(ConnectomeOptions, "edges_of", metavar="NODE"),
+        "nodes_space": field_option(ConnectomeOptions, "nodes_space"),
         **{f.name: field_option(LayerOptions, f.name, **_layer_click(f.name)) for f in fields(LayerOptions)},
     }
 
@@ -195,8 +204,9 @@ parallel_options = stack([
 
 
 def tables_or_maps(inputs: Sequence[Any], kwargs: dict[str, Any]) -> Any:
-    """The data of a command: INPUT tables (one, or a list), or None (maps by ``--lh/--rh/--volume``, or
-    ``--tract-values`` alone). INPUT with maps: the maps are drawn over the tables' region colours.
+    """The data of a command: INPUT tables (one, or a list), or None (maps by ``--lh/--rh/--volume``,
+    ``--tract-values`` or ``--connectome`` alone). INPUT with maps: the maps are drawn over the tables'
+    region colours.
 
     Raises
     ------
@@ -206,9 +216,10 @@ def tables_or_maps(inputs: Sequence[Any], kwargs: dict[str, Any]) -> Any:
     from brainpainter.errors import BrainPainterError
 
     maps = any(kwargs.get(name) is not None for name in ("lh", "rh", "volume"))
-    if not inputs and not maps and kwargs.get("tract_values") is None:
+    if not inputs and not maps and kwargs.get("tract_values") is None and kwargs.get("connectome") is None:
         raise BrainPainterError("give INPUT tables, or maps: --lh FILE and/or --rh FILE, or --volume FILE, "
-                                "or tract values alone: --tract-values FILE --tracts DIR.")
+                                "or tract values alone: --tract-values FILE --tracts DIR, or a connectivity "
+                                "matrix: --connectome FILE.")
     if not inputs:
         return None
     return inputs[0] if len(inputs) == 1 else list(inputs)

@@ -91,6 +91,7 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
 
     Several INPUTs (e.g. lh and rh aparcstats2table files) are merged by image name.
     Per-vertex maps (thickness, .mgh, .gii, ...) are given with --lh FILE --rh FILE (docs/maps.md).
+    A connectivity matrix (--connectome FILE) is drawn as nodes and edges inside the glass cortex.
     """
     from brainpainter.rendering.run import render as run
 
@@ -107,14 +108,21 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
         echo_scale(result.scale, result.layers)
         return
     s = result.manifest["input"]
-    echo_input(s)
+    connectome = result.manifest.get("connectome")
     rendered = len({f["row"] for f in result.manifest["files"]})  # --rows may choose some of the rows
-    of = f" of {s['n_images']}" if rendered != s["n_images"] else ""
-    click.echo(
-        f"{len(result.files)} image(s) written to {out} "
-        f"({rendered} row(s){of}; {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
-        f"{len(s['unmatched_columns'])} unmatched column(s))"
-    )
+    if connectome and not inputs:  # a connectome alone: no table to report
+        click.echo(f"{len(result.files)} image(s) written to {out}")
+    else:
+        echo_input(s)
+        of = f" of {s['n_images']}" if rendered != s["n_images"] else ""
+        click.echo(
+            f"{len(result.files)} image(s) written to {out} "
+            f"({rendered} row(s){of}; {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
+            f"{len(s['unmatched_columns'])} unmatched column(s))"
+        )
+    if connectome:
+        click.echo(f"connectome: {connectome['n_nodes']} node(s), {connectome['n_edges']} edge(s) drawn"
+                   + (" (directed)" if connectome["directed"] else ""))
     tracts = result.manifest.get("tracts")
     if tracts:
         drawn = sum(b["drawn"] for b in tracts["bundles"])

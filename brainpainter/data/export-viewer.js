@@ -115,11 +115,19 @@
     const found = [];
     gltf.scene.traverse((o) => { if (o.isMesh) found.push(o); });
     smoothNormals(found);
+    const glass = cfg.glass || [];  // the cortex over a connectome: see-through, drawn after what is inside
     found.forEach((o) => {
       meshes.push(o);
+      if (glass.indexOf(o.userData.part) >= 0) {
+        o.material = o.material.clone();
+        Object.assign(o.material, { transparent: true, opacity: 0.18, depthWrite: false });
+        o.renderOrder = 1;
+      }
       lit.set(o, o.material);
       const m = o.material.clone();
-      flat.set(o, new T.MeshBasicMaterial({ color: m.color, side: m.side, vertexColors: m.vertexColors }));
+      flat.set(o, new T.MeshBasicMaterial({ color: m.color, side: m.side, vertexColors: m.vertexColors,
+                                            transparent: m.transparent, opacity: m.opacity,
+                                            depthWrite: m.depthWrite }));
     });
     scene.add(gltf.scene);
     const box = new T.Box3().setFromObject(gltf.scene);
@@ -150,10 +158,12 @@
     const r = renderer.domElement.getBoundingClientRect();
     ndc.set(((ev.clientX - r.left) / r.width) * 2 - 1, -((ev.clientY - r.top) / r.height) * 2 + 1);
     ray.setFromCamera(ndc, camera);
-    const hit = ray.intersectObjects(meshes.filter((o) => o.visible), false)[0];
+    const hits = ray.intersectObjects(meshes.filter((o) => o.visible), false);
+    // through the glass cortex: what lies inside it (a connectome's nodes and edges) is named first
+    const hit = hits.find((h) => (cfg.glass || []).indexOf(h.object.userData.part) < 0) || hits[0];
     if (!hit) { tip.style.display = "none"; return; }
     const value = hit.object.userData.value;
-    tip.textContent = hit.object.name + (value === undefined ? "" : ": " + value);
+    tip.textContent = (hit.object.userData.name || hit.object.name) + (value === undefined ? "" : ": " + value);
     tip.style.left = (ev.clientX + 14) + "px"; tip.style.top = (ev.clientY + 10) + "px";
     tip.style.display = "block";
   });

@@ -41,6 +41,7 @@ from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.settings import RGB
 
 if TYPE_CHECKING:
+    from brainpainter.connectome.model import Connectome
     from brainpainter.rendering.run import Run
 
 FORMATS = ("glb", "html")
@@ -153,6 +154,54 @@ def tract_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
     return out
 
 
+def connectome_meshes(scene: Scene, connectome: Connectome | None,
+                      colors: Mapping[str, RGB]) -> list[RegionMesh]:
+    """A connectome's node spheres and edge cylinders, a mesh each, named for the viewer's tooltip.
+
+    A node's mesh is named after the node, with its value (or category); an edge's ``A – B``
+    (``A → B`` directed), with its weight. Their geometry is the scene's (parts ``nodes`` and
+    ``edges``: one instance of a unit mesh per node or edge, consecutive).
+
+    Parameters
+    ----------
+    scene : Scene
+        With ``scene.connectome``.
+    connectome : Connectome, optional
+        None: an empty list.
+    colors : mapping of str to (r, g, b)
+        sRGB 0-1 by key (``node:i``, ``edge:k``); a node without one is drawn in the nodes' grey.
+
+    Returns
+    -------
+    list of RegionMesh
+        Part ``connectome``.
+    """
+    from brainpainter.rendering.connectome_parts import NODE_COLOR, edge_keys, node_keys
+
+    if connectome is None:
+        return []
+    source, target, weight = connectome.edges()
+    arrow = " \u2192 " if connectome.directed else " \u2013 "
+    values, categories = connectome.node_values, connectome.node_categories
+    shown = ([value_text(v) for v in values] if values is not None else
+             list(categories) if categories is not None else [None] * connectome.n_nodes)
+    about: dict[str, list[tuple[str, str, str | None]]] = {
+        "node": list(zip(connectome.names, node_keys(connectome.n_nodes), shown, strict=True)),
+        "edge": [(connectome.names[a] + arrow + connectome.names[b], key, value_text(w))
+                 for a, b, w, key in zip(source, target, weight, edge_keys(len(weight)), strict=True)]}
+    out = []
+    for p in scene.geometry.parts:
+        if p.kind not in about or not about[p.kind]:
+            continue
+        n = len(about[p.kind])
+        m, t = len(p.vertices) // n, len(p.triangles) // n  # vertices and triangles of one instance
+        for k, (name, key, value) in enumerate(about[p.kind]):
+            faces = p.triangles[k * t:(k + 1) * t].astype(np.int32) - k * m
+            out.append(RegionMesh(name, "connectome", p.vertices[k * m:(k + 1) * m], faces,
+                                  p.normals[k * m:(k + 1) * m], colors.get(key, NODE_COLOR), value=value))
+    return out
+
+
 def vertex_meshes(scene: Scene, colors: VertexColors) -> list[RegionMesh]:
     """A map's meshes: each hemisphere's cortex as one mesh coloured per vertex, plus the structures.
 
@@ -214,8 +263,11 @@ def html_page(glb: bytes, *, title: str, meshes: Sequence[RegionMesh], backgroun
     """
     bg = "#{:02x}{:02x}{:02x}".format(*(round(v * 255) for v in (background or (1.0, 1.0, 1.0))))
     dark = background is not None and sum(background) < 1.5
-    parts = [p for p in ("lh", "rh", "subcortical", "tracts") if any(m.part == p for m in meshes)]
-    config = {"azimuth": azimuth, "parts": parts, "background": bg}
+    parts = [p for p in ("lh", "rh", "subcortical", "tracts", "connectome")
+             if any(m.part == p for m in meshes)]
+    # what lies inside the cortex shows through it: the cortex drawn as glass
+    glass = [p for p in ("lh", "rh") if p in parts and "connectome" in parts]
+    config = {"azimuth": azimuth, "parts": parts, "background": bg, "glass": glass}
     attrs = ['id="colorbar"', *['class="colorbar"'] * len(more_bars)]
 
     def b64(png: bytes) -> str:
@@ -224,7 +276,8 @@ def html_page(glb: bytes, *, title: str, meshes: Sequence[RegionMesh], backgroun
     bar = "".join(f'<img {attr} alt="colour bar" src="data:image/png;base64,{b64(png)}">'
                   for attr, png in zip(attrs, [colorbar_png, *more_bars], strict=True)
                   if png)
-    names = {"lh": "left cortex", "rh": "right cortex", "subcortical": "subcortical", "tracts": "tracts"}
+    names = {"lh": "left cortex", "rh": "right cortex", "subcortical": "subcortical", "tracts": "tracts",
+             "connectome": "connectome"}
     toggles = "".join(f'<label><input type="checkbox" data-part="{p}" checked> {names[p]}</label>'
                       for p in parts)
     return _PAGE.format(
@@ -274,28 +327,34 @@ EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cm
                   "strict", "tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_values",
                   "tract_value", "tract_radius", "lh", "rh", "volume", "projection", "projection_radius",
                   "underlay", "underlay_contrast", "threshold", "outline", "outline_threshold", "space",
-                  "frames", "lh_surface", "rh_surface", *option_names(LayerOptions))  # each layer's own scale
+                  "frames", "lh_surface", "rh_surface", *option_names(LayerOptions),  # each layer's own scale
+                  "connectome", "nodes", "node_values", "node_categories", "directed", "edge_threshold",
+                  "top_edges", "edges_of", "nodes_space")
 
 
 def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
     """The scene of a run and the meshes of its row `i`: a map's cortex coloured per vertex, or
     the regions, then the tracts' tubes."""
     from brainpainter.rendering.composition import tract_colors
+    from brainpainter.rendering.connectome_layers import connectome_colors
     from brainpainter.rendering.painter import load_scene, region_colors
 
     opts, tv = run.options.scene, run.tract_values
     atlas_obj, scene = load_scene(run.table.atlas, opts.template, opts.surface, opts.hide,
                                   tracts=opts.tract_spec(), tract_nodes=tv.nodes if tv is not None else (),
-                                  tract_radius=opts.tract_radius)
+                                  tract_radius=opts.tract_radius, connectome=run.connectome)
+    inside = connectome_meshes(scene, run.connectome, connectome_colors(run.connectome, run.layers)
+                               if run.connectome is not None else {})  # a connectome's nodes and edges
     if isinstance(run, MapRun):  # the map, then the tracts drawn with it
         colors = run.colors(i)
-        return scene, vertex_meshes(scene, colors) + tract_meshes(scene, colors.regions)
+        return scene, vertex_meshes(scene, colors) + tract_meshes(scene, colors.regions) + inside
     table = run.table
     values = table.row(i)
     meshes = region_meshes(scene, region_colors(values, atlas_obj, run.scale_of("regions")),
                            atlas_obj.expand(values))
-    return scene, meshes + tract_meshes(
+    meshes += tract_meshes(
         scene, tract_colors(tv.row(table.images[i]), run.scale_of("tracts")) if tv is not None else {})
+    return scene, meshes + inside
 
 
 def export(data: Any, out: str | Path, *, format: str | None = None, row: str | int | None = None,

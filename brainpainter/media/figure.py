@@ -172,7 +172,8 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     from tqdm.auto import tqdm
 
     from brainpainter.io.transaction import FileTransaction
-    from brainpainter.media.colorbar import resolve_ticks
+    from brainpainter.media.colorbar import resolve_ticks, text_color
+    from brainpainter.media.node_sizes import node_size_legend
 
     kwargs: dict[str, Any] = dict(options)
     figure_opts = FigureOptions(**take(kwargs, FigureOptions))
@@ -183,7 +184,8 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     table = run.table
     chosen = select_rows(table.images, rows)
     painter = run.painter()
-    nan, missing = swatches_needed(table, chosen, run.views, painter.scene.geometry)
+    nan, missing = ((False, False) if run.layers[0].kind == "edges"  # a connectome alone: no region swatch
+                    else swatches_needed(table, chosen, run.views, painter.scene.geometry))
     plan = run.items(chosen)
     background = run.settings.background
     # the output folder is locked from before the first render until the figure is published
@@ -202,6 +204,7 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
         layout = compose_figure(images, [table.images[i] for i in chosen], [v.name for v in run.views],
                                 run.scale, figure_opts, nan=nan, missing=missing, background=background,
                                 more_bars=more)
+        node_size_legend(run, layout.colorbar_axes, text_color(background), figure_opts.font_size)
         if tx is not None and path is not None:
             tx.tmp.write_bytes(figure_bytes(layout.figure, path, figure_opts.dpi,
                                             transparent=background is None))

@@ -41,7 +41,7 @@ class RegionMesh:
     name : str
         Region key (``"Left-insula"``), or ``"Left-medial-wall"`` for the
         cortex labels that are no region of the atlas.
-    part : {"lh", "rh", "subcortical", "tracts"}
+    part : {"lh", "rh", "subcortical", "tracts", "connectome"}
     vertices : ndarray of float32, shape (n_vertices, 3)
         RAS millimetres.
     faces : ndarray of int32, shape (n_faces, 3)
@@ -156,8 +156,9 @@ def glb_bytes(meshes: Sequence[RegionMesh], *, compact: bool = False) -> bytes:
 
     The scene is y-up (glTF's convention) with the template's millimetres; each
     node's ``extras`` holds its ``part`` (``lh``, ``rh``, ``subcortical`` or
-    ``tracts``), its sRGB colour as ``#rrggbb`` and, where it has one, its
-    ``value`` as text.
+    ``tracts``, ``connectome``), its sRGB colour as ``#rrggbb`` and, where it has one, its
+    ``value`` as text; a connectome's nodes and edges also their ``name`` as given (three.js
+    renames nodes whose names repeat a region's or hold spaces: ``Left-precentral_1``).
 
     Parameters
     ----------
@@ -182,6 +183,8 @@ def glb_bytes(meshes: Sequence[RegionMesh], *, compact: bool = False) -> bytes:
         extras: dict[str, Any] = {"part": m.part, "color": hex_color}
         if m.value is not None:
             extras["value"] = m.value
+        if m.part == "connectome":
+            extras["name"] = m.name
         node: dict[str, Any] = {"name": m.name, "mesh": i, "extras": extras}
         primitive = _add_mesh(buf, m, node, origin, step)
         if m.vertex_colors is None or compact:  # plain: vertex colours alone (trimesh reads them so)

@@ -56,6 +56,7 @@ from brainpainter.media.timeline import (
     read_times,
 )
 from brainpainter.rendering.composition import tract_colors
+from brainpainter.rendering.connectome_layers import connectome_colors
 from brainpainter.rendering.layers import colorbar_layers
 from brainpainter.rendering.options import Options, RenderKwargs, take
 from brainpainter.rendering.painter import region_colors
@@ -295,7 +296,10 @@ class MovieKeys:
                     f"--strict: column {unmatched[0]!r} matches no region of atlas {table.atlas.name!r} "
                     f"({len(unmatched)} such name(s)); see 'brainpainter check' for the closest names."
                 )
-        rows, key_times = key_frames(table, chosen, times, time_name)
+        if len(chosen) == 1 and movie.orbit and times is None:  # one image turning (a connectome alone)
+            rows, key_times = [chosen[0], chosen[0]], [0.0, 1.0]
+        else:
+            rows, key_times = key_frames(table, chosen, times, time_name)
         return cls(rows, [table.images[i] for i in rows], key_times, time_name)
 
     def caption(self, f: FramePlan) -> str:
@@ -303,7 +307,7 @@ class MovieKeys:
         if self.time_name is not None:
             return f"{self.time_name}: {format_clock(f.clock, self.times)}"
         names = self.names
-        return names[f.a] if f.a == f.b else f"{names[f.a]} {ARROW} {names[f.b]}"
+        return names[f.a] if f.a == f.b or names[f.a] == names[f.b] else f"{names[f.a]} {ARROW} {names[f.b]}"
 
 
 @dataclass
@@ -332,7 +336,8 @@ class MovieFrames:
     @classmethod
     def of(cls, run: Run, keys: MovieKeys, plan: list[FramePlan], movie: MovieOptions) -> MovieFrames:
         painter = run.painter()
-        nan, missing = swatches_needed(run.table, keys.rows, run.views, painter.scene.geometry)
+        nan, missing = ((False, False) if run.layers[0].kind == "edges"  # a connectome alone: no swatch
+                        else swatches_needed(run.table, keys.rows, run.views, painter.scene.geometry))
         w, h = run.settings.width, run.settings.height
         assert run.settings.background is not None
         more = [(layer.scale, layer.label) for layer in colorbar_layers(run.layers)[1:]]
@@ -377,6 +382,9 @@ class MovieFrames:
                     tvals = interpolate(np.array(list(ra.values())), np.array(list(rb.values())), weight)
                     colors.update(tract_colors(dict(zip(ra, tvals.tolist(), strict=True)),
                                                  self.run.scale_of("tracts")))
+                connectome = getattr(self.run, "connectome", None)
+                if connectome is not None:  # the same nodes and edges in every frame
+                    colors.update(connectome_colors(connectome, self.run.layers))
             label = names[a] if a == b else f"{names[a]} {ARROW} {names[b]} ({weight:.3f})"
             yield [Item(colors, view, label=label) for view in state_views]
 

@@ -14,10 +14,11 @@ functions as the commands (:func:`brainpainter.render`, :func:`brainpainter.figu
 >>> scene.figure("fig.pdf", views=["lateral-left", "lateral-right"])
 
 The layers stack in the composition's order whatever the order they were added in: region
-values, the map over them (by its ``alpha``), tracts, then the lines (a contour, an atlas's
-outline). Each kind is drawn once: a second layer of a kind already added is refused (two maps
-cannot be stacked in one composition; draw them in two scenes). A new kind joins :data:`KINDS`
-(how it is recognised and which options it becomes) and nothing else.
+values, the map over them (by its ``alpha``), tracts, a connectome (its edges and nodes), then
+the lines (a contour, an atlas's outline). Each kind is drawn once: a second layer of a kind
+already added is refused (two maps cannot be stacked in one composition; draw them in two
+scenes). A new kind joins :data:`KINDS` (how it is recognised and which options it becomes) and
+nothing else.
 """
 
 from __future__ import annotations
@@ -123,6 +124,17 @@ def _tracts(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:
     return None, options
 
 
+#: The connectome keywords of :meth:`Scene.add` besides its edges' scale: its nodes and which edges.
+CONNECTOME_KEYWORDS = ("nodes", "node_values", "node_categories", "directed", "edge_threshold", "top_edges",
+                       "edges_of", "nodes_space", *(f"nodes_{name}" for name in (*SCALE_FIELDS, "label")))
+
+
+def _connectome(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:
+    """A connectome (a matrix file or a Connectome): its edges' scale, its nodes' and its edges' options."""
+    chosen = {k: v for k, v in layer.keywords.items() if k in CONNECTOME_KEYWORDS}
+    return None, {"connectome": layer.data, **_scale("edges", layer.keywords), **chosen}
+
+
 def _lines(layer: SceneLayer) -> dict[str, Any]:
     """The line keywords (``color``, ``width``) as the run's outline settings."""
     names = {"color": "outline_color", "width": "outline_width"}
@@ -149,6 +161,7 @@ KINDS: dict[str, Kind] = {
     "regions": Kind(_regions, _SCALED, first=True),
     "map": Kind(_map, (*_SCALED, "alpha", "threshold"), first=True),
     "tracts": Kind(_tracts, (*_SCALED, "values", "value")),
+    "connectome": Kind(_connectome, (*_SCALED, *CONNECTOME_KEYWORDS)),
     "contour": Kind(_contour, ("levels", "color", "width")),
     "outline": Kind(_outline, ("color", "width")),
 }
@@ -162,13 +175,18 @@ def infer_kind(data: Any, outline: bool = False, values: Any = None) -> str:
     """The kind of `data`, as the command line reads it.
 
     ``outline=True``: an atlas's name is its outline, any other map a contour of it; tract values
-    (`values`), a tractogram (``.trk``/``.tck``/``.trx``) or a folder of them: tracts; a map
+    (`values`), a tractogram (``.trk``/``.tck``/``.trx``) or a folder of them: tracts; a
+    :class:`~brainpainter.connectome.model.Connectome`: a connectome (a matrix file needs
+    ``kind="connectome"``: a CSV could be a region table); a map
     (``{"lh": ..., "rh": ...}``, a map or CIFTI file, a volume): a map; else a region table.
     """
+    from brainpainter.connectome.model import Connectome
     from brainpainter.maps.inputs import is_map_input
     from brainpainter.maps.volume import is_volume
     from brainpainter.tracts.model import SUFFIXES
 
+    if isinstance(data, Connectome):
+        return "connectome"
     path = Path(data) if isinstance(data, str | Path) else None
     if outline:
         if isinstance(data, str) and path is not None and not path.exists() and not any(
@@ -212,15 +230,16 @@ class Scene:
             A region table; a map (``{"lh": ndarray (n,), "rh": ndarray (n,)}``, a map, CIFTI or
             volume file); tractograms (a folder, files); with ``outline=True`` a mask or p-map
             (a contour of it) or an atlas's name (its region borders).
-        kind : {"regions", "map", "tracts", "contour", "outline"}, optional
+        kind : {"regions", "map", "tracts", "connectome", "contour", "outline"}, optional
             Inferred as the command line infers it (:func:`infer_kind`) when not given.
         outline : bool
             Draw `data` as lines: a map's iso-lines (``levels``, default 0.5), an atlas's borders.
         **keywords
             Its scale: ``cmap``, ``gradient``, ``vmin``, ``vmax``, ``center``, ``label``;
             ``alpha`` and ``threshold`` (a map); ``values`` (tract values: a table, or the
-            bundle columns of the region table), ``value`` (its column); ``color``,
-            ``width`` and ``levels`` (lines).
+            bundle columns of the region table), ``value`` (its column); a connectome's nodes
+            and edges (``nodes``, ``node_values``, ``node_categories``, ``top_edges``, ...,
+            ``nodes_cmap``; its ``cmap``, ... are its edges'); ``color``, ``width`` and ``levels`` (lines).
 
         Raises
         ------

@@ -165,7 +165,8 @@ class RegionsBelow:
 
 
 def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None, meshes: Mapping[str, Any],
-               tract_values: TractValues | None = None) -> tuple[tuple[Layer, ...], RegionsBelow | None]:
+               tract_values: TractValues | None = None,
+               others: Sequence[str] = ()) -> tuple[tuple[Layer, ...], RegionsBelow | None]:
     """The layers of a map run: the map alone, or region values (`table`) with the map over them;
     then tract values, if given.
 
@@ -173,13 +174,15 @@ def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None, me
     :func:`brainpainter.maps.layers.map_scale`); drawn over region values it covers them by
     ``--map-alpha``. `meshes` are the meshes the map is drawn on, by hemisphere. Tract values take
     their own options (``--tracts-cmap``, ...; a gradient spans their values), else the first layer's scale.
+    `others`: the kinds the run draws besides (a connectome's edges and nodes).
     """
     given = options.layers.label("map")
     label = given if given is not None else Path(maps.source).name or "map"
     alpha = float(options.layers.map_alpha)
     threshold = options.maps.threshold
     tracts = ["tracts"] if tract_values is not None else []
-    options.layers.check_drawn(["map", *tracts] if table is None else ["regions", "map", *tracts])
+    drawn = ["map", *tracts] if table is None else ["regions", "map", *tracts]
+    options.layers.check_drawn([*drawn, *others])
     if table is None:
         own = options.layers.scale_options("map", options.scale, first=True)
         assert own is not None
@@ -190,7 +193,7 @@ def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None, me
             f"a map drawn over region values has one image, or one per row of the table; the map has "
             f"{maps.n_images} and the table {len(table.images)} rows ({table.source}). Give a map of one "
             "image, or as many as the table's rows.")
-    regions = run_layers(options, table, None, False, others=("map", *tracts))[0]
+    regions = run_layers(options, table, None, False, others=("map", *tracts, *others))[0]
     own = options.layers.scale_options("map", options.scale, first=False)
     plain = ScaleOptions(nan_color=options.scale.nan_color, missing_color=options.scale.missing_color)
     scale = map_scale(own if own is not None else plain, maps, threshold)

@@ -26,10 +26,14 @@ MARGIN = 0.04
 _POLE_TOLERANCE = 1e-6
 #: Kinds of scene part: cortex of one hemisphere, all subcortical structures, one glass hull, the
 #: white-matter tracts of one hemisphere (or the commissural and midline ones: hemi None), the flat
-#: map of one hemisphere (drawn unlit, by flat views only).
-PART_KINDS = ("cortex", "subcortical", "glass", "tract", "flat")
+#: map of one hemisphere (drawn unlit, by flat views only), a connectome's nodes and its edges.
+PART_KINDS = ("cortex", "subcortical", "glass", "tract", "flat", "node", "edge")
 #: Least depth a camera frames, millimetres: a flat map (no depth) keeps its borders, lifted off it, in view.
 MIN_DEPTH = 1.0
+
+
+#: Kinds of parts that lie inside the cortex (tracts, a connectome's nodes and edges): drawn where tracts are.
+INSIDE = ("tract", "node", "edge")
 
 
 def shows(view: View, kind: str, hemi: str | None, cortex: str = "opaque") -> bool:
@@ -47,7 +51,8 @@ def shows(view: View, kind: str, hemi: str | None, cortex: str = "opaque") -> bo
     Parameters
     ----------
     view : View
-    kind : {"cortex", "subcortical", "glass", "tract", "flat"}
+    kind : {"cortex", "subcortical", "glass", "tract", "flat", "node", "edge"}
+        Nodes and edges are drawn as tracts are.
     hemi : {"lh", "rh"} or None
         None for the subcortical part and for commissural tracts.
     cortex : {"opaque", "glass", "hidden"}
@@ -60,7 +65,7 @@ def shows(view: View, kind: str, hemi: str | None, cortex: str = "opaque") -> bo
         return view.content == "flat" and kind == "flat" and hemi in view.hemis
     if kind == "glass":
         return hemi in view.glass
-    if kind == "tract":
+    if kind in INSIDE:
         if view.content == "subcortical":
             return True
         return cortex != "opaque" and (hemi is None or hemi in view.hemis)

@@ -22,8 +22,7 @@ profile, ``tract-direction:i`` for the fixed direction colours).
 White-matter tracts are parts of kind ``tract`` (``tracts-lh``, ``tracts-rh``
 and ``tracts`` for commissural bundles): triangle tubes built here
 (:func:`brainpainter.tracts.tubes.tube_mesh`), so a renderer draws them as it
-draws any opaque part.
-(:attr:`SceneGeometry.keys`).
+draws any opaque part; so are a connectome's ``nodes`` and ``edges`` (:mod:`.connectome_parts`).
 
 A scene coloured per vertex (``Scene.coloring == "vertices"``, a map) keeps
 one drawing path: its cortex parts are the template's stored meshes, not
@@ -47,6 +46,7 @@ from numpy.typing import NDArray
 from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.rendering import framing
+from brainpainter.rendering.connectome_parts import connectome_parts
 from brainpainter.rendering.lazy_parts import LazyParts, cortex_arrays
 from brainpainter.rendering.part_cache import cortex_kept
 from brainpainter.rendering.parts import (
@@ -189,10 +189,10 @@ class VertexColors(Mapping[str, RGB]):
 
 
 def cortex_mode(setting: str, parts: list[PartGeometry]) -> str:
-    """``RenderSettings.cortex`` resolved: ``auto`` is ``glass`` when `parts` hold tracts, else ``opaque``."""
+    """``RenderSettings.cortex`` resolved: ``auto`` is ``glass`` when `parts` hold tracts or a connectome."""
     if setting != "auto":
         return setting
-    return "glass" if any(p.kind == "tract" for p in parts) else "opaque"
+    return "glass" if any(p.kind in framing.INSIDE for p in parts) else "opaque"
 
 
 def _flat_able(template: Template, meshes: Mapping[str, Any]) -> bool:
@@ -239,8 +239,7 @@ class SceneGeometry:
         from brainpainter.atlas.model import HEMI_PREFIX
         from brainpainter.atlas.template import HEMIS
 
-        template, hidden = scene.template, frozenset(scene.hidden)
-        settings = scene.settings
+        template, hidden, settings = scene.template, frozenset(scene.hidden), scene.settings
         with_sulc = settings.shading != "flat" and settings.lighting in SULC_LIGHTINGS
         keys: list[str] = []
         defaults: list[RGB] = [tuple(scene.medial_wall_color), NEUTRAL_GREY, GLASS_COLOR]  # type: ignore[list-item]
@@ -294,6 +293,7 @@ class SceneGeometry:
         if scene.tracts is not None:
             self._lazy.entries += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for,
                                               scene.tract_radius)
+        self._lazy.entries += connectome_parts(getattr(scene, "connectome", None), slots_for)
         for hemi in HEMIS:
             if hemi in template.manifest.get("glass", {}):
                 self._lazy.later_glass(template, hemi)

@@ -1,4 +1,4 @@
-"""Layers: each kind of data drawn (region values, a map, tract values) with its own colour scale.
+"""Layers: each kind of data drawn (regions, a map, tracts, a connectome's nodes and edges) on its own scale.
 
 A :class:`Layer` is one kind of data's colour scale, opacity and colour-bar label; a run's
 layers are ordered, the first being its main input (a region table, a map, or tract values
@@ -19,12 +19,15 @@ from brainpainter.color.scale import ColourScale, ScaleOptions
 from brainpainter.errors import BrainPainterError, within
 
 #: The kinds of data a layer draws, in the order of their options.
-LAYER_KINDS = ("regions", "map", "tracts")
+LAYER_KINDS = ("regions", "map", "tracts", "nodes", "edges")
 #: The colour-scale options each layer has (the fields of :class:`ScaleOptions` that make its colours).
 SCALE_FIELDS = ("gradient", "cmap", "vmin", "vmax", "center")
-_WHAT = {"regions": "Region values", "map": "The map", "tracts": "Tract values"}
+_WHAT = {"regions": "Region values", "map": "The map", "tracts": "Tract values",
+         "nodes": "Node values", "edges": "Edge weights"}
 _GIVE = {"regions": "give a region table as INPUT", "map": "give a map (--lh/--rh or --volume)",
-         "tracts": "give tract values (--tract-values, or bundle columns in INPUT, with --tracts)"}
+         "tracts": "give tract values (--tract-values, or bundle columns in INPUT, with --tracts)",
+         "nodes": "give a connectome (--connectome) with --node-values or --node-categories",
+         "edges": "give a connectome (--connectome)"}
 
 
 @dataclass(frozen=True)
@@ -33,8 +36,9 @@ class Layer:
 
     Attributes
     ----------
-    kind : {"regions", "map", "tracts"}
+    kind : {"regions", "map", "tracts", "nodes", "edges"}
     scale : ColourScale
+        A categorical layer's (node categories) carries them (``scale.categories``).
     opacity : float
         0-1: how much of the layer covers the layers below it.
     label : str
@@ -82,6 +86,18 @@ class LayerKwargs(TypedDict, total=False):
     tracts_vmax: float | None
     tracts_center: float | None
     tracts_label: str | None
+    nodes_gradient: str | None
+    nodes_cmap: str | None
+    nodes_vmin: float | None
+    nodes_vmax: float | None
+    nodes_center: float | None
+    nodes_label: str | None
+    edges_gradient: str | None
+    edges_cmap: str | None
+    edges_vmin: float | None
+    edges_vmax: float | None
+    edges_center: float | None
+    edges_label: str | None
 
 
 def _scale_field(kind: str, name: str) -> Any:
@@ -108,7 +124,11 @@ class LayerOptions:
         The map's scale.
     tracts_gradient, tracts_cmap, tracts_vmin, tracts_vmax, tracts_center : optional
         The tract values' scale.
-    regions_label, map_label, tracts_label : str, optional
+    nodes_gradient, nodes_cmap, nodes_vmin, nodes_vmax, nodes_center : optional
+        A connectome's node values' scale.
+    edges_gradient, edges_cmap, edges_vmin, edges_vmax, edges_center : optional
+        A connectome's edge weights' scale (default: diverging, ``RdBu_r`` centred at 0).
+    regions_label, map_label, tracts_label, nodes_label, edges_label : str, optional
         Each layer's colour-bar label.
     map_alpha : float
         Opacity of a map drawn over region colours, 0-1.
@@ -134,6 +154,18 @@ class LayerOptions:
     tracts_vmax: float | None = _scale_field("tracts", "vmax")
     tracts_center: float | None = _scale_field("tracts", "center")
     tracts_label: str | None = _label_field("tracts")
+    nodes_gradient: str | None = _scale_field("nodes", "gradient")
+    nodes_cmap: str | None = _scale_field("nodes", "cmap")
+    nodes_vmin: float | None = _scale_field("nodes", "vmin")
+    nodes_vmax: float | None = _scale_field("nodes", "vmax")
+    nodes_center: float | None = _scale_field("nodes", "center")
+    nodes_label: str | None = _label_field("nodes")
+    edges_gradient: str | None = _scale_field("edges", "gradient")
+    edges_cmap: str | None = _scale_field("edges", "cmap")
+    edges_vmin: float | None = _scale_field("edges", "vmin")
+    edges_vmax: float | None = _scale_field("edges", "vmax")
+    edges_center: float | None = _scale_field("edges", "center")
+    edges_label: str | None = _label_field("edges")
 
     def __post_init__(self) -> None:
         if not within(self.map_alpha, 0.0, 1.0):

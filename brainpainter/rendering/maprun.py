@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.surfaces import Surface, read_surfaces, surface_template
 from brainpainter.atlas.template import Template, load_template
+from brainpainter.connectome.model import Connectome
 from brainpainter.errors import BrainPainterError
 from brainpainter.maps.flat import check_flat, flat_labels, flat_sheet, flat_values
 from brainpainter.maps.inputs import VertexMaps, is_map_input, read_maps
@@ -25,6 +26,7 @@ from brainpainter.maps.layers import vertex_colors
 from brainpainter.maps.outlines import Contours, mesh_edges
 from brainpainter.maps.resolution import map_mesh, own_vertex_count
 from brainpainter.rendering.composition import RegionsBelow, line_layers, map_layers, tract_colors
+from brainpainter.rendering.connectome_layers import connectome_colors, connectome_kinds, connectome_layers
 from brainpainter.rendering.geometry import VertexColors
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import Options
@@ -85,6 +87,7 @@ class MapRun:
     below: RegionsBelow | None = None  # region values under the map
     mesh_masks: dict[str, dict[str, NDArray[Any]]] | None = None  # the user's own surfaces
     flat: dict[str, NDArray[Any]] | None = None  # flat views: each sheet vertex's nearest fsaverage vertex
+    connectome: Connectome | None = None  # nodes and edges inside the cortex, drawn as glass
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
     @property
@@ -105,7 +108,7 @@ class MapRun:
         nodes = self.tract_values.nodes if self.tract_values is not None else ()
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
                        scene.renderer, coloring="vertices", contours=self.contours, tracts=scene.tract_spec(),
-                       tract_nodes=nodes, tract_radius=scene.tract_radius)
+                       tract_nodes=nodes, tract_radius=scene.tract_radius, connectome=self.connectome)
 
     def items(self, rows: Any) -> list[tuple[int, View]]:
         return [(i, view) for i in rows for view in self.views]
@@ -140,6 +143,8 @@ class MapRun:
             if self.tract_values is not None:  # each bundle on the tracts' own scale
                 regions.update(tract_colors(self.tract_values.row(self.table.images[row]),
                                             self.scale_of("tracts")))
+            if self.connectome is not None:
+                regions.update(connectome_colors(self.connectome, self.layers))
             self._cache[image] = VertexColors(regions, cortex)
         return self._cache[image]
 
@@ -200,7 +205,10 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     scene = options.scene
     tract_values = (read_tract_values(scene.tract_values, scene.tract_value) if scene.tract_values is not None
                     else None)
-    layers, below = map_layers(options, maps, table, meshes, tract_values)
+    connectome = options.connectome.load(atlas_obj if atlas is None else atlas, tpl, options.scene.surface)
+    layers, below = map_layers(options, maps, table, meshes, tract_values,
+                               others=connectome_kinds(connectome))
+    layers += connectome_layers(options, connectome, first=False) if connectome is not None else ()
     flat = None
     if any(v.content == "flat" for v in view_list):  # the flat maps: fsaverage's templates only
         check_flat(tpl, labels)
@@ -213,7 +221,7 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
         settings = with_aspect(settings, aspect)
     return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list, settings, options,
                   source_vertex, edges, depth, contours, tract_values, layers=layers, below=below,
-                  mesh_masks=masks, flat=flat)
+                  mesh_masks=masks, flat=flat, connectome=connectome)
 
 
 def _own_surfaces(options: Options, surfaces: dict[str, Any]) -> dict[str, Surface]:

@@ -14,9 +14,12 @@ group                     options                                               
 :class:`TableOptions`     image_column, value, region_column, strict                  table.options
 :class:`MapOptions`       lh, rh, underlay, threshold                                 maps.options
 :class:`LayerOptions`     each layer's scale: regions_cmap, map_vmin, tracts_vmax,    rendering.layers
-                          map_alpha, ...
+                          map_alpha, nodes_cmap, edges_center, ...
 :class:`RunnerOptions`    jobs, client, scheduler                                     here
 ========================  ==========================================================  ============
+
+and :class:`~brainpainter.connectome.options.ConnectomeOptions` (connectome, nodes, node_values,
+node_categories, directed, edge_threshold, top_edges, edges_of; ``connectome.options``).
 
 The public functions (``brainpainter.render``, ``figure``, ``movie``,
 ``plot``, ``export``) take these options as flat keywords
@@ -37,6 +40,7 @@ from typing import TYPE_CHECKING, Any, TypedDict
 from brainpainter.atlas.model import SPACES, SURFACES
 from brainpainter.color.rgb import to_rgb
 from brainpainter.color.scale import ScaleKwargs, ScaleOptions
+from brainpainter.connectome.options import ConnectomeKwargs, ConnectomeOptions
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.maps.options import MapKwargs, MapOptions
 from brainpainter.rendering.layers import LayerKwargs, LayerOptions
@@ -81,7 +85,7 @@ class RunnerKwargs(TypedDict, total=False):
 
 
 class RenderKwargs(SceneKwargs, ScaleKwargs, SettingsKwargs, TableKwargs, RunnerKwargs, MapKwargs,
-                   LayerKwargs, total=False):
+                   LayerKwargs, ConnectomeKwargs, total=False):
     """Every option of a run as a flat keyword (see :class:`Options` for what each means)."""
 
 
@@ -274,7 +278,7 @@ class RunnerOptions:
 #: Option group -> its class, in the order they are checked (cheap checks first).
 GROUPS: dict[str, type] = {"runner": RunnerOptions, "scale": ScaleOptions, "scene": SceneOptions,
                            "settings": RenderSettings, "table": TableOptions, "maps": MapOptions,
-                           "layers": LayerOptions}
+                           "layers": LayerOptions, "connectome": ConnectomeOptions}
 
 
 def option_names(cls: type) -> list[str]:
@@ -307,6 +311,8 @@ class Options:
         lh, rh, underlay, threshold (per-vertex maps, :mod:`brainpainter.maps`).
     layers : LayerOptions
         Each layer's own colour options (``tracts_cmap``, ``map_vmin``, ``map_alpha``, ...).
+    connectome : ConnectomeOptions
+        The connectome drawn as nodes and edges (``connectome``, ``nodes``, ``top_edges``, ...).
     size_given : bool
         Whether the user gave ``width`` or ``height``; if not, an atlas with its own
         :attr:`~brainpainter.atlas.model.Atlas.image_aspect` reshapes the default size.
@@ -319,6 +325,7 @@ class Options:
     table: TableOptions = field(default_factory=TableOptions)
     maps: MapOptions = field(default_factory=MapOptions)
     layers: LayerOptions = field(default_factory=LayerOptions)
+    connectome: ConnectomeOptions = field(default_factory=ConnectomeOptions)
     size_given: bool = field(default=True, compare=False)  # not an option: how the settings were made
 
     @classmethod

@@ -21,6 +21,7 @@ from brainpainter.atlas.registry import get_atlas, load_atlas_config
 from brainpainter.atlas.template import Template, load_template, template_for
 from brainpainter.color.rgb import ColorLike, to_rgb
 from brainpainter.color.scale import ColourScale
+from brainpainter.connectome.model import Connectome
 from brainpainter.errors import choice_error
 from brainpainter.maps.outlines import Contours
 from brainpainter.rendering.geometry import Palette, VertexColors
@@ -134,6 +135,7 @@ def load_scene(
     tract_radius: float | None = None,
     coloring: str = "regions",
     contours: Contours | None = None,
+    connectome: Connectome | None = None,
 ) -> tuple[Atlas, Scene]:
     """The atlas and the scene a renderer (or an exporter) draws; nothing is rendered.
 
@@ -172,6 +174,7 @@ def load_scene(
         tract_radius=None if tract_radius is None else float(tract_radius),
         coloring=coloring,
         contours=contours,
+        connectome=connectome,
     )
     return atlas, scene
 
@@ -204,6 +207,8 @@ class Painter:
         ``"vertices"`` draws per-vertex maps (:attr:`brainpainter.rendering.scene.Scene.coloring`).
     contours : Contours, optional
         A second map's iso-lines (:attr:`brainpainter.rendering.scene.Scene.contours`).
+    connectome : Connectome, optional
+        Nodes and edges drawn inside the cortex (:attr:`brainpainter.rendering.scene.Scene.connectome`).
     """
 
     atlas: Atlas | str = "dk"
@@ -219,6 +224,7 @@ class Painter:
     tract_radius: float | None = None
     coloring: str = "regions"
     contours: Contours | None = None
+    connectome: Connectome | None = None
     _renderer: Any = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -226,7 +232,7 @@ class Painter:
         self.atlas, self.scene = load_scene(self.atlas, self.template, self.surface, self.hidden,
                                             self.settings, self.medial_wall_color, self.atlas_config,
                                             self.tracts, self.tract_nodes, self.tract_radius,
-                                            self.coloring, self.contours)
+                                            self.coloring, self.contours, self.connectome)
         self.template = self.scene.template
         from brainpainter.atlas import registry
         from brainpainter.rendering.pythons import require_bpy

@@ -44,6 +44,8 @@ class PainterSpec:
     coloring : {"regions", "vertices"}
     contours : Contours, optional
         A second map's iso-lines (its values travel with the spec: about 1.3 MB for both hemispheres).
+    connectome : Connectome, optional
+        Its nodes and edges travel with the spec (400 nodes: about 1.3 MB of weights).
     """
 
     atlas: Any
@@ -59,6 +61,7 @@ class PainterSpec:
     tract_radius: float | None = None
     coloring: str = "regions"
     contours: Any = None
+    connectome: Any = None
 
     @classmethod
     def of(cls, painter: Painter, template: Any = None) -> PainterSpec:
@@ -78,6 +81,7 @@ class PainterSpec:
             medial_wall_color=tuple(float(c) for c in painter.scene.medial_wall_color),  # type: ignore[arg-type]
             tracts=painter.tracts, tract_nodes=tuple(painter.tract_nodes), tract_radius=painter.tract_radius,
             coloring=painter.scene.coloring, contours=painter.scene.contours,
+            connectome=painter.scene.connectome,
         )
 
     @property
@@ -106,4 +110,4 @@ class PainterSpec:
         return Painter(self.atlas, self.template, self.surface, self.hidden, self.settings,
                        self.renderer, self.medial_wall_color, tracts=self.tracts,
                        tract_nodes=self.tract_nodes, tract_radius=self.tract_radius, coloring=self.coloring,
-                       contours=self.contours)
+                       contours=self.contours, connectome=self.connectome)

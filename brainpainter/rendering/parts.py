@@ -53,8 +53,8 @@ class PartGeometry:
     ----------
     name : str
         ``cortex-lh``, ``cortex-rh``, ``subcortical``, ``glass-lh``, ``glass-rh``,
-        ``tracts-lh``, ``tracts-rh``, ``tracts``.
-    kind : {"cortex", "subcortical", "glass", "tract"}
+        ``tracts-lh``, ``tracts-rh``, ``tracts``, ``nodes``, ``edges``.
+    kind : {"cortex", "subcortical", "glass", "tract", "node", "edge"}
     hemi : {"lh", "rh"} or None
     vertices : ndarray of float32, shape (n_vertices, 3)
         RAS millimetres.

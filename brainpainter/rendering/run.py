@@ -22,10 +22,17 @@ from numpy.typing import NDArray
 from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.registry import get_atlas, load_atlas_config
 from brainpainter.color.scale import ColourScale
+from brainpainter.connectome.model import Connectome
 from brainpainter.errors import BrainPainterError, NoRegionColumnError
 from brainpainter.maps.inputs import is_map_input
 from brainpainter.maps.outlines import Contours
 from brainpainter.rendering.composition import line_entries, line_layers, run_layers, tract_colors
+from brainpainter.rendering.connectome_layers import (
+    connectome_colors,
+    connectome_kinds,
+    connectome_layers,
+    connectome_summary,
+)
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
 from brainpainter.rendering.painter import (
@@ -39,11 +46,16 @@ from brainpainter.rendering.painter import (
 )
 from brainpainter.rendering.parallel import Item, LocalRunner, PainterSpec, Runner, SerialRunner, chunked
 from brainpainter.rendering.settings import RenderSettings, with_aspect
+from brainpainter.rendering.tract_run import (
+    bundle_names,
+    run_tract_values,
+    tracts_only_table,
+    without_bundle_columns,
+)
 from brainpainter.rendering.views import ImagesByView, View, parse_views
 from brainpainter.table.region_table import RegionTable, read_table
 from brainpainter.table.rows import select_rows
-from brainpainter.tracts.model import TractSpec
-from brainpainter.tracts.values import TractValues, is_profile, read_tract_values
+from brainpainter.tracts.values import TractValues
 
 if TYPE_CHECKING:
     from brainpainter.io.transaction import FolderTransaction
@@ -53,8 +65,8 @@ if TYPE_CHECKING:
 class Run:
     """A checked run: the table, its colour scale (fixed over all rows), views, settings and options.
 
-    `scale` is the first layer's; `layers` are the region values and the tract values drawn, each
-    with its scale (:mod:`brainpainter.rendering.layers`).
+    `scale` is the first layer's; `layers` are the region values, the tract values and a
+    connectome's edges and nodes drawn, each with its scale (:mod:`brainpainter.rendering.layers`).
     """
 
     table: RegionTable
@@ -65,6 +77,7 @@ class Run:
     tract_values: TractValues | None = None
     layers: tuple[Layer, ...] = ()
     contours: Contours | None = None  # a second map's iso-lines (--contour)
+    connectome: Connectome | None = None
 
     def scale_of(self, kind: str) -> ColourScale:
         """The colour scale of layer `kind` (``"regions"``, ``"tracts"``); the run's scale if it has none."""
@@ -76,7 +89,7 @@ class Run:
         nodes = self.tract_values.nodes if self.tract_values is not None else ()
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
                        scene.renderer, tracts=scene.tract_spec(), tract_nodes=nodes,
-                       tract_radius=scene.tract_radius, contours=self.contours)
+                       tract_radius=scene.tract_radius, contours=self.contours, connectome=self.connectome)
 
     def items(self, rows: Sequence[int]) -> list[tuple[int, View]]:
         """The images of `rows`: ``(row, view)`` for every row and view, row by row."""
@@ -87,93 +100,9 @@ class Run:
         colors = region_colors(self.table.row(i), self.table.atlas, self.scale_of("regions"))
         if self.tract_values is not None:
             colors.update(tract_colors(self.tract_values.row(self.table.images[i]), self.scale_of("tracts")))
+        if self.connectome is not None:
+            colors.update(connectome_colors(self.connectome, self.layers))
         return Item(colors, view, metadata, self.table.images[i])
-
-
-def tracts_only_table(tract_values: TractValues, atlas: Atlas | None, data: Any) -> RegionTable:
-    """An empty region table for a run whose table holds bundle values only (one row per image)."""
-    images = tract_values.images or ("1",)
-    source = str(data) if isinstance(data, str | Path) else "table"
-    return RegionTable(images=tuple(images), regions=(), values=np.zeros((len(images), 0)),
-                       atlas=atlas or get_atlas("dk"), source=source)
-
-
-def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, bool]:
-    """The tract values of a run: ``tract_values`` if given, else the main table's bundle columns, if any.
-
-    Columns of the main table count as bundles when their canonical name is a bundle of ``tracts``
-    (a file's name); without any, bundles are coloured by direction. A main table that is an
-    along-tract profile (bundle and node columns, pyAFQ's ``tract_profiles.csv``) is tract values
-    only: its errors are reported, and so is a profile none of whose bundles is drawn.
-
-    Returns
-    -------
-    values : TractValues or None
-    only_tracts : bool
-        Every value column of the main table is a bundle (it holds no region values), or there is
-        no main table (``tract_values`` alone).
-    """
-    scene = options.scene
-    if scene.tract_values is not None:
-        return read_tract_values(scene.tract_values, scene.tract_value), data is None
-    spec = scene.tract_spec()
-    if spec is None or data is None or isinstance(data, list):
-        return None, False
-    from brainpainter.io.readers import read_raw
-
-    known = bundle_names(spec)
-    # a stream (the web API's upload) is read again for the region table: back to where it was
-    pos = data.tell() if hasattr(data, "seek") and hasattr(data, "tell") else None
-    profile = False
-    try:
-        raw = read_raw(data)
-        profile = is_profile(raw)
-        tv = read_tract_values(raw, scene.tract_value)
-    except BrainPainterError:
-        if profile:
-            raise
-        return None, False
-    finally:
-        if pos is not None:
-            data.seek(pos)
-    keep = [j for j, (name, _) in enumerate(tv.nodes) if name in known]
-    if not keep and profile:
-        raise BrainPainterError(
-            f"the profile table's bundles {sorted(tv.bundles)[:6]} are none of the tracts drawn "
-            f"{sorted(known)[:6]}; name the tractogram files after the bundles (AF_L.trk, "
-            "CST_right.tck, ...) or give the tractograms the profiles were made on.")
-    if not keep:
-        return None, False
-    names = {tv.nodes[j][0] for j in keep}
-    cols = [j for j, key in enumerate(tv.keys) if key.split(":")[1] in names]
-    return (TractValues(tv.images, tuple(tv.keys[j] for j in cols), tv.values[:, cols],
-                        tuple(tv.nodes[j] for j in keep)), len(keep) == len(tv.nodes))
-
-
-def bundle_names(spec: TractSpec) -> set[str]:
-    """The bundles of the tractograms to draw: their files' names, canonical (``AF_L.trk``: ``AF_left``)."""
-    from brainpainter.tracts.names import canonical
-
-    return {canonical(f.name[: -len(f.suffix)]) for f in spec.files}
-
-
-def without_bundle_columns(data: Any, bundles: set[str]) -> Any:
-    """The main table without its bundle columns (drawn as tract values), read once, for the region table.
-
-    So that a table with region and bundle columns reports no bundle as an unmatched region name
-    (nor fails under ``--strict``). The image column and the region columns stay as they are.
-    """
-    from dataclasses import replace
-
-    from brainpainter.io.readers import read_raw
-    from brainpainter.tracts.names import canonical
-
-    raw = read_raw(data)
-    keep = [j for j, name in enumerate(raw.header) if canonical(name) not in bundles]
-    if len(keep) == len(raw.header):
-        return raw
-    return replace(raw, header=[raw.header[j] for j in keep],
-                   rows=[[row[j] if j < len(row) else None for j in keep] for row in raw.rows])
 
 
 def resolve_atlas(atlas: Atlas | str | None, atlas_config: str | Path | None) -> Atlas | None:
@@ -217,9 +146,12 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     if views is not None:  # a given option's errors before a big input file is read
         view_list = parse_views(views if isinstance(views, str) else list(views))
     tract_values, only_tracts = run_tract_values(data, options)
+    only_connectome = data is None and tract_values is None and options.connectome.given
     if only_tracts and tract_values is not None:
         source = data if data is not None else options.scene.tract_values
         table = tracts_only_table(tract_values, atlas_obj, source)
+    elif only_connectome:
+        table = connectome_only_table(atlas_obj, options.connectome.connectome)
     else:
         if tract_values is not None and options.scene.tract_values is None:
             data = without_bundle_columns(data, {name for name, _ in tract_values.nodes})
@@ -231,16 +163,37 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
                 raise
             raise NoRegionColumnError(f"{exc} Nor does any column name a bundle of --tracts "
                                       f"{sorted(bundle_names(spec))[:6]}.") from None
+    connectome = options.connectome.load(table.atlas, options.scene.template, options.scene.surface)
     if views is None:
-        view_list = parse_views(default_views(table.atlas, only_tracts))
+        view_list = parse_views(CONNECTOME_VIEWS if only_connectome
+                                else default_views(table.atlas, only_tracts))
     own = (table.atlas.name, table.atlas.template_labels)
     contours, settings = line_layers(options, "a region render", own)
     if not options.size_given and table.atlas.image_aspect:  # a brain of another shape: frame the views
         settings = with_aspect(settings, shown_aspect(table.atlas, options.scene.template, view_list))
     elif not options.size_given and (aspect := flat_aspect(view_list)):  # flat maps: wider than a brain
         settings = with_aspect(settings, aspect)
-    layers = run_layers(options, table, tract_values, only_tracts and tract_values is not None)
-    return Run(table, layers[0].scale, view_list, settings, options, tract_values, layers, contours)
+    if only_connectome:
+        options.layers.check_drawn(connectome_kinds(connectome))
+        layers = connectome_layers(options, connectome, first=True)  # type: ignore[arg-type]
+    else:
+        layers = run_layers(options, table, tract_values, only_tracts and tract_values is not None,
+                            others=connectome_kinds(connectome))
+        layers += connectome_layers(options, connectome, first=False) if connectome is not None else ()
+    return Run(table, layers[0].scale, view_list, settings, options, tract_values, layers, contours,
+               connectome)
+
+
+#: The views of a connectome drawn alone: from above and from the left, through the glass cortex.
+CONNECTOME_VIEWS = ("dorsal", "lateral-left")
+
+
+def connectome_only_table(atlas: Atlas | None, source: Any) -> RegionTable:
+    """An empty region table of one image for a run that draws a connectome alone (named after its file)."""
+    name = Path(source).name.split(".")[0] if isinstance(source, str | Path) else "connectome"
+    return RegionTable(images=(name or "connectome",), regions=(), values=np.zeros((1, 0)),
+                       atlas=atlas or get_atlas("dk"), source=str(source) if isinstance(source, str | Path)
+                       else "connectome")
 
 
 def default_views(atlas: Atlas, only_tracts: bool) -> tuple[str, ...] | None:
@@ -444,6 +397,8 @@ def write_images(run: Run, painter: Painter, runner: Runner, chosen: Sequence[in
         }
         if painter.scene.tracts is not None:  # what was drawn of the tractograms (subsampling notes)
             manifest["tracts"] = painter.scene.tracts.summary()
+        if run.connectome is not None:  # its nodes and the number of edges drawn
+            manifest["connectome"] = connectome_summary(run.connectome)
         if tx is not None:
             tx.commit(manifest)  # verify every PNG, then publish them and the manifest last
     return files, images, manifest

@@ -38,6 +38,7 @@ __all__ = ["LIGHTINGS", "QUALITIES", "RGB", "SHADINGS", "SULC_LIGHTINGS", "Blank
            "RenderSettings", "Renderer", "Scene", "nothing_drawn"]
 
 if TYPE_CHECKING:
+    from brainpainter.connectome.model import Connectome
     from brainpainter.maps.outlines import Contours
     from brainpainter.rendering.geometry import Palette, SceneGeometry
     from brainpainter.tracts.model import Tracts
@@ -78,6 +79,9 @@ class Scene:
     contours : Contours, optional
         A second map's iso-lines, drawn with the region borders at ``settings.outline_width``
         pixels (a per-vertex scene only).
+    connectome : Connectome, optional
+        Nodes drawn as lit spheres and edges as lit cylinders, inside the glass cortex
+        (:mod:`brainpainter.rendering.connectome_parts`; palette keys ``node:i``, ``edge:k``).
     """
 
     template: Template
@@ -91,6 +95,7 @@ class Scene:
     tract_radius: float | None = None
     coloring: str = "regions"
     contours: Contours | None = None
+    connectome: Connectome | None = None
 
     def __post_init__(self) -> None:
         if self.surface not in SURFACES:

@@ -47,7 +47,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .connectome_check import connectome_check
 from .memory import can_measure, growth_per_image
+from .pixels import WHITE, near
 from .templates import write_tiny_template
 
 RGB = tuple[float, float, float]
@@ -60,18 +62,11 @@ COLORS: dict[str, RGB] = {
     "Left-Hippocampus": (0.60, 0.05, 0.05), "Right-Hippocampus": (0.05, 0.35, 0.60),
 }
 CONFORMANCE_CHECKS = ("orientation", "flat_colors", "nan_missing", "transparent", "glass", "no_holes",
-                      "repeatable", "tracts", "memory", "vertex_colors", "outlines")
+                      "repeatable", "tracts", "memory", "vertex_colors", "outlines", "connectome")
 #: Colours of the tracts check's two bundles (not among :data:`COLORS`).
 TRACT_COLORS: dict[str, RGB] = {"tract:AF_left": (1.0, 0.0, 0.5), "tract:CST_right": (0.0, 0.5, 1.0)}
-WHITE: RGB = (1.0, 1.0, 1.0)
 #: Largest resident-memory growth per image a renderer may show (MB).
 MAX_MB_PER_IMAGE = 0.1
-
-
-def near(img: NDArray[np.uint8], rgb: Any, tol: float) -> NDArray[np.bool_]:
-    """Pixels of `img`, shape (h, w, 4), within `tol` (0-255 units) of colour `rgb`; shape (h, w)."""
-    target = np.round(np.asarray(rgb, dtype=float)[:3] * 255)
-    return np.asarray(np.abs(img[..., :3].astype(float) - target).max(axis=-1) <= tol)
 
 
 @dataclass
@@ -465,7 +460,8 @@ def check_renderer(renderer: str | type, size: tuple[int, int] = (160, 120),
             _views(run)
         for check, step in (("flat_colors", _antialiased), ("nan_missing", _nan_missing),
                             ("transparent", _transparent), ("glass", _glass), ("tracts", _tracts),
-                            ("vertex_colors", _vertex_colors), ("outlines", _outlines)):
+                            ("vertex_colors", _vertex_colors), ("outlines", _outlines),
+                            ("connectome", connectome_check)):
             if check in checks:
                 step(run)
         if "memory" in checks and can_measure():

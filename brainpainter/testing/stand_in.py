@@ -42,7 +42,7 @@ class StandInRenderer:
         ``faces`` (default): full-height stripes, one per face of the view's
         structures sampled evenly (grouped by label), each in its colour
         (medial wall / neutral grey where the key has no colour), then one per
-        value-coloured bundle (or node) of the view's tracts.
+        value-coloured bundle (or node) of the view's tracts, then one per connectome node and edge.
         ``band``: the background (transparent when ``background`` is None)
         with a "brain" in the middle half of the rows and the middle 3/4 of the
         columns, one stripe per key of `regions` (a smaller band in
@@ -119,10 +119,16 @@ class StandInRenderer:
                 if name in scene.tracts.names:
                     keys = [bundle_key(name)] if n == 1 else [bundle_key(name, k) for k in range(n)]
                     self.tract_keys += [(hemisphere(name), k) for k in keys]
+        connectome = getattr(scene, "connectome", None)
+        if connectome is not None:  # drawn where tracts are: a stripe per node and per edge
+            from brainpainter.rendering.connectome_parts import edge_keys, node_keys
+
+            keys = node_keys(connectome.n_nodes) + edge_keys(len(connectome.edges()[2]))
+            self.tract_keys += [(None, k) for k in keys]
         # how cortex views draw the cortex (scene.geometry.cortex, resolved without building the geometry)
         cortex = getattr(getattr(scene, "settings", None), "cortex", "opaque")
-        self.cortex = ("glass" if getattr(scene, "tracts", None) is not None else "opaque") \
-            if cortex == "auto" else cortex
+        inside = getattr(scene, "tracts", None) is not None or connectome is not None
+        self.cortex = ("glass" if inside else "opaque") if cortex == "auto" else cortex
         type(self).scenes += 1
 
     def painted(self, colors: Mapping[str, Any], part: str) -> dict[str, Any]:

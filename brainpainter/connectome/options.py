@@ -1,0 +1,143 @@
+"""The connectome options of a run (``--connectome``, ``--nodes``, ``--top-edges``, ...), defined once.
+
+The CLI's click options and the keywords of ``brainpainter.render`` (and of figure, movie, plot,
+export) are made from these fields (:mod:`brainpainter.rendering.options`);
+:meth:`ConnectomeOptions.load` reads what they name into a
+:class:`~brainpainter.connectome.model.Connectome` with the edges to draw.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, TypedDict
+
+from brainpainter.atlas.model import SPACES
+from brainpainter.connectome.edges import parse_threshold, select_edges
+from brainpainter.connectome.model import Connectome
+from brainpainter.errors import BrainPainterError, choice_error
+
+if TYPE_CHECKING:
+    from brainpainter.atlas.model import Atlas
+    from brainpainter.atlas.template import Template
+
+
+class ConnectomeKwargs(TypedDict, total=False):
+    """The keyword arguments of :class:`ConnectomeOptions`."""
+
+    connectome: Any
+    nodes: Any
+    node_values: Any
+    node_categories: Any
+    directed: bool
+    edge_threshold: str | float | None
+    top_edges: int | None
+    edges_of: str | None
+    nodes_space: str
+
+
+@dataclass(frozen=True)
+class ConnectomeOptions:
+    """What connectome to draw, with which nodes, and which of its edges.
+
+    Attributes
+    ----------
+    connectome : path or Connectome, optional
+        A connectivity matrix (rows and columns in the atlas's region order, or named), or a
+        :class:`Connectome` (Python).
+    nodes : path, optional
+        Node coordinates (``name,x,y,z`` in the template's space, or BrainNet Viewer ``.node``);
+        default: the centroids of the atlas's regions.
+    node_values : path or array, optional
+        A value per node (sphere size and colour).
+    node_categories : path or sequence, optional
+        A network or module per node (categorical colours with a key).
+    directed : bool
+        The matrix's rows are the edges' sources (else the upper triangle is drawn).
+    edge_threshold : str or float, optional
+        Edges kept: ``|weight| >= 0.3``, or ``95%`` (the strongest 5 %).
+    top_edges : int, optional
+        The K strongest edges (by ``|weight|``) kept.
+    edges_of : str, optional
+        Only the edges of this node.
+    nodes_space : str
+        Space of the nodes file's coordinates (MNI152 is mapped into the template as tracts are).
+    """
+
+    connectome: Any = field(default=None, metadata={
+        "help": "A connectivity matrix drawn as nodes and edges (CSV/TSV with or without names, .npy, .txt, "
+                ".mat, CIFTI .pconn.nii, BrainNet Viewer .edge); see docs/connectomes.md."})
+    nodes: Any = field(default=None, metadata={
+        "help": "Node coordinates (CSV name,x,y,z in the template's space, or BrainNet Viewer .node). "
+                "Default: the centroids of the atlas's regions, in the matrix's order."})
+    node_values: Any = field(default=None, metadata={
+        "help": "A value per node: a file of one per node in the matrix's order, or a column of --nodes; "
+                "drawn as sphere size (2-6 mm) and colour."})
+    node_categories: Any = field(default=None, metadata={
+        "help": "A network or module per node: a file of one per node in the matrix's order, or a column "
+                "of --nodes; drawn in categorical colours with a key."})
+    directed: bool = field(default=False, metadata={
+        "help": "The matrix is directed (row = source); default: undirected, its upper triangle drawn."})
+    edge_threshold: str | float | None = field(default=None, metadata={
+        "help": "Edges drawn: |weight| at least this (0.3), or a percentile of |weight| (95%: the "
+                "strongest 5 %)."})
+    top_edges: int | None = field(default=None, metadata={
+        "help": "Only the K strongest edges (by |weight|) are drawn."})
+    edges_of: str | None = field(default=None, metadata={
+        "help": "Only the edges of this node (Left-precentral) are drawn."})
+    nodes_space: str = field(default="template", metadata={
+        "choices": SPACES, "help": "Space of the --nodes coordinates (MNI152 is mapped to the template)."})
+
+    def __post_init__(self) -> None:
+        if self.connectome is None:
+            given = [f"--{name.replace('_', '-')}" for name in ("nodes", "node_values", "node_categories",
+                                                                "edge_threshold", "top_edges", "edges_of")
+                     if getattr(self, name) is not None] + (["--directed"] if self.directed else [])
+            if given:
+                raise BrainPainterError(f"{given[0]} describes a connectome's nodes or edges, but no "
+                                        "--connectome was given; give the matrix with --connectome FILE.")
+        if self.nodes_space not in SPACES:
+            raise choice_error("--nodes-space", self.nodes_space, SPACES)
+        if self.edge_threshold is not None:
+            parse_threshold(self.edge_threshold)  # a bad threshold fails before the matrix is read
+        if self.top_edges is not None and (isinstance(self.top_edges, bool) or int(self.top_edges) < 0
+                                           or int(self.top_edges) != self.top_edges):
+            raise BrainPainterError(f"--top-edges must be a whole number >= 0; {self.top_edges!r} was given.")
+
+    @property
+    def given(self) -> bool:
+        """Whether a connectome is drawn."""
+        return self.connectome is not None
+
+    def load(self, atlas: Atlas | None, template: Template | str = "fsaverage",
+             surface: str = "pial") -> Connectome | None:
+        """The connectome to draw (None: none given), its nodes placed in `template`, its edges chosen.
+
+        A matrix is read by :func:`~brainpainter.connectome.read.read_connectome` (nodes at the
+        centroids of `atlas`'s regions on `surface`, or from ``nodes``); the edges drawn are chosen by
+        :func:`~brainpainter.connectome.edges.select_edges`.
+
+        Raises
+        ------
+        BrainPainterError
+            A file that cannot be read, names that match no region, a node file of another count, ...
+        """
+        if self.connectome is None:
+            return None
+        if isinstance(self.connectome, Connectome):
+            given = [name for name in ("nodes", "node_values", "node_categories")
+                     if getattr(self, name) is not None]
+            if given:
+                raise BrainPainterError(f"{given[0]}= describes the nodes of a matrix read from a file; a "
+                                        "Connectome given carries its own (Connectome(node_values=...)).")
+            connectome = self.connectome
+        else:
+            from brainpainter.connectome.read import read_connectome
+
+            connectome = read_connectome(
+                self.connectome, atlas, nodes=self.nodes, node_values=self.node_values,
+                node_categories=self.node_categories, directed=bool(self.directed), space=self.nodes_space,
+                template=template, surface=surface)
+        if self.edge_threshold is None and self.top_edges is None and self.edges_of is None:
+            return connectome
+        return select_edges(connectome, threshold=self.edge_threshold, top=self.top_edges,
+                            edges_of=self.edges_of)

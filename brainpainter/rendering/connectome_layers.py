@@ -1,0 +1,129 @@
+"""A connectome's two layers, edges and nodes, each on its own scale, and the colours they give each slot.
+
+The edges' scale colours their weights: diverging, ``RdBu_r`` centred at 0, symmetric over the
+largest ``|weight|`` drawn, unless ``--edges-*`` (or, for a connectome alone, the plain
+``--cmap``/``--vmin``/...) say otherwise. The nodes are a layer when they have categories (a
+categorical scale: its colour bar is their key) or values (a map's automatic scale,
+:func:`brainpainter.maps.autoscale.choose_scale`, or ``--nodes-*``); without either they are drawn
+in one neutral colour (:data:`~brainpainter.rendering.connectome_parts.NODE_COLOR`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from brainpainter.color.scale import ColourScale, ScaleOptions
+from brainpainter.connectome.model import Connectome
+from brainpainter.maps.autoscale import choose_scale
+from brainpainter.rendering.connectome_parts import edge_keys, node_keys
+from brainpainter.rendering.layers import SCALE_FIELDS, Layer
+from brainpainter.rendering.options import Options
+from brainpainter.rendering.settings import RGB
+
+#: The edges' default scale: diverging about a weight of 0.
+EDGE_CENTER = 0.0
+#: Categorical colour maps of node categories, by how many they hold at most (more: turbo, sampled).
+CATEGORY_CMAPS = ((10, "tab10"), (20, "tab20"))
+
+
+def connectome_kinds(connectome: Connectome | None) -> tuple[str, ...]:
+    """The layers a connectome draws: ``edges``, and ``nodes`` when they have values or categories."""
+    if connectome is None:
+        return ()
+    coloured = connectome.node_values is not None or connectome.node_categories is not None
+    return ("edges", "nodes") if coloured else ("edges",)
+
+
+def connectome_layers(options: Options, connectome: Connectome, first: bool) -> tuple[Layer, ...]:
+    """The edge layer and (with node values or categories) the node layer of `connectome`.
+
+    `first`: the edges are the run's first layer (a connectome alone), so the plain scale options
+    (``--cmap``, ``--vmin``, ...) are theirs too.
+    """
+    plain = ScaleOptions(nan_color=options.scale.nan_color, missing_color=options.scale.missing_color)
+    own = options.layers.scale_options("edges", options.scale, first) or plain
+    if all(getattr(own, name) is None for name in SCALE_FIELDS):
+        own = replace(own, center=EDGE_CENTER)
+    weights = connectome.edges()[2]
+    edge_options, chosen = choose_scale(own, weights)
+    edges = Layer("edges", replace(edge_options.scale(weights), chosen=chosen), 1.0,
+                  _label(options, "edges", options.connectome.connectome, "edge weight"))
+    if "nodes" not in connectome_kinds(connectome):
+        return (edges,)
+    if connectome.node_categories is not None:
+        scale = category_scale(connectome.node_categories, plain)
+        source: Any = options.connectome.node_categories
+        fallback = "network"
+    else:
+        assert connectome.node_values is not None
+        values = np.asarray(connectome.node_values, dtype=float)
+        node_options, chosen = choose_scale(options.layers.scale_options("nodes", options.scale, False)
+                                            or plain, values)
+        scale = replace(node_options.scale(values), chosen=chosen)
+        source, fallback = options.connectome.node_values, "node value"
+    return edges, Layer("nodes", scale, 1.0, _label(options, "nodes", source, fallback))
+
+
+def _label(options: Options, kind: str, source: Any, fallback: str) -> str:
+    """A connectome layer's colour-bar label: as given, else its file's name, else `fallback`."""
+    given = options.layers.label(kind)
+    if given is not None:
+        return given
+    return Path(source).name if isinstance(source, str | Path) else fallback
+
+
+def category_scale(categories: tuple[str, ...], plain: ScaleOptions) -> ColourScale:
+    """A categorical scale of node `categories` (N,): one colour each, in order of first appearance."""
+    import matplotlib
+
+    names = list(dict.fromkeys(categories))
+    n = len(names)
+    cmap = next((name for most, name in CATEGORY_CMAPS if n <= most), "turbo")
+    where = np.arange(n) if cmap != "turbo" else np.linspace(0.05, 0.95, n)  # a listed map: its i-th colour
+    colors = np.asarray(matplotlib.colormaps[cmap](where), dtype=float)[:, :3]
+    keyed = tuple(_keyed(names, colors).items())
+    base = replace(plain, cmap=cmap, vmin=0.0, vmax=float(max(n - 1, 1))).scale()
+    return replace(base, colors=np.vstack([colors, colors[-1:]]), categories=keyed)
+
+
+def connectome_colors(connectome: Connectome, layers: tuple[Layer, ...]) -> dict[str, RGB]:
+    """The colour of each node (``node:i``) and edge (``edge:k``) key, by the connectome's layers."""
+    out: dict[str, RGB] = {}
+    by_kind = {layer.kind: layer.scale for layer in layers}
+    if "edges" in by_kind:
+        out.update(_keyed(edge_keys(len(connectome.edges()[2])), by_kind["edges"](connectome.edges()[2])))
+    nodes = by_kind.get("nodes")
+    if nodes is not None and nodes.categories and connectome.node_categories is not None:
+        rgb = dict(nodes.categories)
+        out.update(zip(node_keys(connectome.n_nodes), (rgb[c] for c in connectome.node_categories),
+                       strict=True))
+    elif nodes is not None and connectome.node_values is not None:
+        out.update(_keyed(node_keys(connectome.n_nodes), nodes(np.asarray(connectome.node_values, float))))
+    return out
+
+
+def _keyed(keys: list[str], rgb: NDArray[Any]) -> dict[str, RGB]:
+    return {k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(keys, rgb, strict=True)}
+
+
+def connectome_summary(connectome: Connectome) -> dict[str, Any]:
+    """The manifest's ``connectome``: its nodes (name, position, value, category) and the edges drawn."""
+    values = connectome.node_values
+    nodes = []
+    for i, name in enumerate(connectome.names):
+        node: dict[str, Any] = {"name": name,
+                                "position": [round(float(x), 3) for x in connectome.positions[i]]}
+        if values is not None:
+            node["value"] = float(values[i]) if np.isfinite(values[i]) else None
+        if connectome.node_categories is not None:
+            node["category"] = connectome.node_categories[i]
+        nodes.append(node)
+    weights = connectome.edges()[2]
+    return {"n_nodes": connectome.n_nodes, "n_edges": len(weights), "directed": connectome.directed,
+            "weight_range": [float(weights.min()), float(weights.max())] if len(weights) else None,
+            "nodes": nodes}

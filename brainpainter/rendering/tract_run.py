@@ -1,0 +1,108 @@
+"""The tract values of a run: bundle columns of the main table or ``--tract-values``.
+
+:func:`run_tract_values` finds them (:func:`prepare_run <brainpainter.rendering.run.prepare_run>`
+calls it before reading the region table, which then leaves the bundle columns out:
+:func:`without_bundle_columns`); :func:`brainpainter.rendering.composition.tract_colors` colours
+one image's bundles.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from brainpainter.atlas.model import Atlas
+from brainpainter.atlas.registry import get_atlas
+from brainpainter.errors import BrainPainterError
+from brainpainter.rendering.options import Options
+from brainpainter.table.region_table import RegionTable
+from brainpainter.tracts.model import TractSpec
+from brainpainter.tracts.values import TractValues, is_profile, read_tract_values
+
+
+def tracts_only_table(tract_values: TractValues, atlas: Atlas | None, data: Any) -> RegionTable:
+    """An empty region table for a run whose table holds bundle values only (one row per image)."""
+    images = tract_values.images or ("1",)
+    source = str(data) if isinstance(data, str | Path) else "table"
+    return RegionTable(images=tuple(images), regions=(), values=np.zeros((len(images), 0)),
+                       atlas=atlas or get_atlas("dk"), source=source)
+
+
+def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, bool]:
+    """The tract values of a run: ``tract_values`` if given, else the main table's bundle columns, if any.
+
+    Columns of the main table count as bundles when their canonical name is a bundle of ``tracts``
+    (a file's name); without any, bundles are coloured by direction. A main table that is an
+    along-tract profile (bundle and node columns, pyAFQ's ``tract_profiles.csv``) is tract values
+    only: its errors are reported, and so is a profile none of whose bundles is drawn.
+
+    Returns
+    -------
+    values : TractValues or None
+    only_tracts : bool
+        Every value column of the main table is a bundle (it holds no region values), or there is
+        no main table (``tract_values`` alone).
+    """
+    scene = options.scene
+    if scene.tract_values is not None:
+        return read_tract_values(scene.tract_values, scene.tract_value), data is None
+    spec = scene.tract_spec()
+    if spec is None or data is None or isinstance(data, list):
+        return None, False
+    from brainpainter.io.readers import read_raw
+
+    known = bundle_names(spec)
+    # a stream (the web API's upload) is read again for the region table: back to where it was
+    pos = data.tell() if hasattr(data, "seek") and hasattr(data, "tell") else None
+    profile = False
+    try:
+        raw = read_raw(data)
+        profile = is_profile(raw)
+        tv = read_tract_values(raw, scene.tract_value)
+    except BrainPainterError:
+        if profile:
+            raise
+        return None, False
+    finally:
+        if pos is not None:
+            data.seek(pos)
+    keep = [j for j, (name, _) in enumerate(tv.nodes) if name in known]
+    if not keep and profile:
+        raise BrainPainterError(
+            f"the profile table's bundles {sorted(tv.bundles)[:6]} are none of the tracts drawn "
+            f"{sorted(known)[:6]}; name the tractogram files after the bundles (AF_L.trk, "
+            "CST_right.tck, ...) or give the tractograms the profiles were made on.")
+    if not keep:
+        return None, False
+    names = {tv.nodes[j][0] for j in keep}
+    cols = [j for j, key in enumerate(tv.keys) if key.split(":")[1] in names]
+    return (TractValues(tv.images, tuple(tv.keys[j] for j in cols), tv.values[:, cols],
+                        tuple(tv.nodes[j] for j in keep)), len(keep) == len(tv.nodes))
+
+
+def bundle_names(spec: TractSpec) -> set[str]:
+    """The bundles of the tractograms to draw: their files' names, canonical (``AF_L.trk``: ``AF_left``)."""
+    from brainpainter.tracts.names import canonical
+
+    return {canonical(f.name[: -len(f.suffix)]) for f in spec.files}
+
+
+def without_bundle_columns(data: Any, bundles: set[str]) -> Any:
+    """The main table without its bundle columns (drawn as tract values), read once, for the region table.
+
+    So that a table with region and bundle columns reports no bundle as an unmatched region name
+    (nor fails under ``--strict``). The image column and the region columns stay as they are.
+    """
+    from dataclasses import replace
+
+    from brainpainter.io.readers import read_raw
+    from brainpainter.tracts.names import canonical
+
+    raw = read_raw(data)
+    keep = [j for j, name in enumerate(raw.header) if canonical(name) not in bundles]
+    if len(keep) == len(raw.header):
+        return raw
+    return replace(raw, header=[raw.header[j] for j in keep],
+                   rows=[[row[j] if j < len(row) else None for j in keep] for row in raw.rows])

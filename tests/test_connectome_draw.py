@@ -1,0 +1,109 @@
+"""A connectome drawn: node spheres and edge cylinders as scene parts, coloured and sized (issue 36)."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from brainpainter.atlas.template import load_template
+from brainpainter.connectome.model import Connectome
+from brainpainter.rendering import framing
+from brainpainter.rendering.connectome_parts import (
+    EDGE_RADIUS,
+    NODE_RADIUS,
+    PLAIN_NODE_RADIUS,
+    cylinder_mesh,
+    edge_radii,
+    node_radii,
+)
+from brainpainter.rendering.scene import Scene
+from brainpainter.rendering.views import get_view
+from brainpainter.testing.connectome_check import tiny_connectome
+
+
+def random_connectome(n: int, n_edges: int, seed: int = 0) -> Connectome:
+    """`n` nodes inside the tiny template's hemispheres and `n_edges` edges of both signs."""
+    rng = np.random.default_rng(seed)
+    positions = np.column_stack([rng.choice([-60.0, 60.0], n) + rng.uniform(-30, 30, n),
+                                 rng.uniform(-30, 30, n), rng.uniform(-30, 30, n)])
+    weights = np.full((n, n), np.nan)
+    upper = np.transpose(np.triu_indices(n, 1))
+    for i, j in upper[rng.choice(len(upper), n_edges, replace=False)]:
+        weights[i, j] = weights[j, i] = rng.uniform(-1, 1)
+    return Connectome(tuple(f"n{i}" for i in range(n)), positions, weights, node_values=rng.uniform(0, 1, n))
+
+
+def test_node_radius_follows_the_value_within_the_clamped_range():
+    r = node_radii(np.array([1.0, 2.5, 4.0, np.nan]), 4)
+    np.testing.assert_allclose(r, [NODE_RADIUS[0], np.mean(NODE_RADIUS), NODE_RADIUS[1], NODE_RADIUS[0]])
+    np.testing.assert_allclose(node_radii(None, 3), PLAIN_NODE_RADIUS)
+    np.testing.assert_allclose(node_radii(np.array([7.0, 7.0]), 2), np.mean(NODE_RADIUS))
+
+
+def test_edge_radius_follows_the_absolute_weight():
+    np.testing.assert_allclose(edge_radii(np.array([-1.0, 0.5, 0.0])),
+                               [EDGE_RADIUS[1], np.mean(EDGE_RADIUS), EDGE_RADIUS[0]])
+
+
+def test_a_cylinder_runs_from_node_to_node_at_its_radius_with_outward_normals():
+    a, b = np.array([[0.0, 0.0, 0.0], [1.0, 2.0, 3.0]]), np.array([[10.0, 0.0, 0.0], [1.0, 2.0, -7.0]])
+    verts, normals, tris, pal = cylinder_mesh(a, b, np.array([0.5, 2.0]), np.array([7, 9]))
+    verts = verts.reshape(2, -1, 3)
+    for k, r in enumerate((0.5, 2.0)):
+        axis = (b[k] - a[k]) / np.linalg.norm(b[k] - a[k])
+        rel = verts[k] - a[k]
+        along = rel @ axis
+        assert set(np.round(along, 4)) == {0.0, 10.0}  # both rings, at the ends
+        np.testing.assert_allclose(np.linalg.norm(rel - along[:, None] * axis, axis=1), r, rtol=1e-5)
+    assert set(pal.tolist()) == {7, 9}
+    v = verts.reshape(-1, 3).astype(float)
+    face_n = np.cross(v[tris[:, 1]] - v[tris[:, 0]], v[tris[:, 2]] - v[tris[:, 0]])
+    # counter-clockwise seen from outside: each face's normal agrees with its vertices' normals
+    assert (np.einsum("ij,ij->i", face_n, normals[tris[:, 0]]) > 0).all()
+
+
+def test_nodes_and_edges_are_parts_with_a_slot_each_drawn_inside_the_glass(tiny):
+    scene = Scene(load_template(tiny), "dk", connectome=tiny_connectome())
+    g = scene.geometry
+    parts = {p.name: p for p in g.parts}
+    assert parts["nodes"].kind == "node" and parts["edges"].kind == "edge"
+    assert {"node:0", "node:1", "edge:0"} <= set(g.slot_of)
+    # the larger node value, the larger sphere
+    nodes = parts["nodes"]
+    spread = [np.ptp(nodes.vertices[nodes.palette_index == g.slot_of[f"node:{i}"]][:, 0]) for i in (0, 1)]
+    np.testing.assert_allclose(spread, [2 * NODE_RADIUS[0], 2 * NODE_RADIUS[1]], rtol=0.01)
+    assert g.cortex == "glass"  # a connectome alone shows the cortex as glass
+    for view in ("dorsal", "lateral-left", "subcortical"):
+        assert {"nodes", "edges"} <= {p.name for p in g.visible(get_view(view))}
+    assert framing.shows(get_view("dorsal"), "node", None, "opaque") is False
+
+
+def test_four_hundred_nodes_and_eight_hundred_edges_are_cheap(tiny):
+    template = load_template(tiny)
+    connectome = random_connectome(400, 800)
+    assert Scene(template, "dk").geometry.parts  # warm: the template's meshes read once
+    t0 = time.perf_counter()
+    plain = Scene(template, "dk").geometry
+    t1 = time.perf_counter()
+    g = Scene(template, "dk", connectome=connectome).geometry
+    t2 = time.perf_counter()
+    extra = (t2 - t1) - (t1 - t0)
+    parts = {p.name: p for p in g.parts}
+    assert len(parts["nodes"].triangles) == 400 * 320 and len(parts["edges"].triangles) == 800 * 24
+    assert len(g.keys) == len(plain.keys) + 1200
+    assert extra < 0.5, f"400 nodes and 800 edges cost {extra:.2f} s more to build"
+
+
+@pytest.mark.render
+def test_connectome_check_passes_and_catches_a_mirrored_renderer():
+    pytest.importorskip("bpy")
+    from test_renderer_conformance import _Mirrored
+
+    from brainpainter.testing import check_renderer
+
+    report = check_renderer("blender", checks=("connectome",))
+    assert report["connectome_pixels"]["node:1"] > 3 * report["connectome_pixels"]["node:0"]
+    with pytest.raises(AssertionError, match="connectome: dorsal: node:0 is centred"):
+        check_renderer(_Mirrored, checks=("connectome",))
