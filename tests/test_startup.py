@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import sys
@@ -185,6 +186,9 @@ def test_the_entry_point_cache_follows_installs(site_folder, change):
             f.unlink()
         dist.rmdir()
         expected = set()
+    # importlib.metadata keeps a folder's listing by the folder's mtime, which the kernel's coarse clock
+    # (a few ms) may leave unchanged by a change this fast: a new process would not have that listing
+    importlib.invalidate_caches()
     registry.reset_all()
     assert set(registry.renderers.names()) - {"blender"} == expected
 
