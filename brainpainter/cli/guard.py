@@ -277,6 +277,18 @@ def _stopped(exc: Stopped, before: int) -> int:
 
 
 def _run(group: click.Group, argv: Sequence[str] | None, prog_name: str, before: int) -> int:
+    from brainpainter.io import user_cache
+
+    user_cache.hold()  # a failed command writes no cache file either
+    code = EXIT_USER
+    try:
+        code = _run_command(group, argv, prog_name, before)
+        return code
+    finally:
+        user_cache.release(keep=code == 0)
+
+
+def _run_command(group: click.Group, argv: Sequence[str] | None, prog_name: str, before: int) -> int:
     with signals_as_exceptions(), private_temp(), warnings_on_stdout():
         try:
             group.main(args=list(argv) if argv is not None else None, prog_name=prog_name,

@@ -97,11 +97,62 @@ def write(name: str, key: str, value: Any) -> None:
     write_atomic(folder / name, lambda f: f.write(json.dumps(doc, sort_keys=True).encode("utf-8")))
 
 
+#: Cache files written while a command runs, by path: kept in memory until it succeeds (:func:`hold`).
+_held: dict[Path, bytes] | None = None
+
+
+#: Folders :func:`hold` made for the cache (deepest last), removed again by a failed command if empty.
+_made: list[Path] = []
+
+
+def hold() -> None:
+    """Keep the cache files written from now on in memory until :func:`release` (a command line run:
+    a command that fails writes nothing outside its output folder, not even a cache file).
+
+    The cache folder itself is made now: Mesa writes its compiled shaders there only if it exists.
+    """
+    global _held
+    _held = {}
+    folder = cache_dir()
+    _made.clear()
+    if folder is not None:
+        missing = [p for p in (folder, *folder.parents) if not p.exists()]
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            _made.extend(reversed(missing))
+        except OSError:  # a read-only home: no cache
+            pass
+
+
+def release(keep: bool) -> None:
+    """Write the cache files held since :func:`hold` if `keep` (the command succeeded); else forget
+    them, and remove the folders :func:`hold` made where they are still empty."""
+    global _held
+    held, _held = _held or {}, None
+    if keep:
+        for path, data in held.items():
+            write_atomic(path, lambda f, data=data: f.write(data))
+        return
+    for folder in reversed(_made):
+        try:
+            folder.rmdir()
+        except OSError:  # not empty (Mesa's shaders of a run that failed late): a cache, kept
+            break
+
+
 def write_atomic(path: Path, write: Callable[[IO[bytes]], object]) -> None:
     """Write `path` through `write(file)` into a temporary file beside it, then rename it into place
     (a reader never sees half a file); nothing where the folder cannot be written (a read-only or
-    full disk: the next run computes the value again)."""
+    full disk: the next run computes the value again). While held (:func:`hold`), kept in memory."""
     import tempfile
+
+    if _held is not None:
+        import io
+
+        buffer = io.BytesIO()
+        write(buffer)
+        _held[path] = buffer.getvalue()
+        return
 
     tmp = None
     try:
