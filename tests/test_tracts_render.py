@@ -270,7 +270,7 @@ def test_an_image_does_not_depend_on_the_views_drawn_before(tiny, bundles):
     colours = {"tract:AF_left": RED, "tract:CST_right": BLUE}
     dorsal = get_view("subcortical-dorsal")
     nodes = (("AF_left", 1), ("CST_right", 1))
-    with _painter(tiny, bundles, nodes, quality="default") as p:  # supersampled
+    with _painter(tiny, bundles, nodes, quality="default") as p:  # tract layers, edge buffers kept
         fresh = p.paint_colors(colours, dorsal)
     with _painter(tiny, bundles, nodes, quality="default") as p:
         for name in ("subcortical", "subcortical-left", "subcortical-ventral"):

@@ -11,13 +11,18 @@ palette (a 2-D float texture of linear colours,
 :data:`~brainpainter_blender.gpu_shaders.PALETTE_WIDTH` texels a row, looked up in
 the vertex shader: a map's per-vertex colours are interpolated across each
 triangle; a region's three vertices share one slot), draws the visible parts
-into a supersampled buffer of 16-bit linear light (opaque parts with depth,
-then the glass: back faces, then front faces, blended, no depth writes) and
-averages each SxS block in a second pass (S a compile-time constant) that
+into a buffer of 16-bit linear light (opaque parts with depth, then the glass:
+back faces, then front faces, blended, no depth writes), at output resolution
+for the default quality, and resolves it in a second pass: averaging each SxS
+block of a supersampled buffer (S a compile-time constant, :data:`SUPERSAMPLING`),
+or, at the default quality, mixing each pixel that a region border or
+silhouette crosses with its neighbour across it by the share of the pixel
+beyond the edge (:mod:`brainpainter_blender.edge_aa`: 2x2 supersampling cost
+llvmpipe about four times the pixels for as smooth a picture). The resolve
 also un-premultiplies alpha and flips rows into an sRGB target, which encodes
 linear light to sRGB as it is written. Tract parts are drawn as lines at
 output resolution between the glass's far and near sides
-(:mod:`brainpainter_blender.tract_lines`). So the read-back (into a flat
+(:mod:`brainpainter_blender.tract_lines`), not through the edge buffer. So the read-back (into a flat
 ``gpu.types.Buffer``; ``np.array`` of a multi-dimensional Buffer gives wrong
 strides) is already the image. The GLSL sources are in
 :mod:`brainpainter_blender.gpu_shaders`; :meth:`GpuDraw.profile` times the
@@ -46,7 +51,7 @@ from brainpainter.rendering.framing import view_projection
 from brainpainter.rendering.geometry import PartGeometry, SceneGeometry
 from brainpainter.rendering.scene import RenderSettings
 from brainpainter.rendering.views import View
-from brainpainter_blender import gpu_shaders, meshorder, outlines, tract_lines
+from brainpainter_blender import edge_aa, gpu_shaders, meshorder, outlines, tract_lines
 from brainpainter_blender.gpu_context import in_gpu_context
 
 
@@ -131,7 +136,9 @@ def for_maps(light: Lighting) -> Lighting:
 
 
 #: Supersampling factor per quality (per axis); ``high`` reaches here only for flat shading.
-SUPERSAMPLING = {"fast": 1, "default": 2, "high": 3}
+SUPERSAMPLING = {"fast": 1, "default": 1, "high": 3}
+#: Qualities whose edges are anti-aliased at output resolution (:mod:`brainpainter_blender.edge_aa`).
+EDGE_AA = frozenset({"default"})
 #: Face culling of opaque parts ("BACK": half the triangles are never rasterised; "NONE": draw all).
 CULL_OPAQUE = "BACK"
 #: Format of the supersampled buffer (linear light, premultiplied alpha; 8 bytes a pixel).
@@ -205,6 +212,7 @@ class GpuDraw:
         self._lo_tex: Any = None
         self._resolve: Any = None
         self._quad: Any = None
+        self._edges: edge_aa.EdgeAA | None = None
         in_gpu_context(self._upload)
 
     def _factor(self) -> int:
@@ -223,13 +231,16 @@ class GpuDraw:
         gpu_shaders.part_shader()  # compiled now; the parts' batches on first use (_batch)
         s = self.settings
         self.factor = f = self._factor()
-        self._resolve = gpu_shaders.resolve_shader(f)
+        edges = f == 1 and s.quality in EDGE_AA
+        self._resolve = gpu_shaders.resolve_shader(f, edges)
         self._quad = batch_for_shader(self._resolve, "TRIS", {"pos": [(-1, -1), (3, -1), (-1, 3)]})
         # Linear light in 16-bit integers: as exact as half floats for 0-1 and cheaper to write.
         size = (int(s.width * f), int(s.height * f))
         self._hi_color = gpu.types.GPUTexture(size, format=HI_FORMAT)
         self._hi_depth = gpu.types.GPUTexture(size, format="DEPTH_COMPONENT32F")  # read by tract_lines
         self._hi = gpu.types.GPUFrameBuffer(depth_slot=self._hi_depth, color_slots=self._hi_color)
+        if edges:
+            self._edges = edge_aa.EdgeAA(s.width, s.height, self._hi_depth)
         # The resolve writes linear light; the sRGB target encodes it (cheaper than pow() per pixel).
         self._lo_tex = gpu.types.GPUTexture((s.width, s.height), format="SRGB8_A8")
         self._lo = gpu.types.GPUFrameBuffer(color_slots=self._lo_tex)
@@ -340,11 +351,16 @@ class GpuDraw:
             with self._hi.bind():
                 self._bind_part_shader(aim, tex)
                 self._draw_glass(aim, tex, ("BACK",), mark)
+        edges = None if self._edges is None else self._edges.texture(aim.visible, view, aim)
+        if edges is not None:
+            mark("edges")
         with self._lo.bind():
             # the resolve writes every pixel: no clear
             resolve, s = self._resolve, self.settings
             resolve.bind()
             resolve.uniform_sampler("image", self._hi_color)  # samplers first: see _bind_part_shader
+            if edges is not None:
+                resolve.uniform_sampler("edges", edges)
             resolve.uniform_int("out_height", s.height)
             self._quad.draw(resolve)
             mark("resolve")
@@ -479,6 +495,9 @@ class GpuDraw:
             self._hi = self._hi_color = self._hi_depth = None
             self._lo = self._lo_tex = self._quad = self._palette_tex = None
             self._lines.close()
+            if self._edges is not None:
+                self._edges.close()
+                self._edges = None
             self._batches.clear()
 
         in_gpu_context(drop)
