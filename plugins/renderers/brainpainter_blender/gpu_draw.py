@@ -347,7 +347,8 @@ class GpuDraw:
             self._draw_parts(aim, tex, mark, tracts)
         if tracts:
             self._lines.draw_over(tracts, view, aim, tex, self.lighting, self._hi,
-                                  lambda: self._draw_opaque(aim, tex, tracts), mark)
+                                  lambda: self._draw_opaque(aim, tex, tracts), mark,
+                                  self._hi_depth if self.factor == 1 else None)
             with self._hi.bind():
                 self._bind_part_shader(aim, tex)
                 self._draw_glass(aim, tex, ("BACK",), mark)
