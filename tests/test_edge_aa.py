@@ -54,3 +54,19 @@ def test_a_map_cortex_has_no_region_borders():
     vertices, faces, _ = _cube()
     per_vertex = np.arange(len(vertices))  # a map: slots differ within triangles
     assert not edge_table(vertices, faces, per_vertex).border.any()
+
+
+def test_front_faces_are_those_facing_an_orthographic_camera():
+    # the default draw path leaves out, per view, the triangles back-face culling would drop
+    from brainpainter_blender.gpu_draw import front_faces
+
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    mvp = np.diag([0.5, 0.5, -0.01, 1.0])  # orthographic, looking down -z (towards the viewer: +z)
+    kept = front_faces(sphere.vertices, sphere.faces, mvp)
+    normals = trimesh.triangles.normals(sphere.vertices[kept])[0]
+    assert (normals[:, 2] >= -1e-9).all()
+    assert len(kept) == int((sphere.face_normals[:, 2] >= -1e-9).sum())
+    assert 0.4 * len(sphere.faces) < len(kept) < 0.6 * len(sphere.faces)
+    # an image mirrored (x flipped) turns the winding on screen, for culling as for this
+    mirrored = front_faces(sphere.vertices, sphere.faces, np.diag([-0.5, 0.5, -0.01, 1.0]))
+    assert (trimesh.triangles.normals(sphere.vertices[mirrored])[0][:, 2] <= 1e-9).all()

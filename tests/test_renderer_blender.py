@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -256,6 +257,29 @@ def test_default_quality_antialiases_edges_without_supersampling(template):
     # gave 1.071 there and 1.013 on the silhouettes, no anti-aliasing 1.122 and 1.060
     assert got["default"][0] <= 1.08 < got["fast"][0], got  # region borders
     assert got["default"][1] <= 1.03 < got["fast"][1], got  # silhouettes against the background
+
+
+@pytest.mark.render
+def test_leaving_out_the_back_faces_changes_no_pixel(template, monkeypatch):
+    """Issue 37: each view draws only the triangles facing it (GpuDraw._front), not all of them
+    for the rasteriser to cull; the images are the same."""
+    from brainpainter_blender.gpu_draw import GpuDraw
+
+    views = [get_view("lateral-left"), get_view("subcortical"),
+             replace(get_view("lateral-left"), azimuth=130.0, elevation=35.0, hemis=("lh", "rh"))]
+    colors = _quadrant_colors()
+
+    def images():
+        r = _renderer(template, glass_opacity=0.3)
+        try:
+            return [r.render(colors, v) for v in views]
+        finally:
+            r.close()
+
+    culled = images()
+    monkeypatch.setattr(GpuDraw, "_front", lambda self, part, aim: self._batch(part))
+    for a, b in zip(culled, images(), strict=True):
+        assert np.array_equal(a, b)
 
 
 @pytest.mark.render
