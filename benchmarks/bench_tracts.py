@@ -26,7 +26,11 @@ by 2x from run to run, the CPU ones much less.
 
     python benchmarks/bench_tracts.py                          # 3,000 and 10,000 streamlines, 1200x900
     python benchmarks/bench_tracts.py --streamlines 2000 --size 800x600 --repeats 3
-    python benchmarks/bench_tracts.py --cpu --streamlines 10000 --tract-quality fast   # no supersampling
+    python benchmarks/bench_tracts.py --cpu --streamlines 10000 --tract-quality fast   # no anti-aliasing
+    python benchmarks/bench_tracts.py --streamlines 10000 --profile    # where an orbit frame's time goes
+
+``--profile`` also prints the median milliseconds of each step of an orbit's frame (a view
+not drawn before, one colour per bundle; ``GpuDraw.profile``: each step waited for).
 
 Timings depend on the machine (llvmpipe without a GPU); say which one in docs/benchmarks.md.
 """
@@ -93,6 +97,17 @@ def _recoloured(colors, view, repeats: int) -> list:
 def _orbit(colors, view, repeats: int) -> list:
     """Images of a movie's orbit: every one a view not drawn before (5-degree steps)."""
     return [(colors, replace(view, azimuth=(view.azimuth + 5.0 * i) % 360.0)) for i in range(repeats + 1)]
+
+
+def _orbit_steps(painter, colors, view, repeats: int) -> dict[str, float]:
+    """Median milliseconds of each step of an orbit's frame (views not drawn before), Blender renderer."""
+    from brainpainter.rendering.geometry import Palette
+
+    gpu = painter.load()._gpu
+    rgb = Palette(colors, painter.scene.geometry).rgb
+    rows = [gpu.profile(rgb, replace(view, azimuth=(view.azimuth + 2.5 + 5.0 * i) % 360.0))
+            for i in range(repeats)]
+    return {k: 1000 * statistics.median(r.get(k, 0.0) for r in rows) for k in rows[0]}
 
 
 PEER = r"""
@@ -170,6 +185,7 @@ def main() -> None:
     p.add_argument("--peer", action="store_true",
                    help="Also time PyVista drawing the same centrelines as tubes (needs pyvista).")
     p.add_argument("--peer-png", default="", help="Write PyVista's last image here (to look at it).")
+    p.add_argument("--profile", action="store_true", help="Also time the steps of an orbit's frame.")
     p.add_argument("--tract-quality", default="default", choices=("fast", "default"),
                    help="Quality of the images with tracts (the DK references stay default).")
     args = p.parse_args()
@@ -217,6 +233,9 @@ def main() -> None:
                     # by row): the renderer colours the view's kept lines again, without drawing them
                     new = _time(painter, _recoloured(colors, sub, args.repeats)) if nodes else None
                     orbit = _time(painter, _orbit(colors, sub, args.repeats))
+                    steps = None
+                    if args.profile and nodes:
+                        steps = _orbit_steps(painter, colors, sub, args.repeats)
                     peer = None
                     if args.peer and nodes:
                         peer = _peer(painter, sub, args, width, height, args.peer_png)
@@ -229,6 +248,9 @@ def main() -> None:
                       f"{glass / ref['lateral-left']:.2f} x a DK lateral-left render")
                 print(f"{'':46s}subcortical orbit, a new view each image {orbit * 1000:6.0f} {unit}/image = "
                       f"{orbit / ref['lateral-left']:.2f} x a DK lateral-left render")
+                if steps is not None:
+                    print(f"{'':46s}an orbit frame, step by step (ms, each waited for): "
+                          + ", ".join(f"{k} {v:.0f}" for k, v in steps.items()))
                 if peer is not None and new is not None:
                     print(f"{'':46s}PyVista, the same streamlines alone, recoloured each image "
                           f"{peer * 1000:6.0f} ms/image = {peer / new:.2f} x ours (wall clock)")

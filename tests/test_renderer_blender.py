@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -231,6 +232,71 @@ def test_antialiased_flat_interiors_are_exact(template, quality):
         core = ndimage.binary_erosion(_mask(img, rgb, 30), iterations=3)
         assert core.sum() > 100
         assert (m[core]).all(), "interior pixels differ from the given colour"
+
+
+@pytest.mark.render
+def test_default_quality_antialiases_edges_without_supersampling(template):
+    """Issue 37: the default quality draws at output resolution and smooths region borders and
+    silhouettes from the geometry (edge_aa), as smooth as 2x2 supersampling was."""
+    from brainpainter.media.imagemetrics import border_ratio
+
+    a, b, white = (230, 60, 40), (40, 90, 220), (255, 255, 255)
+    colors = {f"Left-{n}": tuple(c / 255 for c in (a if n in ("antsup", "postinf") else b))
+              for n in REGIONS[1:]}
+    got = {}
+    for quality in ("fast", "default"):
+        r = _renderer(template, quality=quality, shading="flat", glass_opacity=0.0, width=640, height=480)
+        try:
+            img = r.render(colors, get_view("lateral-left"))
+            factor = r._gpu.factor
+        finally:
+            r.close()
+        got[quality] = (border_ratio(img, a, b)[0], border_ratio(img, a, white)[0], factor)
+    assert got["default"][2] == 1  # no supersampling
+    # the ellipsoid's borders follow whole triangles (a zigzag of the mesh itself): 2x2 supersampling
+    # gave 1.071 there and 1.013 on the silhouettes, no anti-aliasing 1.122 and 1.060
+    assert got["default"][0] <= 1.08 < got["fast"][0], got  # region borders
+    assert got["default"][1] <= 1.03 < got["fast"][1], got  # silhouettes against the background
+
+
+@pytest.mark.render
+def test_leaving_out_the_back_faces_changes_no_pixel(template, monkeypatch):
+    """Issue 37: each view draws only the triangles facing it (GpuDraw._front), not all of them
+    for the rasteriser to cull; the images are the same."""
+    from brainpainter_blender.gpu_draw import GpuDraw
+
+    views = [get_view("lateral-left"), get_view("subcortical"),
+             replace(get_view("lateral-left"), azimuth=130.0, elevation=35.0, hemis=("lh", "rh"))]
+    colors = _quadrant_colors()
+
+    def images():
+        r = _renderer(template, glass_opacity=0.3)
+        try:
+            return [r.render(colors, v) for v in views]
+        finally:
+            r.close()
+
+    culled = images()
+    monkeypatch.setattr(GpuDraw, "_front", lambda self, part, aim: self._batch(part))
+    for a, b in zip(culled, images(), strict=True):
+        assert np.array_equal(a, b)
+
+
+@pytest.mark.render
+@pytest.mark.parametrize("quality", ["fast", "default"])
+def test_outlines_leave_no_holes_in_an_opaque_image(template, quality):
+    """The outline shader's anti-aliasing (coverage as alpha) is blended: written as it was, its
+    alpha made see-through pixels along every border of an opaque brain."""
+    r = _renderer(template, quality=quality, shading="flat", glass_opacity=0.0, background=None,
+                  outline_width=2.0)
+    try:
+        img = r.render({f"Left-{n}": (0.9, 0.8, 0.1) for n in REGIONS[1:]}, get_view("lateral-left"))
+    finally:
+        r.close()
+    inside = ndimage.binary_erosion(ndimage.binary_fill_holes(img[..., 3] > 0), iterations=3)
+    dark = (img[..., :3].max(axis=-1) < 100) & inside
+    assert dark.sum() > 200  # the borders are drawn
+    assert (img[..., 3][inside] == 255).all(), np.unique(img[..., 3][inside])
 
 
 @pytest.mark.render

@@ -195,7 +195,8 @@ def test_border_ratio_tells_a_staircase_from_a_smooth_border():
 @pytest.mark.render
 @pytest.mark.integration
 def test_dk_borders_are_smooth_at_2400x1800():
-    """Issue 10 bar: border length / border length after 1.5 px Gaussian smoothing <= 1.09."""
+    """Issue 10 bar: border length / border length after 1.5 px Gaussian smoothing <= 1.09; issue 37
+    (edges anti-aliased at output resolution instead of 2x2 supersampling): <= 1.05."""
     pytest.importorskip("bpy")
     sys.path.insert(0, str(REPO / "benchmarks"))
     try:
@@ -205,4 +206,4 @@ def test_dk_borders_are_smooth_at_2400x1800():
     img = two_colour_render("dk", str(DEFAULT_TEMPLATE))
     ratio, length = border_ratio(img, COLOR_A, COLOR_B)
     assert length > 3000  # many borders in view
-    assert ratio <= 1.09, ratio
+    assert ratio <= 1.05, ratio

@@ -248,6 +248,27 @@ def test_a_new_colour_in_the_same_view_recolours_the_kept_lines(tiny, bundles):
     assert (drawn[0] != drawn[1]).sum() <= 0.01 * drawn[0].sum()
 
 
+@pytest.mark.parametrize("quality", ["fast", "default"])
+def test_a_new_view_draws_the_opaque_parts_once(tiny, bundles, monkeypatch, quality):
+    # issue 37 (a movie's orbit: a new view every frame): at output resolution the lines are
+    # depth-tested against the image's own depth, not against the opaque parts drawn again
+    from brainpainter_blender.gpu_draw import GpuDraw
+
+    calls = []
+    draw_opaque = GpuDraw._draw_opaque
+
+    def counted(self, *args, **kwargs):
+        calls.append(1)
+        return draw_opaque(self, *args, **kwargs)
+
+    monkeypatch.setattr(GpuDraw, "_draw_opaque", counted)
+    with _painter(tiny, bundles, (("AF_left", 1),), quality=quality) as p:
+        for azimuth in (0.0, 20.0, 40.0):
+            view = replace(get_view("subcortical-dorsal"), azimuth=azimuth)
+            p.paint_colors({"tract:AF_left": RED}, view)
+    assert len(calls) == 3
+
+
 @pytest.mark.parametrize("z", [-20.0, 20.0])
 def test_a_bundle_below_a_structure_is_hidden_by_it_from_above(tiny, tmp_path, z):
     # the tiny template's structures: boxes within |x| <= 25, |y| <= 10, |z| <= 5
@@ -270,7 +291,7 @@ def test_an_image_does_not_depend_on_the_views_drawn_before(tiny, bundles):
     colours = {"tract:AF_left": RED, "tract:CST_right": BLUE}
     dorsal = get_view("subcortical-dorsal")
     nodes = (("AF_left", 1), ("CST_right", 1))
-    with _painter(tiny, bundles, nodes, quality="default") as p:  # supersampled
+    with _painter(tiny, bundles, nodes, quality="default") as p:  # tract layers, edge buffers kept
         fresh = p.paint_colors(colours, dorsal)
     with _painter(tiny, bundles, nodes, quality="default") as p:
         for name in ("subcortical", "subcortical-left", "subcortical-ventral"):

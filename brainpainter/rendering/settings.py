@@ -77,8 +77,9 @@ class RenderSettings:
         Stored as sRGB 0-1, tuple of float, shape (3,); ``None`` renders a
         transparent background.
     quality : {"fast", "default", "high"}
-        ``fast``: no anti-aliasing; ``default``: 2x2 supersampling; ``high``:
-        path tracing (Cycles), or 3x3 supersampling for flat shading.
+        ``fast``: no anti-aliasing; ``default``: region borders and silhouettes
+        anti-aliased from the geometry; ``high``: path tracing (Cycles), or 3x3
+        supersampling for flat shading.
     shading : {"default", "flat"}
         ``flat`` draws exact, unlit colours.
     lighting : {"studio", "soft", "flat-studio", "sulc"}
@@ -106,7 +107,7 @@ class RenderSettings:
     background: RGB | None = field(default=(1.0, 1.0, 1.0), metadata={
         "help": "Background colour.", "cli_default": "white"})
     quality: str = field(default="default", metadata={"choices": QUALITIES, "help": (
-        "fast: no anti-aliasing; default: 2x2 supersampling; high: path tracing (Cycles), slow.")})
+        "fast: no anti-aliasing; default: anti-aliased edges; high: path tracing (Cycles), slow.")})
     shading: str = field(default="default", metadata={"choices": SHADINGS, "help": (
         "flat: exact, unlit colours (for measuring colours in the image).")})
     lighting: str = field(default="studio", metadata={

@@ -11,13 +11,18 @@ palette (a 2-D float texture of linear colours,
 :data:`~brainpainter_blender.gpu_shaders.PALETTE_WIDTH` texels a row, looked up in
 the vertex shader: a map's per-vertex colours are interpolated across each
 triangle; a region's three vertices share one slot), draws the visible parts
-into a supersampled buffer of 16-bit linear light (opaque parts with depth,
-then the glass: back faces, then front faces, blended, no depth writes) and
-averages each SxS block in a second pass (S a compile-time constant) that
+into a buffer of 16-bit linear light (opaque parts with depth, then the glass:
+back faces, then front faces, blended, no depth writes), at output resolution
+for the default quality, and resolves it in a second pass: averaging each SxS
+block of a supersampled buffer (S a compile-time constant, :data:`SUPERSAMPLING`),
+or, at the default quality, mixing each pixel that a region border or
+silhouette crosses with its neighbour across it by the share of the pixel
+beyond the edge (:mod:`brainpainter_blender.edge_aa`: 2x2 supersampling cost
+llvmpipe about four times the pixels for as smooth a picture). The resolve
 also un-premultiplies alpha and flips rows into an sRGB target, which encodes
 linear light to sRGB as it is written. Tract parts are drawn as lines at
 output resolution between the glass's far and near sides
-(:mod:`brainpainter_blender.tract_lines`). So the read-back (into a flat
+(:mod:`brainpainter_blender.tract_lines`), not through the edge buffer. So the read-back (into a flat
 ``gpu.types.Buffer``; ``np.array`` of a multi-dimensional Buffer gives wrong
 strides) is already the image. The GLSL sources are in
 :mod:`brainpainter_blender.gpu_shaders`; :meth:`GpuDraw.profile` times the
@@ -37,8 +42,9 @@ towards white or black, and the peak stays <= 1, so hues stay pure.
 from __future__ import annotations
 
 import time
+from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -47,7 +53,7 @@ from brainpainter.rendering.framing import view_projection
 from brainpainter.rendering.geometry import PartGeometry, SceneGeometry
 from brainpainter.rendering.scene import RenderSettings
 from brainpainter.rendering.views import View
-from brainpainter_blender import gpu_shaders, meshorder, outlines, tract_lines
+from brainpainter_blender import edge_aa, gpu_shaders, meshorder, outlines, tract_lines
 from brainpainter_blender.gpu_context import in_gpu_context
 
 
@@ -132,7 +138,9 @@ def for_maps(light: Lighting) -> Lighting:
 
 
 #: Supersampling factor per quality (per axis); ``high`` reaches here only for flat shading.
-SUPERSAMPLING = {"fast": 1, "default": 2, "high": 3}
+SUPERSAMPLING = {"fast": 1, "default": 1, "high": 3}
+#: Qualities whose edges are anti-aliased at output resolution (:mod:`brainpainter_blender.edge_aa`).
+EDGE_AA = frozenset({"default"})
 #: Face culling of opaque parts ("BACK": half the triangles are never rasterised; "NONE": draw all).
 CULL_OPAQUE = "BACK"
 #: Format of the supersampled buffer (linear light, premultiplied alpha; 8 bytes a pixel).
@@ -141,6 +149,8 @@ HI_FORMAT = "RGBA16"
 MAX_SUPERSAMPLED_PIXELS = 64_000_000
 #: Views whose framing a renderer keeps (a movie's orbit has one per frame).
 MAX_CACHED_VIEWS = 64
+#: Views whose front faces a renderer keeps (an index buffer per opaque part: ~0.9 MB a hemisphere).
+MAX_FRONT_VIEWS = 8
 #: Glass: opacity at grazing angles, as a multiple of the opacity facing the camera.
 GLASS_EDGE = 2.5
 #: Glass: extra opacity at the very outline (Fresnel-like), so the glass reads as a shell, not a fog.
@@ -152,6 +162,29 @@ def srgb_to_linear(rgb: np.ndarray) -> np.ndarray:
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
+def front_faces(vertices: np.ndarray, triangles: np.ndarray, mvp: np.ndarray) -> np.ndarray:
+    """The triangles that an orthographic `mvp` shows counter-clockwise (those that back-face
+    culling keeps; edge-on ones too).
+
+    Parameters
+    ----------
+    vertices : ndarray of float, shape (n_vertices, 3)
+    triangles : ndarray of int, shape (n_triangles, 3)
+    mvp : ndarray of float, shape (4, 4)
+        Model-view-projection matrix (row-major, ``mvp @ [x, y, z, 1]``).
+
+    Returns
+    -------
+    ndarray, shape (n_front, 3)
+        The rows of `triangles` kept, in their order.
+    """
+    xy = np.asarray(vertices, np.float64) @ mvp[:2, :3].T
+    a, b, c = xy[triangles[:, 0]], xy[triangles[:, 1]], xy[triangles[:, 2]]
+    area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    kept: np.ndarray = triangles[area >= 0]
+    return kept
+
+
 @dataclass(frozen=True)
 class _Aim:
     """A view's parts and camera uniforms (``mathutils`` values, world space)."""
@@ -161,6 +194,8 @@ class _Aim:
     back: Any
     key_dir: Any
     fill_dir: Any
+    #: per opaque part, its batch of the triangles facing the camera (:meth:`GpuDraw._front`)
+    front: dict[str, Any] = field(default_factory=dict)
 
 
 def _aim_for(geometry: SceneGeometry, view: View, settings: RenderSettings, light: Lighting) -> _Aim:
@@ -195,6 +230,8 @@ class GpuDraw:
         #: the lighting of a map's cortex (a scene coloured per vertex); regions keep :attr:`lighting`
         self.map_lighting = for_maps(self.lighting)
         self._batches: dict[str, Any] = {}
+        self._meshes: dict[str, tuple[Any, np.ndarray, np.ndarray]] = {}
+        self._fronts: deque[_Aim] = deque()  # the views holding front faces, oldest first
         self._aims: dict[View, _Aim] = {}
         self._palette_key: bytes | None = None
         self._palette_tex: Any = None
@@ -206,6 +243,7 @@ class GpuDraw:
         self._lo_tex: Any = None
         self._resolve: Any = None
         self._quad: Any = None
+        self._edges: edge_aa.EdgeAA | None = None
         in_gpu_context(self._upload)
 
     def _factor(self) -> int:
@@ -224,13 +262,16 @@ class GpuDraw:
         gpu_shaders.part_shader()  # compiled now; the parts' batches on first use (_batch)
         s = self.settings
         self.factor = f = self._factor()
-        self._resolve = gpu_shaders.resolve_shader(f)
+        edges = f == 1 and s.quality in EDGE_AA
+        self._resolve = gpu_shaders.resolve_shader(f, edges)
         self._quad = batch_for_shader(self._resolve, "TRIS", {"pos": [(-1, -1), (3, -1), (-1, 3)]})
         # Linear light in 16-bit integers: as exact as half floats for 0-1 and cheaper to write.
         size = (int(s.width * f), int(s.height * f))
         self._hi_color = gpu.types.GPUTexture(size, format=HI_FORMAT)
         self._hi_depth = gpu.types.GPUTexture(size, format="DEPTH_COMPONENT32F")  # read by tract_lines
         self._hi = gpu.types.GPUFrameBuffer(depth_slot=self._hi_depth, color_slots=self._hi_color)
+        if edges:
+            self._edges = edge_aa.EdgeAA(s.width, s.height, self._hi_depth)
         # The resolve writes linear light; the sRGB target encodes it (cheaper than pow() per pixel).
         self._lo_tex = gpu.types.GPUTexture((s.width, s.height), format="SRGB8_A8")
         self._lo = gpu.types.GPUFrameBuffer(color_slots=self._lo_tex)
@@ -242,16 +283,44 @@ class GpuDraw:
         """
         batch = self._batches.get(part.name)
         if batch is None:
-            from gpu_extras.batch import batch_for_shader
+            import gpu
 
             order, triangles = meshorder.cache_friendly(part.vertices, part.triangles)
-            batch = self._batches[part.name] = batch_for_shader(
-                gpu_shaders.part_shader(), "TRIS",
-                {"pos": part.vertices[order], "nrm": part.normals[order],
-                 "pal": part.palette_index[order].astype(np.float32), "sulc": part.sulc[order],
-                 "ao": self._occlusion(part)[order]},
-                indices=triangles,
-            )
+            attrs = {"pos": part.vertices[order], "nrm": part.normals[order],
+                     "pal": part.palette_index[order].astype(np.float32), "sulc": part.sulc[order],
+                     "ao": self._occlusion(part)[order]}
+            fmt = gpu.types.GPUVertFormat()
+            for name, _ in gpu_shaders.part_shader().attrs_info_get():
+                fmt.attr_add(id=name, comp_type="F32", len=3 if name in ("pos", "nrm") else 1,
+                             fetch_mode="FLOAT")
+            vbo = gpu.types.GPUVertBuf(fmt, len(order))
+            for name, values in attrs.items():
+                vbo.attr_fill(name, np.ascontiguousarray(values, np.float32))
+            self._meshes[part.name] = (vbo, attrs["pos"], triangles)
+            batch = self._batches[part.name] = gpu.types.GPUBatch(
+                type="TRIS", buf=vbo, elem=gpu.types.GPUIndexBuf(type="TRIS", seq=triangles))
+        return batch
+
+    def _front(self, part: PartGeometry, aim: _Aim) -> Any:
+        """The part's batch of the triangles that face the camera in `aim` (kept with the view).
+
+        The rasteriser culls the others anyway, but only after shading their vertices and
+        setting them up: llvmpipe draws a cortex about a third faster without them. Facing is
+        the sign of the triangle's area on screen, as the rasteriser decides it.
+        """
+        batch = aim.front.get(part.name)
+        if batch is None:
+            import gpu
+
+            if not aim.front:
+                self._fronts.append(aim)
+                if len(self._fronts) > MAX_FRONT_VIEWS:
+                    self._fronts.popleft().front.clear()
+            self._batch(part)
+            vbo, pos, triangles = self._meshes[part.name]
+            batch = aim.front[part.name] = gpu.types.GPUBatch(
+                type="TRIS", buf=vbo, elem=gpu.types.GPUIndexBuf(
+                    type="TRIS", seq=front_faces(pos, triangles, np.asarray(aim.mvp, np.float64))))
         return batch
 
     def _occlusion(self, part: PartGeometry) -> np.ndarray:
@@ -337,15 +406,21 @@ class GpuDraw:
             self._draw_parts(aim, tex, mark, tracts)
         if tracts:
             self._lines.draw_over(tracts, view, aim, tex, self.lighting, self._hi,
-                                  lambda: self._draw_opaque(aim, tex, tracts), mark)
+                                  lambda: self._draw_opaque(aim, tex, tracts), mark,
+                                  self._hi_depth if self.factor == 1 else None)
             with self._hi.bind():
                 self._bind_part_shader(aim, tex)
                 self._draw_glass(aim, tex, ("BACK",), mark)
+        edges = None if self._edges is None else self._edges.texture(aim.visible, view, aim)
+        if edges is not None:
+            mark("edges")
         with self._lo.bind():
             # the resolve writes every pixel: no clear
             resolve, s = self._resolve, self.settings
             resolve.bind()
             resolve.uniform_sampler("image", self._hi_color)  # samplers first: see _bind_part_shader
+            if edges is not None:
+                resolve.uniform_sampler("edges", edges)
             resolve.uniform_int("out_height", s.height)
             self._quad.draw(resolve)
             mark("resolve")
@@ -399,7 +474,7 @@ class GpuDraw:
                                     ("ao_strength", light.occlusion),
                                     ("rim", light.rim if p.kind == "subcortical" else 0.0)):
                     shader.uniform_float(name, value)
-                self._batch(p).draw(shader)
+                self._front(p, aim).draw(shader)
                 if mark is not None:
                     mark(f"draw {p.name}")
         return shader
@@ -481,6 +556,12 @@ class GpuDraw:
             self._hi = self._hi_color = self._hi_depth = None
             self._lo = self._lo_tex = self._quad = self._palette_tex = None
             self._lines.close()
+            if self._edges is not None:
+                self._edges.close()
+                self._edges = None
             self._batches.clear()
+            self._meshes.clear()
+            self._aims.clear()
+            self._fronts.clear()
 
         in_gpu_context(drop)

@@ -78,11 +78,53 @@ void main()
     }
   }
   sum *= 1.0 / float(FACTOR * FACTOR);
+#if EDGES
+  /* an edge's pixel (FACTOR 1): mixed with its neighbour across the edge by the share of the
+     pixel that the other side covers (see edge_aa) */
+  vec4 e = texelFetch(edges, src, 0);
+  if (e.a > 0.0) {
+    ivec2 across = clamp(src + ivec2(round(e.xy * 2.0 - 1.0)), ivec2(0), textureSize(image, 0) - 1);
+    sum = mix(sum, texelFetch(image, across, 0), e.z);
+  }
+#endif
   /* linear light out: the sRGB target encodes it */
   fragColor = vec4(sum.a > 0.0 ? sum.rgb / sum.a : vec3(0.0), sum.a);
 }
 """
 
+
+_EDGE_VERTEX = """
+void main()
+{
+  /* the edge in framebuffer pixels: a point on it (anchor) and its direction, the same at both
+     ends (pointing right, or up), so the fragment can find its distance from the edge */
+  vec4 c = mvp * vec4(pos, 1.0);
+  vec4 o = mvp * vec4(other, 1.0);
+  vec2 a = (c.xy / c.w * 0.5 + 0.5) * viewport;
+  vec2 d = (o.xy / o.w * 0.5 + 0.5) * viewport - a;
+  dir = (d.x < 0.0 || (d.x == 0.0 && d.y < 0.0)) ? -d : d;
+  anchor = a;
+  c.z -= bias * c.w;
+  gl_Position = c;
+}
+"""
+
+_EDGE_FRAGMENT = """
+void main()
+{
+  /* distance from the pixel's centre to the edge along the minor axis: the neighbour on the
+     other side covers 0.5 - |distance| of the pixel */
+  vec2 off = gl_FragCoord.xy - anchor;
+  bool xmajor = abs(dir.x) >= abs(dir.y);
+  float dist = xmajor ? off.y - dir.y / dir.x * off.x : off.x - dir.x / dir.y * off.y;
+  float w = 0.5 - abs(dist);
+  if (w <= 0.0) {
+    discard;
+  }
+  vec2 across = xmajor ? vec2(0.0, dist > 0.0 ? -1.0 : 1.0) : vec2(dist > 0.0 ? -1.0 : 1.0, 0.0);
+  fragColor = vec4(across * 0.5 + 0.5, w, 1.0);
+}
+"""
 
 _BOX_VERTEX = """
 void main()
@@ -205,10 +247,20 @@ def part_shader() -> Any:
                   varyings=(("smooth", "VEC4", "color"),))
 
 
-def resolve_shader(factor: int) -> Any:
-    """The resolve shader for one supersampling factor (compiled once per process and factor)."""
-    return _build(("resolve", factor), _RESOLVE_VERTEX, _RESOLVE_FRAGMENT, defines={"FACTOR": factor},
-                  constants=(("INT", "out_height"),), samplers=("image",), inputs=(("VEC2", "pos"),))
+def resolve_shader(factor: int, edges: bool = False) -> Any:
+    """The resolve shader for one supersampling factor (compiled once per process and factor);
+    `edges`: factor 1, mixing the edges' pixels as the edge buffer says (:mod:`.edge_aa`)."""
+    return _build(("resolve", factor, edges), _RESOLVE_VERTEX, _RESOLVE_FRAGMENT,
+                  defines={"FACTOR": factor, "EDGES": int(edges)}, constants=(("INT", "out_height"),),
+                  samplers=("image", "edges") if edges else ("image",), inputs=(("VEC2", "pos"),))
+
+
+def edge_shader() -> Any:
+    """The edges of :mod:`brainpainter_blender.edge_aa` as lines: which neighbour, how much of it."""
+    return _build("edge", _EDGE_VERTEX, _EDGE_FRAGMENT,
+                  constants=(("MAT4", "mvp"), ("VEC2", "viewport"), ("FLOAT", "bias")),
+                  inputs=(("VEC3", "pos"), ("VEC3", "other")),
+                  varyings=(("no_perspective", "VEC2", "anchor"), ("flat", "VEC2", "dir")))
 
 
 def box_shader(step: str, factor: int = 1) -> Any:

@@ -1,8 +1,9 @@
 """Region borders drawn as lines of constant pixel width (``--outline``), by the default draw path.
 
 Blender's polyline shader widens each segment to a quad in screen space, so the width is
-constant in output pixels (times the supersampling factor, so the resolve keeps it); the
-depth test hides the borders behind the surface in front of them.
+constant in output pixels (times the supersampling factor, so the resolve keeps it), and
+anti-aliases it (its coverage as alpha, blended); the depth test hides the borders behind
+the surface in front of them.
 """
 
 from __future__ import annotations
@@ -50,6 +51,10 @@ def draw_outlines(batches: dict[str, Any], parts: list[PartGeometry], mvp: Any, 
     shader.uniform_float("lineWidth", settings.outline_width * factor)
     shader.uniform_float("color", (*srgb_to_linear(settings.outline_color), 1.0))
     gpu.state.face_culling_set("NONE")
+    # the shader's own anti-aliasing (coverage as alpha), blended: written as it is, the alpha left
+    # holes along the lines in an opaque image
+    shader.uniform_bool("lineSmooth", True)
+    gpu.state.blend_set("ALPHA")
     with gpu.matrix.push_pop(), gpu.matrix.push_pop_projection():
         gpu.matrix.load_matrix(Matrix.Identity(4))
         gpu.matrix.load_projection_matrix(mvp)
@@ -60,4 +65,5 @@ def draw_outlines(batches: dict[str, Any], parts: list[PartGeometry], mvp: Any, 
                 batches[key] = batch_for_shader(
                     shader, "LINES", {"pos": np.ascontiguousarray(p.outline.reshape(-1, 3), np.float32)})
             batches[key].draw(shader)
+    gpu.state.blend_set("NONE")
     return True

@@ -2,8 +2,8 @@
 
 Two draw paths behind one class. The default is Blender's ``gpu`` module
 (:mod:`brainpainter_blender.gpu_draw`): the scene's geometry is uploaded once
-as indexed batches and each image uploads a palette, draws with
-supersampling and reads the pixels back. ``quality="high"`` with default
+as indexed batches and each image uploads a palette, draws, anti-aliases
+the edges and reads the pixels back. ``quality="high"`` with default
 shading path-traces with Cycles instead (GPU when one is present): that path
 builds Blender objects with one material per region and recolours the
 materials. What is drawn and from where comes from core

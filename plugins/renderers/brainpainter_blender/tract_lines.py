@@ -149,7 +149,8 @@ class TractLines:
         return radius * float(np.linalg.norm(scale)) * self.width / 2.0
 
     def draw_over(self, parts: list[PartGeometry], view: Any, aim: Any, palette: Any, lighting: Any,
-                  supersampled: Any, draw_opaque: Callable[[], None], mark: Callable[[str], None]) -> None:
+                  supersampled: Any, draw_opaque: Callable[[], None], mark: Callable[[str], None],
+                  depth: Any = None) -> None:
         """Colour the view's tracts' layer (drawn first when not kept) and put it over `supersampled`.
 
         Parameters
@@ -170,6 +171,10 @@ class TractLines:
             lines' occluders).
         mark : callable
             Called with the name of each step done (see ``GpuDraw.profile``).
+        depth : gpu.types.GPUTexture, optional
+            The opaque parts' depth at output resolution, when `supersampled` is not
+            supersampled: the lines are depth-tested against it instead of drawing the
+            opaque parts again (`draw_opaque` is not called).
         """
         import gpu
 
@@ -178,7 +183,8 @@ class TractLines:
             spare = None
             while len(self._layers) >= max(1, MAX_LAYER_PIXELS // (self.width * self.height)):
                 spare = self._layers.popitem(last=False)[1]  # its textures are drawn over
-            layer = self._layers[view] = self._draw_layer(parts, aim, lighting, draw_opaque, mark, spare)
+            layer = self._layers[view] = self._draw_layer(parts, aim, lighting, draw_opaque, mark, spare,
+                                                          depth)
         self._layers.move_to_end(view)
         with self._scratch("coloured").bind():
             self._box_pass("colour", layer.box, {"shade": layer.shade, "slots": layer.slots,
@@ -224,14 +230,15 @@ class TractLines:
 
     def _draw_layer(self, parts: list[PartGeometry], aim: Any, lighting: Any,
                     draw_opaque: Callable[[], None], mark: Callable[[str], None],
-                    spare: _Layer | None = None) -> _Layer:
-        """A view's layer (in `spare`'s textures): cleared, the opaque parts' depth, then the lines."""
+                    spare: _Layer | None = None, depth: Any = None) -> _Layer:
+        """A view's layer (in `spare`'s textures): cleared, the opaque parts' depth (or `depth`, theirs
+        already drawn, left as it is), then the lines."""
         import gpu
 
         from brainpainter_blender import gpu_shaders
 
         size = (self.width, self.height)
-        if self._depth is None:
+        if self._depth is None and depth is None:
             self._depth = gpu.types.GPUTexture(size, format="DEPTH_COMPONENT32F")
         if spare is None:
             shade = gpu.types.GPUTexture(size, format="RGBA16")
@@ -239,15 +246,19 @@ class TractLines:
         else:
             shade, slots = spare.shade, spare.slots
         self._scratch("slots")
-        fb = gpu.types.GPUFrameBuffer(depth_slot=self._depth, color_slots=(shade, self._textures["slots"]))
+        fb = gpu.types.GPUFrameBuffer(depth_slot=self._depth if depth is None else depth,
+                                      color_slots=(shade, self._textures["slots"]))
         back = np.asarray(aim.back, np.float64)
         batches = [self._sorted(p, back) for p in parts]
         with fb.bind():
-            fb.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
-            gpu.state.color_mask_set(False, False, False, False)
-            draw_opaque()
-            gpu.state.color_mask_set(True, True, True, True)
-            mark("tract depth")
+            if depth is None:
+                fb.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
+                gpu.state.color_mask_set(False, False, False, False)
+                draw_opaque()
+                gpu.state.color_mask_set(True, True, True, True)
+                mark("tract depth")
+            else:
+                fb.clear(color=(0.0, 0.0, 0.0, 0.0))
             shader = gpu_shaders.line_shader()
             shader.bind()
             half = self._half_width(parts, aim)

@@ -1,0 +1,72 @@
+"""The edges that the default draw path anti-aliases (brainpainter_blender.edge_aa), without Blender."""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+
+from brainpainter.rendering.parts import split_by_label
+from brainpainter_blender.edge_aa import edge_table, visible_edges
+
+#: Towards a camera that sees the +x, +y and +z faces of a cube.
+BACK = np.array([0.3, 0.2, 1.0]) / np.linalg.norm([0.3, 0.2, 1.0])
+
+
+def _cube(top_slot: int = 0):
+    box = trimesh.creation.box()
+    top = box.face_normals[:, 2] > 0.5
+    face_slot = np.where(top, top_slot, 0)
+    vertices, faces, slots, _ = split_by_label(box.vertices, box.faces, face_slot)
+    return vertices, faces, slots
+
+
+def test_a_closed_mesh_has_silhouettes_only():
+    vertices, faces, slots = _cube()
+    table = edge_table(vertices, faces, slots)
+    assert len(table.ends) == 18  # 12 edges of the cube, 6 diagonals of its faces
+    assert (table.faces >= 0).all() and not table.border.any()
+    ends = vertices[table.ends[visible_edges(table, BACK)]]
+    assert len(ends) == 6  # the hexagon around the three faces seen
+    # each silhouette edge lies between a face seen and one not seen: on none of the seen faces' centres
+    for axis in range(3):
+        assert not np.all(np.isclose(ends[:, :, axis], 0.5), axis=1).all()
+
+
+def test_region_borders_join_the_copies_of_their_vertices():
+    vertices, faces, slots = _cube(top_slot=1)
+    assert len(vertices) > 8  # the top face's corners are copies
+    table = edge_table(vertices, faces, slots)
+    assert len(table.ends) == 18 and (table.faces >= 0).all()
+    assert table.border.sum() == 4  # the top face's four edges
+    assert len(visible_edges(table, BACK)) == 8  # the hexagon and the top's two edges inside it
+    assert len(visible_edges(table, -BACK)) == 6  # from behind: the hexagon; the top faces away
+
+
+def test_open_boundaries_count_when_their_triangle_faces_the_camera():
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
+    table = edge_table(vertices, np.array([[0, 1, 2]]), np.zeros(3, np.int32))
+    assert len(table.ends) == 3 and (table.faces[:, 1] == -1).all()
+    assert len(visible_edges(table, np.array([0.0, 0.0, 1.0]))) == 3
+    assert len(visible_edges(table, np.array([0.0, 0.0, -1.0]))) == 0
+
+
+def test_a_map_cortex_has_no_region_borders():
+    vertices, faces, _ = _cube()
+    per_vertex = np.arange(len(vertices))  # a map: slots differ within triangles
+    assert not edge_table(vertices, faces, per_vertex).border.any()
+
+
+def test_front_faces_are_those_facing_an_orthographic_camera():
+    # the default draw path leaves out, per view, the triangles back-face culling would drop
+    from brainpainter_blender.gpu_draw import front_faces
+
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    mvp = np.diag([0.5, 0.5, -0.01, 1.0])  # orthographic, looking down -z (towards the viewer: +z)
+    kept = front_faces(sphere.vertices, sphere.faces, mvp)
+    normals = trimesh.triangles.normals(sphere.vertices[kept])[0]
+    assert (normals[:, 2] >= -1e-9).all()
+    assert len(kept) == int((sphere.face_normals[:, 2] >= -1e-9).sum())
+    assert 0.4 * len(sphere.faces) < len(kept) < 0.6 * len(sphere.faces)
+    # an image mirrored (x flipped) turns the winding on screen, for culling as for this
+    mirrored = front_faces(sphere.vertices, sphere.faces, np.diag([-0.5, 0.5, -0.01, 1.0]))
+    assert (trimesh.triangles.normals(sphere.vertices[mirrored])[0][:, 2] <= 1e-9).all()
