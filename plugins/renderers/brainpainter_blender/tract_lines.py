@@ -163,7 +163,7 @@ class TractLines:
             The view's matrix and camera axes.
         palette : gpu.types.GPUTexture
             The image's palette (linear colours, as the part shader reads it).
-        lighting : brainpainter_blender.gpu_draw.Lighting
+        lighting : brainpainter_blender.gpu_lighting.Lighting
         supersampled : gpu.types.GPUFrameBuffer
             The supersampled buffer (its size a multiple of the output's).
         draw_opaque : callable
