@@ -15,6 +15,7 @@ foreign or oversized file) reads as a miss, and the caller computes the value ag
 
 from __future__ import annotations
 
+import functools
 import os
 import sys
 from collections.abc import Callable
@@ -131,13 +132,17 @@ def release(keep: bool) -> None:
     held, _held = _held or {}, None
     if keep:
         for path, data in held.items():
-            write_atomic(path, lambda f, data=data: f.write(data))
+            write_atomic(path, functools.partial(_write_bytes, data))
         return
     for folder in reversed(_made):
         try:
             folder.rmdir()
         except OSError:  # not empty (Mesa's shaders of a run that failed late): a cache, kept
             break
+
+
+def _write_bytes(data: bytes, f: IO[bytes]) -> None:
+    f.write(data)
 
 
 def write_atomic(path: Path, write: Callable[[IO[bytes]], object]) -> None:
