@@ -14,6 +14,7 @@ import pytest
 from brainpainter.atlas import installed, registry
 from brainpainter.atlas.template import Template, load_template
 from brainpainter.io import user_cache
+from brainpainter.rendering.mesh_edges import edge_table
 from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.views import get_view
 from brainpainter.testing import fake_distribution, write_tiny_template
@@ -85,6 +86,27 @@ def test_a_lateral_left_render_is_the_image_of_the_whole_scene():
             images.append(painter.paint_colors(colors, get_view("lateral-left")))
     assert (images[0][..., 3] > 0).mean() > 0.3  # a brain was drawn
     np.testing.assert_array_equal(images[0], images[1])
+
+
+@pytest.mark.render
+def test_a_cortex_read_from_the_cache_draws_the_pixels_of_one_computed(monkeypatch):
+    """Default template, lateral-left: the part and its edge table read back from the cache give the
+    image of a run with no cache (which builds the edge table in the renderer)."""
+    pytest.importorskip("bpy")
+    from brainpainter.rendering.painter import Painter
+    from brainpainter.rendering.settings import RenderSettings
+
+    colors = {"Left-precentral": (1.0, 0.9, 0.0), "Left-insula": (0.1, 0.3, 0.9)}
+    images = []
+    for cache in ("off", "on", "on"):  # none; computed and written; read
+        monkeypatch.setenv(user_cache.SWITCH_ENV, cache)
+        with Painter("dk", settings=RenderSettings(320, 240)) as painter:
+            images.append(painter.paint_colors(colors, get_view("lateral-left")))
+            (part,) = painter.scene.geometry.visible(get_view("lateral-left"))
+            assert (part.edges is None) == (cache == "off")
+    assert (images[0][..., 3] > 0).mean() > 0.3  # a brain was drawn
+    np.testing.assert_array_equal(images[0], images[1])
+    np.testing.assert_array_equal(images[0], images[2])
 
 
 # -- the user's cache folder ---------------------------------------------------------------------
@@ -291,6 +313,14 @@ def _same(a, b):
         if x is not None:
             np.testing.assert_array_equal(x, y, err_msg=field)
             assert x.dtype == y.dtype or field == "hull", field
+    for part in (a, b):  # a part from the cache holds its edge table: the one its arrays give
+        if part.edges is not None:
+            _same_edges(part.edges, edge_table(part.vertices, part.triangles, part.palette_index))
+
+
+def _same_edges(a, b):
+    for field in ("ends", "faces", "border", "normals"):
+        np.testing.assert_array_equal(getattr(a, field), getattr(b, field), err_msg=field)
 
 
 def test_a_second_run_reads_the_cortex_part_it_computed(tmp_path, builds):
@@ -300,6 +330,19 @@ def test_a_second_run_reads_the_cortex_part_it_computed(tmp_path, builds):
     again = _left(path)
     assert builds[0] == 1  # read, not computed
     _same(first, again)
+
+
+def test_a_cortex_part_keeps_its_edge_table(tmp_path, builds, monkeypatch):
+    """The anti-aliasing's edge table is read with the part, not built again by the renderer."""
+    from brainpainter_blender import edge_aa
+
+    path = write_tiny_template(tmp_path / "tiny")
+    first = _left(path)
+    again = _left(path)
+    assert builds[0] == 1 and first.edges is not None and again.edges is not None
+    _same_edges(again.edges, edge_table(again.vertices, again.triangles, again.palette_index))
+    monkeypatch.setattr(edge_aa, "edge_table", lambda *a: pytest.fail("edge table built again"))
+    assert edge_aa.EdgeAA(8, 8, None)._table(again) is again.edges
 
 
 @pytest.mark.parametrize("change", ["template file", "hidden", "surface", "shading"])
@@ -331,7 +374,8 @@ def test_the_part_cache_follows_what_the_part_depends_on(tmp_path, builds, chang
 
 
 @pytest.mark.parametrize("damage", ["truncated", "noise", "changed array", "slot out of range",
-                                   "triangle out of range", "pickle", "huge"])
+                                   "triangle out of range", "edge out of range",
+                                   "edge triangle out of range", "no edge table", "pickle", "huge"])
 def test_a_damaged_part_file_is_computed_again(tmp_path, builds, damage):
     from brainpainter.rendering import part_cache
 
@@ -351,11 +395,19 @@ def test_a_damaged_part_file_is_computed_again(tmp_path, builds, damage):
         arrays["vertices"][0] += 1
         np.savez(file, digest=digest, **arrays)
         assert data != file.read_bytes()
-    elif damage in ("slot out of range", "triangle out of range"):  # a digest that fits: checked anyway
+    elif damage in ("slot out of range", "triangle out of range", "edge out of range",
+                    "edge triangle out of range", "no edge table"):  # a digest that fits: checked anyway
         if damage == "slot out of range":
             arrays["palette_index"][0] = 10**6
-        else:
+        elif damage == "triangle out of range":
             arrays["triangles"][0, 0] = len(arrays["vertices"])
+        elif damage == "edge out of range":
+            arrays["edge_ends"][0, 1] = len(arrays["vertices"])
+        elif damage == "edge triangle out of range":
+            arrays["edge_faces"][-1, 1] = len(arrays["triangles"])
+        else:  # a file of the first format
+            arrays = {k: v for k, v in arrays.items() if k not in ("edge_ends", "edge_faces", "edge_border",
+                                                                   "face_normals")}
         np.savez(file, digest=np.array(part_cache._digest(arrays)), **arrays)
     elif damage == "pickle":
         np.savez(file, digest=np.array("x"), **{**arrays, "vertices": np.array([object()], dtype=object)})

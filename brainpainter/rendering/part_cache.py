@@ -2,19 +2,21 @@
 
 Splitting a hemisphere by region, its normals, occlusion and borders are the same in every run
 of a template, label set, surface and set of hidden regions (0.1-0.15 s of a cold first image on
-an idle 2-core machine). :func:`cached_part` keeps the finished
-:class:`~brainpainter.rendering.parts.PartGeometry` arrays as one uncompressed ``.npz`` in
+an idle 2-core machine), and so is its edge table, which the default renderer's anti-aliasing
+needs (:mod:`brainpainter.rendering.mesh_edges`, another ~0.1 s). :func:`cached_part` keeps the
+finished :class:`~brainpainter.rendering.parts.PartGeometry` arrays and its edge table as one
+uncompressed ``.npz`` in
 ``<user cache>/parts`` (:mod:`brainpainter.io.user_cache`), named by a key: the SHA-256 of the
 template files the part is read from (their bytes, not their times), of everything else it
 depends on (:func:`part_key`) and of the source of the modules that compute it (a new
 release never reads an old result).
 
 A file is used only when it loads without pickles, holds exactly the expected arrays with the
-expected dtypes and consistent shapes, its triangles index its vertices, its palette slots lie
-in the scene's, and the SHA-256 of its arrays matches the one it stores; anything else (a
-damaged, truncated, foreign or oversized file) is a miss: the part is computed and the file
-written again (atomically). At most :data:`MAX_FILES` files are kept (the newest). Maps
-(per-vertex scenes) are not kept: their mesh follows the map.
+expected dtypes and consistent shapes, its triangles and edges index its vertices, its edges'
+triangles its triangles, its palette slots lie in the scene's, and the SHA-256 of its arrays
+matches the one it stores; anything else (a damaged, truncated, foreign or oversized file) is a
+miss: the part is computed and the file written again (atomically). At most :data:`MAX_FILES`
+files are kept (the newest). Maps (per-vertex scenes) are not kept: their mesh follows the map.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import hashlib
 import json
 import os
 from collections.abc import Callable, Iterable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -30,23 +33,30 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.io import user_cache
+from brainpainter.rendering.mesh_edges import EdgeTable, edge_table
 from brainpainter.rendering.parts import PartGeometry
 
 #: Folder of the part files in :func:`brainpainter.io.user_cache.cache_dir`.
 FOLDER = "parts"
 #: Part files kept at most (the newest; a cortex part of the default template is 4.6 MB).
 MAX_FILES = 16
-#: Bumped when the file's layout changes.
-FORMAT = 1
+#: Bumped when the file's layout changes (2: the edge table).
+FORMAT = 2
 #: Arrays every file holds: name -> (dtype, trailing shape); the first axis is checked against the others.
 ARRAYS = {"vertices": ("float32", (3,)), "normals": ("float32", (3,)), "triangles": ("uint32", (3,)),
-          "palette_index": ("int32", ()), "sulc": ("float32", ())}
+          "palette_index": ("int32", ()), "sulc": ("float32", ()),
+          "edge_ends": ("int32", (2,)), "edge_faces": ("int32", (2,)), "edge_border": ("bool", ()),
+          "face_normals": ("float32", (3,))}
+#: Arrays whose first axis is not the vertices': name -> the array whose first axis it shares.
+OTHER_AXIS = {"outline": "outline", "triangles": "triangles", "face_normals": "triangles",
+              "edge_ends": "edge_ends", "edge_faces": "edge_ends", "edge_border": "edge_ends"}
 #: Optional arrays: ``occlusion`` per vertex, ``outline`` segments.
 OPTIONAL = {"occlusion": ("float32", ()), "outline": ("float32", (2, 3))}
 #: Modules whose code makes a part: their source is part of the key.
 SOURCES = ("brainpainter.atlas.mesh", "brainpainter.atlas.template", "brainpainter.atlas.occlusion",
            "brainpainter.rendering.parts", "brainpainter.rendering.geometry",
-           "brainpainter.rendering.borders", "brainpainter.rendering.sulc")
+           "brainpainter.rendering.borders", "brainpainter.rendering.sulc",
+           "brainpainter.rendering.mesh_edges")
 
 _source_digest: list[str] = []
 
@@ -129,12 +139,16 @@ def _checked(arrays: dict[str, NDArray[Any]], n_slots: int) -> bool:
         a = arrays[name]
         if a.dtype != np.dtype(dtype) or a.shape[1:] != tail:
             return False
-        if name != "outline" and name != "triangles" and len(a) != n:
+        if len(a) != (len(arrays[OTHER_AXIS[name]]) if name in OTHER_AXIS else n):
             return False
     tri, pal = arrays["triangles"], arrays["palette_index"]
     if (tri.size and int(tri.max()) >= n) or (pal.size and (int(pal.min()) < 0 or int(pal.max()) >= n_slots)):
         return False
-    return all(np.isfinite(arrays[k]).all() for k in ("vertices", "normals"))
+    ends, faces = arrays["edge_ends"], arrays["edge_faces"]
+    if ends.size and (int(ends.min()) < 0 or int(ends.max()) >= n
+                      or int(faces.min()) < -1 or int(faces.max()) >= len(tri)):
+        return False
+    return all(np.isfinite(arrays[k]).all() for k in ("vertices", "normals", "face_normals"))
 
 
 def read_part(path: Path, name: str, kind: str, hemi: str | None, n_slots: int,
@@ -157,14 +171,19 @@ def read_part(path: Path, name: str, kind: str, hemi: str | None, n_slots: int,
     except (ValueError, TypeError):
         return None
     v = arrays["vertices"]
+    edges = EdgeTable(arrays["edge_ends"], arrays["edge_faces"], arrays["edge_border"],
+                      arrays["face_normals"])
     return PartGeometry(name, kind, hemi, v, arrays["normals"], arrays["triangles"], arrays["palette_index"],
-                        arrays["sulc"], v, arrays.get("occlusion"), arrays.get("outline"))
+                        arrays["sulc"], v, arrays.get("occlusion"), arrays.get("outline"), edges=edges)
 
 
 def write_part(path: Path, part: PartGeometry) -> None:
-    """Store `part`'s arrays in `path` (atomically; nothing where the folder cannot be written)."""
+    """Store `part`'s arrays and edge table in `path` (atomically; nothing where the folder cannot be
+    written; its edge table is built first where it has none)."""
+    edges = part.edges or edge_table(part.vertices, part.triangles, part.palette_index)
     arrays = {"vertices": part.vertices, "normals": part.normals, "triangles": part.triangles,
-              "palette_index": part.palette_index, "sulc": part.sulc}
+              "palette_index": part.palette_index, "sulc": part.sulc, "edge_ends": edges.ends,
+              "edge_faces": edges.faces, "edge_border": edges.border, "face_normals": edges.normals}
     if part.occlusion is not None:
         arrays["occlusion"] = part.occlusion
     if part.outline is not None:
@@ -191,7 +210,7 @@ def cached_part(files: list[str | Path], facts: dict[str, Any], name: str, kind:
     n_slots : int
         Palette slots of the scene (every stored slot must be below it).
     build : callable
-        Computes the part (None: nothing to draw; not stored).
+        Computes the part (None: nothing to draw; not stored); its edge table is built beside it.
     """
     folder = user_cache.cache_dir()
     if folder is None:
@@ -206,6 +225,7 @@ def cached_part(files: list[str | Path], facts: dict[str, Any], name: str, kind:
     if part is None:
         part = build()
         if part is not None:
+            part = replace(part, edges=edge_table(part.vertices, part.triangles, part.palette_index))
             write_part(path, part)
             prune(path.parent)
     return part

@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 
 from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.errors import BrainPainterError
+from brainpainter.rendering.mesh_edges import EdgeTable
 
 #: Colour of subcortical structures that have no colour in the mapping (sRGB).
 NEUTRAL_GREY = (0.8, 0.8, 0.8)
@@ -84,6 +85,10 @@ class PartGeometry:
     centrelines : Centrelines or None
         A ``tract`` part's streamlines; a renderer draws either them, as lines of the
         tubes' width, or the tubes (the triangles); None for every other kind.
+    edges : EdgeTable or None
+        The mesh's edges (:func:`brainpainter.rendering.mesh_edges.edge_table` of its vertices,
+        triangles and slots) where they were kept with the part
+        (:mod:`brainpainter.rendering.part_cache`); None: a renderer that needs them builds them.
     """
 
     name: str
@@ -98,6 +103,7 @@ class PartGeometry:
     occlusion: NDArray[Any] | None = None
     outline: NDArray[Any] | None = None
     centrelines: Centrelines | None = None
+    edges: EdgeTable | None = None
 
 
 @dataclass(frozen=True)
