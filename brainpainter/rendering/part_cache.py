@@ -38,7 +38,7 @@ from brainpainter.rendering.parts import PartGeometry
 
 #: Folder of the part files in :func:`brainpainter.io.user_cache.cache_dir`.
 FOLDER = "parts"
-#: Part files kept at most (the newest; a cortex part of the default template is 4.6 MB).
+#: Part files kept at most (the newest; a cortex part of the default template and its edge table: 9.9 MB).
 MAX_FILES = 16
 #: Bumped when the file's layout changes (2: the edge table).
 FORMAT = 2
