@@ -70,3 +70,18 @@ def test_front_faces_are_those_facing_an_orthographic_camera():
     # an image mirrored (x flipped) turns the winding on screen, for culling as for this
     mirrored = front_faces(sphere.vertices, sphere.faces, np.diag([-0.5, 0.5, -0.01, 1.0]))
     assert (trimesh.triangles.normals(sphere.vertices[mirrored])[0][:, 2] <= 1e-9).all()
+
+
+def test_back_faces_are_the_rest_for_the_glass_far_side():
+    # the glass's far side draws, per view, only the triangles front-face culling keeps
+    from brainpainter_blender.gpu_draw import front_faces
+
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    mvp = np.diag([0.5, 0.5, -0.01, 1.0])
+    front = front_faces(sphere.vertices, sphere.faces, mvp)
+    back = front_faces(sphere.vertices, sphere.faces, mvp, back=True)
+    assert (trimesh.triangles.normals(sphere.vertices[back])[0][:, 2] <= 1e-9).all()
+    # every triangle on one side (edge-on ones, of no area on screen, on both)
+    both = {tuple(t) for t in front} & {tuple(t) for t in back}
+    assert len(front) + len(back) - len(both) == len(sphere.faces)
+    assert len(both) < 0.1 * len(sphere.faces)
