@@ -83,29 +83,68 @@ def srgb_to_linear(rgb: np.ndarray) -> np.ndarray:
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
+def triangle_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """The triangles' normals scaled by twice their areas (``(b - a) x (c - a)``), one row per axis.
+
+    Parameters
+    ----------
+    vertices : ndarray of float, shape (n_vertices, 3)
+    triangles : ndarray of int, shape (n_triangles, 3)
+
+    Returns
+    -------
+    ndarray of float32, shape (3, n_triangles)
+    """
+    xyz = np.ascontiguousarray(np.asarray(vertices, np.float32).T)  # per axis: the gathers stay contiguous
+    a, b, c = (xyz[:, triangles[:, i]] for i in range(3))
+    e1, e2 = b - a, c - a
+    return np.stack([e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                     e1[0] * e2[1] - e1[1] * e2[0]])
+
+
+def facing(normals: np.ndarray, mvp: np.ndarray, back: bool = False) -> np.ndarray:
+    """Which triangles an orthographic `mvp` shows counter-clockwise (those that back-face culling
+    keeps; edge-on ones too), or with `back` clockwise (those that front-face culling keeps).
+
+    Parameters
+    ----------
+    normals : ndarray of float, shape (3, n_triangles)
+        :func:`triangle_normals` of the mesh (kept between views: a new view costs one product
+        per triangle).
+    mvp : ndarray of float, shape (4, 4)
+        Model-view-projection matrix (row-major, ``mvp @ [x, y, z, 1]``).
+    back : bool
+        The triangles turned away instead (edge-on ones too).
+
+    Returns
+    -------
+    ndarray of bool, shape (n_triangles,)
+    """
+    # A triangle's signed area on screen, edges e1 and e2, x and y from the rows r1 and r2 of
+    # mvp: (r1 . e1)(r2 . e2) - (r2 . e1)(r1 . e2) = (r1 x r2) . (e1 x e2). Elementwise: no BLAS thread.
+    k = np.cross(mvp[0, :3], mvp[1, :3]).astype(np.float32)
+    area = normals[0] * k[0] + normals[1] * k[1] + normals[2] * k[2]
+    kept: np.ndarray = area <= 0 if back else area >= 0
+    return kept
+
+
 def front_faces(vertices: np.ndarray, triangles: np.ndarray, mvp: np.ndarray,
                 back: bool = False) -> np.ndarray:
-    """The triangles that an orthographic `mvp` shows counter-clockwise (those that back-face
-    culling keeps; edge-on ones too), or with `back` clockwise (those that front-face culling keeps).
+    """The triangles that :func:`facing` keeps.
 
     Parameters
     ----------
     vertices : ndarray of float, shape (n_vertices, 3)
     triangles : ndarray of int, shape (n_triangles, 3)
     mvp : ndarray of float, shape (4, 4)
-        Model-view-projection matrix (row-major, ``mvp @ [x, y, z, 1]``).
     back : bool
-        Keep the triangles turned away instead (edge-on ones too).
 
     Returns
     -------
     ndarray, shape (n_kept, 3)
         The rows of `triangles` kept, in their order.
     """
-    xy = np.asarray(vertices, np.float64) @ mvp[:2, :3].T
-    a, b, c = xy[triangles[:, 0]], xy[triangles[:, 1]], xy[triangles[:, 2]]
-    area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    kept: np.ndarray = triangles[area <= 0 if back else area >= 0]
+    kept: np.ndarray = triangles[facing(triangle_normals(vertices, triangles), mvp, back)]
     return kept
 
 
@@ -221,7 +260,7 @@ class GpuDraw:
             vbo = gpu.types.GPUVertBuf(fmt, len(order))
             for name, values in attrs.items():
                 vbo.attr_fill(name, np.ascontiguousarray(values, np.float32))
-            self._meshes[part.name] = (vbo, attrs["pos"], triangles)
+            self._meshes[part.name] = (vbo, triangle_normals(attrs["pos"], triangles), triangles)
             batch = self._batches[part.name] = gpu.types.GPUBatch(
                 type="TRIS", buf=vbo, elem=gpu.types.GPUIndexBuf(type="TRIS", seq=triangles))
         return batch
@@ -244,10 +283,10 @@ class GpuDraw:
                 if len(self._fronts) > MAX_FRONT_VIEWS:
                     self._fronts.popleft().front.clear()
             self._batch(part)
-            vbo, pos, triangles = self._meshes[part.name]
+            vbo, normals, triangles = self._meshes[part.name]
+            seq = triangles[facing(normals, np.asarray(aim.mvp, np.float64), back)]
             batch = aim.front[key] = gpu.types.GPUBatch(
-                type="TRIS", buf=vbo, elem=gpu.types.GPUIndexBuf(
-                    type="TRIS", seq=front_faces(pos, triangles, np.asarray(aim.mvp, np.float64), back)))
+                type="TRIS", buf=vbo, elem=gpu.types.GPUIndexBuf(type="TRIS", seq=seq))
         return batch
 
     def _occlusion(self, part: PartGeometry) -> np.ndarray:
