@@ -70,3 +70,40 @@ def test_front_faces_are_those_facing_an_orthographic_camera():
     # an image mirrored (x flipped) turns the winding on screen, for culling as for this
     mirrored = front_faces(sphere.vertices, sphere.faces, np.diag([-0.5, 0.5, -0.01, 1.0]))
     assert (trimesh.triangles.normals(sphere.vertices[mirrored])[0][:, 2] <= 1e-9).all()
+
+
+def test_back_faces_are_the_rest_for_the_glass_far_side():
+    # the glass's far side draws, per view, only the triangles front-face culling keeps
+    from brainpainter_blender.gpu_draw import front_faces
+
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    mvp = np.diag([0.5, 0.5, -0.01, 1.0])
+    front = front_faces(sphere.vertices, sphere.faces, mvp)
+    back = front_faces(sphere.vertices, sphere.faces, mvp, back=True)
+    assert (trimesh.triangles.normals(sphere.vertices[back])[0][:, 2] <= 1e-9).all()
+    # every triangle on one side (edge-on ones, of no area on screen, on both)
+    both = {tuple(t) for t in front} & {tuple(t) for t in back}
+    assert len(front) + len(back) - len(both) == len(sphere.faces)
+    assert len(both) < 0.1 * len(sphere.faces)
+
+
+def test_facing_from_kept_normals_is_the_sign_of_the_area_on_screen():
+    # a new view (a movie's orbit) tests each triangle against kept normals: the same triangles
+    # as the signed area of its corners projected by any orthographic camera, mirrored or turned
+    from brainpainter_blender.gpu_draw import facing, triangle_normals
+
+    rng = np.random.default_rng(0)
+    vertices = rng.normal(size=(200, 3)) * 50
+    triangles = rng.integers(0, 200, size=(500, 3))
+    normals = triangle_normals(vertices, triangles)
+    assert normals.shape == (3, 500)
+    for _ in range(5):
+        q, _r = np.linalg.qr(rng.normal(size=(3, 3)))
+        mvp = np.eye(4)
+        mvp[:3, :3] = q * rng.choice([-1, 1], 3) * [0.01, 0.02, -0.001]
+        mvp[:3, 3] = rng.normal(size=3)
+        xy = vertices @ mvp[:2, :3].T
+        a, b, c = xy[triangles[:, 0]], xy[triangles[:, 1]], xy[triangles[:, 2]]
+        area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+        assert (facing(normals, mvp) == (area >= 0)).all()
+        assert (facing(normals, mvp, back=True) == (area <= 0)).all()

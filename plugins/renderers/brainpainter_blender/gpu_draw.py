@@ -12,7 +12,8 @@ palette (a 2-D float texture of linear colours,
 the vertex shader: a map's per-vertex colours are interpolated across each
 triangle; a region's three vertices share one slot), draws the visible parts
 into a buffer of 16-bit linear light (opaque parts with depth, then the glass:
-back faces, then front faces, blended, no depth writes), at output resolution
+back faces, then front faces, blended, no depth writes; per view only the triangles
+that side shows), at output resolution
 for the default quality, and resolves it in a second pass: averaging each SxS
 block of a supersampled buffer (S a compile-time constant, :data:`SUPERSAMPLING`),
 or, at the default quality, mixing each pixel that a region border or
@@ -69,7 +70,7 @@ HI_FORMAT = "RGBA16"
 MAX_SUPERSAMPLED_PIXELS = 64_000_000
 #: Views whose framing a renderer keeps (a movie's orbit has one per frame).
 MAX_CACHED_VIEWS = 64
-#: Views whose front faces a renderer keeps (an index buffer per opaque part: ~0.9 MB a hemisphere).
+#: Views whose front faces a renderer keeps (an index buffer per part, two per glass part: ~0.9 MB each).
 MAX_FRONT_VIEWS = 8
 #: Glass: opacity at grazing angles, as a multiple of the opacity facing the camera.
 GLASS_EDGE = 2.5
@@ -82,26 +83,68 @@ def srgb_to_linear(rgb: np.ndarray) -> np.ndarray:
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
-def front_faces(vertices: np.ndarray, triangles: np.ndarray, mvp: np.ndarray) -> np.ndarray:
-    """The triangles that an orthographic `mvp` shows counter-clockwise (those that back-face
-    culling keeps; edge-on ones too).
+def triangle_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """The triangles' normals scaled by twice their areas (``(b - a) x (c - a)``), one row per axis.
+
+    Parameters
+    ----------
+    vertices : ndarray of float, shape (n_vertices, 3)
+    triangles : ndarray of int, shape (n_triangles, 3)
+
+    Returns
+    -------
+    ndarray of float32, shape (3, n_triangles)
+    """
+    xyz = np.ascontiguousarray(np.asarray(vertices, np.float32).T)  # per axis: the gathers stay contiguous
+    a, b, c = (xyz[:, triangles[:, i]] for i in range(3))
+    e1, e2 = b - a, c - a
+    return np.stack([e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                     e1[0] * e2[1] - e1[1] * e2[0]])
+
+
+def facing(normals: np.ndarray, mvp: np.ndarray, back: bool = False) -> np.ndarray:
+    """Which triangles an orthographic `mvp` shows counter-clockwise (those that back-face culling
+    keeps; edge-on ones too), or with `back` clockwise (those that front-face culling keeps).
+
+    Parameters
+    ----------
+    normals : ndarray of float, shape (3, n_triangles)
+        :func:`triangle_normals` of the mesh (kept between views: a new view costs one product
+        per triangle).
+    mvp : ndarray of float, shape (4, 4)
+        Model-view-projection matrix (row-major, ``mvp @ [x, y, z, 1]``).
+    back : bool
+        The triangles turned away instead (edge-on ones too).
+
+    Returns
+    -------
+    ndarray of bool, shape (n_triangles,)
+    """
+    # A triangle's signed area on screen, edges e1 and e2, x and y from the rows r1 and r2 of
+    # mvp: (r1 . e1)(r2 . e2) - (r2 . e1)(r1 . e2) = (r1 x r2) . (e1 x e2). Elementwise: no BLAS thread.
+    k = np.cross(mvp[0, :3], mvp[1, :3]).astype(np.float32)
+    area = normals[0] * k[0] + normals[1] * k[1] + normals[2] * k[2]
+    kept: np.ndarray = area <= 0 if back else area >= 0
+    return kept
+
+
+def front_faces(vertices: np.ndarray, triangles: np.ndarray, mvp: np.ndarray,
+                back: bool = False) -> np.ndarray:
+    """The triangles that :func:`facing` keeps.
 
     Parameters
     ----------
     vertices : ndarray of float, shape (n_vertices, 3)
     triangles : ndarray of int, shape (n_triangles, 3)
     mvp : ndarray of float, shape (4, 4)
-        Model-view-projection matrix (row-major, ``mvp @ [x, y, z, 1]``).
+    back : bool
 
     Returns
     -------
-    ndarray, shape (n_front, 3)
+    ndarray, shape (n_kept, 3)
         The rows of `triangles` kept, in their order.
     """
-    xy = np.asarray(vertices, np.float64) @ mvp[:2, :3].T
-    a, b, c = xy[triangles[:, 0]], xy[triangles[:, 1]], xy[triangles[:, 2]]
-    area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    kept: np.ndarray = triangles[area >= 0]
+    kept: np.ndarray = triangles[facing(triangle_normals(vertices, triangles), mvp, back)]
     return kept
 
 
@@ -114,7 +157,8 @@ class _Aim:
     back: Any
     key_dir: Any
     fill_dir: Any
-    #: per opaque part, its batch of the triangles facing the camera (:meth:`GpuDraw._front`)
+    #: per part, its batch of the triangles facing the camera; per glass part also of those turned
+    #: away (:meth:`GpuDraw._front`)
     front: dict[str, Any] = field(default_factory=dict)
 
 
@@ -216,19 +260,21 @@ class GpuDraw:
             vbo = gpu.types.GPUVertBuf(fmt, len(order))
             for name, values in attrs.items():
                 vbo.attr_fill(name, np.ascontiguousarray(values, np.float32))
-            self._meshes[part.name] = (vbo, attrs["pos"], triangles)
+            self._meshes[part.name] = (vbo, triangle_normals(attrs["pos"], triangles), triangles)
             batch = self._batches[part.name] = gpu.types.GPUBatch(
                 type="TRIS", buf=vbo, elem=gpu.types.GPUIndexBuf(type="TRIS", seq=triangles))
         return batch
 
-    def _front(self, part: PartGeometry, aim: _Aim) -> Any:
-        """The part's batch of the triangles that face the camera in `aim` (kept with the view).
+    def _front(self, part: PartGeometry, aim: _Aim, back: bool = False) -> Any:
+        """The part's batch of the triangles that face the camera in `aim` (kept with the view),
+        or with `back` of those turned away (the glass's far side).
 
         The rasteriser culls the others anyway, but only after shading their vertices and
         setting them up: llvmpipe draws a cortex about a third faster without them. Facing is
         the sign of the triangle's area on screen, as the rasteriser decides it.
         """
-        batch = aim.front.get(part.name)
+        key = f"{part.name} back" if back else part.name
+        batch = aim.front.get(key)
         if batch is None:
             import gpu
 
@@ -237,10 +283,10 @@ class GpuDraw:
                 if len(self._fronts) > MAX_FRONT_VIEWS:
                     self._fronts.popleft().front.clear()
             self._batch(part)
-            vbo, pos, triangles = self._meshes[part.name]
-            batch = aim.front[part.name] = gpu.types.GPUBatch(
-                type="TRIS", buf=vbo, elem=gpu.types.GPUIndexBuf(
-                    type="TRIS", seq=front_faces(pos, triangles, np.asarray(aim.mvp, np.float64))))
+            vbo, normals, triangles = self._meshes[part.name]
+            seq = triangles[facing(normals, np.asarray(aim.mvp, np.float64), back)]
+            batch = aim.front[key] = gpu.types.GPUBatch(
+                type="TRIS", buf=vbo, elem=gpu.types.GPUIndexBuf(type="TRIS", seq=seq))
         return batch
 
     def _occlusion(self, part: PartGeometry) -> np.ndarray:
@@ -437,8 +483,8 @@ class GpuDraw:
             shader.uniform_float("rim", 0.0)
             for cull in culled:
                 gpu.state.face_culling_set(cull)
-                for p in glass:
-                    self._batch(p).draw(shader)
+                for p in glass:  # only the triangles the culling keeps (see _front)
+                    self._front(p, aim, back=cull == "FRONT").draw(shader)
             mark({"FRONT": "glass, far side", "BACK": "glass, near side"}.get("".join(culled), "glass"))
             gpu.state.blend_set("NONE")
             gpu.state.depth_mask_set(True)
@@ -448,7 +494,7 @@ class GpuDraw:
             gpu.state.color_mask_set(False, False, False, False)
             gpu.state.face_culling_set("BACK")
             for p in glass:
-                self._batch(p).draw(shader)
+                self._front(p, aim).draw(shader)
             gpu.state.color_mask_set(True, True, True, True)
             self._draw_outlines(aim, glass, shader, tex)
             mark("glass outlines")
