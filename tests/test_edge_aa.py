@@ -58,7 +58,7 @@ def test_a_map_cortex_has_no_region_borders():
 
 def test_front_faces_are_those_facing_an_orthographic_camera():
     # the default draw path leaves out, per view, the triangles back-face culling would drop
-    from brainpainter_blender.gpu_draw import front_faces
+    from brainpainter_blender.facing import front_faces
 
     sphere = trimesh.creation.icosphere(subdivisions=3)
     mvp = np.diag([0.5, 0.5, -0.01, 1.0])  # orthographic, looking down -z (towards the viewer: +z)
@@ -74,7 +74,7 @@ def test_front_faces_are_those_facing_an_orthographic_camera():
 
 def test_back_faces_are_the_rest_for_the_glass_far_side():
     # the glass's far side draws, per view, only the triangles front-face culling keeps
-    from brainpainter_blender.gpu_draw import front_faces
+    from brainpainter_blender.facing import front_faces
 
     sphere = trimesh.creation.icosphere(subdivisions=3)
     mvp = np.diag([0.5, 0.5, -0.01, 1.0])
@@ -90,7 +90,7 @@ def test_back_faces_are_the_rest_for_the_glass_far_side():
 def test_facing_from_kept_normals_is_the_sign_of_the_area_on_screen():
     # a new view (a movie's orbit) tests each triangle against kept normals: the same triangles
     # as the signed area of its corners projected by any orthographic camera, mirrored or turned
-    from brainpainter_blender.gpu_draw import facing, triangle_normals
+    from brainpainter_blender.facing import facing, triangle_normals
 
     rng = np.random.default_rng(0)
     vertices = rng.normal(size=(200, 3)) * 50

@@ -277,7 +277,7 @@ def test_leaving_out_the_back_faces_changes_no_pixel(template, monkeypatch):
             r.close()
 
     culled = images()
-    monkeypatch.setattr(GpuDraw, "_front", lambda self, part, aim: self._batch(part))
+    monkeypatch.setattr(GpuDraw, "_front", lambda self, part, aim, back=False: self._batch(part))
     for a, b in zip(culled, images(), strict=True):
         assert np.array_equal(a, b)
 

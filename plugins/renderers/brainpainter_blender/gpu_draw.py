@@ -55,6 +55,7 @@ from brainpainter.rendering.geometry import PartGeometry, SceneGeometry
 from brainpainter.rendering.scene import RenderSettings
 from brainpainter.rendering.views import View
 from brainpainter_blender import edge_aa, gpu_shaders, meshorder, outlines, tract_lines
+from brainpainter_blender.facing import facing, triangle_normals
 from brainpainter_blender.gpu_context import in_gpu_context
 from brainpainter_blender.gpu_lighting import FLAT, LIGHTING, Lighting, for_maps
 
@@ -81,71 +82,6 @@ def srgb_to_linear(rgb: np.ndarray) -> np.ndarray:
     """The IEC 61966-2-1 sRGB transfer function inverted, for an array of sRGB 0-1 values."""
     c = np.clip(np.asarray(rgb, dtype=np.float64), 0.0, 1.0)
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-
-
-def triangle_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """The triangles' normals scaled by twice their areas (``(b - a) x (c - a)``), one row per axis.
-
-    Parameters
-    ----------
-    vertices : ndarray of float, shape (n_vertices, 3)
-    triangles : ndarray of int, shape (n_triangles, 3)
-
-    Returns
-    -------
-    ndarray of float32, shape (3, n_triangles)
-    """
-    xyz = np.ascontiguousarray(np.asarray(vertices, np.float32).T)  # per axis: the gathers stay contiguous
-    a, b, c = (xyz[:, triangles[:, i]] for i in range(3))
-    e1, e2 = b - a, c - a
-    return np.stack([e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                     e1[0] * e2[1] - e1[1] * e2[0]])
-
-
-def facing(normals: np.ndarray, mvp: np.ndarray, back: bool = False) -> np.ndarray:
-    """Which triangles an orthographic `mvp` shows counter-clockwise (those that back-face culling
-    keeps; edge-on ones too), or with `back` clockwise (those that front-face culling keeps).
-
-    Parameters
-    ----------
-    normals : ndarray of float, shape (3, n_triangles)
-        :func:`triangle_normals` of the mesh (kept between views: a new view costs one product
-        per triangle).
-    mvp : ndarray of float, shape (4, 4)
-        Model-view-projection matrix (row-major, ``mvp @ [x, y, z, 1]``).
-    back : bool
-        The triangles turned away instead (edge-on ones too).
-
-    Returns
-    -------
-    ndarray of bool, shape (n_triangles,)
-    """
-    # A triangle's signed area on screen, edges e1 and e2, x and y from the rows r1 and r2 of
-    # mvp: (r1 . e1)(r2 . e2) - (r2 . e1)(r1 . e2) = (r1 x r2) . (e1 x e2). Elementwise: no BLAS thread.
-    k = np.cross(mvp[0, :3], mvp[1, :3]).astype(np.float32)
-    area = normals[0] * k[0] + normals[1] * k[1] + normals[2] * k[2]
-    kept: np.ndarray = area <= 0 if back else area >= 0
-    return kept
-
-
-def front_faces(vertices: np.ndarray, triangles: np.ndarray, mvp: np.ndarray,
-                back: bool = False) -> np.ndarray:
-    """The triangles that :func:`facing` keeps.
-
-    Parameters
-    ----------
-    vertices : ndarray of float, shape (n_vertices, 3)
-    triangles : ndarray of int, shape (n_triangles, 3)
-    mvp : ndarray of float, shape (4, 4)
-    back : bool
-
-    Returns
-    -------
-    ndarray, shape (n_kept, 3)
-        The rows of `triangles` kept, in their order.
-    """
-    kept: np.ndarray = triangles[facing(triangle_normals(vertices, triangles), mvp, back)]
-    return kept
 
 
 @dataclass(frozen=True)
