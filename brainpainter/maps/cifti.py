@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.io.files import check_input
+from brainpainter.maps.fslr import named_space
 from brainpainter.maps.options import frame_rows
 from brainpainter.maps.resolution import known_count
 
@@ -66,6 +67,8 @@ class Cifti:
         Mean of each subcortical structure (value maps only).
     says_fslr : bool
         Whether the file's name or metadata names fsLR.
+    declared : {"fsLR", "fsaverage"}, optional
+        The mesh family the file's metadata names (:func:`brainpainter.maps.fslr.named_space`).
     """
 
     values: dict[str, NDArray[Any]]
@@ -75,6 +78,7 @@ class Cifti:
     source: str
     regions: dict[str, NDArray[Any]] | None
     says_fslr: bool
+    declared: str | None = None
 
 
 def is_cifti(data: Any) -> bool:
@@ -167,7 +171,8 @@ def read_cifti(path: str | Path, frames: Any = None, *, own_mesh: bool = False) 
         raise BrainPainterError(f"{what} holds no cortex (CORTEX_LEFT/CORTEX_RIGHT) and no subcortical "
                                 "structure brainpainter draws.")
     return Cifti(values, _image_names(rows_axis, rows, p), labels[0] if labels else None,
-                 labels[2] if labels else None, f"cifti={p.name}", regions or None, _says_fslr(p.name, img))
+                 labels[2] if labels else None, f"cifti={p.name}", regions or None, _says_fslr(p.name, img),
+                 named_space(_metadata(img)))
 
 
 def _grayordinates(cols_axis: Any, data: NDArray[Any], nvertices: dict[str, int], means: bool,
@@ -240,12 +245,15 @@ def _suffix(name: str) -> str:
 
 def _says_fslr(name: str, img: Any) -> bool:
     """Whether the file's name or metadata names fsLR (``fs_LR``, ``fsLR``)."""
-    text = [name]
+    return any(re.search(r"fs_?lr", t, re.IGNORECASE) for t in [name, *_metadata(img)])
+
+
+def _metadata(img: Any) -> list[str]:
+    """The values of a CIFTI file's metadata (none where it has none or odd ones)."""
     try:
-        text += [str(v) for v in (img.header.matrix.metadata or {}).values()]
-    except Exception:  # no or odd metadata: the name alone decides
-        pass
-    return any(re.search(r"fs_?lr", t, re.IGNORECASE) for t in text)
+        return [str(v) for v in (img.header.matrix.metadata or {}).values()]
+    except Exception:  # no or odd metadata
+        return []
 
 
 def _image_names(axis: Any, rows: list[int], path: Path) -> tuple[str, ...]:
