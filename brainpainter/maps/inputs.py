@@ -310,9 +310,18 @@ def _read_on_mesh(given: dict[str, Any], mesh: Mapping[str, int], external: Exte
 
 
 def _cifti_on_mesh(c: Any, name: str, mesh: Mapping[str, int]) -> VertexMaps:
-    """A CIFTI file's cortex (:func:`~brainpainter.maps.cifti.read_cifti`) on the user's own surfaces."""
+    """A CIFTI file's cortex (:func:`~brainpainter.maps.cifti.read_cifti`) on the user's own surfaces.
+
+    Its subcortical structures are left out, with a note: a template of your own surfaces has no
+    subcortical meshes, and the template's (fsaverage's) are not in your surfaces' coordinates.
+    """
     values = {h: native(v, f"CIFTI file {name!r} ({h})", n=mesh[h]) for h, v in c.values.items() if h in mesh}
-    return VertexMaps(values, c.images, c.categories, c.category_colors, c.source, c.regions, own_mesh=True)
+    notes = () if not c.regions else (
+        f"CIFTI file {name!r}: its subcortical structures ({', '.join(sorted(c.regions))}) are not drawn on "
+        "your own surfaces (--lh-surface/--rh-surface), which have no subcortical meshes; render the file "
+        "without them to see the structures on the template's (--views subcortical).",)
+    return VertexMaps(values, c.images, c.categories, c.category_colors, c.source, None, own_mesh=True,
+                      notes=notes)
 
 
 def pick_images(maps: VertexMaps, frames: Any) -> VertexMaps:
