@@ -184,10 +184,10 @@ def _grayordinates(cols_axis: Any, data: NDArray[Any], nvertices: dict[str, int]
     values = {hemi: np.full((len(data), n), np.nan, np.float32) for hemi, n in nvertices.items()}
     regions: dict[str, NDArray[Any]] = {}
     if isinstance(cols_axis, axes.BrainModelAxis):
-        for structure, cols, model in cols_axis.iter_structures():  # type: ignore[no-untyped-call]
+        for structure, cols in _structures(cols_axis):
             if structure in _CORTEX:
                 hemi = _CORTEX[structure]
-                vertex = np.asarray(model.vertex, np.int64)
+                vertex = np.asarray(cols_axis.vertex[cols], np.int64)
                 if len(vertex) and (vertex.min() < 0 or vertex.max() >= nvertices[hemi]):
                     raise BrainPainterError(f"{what}: a {hemi} vertex index is outside its mesh of "
                                             f"{nvertices[hemi]} vertices; the file is damaged.")
@@ -207,6 +207,20 @@ def _grayordinates(cols_axis: Any, data: NDArray[Any], nvertices: dict[str, int]
                                                 f"{nvertices[hemi]} vertices; the file is damaged.")
                     values[hemi][:, vertex] = data[:, j][:, None]
     return values, regions
+
+
+def _structures(axis: Any) -> list[tuple[str, slice]]:
+    """The brain structures of a BrainModelAxis in their order along it, with the columns of each.
+
+    As nibabel's ``iter_structures`` without building an axis per structure (which converts every
+    column's name again: a third of the time of reading a 91k file).
+    """
+    names = np.asarray(axis.name)
+    if not len(names):
+        return []
+    starts = [0, *(np.flatnonzero(names[1:] != names[:-1]) + 1).tolist()]
+    ends = [*starts[1:], len(names)]
+    return [(str(names[a]), slice(a, b)) for a, b in zip(starts, ends, strict=True)]
 
 
 def _check_size(img: Any, axes_shape: tuple[int, int], file_size: int, what: str) -> int:
