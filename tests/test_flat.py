@@ -112,7 +112,9 @@ def dk_scene():
 def test_the_camera_frames_the_sheets_left_on_the_left(dk_scene):
     g = dk_scene.geometry
     parts = g.visible(get_view("flat"))
-    assert [(p.name, p.kind) for p in parts] == [("flat-lh", "flat"), ("flat-rh", "flat")]
+    assert [(p.name, p.kind) for p in parts] == [(n, "flat") for n in ("flat-lh", "flat-lh-rim", "flat-rh",
+                                                                        "flat-rh-rim")]
+    parts = [p for p in parts if not p.name.endswith("-rim")]
     assert all(p.outline is not None and len(p.outline) > 1000 for p in parts)  # --outline on the sheet
     pose = g.camera(get_view("flat"), 2.0)
     lh, rh = (framing.to_pixels(p.hull, pose, 800, 400) for p in parts)
@@ -123,7 +125,7 @@ def test_the_camera_frames_the_sheets_left_on_the_left(dk_scene):
     m = framing.view_projection(pose, 2.0)
     depth = outline @ m[2, :3] + m[2, 3]
     assert -1 < depth.min() and depth.max() < 1  # the lifted borders are not clipped
-    assert [p.name for p in g.visible(get_view("flat-right"))] == ["flat-rh"]
+    assert [p.name for p in g.visible(get_view("flat-right"))] == ["flat-rh", "flat-rh-rim"]
 
 
 def test_a_map_scene_takes_the_sheets_palette_slots_only_when_a_flat_view_needs_them():
@@ -137,7 +139,8 @@ def test_a_map_scene_takes_the_sheets_palette_slots_only_when_a_flat_view_needs_
     grey = np.full((N_FLAT, 3), 0.5, np.float32)
     rgb = Palette({}, g, {"flat-lh": grey, "flat-rh": grey}).rgb
     assert rgb.shape == (n + 2 * N_FLAT, 3) and (rgb[n:] == 0.5).all()
-    lh, rh = g.visible(get_view("flat"))
+    lh, lh_rim, rh, rh_rim = g.visible(get_view("flat"))
+    assert (lh_rim.palette_index == rh_rim.palette_index[0]).all()  # the rims: one grey slot
     assert lh.palette_index[0] == n and rh.palette_index[-1] == n + 2 * N_FLAT - 1
 
 
@@ -232,3 +235,52 @@ def test_flat_views_mix_with_3d_views_and_refuse_cycles(tmp_path):
     with pytest.raises(BrainPainterError, match=r"flat map.*gpu path"):
         brainpainter.render(_table(tmp_path / "t.csv"), "dk", views="flat", quality="high", width=64,
                             height=32, progress=False)
+
+
+def test_the_rim_is_a_band_just_outside_the_boundary_facing_the_camera():
+    from brainpainter.rendering.flat_parts import rim
+
+    square = np.array([[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]], np.float32)
+    v, f = rim(square, np.array([[0, 1, 2], [0, 2, 3]]), 0.1)
+    c = v[f][..., :2].astype(float)
+    area = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]) / 2
+    assert len(f) == 8 and (area > 0).all()  # two triangles per boundary edge, none culled
+    assert area.sum() == pytest.approx(2.2 ** 2 - 2 ** 2)  # a band 0.1 wide all round (mitred corners)
+    np.testing.assert_allclose(np.abs(v[4:, :2] - 1), 1.1, rtol=1e-6)  # the outer ring outside the square
+
+
+def _ramp_map(tmp_path: Path) -> Path:
+    """An fsaverage5 left map from 0 (posterior) to 1 (anterior)."""
+    y = nib.freesurfer.read_geometry(str(FS5 / "surf" / "lh.white"))[0][:, 1]
+    path = tmp_path / "lh.mgh"
+    ramp = ((y - y.min()) / np.ptp(y)).astype(np.float32).reshape(-1, 1, 1)
+    nib.MGHImage(ramp, np.eye(4)).to_filename(str(path))
+    return path
+
+
+def test_hide_and_cluster_borders_reach_a_maps_flat_sheet(tmp_path):
+    lh = _ramp_map(tmp_path)
+
+    def flat_left(**kw):
+        (img,) = brainpainter.render(lh=lh, views="flat-left", cmap="RdBu_r", vmin=0, vmax=1, threshold=0.5,
+                                     width=400, height=300, progress=False, **kw).images.values()
+        return img[..., :3].astype(int)
+
+    plain, borders = flat_left(), flat_left(outline_threshold=True)
+    dark = (borders.max(axis=-1) < 40).sum()
+    assert (plain.max(axis=-1) < 40).sum() < 5 and dark > 40  # the cluster's edge, as on the 3-D cortex
+    hidden = flat_left(hide=["Left-superiorfrontal", "Left-precentral"])
+    white = (hidden.min(axis=-1) > 250).sum() - (plain.min(axis=-1) > 250).sum()
+    assert white > 0.03 * hidden.shape[0] * hidden.shape[1]  # the hidden regions' triangles are not drawn
+
+
+def test_a_sheet_in_the_backgrounds_colour_keeps_its_grey_rim(tmp_path):
+    lh = tmp_path / "lh.mgh"
+    nib.MGHImage(np.zeros((10242, 1, 1), np.float32), np.eye(4)).to_filename(str(lh))
+    (img,) = brainpainter.render(lh=lh, views="flat-left", cmap="Greys", vmin=0, vmax=1, width=400,
+                                 height=300, progress=False).images.values()
+    c = img[..., :3].astype(int)
+    assert (c.min(axis=-1) > 250).mean() > 0.9  # the map's white on white ...
+    rim = (np.abs(c - 204).max(axis=-1) < 30)  # ... inside NEUTRAL_GREY's rim
+    rows, cols = np.nonzero(rim)
+    assert rim.sum() > 300 and np.ptp(cols) > 0.6 * c.shape[1] and np.ptp(rows) > 0.4 * c.shape[0]

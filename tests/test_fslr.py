@@ -134,6 +134,22 @@ def test_cli_cifti1_exits_2_with_one_line(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+def test_cli_space_contradicting_the_cifti_metadata_exits_2_with_one_line(tmp_path):
+    cols = (axes.BrainModelAxis.from_surface(np.arange(5), N164, "CortexLeft")
+            + axes.BrainModelAxis.from_surface(np.arange(5), N164, "CortexRight"))
+    img = nib.Cifti2Image(np.ones((1, 10), np.float32), header=(axes.ScalarAxis(["m"]), cols))
+    img.header.matrix.metadata = nib.cifti2.Cifti2MetaData({"Provenance": "x.164k_fs_LR.dscalar.nii"})
+    path = tmp_path / "x.dscalar.nii"
+    img.to_filename(str(path))
+    assert read_maps(path).space == "fsLR" and read_maps(path, space="fsLR").space == "fsLR"
+    out = subprocess.run([sys.executable, "-m", "brainpainter", "render", str(path), "--space", "fsaverage",
+                          "--out", str(tmp_path / "o")], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2, out.stderr
+    line = out.stderr.strip()
+    assert len(line.splitlines()) == 1 and "says fsLR in its metadata" in line and "--space fsaverage" in line
+    assert not (tmp_path / "o").exists()
+
+
 def test_a_parcel_file_that_would_grow_too_much_is_refused(tmp_path):
     parcels = axes.ParcelsAxis.from_brain_models([("a", axes.BrainModelAxis.from_surface(np.arange(3), N164,
                                                                                           "CortexLeft"))])
@@ -160,7 +176,16 @@ def test_fslr_gifti_space(tmp_path):
     assert read_maps(lh=plain, space="fsLR").space == "fsLR"
     said = _gifti(tmp_path / "c.shape.gii", np.zeros(N164), {"Provenance": "x.164k_fs_LR.dscalar.nii"})
     assert read_maps(lh=said).space == "fsLR" and not read_maps(lh=said).notes
-    assert read_maps(lh=said, space="fsaverage").space == "fsaverage"  # given wins
+    assert read_maps(lh=said, space="fsLR").space == "fsLR"
+    with pytest.raises(BrainPainterError, match=r"says fsLR in its metadata, but --space fsaverage") as e:
+        read_maps(lh=said, space="fsaverage")  # the file's metadata decides: a contradiction is refused
+    assert "\n" not in str(e.value)
+    fsavg = _gifti(tmp_path / "f.shape.gii", np.zeros(N164), {"SubjectID": "fsaverage"})
+    assert read_maps(lh=fsavg).space == "fsaverage" and not read_maps(lh=fsavg).notes
+    with pytest.raises(BrainPainterError, match=r"says fsaverage in its metadata, but --space fsLR"):
+        read_maps(lh=fsavg, space="fsLR")
+    both = _gifti(tmp_path / "g.shape.gii", np.zeros(N164), {"Provenance": "resampled fs_LR to fsaverage"})
+    assert read_maps(lh=both, space="fsaverage").space == "fsaverage"  # names both: --space decides
     bids = _gifti(tmp_path / "hemi-L_space-fsLR_den-164k_x.shape.gii", np.zeros(N164))
     assert read_maps(lh=bids).space == "fsLR"
     with pytest.raises(BrainPainterError, match="fsLR 32k, not fsaverage"):

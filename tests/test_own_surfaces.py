@@ -136,6 +136,27 @@ def test_overlapping_hemispheres_are_moved_apart(tmp_path):
             np.testing.assert_allclose(lh, v + np.array([-31.0, 0, 0]), atol=1e-4)
 
 
+def test_a_ciftis_subcortical_structures_on_own_surfaces_are_left_out_with_a_note(tmp_path):
+    """No subcortical view of the own surfaces (it showed no structure): the cortex is drawn, the note says
+    why the structures are not and where to see them."""
+    from nibabel.cifti2 import cifti2_axes as axes
+
+    pial = _subject(tmp_path / "subj")
+    n = len(_icosphere()[0])
+    mask = np.zeros((4, 4, 4), bool)
+    mask.flat[:3] = True
+    cols = (axes.BrainModelAxis.from_surface(np.arange(n), n, "CortexLeft")
+            + axes.BrainModelAxis.from_mask(mask, name="thalamus_left", affine=np.eye(4)))
+    path = tmp_path / "x.dscalar.nii"
+    img = nib.Cifti2Image(np.ones((1, n + 3), np.float32), header=(axes.ScalarAxis(["z"]), cols))
+    img.to_filename(str(path))
+    run = prepare_run(path, lh_surface=str(pial), cmap="viridis", vmin=0, vmax=1)
+    assert [view.name for view in run.views] == ["lateral-left", "medial-left"]
+    assert not run.maps.regions
+    (note,) = run.maps.notes
+    assert "Left-Thalamus" in note and "not drawn on your own surfaces" in note and "\n" not in note
+
+
 def test_map_run_colours_each_surface_vertex_with_its_own_value(tmp_path):
     """No resampling: the drawn mesh is the surface, and vertex i shows map value i (underlay off cortex)."""
     from brainpainter.maps.layers import GYRUS_GREY, SULCUS_GREY

@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.io.files import check_input
+from brainpainter.maps.fslr import named_space
 from brainpainter.maps.options import frame_rows
 from brainpainter.maps.resolution import known_count
 
@@ -66,6 +67,8 @@ class Cifti:
         Mean of each subcortical structure (value maps only).
     says_fslr : bool
         Whether the file's name or metadata names fsLR.
+    declared : {"fsLR", "fsaverage"}, optional
+        The mesh family the file's metadata names (:func:`brainpainter.maps.fslr.named_space`).
     """
 
     values: dict[str, NDArray[Any]]
@@ -75,6 +78,7 @@ class Cifti:
     source: str
     regions: dict[str, NDArray[Any]] | None
     says_fslr: bool
+    declared: str | None = None
 
 
 def is_cifti(data: Any) -> bool:
@@ -167,7 +171,8 @@ def read_cifti(path: str | Path, frames: Any = None, *, own_mesh: bool = False) 
         raise BrainPainterError(f"{what} holds no cortex (CORTEX_LEFT/CORTEX_RIGHT) and no subcortical "
                                 "structure brainpainter draws.")
     return Cifti(values, _image_names(rows_axis, rows, p), labels[0] if labels else None,
-                 labels[2] if labels else None, f"cifti={p.name}", regions or None, _says_fslr(p.name, img))
+                 labels[2] if labels else None, f"cifti={p.name}", regions or None, _says_fslr(p.name, img),
+                 named_space(_metadata(img)))
 
 
 def _grayordinates(cols_axis: Any, data: NDArray[Any], nvertices: dict[str, int], means: bool,
@@ -179,10 +184,10 @@ def _grayordinates(cols_axis: Any, data: NDArray[Any], nvertices: dict[str, int]
     values = {hemi: np.full((len(data), n), np.nan, np.float32) for hemi, n in nvertices.items()}
     regions: dict[str, NDArray[Any]] = {}
     if isinstance(cols_axis, axes.BrainModelAxis):
-        for structure, cols, model in cols_axis.iter_structures():  # type: ignore[no-untyped-call]
+        for structure, cols in _structures(cols_axis):
             if structure in _CORTEX:
                 hemi = _CORTEX[structure]
-                vertex = np.asarray(model.vertex, np.int64)
+                vertex = np.asarray(cols_axis.vertex[cols], np.int64)
                 if len(vertex) and (vertex.min() < 0 or vertex.max() >= nvertices[hemi]):
                     raise BrainPainterError(f"{what}: a {hemi} vertex index is outside its mesh of "
                                             f"{nvertices[hemi]} vertices; the file is damaged.")
@@ -202,6 +207,20 @@ def _grayordinates(cols_axis: Any, data: NDArray[Any], nvertices: dict[str, int]
                                                 f"{nvertices[hemi]} vertices; the file is damaged.")
                     values[hemi][:, vertex] = data[:, j][:, None]
     return values, regions
+
+
+def _structures(axis: Any) -> list[tuple[str, slice]]:
+    """The brain structures of a BrainModelAxis in their order along it, with the columns of each.
+
+    As nibabel's ``iter_structures`` without building an axis per structure (which converts every
+    column's name again: a third of the time of reading a 91k file).
+    """
+    names = np.asarray(axis.name)
+    if not len(names):
+        return []
+    starts = [0, *(np.flatnonzero(names[1:] != names[:-1]) + 1).tolist()]
+    ends = [*starts[1:], len(names)]
+    return [(str(names[a]), slice(a, b)) for a, b in zip(starts, ends, strict=True)]
 
 
 def _check_size(img: Any, axes_shape: tuple[int, int], file_size: int, what: str) -> int:
@@ -240,12 +259,15 @@ def _suffix(name: str) -> str:
 
 def _says_fslr(name: str, img: Any) -> bool:
     """Whether the file's name or metadata names fsLR (``fs_LR``, ``fsLR``)."""
-    text = [name]
+    return any(re.search(r"fs_?lr", t, re.IGNORECASE) for t in [name, *_metadata(img)])
+
+
+def _metadata(img: Any) -> list[str]:
+    """The values of a CIFTI file's metadata (none where it has none or odd ones)."""
     try:
-        text += [str(v) for v in (img.header.matrix.metadata or {}).values()]
-    except Exception:  # no or odd metadata: the name alone decides
-        pass
-    return any(re.search(r"fs_?lr", t, re.IGNORECASE) for t in text)
+        return [str(v) for v in (img.header.matrix.metadata or {}).values()]
+    except Exception:  # no or odd metadata
+        return []
 
 
 def _image_names(axis: Any, rows: list[int], path: Path) -> tuple[str, ...]:

@@ -21,7 +21,7 @@ from brainpainter.errors import BrainPainterError
 from brainpainter.io.files import MAX_DATA_FILE, inflated, read_input
 from brainpainter.io.gifti import External, read_gifti
 from brainpainter.io.sniff import CURV, GZIP, HEAD, MGH, NIFTI1, NIFTI2, NPY, described, what_is
-from brainpainter.maps.fslr import names_fslr
+from brainpainter.maps.fslr import named_space
 from brainpainter.maps.resolution import FAMILY, FSLR, N_FSAVERAGE, native
 
 #: File endings read as text, as arrays, as surface images, as label maps.
@@ -40,7 +40,7 @@ class Hemi:
     values: NDArray[Any]  # float32, shape (k, n), n a count of the fsaverage family or fsLR; NaN = no value
     categories: tuple[str, ...] | None = None
     colors: NDArray[Any] | None = None  # float, shape (n_categories, 3), sRGB 0-1
-    fslr: bool = False  # the file's metadata names fsLR
+    space: str | None = None  # the mesh family the file's metadata names ("fsLR", "fsaverage")
 
 
 def read_hemi(value: Any, hemi: str, *, external: External = "folder", n: int | None = None) -> Hemi:
@@ -98,7 +98,7 @@ def read_file(path: Path, hemi: str, *, external: External = "folder", n: int | 
             return Hemi(native(v, what=what, n=n))
         if name.endswith((".gii", ".gii.gz")):
             img = read_gifti(path, external=external, what="map file")
-            return replace(_gifti(img, what, n), fslr=_gifti_says_fslr(img))
+            return replace(_gifti(img, what, n), space=_gifti_space(img))
         if name.endswith((".mgh", ".mgz", ".nii", ".nii.gz")):
             # read whole (no file left open by a lazy proxy), inflated if gzip, bounded
             raw = inflated(read_input(path, "map file", MAX_DATA_FILE), what)
@@ -166,10 +166,10 @@ def _surface_frames(data: NDArray[Any], what: str, n: int | None = None) -> NDAr
                             "fsaverage surface; a volume in MNI space goes to --volume.")
 
 
-def _gifti_says_fslr(img: Any) -> bool:
-    """Whether a GIfTI image's metadata (the file's or a data array's) names fsLR."""
+def _gifti_space(img: Any) -> str | None:
+    """The mesh family a GIfTI image's metadata (the file's or a data array's) names (:func:`named_space`)."""
     metas = [img.meta, *(d.meta for d in img.darrays)]
-    return any(names_fslr(str(v)) for m in metas if m is not None for v in m.values())
+    return named_space(str(v) for m in metas if m is not None for v in m.values())
 
 
 def _gifti(img: Any, what: str, n: int | None = None) -> Hemi:

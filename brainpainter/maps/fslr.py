@@ -15,7 +15,7 @@ of the finite values it draws on, NaN when it has none.
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from functools import cache
 from importlib import resources
 from typing import Any
@@ -57,14 +57,24 @@ def names_fslr(text: str) -> bool:
     return re.search(r"fs_?lr", text, re.IGNORECASE) is not None
 
 
+def named_space(texts: Iterable[str]) -> str | None:
+    """The mesh family a file's metadata names (`texts`: its values): ``"fsLR"`` or ``"fsaverage"``; None
+    where they name neither or both (a provenance of resampling from one to the other)."""
+    texts = [str(t) for t in texts]
+    fslr = any(names_fslr(t) for t in texts)
+    fsaverage = any(re.search("fsaverage", t, re.IGNORECASE) for t in texts)
+    return None if fslr == fsaverage else "fsLR" if fslr else "fsaverage"
+
+
 def decide_space(counts: Mapping[str, int], space: str | None, says_fslr: bool,
-                 what: str) -> tuple[str, tuple[str, ...]]:
+                 what: str, declared: str | None = None) -> tuple[str, tuple[str, ...]]:
     """The mesh family of maps with `counts` vertices per hemisphere, and a note when it was a guess.
 
     32,492 vertices is fsLR 32k (59,292 fsLR 59k, refused: no resampling);
-    163,842 is both fsaverage and fsLR 164k: the file decides where it names fsLR
-    (`says_fslr`), else `space`, else fsaverage (with a note). `space` given
-    wins over the file.
+    163,842 is both fsaverage and fsLR 164k: the file's metadata decides where
+    it names a family (`declared`, :func:`named_space`; a `space` naming the
+    other one is refused), else `space`, else fsLR where the file's name says
+    so (`says_fslr`), else fsaverage (with a note).
 
     Returns
     -------
@@ -74,7 +84,8 @@ def decide_space(counts: Mapping[str, int], space: str | None, says_fslr: bool,
     Raises
     ------
     BrainPainterError
-        `space` contradicting a count, fsLR beside fsaverage-family counts, or fsLR 59k.
+        `space` contradicting a count or the file's metadata, fsLR beside fsaverage-family counts, or
+        fsLR 59k.
     """
     if space is not None and space not in SPACES:
         raise choice_error("space", space, SPACES)
@@ -85,7 +96,12 @@ def decide_space(counts: Mapping[str, int], space: str | None, says_fslr: bool,
                                     "not fsaverage; leave out --space (or give --space fsLR).")
         chosen = "fsLR"
     elif N_FSAVERAGE in counts.values():
-        chosen = space or ("fsLR" if says_fslr else "fsaverage")
+        if declared is not None and space is not None and space != declared:
+            raise BrainPainterError(
+                f"{what} says {declared} in its metadata, but --space {space} was given; the file's metadata "
+                f"decides where it names the space: leave out --space (or give --space {declared}), or "
+                "correct the file's metadata.")
+        chosen = declared or space or ("fsLR" if says_fslr else "fsaverage")
     else:
         if space == "fsLR" and counts:
             n = next(iter(counts.values()))
@@ -100,7 +116,7 @@ def decide_space(counts: Mapping[str, int], space: str | None, says_fslr: bool,
                                         "hemispheres on one mesh.")
             check_fslr(n, f"{what} ({hemi})")
         return "fsLR", ()
-    if space is None:
+    if space is None and declared is None:
         return "fsaverage", (f"{what} has 163842 values per hemisphere, as fsaverage and fsLR 164k have, and "
                              "does not say which: drawn as fsaverage; give --space fsLR if it is fsLR 164k.",)
     return "fsaverage", ()

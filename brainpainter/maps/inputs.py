@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.io.gifti import External
 from brainpainter.maps.files import GIFTI_ENDINGS, SUFFIXES, Hemi, read_hemi
-from brainpainter.maps.fslr import SPACES, decide_space, names_fslr
+from brainpainter.maps.fslr import SPACES, decide_space, named_space, names_fslr
 from brainpainter.maps.options import frame_rows
 from brainpainter.maps.resolution import native, to_fsaverage
 
@@ -235,7 +235,7 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
         if mesh is not None:  # its cortex on the user's own (fsLR) surfaces, as it is
             return _cifti_on_mesh(c, Path(data).name, mesh)
         chosen, notes = decide_space({h: v.shape[1] for h, v in c.values.items()}, space, c.says_fslr,
-                                     f"CIFTI file {Path(data).name!r}")
+                                     f"CIFTI file {Path(data).name!r}", c.declared)
         return VertexMaps(c.values, c.images, c.categories, c.category_colors, c.source, c.regions, chosen,
                           notes)
     cifti = [v for v in (data, lh, rh, volume) if is_cifti(v)]
@@ -257,9 +257,10 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
         return pick_images(_read_on_mesh(given, mesh, external), frames)
     hemis = {h: read_hemi(v, h, external=external) for h, v in given.items()}
     maps = _combine(hemis, given)
-    says = any(h.fslr for h in hemis.values()) or any(
-        names_fslr(Path(v).name) for v in given.values() if isinstance(v, str | Path))
-    chosen, notes = decide_space({h: v.shape[1] for h, v in maps.values.items()}, space, says, "the map")
+    says = any(names_fslr(Path(v).name) for v in given.values() if isinstance(v, str | Path))
+    declared = named_space(h.space for h in hemis.values() if h.space is not None)
+    chosen, notes = decide_space({h: v.shape[1] for h, v in maps.values.items()}, space, says, "the map",
+                                 declared)
     return pick_images(replace(maps, space=chosen, notes=notes), frames)
 
 
@@ -309,9 +310,18 @@ def _read_on_mesh(given: dict[str, Any], mesh: Mapping[str, int], external: Exte
 
 
 def _cifti_on_mesh(c: Any, name: str, mesh: Mapping[str, int]) -> VertexMaps:
-    """A CIFTI file's cortex (:func:`~brainpainter.maps.cifti.read_cifti`) on the user's own surfaces."""
+    """A CIFTI file's cortex (:func:`~brainpainter.maps.cifti.read_cifti`) on the user's own surfaces.
+
+    Its subcortical structures are left out, with a note: a template of your own surfaces has no
+    subcortical meshes, and the template's (fsaverage's) are not in your surfaces' coordinates.
+    """
     values = {h: native(v, f"CIFTI file {name!r} ({h})", n=mesh[h]) for h, v in c.values.items() if h in mesh}
-    return VertexMaps(values, c.images, c.categories, c.category_colors, c.source, c.regions, own_mesh=True)
+    notes = () if not c.regions else (
+        f"CIFTI file {name!r}: its subcortical structures ({', '.join(sorted(c.regions))}) are not drawn on "
+        "your own surfaces (--lh-surface/--rh-surface), which have no subcortical meshes; render the file "
+        "without them to see the structures on the template's (--views subcortical).",)
+    return VertexMaps(values, c.images, c.categories, c.category_colors, c.source, None, own_mesh=True,
+                      notes=notes)
 
 
 def pick_images(maps: VertexMaps, frames: Any) -> VertexMaps:

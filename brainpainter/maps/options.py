@@ -147,7 +147,8 @@ class MapOptions:
     space: str | None = field(default=None, metadata={
         "choices": ("fsaverage", "fsLR"),
         "help": "Mesh of a 163842-vertex map (fsaverage or fsLR 164k) when its file does not say; 32492 "
-                "vertices is always fsLR 32k. Default: the file's metadata, else fsaverage."})
+                "vertices is always fsLR 32k. Default: the file's metadata, else fsaverage; a --space that "
+                "contradicts the file's metadata is refused."})
     frames: Any = field(default=None, metadata={
         "help": "Images of a map series to draw (a CIFTI dtseries' frames): start:stop:step or a comma list, "
                 "e.g. 0:100:10."})

@@ -3,7 +3,9 @@
 :attr:`brainpainter.rendering.geometry.SceneGeometry.flat_parts` builds them from
 :mod:`brainpainter.maps.flat` when a flat view first draws them: parts of kind
 ``flat`` (``flat-lh``, ``flat-rh``) in the plane z = 0 (RAS, turned into the
-template's coordinates), which renderers draw unlit, as they draw any opaque part.
+template's coordinates), which renderers draw unlit, as they draw any opaque part; around
+each sheet a thin grey rim (``flat-lh-rim``, ``flat-rh-rim``: :func:`rim`), so that a region drawn in
+the background's colour keeps its edge.
 """
 
 from __future__ import annotations
@@ -16,7 +18,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.maps.flat import FlatSheet, check_flat, face_labels, flat_labels, flat_sheet, to_flat
-from brainpainter.rendering.parts import MEDIAL_SLOT, PartGeometry, build_part
+from brainpainter.rendering.parts import MEDIAL_SLOT, NEUTRAL_SLOT, PartGeometry, build_part
+
+#: Width of the grey rim around each flat sheet, millimetres of the sheet (about a pixel at the default size).
+RIM_MM = 1.2
 
 
 def flat_parts(scene: Any, slot_of: Mapping[str, int], vertex_slots: Mapping[str, tuple[int, int]],
@@ -25,10 +30,12 @@ def flat_parts(scene: Any, slot_of: Mapping[str, int], vertex_slots: Mapping[str
 
     Per region, a triangle takes its vertices' region (each vertex its nearest
     fsaverage vertex's label in ``scene.labels``) and that region's slot in
-    `slot_of` (hidden regions: not drawn; a label without a slot: the medial
-    wall's). Per vertex (``flat-<hemi>`` in `vertex_slots`), sheet vertex ``i``
-    has slot ``vertex_slots["flat-<hemi>"][0] + i``. Region borders
-    (``--outline``) and ``--contour``'s iso-lines are drawn on them as on the cortex.
+    `slot_of` (a label without a slot: the medial wall's). Per vertex
+    (``flat-<hemi>`` in `vertex_slots`), sheet vertex ``i`` has slot
+    ``vertex_slots["flat-<hemi>"][0] + i``. Either way the triangles of hidden
+    regions (``--hide``) are not drawn. Region borders (``--outline``) and
+    ``--contour``'s iso-lines are drawn on them as on the cortex; each sheet is
+    followed by its grey rim (:func:`rim`, slot ``NEUTRAL_SLOT``).
 
     Parameters
     ----------
@@ -54,12 +61,14 @@ def flat_parts(scene: Any, slot_of: Mapping[str, int], vertex_slots: Mapping[str
         names = [HEMI_PREFIX[hemi] + n for n in scene.template.cortex(scene.labels, hemi).label_names]
         per_vertex = f"flat-{hemi}" in vertex_slots
         outlined = scene.settings.outline_width > 0
-        labels = (flat_labels(scene.template, scene.labels, hemi) if outlined or not per_vertex
-                  else np.zeros(len(sheet.vertices), np.int64))  # a map's sheet needs labels for borders only
+        hidden = np.asarray([k in scene.hidden for k in names], bool)
+        needs_labels = outlined or hidden.any() or not per_vertex  # a map: for borders and --hide only
+        labels = (flat_labels(scene.template, scene.labels, hemi) if needs_labels
+                  else np.zeros(len(sheet.vertices), np.int64))
         if per_vertex:  # vertex i of the sheet is slot first + i
             sheet_vertices, faces = sheet.vertices, sheet.faces
             label_of_face = face_labels(faces, labels)
-            face_slot = np.full(len(faces), MEDIAL_SLOT, np.int64)
+            face_slot = np.where(hidden[label_of_face], -1, MEDIAL_SLOT).astype(np.int64)
         else:  # regions meet half-way between vertices of two labels
             sheet_vertices, faces, label_of_face = split_at_borders(sheet.vertices, sheet.faces, labels)
             slot = [-1 if k in scene.hidden else slot_of.get(k, MEDIAL_SLOT) for k in names]
@@ -74,7 +83,58 @@ def flat_parts(scene: Any, slot_of: Mapping[str, int], vertex_slots: Mapping[str
         if part is not None:
             drawn = np.unique(faces[face_slot >= 0])  # the hull: the sheet drawn, not its cuts
             parts.append(replace(part, hull=sheet_vertices[drawn] @ to_ras))
+        rim_vertices, rim_faces = rim(sheet.vertices, sheet.faces, RIM_MM)
+        edge = build_part(f"flat-{hemi}-rim", "flat", hemi, rim_vertices @ to_ras, rim_faces,
+                          np.full(len(rim_faces), NEUTRAL_SLOT, np.int64),
+                          np.zeros(len(rim_vertices), np.float32), occlusion=False)
+        if edge is not None:
+            parts.append(replace(edge, hull=rim_vertices @ to_ras))
     return tuple(parts)
+
+
+def rim(vertices: NDArray[Any], faces: NDArray[Any], width: float) -> tuple[NDArray[Any], NDArray[Any]]:
+    """A band of `width` just outside the boundary of a flat mesh (its outer edge and its cuts).
+
+    Parameters
+    ----------
+    vertices : ndarray of float, shape (n, 3)
+        In the plane z = 0.
+    faces : ndarray of int, shape (m, 3)
+        Counter-clockwise seen from +z.
+    width : float
+
+    Returns
+    -------
+    vertices : ndarray of float32, shape (2 k, 3)
+        The k boundary vertices, then each moved outwards, mitred so that the band is `width` wide
+        along its edges.
+    faces : ndarray of int64, shape (2 b, 3)
+        Two triangles per boundary edge, counter-clockwise seen from +z.
+    """
+    f = np.asarray(faces, np.int64)
+    edges = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])  # interior on the left of a -> b
+    key = np.sort(edges, axis=1)
+    _, inverse, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    boundary = edges[count[inverse.ravel()] == 1]
+    if not len(boundary):
+        return np.zeros((0, 3), np.float32), np.zeros((0, 3), np.int64)
+    ring, local = np.unique(boundary, return_inverse=True)
+    local = local.reshape(-1, 2)
+    xy = np.asarray(vertices, np.float64)[ring, :2]
+    d = xy[local[:, 1]] - xy[local[:, 0]]
+    outward = np.column_stack([d[:, 1], -d[:, 0]]) / np.maximum(np.linalg.norm(d, axis=1), 1e-12)[:, None]
+    mean = np.zeros_like(xy)
+    np.add.at(mean, local[:, 0], outward)
+    np.add.at(mean, local[:, 1], outward)
+    mean /= np.bincount(local.ravel(), minlength=len(ring))[:, None]
+    # a mitred corner: the band `width` wide along both edges (at most twice that at a sharp corner)
+    outer = xy + width * mean / np.maximum((mean ** 2).sum(axis=1), 0.25)[:, None]
+    k = len(ring)
+    a, b = local[:, 0], local[:, 1]
+    band = np.concatenate([np.stack([b, a, a + k], 1), np.stack([b, a + k, b + k], 1)])
+    flat = np.zeros((2 * k, 3), np.float32)
+    flat[:, :2] = np.concatenate([xy, outer])
+    return flat, band
 
 
 def split_at_borders(vertices: NDArray[Any], faces: NDArray[Any], vertex_label: NDArray[Any]

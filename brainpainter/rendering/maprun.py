@@ -87,6 +87,7 @@ class MapRun:
     below: RegionsBelow | None = None  # region values under the map
     mesh_masks: dict[str, dict[str, NDArray[Any]]] | None = None  # the user's own surfaces
     flat: dict[str, NDArray[Any]] | None = None  # flat views: each sheet vertex's nearest fsaverage vertex
+    flat_edges: dict[str, NDArray[Any]] | None = None  # the sheets' edges (--outline-threshold on flat views)
     connectome: Connectome | None = None  # nodes and edges inside the cortex, drawn as glass
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
@@ -131,6 +132,7 @@ class MapRun:
             if self.flat is not None:  # the flat maps' vertices: the map's values there, the same layers
                 on_flat = vertex_colors(
                     self.maps, map_image, self.flat, scale, m.underlay, m.threshold,
+                    cluster_edges=self.flat_edges,
                     below=None if below is None else {h: below[f"flat-{h}"] for h in self.flat},
                     opacity=self.layer("map").opacity, contrast=m.underlay_contrast,
                     sample=lambda hemi, i: flat_values(self.maps, hemi, i))
@@ -209,10 +211,12 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     layers, below = map_layers(options, maps, table, meshes, tract_values,
                                others=connectome_kinds(connectome))
     layers += connectome_layers(options, connectome, first=False) if connectome is not None else ()
-    flat = None
+    flat = flat_edges = None
     if any(v.content == "flat" for v in view_list):  # the flat maps: fsaverage's templates only
         check_flat(tpl, labels)
         flat = {hemi: flat_sheet(hemi).nearest for hemi in ("lh", "rh")}
+        if edges is not None:
+            flat_edges = {hemi: mesh_edges(flat_sheet(hemi).faces) for hemi in flat}
         if below is not None:
             below = below.on_flat({hemi: flat_labels(tpl, labels, hemi) for hemi in flat},
                                   {hemi: tpl.cortex(labels, hemi).label_names for hemi in flat})
@@ -221,7 +225,7 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
         settings = with_aspect(settings, aspect)
     return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list, settings, options,
                   source_vertex, edges, depth, contours, tract_values, layers=layers, below=below,
-                  mesh_masks=masks, flat=flat, connectome=connectome)
+                  mesh_masks=masks, flat=flat, flat_edges=flat_edges, connectome=connectome)
 
 
 def _own_surfaces(options: Options, surfaces: dict[str, Any]) -> dict[str, Surface]:
