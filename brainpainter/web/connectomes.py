@@ -22,11 +22,7 @@ gets them as the CLI's ``--connectome``, ``--nodes``, ``--node-values`` and ``--
 
 from __future__ import annotations
 
-import contextlib
 import csv
-import hashlib
-import os
-import shutil
 import tempfile
 from pathlib import Path
 from typing import Any
@@ -35,7 +31,7 @@ import numpy as np
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.web.bundle import bundle_header as read_header
-from brainpainter.web.bundle import members, write_bundle
+from brainpainter.web.bundle import members, write_bundle, written_once
 
 #: The first bytes of a stored connectome upload.
 MAGIC = b"BRAINPAINTER-CONNECTOME/1\n"
@@ -204,26 +200,18 @@ def materialise(data: bytes, root: Path) -> dict[str, str]:
     reused), as the keywords of a run (``connectome``, ``nodes``, ``node_values``, ``node_categories``).
 
     A matrix that named its nodes is written as a CSV with its names (read back by name, as uploaded),
-    else as the ``.npy`` kept.
+    else as the ``.npy`` kept (:func:`~brainpainter.web.bundle.written_once`).
     """
     header, start = bundle_header(data)
-    digest = hashlib.sha256(data).hexdigest()[:32]
-    folder = root / "incoming" / f"connectome-{digest}"
-    if not folder.is_dir():
-        (root / "incoming").mkdir(mode=0o700, parents=True, exist_ok=True)
-        work = Path(tempfile.mkdtemp(prefix=".connectome-", dir=root / "incoming"))
-        names = [str(n) for n in header.get("names", [])]
+
+    def fill(work: Path) -> None:
         for f, content in members(data, header, start):
             target = work / ("matrix.npy" if f["role"] == "matrix" else Path(str(f["name"])).name)
             target.write_bytes(content)
-        if names:
-            _named_csv(work / "matrix.npy", names, work / "matrix.csv")
-        try:
-            os.rename(work, folder)
-        except OSError:  # another process wrote it first: the same content
-            shutil.rmtree(work, ignore_errors=True)
-    with contextlib.suppress(OSError):
-        os.utime(folder)
+        if header.get("names"):
+            _named_csv(work / "matrix.npy", [str(n) for n in header["names"]], work / "matrix.csv")
+
+    folder = written_once(data, root, "connectome", fill)
     out = {"connectome": str(folder / ("matrix.csv" if (folder / "matrix.csv").is_file() else "matrix.npy"))}
     for f in header["files"]:
         if f["role"] != "matrix":
@@ -236,7 +224,6 @@ def connectome_files(data: bytes, options: Any, connectome: bytes | None,
     """The files on disk of the connectome of a run (the run's keywords ``connectome``, ``nodes``, ...,
     and its layers' labels where `options` give none): the upload itself (the connectome alone) or option
     ``connectome``'s; None without one."""
-    import tempfile
 
     if is_connectome_bundle(data):
         if connectome is not None and connectome != data:
