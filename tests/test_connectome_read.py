@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import importlib.metadata
 import tracemalloc
+import warnings
 from pathlib import Path
 
 import nibabel as nib
@@ -40,7 +41,7 @@ def write_csv(path: Path, weights: np.ndarray, names: list[str] | None = None, r
     if names is not None and columns:
         lines.append(sep.join(([""] if rows else []) + names))
     for i, row in enumerate(weights):
-        cells = ["" if np.isnan(v) else repr(float(v)) for v in row]
+        cells = ["NaN" if np.isnan(v) else repr(float(v)) for v in row]
         lines.append(sep.join(([names[i]] if names is not None and rows else []) + cells))
     path.write_text("\n".join(lines) + "\n")
     return path
@@ -103,7 +104,7 @@ def test_one_long_line_is_refused_before_it_is_split(tmp_path, sep):
 def test_spreadsheet_exports_with_a_separator_at_every_line_end(tmp_path, end):
     (tmp_path / "m.csv").write_bytes(end.join([",A,B,", "A,,0.5,", "B,0.5,,", ""]).encode())
     m = read_matrix(tmp_path / "m.csv")
-    assert m.names == ("A", "B") and m.weights[0, 1] == 0.5 and np.isnan(m.weights[1, 1])
+    assert m.names == ("A", "B") and m.weights[0, 1] == 0.5 and m.weights[1, 1] == 0  # empty: no edge
 
 
 def test_npy_mat_edge_and_array_read_alike(tmp_path):
@@ -582,3 +583,13 @@ def test_any_small_text_file_reads_or_is_one_line(tmp_path):
         assert m.names is None or len(m.names) == len(m.weights)
 
     check()
+
+
+def test_an_empty_csv_cell_is_no_edge_without_a_warning(tmp_path, dk):
+    path = tmp_path / "e.csv"
+    path.write_text(",Left-insula,Right-insula,Left-precentral\nLeft-insula,0,,0.3\n"
+                    "Right-insula,,0,0.2\nLeft-precentral,0.3,0.2,\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        conn = read_connectome(path, dk)
+    assert len(conn.edges()[0]) == 2

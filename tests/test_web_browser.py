@@ -477,3 +477,42 @@ def test_page_draws_a_map_over_the_table_each_with_its_own_colour_bar(served, tm
         assert dark[1] > dark[0] + 100, dark
         _shot(page, tmp_path, "layers-page.png")
         assert errors == []
+
+
+def test_page_draws_a_connectome_alone_with_its_bars_and_command(served, tmp_path):
+    """Issue 36: a matrix of two DK regions and its node values chosen in the Connectome field (no
+    table): the report counts the nodes, the preview from above (real renderer) draws the edge in its
+    scale's colour through the glass cortex, the colour bars are the edges' and the nodes', and the
+    command line is render --connectome with the files as uploaded and the page's threshold."""
+    from playwright.sync_api import expect
+
+    (tmp_path / "m.csv").write_text(",Left-precentral,Right-precentral\nLeft-precentral,0,0.8\n"
+                                    "Right-precentral,0.8,0\n")
+    (tmp_path / "v.txt").write_text("1\n3\n")
+    with _page(tmp_path) as (page, errors):
+        page.goto(served.url + "/")
+        expect(page.locator("#tracts_space option[value=template]")).to_have_count(1)
+        page.locator("#size").fill("320x240")
+        page.locator("#atlas").select_option("dk")
+        page.locator("#edge_threshold").fill("0.5")
+        page.locator("#pview").select_option("dorsal")
+        page.locator("#connectome-values").set_input_files(str(tmp_path / "v.txt"))
+        expect(page.locator("#connectome-status")).to_contain_text("Choose the matrix first")
+        page.locator("#connectome-matrix").set_input_files(str(tmp_path / "m.csv"))
+        expect(page.locator("#connectome-status")).to_contain_text("OK: 2 nodes, 2 weights")
+        expect(page.locator("#preview-status")).to_contain_text("dorsal · rendered in", timeout=120_000)
+        bars = page.locator(".cbar:visible")
+        expect(bars).to_have_count(2, timeout=120_000)
+        expect(bars.nth(0).locator(".cbar-label")).to_have_text("Edges: m.csv")  # the files as uploaded
+        expect(bars.nth(1).locator(".cbar-label")).to_have_text("Nodes: v.txt")
+        expect(page.locator("#command")).to_contain_text("--connectome m.csv --node-values v.txt")
+        expect(page.locator("#command")).to_contain_text("--edge-threshold 0.5")
+        img = png_pixels(page.locator("#preview").screenshot())
+        assert _brain(img).mean() > 0.05
+        # the edge (0.8: the top of the page's white-yellow-orange-red gradient, clipped at 0.8) is
+        # saturated; the right node (value 3) is drawn larger than the left (value 1)
+        warm = (img[..., 0].astype(int) > 200) & (img[..., 2].astype(int) < 120)
+        cols = np.nonzero(warm)[1]
+        assert warm.sum() > 30 and cols.max() > img.shape[1] / 2 > cols.min(), warm.sum()
+        _shot(page, tmp_path, "connectome-page.png")
+        assert errors == []

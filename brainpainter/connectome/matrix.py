@@ -51,7 +51,7 @@ class Matrix:
     Attributes
     ----------
     weights : ndarray, (N, N) float64
-        The values as given (NaN where a cell was empty).
+        The values as given (0, no edge, where a cell was empty; NaN where it said NaN).
     names : tuple of str, (N,), or None
         Node names the file gives (a header, a first column, CIFTI parcels); None when it gives none.
     source : str
@@ -304,14 +304,15 @@ def _at(names: list[str], k: int) -> str:
 
 
 def _numbers(cells: list[Any], decimal_comma: bool, source: str, line: int, col0: int) -> NDArray[np.float64]:
-    """One row's cells as floats (empty cells NaN); a cell that is no number is an error."""
+    """One row's cells as floats (an empty cell is 0: no edge, not a NaN dropped with a warning); a cell
+    that is no number is an error."""
     try:
         return np.array(cells, dtype=np.float64)  # the common case: every cell a plain number
     except ValueError:
         pass
     out = np.full(len(cells), np.nan)
     for j, cell in enumerate(cells):
-        value = to_number(cell, decimal_comma)
+        value = 0.0 if cell is None or not str(cell).strip() else to_number(cell, decimal_comma)
         if value is None:
             raise BrainPainterError(
                 f"connectome matrix {source!r}: line {line}, column {j + col0} is {str(cell)[:40]!r}, not a "

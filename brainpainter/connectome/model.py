@@ -44,6 +44,14 @@ class Connectome:
         """Number of nodes N."""
         return len(self.names)
 
+    def digest(self) -> str:
+        """A SHA-256 of everything drawn (names, positions, weights, per-node vectors): equal connectomes,
+        equal digests (a cached painter's key)."""
+        import hashlib
+        import pickle
+
+        return hashlib.sha256(pickle.dumps(self)).hexdigest()
+
     def edges(self) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.float64]]:
         """The edges drawn: finite off-diagonal weights (the upper triangle unless ``directed``).
 

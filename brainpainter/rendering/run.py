@@ -184,6 +184,17 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
                connectome)
 
 
+def layer_summaries(run: Run, painter: Painter) -> dict[str, Any]:
+    """A manifest's ``tracts`` (what was drawn of the tractograms: subsampling notes) and ``connectome``
+    (its nodes and the number of edges drawn), where the run draws them (render's and the web's jobs)."""
+    out: dict[str, Any] = {}
+    if painter.scene.tracts is not None:
+        out["tracts"] = painter.scene.tracts.summary()
+    if run.connectome is not None:
+        out["connectome"] = connectome_summary(run.connectome)
+    return out
+
+
 #: The views of a connectome drawn alone: from above and from the left, through the glass cortex.
 CONNECTOME_VIEWS = ("dorsal", "lateral-left")
 
@@ -395,10 +406,7 @@ def write_images(run: Run, painter: Painter, runner: Runner, chosen: Sequence[in
             "files": [{"file": path.name, "image": table.images[i], "row": i, "view": view.name}
                       for path, (i, view) in zip(files, plan, strict=False)],
         }
-        if painter.scene.tracts is not None:  # what was drawn of the tractograms (subsampling notes)
-            manifest["tracts"] = painter.scene.tracts.summary()
-        if run.connectome is not None:  # its nodes and the number of edges drawn
-            manifest["connectome"] = connectome_summary(run.connectome)
+        manifest.update(layer_summaries(run, painter))
         if tx is not None:
             tx.commit(manifest)  # verify every PNG, then publish them and the manifest last
     return files, images, manifest

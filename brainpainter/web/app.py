@@ -17,6 +17,7 @@ API (all JSON unless said; errors are ``{"error": "one line"}`` with the CLI's m
                                    the query -> {"upload_id", "name", "report"} (web/tracts.py); the id is
                                    option "tracts" of a table's renders, or an upload_id itself (the tracts
                                    alone, coloured by their values table)
+    POST /api/connectomes?name=&size=&role=  a matrix[, nodes, values, categories]: web/connectomes.py
     POST /api/check                {"upload_id", "options"} -> the check report for those options
     POST /api/preview              {"upload_id", "options", "row", "view"} -> image/png
     POST /api/jobs                 {"upload_id", "kind", "options", "figure"|"movie"|"export"} -> 202 {job}
@@ -77,13 +78,12 @@ from brainpainter.web.options import (
     map_check,
     prepare,
     table_layers,
-    tract_check,
     upload_name,
 )
 from brainpainter.web.pool import MAX_PREVIEW_WAITING, Pool, PreviewBusy, PreviewUnavailable, preview_request
 from brainpainter.web.reproduce import reproduce
 from brainpainter.web.store import LimitError, Store, valid_id
-from brainpainter.web.tract_routes import add_tracts_route, layer_uploads
+from brainpainter.web.tract_routes import add_tracts_route, alone_check, layer_uploads
 from brainpainter.web.tracts import is_tract_bundle, is_tract_upload
 from brainpainter.web.upload import (
     check_table,
@@ -312,13 +312,13 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
                                                                                      owner_of(request))
         report = await _check_report(data, name, o, layers)
         # the command line and the Python call that make these images again
-        report["reproduce"] = await work.run(reproduce, data, name, o, layers.tracts, map_upload=layers.map,
-                                             contour_upload=layers.contour)
+        report["reproduce"] = await work.run(reproduce, data, name, o, layers.tracts,
+                                             **{k: v for k, v in layers.kwargs().items() if k != "tracts"})
         return report
 
     async def _check_report(data: bytes, name: str, o: RenderOptions, layers: LayerUploads) -> dict[str, Any]:
-        if is_tract_bundle(data):  # the tracts alone: their report, with the colour scale of `o`
-            return await work.run(tract_check, data, name, o, data_dir=store.root)
+        if (alone := await alone_check(work, data, name, o, store.root)) is not None:  # tracts, connectome
+            return alone
         if is_bundle(data):
             return await work.run(map_check, data, name, o, data_dir=store.root, **layers.kwargs())
         opts = {**o.model_dump(include=set(TableOptions.model_fields)),

@@ -13,9 +13,13 @@ the upload inflated to.
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
 import json
+import os
 import shutil
-from collections.abc import Iterator
+import tempfile
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -63,3 +67,24 @@ def members(data: bytes, header: dict[str, Any], start: int) -> Iterator[tuple[d
         size = int(f["size"])
         yield f, data[start:start + size]
         start += size
+
+
+def written_once(data: bytes, root: Path, kind: str, fill: Callable[[Path], None]) -> Path:
+    """The folder ``root/incoming/<kind>-<sha256>`` of bundle `data`'s files, written once by `fill` (into
+    a new folder renamed into place: a folder present is complete; two uploads never share one).
+
+    Its time is renewed on every use: the store deletes folders of ``incoming`` unused for an hour (a
+    later use writes them again).
+    """
+    folder = root / "incoming" / f"{kind}-{hashlib.sha256(data).hexdigest()[:32]}"
+    if not folder.is_dir():
+        (root / "incoming").mkdir(mode=0o700, parents=True, exist_ok=True)
+        work = Path(tempfile.mkdtemp(prefix=f".{kind}-", dir=root / "incoming"))
+        fill(work)
+        try:
+            os.rename(work, folder)
+        except OSError:  # another process wrote it first: the same content
+            shutil.rmtree(work, ignore_errors=True)
+    with contextlib.suppress(OSError):
+        os.utime(folder)
+    return folder

@@ -44,7 +44,7 @@ SECURITY_HEADERS = [
 JSON_BODY_LIMIT = 64 * 1024
 JSON_BODY_TIME_LIMIT_S = 30.0
 #: Requests whose body is an upload (the upload size and time limits, and upload slots, apply).
-UPLOAD_PATHS = ("/api/uploads", "/api/tracts")
+UPLOAD_PATHS = ("/api/uploads", "/api/tracts", "/api/connectomes")
 MAX_UPLOADS_IN_FLIGHT = 64  # uploads being received from all clients together
 UPLOAD_SLOT_WAIT_S = 5.0  # an upload beyond a client's slots waits this long for one, then gets 429
 STATE_CHANGING = ("POST", "PUT", "DELETE", "PATCH")

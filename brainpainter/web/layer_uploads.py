@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 #: A job's copy of each layer upload its options name (beside ``input.bin``).
-FILES = {"tracts": "tracts.bin", "map": "map.bin", "contour": "contour.bin"}
+FILES = {"tracts": "tracts.bin", "map": "map.bin", "contour": "contour.bin", "connectome": "connectome.bin"}
 
 
 @dataclass(frozen=True)
@@ -29,15 +29,19 @@ class LayerUploads:
         A map bundle (:mod:`brainpainter.web.maps`), drawn over the table's region colours.
     contour : bytes, optional
         A map bundle whose iso-lines are drawn over the map (``--contour``).
+    connectome : bytes, optional
+        A connectome bundle (:mod:`brainpainter.web.connectomes`), drawn as nodes and edges.
     """
 
     tracts: bytes | None = None
     map: bytes | None = None
     contour: bytes | None = None
+    connectome: bytes | None = None
 
     def kwargs(self) -> dict[str, Any]:
         """The keyword arguments of :func:`brainpainter.web.options.prepare` (and of previews, reports)."""
-        return {"tracts": self.tracts, "map_upload": self.map, "contour_upload": self.contour}
+        return {"tracts": self.tracts, "map_upload": self.map, "contour_upload": self.contour,
+                "connectome_upload": self.connectome}
 
     def files(self) -> dict[str, bytes] | None:
         """A job's copies: file name -> bytes (None when there are none)."""

@@ -27,6 +27,7 @@ from brainpainter.rendering.layers import LayerOptions
 from brainpainter.rendering.options import SceneOptions, option_names
 from brainpainter.rendering.settings import RenderSettings, parse_size
 from brainpainter.table.options import TableOptions as ReadOptions
+from brainpainter.web.connectomes import CONNECTOME_FIELDS, connectome_fields
 from brainpainter.web.layer_uploads import layer_maps
 from brainpainter.web.tracts import MAX_WEB_STREAMLINES
 
@@ -38,7 +39,7 @@ if TYPE_CHECKING:
 TRACT_FIELDS = ("tracts", "tracts_space", "tracts_affine", "max_streamlines", "tract_radius", "tract_value")
 #: The options that name another upload drawn as a layer of the main one (a map over a table, tracts, a
 #: contour map's iso-lines).
-LAYER_UPLOADS = ("map", "tracts", "contour")
+LAYER_UPLOADS = ("map", "tracts", "contour", "connectome")
 
 #: Suffixes an uploaded file name may have (only used to sniff the format; never a path).
 UPLOAD_SUFFIXES = (".csv", ".tsv", ".tab", ".txt", ".dat", ".xlsx", ".xlsm", ".xls")
@@ -93,7 +94,7 @@ def _layer_fields() -> dict[str, Any]:
 if TYPE_CHECKING:
     _WithLayers = TableOptions
 else:  # the table's options and each layer's, then render's own
-    _WithLayers = create_model("_WithLayers", __base__=TableOptions, **_layer_fields())
+    _WithLayers = create_model("_WithLayers", __base__=TableOptions, **_layer_fields(), **connectome_fields())
 
 
 class RenderOptions(_WithLayers):
@@ -153,18 +154,26 @@ class RenderOptions(_WithLayers):
     tract_radius: PositiveFloat | None = core(SceneOptions, "tract_radius")
     tract_value: str | None = Field(None, max_length=200,
                                     description=core(SceneOptions, "tract_value").description)
+    connectome: str | None = Field(None, pattern="^[0-9a-f]{32}$", description=(
+        "Upload id of a connectome (POST /api/connectomes: a matrix, its nodes, node values and "
+        "categories) drawn with the table as nodes and edges, as --connectome (--nodes, ...)."))
 
     def table_kwargs(self) -> dict[str, Any]:
         return {name: getattr(self, name) for name in option_names(ReadOptions)}
 
-    def run_kwargs(self, tracts: TractFiles | None = None) -> dict[str, Any]:
+    def run_kwargs(self, tracts: TractFiles | None = None,
+                   connectome: dict[str, str] | None = None) -> dict[str, Any]:
         """Keyword arguments of ``prepare_run`` (without `data`, `atlas` and `hide`).
 
         `tracts`: the files of the ``tracts`` upload on disk (:func:`brainpainter.web.tracts.materialise`),
-        given as the CLI's ``--tracts``, ``--tract-values`` and ``--tracts-affine``.
+        given as the CLI's ``--tracts``, ``--tract-values`` and ``--tracts-affine``; `connectome`: the
+        files of a connectome upload (:func:`brainpainter.web.connectomes.materialise`), given with the
+        connectome's options.
         """
         values = self.model_dump(exclude={"atlas", "size", "transparent", "hide", *LAYER_UPLOADS,
-                                          *TRACT_FIELDS})
+                                          *TRACT_FIELDS, *CONNECTOME_FIELDS})
+        if connectome is not None:
+            values.update(connectome, **self.model_dump(include=set(CONNECTOME_FIELDS)))
         if self.size:  # none: the default size, which an atlas of another shape reshapes (as on the CLI)
             values["width"], values["height"] = parse_size(self.size)
         if self.transparent:
@@ -229,20 +238,21 @@ class Prepared:
         scene = self.run.options.scene
         tv = getattr(self.run, "tract_values", None)
         return {"tracts": scene.tract_spec(), "tract_nodes": tv.nodes if tv is not None else (),
-                "tract_radius": scene.tract_radius, "contours": getattr(self.run, "contours", None)}
+                "tract_radius": scene.tract_radius, "contours": getattr(self.run, "contours", None),
+                "connectome": getattr(self.run, "connectome", None)}
 
 
 def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int | None = None,
             max_pixels: int | None = None, tracts: bytes | None = None,
             data_dir: Path | None = None, map_upload: bytes | None = None,
-            contour_upload: bytes | None = None) -> Prepared:
+            contour_upload: bytes | None = None, connectome_upload: bytes | None = None) -> Prepared:
     """Check `options` against the uploaded table (or map) exactly as ``brainpainter render`` would.
 
     Parameters
     ----------
     data : bytes
-        The uploaded table file, a map bundle (:mod:`brainpainter.web.maps`), or a tract bundle
-        (:mod:`brainpainter.web.tracts`) with a table of bundle values: the tracts alone.
+        The uploaded table file, a map bundle (:mod:`brainpainter.web.maps`), a tract bundle with a table
+        of bundle values (the tracts alone), or a connectome bundle (the connectome alone).
     name : str
         Its display name (from :func:`upload_name`).
     options : RenderOptions
@@ -254,8 +264,8 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
         The tract bundle that option ``tracts`` names (drawn with the table).
     data_dir : Path, optional
         The server's data folder: a tract bundle's files are written under it (``incoming/``).
-    map_upload, contour_upload : bytes, optional
-        The map bundles of options ``map`` (over the table) and ``contour`` (iso-lines over the map).
+    map_upload, contour_upload, connectome_upload : bytes, optional
+        The bundles of options ``map`` (over the table), ``contour`` (iso-lines over it), ``connectome``.
 
     Raises
     ------
@@ -265,12 +275,13 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     from brainpainter.io.output import file_key, safe_name
     from brainpainter.rendering.painter import resolve_hidden
     from brainpainter.rendering.run import prepare_run
+    from brainpainter.web.connectomes import connectome_files, is_connectome_bundle
     from brainpainter.web.maps import is_bundle, read_bundle
     from brainpainter.web.tracts import is_tract_bundle
 
     alone = is_tract_bundle(data)
     files = _tract_files(data, options, tracts, data_dir)
-    kwargs = options.run_kwargs(files)
+    kwargs = options.run_kwargs(files, connectome_files(data, options, connectome_upload, data_dir))
     kwargs.update(layer_maps(options, data, map_upload, contour_upload))
     default = RenderSettings()
     pixels = kwargs.get("width", default.width) * kwargs.get("height", default.height)
@@ -291,7 +302,8 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     elif is_bundle(data):  # a map: its files, read as the CLI reads --lh/--rh (tracts drawn with it)
         run = prepare_run(read_bundle(data), options.atlas, **kwargs)
     else:
-        run = prepare_run(table_stream(data, name), options.atlas, **kwargs)
+        table = None if is_connectome_bundle(data) else table_stream(data, name)  # None: the connectome alone
+        run = prepare_run(table, options.atlas, **kwargs)
     hidden = options.hide_tokens()
     resolve_hidden(hidden, run.table.atlas)
     n = len(run.table.images) * len(run.views)

@@ -252,13 +252,15 @@ def preview_settings(settings: Any, max_width: int) -> Any:
 
 def preview_request(data: bytes, name: str, options: Any, row: int | str, view: str, config: ServerConfig,
                     tracts: bytes | None = None, data_dir: Any = None,
-                    map_upload: bytes | None = None, contour_upload: bytes | None = None) -> dict[str, Any]:
+                    map_upload: bytes | None = None, contour_upload: bytes | None = None,
+                    connectome_upload: bytes | None = None) -> dict[str, Any]:
     """The preview process's request for `row` (index or image name) of an upload from `view`.
 
     `options` is a :class:`brainpainter.web.options.RenderOptions`; a map's colours are per vertex
     (``coloring`` ``"vertices"``); `tracts` is the tract upload option ``tracts`` names (its spec, nodes
     and radius go with the request: the preview painter's scene); `map_upload` and `contour_upload` the
-    maps options ``map`` (drawn over the table's regions) and ``contour`` name. Raises the CLI's one-line
+    maps options ``map`` (drawn over the table's regions) and ``contour`` name, `connectome_upload` the
+    connectome option ``connectome`` names. Raises the CLI's one-line
     errors.
     """
     import re
@@ -271,7 +273,8 @@ def preview_request(data: bytes, name: str, options: Any, row: int | str, view: 
     if views[0].content == "flat":  # a map's run colours the flat maps' vertices when it draws a flat view
         options = options.model_copy(update={"views": views[0].name})
     prep = prepare(data, name, options, max_pixels=config.max_pixels, tracts=tracts,
-                   data_dir=data_dir, map_upload=map_upload, contour_upload=contour_upload)
+                   data_dir=data_dir, map_upload=map_upload, contour_upload=contour_upload,
+                   connectome_upload=connectome_upload)
     table = prep.run.table
     if isinstance(row, int) or re.fullmatch(r"[0-9]{1,9}", row):
         i = int(row)

@@ -17,6 +17,7 @@ import shlex
 from pathlib import PurePosixPath
 from typing import Any
 
+from brainpainter.web.connectomes import CONNECTOME_FIELDS
 from brainpainter.web.options import LAYER_UPLOADS, TRACT_FIELDS, RenderOptions
 
 #: Options that apply to per-vertex maps only (left out of a table's command).
@@ -43,7 +44,8 @@ def _same(name: str, value: Any, default: Any) -> bool:
     return bool(value == default)
 
 
-def changed(options: RenderOptions, *, kind: str, tracts: bool) -> list[tuple[str, Any]]:
+def changed(options: RenderOptions, *, kind: str, tracts: bool,
+            connectome: bool = False) -> list[tuple[str, Any]]:
     """The options that differ from their defaults, as ``(name, value)`` in the options' order.
 
     Parameters
@@ -53,6 +55,8 @@ def changed(options: RenderOptions, *, kind: str, tracts: bool) -> list[tuple[st
         What is drawn (map options are left out of a table's command; a table with a map over it: map).
     tracts : bool
         Whether tracts are drawn (tract options are left out otherwise).
+    connectome : bool
+        Whether a connectome is drawn (its edge options are left out otherwise).
 
     Notes
     -----
@@ -63,7 +67,7 @@ def changed(options: RenderOptions, *, kind: str, tracts: bool) -> list[tuple[st
     for name, info in RenderOptions.model_fields.items():
         value = getattr(options, name)
         if name in LAYER_UPLOADS or (name in TRACT_FIELDS and not tracts) or (
-                name in MAP_ONLY and kind != "map"):
+                name in MAP_ONLY and kind != "map") or (name in CONNECTOME_FIELDS and not connectome):
             continue
         if name == "hide":
             value = options.hide_tokens()
@@ -84,15 +88,19 @@ def inputs(data: bytes, name: str) -> tuple[str, list[str], list[tuple[str, str]
 
     Returns
     -------
-    kind : {"table", "map", "tracts"}
+    kind : {"table", "map", "tracts", "connectome"}
     positional : list of str
-        The table (or the tracts' values table, tracts alone; or a CIFTI file).
+        The table (or the tracts' values table, tracts alone; or a CIFTI file; none for a connectome
+        alone).
     options : list of (str, str)
         ``("lh", name)``, ``("rh", name)``, ``("volume", name)`` of a map.
     """
+    from brainpainter.web.connectomes import is_connectome_bundle
     from brainpainter.web.maps import bundle_header, is_bundle
     from brainpainter.web.tracts import is_tract_bundle, report_of
 
+    if is_connectome_bundle(data):
+        return "connectome", [], []
     if is_tract_bundle(data):
         values = report_of(data).get("values") or {}
         return "tracts", [values["file"]] if values.get("file") else [], []
@@ -122,6 +130,15 @@ def tract_inputs(tracts: bytes, alone: bool) -> list[tuple[str, str]]:
     if values.get("file") and not alone:
         out.append(("tract_values", values["file"]))
     return out
+
+
+def connectome_inputs(connectome: bytes) -> list[tuple[str, str]]:
+    """``--connectome`` and, where uploaded, ``--nodes``, ``--node-values``, ``--node-categories``: the
+    files by the client's names (made safe)."""
+    from brainpainter.web.connectomes import ROLES, report_of
+
+    files = report_of(connectome)["files"]
+    return [("connectome" if role == "matrix" else role, files[role]) for role in ROLES if role in files]
 
 
 def _flag(name: str) -> str:
@@ -186,7 +203,8 @@ def media_options(kind: str, params: dict[str, Any]) -> tuple[str, list[tuple[st
 
 def reproduce(data: bytes, name: str, options: RenderOptions, tracts: bytes | None = None,
               kind: str = "images", params: dict[str, Any] | None = None, *,
-              map_upload: bytes | None = None, contour_upload: bytes | None = None) -> dict[str, str]:
+              map_upload: bytes | None = None, contour_upload: bytes | None = None,
+              connectome_upload: bytes | None = None) -> dict[str, str]:
     """The command and the Python call that make the images of `options` from the upload `data` (named
     `name`): ``brainpainter render``, or ``figure`` / ``movie`` for those jobs (`kind`, with their
     `params`).
@@ -208,6 +226,8 @@ def reproduce(data: bytes, name: str, options: RenderOptions, tracts: bytes | No
         The map bundle option ``map`` names (drawn over the table: its ``--lh``/``--rh`` or ``--volume``).
     contour_upload : bytes, optional
         The map bundle option ``contour`` names (``--contour``).
+    connectome_upload : bytes, optional
+        The connectome bundle option ``connectome`` names (``--connectome``, ``--nodes``, ...).
 
     Returns
     -------
@@ -227,7 +247,10 @@ def reproduce(data: bytes, name: str, options: RenderOptions, tracts: bytes | No
         for key, value in tract_inputs(drawn, upload == "tracts"):
             merged.setdefault(key, []).append(value)
         pairs += [(k, v if k == "tracts" else v[0]) for k, v in merged.items()]
-    pairs += changed(options, kind=upload, tracts=drawn is not None)
+    network = data if upload == "connectome" else connectome_upload
+    if network is not None:
+        pairs += connectome_inputs(network)
+    pairs += changed(options, kind=upload, tracts=drawn is not None, connectome=network is not None)
     command, out = "render", OUT
     if kind == "export":  # an export draws no image: no views, size or quality
         from brainpainter.media.export import EXPORT_OPTIONS

@@ -1,14 +1,17 @@
-"""The route of tractogram uploads (``POST /api/tracts``) and the uploads a render's options name (tracts, a
-map over a table: :class:`~brainpainter.web.layer_uploads.LayerUploads`)."""
+"""The routes of tractogram and connectome uploads (``POST /api/tracts``, ``POST /api/connectomes``) and the
+uploads a render's options name (tracts, a map over a table, a connectome:
+:class:`~brainpainter.web.layer_uploads.LayerUploads`)."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Annotated, Any
 
 from fastapi import FastAPI, Query, Request
 from starlette.concurrency import run_in_threadpool
 
 from brainpainter.web.config import ServerConfig
+from brainpainter.web.connectomes import ROLES
 from brainpainter.web.http import (
     ApiError,
     Work,
@@ -26,8 +29,9 @@ from brainpainter.web.upload import read_tract_upload
 
 
 def add_tracts_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
-    """Uploads of tractograms (web/tracts.py)."""
+    """Uploads of tractograms (web/tracts.py) and of connectomes (:func:`add_connectome_route`)."""
     work: Work = app.state.work
+    add_connectome_route(app, config, store)
 
     @app.post("/api/tracts", tags=["api"], openapi_extra={"requestBody": {
         "required": True, "content": {"application/octet-stream": {"schema": {"type": "string",
@@ -72,6 +76,80 @@ def add_tracts_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
         return {"upload_id": upload_id, "name": shown, "size": size, "report": report}
 
 
+def add_connectome_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
+    """Uploads of connectomes (web/connectomes.py)."""
+    from brainpainter.web.connectomes import MAX_NODES
+    from brainpainter.web.upload import read_connectome_upload
+
+    work: Work = app.state.work
+
+    @app.post("/api/connectomes", tags=["api"], openapi_extra={"requestBody": {
+        "required": True, "content": {"application/octet-stream": {"schema": {"type": "string",
+                                                                              "format": "binary"}}}}})
+    async def upload_connectome(request: Request,
+                                name: Annotated[list[str] | None, Query(description=(
+                                    "File names, in the body's order: the matrix (CSV/TSV/text, .edge, .npy, "
+                                    ".mat, .pconn.nii), then optionally a nodes file (name,x,y,z or .node), "
+                                    "node values, node categories."))] = None,
+                                sizes: Annotated[list[int] | None, Query(alias="size", description=(
+                                    "With several names: each file's bytes, in the body's order."))] = None,
+                                role: Annotated[list[str] | None, Query(description=(
+                                    "The role of each file, one of matrix, nodes, node_values, "
+                                    "node_categories (default: in that order)."))] = None,
+                                ) -> dict[str, Any]:
+        """Upload a connectome and get its report (nodes, edges); nothing is kept when it cannot be read."""
+        from brainpainter.web.tracts import member_name
+
+        require_octet_stream(request, "the files")
+        names, sizes = name or [], sizes or []
+        if not names or max(len(names), len(sizes)) > len(ROLES) or any(len(n) > 200 for n in names):
+            raise ApiError(422, f"give 1 to {len(ROLES)} file names (name=matrix.csv&name=nodes.csv...), "
+                                "each at most 200 characters.")
+        await disk_budget(store, config)
+        shown = " + ".join(member_name(n) for n in names)
+        path, size = await receive_body(request, store.root)
+        try:
+            data, report = await work.run(
+                read_connectome_upload, path, names, sizes, role or [], store.root / "incoming",
+                max_nodes=MAX_NODES, time_limit_s=config.parse_time_limit_s)
+        finally:
+            path.unlink(missing_ok=True)
+        upload_id = await run_in_threadpool(store.add_upload, client_of(request), shown, data,
+                                            config.result_ttl_s, config.max_uploads_per_client,
+                                            owner=owner_of(request))
+        return {"upload_id": upload_id, "name": shown, "size": size, "report": report}
+
+
+async def alone_check(work: Work, data: bytes, name: str, options: RenderOptions,
+                      data_dir: Path) -> dict[str, Any] | None:
+    """The check report of tracts or a connectome uploaded as the main upload (drawn alone: their report
+    with the colour scales of `options`); None for another upload."""
+    from brainpainter.web.connectomes import is_connectome_bundle
+    from brainpainter.web.options import tract_check
+
+    check: Any = (tract_check if is_tract_bundle(data) else connectome_check if is_connectome_bundle(data)
+                  else None)
+    return None if check is None else dict(await work.run(check, data, name, options, data_dir=data_dir))
+
+
+def connectome_check(data: bytes, name: str, options: RenderOptions, *,
+                     data_dir: Path | None = None) -> dict[str, Any]:
+    """The report of a connectome upload drawn alone (:func:`report_of`) with the colour bars of its
+    edges and nodes under `options` (a :class:`~brainpainter.web.options.RenderOptions`) and the number
+    of edges drawn (``drawn``)."""
+    from brainpainter.rendering.connectome_layers import connectome_summary
+    from brainpainter.web.connectomes import report_of
+    from brainpainter.web.options import layers_report, prepare, scale_report
+
+    report = report_of(data)
+    run = prepare(data, name, options, data_dir=data_dir).run
+    report["scale"] = scale_report(run.scale)
+    report["layers"] = layers_report(run)
+    drawn = connectome_summary(run.connectome) if run.connectome is not None else {}
+    report["drawn"] = {k: v for k, v in drawn.items() if k != "nodes"}  # n_edges, weight_range
+    return report
+
+
 def tracts_of(store: Store, options: RenderOptions, owner: str) -> bytes | None:
     """The tract upload of `owner` that option ``tracts`` names (None without it)."""
     if options.tracts is None:
@@ -84,7 +162,7 @@ def tracts_of(store: Store, options: RenderOptions, owner: str) -> bytes | None:
 
 
 def layer_uploads(store: Store, options: RenderOptions, owner: str) -> LayerUploads:
-    """The uploads of `owner` that `options` name (``tracts``, ``map``, ``contour``).
+    """The uploads of `owner` that `options` name (``tracts``, ``map``, ``contour``, ``connectome``).
 
     Raises
     ------
@@ -101,4 +179,10 @@ def layer_uploads(store: Store, options: RenderOptions, owner: str) -> LayerUplo
             raise ApiError(404, f"the map upload of option {name} was not found (it expired, the id is "
                                 "wrong, or it is not a map); upload the map again.")
         maps[name] = None if got is None else got[1]
-    return LayerUploads(tracts_of(store, options, owner), **maps)
+    from brainpainter.web.connectomes import is_connectome_bundle
+
+    got = None if options.connectome is None else store.get_upload(options.connectome, owner)
+    if options.connectome is not None and (got is None or not is_connectome_bundle(got[1])):
+        raise ApiError(404, "the connectome upload of option connectome was not found (it expired, the id is "
+                            "wrong, or it is no connectome); upload the connectome again.")
+    return LayerUploads(tracts_of(store, options, owner), **maps, connectome=None if got is None else got[1])

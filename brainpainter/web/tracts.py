@@ -28,11 +28,9 @@ painter), and the run gets the paths exactly as the CLI's ``--tracts``,
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import os
 import re
-import shutil
 import tempfile
 import zipfile
 from dataclasses import dataclass
@@ -42,7 +40,7 @@ from typing import Any
 from brainpainter.errors import BrainPainterError
 from brainpainter.tracts.model import SUFFIXES
 from brainpainter.web.bundle import bundle_header as read_header
-from brainpainter.web.bundle import members, write_bundle
+from brainpainter.web.bundle import members, write_bundle, written_once
 
 #: The first bytes of a stored tract upload.
 MAGIC = b"BRAINPAINTER-TRACTS/2\n"
@@ -405,27 +403,17 @@ class TractFiles:
 
 
 def materialise(data: bytes, root: Path) -> TractFiles:
-    """The files of tract bundle `data` in ``root/incoming/tracts-<sha256>`` (written once, then reused).
-
-    The folder's time is renewed on every use: the store deletes folders of ``incoming`` unused for an
-    hour (a later use writes them again).
-    """
+    """The files of tract bundle `data` in ``root/incoming/tracts-<sha256>`` (written once, then reused:
+    :func:`~brainpainter.web.bundle.written_once`)."""
     header, start = bundle_header(data)
-    digest = hashlib.sha256(data).hexdigest()[:32]
-    folder = root / "incoming" / f"tracts-{digest}"
-    if not folder.is_dir():
-        (root / "incoming").mkdir(mode=0o700, parents=True, exist_ok=True)
-        work = Path(tempfile.mkdtemp(prefix=".tracts-", dir=root / "incoming"))
+
+    def fill(work: Path) -> None:
         for f, content in members(data, header, start):
             sub = work / str(f["role"])
             sub.mkdir(exist_ok=True)
             (sub / member_name(str(f["name"]))).write_bytes(content)
         (work / "bundles").mkdir(exist_ok=True)
-        try:
-            os.rename(work, folder)
-        except OSError:  # another process wrote it first: the same content
-            shutil.rmtree(work, ignore_errors=True)
-    with contextlib.suppress(OSError):
-        os.utime(folder)
+
+    folder = written_once(data, root, "tracts", fill)
     tables = sorted((folder / "values").glob("*")) if (folder / "values").is_dir() else []
     return TractFiles(folder, folder / "bundles", tables[0] if tables else None)

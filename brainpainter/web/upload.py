@@ -328,3 +328,69 @@ def _tracts_main(conn: Any, work: str, files: list[str], max_files: int, max_str
                                "a .trk, .tck or .trx file (docs/tracts.md)."))
     finally:
         conn.close()
+
+
+def read_connectome_upload(path: Path, names: list[str], sizes: list[int], roles: list[str], folder: Path, *,
+                           max_nodes: int, time_limit_s: float) -> tuple[bytes, dict[str, Any]]:
+    """The received body at `path` (the files `names`, `sizes` bytes each, `roles` each) read as a
+    connectome (:mod:`brainpainter.web.connectomes`): ``(connectome bundle, report)``; raises the first
+    error as one line.
+
+    Parameters
+    ----------
+    folder : Path
+        A private folder for the work (under the server's data folder; removed after).
+    max_nodes : int
+        Most nodes a matrix may have.
+    time_limit_s : float
+        The reading process is killed after this many seconds.
+    """
+    from brainpainter.web.connectomes import ROLES, roles_of
+    from brainpainter.web.maps import split_body
+    from brainpainter.web.tracts import member_name
+
+    roles = roles_of(names, roles)
+    parts = split_body(path.read_bytes(), names, sizes, max_files=len(ROLES))
+    work = Path(tempfile.mkdtemp(prefix="connectome-upload-", dir=folder))
+    try:
+        (work / "in").mkdir()
+        written: dict[str, str] = {}
+        for role, (name, body) in zip(roles, parts, strict=True):
+            (work / "in" / role).mkdir()
+            target = work / "in" / role / member_name(name)
+            target.write_bytes(body)
+            written[role] = str(target)
+        shown = member_name(names[roles.index("matrix")])
+        report = _in_child(
+            _connectome_main, (str(work), written, max_nodes), "brainpainter-read-connectome", time_limit_s,
+            f"reading {shown!r} took longer than this server's limit of {time_limit_s:g} s; give a smaller "
+            "matrix, or render it with 'brainpainter render --connectome' on your own computer.",
+            f"reading {shown!r} stopped unexpectedly (too large for this server?); give a smaller matrix.")
+        return (work / "bundle.bin").read_bytes(), report
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+def _connectome_main(conn: Any, work: str, files: dict[str, str], max_nodes: int) -> None:
+    """Entry point of the connectome reading process: send ``("ok", report)`` or ``("error", line)``."""
+    from brainpainter.web.connectomes import ROLES, build_connectome_bundle
+    from brainpainter.web.worker import die_with_parent, limit_memory
+
+    die_with_parent()
+    limit_memory()
+    try:
+        conn.send(("ok", build_connectome_bundle(Path(work), {r: Path(p) for r, p in files.items()},
+                                                 max_nodes)))
+    except BrainPainterError as exc:
+        line = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        for role in ROLES:
+            line = line.replace(f"{work}/in/{role}/", "")
+        conn.send(_failed(exc, line.replace(work + "/", "")))
+    except MemoryError:
+        conn.send(("error", "the connectome needs more memory than this server gives one upload; give a "
+                            "smaller matrix."))
+    except Exception as exc:
+        conn.send(_failed(exc, f"cannot read the connectome ({type(exc).__name__}); check that the matrix "
+                               "is a CSV/TSV/text matrix, .edge, .npy, .mat or .pconn.nii."))
+    finally:
+        conn.close()

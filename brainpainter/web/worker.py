@@ -48,21 +48,20 @@ class PainterCache:
 
     def get(self, atlas: Any, surface: str, hidden: list[str], settings: Any,
             coloring: str = "regions", tracts: Any = None, tract_nodes: Any = (),
-            tract_radius: float | None = None, contours: Any = None) -> Any:
-        """A loaded painter; `coloring` ``"vertices"`` for a map run (a per-vertex scene); `tracts` (a
-        :class:`~brainpainter.tracts.model.TractSpec`), `tract_nodes`, `tract_radius` and `contours` (a
-        :class:`~brainpainter.maps.outlines.Contours`) as :class:`~brainpainter.rendering.painter.Painter`
-        takes them (part of the key: the spec names content-addressed files, the contours by a digest of
-        their values, so two uploads never share a painter)."""
+            tract_radius: float | None = None, contours: Any = None, connectome: Any = None) -> Any:
+        """A loaded painter; `coloring` ``"vertices"`` for a map run (a per-vertex scene); `tracts`,
+        `tract_nodes`, `tract_radius`, `contours` and `connectome` as :class:`~brainpainter.rendering.painter
+        .Painter` takes them (part of the key: the spec names content-addressed files, the contours and the
+        connectome by a digest of their values, so two uploads never share a painter)."""
         from brainpainter.rendering.painter import Painter
 
         key = painter_key(atlas.name, surface, hidden, settings, coloring, tracts, tract_nodes, tract_radius,
-                          contours)
+                          contours, connectome)
         painter = self._painters.get(key)
         if painter is None:
             painter = Painter(atlas, "fsaverage", surface, hidden, settings, self.renderer, coloring=coloring,
                               tracts=tracts, tract_nodes=tract_nodes, tract_radius=tract_radius,
-                              contours=contours)
+                              contours=contours, connectome=connectome)
             painter.load()
             self._painters[key] = painter
             while len(self._painters) > self.size:
@@ -86,14 +85,16 @@ class PainterCache:
 
 def painter_key(atlas: str, surface: str, hidden: list[str], settings: Any, coloring: str = "regions",
                 tracts: Any = None, tract_nodes: Any = (),
-                tract_radius: float | None = None, contours: Any = None) -> tuple[Any, ...]:
+                tract_radius: float | None = None, contours: Any = None,
+                connectome: Any = None) -> tuple[Any, ...]:
     """What makes a painter's scene: a cached painter is reused only for the same key."""
     import hashlib
 
     drawn = None if contours is None else (contours.levels, contours.regions, hashlib.sha256(b"".join(
         h.encode() + v.tobytes() for h, v in sorted(contours.values.items()))).hexdigest())
+    network = None if connectome is None else connectome.digest()
     return (atlas, surface, tuple(sorted(hidden)), settings, coloring, tracts,
-            tuple((str(n), int(k)) for n, k in tract_nodes), tract_radius, drawn)
+            tuple((str(n), int(k)) for n, k in tract_nodes), tract_radius, drawn, network)
 
 
 def _orphaned(parent: int) -> bool:
@@ -284,7 +285,7 @@ def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
     from brainpainter.io.output import PngWriter
     from brainpainter.io.transaction import MANIFEST
     from brainpainter.rendering.parallel import SerialRunner
-    from brainpainter.rendering.run import paint, png_metadata, run_settings
+    from brainpainter.rendering.run import layer_summaries, paint, png_metadata, run_settings
     from brainpainter.web.job_zip import zip_name
 
     data, prep = _prepared(folder, job)
@@ -310,8 +311,7 @@ def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
                for name, (i, view) in zip(names, plan, strict=True)]
     manifest = {"software": {"brainpainter": __version__}, "input": table.summary(), "settings": settings,
                 "files": entries}
-    if painter.scene.tracts is not None:  # what was drawn of the tractograms, as render's manifest says
-        manifest["tracts"] = painter.scene.tracts.summary()
+    manifest.update(layer_summaries(run, painter))  # tracts and connectome drawn, as render's manifest
     manifest["reproduce"] = _reproduced(folder, job, data, prep)
     publish_drawn(folder, names, manifest, (run.settings.width, run.settings.height))
     # the zip is not stored (it would copy every PNG): it is made while it is downloaded
@@ -372,7 +372,7 @@ def _reproduced(folder: Path, job: dict[str, Any], data: bytes, prep: Any) -> di
     if job["kind"] == "export":  # the command names the row by its image name
         params["image"] = prep.run.table.images[params.get("row", 0)]
     return reproduce(data, job["input_name"], prep.options, layers.tracts, job["kind"], params,
-                     map_upload=layers.map, contour_upload=layers.contour)
+                     **{k: v for k, v in layers.kwargs().items() if k != "tracts"})
 
 
 def _media_manifest(folder: Path, job: dict[str, Any], data: bytes, prep: Any, name: str) -> list[str]:
@@ -488,7 +488,7 @@ def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int
                 painter = painters.get(atlas, req["surface"], req["hidden"], req["settings"],
                                        req.get("coloring", "regions"), req.get("tracts"),
                                        req.get("tract_nodes", ()), req.get("tract_radius"),
-                                       req.get("contours"))
+                                       req.get("contours"), req.get("connectome"))
                 pixels = painter.paint_colors(req["colors"], req["view"])
                 conn.send(("ok", png_bytes(pixels), int((time.perf_counter() - t0) * 1000)))
             except BrainPainterError as exc:

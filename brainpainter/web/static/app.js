@@ -6,10 +6,14 @@ const $ = (id) => document.getElementById(id);
 const state = { uploadId: null, files: null, name: null, report: null, meta: null, isMap: false,
                 previewCtl: null, previewTimer: null, previewUrl: null, seq: 0, scale: null,
                 tractsId: null, tractReport: null, tractFiles: null, summary: "", layers: [],
-                mapId: null, mapReport: null, contourId: null, contourReport: null };
+                mapId: null, mapReport: null, contourId: null, contourReport: null,
+                connectomeId: null, connectomeReport: null };
 const DEFAULT_VIEWS = ["lateral-left", "medial-left", "subcortical"];
 const MAP_VIEWS = ["lateral-left", "medial-left", "lateral-right", "medial-right"];  // a map's default
 const TRACT_VIEWS = ["subcortical", "subcortical-dorsal"];  // tracts alone: the views that show them
+const CONNECTOME_VIEWS = ["dorsal", "lateral-left"];  // a connectome alone: through the glass cortex
+const CONNECTOME_ROLES = { "connectome-matrix": "matrix", "connectome-nodes": "nodes",
+                           "connectome-values": "node_values", "connectome-categories": "node_categories" };
 
 function el(tag, attrs = {}, ...children) {
   const node = document.createElement(tag);
@@ -110,7 +114,8 @@ function fillBar(bar, layer) {
 
 // a layer's label as the page shows it: the layer's kind with its label (a file name, or the one given)
 function shownLabel(layer) {
-  const kind = { regions: "Regions", map: "Map", tracts: "Tracts" }[layer.kind] || layer.kind;
+  const kind = { regions: "Regions", map: "Map", tracts: "Tracts", edges: "Edges", nodes: "Nodes" }[layer.kind]
+    || layer.kind;
   return layer.label ? `${kind}: ${layer.label}` : kind;
 }
 
@@ -211,6 +216,10 @@ function options() {
     tracts_space: $("tracts_space").value || undefined, cortex: $("cortex").value || undefined,
     tracts_affine: textOrNull("tracts_affine"), max_streamlines: numberOrNull("max_streamlines") ?? undefined,
     tract_radius: numberOrNull("tract_radius"), tract_value: textOrNull("tract_value"),
+    // a connectome: drawn with the table (option connectome), or alone (the connectome is the upload)
+    connectome: state.connectomeId && state.connectomeId !== state.uploadId ? state.connectomeId : null,
+    edge_threshold: textOrNull("edge_threshold"), top_edges: numberOrNull("top_edges"),
+    edges_of: textOrNull("edges_of"), directed: $("directed").checked,
     ...layerOptions(),
   };
 }
@@ -221,6 +230,7 @@ const LAYER_NAMES = { map: "Map", tracts: "Tracts" };
 // The first layer: what the main upload is (its colours are the plain ones).
 function mainKind() {
   if (state.isMap) return "map";
+  if (state.uploadId && state.uploadId === state.connectomeId) return "edges";
   return state.uploadId && state.uploadId === state.tractsId ? "tracts" : "regions";
 }
 
@@ -373,8 +383,9 @@ function noUpload() {
 
 // Only the options that apply to what was uploaded (all of them before any upload).
 function showFieldsets() {
-  const any = Boolean(state.uploadId || state.tractsId);
+  const any = Boolean(state.uploadId || state.tractsId || state.connectomeId);
   $("tract-options").hidden = any && !state.tractsId;
+  $("connectome-options").hidden = any && !state.connectomeId;
   const over = overLayers();
   $("map-box").hidden = any && (state.isMap || mainKind() === "tracts");
   $("contour-box").hidden = any && !state.isMap && !over.map;
@@ -388,7 +399,7 @@ function showFieldsets() {
 function setDefaultViews(wanted) {
   const boxes = [...document.querySelectorAll('input[name="views"]')];
   const now = boxes.filter((b) => b.checked).map((b) => b.value).join(",");
-  if (![DEFAULT_VIEWS, MAP_VIEWS, TRACT_VIEWS].some((v) => now === v.join(","))) return;
+  if (![DEFAULT_VIEWS, MAP_VIEWS, TRACT_VIEWS, CONNECTOME_VIEWS].some((v) => now === v.join(","))) return;
   for (const b of boxes) b.checked = wanted.includes(b.value);
 }
 
@@ -408,6 +419,7 @@ function showReport(r) {
   const add = (k, v) => dl.append(el("dt", { text: k }), el("dd", { text: v }));
   if (r.kind === "map") { showMapReport(r, box, dl, add); showScaleUsed(state.scale, r.values.range); return; }
   if (r.kind === "tracts") { showTractReport(r, box, dl, add); showScaleUsed(state.scale, null); return; }
+  if (r.kind === "connectome") { showConnectomeReport(r, box, dl, add); showScaleUsed(state.scale, null); return; }
   showScaleUsed(state.scale, r.values.range);
   for (const i of r.inputs) { add("format", i.format); add("shape", i.shape.description); }
   add("atlas", r.atlas.name + (r.atlas.inferred ? ` (inferred: ${r.atlas.reason})` : " (given)"));
@@ -488,6 +500,66 @@ function showTractReport(r, box, dl, add) {
     for (const t of r.notes) ul.append(el("li", { text: pageWords(t) }));
     box.append(ul);
   }
+}
+
+function showConnectomeReport(r, box, dl, add) {
+  state.scale = r.scale || null;
+  state.layers = r.layers || [];
+  showBars(state.layers);
+  add("nodes", `${r.nodes}${r.named ? " (named by the matrix)" : " (in the atlas's order)"}`);
+  add("weights", String(r.edges));
+  if (r.drawn) add("edges drawn", String(r.drawn.n_edges));
+  add("files", Object.values(r.files).join(", "));
+  box.append(dl);
+}
+
+// -- a connectome: its own upload (matrix, nodes, node values, categories), with the table or alone -------
+async function uploadConnectome() {
+  const files = [], roles = [];
+  for (const [id, role] of Object.entries(CONNECTOME_ROLES)) {
+    const f = $(id).files[0];
+    if (f) { files.push({ blob: f, name: f.name, size: f.size }); roles.push(role); }
+  }
+  if (!roles.includes("matrix")) { $("connectome-status").textContent = "Choose the matrix first."; return; }
+  const q = new URLSearchParams();
+  files.forEach((f, i) => { q.append("name", f.name); q.append("size", String(f.size)); q.append("role", roles[i]); });
+  const shown = files.map((f) => f.name).join(" + ");
+  say("connectome-error", "");
+  $("connectome-status").textContent = "Reading the connectome…";
+  try {
+    const res = await api(`/api/connectomes?${q}`, { method: "POST", body: new Blob(files.map((f) => f.blob)),
+                                                     headers: { "content-type": "application/octet-stream" } });
+    const j = await res.json();
+    const alone = !state.uploadId || state.uploadId === state.connectomeId;
+    state.connectomeId = j.upload_id; state.connectomeReport = j.report;
+    $("connectome-status").textContent = `OK: ${j.report.summary}`;
+    $("connectome-clear").disabled = false;
+    if (alone) {  // no table: the connectome alone, through the glass cortex
+      state.uploadId = j.upload_id; state.files = null; state.isMap = false;
+      setDefaultViews(CONNECTOME_VIEWS);
+      showReport(j.report);
+      fillRows([files[0].name.split(".")[0] || "connectome"], 1);
+      setReady(true);
+    }
+    showFieldsets();
+    schedulePreview(0);
+  } catch (e) {
+    say("connectome-error", refused(shown, e.message));
+    $("connectome-status").textContent = state.connectomeId ? `Still drawn: ${state.connectomeReport.summary}`
+      : "No connectome is drawn.";
+    $("connectome-clear").disabled = false;
+  }
+}
+
+function clearConnectome() {
+  if (state.uploadId && state.uploadId === state.connectomeId) {
+    state.uploadId = null; setReady(false); $("report").textContent = "";
+  }
+  state.connectomeId = null; state.connectomeReport = null;
+  for (const id of Object.keys(CONNECTOME_ROLES)) $(id).value = "";
+  $("connectome-status").textContent = ""; $("connectome-clear").disabled = true; say("connectome-error", "");
+  showFieldsets();
+  schedulePreview(0);
 }
 
 // -- tracts: their own upload, drawn with the table (option tracts) or alone --------------------
@@ -746,6 +818,8 @@ function wire() {
     if (list.length) uploadTracts(picked(list));
   });
   $("tract-clear").addEventListener("click", clearTracts);
+  for (const id of Object.keys(CONNECTOME_ROLES)) $(id).addEventListener("change", uploadConnectome);
+  $("connectome-clear").addEventListener("click", clearConnectome);
   for (const kind of ["map", "contour"]) {
     $(`${kind}-files`).addEventListener("change", () => {
       const list = $(`${kind}-files`).files;
