@@ -254,7 +254,8 @@ def test_the_entry_point_cache_follows_installs(site_folder, change):
     # (a few ms) may leave unchanged by a change this fast: a new process would not have that listing
     importlib.invalidate_caches()
     registry.reset_all()
-    assert set(registry.renderers.names()) - {"blender"} == expected
+    # (other tests' renderers registered in this process, e.g. the conformance suite's, are not ours)
+    assert set(registry.renderers.names()) & {"toy", "toy2", "other"} == expected
 
 
 def test_a_corrupt_entry_point_cache_is_read_again(site_folder):
