@@ -93,6 +93,30 @@ def test_lit_tubes_are_shaded_and_glass_covers_them(tiny, bundles):
     assert np.ptp(img[reddish][:, 0].astype(int)) > 30  # lit: not one flat colour
 
 
+def _tubes_built(painter) -> list[bool]:
+    return [p.tubes_built for p in painter.scene.geometry._lazy.built_parts() if p.kind == "tract"]
+
+
+def test_a_default_render_draws_the_centrelines_and_builds_no_tubes(tiny, bundles):
+    with _painter(tiny, bundles, (("AF_left", 1),), shading="default", quality="default") as p:
+        img = p.paint_colors({"tract:AF_left": RED}, get_view("subcortical"))
+        assert p.load().draws_tubes is False
+        assert _tubes_built(p) == [False, False]  # tracts-lh and tracts-rh: lines only
+    assert ((img[..., 0] > img[..., 1] + 40) & (img[..., 0] > img[..., 2] + 40)).sum() > 200
+
+
+def test_cycles_and_the_export_get_the_tubes(tiny, bundles):
+    from brainpainter.media.export import tract_meshes
+
+    with _painter(tiny, bundles, (("AF_left", 1),), shading="default", quality="high") as p:
+        assert p.load().draws_tubes is True
+        assert _tubes_built(p) == [True, True]  # uploaded to Blender's scene
+    with _painter(tiny, bundles, (("AF_left", 1),)) as p:
+        meshes = tract_meshes(p.scene, {"tract:AF_left": RED})
+    assert [len(m.faces) for m in meshes] == [40 * 31 * 3 * 2] * 2  # 40 streamlines of 32 points, 3 sides
+    assert np.allclose(meshes[0].vertex_colors, RED)
+
+
 def test_a_cortex_view_shows_its_hemispheres_bundle_through_the_glass_cortex(tiny, bundles):
     colors = {"tract:AF_left": RED, "tract:CST_right": BLUE}
     nodes = (("AF_left", 1), ("CST_right", 1))

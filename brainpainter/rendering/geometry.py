@@ -20,9 +20,10 @@ bundle's one colour, ``tract:AF_left:17`` for node 17 of an along-tract
 profile, ``tract-direction:i`` for the fixed direction colours).
 
 White-matter tracts are parts of kind ``tract`` (``tracts-lh``, ``tracts-rh``
-and ``tracts`` for commissural bundles): triangle tubes built here
-(:func:`brainpainter.tracts.tubes.tube_mesh`), so a renderer draws them as it
-draws any opaque part; so are a connectome's ``nodes`` and ``edges`` (:mod:`.connectome_parts`).
+and ``tracts`` for commissural bundles): centrelines, and triangle tubes
+(:func:`brainpainter.tracts.tubes.tube_mesh`) built when first read
+(:class:`~brainpainter.rendering.tract_parts.TractPart`), so a renderer that draws
+tubes draws them as any opaque part; so are a connectome's ``nodes`` and ``edges`` (:mod:`.connectome_parts`).
 
 A scene coloured per vertex (``Scene.coloring == "vertices"``, a map) keeps
 one drawing path: its cortex parts are the template's stored meshes, not

@@ -119,6 +119,10 @@ class Renderer(Protocol):
     only re-colours (a palette upload) and re-aims (the view's camera from
     ``scene.geometry.camera``). Check a renderer with
     :func:`brainpainter.testing.check_renderer`.
+
+    Optional attribute ``draws_tubes: bool`` (absent: True): whether it draws a
+    ``tract`` part's tubes (its triangles, built when first read) or only its
+    ``centrelines``; the conformance suite holds a renderer to it.
     """
 
     def __init__(self, scene: Scene) -> None: ...

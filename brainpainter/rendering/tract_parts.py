@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -29,7 +30,8 @@ def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
                 radius: float | None = None) -> list[PartGeometry]:
     """The tubes and centrelines of `tracts`, a part per hemisphere (``tracts-lh``, ``-rh``, ``tracts``).
 
-    The tubes keep to :data:`~brainpainter.tracts.tubes.TRIANGLE_BUDGET`; the
+    The tubes keep to :data:`~brainpainter.tracts.tubes.TRIANGLE_BUDGET` and are built
+    on first use (:class:`TractPart`: a renderer that draws tubes, an export); the
     centrelines (:class:`~brainpainter.rendering.parts.Centrelines`, which the
     default renderer draws as lines) to the finer
     :data:`~brainpainter.tracts.tubes.LINE_SEGMENT_BUDGET`.
@@ -48,9 +50,10 @@ def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
     Returns
     -------
     list of PartGeometry
+        :class:`TractPart` each.
     """
     from brainpainter.tracts.names import hemisphere
-    from brainpainter.tracts.tubes import SIDES, auto_radius, line_points_for, points_for, tube_mesh
+    from brainpainter.tracts.tubes import SIDES, auto_radius, line_points_for, points_for
 
     n_lines, n_points = tracts.lines.shape[:2]
     radius = auto_radius(n_lines) if radius is None else radius
@@ -58,18 +61,81 @@ def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
     lines, point_slot = _points(tracts, nodes, slots_for, points_for(n_lines, n_points, SIDES))
     centres, centre_slot = _points(tracts, nodes, slots_for, line_points_for(n_lines, n_points))
     hemis = np.array([hemisphere(n) or "" for n in tracts.names])[tracts.bundle]
-    out = []
+    out: list[PartGeometry] = []
     for hemi, part in (("lh", "tracts-lh"), ("rh", "tracts-rh"), ("", "tracts")):
         pick = hemis == hemi
         if not np.any(pick):
             continue
-        verts, normals, tris = tube_mesh(lines[pick], radius, SIDES)
-        pal = np.repeat(point_slot[pick].ravel(), SIDES).astype(np.int32)
         centre = Centrelines(centres[pick].astype(np.float32), centre_slot[pick].astype(np.int32), radius)
-        out.append(PartGeometry(part, "tract", hemi or None, verts, normals, tris, pal,
-                                np.zeros(len(verts), np.float32), lines[pick].reshape(-1, 3),
-                                centrelines=centre))
+        out.append(TractPart(part, hemi or None, lines[pick], point_slot[pick], centre))
     return out
+
+
+class TractPart(PartGeometry):
+    """A ``tract`` part whose tubes (vertices, normals, triangles, palette_index, sulc) are built
+    when first read: a renderer that draws the centrelines as lines never builds them.
+
+    Parameters
+    ----------
+    name : str
+    hemi : {"lh", "rh"} or None
+    lines : ndarray of float, shape (n_streamlines, n_points, 3)
+        The streamlines at the tubes' level of detail (also the part's hull).
+    point_slot : ndarray of int, shape (n_streamlines, n_points)
+        Palette slot of each point.
+    centrelines : Centrelines
+        Its radius is the tubes'.
+    """
+
+    def __init__(self, name: str, hemi: str | None, lines: NDArray[Any], point_slot: NDArray[Any],
+                 centrelines: Centrelines) -> None:
+        for key, value in (("name", name), ("kind", "tract"), ("hemi", hemi),
+                           ("hull", lines.reshape(-1, 3)), ("centrelines", centrelines)):
+            object.__setattr__(self, key, value)
+        object.__setattr__(self, "_lines", (lines, point_slot))
+
+    def __repr__(self) -> str:
+        return f"TractPart({self.name!r}, tubes {'built' if self.tubes_built else 'not built'})"
+
+    @property
+    def tubes_built(self) -> bool:
+        """Whether the tubes' arrays were built (read by someone)."""
+        return "_tubes" in self.__dict__
+
+    @cached_property
+    def _tubes(self) -> tuple[NDArray[Any], ...]:
+        from brainpainter.tracts.tubes import SIDES, tube_mesh
+
+        lines, point_slot = self.__dict__["_lines"]
+        assert self.centrelines is not None
+        verts, normals, tris = tube_mesh(lines, self.centrelines.radius, SIDES)
+        pal = np.repeat(point_slot.ravel(), SIDES).astype(np.int32)
+        return verts, normals, tris, pal, np.zeros(len(verts), np.float32)
+
+    @property
+    def vertices(self) -> NDArray[Any]:
+        """Of the tubes, float32, shape (n_streamlines * n_points * SIDES, 3)."""
+        return self._tubes[0]
+
+    @property
+    def normals(self) -> NDArray[Any]:
+        """Of the tubes, unit, radial; float32, same shape as vertices."""
+        return self._tubes[1]
+
+    @property
+    def triangles(self) -> NDArray[Any]:
+        """Of the tubes, uint32, shape (n_triangles, 3)."""
+        return self._tubes[2]
+
+    @property
+    def palette_index(self) -> NDArray[Any]:
+        """Palette slot of each tube vertex, int32."""
+        return self._tubes[3]
+
+    @property
+    def sulc(self) -> NDArray[Any]:
+        """Zeros, float32, one per tube vertex."""
+        return self._tubes[4]
 
 
 def _points(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,

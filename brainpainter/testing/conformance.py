@@ -24,7 +24,9 @@ the renderer needs none:
 ``tracts``
     white-matter tracts (parts of kind ``tract``: tubes of two bundles, one per
     hemisphere, one colour each) are drawn in their exact flat colour where the
-    camera projects them, in the subcortical views, with the glass brain;
+    camera projects them, in the subcortical views, with the glass brain; a
+    renderer's ``draws_tubes`` (absent: True) is a bool, and one that says False
+    built no tubes (drew the centrelines);
 ``memory``
     resident memory does not grow per image (:func:`~brainpainter.testing.memory.growth_per_image`);
 ``vertex_colors``
@@ -306,7 +308,7 @@ def _tracts(run: _Run) -> None:
             view = get_view(name)
             img = run.paint(scene, renderer, {**COLORS, **TRACT_COLORS}, view)
             pose = scene.geometry.camera(view, run.width / run.height)
-            shown = {int(p.palette_index[0]) for p in scene.geometry.visible(view) if p.kind == "tract"}
+            shown = {_tract_slot(p) for p in scene.geometry.visible(view) if p.kind == "tract"}
             for key, rgb in TRACT_COLORS.items():
                 mask = near(img, rgb, 1)
                 if scene.geometry.slot_of[key] not in shown:
@@ -317,7 +319,7 @@ def _tracts(run: _Run) -> None:
                     run.problems.append(f"tracts: {name}: bundle {key} is not drawn in its flat colour {rgb}")
                     continue
                 part = next(p for p in scene.geometry.parts if p.kind == "tract"
-                            and p.palette_index[0] == scene.geometry.slot_of[key])
+                            and _tract_slot(p) == scene.geometry.slot_of[key])
                 expected = framing.to_pixels(part.hull, pose, run.width, run.height).mean(axis=0)
                 ys, xs = np.nonzero(mask)
                 err = float(np.hypot(xs.mean() + 0.5 - expected[0], ys.mean() + 0.5 - expected[1]))
@@ -325,9 +327,28 @@ def _tracts(run: _Run) -> None:
                 if err > 0.05 * run.width:
                     run.problems.append(f"tracts: {name}: bundle {key} is centred {err:.1f} px from where "
                                         "the camera puts it")
+        _tubes(run, scene, renderer)
     finally:
         renderer.close()
     run.report["tracts_worst_px"] = round(worst, 2)
+
+
+def _tract_slot(part: Any) -> int:
+    """The palette slot of a one-colour tract part (from its centrelines: reading it builds no tubes)."""
+    return int(part.centrelines.slots[0, 0])
+
+
+def _tubes(run: _Run, scene: Any, renderer: Any) -> None:
+    """A renderer's ``draws_tubes`` (absent: True) is a bool, and one that draws none built none."""
+    draws = getattr(renderer, "draws_tubes", True)
+    if not isinstance(draws, bool):
+        run.problems.append(f"tracts: {run.name}: draws_tubes must be True or False; {draws!r} was given")
+        return
+    built = [p.name for p in scene.geometry.parts if p.kind == "tract" and getattr(p, "tubes_built", True)]
+    if not draws and built:
+        run.problems.append(f"tracts: {run.name}: says draws_tubes=False but built the tubes of {built} "
+                            "(draw part.centrelines; read no tract part's vertices, triangles, "
+                            "palette_index)")
 
 
 def _vertex_colors(run: _Run) -> None:

@@ -60,6 +60,9 @@ class StandInRenderer:
         Memory kept for ever per image (a leak, for testing memory checks).
     record : bool
         Whether ``calls`` records each image (off for memory measurements).
+    draws_tubes : bool
+        The renderer contract's capability: whether it draws the tract parts' tubes. True: loading
+        reads them (``tube_triangles``: their number), as a mesh renderer uploads them.
     calls : list of (dict, View)
         ``(colors, view)`` of every image of this class.
     scenes, images : int
@@ -73,6 +76,7 @@ class StandInRenderer:
     fail: ClassVar[Callable[[int], BaseException | None] | None] = None
     leak_mb: ClassVar[float] = 0.0
     record: ClassVar[bool] = True
+    draws_tubes: ClassVar[bool] = False
     calls: ClassVar[list[tuple[dict[str, Any], Any]]] = []
     scenes: ClassVar[int] = 0
     images: ClassVar[int] = 0
@@ -91,7 +95,7 @@ class StandInRenderer:
     def with_(cls, **params: Any) -> type[StandInRenderer]:
         """A subclass with the given parameters (see the class attributes), e.g. ``with_(delay=0.1)``."""
         unknown = sorted(set(params) - {"layout", "regions", "delay", "noise", "fail", "leak_mb",
-                                        "record"})
+                                        "record", "draws_tubes"})
         if unknown or params.get("layout", cls.layout) not in LAYOUTS:
             raise ValueError(f"unknown stand-in parameters {unknown} or layout; layouts: {LAYOUTS}")
         if params.get("fail") is not None:
@@ -119,6 +123,9 @@ class StandInRenderer:
                 if name in scene.tracts.names:
                     keys = [bundle_key(name)] if n == 1 else [bundle_key(name, k) for k in range(n)]
                     self.tract_keys += [(hemisphere(name), k) for k in keys]
+        self.tube_triangles = 0
+        if self.draws_tubes and scene.tracts is not None:
+            self.tube_triangles = sum(len(p.triangles) for p in scene.geometry.parts if p.kind == "tract")
         connectome = getattr(scene, "connectome", None)
         if connectome is not None:  # drawn where tracts are: a stripe per node and per edge
             from brainpainter.rendering.connectome_parts import edge_keys, node_keys

@@ -61,6 +61,8 @@ class BlenderRenderer:
         self._as_glass: dict[str, bool] = {}  # Cycles: the cortex parts drawn as glass (--cortex glass)
         self._gpu = None
         self.cycles = lighting.uses_cycles(scene.settings)
+        #: the renderer contract's capability: Cycles draws a tract part's tubes, the gpu path its centrelines
+        self.draws_tubes = self.cycles
         if self.cycles and getattr(scene, "coloring", "regions") == "vertices":
             raise BrainPainterError(
                 "per-vertex maps are drawn by the gpu path, not by Cycles (--quality high with smooth "
