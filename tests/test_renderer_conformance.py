@@ -91,8 +91,9 @@ def test_tracts_check_holds_a_renderer_to_its_draws_tubes():
 def test_a_stand_in_that_draws_tubes_gets_them(tmp_path):
     from brainpainter.atlas.template import load_template
     from brainpainter.rendering.scene import Scene
-    from brainpainter.testing.conformance import tiny_tracts, write_tiny_template
+    from brainpainter.testing.conformance import write_tiny_template
     from brainpainter.testing.stand_in import StandInRenderer
+    from brainpainter.testing.tiny_tracts import tiny_tracts
 
     template = load_template(write_tiny_template(tmp_path / "tiny"))
     for draws, built in ((True, True), (False, False)):

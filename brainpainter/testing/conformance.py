@@ -53,6 +53,7 @@ from .connectome_check import connectome_check
 from .memory import can_measure, growth_per_image
 from .pixels import WHITE, near
 from .templates import write_tiny_template
+from .tiny_tracts import tiny_tracts
 
 RGB = tuple[float, float, float]
 #: Distinct flat colours of the tiny template's regions (sRGB 0-1).
@@ -263,30 +264,6 @@ def _glass(run: _Run) -> None:
     if kept < 0.9:
         run.problems.append(f"glass: the structures do not show through the glass ({kept:.0%} keep "
                             "their hue)")
-
-
-def tiny_tracts() -> Any:
-    """Two synthetic bundles for the tiny template: ``AF_left`` along y at x = -35, ``CST_right`` along z.
-
-    Returns
-    -------
-    brainpainter.tracts.model.Tracts
-        20 streamlines of 16 points each per bundle.
-    """
-    from brainpainter.tracts.model import Tracts
-
-    rng = np.random.default_rng(0)
-    t = np.linspace(-1.0, 1.0, 16)
-    lines = []
-    for i in range(40):
-        jitter = rng.normal(0.0, 1.5, 3)
-        if i < 20:
-            pts = np.column_stack([np.full(16, -35.0), 30 * t, 20 + 5 * np.cos(t * 1.5)]) + jitter
-        else:
-            pts = np.column_stack([np.full(16, 35.0) + 3 * np.sin(t * 2), np.zeros(16), 30 * t]) + jitter
-        lines.append(pts)
-    bundle = np.repeat(np.arange(2, dtype=np.int32), 20)
-    return Tracts(("AF_left", "CST_right"), np.asarray(lines, np.float32), bundle, (20, 20))
 
 
 def _tracts(run: _Run) -> None:
