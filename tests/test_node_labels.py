@@ -6,6 +6,7 @@ import json
 
 import numpy as np
 import pytest
+from test_connectome_render import cluster  # noqa: F401  (the Dask cluster fixture)
 
 import brainpainter
 from brainpainter.connectome.labels import labelled_nodes, node_strength
@@ -117,9 +118,10 @@ def write_brainnet(tmp_path) -> tuple[str, str]:
     return str(tmp_path / "net.node"), str(tmp_path / "net.edge")
 
 
-def test_a_node_files_labels_change_no_picture_by_default_and_travel_to_jobs(tmp_path, tiny):
+def test_a_node_files_labels_change_no_picture_by_default_and_travel_to_jobs(
+        tmp_path, tiny, cluster):  # noqa: F811  (the fixture imported)
     """A .node's label column alone draws nothing (today's pictures); --node-labels-top draws the top
-    nodes' labels, the same in one process and with --jobs, and the manifest names them."""
+    nodes' labels, the same in one process, with --jobs and on Dask workers, and the manifest names them."""
     from brainpainter.testing import stand_in
 
     nodes, edges = write_brainnet(tmp_path)
@@ -136,16 +138,19 @@ def test_a_node_files_labels_change_no_picture_by_default_and_travel_to_jobs(tmp
                                      **kw)
         jobs = brainpainter.render(None, renderer=renderer, out=tmp_path / "jobs", node_labels_top=2,
                                    jobs=2, **kw)
+        dask = brainpainter.render(None, renderer=renderer, out=tmp_path / "dask", node_labels_top=2,
+                                   client=cluster, **kw)
     image = next(iter(default.images.values()))
     np.testing.assert_array_equal(image, next(iter(bare.images.values())))
     assert "labelled" not in default.manifest["connectome"]
     manifest = json.loads((tmp_path / "serial" / "manifest.json").read_text())
     # equal node values (sizes): the strongest, beta and delta (strengths 1.3 and 1.0; 0.8, 0.5)
     assert manifest["connectome"]["labelled"] == ["beta", "delta"]
-    assert jobs.workers["backend"] == "LocalRunner"
+    assert jobs.workers["backend"] == "LocalRunner" and dask.workers["backend"] == "DaskRunner"
     assert jobs.manifest["connectome"] == manifest["connectome"]
     for path in serial.files:
         assert (tmp_path / "jobs" / path.name).read_bytes() == path.read_bytes()
+        assert (tmp_path / "dask" / path.name).read_bytes() == path.read_bytes()
     from PIL import Image
 
     with Image.open(serial.files[0]) as png:
