@@ -515,4 +515,7 @@ def test_page_draws_a_connectome_alone_with_its_bars_and_command(served, tmp_pat
         cols = np.nonzero(warm)[1]
         assert warm.sum() > 30 and cols.max() > img.shape[1] / 2 > cols.min(), warm.sum()
         _shot(page, tmp_path, "connectome-page.png")
+        page.locator("#node_labels_top").fill("1")  # the page's node labels: the CLI's option
+        page.locator("#node_labels_top").dispatch_event("change")
+        expect(page.locator("#command")).to_contain_text("--node-labels-top 1", timeout=60_000)
         assert errors == []

@@ -167,3 +167,13 @@ def test_a_mat_matrix_is_read_too(server, tmp_path):
     scipy.io.savemat(tmp_path / "m.mat", {"W": np.array([[0, 0.5], [0.5, 0]])}, do_compression=True)
     r = post(server, [("m.mat", (tmp_path / "m.mat").read_bytes())])
     assert r.status_code == 200 and r.json()["report"]["edges"] == 2, r.text
+
+
+def test_node_labels_are_options_of_the_api_and_its_command(server):
+    uid = post(server, [("m.csv", MATRIX), ("nodes.csv", NODES)], ["matrix", "nodes"]).json()["upload_id"]
+    opts = {**OPTS, "node_labels_top": 1}
+    rep = server.post("/api/check", json={"upload_id": uid, "options": opts}).json()
+    assert rep["drawn"]["labelled"] == ["Right-precentral"]  # the strongest: |0.8| + |-0.4|
+    assert "--node-labels-top 1" in rep["reproduce"]["command"]
+    bad = server.post("/api/check", json={"upload_id": uid, "options": {**OPTS, "node_labels_top": 0}})
+    assert bad.status_code in (400, 422) and "node_labels_top" in bad.text

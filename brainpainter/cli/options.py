@@ -42,7 +42,7 @@ RENDER_OPTION_NAMES = (
     "glass_opacity", "cortex", "outline_width", "outline_color", "renderer", "atlas_config", "tracts",
     "tracts_space", "tracts_affine", "max_streamlines", "tract_values", "tract_value", "tract_radius",
     "connectome", "nodes", "node_values", "node_categories", "directed", "edge_threshold", "top_edges",
-    "edges_of", "nodes_space", *(f.name for f in fields(LayerOptions)),
+    "edges_of", "nodes_space", "node_labels", "node_labels_top", *(f.name for f in fields(LayerOptions)),
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
@@ -135,6 +135,9 @@ def render_option_list(views: str | None = None, size: str = DEFAULT_SIZE) -> di
         "top_edges": field_option(ConnectomeOptions, "top_edges", type=click.IntRange(min=1), metavar="K"),
         "edges_of": field_option(ConnectomeOptions, "edges_of", metavar="NODE"),
         "nodes_space": field_option(ConnectomeOptions, "nodes_space"),
+        "node_labels": field_option(ConnectomeOptions, "node_labels"),
+        "node_labels_top": field_option(ConnectomeOptions, "node_labels_top", type=click.IntRange(min=1),
+                                        metavar="K"),
         **{f.name: field_option(LayerOptions, f.name, **_layer_click(f.name)) for f in fields(LayerOptions)},
     }
 

@@ -28,7 +28,9 @@ class Connectome:
     node_categories : tuple of str, (N,), or None
         A category per node (a network or module), drawn in categorical colours with a key.
     node_labels : tuple of str, (N,), or None
-        Text drawn beside each node ("" for none).
+        Text of each node's label ("" for none; None: the node names).
+    labelled : tuple of int
+        The nodes whose labels are drawn on the images (``--node-labels``), in order; none by default.
     """
 
     names: tuple[str, ...]
@@ -38,11 +40,16 @@ class Connectome:
     node_values: NDArray[np.float64] | None = None
     node_categories: tuple[str, ...] | None = None
     node_labels: tuple[str, ...] | None = None
+    labelled: tuple[int, ...] = ()
 
     @property
     def n_nodes(self) -> int:
         """Number of nodes N."""
         return len(self.names)
+
+    def label_texts(self) -> tuple[str, ...]:
+        """The label of each node, (N,): its ``node_labels`` entry where given, else its name."""
+        return self.names if self.node_labels is None else self.node_labels
 
     def digest(self) -> str:
         """A SHA-256 of everything drawn (names, positions, weights, per-node vectors): equal connectomes,

@@ -8,11 +8,12 @@ export) are made from these fields (:mod:`brainpainter.rendering.options`);
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, TypedDict
 
 from brainpainter.atlas.model import SPACES
 from brainpainter.connectome.edges import parse_threshold, select_edges
+from brainpainter.connectome.labels import labelled_nodes
 from brainpainter.connectome.model import Connectome
 from brainpainter.errors import BrainPainterError, choice_error
 
@@ -33,6 +34,8 @@ class ConnectomeKwargs(TypedDict, total=False):
     top_edges: int | None
     edges_of: str | None
     nodes_space: str
+    node_labels: bool
+    node_labels_top: int | None
 
 
 @dataclass(frozen=True)
@@ -61,6 +64,11 @@ class ConnectomeOptions:
         Only the edges of this node.
     nodes_space : str
         Space of the nodes file's coordinates (MNI152 is mapped into the template as tracts are).
+    node_labels : bool
+        Draw the nodes' labels (the connectome's ``node_labels``, else the node names) on the images.
+    node_labels_top : int, optional
+        Label only the K nodes of the largest node value (no values: the largest strength, the sum of
+        the ``|weight|`` of their drawn edges); implies ``node_labels``.
     """
 
     connectome: Any = field(default=None, metadata={
@@ -86,12 +94,18 @@ class ConnectomeOptions:
         "help": "Only the edges of this node (Left-precentral) are drawn."})
     nodes_space: str = field(default="template", metadata={
         "choices": SPACES, "help": "Space of the --nodes coordinates (MNI152 is mapped to the template)."})
+    node_labels: bool = field(default=False, metadata={
+        "help": "Draw the nodes' labels (a .node file's label column, else the node names) beside them."})
+    node_labels_top: int | None = field(default=None, metadata={
+        "help": "Label only the K nodes of the largest node value (no values: the largest strength, the "
+                "sum of |weight| of their drawn edges); implies --node-labels."})
 
     def __post_init__(self) -> None:
         if self.connectome is None:
             given = [f"--{name.replace('_', '-')}" for name in ("nodes", "node_values", "node_categories",
-                                                                "edge_threshold", "top_edges", "edges_of")
-                     if getattr(self, name) is not None] + (["--directed"] if self.directed else [])
+                                                                "edge_threshold", "top_edges", "edges_of",
+                                                                "node_labels_top", "directed", "node_labels")
+                     if getattr(self, name) not in (None, False)]
             if given:
                 raise BrainPainterError(f"{given[0]} describes a connectome's nodes or edges, but no "
                                         "--connectome was given; give the matrix with --connectome FILE.")
@@ -99,9 +113,11 @@ class ConnectomeOptions:
             raise choice_error("--nodes-space", self.nodes_space, SPACES)
         if self.edge_threshold is not None:
             parse_threshold(self.edge_threshold)  # a bad threshold fails before the matrix is read
-        if self.top_edges is not None and (isinstance(self.top_edges, bool) or int(self.top_edges) < 0
-                                           or int(self.top_edges) != self.top_edges):
-            raise BrainPainterError(f"--top-edges must be a whole number >= 0; {self.top_edges!r} was given.")
+        for name in ("top_edges", "node_labels_top"):
+            count = getattr(self, name)
+            if count is not None and (isinstance(count, bool) or int(count) < 0 or int(count) != count):
+                raise BrainPainterError(f"--{name.replace('_', '-')} must be a whole number >= 0; {count!r} "
+                                        "was given.")
 
     @property
     def given(self) -> bool:
@@ -137,7 +153,9 @@ class ConnectomeOptions:
                 self.connectome, atlas, nodes=self.nodes, node_values=self.node_values,
                 node_categories=self.node_categories, directed=bool(self.directed), space=self.nodes_space,
                 template=template, surface=surface)
-        if self.edge_threshold is None and self.top_edges is None and self.edges_of is None:
+        if self.edge_threshold is not None or self.top_edges is not None or self.edges_of is not None:
+            connectome = select_edges(connectome, threshold=self.edge_threshold, top=self.top_edges,
+                                      edges_of=self.edges_of)
+        if not self.node_labels and self.node_labels_top is None:
             return connectome
-        return select_edges(connectome, threshold=self.edge_threshold, top=self.top_edges,
-                            edges_of=self.edges_of)
+        return replace(connectome, labelled=labelled_nodes(connectome, self.node_labels_top))

@@ -126,7 +126,8 @@ def _tracts(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:
 
 #: The connectome keywords of :meth:`Scene.add` besides its edges' scale: its nodes and which edges.
 CONNECTOME_KEYWORDS = ("nodes", "node_values", "node_categories", "directed", "edge_threshold", "top_edges",
-                       "edges_of", "nodes_space", *(f"nodes_{name}" for name in (*SCALE_FIELDS, "label")))
+                       "edges_of", "nodes_space", "node_labels", "node_labels_top",
+                       *(f"nodes_{name}" for name in (*SCALE_FIELDS, "label")))
 
 
 def _connectome(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:

@@ -112,7 +112,8 @@ def _keyed(keys: list[str], rgb: NDArray[Any]) -> dict[str, RGB]:
 
 
 def connectome_summary(connectome: Connectome) -> dict[str, Any]:
-    """The manifest's ``connectome``: its nodes (name, position, value, category) and the edges drawn."""
+    """The manifest's ``connectome``: its nodes (name, position, value, category, the label drawn) and the
+    edges drawn; ``labelled``: the names of the nodes labelled on the images (when any is)."""
     values = connectome.node_values
     nodes = []
     for i, name in enumerate(connectome.names):
@@ -122,8 +123,14 @@ def connectome_summary(connectome: Connectome) -> dict[str, Any]:
             node["value"] = float(values[i]) if np.isfinite(values[i]) else None
         if connectome.node_categories is not None:
             node["category"] = connectome.node_categories[i]
+        if i in connectome.labelled:
+            node["label"] = connectome.label_texts()[i]
         nodes.append(node)
     weights = connectome.edges()[2]
-    return {"n_nodes": connectome.n_nodes, "n_edges": len(weights), "directed": connectome.directed,
-            "weight_range": [float(weights.min()), float(weights.max())] if len(weights) else None,
-            "nodes": nodes}
+    out: dict[str, Any] = {
+        "n_nodes": connectome.n_nodes, "n_edges": len(weights), "directed": connectome.directed,
+        "weight_range": [float(weights.min()), float(weights.max())] if len(weights) else None,
+        "nodes": nodes}
+    if connectome.labelled:
+        out["labelled"] = [connectome.names[i] for i in connectome.labelled]
+    return out

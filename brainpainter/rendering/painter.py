@@ -252,12 +252,21 @@ class Painter:
         """Render explicit region colours (group keys colour their members); RGBA uint8, (h, w, 4).
 
         A :class:`~brainpainter.rendering.geometry.VertexColors` also colours each cortex vertex (a map).
+        A connectome's labelled nodes get their labels drawn over the image
+        (:func:`~brainpainter.rendering.node_labels.draw_node_labels`).
         """
         assert isinstance(self.atlas, Atlas)
         scene = self.scene
         vertex_rgb = colors.vertices if isinstance(colors, VertexColors) else None
         palette = Palette(self.atlas.expand(colors), lambda: scene.geometry, vertex_rgb)
         pixels: NDArray[Any] = self.load().render(palette, view)
+        connectome = scene.connectome
+        if connectome is not None and connectome.labelled and any(
+                part.kind == "node" for part in scene.geometry.visible(view)):
+            from brainpainter.rendering.node_labels import draw_node_labels
+
+            pose = scene.geometry.camera(view, pixels.shape[1] / pixels.shape[0])
+            pixels = draw_node_labels(pixels, connectome, pose)
         return pixels
 
     def paint(self, values: Mapping[str, float], view: View, scale: ColourScale) -> NDArray[Any]:

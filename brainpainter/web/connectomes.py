@@ -42,7 +42,8 @@ OPTIONS = {"matrix": "--connectome", "nodes": "--nodes", "node_values": "--node-
            "node_categories": "--node-categories"}
 #: The render options of a connectome's edges and nodes (given to a run only with a connectome upload, whose
 #: files give --nodes, --node-values and --node-categories): :class:`ConnectomeOptions`'s.
-CONNECTOME_FIELDS = ("directed", "edge_threshold", "top_edges", "edges_of", "nodes_space")
+CONNECTOME_FIELDS = ("directed", "edge_threshold", "top_edges", "edges_of", "nodes_space", "node_labels",
+                     "node_labels_top")
 #: Nodes a web connectome has at most (a 1000 x 1000 matrix is 4 MB as float32).
 MAX_NODES = 1000
 
@@ -67,7 +68,9 @@ def connectome_fields() -> dict[str, Any]:
             "edge_threshold": made("edge_threshold", str | None, max_length=40),
             "top_edges": made("top_edges", int | None, ge=0, le=1_000_000),
             "edges_of": made("edges_of", str | None, max_length=200),
-            "nodes_space": made("nodes_space", Literal[of["nodes_space"].metadata["choices"]])}
+            "nodes_space": made("nodes_space", Literal[of["nodes_space"].metadata["choices"]]),
+            "node_labels": made("node_labels", bool),
+            "node_labels_top": made("node_labels_top", int | None, ge=1, le=MAX_NODES)}
 
 
 def is_connectome_bundle(data: bytes) -> bool:

@@ -220,6 +220,7 @@ function options() {
     connectome: state.connectomeId && state.connectomeId !== state.uploadId ? state.connectomeId : null,
     edge_threshold: textOrNull("edge_threshold"), top_edges: numberOrNull("top_edges"),
     edges_of: textOrNull("edges_of"), directed: $("directed").checked,
+    node_labels: $("node_labels").checked, node_labels_top: numberOrNull("node_labels_top"),
     ...layerOptions(),
   };
 }
