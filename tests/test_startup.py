@@ -109,48 +109,6 @@ def test_a_cortex_read_from_the_cache_draws_the_pixels_of_one_computed(monkeypat
     np.testing.assert_array_equal(images[0], images[2])
 
 
-_BLENDER_STATE = """
-import json, sys
-import bpy
-resets = []
-bpy.app.handlers.load_factory_startup_post.append(bpy.app.handlers.persistent(lambda *a: resets.append(1)))
-if sys.argv[1] == "user startup":
-    bpy.ops.wm.save_homefile()  # into BLENDER_USER_CONFIG
-if sys.argv[1] == "factory":
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-else:
-    from brainpainter_blender._bpy import import_bpy
-    import_bpy()
-s = bpy.context.scene
-state = {k: sorted(b.name for b in getattr(bpy.data, k)) for k in dir(bpy.data)
-         if isinstance(getattr(bpy.data, k, None), bpy.types.bpy_prop_collection)}
-state["scene"] = [s.name, s.render.engine, s.view_settings.view_transform, s.view_settings.look,
-                  s.display_settings.display_device, s.render.resolution_x, len(s.objects)]
-print(json.dumps({"resets": len(resets), "state": state}))
-"""
-
-
-@pytest.mark.render
-def test_blender_starts_as_its_empty_factory_settings_without_reading_them_again(tmp_path):
-    """Without a user's startup file the start-up data is deleted (the factory settings are not read
-    again: ~0.08 s); the state is the one ``read_factory_settings(use_empty=True)`` leaves. With a
-    user's startup file the factory settings are read."""
-    pytest.importorskip("bpy")
-    import subprocess
-
-    env = {**os.environ, "BLENDER_USER_CONFIG": str(tmp_path / "config")}
-    got = {}
-    for how in ("factory", "brainpainter", "user startup"):
-        out = subprocess.run([sys.executable, "-c", _BLENDER_STATE, how], env=env, capture_output=True,
-                             text=True, check=True).stdout
-        got[how] = json.loads(out.splitlines()[-1])
-    assert got["factory"]["resets"] == 1 and got["brainpainter"]["resets"] == 0
-    assert got["brainpainter"]["state"] == got["factory"]["state"]
-    assert not got["factory"]["state"]["objects"] and got["factory"]["state"]["scenes"]
-    assert got["user startup"]["resets"] == 1 and (tmp_path / "config" / "startup.blend").exists()
-    assert got["user startup"]["state"] == got["factory"]["state"]
-
-
 # -- the user's cache folder ---------------------------------------------------------------------
 def test_a_cache_file_is_read_back_for_its_key_only():
     user_cache.write("x.json", "key-1", {"a": [1, 2]})

@@ -55,31 +55,9 @@ def import_bpy() -> ModuleType:
             ) from None
         if bpy.app.background:  # never wipe a user's scene inside the Blender application
             with quiet(), held():
-                empty_factory_scene(bpy)
+                bpy.ops.wm.read_factory_settings(use_empty=True)
         _state["bpy"] = bpy
         return bpy
-
-
-#: Blender's data kinds that ``read_factory_settings(use_empty=True)`` keeps (the rest it deletes).
-KEPT_DATA = frozenset({"scenes", "screens", "window_managers", "workspaces"})
-
-
-def empty_factory_scene(bpy: ModuleType) -> None:
-    """Leave Blender as ``bpy.ops.wm.read_factory_settings(use_empty=True)`` does, at less cost.
-
-    Where the user has no startup file or preferences of their own (``startup.blend``,
-    ``userpref.blend`` in Blender's user configuration folder), ``import bpy`` has just loaded the
-    factory ones: deleting the startup file's data (cube, camera, light, material, world, ...), as
-    ``use_empty`` does, gives the same state without the reset's second load of the startup file
-    and of every add-on (~0.08 s CPU of a first image). Otherwise the factory settings are read.
-    """
-    config = bpy.utils.user_resource("CONFIG")
-    if any(os.path.exists(os.path.join(config, name)) for name in ("startup.blend", "userpref.blend")):
-        bpy.ops.wm.read_factory_settings(use_empty=True)
-        return
-    data = [getattr(bpy.data, name) for name in dir(bpy.data) if name not in KEPT_DATA]
-    bpy.data.batch_remove([block for kind in data if isinstance(kind, bpy.types.bpy_prop_collection)
-                           for block in kind if isinstance(block, bpy.types.ID)])
 
 
 def _load_malloc_trim():
