@@ -25,13 +25,19 @@ FS5 = SHARED / "freesurfer" / "subjects" / "fsaverage5"
 
 
 # -- the shipped sheets -----------------------------------------------------------------------------
+def signed_area2(corners):
+    """Twice the signed areas of 2-D triangles (positive: counter-clockwise), corners (n, 3, 2) -> (n,)."""
+    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    return e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]  # np.cross of 2-D vectors is deprecated (numpy 2)
+
+
 def test_sheets_lie_side_by_side_facing_the_camera():
     lh, rh = flat_sheet("lh"), flat_sheet("rh")
     assert lh.vertices[lh.used, 0].max() < 0 < rh.vertices[rh.used, 0].min()  # left on the left
     for sheet in (lh, rh):
         assert sheet.vertices.shape == (N_FLAT, 3) and not sheet.vertices[:, 2].any()
         c = sheet.vertices[sheet.faces][..., :2].astype(float)
-        area = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0])
+        area = signed_area2(c)
         assert (area >= 0).all()  # counter-clockwise from +z: none culled
         np.testing.assert_allclose(sheet.weights.sum(axis=1), 1.0, atol=1e-4)
         assert 25_000 < len(sheet.used) < N_FLAT  # the cuts are no triangles'
@@ -76,7 +82,7 @@ def test_regions_meet_half_way_between_vertices_of_two_labels():
     for labels in ([0, 0, 1, 1], [0, 1, 2, 2], [5, 5, 5, 5]):
         v, f, fl = split_at_borders(square, faces, np.array(labels))
         c = v[f][..., :2].astype(float)
-        area = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]) / 2
+        area = signed_area2(c) / 2
         assert (area > 0).all() and area.sum() == pytest.approx(4.0)  # the same square, all facing +z
         for label in set(labels):  # each label's area: its vertices' share, split at the midpoints
             corners = [i for i, x in enumerate(labels) if x == label]
@@ -84,7 +90,7 @@ def test_regions_meet_half_way_between_vertices_of_two_labels():
                                                        for i in corners)
     v, f, fl = split_at_borders(square, faces, np.array([0, 0, 1, 1]))
     c = v[f][..., :2].astype(float)
-    area = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]) / 2
+    area = signed_area2(c) / 2
     assert area[fl == 0].sum() == pytest.approx(2.0)  # the border runs through the middle
     assert len(v) == 4 + 3  # three midpoints (edges 1-2, 0-2, 0-3), shared by both triangles
 
@@ -243,7 +249,7 @@ def test_the_rim_is_a_band_just_outside_the_boundary_facing_the_camera():
     square = np.array([[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]], np.float32)
     v, f = rim(square, np.array([[0, 1, 2], [0, 2, 3]]), 0.1)
     c = v[f][..., :2].astype(float)
-    area = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]) / 2
+    area = signed_area2(c) / 2
     assert len(f) == 8 and (area > 0).all()  # two triangles per boundary edge, none culled
     assert area.sum() == pytest.approx(2.2 ** 2 - 2 ** 2)  # a band 0.1 wide all round (mitred corners)
     np.testing.assert_allclose(np.abs(v[4:, :2] - 1), 1.1, rtol=1e-6)  # the outer ring outside the square

@@ -130,6 +130,12 @@ def adaptive(src: tuple[np.ndarray, np.ndarray], tgt: tuple[np.ndarray, np.ndarr
     return chosen
 
 
+def signed_area2(corners: np.ndarray) -> np.ndarray:
+    """Twice the signed areas of 2-D triangles (positive: counter-clockwise), corners (n, 3, 2) -> (n,)."""
+    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    return e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]  # np.cross of 2-D vectors is deprecated (numpy 2)
+
+
 def gifti(path: Path) -> list[np.ndarray]:
     return [np.asarray(d.data) for d in nib.load(str(path)).darrays]
 
@@ -147,7 +153,7 @@ def flat(fslr: Path, fsavg: dict[str, tuple[np.ndarray, np.ndarray]]) -> None:
         shift = (half_width + FLAT_GAP / 2) * (-1 if hemi == "lh" else 1)
         q = np.round((xy - centre + [shift, 0.0]) / FLAT_QUANTUM)
         corner = q[faces]
-        area = np.cross(corner[:, 1] - corner[:, 0], corner[:, 2] - corner[:, 0])
+        area = signed_area2(corner)
         faces[area < 0] = faces[area < 0][:, ::-1]  # folded-over triangles face the camera too
         xy = q * FLAT_QUANTUM
         arrays[f"{hemi}_xy"] = q.astype(np.int16)
@@ -170,7 +176,7 @@ def validate_flat(arrays: dict[str, np.ndarray]) -> None:
     for hemi in ("lh", "rh"):
         xy, faces = arrays[f"{hemi}_xy"].astype(np.float64) * scale, arrays[f"{hemi}_faces"].astype(np.int64)
         corner = xy[faces]
-        area = np.cross(corner[:, 1] - corner[:, 0], corner[:, 2] - corner[:, 0])
+        area = signed_area2(corner)
         assert (area >= 0).all(), f"{hemi}: {(area < 0).sum()} triangles face away"
         sums = arrays[f"{hemi}_fsaverage_weights"].astype(np.int64).sum(axis=1)
         assert np.abs(sums - 65535).max() <= 2, f"{hemi}: weights do not sum to 1"
