@@ -396,12 +396,12 @@ def test_refused_uploads_keep_their_message_and_the_last_good_one(served, tmp_pa
 
         page.locator("#pview").select_option("subcortical")
         expect(status).to_contain_text("subcortical · rendered in", timeout=60_000)
+        seq = page.locator("#preview").get_attribute("data-seq")  # before the upload: its preview is quick
         page.locator("#tract-files").set_input_files(str(bundles))
         tract_status = page.locator("#tract-status")
         expect(tract_status).to_contain_text("subject sub_1 of 5", timeout=60_000)
         expect(page.locator("#tract-options")).to_be_visible()
         expect(page.locator("#command")).to_contain_text("--tracts minimal_bundles/sub_1", timeout=60_000)
-        seq = page.locator("#preview").get_attribute("data-seq")
         expect(page.locator("#preview")).not_to_have_attribute("data-seq", seq, timeout=60_000)
         expect(status).to_contain_text("rendered in", timeout=60_000)
         expect(page.locator("#command")).to_contain_text("--tracts minimal_bundles/sub_1", timeout=60_000)
