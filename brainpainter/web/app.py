@@ -59,9 +59,9 @@ from brainpainter.web.http import (
     Work,
     client_of,
     disk_budget,
+    keep_upload,
     one_line,
     owner_of,
-    receive_body,
     require_octet_stream,
     validation_line,
 )
@@ -278,22 +278,16 @@ def _add_upload_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
         shown = " + ".join(file_name(n) for n in names) if is_map else upload_name(names[0])
         opts = {"atlas": atlas or None, "image_column": image_column or None, "value": value or None,
                 "region_column": region_column or None, "strict": strict}
-        path, size = await receive_body(request, store.root)
-        try:
-            # read into memory only on a work thread: at most a few bodies are in memory at once
-            if is_map:
-                data, (report, images) = await work.run(
-                    read_map_upload, path, names, sizes, hemi, store.root / "incoming",
-                    max_images=config.max_map_images, time_limit_s=config.parse_time_limit_s)
-            else:
-                data, (report, images) = await work.run(read_and_check, path, shown, opts,
-                                                        max_rows=config.max_rows,
-                                                        time_limit_s=config.parse_time_limit_s)
-        finally:
-            path.unlink(missing_ok=True)
-        upload_id = await run_in_threadpool(store.add_upload, client_of(request), shown, data,
-                                            config.result_ttl_s, config.max_uploads_per_client,
-                                            owner=owner_of(request))
+        # read into memory only on a work thread: at most a few bodies are in memory at once
+        if is_map:
+            upload_id, size, (report, images) = await keep_upload(
+                request, store, config, work, shown, read_map_upload, names, sizes, hemi,
+                store.root / "incoming", max_images=config.max_map_images,
+                time_limit_s=config.parse_time_limit_s)
+        else:
+            upload_id, size, (report, images) = await keep_upload(
+                request, store, config, work, shown, read_and_check, shown, opts, max_rows=config.max_rows,
+                time_limit_s=config.parse_time_limit_s)
         return {"upload_id": upload_id, "name": shown, "size": size, "report": report,
                 "images": images[:MAX_LISTED_IMAGES]}
 

@@ -110,6 +110,33 @@ async def receive_body(request: Request, root: Path) -> tuple[Path, int]:
     return path, size
 
 
+async def keep_upload(request: Request, store: Store, config: ServerConfig, work: Work, shown: str,
+                      read: Callable[..., tuple[bytes, Any]], *args: Any,
+                      **kwargs: Any) -> tuple[str, int, Any]:
+    """Receive the body, read it on a work thread and keep what was read as the client's upload.
+
+    ``read(path, *args, **kwargs)`` returns ``(data, report)``: the bytes kept and what the answer
+    reports. The body's file is removed whatever happens.
+
+    Returns
+    -------
+    upload_id : str
+    size : int
+        The body's bytes.
+    report : object
+        What `read` reported.
+    """
+    path, size = await receive_body(request, store.root)
+    try:
+        data, report = await work.run(read, path, *args, **kwargs)
+    finally:
+        path.unlink(missing_ok=True)
+    upload_id = await run_in_threadpool(store.add_upload, client_of(request), shown, data,
+                                        config.result_ttl_s, config.max_uploads_per_client,
+                                        owner=owner_of(request))
+    return upload_id, size, report
+
+
 def validation_line(exc: RequestValidationError) -> str:
     """A request that does not fit the API's schema, as one line: the first problem, and how many more."""
     errors = exc.errors()

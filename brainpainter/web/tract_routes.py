@@ -8,17 +8,14 @@ from pathlib import Path
 from typing import Annotated, Any
 
 from fastapi import FastAPI, Query, Request
-from starlette.concurrency import run_in_threadpool
 
 from brainpainter.web.config import ServerConfig
 from brainpainter.web.connectomes import ROLES
 from brainpainter.web.http import (
     ApiError,
     Work,
-    client_of,
     disk_budget,
-    owner_of,
-    receive_body,
+    keep_upload,
     require_octet_stream,
 )
 from brainpainter.web.layer_uploads import LayerUploads
@@ -62,17 +59,10 @@ def add_tracts_route(app: FastAPI, config: ServerConfig, store: Store) -> None:
                                 "files (one per bundle) or a .zip of them.")
         await disk_budget(store, config)
         shown = " + ".join(member_name(n) for n in names[:5]) + (" + ..." if len(names) > 5 else "")
-        path, size = await receive_body(request, store.root)
-        try:
-            data, report = await work.run(
-                read_tract_upload, path, names, sizes, store.root / "incoming",
-                max_files=config.max_tract_files, max_streamlines=config.max_tract_streamlines,
-                time_limit_s=config.parse_time_limit_s, subject=subject)
-        finally:
-            path.unlink(missing_ok=True)
-        upload_id = await run_in_threadpool(store.add_upload, client_of(request), shown, data,
-                                            config.result_ttl_s, config.max_uploads_per_client,
-                                            owner=owner_of(request))
+        upload_id, size, report = await keep_upload(
+            request, store, config, work, shown, read_tract_upload, names, sizes, store.root / "incoming",
+            max_files=config.max_tract_files, max_streamlines=config.max_tract_streamlines,
+            time_limit_s=config.parse_time_limit_s, subject=subject)
         return {"upload_id": upload_id, "name": shown, "size": size, "report": report}
 
 
@@ -107,16 +97,9 @@ def add_connectome_route(app: FastAPI, config: ServerConfig, store: Store) -> No
                                 "each at most 200 characters.")
         await disk_budget(store, config)
         shown = " + ".join(member_name(n) for n in names)
-        path, size = await receive_body(request, store.root)
-        try:
-            data, report = await work.run(
-                read_connectome_upload, path, names, sizes, role or [], store.root / "incoming",
-                max_nodes=MAX_NODES, time_limit_s=config.parse_time_limit_s)
-        finally:
-            path.unlink(missing_ok=True)
-        upload_id = await run_in_threadpool(store.add_upload, client_of(request), shown, data,
-                                            config.result_ttl_s, config.max_uploads_per_client,
-                                            owner=owner_of(request))
+        upload_id, size, report = await keep_upload(
+            request, store, config, work, shown, read_connectome_upload, names, sizes, role or [],
+            store.root / "incoming", max_nodes=MAX_NODES, time_limit_s=config.parse_time_limit_s)
         return {"upload_id": upload_id, "name": shown, "size": size, "report": report}
 
 
