@@ -268,6 +268,18 @@ def test_pyafq_profiles_with_several_measures_need_a_value_column():
     assert tv.row("stage-3")["tract:UF_left:2"] == 3.0  # one row (a group's profile) colours every image
 
 
+def test_a_long_table_without_nodes_gives_one_value_per_bundle():
+    tv = read_tract_values(pd.DataFrame({"bundle": ["AF_L", "CST_R"], "fa": [0.3, 0.7]}))
+    assert tv.images is None and tv.nodes == (("AF_left", 1), ("CST_right", 1))
+    assert tv.row("any") == {"tract:AF_left": 0.3, "tract:CST_right": 0.7}
+    tv = read_tract_values(pd.DataFrame({"subject": ["a", "a", "b"], "tract": ["AF_L", "CST_R", "AF_L"],
+                                         "fa": [0.3, 0.7, 0.5]}))
+    assert tv.images == ("a", "b") and tv.row("b")["tract:AF_left"] == 0.5
+    assert np.isnan(tv.row("b")["tract:CST_right"])
+    with pytest.raises(BrainPainterError, match="names a bundle twice for one image"):
+        read_tract_values(pd.DataFrame({"bundle": ["AF_L", "AF_left"], "fa": [0.3, 0.7]}))
+
+
 def test_wide_profiles_have_a_node_column():
     tv = read_tract_values(pd.DataFrame({"node": [0, 1, 2], "AF_left": [0.0, 1.5, 3.0]}))
     assert tv.nodes == (("AF_left", 3),) and tv.row("x")["tract:AF_left:2"] == 3.0
@@ -314,6 +326,37 @@ def test_the_cortex_option_decides_what_a_cortex_view_draws(tiny, bundles, corte
         assert glass.palette_index is cortex_lh.palette_index and cortex_lh.kind == "cortex"
     # the subcortical views are unchanged
     assert {p.name for p in g.visible(get_view("subcortical"))} >= {"tracts-lh", "tracts-rh", "glass-rh"}
+
+
+@pytest.mark.parametrize(("given", "cortex"), [
+    ({"table": {"Left-insula": 2.0}}, "opaque"),  # the cortex carries values: drawn in their colours
+    ({"table": {"Left-insula": 2.0}, "cortex": "glass"}, "glass"),  # asked for: kept
+    ({"table": {"Left-Hippocampus": 2.0}}, "auto"),  # values on structures only: glass (geometry's auto)
+    ({"tract_values": "v.csv"}, "auto"),  # bundle values alone: the grey glass cortex
+])
+def test_with_tracts_a_cortex_carrying_values_is_drawn_opaque(tmp_path, bundles, given, cortex):
+    from brainpainter.rendering.run import prepare_run
+
+    (tmp_path / "v.csv").write_text("AF_L,CST_R\n0.3,0.7\n")
+    kwargs = {k: v for k, v in given.items() if k != "table"}
+    if "tract_values" in kwargs:
+        kwargs["tract_values"] = str(tmp_path / kwargs["tract_values"])
+    run = prepare_run(given.get("table"), "dk", tracts=[str(bundles)], tracts_space="template", **kwargs)
+    assert run.settings.cortex == cortex
+
+
+def test_tract_values_naming_no_bundle_drawn_are_a_one_line_error(tmp_path, monkeypatch, capsys, bundles):
+    from brainpainter.cli.main import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "t.csv").write_text("Left-insula\n1\n")
+    (tmp_path / "fa.csv").write_text("bundle,fa\nSLF_L,0.4\n")  # drawn as direction colours before
+    with pytest.raises(SystemExit) as exit_:
+        main(["render", "t.csv", "--tracts", str(bundles), "--tract-values", "fa.csv", "--out", "o"])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and len(err.strip().splitlines()) == 1
+    assert "['SLF_left'] are none of the tracts drawn ['AF_left', 'CST_right']" in err
+    assert not (tmp_path / "o").exists()
 
 
 def test_without_tracts_the_cortex_stays_opaque_and_hidden_explains_an_empty_view(tiny):

@@ -231,6 +231,26 @@ def test_render_command_with_a_bundle_table(tmp_path, bundles, tiny):
     assert "note: AF_left: 30 of 40 streamlines drawn" in result.output
 
 
+def test_a_region_table_with_tracts_draws_its_cortex_in_its_colours(tmp_path, bundles, tiny):
+    """``--cortex auto``: a cortex carrying values is opaque in the cortex views (as glass, at 0.12
+    opacity, its colours were a few pale wisps under a colour bar they did not show)."""
+    from click.testing import CliRunner
+    from PIL import Image
+
+    from brainpainter.cli.main import cli
+
+    (tmp_path / "t.csv").write_text("Left-insula,Left-precuneus,Left-superiorfrontal,AF_L\n3,3,3,0\n")
+    out = tmp_path / "out"
+    result = CliRunner().invoke(cli, [
+        "render", str(tmp_path / "t.csv"), "--tracts", str(bundles), "--tracts-space", "template",
+        "--template", str(tiny), "--views", "lateral-left", "--size", "160x120", "--shading", "flat",
+        "--quality", "fast", "--vmin", "0", "--vmax", "3", "--gradient", "blue,red", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    img = np.asarray(Image.open(out / "1_lateral-left.png").convert("RGB"))
+    brain = np.ptp(img.astype(int), axis=-1) > 30
+    assert brain.sum() > 1000 and _mask(img, RED, 12).sum() > 0.5 * brain.sum()
+
+
 def test_render_command_with_jobs_2_draws_the_bundles_in_every_view(tmp_path, bundles, tiny):
     from click.testing import CliRunner
     from PIL import Image

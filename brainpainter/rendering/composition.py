@@ -270,3 +270,19 @@ def read_contours(options: MapOptions) -> Contours | None:
                                 "Give one image (a cluster mask, a p-map).")
     values = {hemi: np.asarray(maps.on_fsaverage(hemi, 0), np.float32) for hemi in maps.values}
     return Contours(values, options.levels, regions=options.outline is not None)
+
+
+def cortex_for(settings: RenderSettings, *, cortex_values: bool, tracts: bool,
+               connectome: bool) -> RenderSettings:
+    """``--cortex auto`` resolved where the cortex carries values: opaque, in its true colours.
+
+    A glass cortex shows its colours at ``glass_opacity`` (0.12): a thickness map or region values
+    drawn as glass over white read as a few pale wisps, no longer the colours of their colour bar.
+    So with tracts, ``auto`` draws glass only where the cortex carries no values (the tracts then
+    show through a grey cortex); where it carries them the cortex views draw it opaque and the
+    tracts show in the subcortical views (``--cortex glass`` shows them through it). A connectome
+    keeps the glass (its nodes sit inside the cortex). Other settings are returned unchanged.
+    """
+    if settings.cortex == "auto" and cortex_values and tracts and not connectome:
+        return replace(settings, cortex="opaque")
+    return settings

@@ -25,7 +25,7 @@ from brainpainter.maps.inputs import VertexMaps, is_map_input, read_maps
 from brainpainter.maps.layers import vertex_colors
 from brainpainter.maps.outlines import Contours, mesh_edges
 from brainpainter.maps.resolution import map_mesh, own_vertex_count
-from brainpainter.rendering.composition import RegionsBelow, line_layers, map_layers, tract_colors
+from brainpainter.rendering.composition import RegionsBelow, cortex_for, line_layers, map_layers, tract_colors
 from brainpainter.rendering.connectome_layers import connectome_colors, connectome_kinds, connectome_layers
 from brainpainter.rendering.geometry import VertexColors
 from brainpainter.rendering.layers import Layer
@@ -34,9 +34,10 @@ from brainpainter.rendering.painter import Painter, flat_aspect, region_colors
 from brainpainter.rendering.parallel import Item
 from brainpainter.rendering.settings import with_aspect
 from brainpainter.rendering.sulc import convexity
+from brainpainter.rendering.tract_run import given_tract_values
 from brainpainter.rendering.views import View, parse_views
 from brainpainter.table.region_table import RegionTable, read_table
-from brainpainter.tracts.values import TractValues, read_tract_values
+from brainpainter.tracts.values import TractValues
 
 #: Default views of a map run: both hemispheres, outside and inside.
 MAP_VIEWS = "lateral-left,medial-left,lateral-right,medial-right"
@@ -194,8 +195,9 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     labels = atlas_obj.template_labels if atlas_obj.template_labels in tpl.label_sets else "dk"
     meshes = {hemi: map_mesh(tpl, labels, hemi) for hemi in ("lh", "rh")}
     views = options.scene.views
-    if views is None:  # not given: both hemispheres; a volume also colours the subcortical structures
-        views = MAP_VIEWS + (",subcortical" if maps.regions else "")
+    if views is None:  # not given: both hemispheres
+        # a volume also colours the subcortical structures; tracts show in the subcortical view
+        views = MAP_VIEWS + (",subcortical" if maps.regions or options.scene.tracts else "")
         if len(surfaces) == 1:  # one surface of your own: the views of its hemisphere
             side = "left" if "lh" in surfaces else "right"
             views = f"lateral-{side},medial-{side}"
@@ -205,11 +207,12 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
              else None)
     masks = {hemi: surface_masks(tpl, labels, meshes[hemi], n) for hemi, n in own.items()} if own else None
     scene = options.scene
-    tract_values = (read_tract_values(scene.tract_values, scene.tract_value) if scene.tract_values is not None
-                    else None)
+    tract_values = given_tract_values(scene)
     connectome = options.connectome.load(atlas_obj if atlas is None else atlas, tpl, options.scene.surface)
     layers, below = map_layers(options, maps, table, meshes, tract_values,
                                others=connectome_kinds(connectome))
+    settings = cortex_for(settings, cortex_values=True, tracts=bool(options.scene.tracts),
+                          connectome=connectome is not None)
     layers += connectome_layers(options, connectome, first=False) if connectome is not None else ()
     flat = flat_edges = None
     if any(v.content == "flat" for v in view_list):  # the flat maps: fsaverage's templates only

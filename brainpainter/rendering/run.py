@@ -26,7 +26,7 @@ from brainpainter.connectome.model import Connectome
 from brainpainter.errors import BrainPainterError, NoRegionColumnError
 from brainpainter.maps.inputs import is_map_input
 from brainpainter.maps.outlines import Contours
-from brainpainter.rendering.composition import line_entries, line_layers, run_layers, tract_colors
+from brainpainter.rendering.composition import cortex_for, line_entries, line_layers, run_layers, tract_colors
 from brainpainter.rendering.connectome_layers import (
     connectome_colors,
     connectome_kinds,
@@ -169,6 +169,9 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
                                 else default_views(table.atlas, only_tracts))
     own = (table.atlas.name, table.atlas.template_labels)
     contours, settings = line_layers(options, "a region render", own)
+    cortical = {r.key for r in table.atlas.cortical()}
+    settings = cortex_for(settings, cortex_values=bool(cortical.intersection(table.regions)),
+                          tracts=bool(options.scene.tracts), connectome=connectome is not None)
     if not options.size_given and table.atlas.image_aspect:  # a brain of another shape: frame the views
         settings = with_aspect(settings, shown_aspect(table.atlas, options.scene.template, view_list))
     elif not options.size_given and (aspect := flat_aspect(view_list)):  # flat maps: wider than a brain

@@ -99,7 +99,9 @@ class RenderSettings:
         How the cortex views draw the cortex: ``opaque``; ``glass``, transparent
         in its colours (``glass_opacity``) with the white-matter tracts of the
         view's hemispheres inside; ``hidden``, the tracts alone; ``auto``
-        (default): ``glass`` when the scene has tracts, else ``opaque``.
+        (default): ``glass`` when the scene has tracts, else ``opaque`` (a run whose
+        cortex carries values draws it ``opaque`` with tracts too:
+        :func:`brainpainter.rendering.composition.cortex_for`).
     """
 
     width: int = field(default=1200, metadata={"help": "Image width, pixels."})
@@ -120,8 +122,9 @@ class RenderSettings:
         "help": "Colour of the region borders (--outline), e.g. black or white.", "cli_default": "black"})
     cortex: str = field(default="auto", metadata={"choices": CORTEX_MODES, "help": (
         "How cortex views (lateral, medial, dorsal, ...) draw the cortex: glass shows the --tracts inside "
-        "a transparent cortex in its colours, hidden the tracts alone; auto: glass with --tracts, else "
-        "opaque.")})
+        "a transparent cortex in its colours, hidden the tracts alone; auto: glass with --tracts or a "
+        "connectome, opaque where the cortex carries values (a map, cortical region values) or with "
+        "neither.")})
 
     def __post_init__(self) -> None:
         for name, allowed in (("quality", QUALITIES), ("shading", SHADINGS), ("lighting", LIGHTINGS),

@@ -16,10 +16,10 @@ import numpy as np
 from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.registry import get_atlas
 from brainpainter.errors import BrainPainterError
-from brainpainter.rendering.options import Options
+from brainpainter.rendering.options import Options, SceneOptions
 from brainpainter.table.region_table import RegionTable
 from brainpainter.tracts.model import TractSpec
-from brainpainter.tracts.values import TractValues, is_profile, read_tract_values
+from brainpainter.tracts.values import TractValues, is_long, read_tract_values
 
 
 def tracts_only_table(tract_values: TractValues, atlas: Atlas | None, data: Any) -> RegionTable:
@@ -36,7 +36,9 @@ def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, b
     Columns of the main table count as bundles when their canonical name is a bundle of ``tracts``
     (a file's name); without any, bundles are coloured by direction. A main table that is an
     along-tract profile (bundle and node columns, pyAFQ's ``tract_profiles.csv``) is tract values
-    only: its errors are reported, and so is a profile none of whose bundles is drawn.
+    only: its errors are reported, and so is a profile none of whose bundles is drawn. Tract values
+    that name none of the bundles drawn are an error (else the tracts would be drawn in direction
+    colours under a colour bar of values they do not show).
 
     Returns
     -------
@@ -47,7 +49,7 @@ def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, b
     """
     scene = options.scene
     if scene.tract_values is not None:
-        return read_tract_values(scene.tract_values, scene.tract_value), data is None
+        return given_tract_values(scene), data is None
     spec = scene.tract_spec()
     if spec is None or data is None or isinstance(data, list):
         return None, False
@@ -59,7 +61,7 @@ def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, b
     profile = False
     try:
         raw = read_raw(data)
-        profile = is_profile(raw)
+        profile = is_long(raw)
         tv = read_tract_values(raw, scene.tract_value)
     except BrainPainterError:
         if profile:
@@ -70,16 +72,32 @@ def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, b
             data.seek(pos)
     keep = [j for j, (name, _) in enumerate(tv.nodes) if name in known]
     if not keep and profile:
-        raise BrainPainterError(
-            f"the profile table's bundles {sorted(tv.bundles)[:6]} are none of the tracts drawn "
-            f"{sorted(known)[:6]}; name the tractogram files after the bundles (AF_L.trk, "
-            "CST_right.tck, ...) or give the tractograms the profiles were made on.")
+        raise _none_drawn("the table", tv, known)
     if not keep:
         return None, False
     names = {tv.nodes[j][0] for j in keep}
     cols = [j for j, key in enumerate(tv.keys) if key.split(":")[1] in names]
     return (TractValues(tv.images, tuple(tv.keys[j] for j in cols), tv.values[:, cols],
                         tuple(tv.nodes[j] for j in keep)), len(keep) == len(tv.nodes))
+
+
+def _none_drawn(what: str, tv: TractValues, known: set[str]) -> BrainPainterError:
+    return BrainPainterError(
+        f"the bundles of {what} {sorted(tv.bundles)[:6]} are none of the tracts drawn {sorted(known)[:6]}; "
+        "name the tractogram files after the bundles (AF_L.trk, CST_right.tck, ...), the columns after "
+        "the tractograms, or give the tractograms the values were measured on.")
+
+
+def given_tract_values(scene: SceneOptions) -> TractValues | None:
+    """``--tract-values`` read, checked to name at least one bundle of ``--tracts`` (None: not given)."""
+    if scene.tract_values is None:
+        return None
+    tv = read_tract_values(scene.tract_values, scene.tract_value)
+    spec = scene.tract_spec()
+    if spec is not None and not set(tv.bundles) & bundle_names(spec):
+        name = Path(scene.tract_values).name if isinstance(scene.tract_values, str | Path) else "tract values"
+        raise _none_drawn(f"--tract-values {name!r}", tv, bundle_names(spec))
+    return tv
 
 
 def bundle_names(spec: TractSpec) -> set[str]:

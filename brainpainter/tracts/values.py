@@ -7,6 +7,8 @@ Layouts (read by :func:`brainpainter.io.readers.read_raw`, so CSV, TSV,
   ``Left Arcuate``, ...: :func:`brainpainter.tracts.names.canonical`), rows are
   images, with an optional image column (``image``, ``subject``,
   ``subjectID``, ``Image-name-unique``);
+* **per bundle, long**: a bundle column (``bundle``, ``tract``, ``tractID``), one value
+  column and an optional image column: a row per bundle (and image);
 * **profile, long**: a ``node`` (or ``nodeID``) column, a bundle column
   (``bundle``, ``tract``, ``tractID``), one value column (pyAFQ's
   ``tract_profiles.csv`` has several: name one with `value`) and an optional
@@ -107,16 +109,15 @@ def _find(header: list[str], names: tuple[str, ...]) -> int | None:
     return None
 
 
-def is_profile(data: Any) -> bool:
-    """Whether `data` (anything :func:`read_tract_values` reads) is a long along-tract profile table.
+def is_long(data: Any) -> bool:
+    """Whether `data` (anything :func:`read_tract_values` reads) is a long table of tract values.
 
-    A profile has a node column and a bundle column (``node``/``nodeID``, ``bundle``/``tractID``):
-    it holds tract values only, whatever else it holds.
+    A long table has a bundle column (``bundle``/``tractID``): a row per bundle, or per node of a
+    bundle (pyAFQ's ``tract_profiles.csv``). It holds tract values only, whatever else it holds.
     """
     from brainpainter.io.readers import read_raw
 
-    header = list(read_raw(data).header)
-    return _find(header, NODE_COLUMNS) is not None and _find(header, BUNDLE_COLUMNS) is not None
+    return _find(list(read_raw(data).header), BUNDLE_COLUMNS) is not None
 
 
 def read_tract_values(data: Any, value: str | None = None) -> TractValues:
@@ -147,7 +148,7 @@ def read_tract_values(data: Any, value: str | None = None) -> TractValues:
         image_col = header.index(raw.index_column)
     node_col = _find(header, NODE_COLUMNS)
     bundle_col = _find(header, BUNDLE_COLUMNS)
-    if node_col is not None and bundle_col is not None:
+    if bundle_col is not None:  # long: a row per bundle (and node, and image)
         return _long_profile(raw.source, header, rows, dc, image_col, node_col, bundle_col, value)
     skip = {c for c in (image_col, node_col) if c is not None}
     cols = [j for j in range(len(header)) if j not in skip and header[j].strip()]
@@ -183,7 +184,8 @@ def _nodes(source: str, cells: list[Any], dc: bool) -> NDArray[Any]:
 
 
 def _long_profile(source: str, header: list[str], rows: list[list[Any]], dc: bool, image_col: int | None,
-                  node_col: int, bundle_col: int, value: str | None) -> TractValues:
+                  node_col: int | None, bundle_col: int, value: str | None) -> TractValues:
+    """A long table: a row per bundle, node (without a node column: one value per bundle) and image."""
     skip = {c for c in (image_col, node_col, bundle_col) if c is not None}
     if value is not None:
         if value not in header:
@@ -195,16 +197,22 @@ def _long_profile(source: str, header: list[str], rows: list[list[Any]], dc: boo
                    and any(math.isfinite(_number(r[j], dc)) for r in rows[:50])]
         if len(numeric) != 1:
             raise BrainPainterError(
-                f"the profile table {source!r} has {len(numeric)} value columns "
+                f"the {'profile' if node_col is not None else 'bundle'} table {source!r} has {len(numeric)} "
+                f"value columns "
                 f"{[header[j] for j in numeric]}; name the one to draw (--tract-value COLUMN).")
         value_col = numeric[0]
-    node = _nodes(source, [r[node_col] for r in rows], dc)
-    n = int(node.max()) + 1
+    node = (_nodes(source, [r[node_col] for r in rows], dc) if node_col is not None
+            else np.zeros(len(rows), dtype=np.int64))
+    n = int(node.max()) + 1 if len(node) else 1
     names = [canonical(str(r[bundle_col])) for r in rows]
     bundles = list(dict.fromkeys(names))
+    if node_col is None and len(set(zip(names, [r[image_col] if image_col is not None else "" for r in rows],
+                                        strict=True))) < len(rows):
+        raise BrainPainterError(f"the bundle table {source!r} names a bundle twice for one image; give one "
+                                "row per bundle (and image), or a node column for along-tract profiles.")
     images_all = [str(r[image_col]).strip() for r in rows] if image_col is not None else [""] * len(rows)
     images = list(dict.fromkeys(images_all))
-    keys = tuple(bundle_key(b, k) for b in bundles for k in range(n))
+    keys = tuple(bundle_key(b, k if node_col is not None else None) for b in bundles for k in range(n))
     col_of: Mapping[str, int] = {b: i * n for i, b in enumerate(bundles)}
     row_of = {im: i for i, im in enumerate(images)}
     vals = np.full((len(images), len(keys)), np.nan)

@@ -51,8 +51,10 @@ brainpainter figure "$work/thickness.csv" "${common[@]}" --tract-values "$work/f
 # 3. along-tract profiles: 100 nodes per bundle
 brainpainter figure "$work/thickness.csv" "${common[@]}" --tract-values "$work/profiles.csv" --vmin 0.3 --vmax 0.6 \
     --cmap plasma --views subcortical,subcortical-left --label "FA along the bundle" --out profiles.png
-# 4. the cortex views: the bundles of the view's hemispheres through the cortex drawn as glass (--cortex auto)
-brainpainter render "$work/cortex.csv" --atlas dk "${common[@]}" --views lateral-left,medial-left,dorsal,subcortical \
+# 4. the cortex views: the bundles of the view's hemispheres through the cortex drawn as glass (--cortex glass;
+#    auto draws a cortex that carries values opaque, in the colours of its colour bar)
+brainpainter render "$work/cortex.csv" --atlas dk "${common[@]}" --cortex glass \
+    --views lateral-left,medial-left,dorsal,subcortical \
     --size 600x450 --out "$work/cortex"
 python - "$work" <<'PY'
 import sys
