@@ -94,3 +94,16 @@ def test_an_export_of_a_map_has_its_tracts_too(tmp_path, layers):
     assert {m.part for m in meshes} >= {"lh", "rh", "tracts"} and len(tubes) == 2
     colours = {tuple(np.round(np.asarray(m.color)[..., :3].reshape(-1, 3)[0], 2)) for m in tubes}
     assert colours == {tuple(np.round(colormaps["magma"](x)[:3], 2)) for x in (0.0, 1.0)}
+
+
+def test_a_map_with_tracts_is_opaque_and_shows_the_tracts_in_a_subcortical_view(tmp_path, layers):
+    """``--cortex auto`` with a map: the map keeps its colours (opaque cortex), the default views add
+    ``subcortical`` where the tracts show (before: the map as glass at 0.12 opacity, no view inside)."""
+    from brainpainter.rendering.run import prepare_run
+
+    _, options = layers
+    options = {"tracts": options["tracts"], "tracts_space": "template"}  # direction colours
+    run = prepare_run({"lh": np.zeros(10242), "rh": np.zeros(10242)}, **options)
+    assert run.settings.cortex == "opaque" and "subcortical" in [v.name for v in run.views]
+    run = prepare_run({"lh": np.zeros(10242), "rh": np.zeros(10242)}, **options, cortex="glass")
+    assert run.settings.cortex == "glass"
