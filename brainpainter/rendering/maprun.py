@@ -19,6 +19,7 @@ from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.surfaces import Surface, read_surfaces, surface_template
 from brainpainter.atlas.template import Template, load_template
 from brainpainter.connectome.model import Connectome
+from brainpainter.connectome.series import check_images
 from brainpainter.errors import BrainPainterError
 from brainpainter.maps.flat import check_flat, flat_labels, flat_sheet, flat_values
 from brainpainter.maps.inputs import VertexMaps, is_map_input, read_maps
@@ -146,7 +147,7 @@ class MapRun:
                 regions.update(tract_colors(self.tract_values.row(self.table.images[row]),
                                             self.scale_of("tracts")))
             if self.connectome is not None:
-                regions.update(connectome_colors(self.connectome, self.layers))
+                regions.update(connectome_colors(self.connectome, self.layers, image))
             self._cache[image] = VertexColors(regions, cortex)
         return self._cache[image]
 
@@ -208,6 +209,7 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     tract_values = (read_tract_values(scene.tract_values, scene.tract_value) if scene.tract_values is not None
                     else None)
     connectome = options.connectome.load(atlas_obj if atlas is None else atlas, tpl, options.scene.surface)
+    check_images(connectome, maps.n_images, "the maps")
     layers, below = map_layers(options, maps, table, meshes, tract_values,
                                others=connectome_kinds(connectome))
     layers += connectome_layers(options, connectome, first=False) if connectome is not None else ()
