@@ -148,3 +148,16 @@ def test_scene_add_takes_a_series(tiny, nodes):
     assert sorted(drawn.images) == [("stage-1", "dorsal"), ("stage-2", "dorsal")]
     assert [i["weight_range"] for i in drawn.manifest["connectome"]["series"]["images"]] == [[0.3, 0.3],
                                                                                            [-0.6, -0.6]]
+
+
+def test_a_series_with_a_table_takes_matrix_i_for_row_i(tiny, nodes):
+    from brainpainter.rendering.run import prepare_run
+    from brainpainter.rendering.views import get_view
+
+    table = {"image": ["before", "after"], "Left-precentral": [1.0, 2.0]}
+    run = prepare_run(table, "dk", connectome=np.stack([pair(0.3), pair(-0.6)]), nodes=nodes,
+                      template=str(tiny))
+    edges = run.scale_of("edges")
+    for row, w in ((0, 0.3), (1, -0.6)):
+        expected = tuple(float(c) for c in edges(np.array([w]))[0])
+        assert run.item(row, get_view("dorsal")).colors["edge:0"] == expected

@@ -29,8 +29,7 @@ import glob
 import os
 import re
 import sys
-from dataclasses import dataclass, replace
-from functools import lru_cache
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -247,6 +246,10 @@ class EdgeSeries:
     directed: bool
     images: tuple[dict[str, Any], ...]
     sample: NDArray[np.float64]
+    _recent: dict[int, NDArray[np.float64]] = field(default_factory=dict, init=False, repr=False)
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {**self.__dict__, "_recent": {}}  # what was read stays in this process
 
     def __len__(self) -> int:
         return len(self.matrices)
@@ -262,8 +265,22 @@ class EdgeSeries:
         return self.matrices.source
 
     def weights(self, t: int) -> NDArray[np.float64]:
-        """The weight of each edge drawn in matrix `t`, shape (E,): 0 where it has none."""
-        return _edge_weights(self, int(t))
+        """The weight of each edge drawn in matrix `t`, shape (E,): 0 where it has none (the last two read
+        are kept: a movie's frames between two matrices read both)."""
+        t = int(t)
+        if t not in self._recent:
+            if len(self._recent) >= 2:
+                del self._recent[next(iter(self._recent))]
+            self._recent[t] = self._read(t)
+        return self._recent[t]
+
+    def _read(self, t: int) -> NDArray[np.float64]:
+        m = self.matrices.matrix(t).weights
+        w = m[self.edge_from, self.edge_to]
+        if not self.directed:  # an edge given in the lower triangle only
+            w = np.where(np.isfinite(w) & (w != 0), w, m[self.edge_to, self.edge_from])
+        out: NDArray[np.float64] = np.nan_to_num(w, nan=0.0)
+        return out
 
     def at(self, image: float | tuple[int, int, float]) -> NDArray[np.float64]:
         """The edges' weights of image `image`, shape (E,); of ``(a, b, w)``: ``(1 - w) * a + w * b``
@@ -279,17 +296,6 @@ class EdgeSeries:
     def summary(self) -> dict[str, Any]:
         """The manifest's ``series``: the matrices' source, their count and each image's edges."""
         return {"source": self.matrices.source, "n_matrices": len(self), "images": list(self.images)}
-
-
-@lru_cache(maxsize=4)
-def _edge_weights(series: EdgeSeries, t: int) -> NDArray[np.float64]:
-    """The weights of `series`' edges in its matrix `t` (the last few kept: a movie reads each twice)."""
-    m = series.matrices.matrix(t).weights
-    w = m[series.edge_from, series.edge_to]
-    if not series.directed:  # an edge given in the lower triangle only
-        w = np.where(np.isfinite(w) & (w != 0), w, m[series.edge_to, series.edge_from])
-    out: NDArray[np.float64] = np.nan_to_num(w, nan=0.0)
-    return out
 
 
 def series_connectome(series: MatrixSeries, read: Callable[[Matrix], Connectome],
