@@ -161,3 +161,14 @@ def test_a_series_with_a_table_takes_matrix_i_for_row_i(tiny, nodes):
     for row, w in ((0, 0.3), (1, -0.6)):
         expected = tuple(float(c) for c in edges(np.array([w]))[0])
         assert run.item(row, get_view("dorsal")).colors["edge:0"] == expected
+
+
+def test_the_export_of_a_series_row_shows_that_matrix_weight(tmp_path, tiny, nodes):
+    import struct
+
+    stack = np.stack([pair(0.3), pair(-0.6)])
+    glb = brainpainter.export(None, tmp_path / "c.glb", row="stage-1", connectome=stack, nodes=nodes,
+                              template=str(tiny)).read_bytes()
+    doc = json.loads(glb[20:20 + struct.unpack("<I", glb[12:16])[0]])
+    extras = {node["name"]: node["extras"] for node in doc["nodes"] if node["extras"]["part"] == "connectome"}
+    assert extras["left \u2013 right"]["value"] == "0.3"  # not -0.6, its largest over the series

@@ -362,6 +362,20 @@ def _quantiles(weight: NDArray[np.float64]) -> NDArray[np.float64]:
     return picked
 
 
+def image_connectome(connectome: Connectome, image: int) -> Connectome:
+    """`connectome` with the weights of `image` of its series at the edges it draws (0 where that matrix
+    has none: still drawn), e.g. for an export's tooltips; `connectome` itself where it has no series."""
+    series = connectome.series
+    if series is None:
+        return connectome
+    source, target, _ = connectome.edges()
+    weights = np.full_like(connectome.weights, np.nan)
+    weights[source, target] = series.at(image)
+    if not connectome.directed:
+        weights[target, source] = weights[source, target]
+    return replace(connectome, weights=weights)
+
+
 def check_images(connectome: Connectome | None, n_images: int, what: str) -> None:
     """Refuse a series whose matrices are not one per image of the table (or maps) drawn with it.
 
