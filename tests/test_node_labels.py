@@ -218,3 +218,25 @@ def test_a_label_that_fits_nowhere_is_left_out():
     placed, left_out = place_labels([3, 5], np.array([[30.0, 50.0], [31.0, 50.0]]), np.array([2.0, 2.0]),
                                     (100, 100), wide)
     assert [p[0] for p in placed] == [3] and left_out == [5]
+
+
+def test_the_label_of_the_larger_node_value_is_placed_first():
+    """Two nodes at one spot: the one of the larger value keeps the place right of the node."""
+    from brainpainter.rendering.framing import CameraPose
+    from brainpainter.rendering.node_labels import draw_node_labels
+
+    pose = CameraPose(location=np.array([0.0, 0.0, 100.0]), rotation=np.eye(3), ortho_scale=100.0,
+                      clip_start=1.0, clip_end=200.0)
+    blank = np.full((400, 400, 4), 255, np.uint8)
+
+    def drawn(labelled, values):
+        c = Connectome(("WWWW", "MMMM"), np.zeros((2, 3)), np.full((2, 2), np.nan),
+                       node_values=np.array(values, float), labelled=labelled)
+        return _dark(draw_node_labels(blank, c, pose))
+
+    w, m = drawn((0,), (1.0, 5.0)).sum(), drawn((1,), (1.0, 5.0)).sum()
+    assert abs(w - m) > 0.2 * max(w, m)  # the two texts tell apart by their dark pixels
+    for values, first in (((1.0, 5.0), m), ((5.0, 1.0), w)):
+        both = drawn((0, 1), values)
+        assert both[:, 200:].sum() == first  # the larger right of the node, as drawn alone
+        assert both.sum() >= 0.95 * (w + m)  # the other left of it, uncovered

@@ -2,8 +2,9 @@
 
 The labels (:attr:`~brainpainter.connectome.model.Connectome.labelled`) are 2-D text drawn after the
 3-D render: dark text with a light halo (it reads over the glass, the edges and the background), its
-height a fixed share of the image's (:data:`TEXT_SHARE`). Labels are placed one after another, in
-node order, at the first of :data:`PLACES` around their sphere's projected rim (just right of it, else
+height a fixed share of the image's (:data:`TEXT_SHARE`). Labels are placed one after another (the
+largest node value first, else the strongest node: :func:`~brainpainter.connectome.labels.ranked`), each
+at the first of :data:`PLACES` around their sphere's projected rim (just right of it, else
 left of it, else above or below) where the text lies inside the image and overlaps no label placed
 before (:func:`place_labels`, a greedy placement); a label that fits nowhere, or whose node projects
 outside the image, is left out (and logged).
@@ -18,6 +19,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from brainpainter.connectome.labels import ranked
 from brainpainter.connectome.model import Connectome
 from brainpainter.rendering import framing
 from brainpainter.rendering.connectome_parts import node_radii
@@ -68,7 +70,7 @@ def draw_node_labels(pixels: NDArray[Any], connectome: Connectome, pose: framing
     from PIL import Image, ImageDraw, ImageFont
 
     height, width = pixels.shape[:2]
-    index = np.asarray(connectome.labelled, dtype=np.intp)
+    index = ranked(connectome, np.asarray(connectome.labelled, dtype=np.intp))  # the first placed first
     centre = framing.to_pixels(connectome.positions[index], pose, width, height)
     rim = framing.to_pixels(connectome.positions[index] + pose.right * node_radii(
         connectome.node_values, connectome.n_nodes)[index, None], pose, width, height)
