@@ -377,7 +377,8 @@ def image_connectome(connectome: Connectome, image: int) -> Connectome:
 
 
 def check_images(connectome: Connectome | None, n_images: int, what: str) -> None:
-    """Refuse a series whose matrices are not one per image of the table (or maps) drawn with it.
+    """Refuse a series whose matrices are not one per image of the table (or maps) drawn with it; `what`:
+    ``"table 'x.csv' has"``, ``"the maps have"``.
 
     Raises
     ------
@@ -387,6 +388,6 @@ def check_images(connectome: Connectome | None, n_images: int, what: str) -> Non
     series = None if connectome is None else connectome.series
     if series is not None and len(series) != n_images:
         raise BrainPainterError(
-            f"connectome series {series.given!r} has {len(series)} matrices but {what} has "
-            f"{n_images} image(s); give one matrix per image (row i is drawn with matrix i), or draw the "
+            f"connectome series {series.given!r} has {len(series)} matrices but {what} {n_images} "
+            f"image(s); give one matrix per image (row i is drawn with matrix i), or draw the "
             "series alone.")

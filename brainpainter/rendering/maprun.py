@@ -209,7 +209,7 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     tract_values = (read_tract_values(scene.tract_values, scene.tract_value) if scene.tract_values is not None
                     else None)
     connectome = options.connectome.load(atlas_obj if atlas is None else atlas, tpl, options.scene.surface)
-    check_images(connectome, maps.n_images, "the maps")
+    check_images(connectome, maps.n_images, "the maps have")
     layers, below = map_layers(options, maps, table, meshes, tract_values,
                                others=connectome_kinds(connectome))
     layers += connectome_layers(options, connectome, first=False) if connectome is not None else ()

@@ -168,7 +168,7 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     if only_connectome and connectome is not None and connectome.series is not None:  # an image per matrix
         table = connectome_only_table(table.atlas, options.connectome.connectome,
                                       connectome.series.names)
-    check_images(connectome, len(table.images), f"table {table.source!r}")
+    check_images(connectome, len(table.images), f"table {table.source!r} has")
     if views is None:
         view_list = parse_views(CONNECTOME_VIEWS if only_connectome
                                 else default_views(table.atlas, only_tracts))
