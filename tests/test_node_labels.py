@@ -170,3 +170,73 @@ def test_scene_add_passes_node_labels_through(tiny):
                                   progress=False, **kw)
     assert drawn.manifest["connectome"]["labelled"] == ["left", "right"]
     np.testing.assert_array_equal(next(iter(drawn.images.values())), next(iter(cli.images.values())))
+
+
+def test_labels_of_nodes_that_project_together_are_moved_apart():
+    """Two nodes 1 mm apart: each label drawn alone sits right of its node; drawn together, the second
+    moves (left of its node) so that no text pixel of either is covered and their boxes do not meet."""
+    from brainpainter.rendering.framing import CameraPose, to_pixels
+    from brainpainter.rendering.node_labels import draw_node_labels, place_labels
+
+    pose = CameraPose(location=np.array([0.0, 0.0, 100.0]), rotation=np.eye(3), ortho_scale=100.0,
+                      clip_start=1.0, clip_end=200.0)
+    positions = np.array([[0.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    blank = np.full((400, 400, 4), 255, np.uint8)
+
+    def drawn(labelled):
+        c = Connectome(("WWWW", "MMMM"), positions, np.full((2, 2), np.nan), labelled=labelled)
+        return _dark(draw_node_labels(blank, c, pose))
+
+    alone = [drawn((i,)) for i in (0, 1)]
+    assert all(a[:, 200:].sum() > 50 and not a[:, :200].any() for a in alone)  # right of the node
+    both = drawn((0, 1))
+    assert both.sum() >= 0.97 * (alone[0].sum() + alone[1].sum())  # was ~half: each hid the other
+    assert both[:, 200:].sum() > 0.9 * alone[0].sum() and both[:, :200].sum() > 0.9 * alone[1].sum()
+
+    boxes = {}
+
+    def box(i, xy, anchor):  # 40 x 12 px from the anchor point, as PIL anchors it
+        x = xy[0] - {"l": 0, "m": 20, "r": 40}[anchor[0]]
+        y = xy[1] - {"m": 6, "s": 12, "a": 0}[anchor[1]]
+        boxes[i] = (x, y, x + 40, y + 12)
+        return boxes[i]
+
+    placed, left_out = place_labels([0, 1], to_pixels(positions, pose, 400, 400), np.array([5.0, 5.0]),
+                                    (400, 400), box)
+    (a, b) = (boxes[0], boxes[1])
+    assert left_out == [] and [p[0] for p in placed] == [0, 1]
+    assert a[2] <= b[0] or b[2] <= a[0] or a[3] <= b[1] or b[3] <= a[1]
+
+
+def test_a_label_that_fits_nowhere_is_left_out():
+    from brainpainter.rendering.node_labels import place_labels
+
+    def wide(i, xy, anchor):  # a label wider than half the image fits on one side only
+        return (xy[0], xy[1] - 5, xy[0] + 60, xy[1] + 5) if anchor[0] == "l" else (xy[0] - 60, xy[1] - 5,
+                                                                                      xy[0], xy[1] + 5)
+
+    placed, left_out = place_labels([3, 5], np.array([[30.0, 50.0], [31.0, 50.0]]), np.array([2.0, 2.0]),
+                                    (100, 100), wide)
+    assert [p[0] for p in placed] == [3] and left_out == [5]
+
+
+def test_the_label_of_the_larger_node_value_is_placed_first():
+    """Two nodes at one spot: the one of the larger value keeps the place right of the node."""
+    from brainpainter.rendering.framing import CameraPose
+    from brainpainter.rendering.node_labels import draw_node_labels
+
+    pose = CameraPose(location=np.array([0.0, 0.0, 100.0]), rotation=np.eye(3), ortho_scale=100.0,
+                      clip_start=1.0, clip_end=200.0)
+    blank = np.full((400, 400, 4), 255, np.uint8)
+
+    def drawn(labelled, values):
+        c = Connectome(("WWWW", "MMMM"), np.zeros((2, 3)), np.full((2, 2), np.nan),
+                       node_values=np.array(values, float), labelled=labelled)
+        return _dark(draw_node_labels(blank, c, pose))
+
+    w, m = drawn((0,), (1.0, 5.0)).sum(), drawn((1,), (1.0, 5.0)).sum()
+    assert abs(w - m) > 0.2 * max(w, m)  # the two texts tell apart by their dark pixels
+    for values, first in (((1.0, 5.0), m), ((5.0, 1.0), w)):
+        both = drawn((0, 1), values)
+        assert both[:, 200:].sum() == first  # the larger right of the node, as drawn alone
+        assert both.sum() >= 0.95 * (w + m)  # the other left of it, uncovered

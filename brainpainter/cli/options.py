@@ -128,8 +128,10 @@ def render_option_list(views: str | None = None, size: str = DEFAULT_SIZE) -> di
         "tract_values": field_option(scene, "tract_values", type=click.Path(dir_okay=False)),
         "tract_value": field_option(scene, "tract_value"),
         "tract_radius": field_option(scene, "tract_radius"),
+        # several matrices, one per image: a folder, a.csv,b.csv or a glob (docs/connectomes.md)
+        "connectome": field_option(ConnectomeOptions, "connectome", type=click.Path(), metavar="FILE"),
         **{name: field_option(ConnectomeOptions, name, type=click.Path(dir_okay=False), metavar="FILE")
-           for name in ("connectome", "nodes", "node_values", "node_categories")},
+           for name in ("nodes", "node_values", "node_categories")},
         "directed": field_option(ConnectomeOptions, "directed"),
         "edge_threshold": field_option(ConnectomeOptions, "edge_threshold", type=str, metavar="W|P%"),
         "top_edges": field_option(ConnectomeOptions, "top_edges", type=click.IntRange(min=1), metavar="K"),

@@ -121,7 +121,9 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
             f"{len(s['unmatched_columns'])} unmatched column(s))"
         )
     if connectome:
+        series = connectome.get("series")  # a matrix per image: the edges any of them keeps
         click.echo(f"connectome: {connectome['n_nodes']} node(s), {connectome['n_edges']} edge(s) drawn"
+                   + (f" (kept by any of {series['n_matrices']} matrices)" if series else "")
                    + (" (directed)" if connectome["directed"] else ""))
     tracts = result.manifest.get("tracts")
     if tracts:

@@ -37,8 +37,15 @@ def labelled_nodes(connectome: Connectome, top: int | None = None) -> tuple[int,
     named = np.array([i for i, text in enumerate(texts) if text.strip()], dtype=np.intp)
     if top is None or top >= len(named):
         return tuple(int(i) for i in named)
-    strength = node_strength(connectome)[named]
-    values = strength if connectome.node_values is None else np.asarray(connectome.node_values, float)[named]
-    values = np.where(np.isfinite(values), values, -np.inf)
-    chosen = named[np.lexsort((-strength, -values))[:int(top)]]
+    chosen = ranked(connectome, named)[:int(top)]
     return tuple(int(i) for i in np.sort(chosen))
+
+
+def ranked(connectome: Connectome, nodes: NDArray[np.intp]) -> NDArray[np.intp]:
+    """`nodes`, shape (K,), from the first to the last to label: by node value (NaN last), equal values by
+    strength; without values by strength (:func:`node_strength`); ties in node order."""
+    strength = node_strength(connectome)[nodes]
+    values = strength if connectome.node_values is None else np.asarray(connectome.node_values, float)[nodes]
+    values = np.where(np.isfinite(values), values, -np.inf)
+    order: NDArray[np.intp] = nodes[np.lexsort((-strength, -values))]
+    return order

@@ -68,9 +68,9 @@ def read_matrix(matrix: Any) -> Matrix:
 
     Parameters
     ----------
-    matrix : path-like, array-like (N, N) or pandas DataFrame
+    matrix : path-like, array-like (N, N), pandas DataFrame or Matrix
         A file (see the module docstring) or the weights themselves; a DataFrame's string columns
-        are the node names.
+        are the node names. A :class:`Matrix` (already read) is returned as it is.
 
     Returns
     -------
@@ -81,13 +81,15 @@ def read_matrix(matrix: Any) -> Matrix:
     BrainPainterError
         An unreadable, empty, non-square or too large matrix, or cells that are not numbers.
     """
+    if isinstance(matrix, Matrix):
+        return matrix
     if isinstance(matrix, str | os.PathLike):
         path = Path(matrix)
         name = path.name.lower()
         if name.endswith(".npy"):
             weights, names = read_npy(path, WHAT), None
         elif name.endswith(".mat"):
-            weights, names = _read_mat(path), None
+            weights, names = read_mat(path), None
         elif name.endswith((".pconn.nii", ".nii")):
             weights, names = _read_pconn(path)
         else:
@@ -323,7 +325,7 @@ def _numbers(cells: list[Any], decimal_comma: bool, source: str, line: int, col0
 
 
 # -- binary ------------------------------------------------------------------------------------
-def _limit_error(path: Path, shape: tuple[int, ...], limit: int, what: str = WHAT) -> BrainPainterError:
+def limit_error(path: Path, shape: tuple[int, ...], limit: int, what: str = WHAT) -> BrainPainterError:
     need = math.prod(shape) * 8
     return BrainPainterError(
         f"{what} {str(path)!r} declares a {' x '.join(map(str, shape))} array ({need / 2**20:.0f} "
@@ -367,7 +369,7 @@ def read_npy(path: Path, what: str, ndim: int = 2) -> NDArray[np.float64]:
         raise BrainPainterError(f"{what} {str(path)!r} holds {dtype} values; a matrix holds numbers "
                                 "(save a float array with numpy.save).")
     if math.prod(shape) * 8 > limit:
-        raise _limit_error(path, tuple(shape), limit, what)
+        raise limit_error(path, tuple(shape), limit, what)
     if len(shape) != ndim:
         raise BrainPainterError(f"{what} {str(path)!r} holds a {len(shape)}-D array of shape "
                                 f"{tuple(shape)}; it must have {ndim} dimension(s). Save the right array "
@@ -385,9 +387,10 @@ _MAT_NUMERIC = ("double", "single", "int8", "uint8", "int16", "uint16", "int32",
                 "logical")
 
 
-def _read_mat(path: Path) -> NDArray[np.float64]:
-    """The one 2-D numeric variable of a MATLAB file (or its one square one), its size and elements checked
-    (:mod:`brainpainter.connectome.matfile`) before scipy reads it."""
+def read_mat(path: Path, ndim: int = 2) -> NDArray[np.float64]:
+    """The one numeric variable of `ndim` dimensions of a MATLAB file (or its one whose first two are equal:
+    N x N, a series' N x N x T), its size and elements checked (:mod:`brainpainter.connectome.matfile`)
+    before scipy reads it."""
     import io
 
     import scipy.io
@@ -407,17 +410,17 @@ def _read_mat(path: Path) -> NDArray[np.float64]:
                                 f"({_said(exc)}); save it again with MATLAB's save.") from None
     # MATLAB keeps every number 2-D: a scalar is 1 x 1, a vector 1 x n
     matrices = [(n, tuple(s)) for n, s, cls in variables
-                if len(s) == 2 and min(s) > 1 and cls in _MAT_NUMERIC]
+                if len(s) == ndim and min(s) > 1 and cls in _MAT_NUMERIC]
     square = [(n, s) for n, s in matrices if s[0] == s[1]]
     pick = matrices if len(matrices) == 1 else square if len(square) == 1 else []
     if not pick:
         shown = ", ".join(f"{n} ({' x '.join(map(str, s))} {cls})" for n, s, cls in variables) or "nothing"
         raise BrainPainterError(
-            f"connectome matrix {str(path)!r} holds {shown}; it needs exactly one 2-D numeric (square) "
+            f"connectome matrix {str(path)!r} holds {shown}; it needs exactly one {ndim}-D numeric (square) "
             "variable. Save the matrix alone (save(FILE, 'W')) or as CSV.")
     name, shape = pick[0]
     if math.prod(shape) * 8 > limit:
-        raise _limit_error(path, shape, limit)
+        raise limit_error(path, shape, limit)
     if raw[126:128] in (b"IM", b"MI") and raw[124:126] != b"\x00\x00":  # v5 (a v4 file has no such header)
         check_variable(raw, name, limit, str(path))
     try:
@@ -471,7 +474,7 @@ def _read_pconn(path: Path) -> tuple[NDArray[np.float64], tuple[str, ...]]:
                 "-cifti-parcellate).")
         shape = (len(axes[0]), len(axes[1]))
         if math.prod(shape) * 8 > limit:
-            raise _limit_error(path, shape, limit)
+            raise limit_error(path, shape, limit)
         if stored != shape or math.prod(shape) * img.get_data_dtype().itemsize > size:
             raise BrainPainterError(
                 f"connectome matrix {str(path)!r} names {shape[0]} x {shape[1]} parcels but its data are "

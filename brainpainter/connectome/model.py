@@ -3,9 +3,35 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
+
+
+class EdgeSeries(Protocol):
+    """What a connectome drawn from a series of matrices knows of them
+    (:class:`brainpainter.connectome.series.EdgeSeries`)."""
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The image of each matrix, (T,)."""
+
+    @property
+    def given(self) -> str:
+        """What the series was given as, for messages."""
+
+    @property
+    def sample(self) -> NDArray[np.float64]:
+        """Weights the edges' colour scale is chosen from, (S,)."""
+
+    def __len__(self) -> int: ...
+
+    def at(self, image: float | tuple[int, int, float]) -> NDArray[np.float64]:
+        """The weights of the edges drawn (:meth:`Connectome.edges`'s order) in `image`, (E,)."""
+
+    def summary(self) -> dict[str, Any]:
+        """The manifest's ``series``."""
 
 
 @dataclass(frozen=True)
@@ -31,6 +57,9 @@ class Connectome:
         Text of each node's label ("" for none; None: the node names).
     labelled : tuple of int
         The nodes whose labels are drawn on the images (``--node-labels``), in order; none by default.
+    series : EdgeSeries, optional
+        A series of matrices, one per image (:mod:`brainpainter.connectome.series`): `weights` are then
+        the edges drawn in every image at their largest ``|weight|``, and the series gives each image's.
     """
 
     names: tuple[str, ...]
@@ -41,6 +70,7 @@ class Connectome:
     node_categories: tuple[str, ...] | None = None
     node_labels: tuple[str, ...] | None = None
     labelled: tuple[int, ...] = ()
+    series: EdgeSeries | None = None
 
     @property
     def n_nodes(self) -> int:

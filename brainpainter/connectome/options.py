@@ -46,7 +46,8 @@ class ConnectomeOptions:
     ----------
     connectome : path or Connectome, optional
         A connectivity matrix (rows and columns in the atlas's region order, or named), or a
-        :class:`Connectome` (Python).
+        :class:`Connectome` (Python); or a series of matrices, one per image
+        (:mod:`brainpainter.connectome.series`).
     nodes : path, optional
         Node coordinates (``name,x,y,z`` in the template's space, or BrainNet Viewer ``.node``);
         default: the centroids of the atlas's regions.
@@ -73,7 +74,8 @@ class ConnectomeOptions:
 
     connectome: Any = field(default=None, metadata={
         "help": "A connectivity matrix drawn as nodes and edges (CSV/TSV with or without names, .npy, .txt, "
-                ".mat, CIFTI .pconn.nii, BrainNet Viewer .edge); see docs/connectomes.md."})
+                ".mat, CIFTI .pconn.nii, BrainNet Viewer .edge); several, one per image (a.csv,b.csv, a "
+                "folder, a quoted glob, a T x N x N .npy): see docs/connectomes.md."})
     nodes: Any = field(default=None, metadata={
         "help": "Node coordinates (CSV name,x,y,z in the template's space, or BrainNet Viewer .node). "
                 "Default: the centroids of the atlas's regions, in the matrix's order."})
@@ -124,13 +126,23 @@ class ConnectomeOptions:
         """Whether a connectome is drawn."""
         return self.connectome is not None
 
+    def chosen(self, connectome: Connectome) -> Connectome:
+        """`connectome` with only the edges drawn (``edge_threshold``, ``top_edges``, ``edges_of``)."""
+        if self.edge_threshold is None and self.top_edges is None and self.edges_of is None:
+            return connectome
+        return select_edges(connectome, threshold=self.edge_threshold, top=self.top_edges,
+                            edges_of=self.edges_of)
+
     def load(self, atlas: Atlas | None, template: Template | str = "fsaverage",
              surface: str = "pial") -> Connectome | None:
         """The connectome to draw (None: none given), its nodes placed in `template`, its edges chosen.
 
         A matrix is read by :func:`~brainpainter.connectome.read.read_connectome` (nodes at the
         centroids of `atlas`'s regions on `surface`, or from ``nodes``); the edges drawn are chosen by
-        :func:`~brainpainter.connectome.edges.select_edges`.
+        :func:`~brainpainter.connectome.edges.select_edges`. A series of matrices (several files, a folder,
+        a glob, a 3-D array: :func:`~brainpainter.connectome.series.matrix_series`) is read one matrix at a
+        time into one connectome whose ``series`` colours each image
+        (:func:`~brainpainter.connectome.series.series_connectome`).
 
         Raises
         ------
@@ -145,17 +157,20 @@ class ConnectomeOptions:
             if given:
                 raise BrainPainterError(f"{given[0]}= describes the nodes of a matrix read from a file; a "
                                         "Connectome given carries its own (Connectome(node_values=...)).")
-            connectome = self.connectome
+            connectome = self.chosen(self.connectome)
         else:
             from brainpainter.connectome.read import read_connectome
+            from brainpainter.connectome.series import matrix_series, series_connectome
 
-            connectome = read_connectome(
-                self.connectome, atlas, nodes=self.nodes, node_values=self.node_values,
-                node_categories=self.node_categories, directed=bool(self.directed), space=self.nodes_space,
-                template=template, surface=surface)
-        if self.edge_threshold is not None or self.top_edges is not None or self.edges_of is not None:
-            connectome = select_edges(connectome, threshold=self.edge_threshold, top=self.top_edges,
-                                      edges_of=self.edges_of)
+            def read(matrix: Any) -> Connectome:
+                return read_connectome(
+                    matrix, atlas, nodes=self.nodes, node_values=self.node_values,
+                    node_categories=self.node_categories, directed=bool(self.directed),
+                    space=self.nodes_space, template=template, surface=surface)
+
+            series = matrix_series(self.connectome)
+            connectome = (self.chosen(read(self.connectome)) if series is None
+                          else series_connectome(series, read, self.chosen))
         if not self.node_labels and self.node_labels_top is None:
             return connectome
         return replace(connectome, labelled=labelled_nodes(connectome, self.node_labels_top))

@@ -335,6 +335,7 @@ EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cm
 def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
     """The scene of a run and the meshes of its row `i`: a map's cortex coloured per vertex, or
     the regions, then the tracts' tubes."""
+    from brainpainter.connectome.series import image_connectome
     from brainpainter.rendering.composition import tract_colors
     from brainpainter.rendering.connectome_layers import connectome_colors
     from brainpainter.rendering.painter import load_scene, region_colors
@@ -343,8 +344,9 @@ def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
     atlas_obj, scene = load_scene(run.table.atlas, opts.template, opts.surface, opts.hide,
                                   tracts=opts.tract_spec(), tract_nodes=tv.nodes if tv is not None else (),
                                   tract_radius=opts.tract_radius, connectome=run.connectome)
-    inside = connectome_meshes(scene, run.connectome, connectome_colors(run.connectome, run.layers)
-                               if run.connectome is not None else {})  # a connectome's nodes and edges
+    shown = None if run.connectome is None else image_connectome(run.connectome, i)  # a series: row i's
+    inside = connectome_meshes(scene, shown, connectome_colors(shown, run.layers)
+                               if shown is not None else {})  # a connectome's nodes and edges
     if isinstance(run, MapRun):  # the map, then the tracts drawn with it
         colors = run.colors(i)
         return scene, vertex_meshes(scene, colors) + tract_meshes(scene, colors.regions) + inside

@@ -383,8 +383,8 @@ class MovieFrames:
                     colors.update(tract_colors(dict(zip(ra, tvals.tolist(), strict=True)),
                                                  self.run.scale_of("tracts")))
                 connectome = getattr(self.run, "connectome", None)
-                if connectome is not None:  # the same nodes and edges in every frame
-                    colors.update(connectome_colors(connectome, self.run.layers))
+                if connectome is not None:  # a series' edge weights change between key frames like regions
+                    colors.update(connectome_colors(connectome, self.run.layers, (rows[a], rows[b], weight)))
             label = names[a] if a == b else f"{names[a]} {ARROW} {names[b]} ({weight:.3f})"
             yield [Item(colors, view, label=label) for view in state_views]
 

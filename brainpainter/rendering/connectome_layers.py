@@ -49,7 +49,7 @@ def connectome_layers(options: Options, connectome: Connectome, first: bool) -> 
     own = options.layers.scale_options("edges", options.scale, first) or plain
     if all(getattr(own, name) is None for name in SCALE_FIELDS):
         own = replace(own, center=EDGE_CENTER)
-    weights = connectome.edges()[2]
+    weights = connectome.edges()[2] if connectome.series is None else connectome.series.sample  # all images'
     edge_options, chosen = choose_scale(own, weights)
     edges = Layer("edges", replace(edge_options.scale(weights), chosen=chosen), 1.0,
                   _label(options, "edges", options.connectome.connectome, "edge weight"))
@@ -91,12 +91,19 @@ def category_scale(categories: tuple[str, ...], plain: ScaleOptions) -> ColourSc
     return replace(base, colors=np.vstack([colors, colors[-1:]]), categories=keyed)
 
 
-def connectome_colors(connectome: Connectome, layers: tuple[Layer, ...]) -> dict[str, RGB]:
-    """The colour of each node (``node:i``) and edge (``edge:k``) key, by the connectome's layers."""
+def connectome_colors(connectome: Connectome, layers: tuple[Layer, ...],
+                      image: float | tuple[int, int, float] | None = None) -> dict[str, RGB]:
+    """The colour of each node (``node:i``) and edge (``edge:k``) key, by the connectome's layers.
+
+    `image`: of a series of matrices, the image (or a movie's ``(a, b, weight)`` between two) whose edge
+    weights are drawn (:meth:`~brainpainter.connectome.series.EdgeSeries.at`).
+    """
     out: dict[str, RGB] = {}
     by_kind = {layer.kind: layer.scale for layer in layers}
     if "edges" in by_kind:
-        out.update(_keyed(edge_keys(len(connectome.edges()[2])), by_kind["edges"](connectome.edges()[2])))
+        weights = (connectome.edges()[2] if connectome.series is None or image is None
+                   else connectome.series.at(image))
+        out.update(_keyed(edge_keys(len(weights)), by_kind["edges"](weights)))
     nodes = by_kind.get("nodes")
     if nodes is not None and nodes.categories and connectome.node_categories is not None:
         rgb = dict(nodes.categories)
@@ -113,7 +120,8 @@ def _keyed(keys: list[str], rgb: NDArray[Any]) -> dict[str, RGB]:
 
 def connectome_summary(connectome: Connectome) -> dict[str, Any]:
     """The manifest's ``connectome``: its nodes (name, position, value, category, the label drawn) and the
-    edges drawn; ``labelled``: the names of the nodes labelled on the images (when any is)."""
+    edges drawn; ``labelled``: the names of the nodes labelled on the images (when any is); ``series``: a
+    series' matrices and each image's edges (:meth:`~brainpainter.connectome.series.EdgeSeries.summary`)."""
     values = connectome.node_values
     nodes = []
     for i, name in enumerate(connectome.names):
@@ -133,4 +141,6 @@ def connectome_summary(connectome: Connectome) -> dict[str, Any]:
         "nodes": nodes}
     if connectome.labelled:
         out["labelled"] = [connectome.names[i] for i in connectome.labelled]
+    if connectome.series is not None:
+        out["series"] = connectome.series.summary()
     return out

@@ -19,6 +19,7 @@ from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.surfaces import Surface, read_surfaces, surface_template
 from brainpainter.atlas.template import Template, load_template
 from brainpainter.connectome.model import Connectome
+from brainpainter.connectome.series import check_images
 from brainpainter.errors import BrainPainterError
 from brainpainter.maps.flat import check_flat, flat_labels, flat_sheet, flat_values
 from brainpainter.maps.inputs import VertexMaps, is_map_input, read_maps
@@ -147,7 +148,7 @@ class MapRun:
                 regions.update(tract_colors(self.tract_values.row(self.table.images[row]),
                                             self.scale_of("tracts")))
             if self.connectome is not None:
-                regions.update(connectome_colors(self.connectome, self.layers))
+                regions.update(connectome_colors(self.connectome, self.layers, image))
             self._cache[image] = VertexColors(regions, cortex)
         return self._cache[image]
 
@@ -209,6 +210,7 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     scene = options.scene
     tract_values = given_tract_values(scene)
     connectome = options.connectome.load(atlas_obj if atlas is None else atlas, tpl, options.scene.surface)
+    check_images(connectome, maps.n_images, "the maps have")
     layers, below = map_layers(options, maps, table, meshes, tract_values,
                                others=connectome_kinds(connectome))
     settings = cortex_for(settings, cortex_values=True, tracts=bool(options.scene.tracts),

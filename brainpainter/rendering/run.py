@@ -23,6 +23,7 @@ from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.registry import get_atlas, load_atlas_config
 from brainpainter.color.scale import ColourScale
 from brainpainter.connectome.model import Connectome
+from brainpainter.connectome.series import check_images
 from brainpainter.errors import BrainPainterError, NoRegionColumnError
 from brainpainter.maps.inputs import is_map_input
 from brainpainter.maps.outlines import Contours
@@ -101,7 +102,7 @@ class Run:
         if self.tract_values is not None:
             colors.update(tract_colors(self.tract_values.row(self.table.images[i]), self.scale_of("tracts")))
         if self.connectome is not None:
-            colors.update(connectome_colors(self.connectome, self.layers))
+            colors.update(connectome_colors(self.connectome, self.layers, i))
         return Item(colors, view, metadata, self.table.images[i])
 
 
@@ -164,6 +165,10 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
             raise NoRegionColumnError(f"{exc} Nor does any column name a bundle of --tracts "
                                       f"{sorted(bundle_names(spec))[:6]}.") from None
     connectome = options.connectome.load(table.atlas, options.scene.template, options.scene.surface)
+    if only_connectome and connectome is not None and connectome.series is not None:  # an image per matrix
+        table = connectome_only_table(table.atlas, options.connectome.connectome,
+                                      connectome.series.names)
+    check_images(connectome, len(table.images), f"table {table.source!r} has")
     if views is None:
         view_list = parse_views(CONNECTOME_VIEWS if only_connectome
                                 else default_views(table.atlas, only_tracts))
@@ -202,10 +207,12 @@ def layer_summaries(run: Run, painter: Painter) -> dict[str, Any]:
 CONNECTOME_VIEWS = ("dorsal", "lateral-left")
 
 
-def connectome_only_table(atlas: Atlas | None, source: Any) -> RegionTable:
-    """An empty region table of one image for a run that draws a connectome alone (named after its file)."""
+def connectome_only_table(atlas: Atlas | None, source: Any, images: Sequence[str] = ()) -> RegionTable:
+    """An empty region table of one image for a run that draws a connectome alone (named after its file), or
+    of `images` (a series of matrices: one each)."""
     name = Path(source).name.split(".")[0] if isinstance(source, str | Path) else "connectome"
-    return RegionTable(images=(name or "connectome",), regions=(), values=np.zeros((1, 0)),
+    names = tuple(images) or (name or "connectome",)
+    return RegionTable(images=names, regions=(), values=np.zeros((len(names), 0)),
                        atlas=atlas or get_atlas("dk"), source=str(source) if isinstance(source, str | Path)
                        else "connectome")
 
