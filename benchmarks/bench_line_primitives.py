@@ -13,7 +13,7 @@ Two measurements, CPU ms of the whole process (all llvmpipe threads) beside wall
   both targets, depth-tested) from the subcortical view, as drawn and in variants that change
   one thing: lines 1 pixel wide, no blending, no depth test, every other segment (half the
   segments, half the length), segments joined five at a time (a fifth of the segments, the
-  same length).
+  same length), shaders with the same inputs and outputs that compute nothing.
 
     python benchmarks/bench_line_primitives.py                 # both, 5 repeats
     python benchmarks/bench_line_primitives.py --only primitives --width 4 --quad-width 2.46
@@ -118,6 +118,35 @@ def primitives(width: float, quad_width: float, repeats: int) -> dict[str, tuple
     return out
 
 
+def _constant_line_shader() -> Any:
+    """A shader with the line shader's inputs, varyings and outputs that computes nothing."""
+    from brainpainter_blender import gpu_shaders
+
+    vertex = """
+void main()
+{
+  centre = vec2(pal, cap);
+  dir = tang.xy;
+  even_slot = odd_slot = towards_odd = odd;
+  gl_Position = mvp * vec4(pos, 1.0);
+}
+"""
+    fragment = """
+void main()
+{
+  lit = vec4(centre.x + dir.x, even_slot + odd_slot, towards_odd, 0.5);
+  slot = vec4(1.0);
+}
+"""
+    names = [name for name, _ in gpu_shaders.line_shader().attrs_info_get()]
+    inputs = tuple(("VEC3" if name in ("pos", "tang") else "FLOAT", name) for name in names)
+    return gpu_shaders._build("line_constant", vertex, fragment, constants=(("MAT4", "mvp"),),
+                              inputs=inputs, varyings=tuple(("no_perspective", kind, name) for kind, name in (
+                                  ("VEC2", "centre"), ("VEC2", "dir"), ("FLOAT", "even_slot"),
+                                  ("FLOAT", "odd_slot"), ("FLOAT", "towards_odd"))),
+                              outputs=(("VEC4", "lit"), ("VEC4", "slot")))
+
+
 def layer(painter: Any, repeats: int) -> tuple[dict[str, tuple[float, float]], str]:
     """The real tracts' layer of the subcortical view, as drawn and in variants (in a GPU context),
     and a line saying how many segments, how long, how wide."""
@@ -152,8 +181,8 @@ def layer(painter: Any, repeats: int) -> tuple[dict[str, tuple[float, float]], s
     variants: dict[str, dict[str, Any]] = {
         "as drawn": {}, "1 px wide": {"width": 1.0}, "no blending": {"blend": "NONE"},
         "no depth test": {"depth": "NONE"}, "every other segment": {"batches": joined(2, True)},
-        "segments joined by 5": {"batches": joined(5, False)}}
-    shader = gpu_shaders.line_shader()
+        "segments joined by 5": {"batches": joined(5, False)},
+        "constant shaders": {"shader": _constant_line_shader()}}
 
     def sync() -> None:
         fb.read_color(0, 0, 1, 1, 4, 0, "UBYTE", data=gpu.types.Buffer("UBYTE", 4))
@@ -162,19 +191,21 @@ def layer(painter: Any, repeats: int) -> tuple[dict[str, tuple[float, float]], s
     with fb.bind():
         for name, v in variants.items():
             fb.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
+            shader = v.get("shader") or gpu_shaders.line_shader()
             shader.bind()
             for key, value in (("mvp", aim.mvp), ("viewport", (float(size[0]), float(size[1]))),
                                ("half_width", half), ("key_dir", (0.0, 0.0, 1.0)),
                                ("fill_dir", (0.0, 0.0, 1.0)), ("ambient", 0.3), ("key", 0.5),
                                ("fill", 0.2), ("contrast", 0.2)):
-                shader.uniform_float(key, value)
+                if "shader" not in v or key == "mvp":
+                    shader.uniform_float(key, value)
             gpu.state.depth_test_set(v.get("depth", "LESS_EQUAL"))
             gpu.state.depth_mask_set(False)
             gpu.state.blend_set(v.get("blend", "ALPHA_PREMULT"))
             gpu.state.line_width_set(v.get("width", float(tract_lines.raster_width(half))))
             fixed = v.get("batches")
 
-            def run(fixed: Any = fixed) -> None:
+            def run(fixed: Any = fixed, shader: Any = shader) -> None:
                 for batch in fixed if fixed is not None else [lines._sorted(p, back) for p in parts]:
                     batch.draw(shader)
 
