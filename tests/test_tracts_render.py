@@ -366,6 +366,72 @@ def test_the_tracts_box_lies_on_whole_output_pixels():
     assert 0 <= pixels[0] < pixels[2] <= width and 0 <= pixels[1] < pixels[3] <= height
 
 
+def _line_coverage(start, end, radius: float, size: int = 200) -> np.ndarray:
+    """Coverage (the tracts' layer's alpha), shape (size, size), row 0 at the bottom, of one
+    streamline of 11 points from `start` to `end` (millimetres; 2 pixels a millimetre)."""
+    from types import SimpleNamespace
+
+    from brainpainter.rendering.parts import Centrelines, PartGeometry
+    from brainpainter_blender import _bpy
+    from brainpainter_blender.gpu_context import in_gpu_context
+    from brainpainter_blender.gpu_lighting import FLAT
+    from brainpainter_blender.tract_lines import TractLines
+
+    t = np.linspace(0.0, 1.0, 11)[:, None]
+    points = (np.asarray(start, float) + t * (np.asarray(end, float) - start))[None].astype(np.float32)
+    empty = np.zeros((0, 3), np.float32)
+    part = PartGeometry("tracts", "tract", None, empty, empty, np.zeros((0, 3), np.uint32),
+                        np.zeros(0, np.int32), np.zeros(0, np.float32), points.reshape(-1, 3),
+                        centrelines=Centrelines(points, np.zeros((1, 11), np.int32), radius))
+
+    def job() -> np.ndarray:
+        import gpu
+        from mathutils import Matrix
+
+        mvp = Matrix(np.diag([1 / 50, 1 / 50, 1 / 100, 1.0]).tolist())
+        aim = SimpleNamespace(mvp=mvp, back=(0.0, 0.0, 1.0))
+        lines = TractLines(size, size)
+        layer = lines._draw_layer([part], aim, FLAT, lambda: None, lambda step: None)
+        buf = gpu.types.Buffer("FLOAT", size * size * 4)
+        with gpu.types.GPUFrameBuffer(color_slots=layer.shade).bind():
+            gpu.state.active_framebuffer_get().read_color(0, 0, size, size, 4, 0, "FLOAT", data=buf)
+        lines.close()
+        return np.array(buf, np.float32).reshape(size, size, 4)[..., 3]
+
+    with _bpy.LOCK:
+        return in_gpu_context(job)
+
+
+@pytest.mark.parametrize("end", [(20.15, 0.15, 0.0), (15.15, 15.15, 0.0)], ids=["horizontal", "diagonal"])
+def test_a_line_covers_its_width_times_its_length_to_both_ends(end):
+    # a centreline 2 * half_width wide (anti-aliased: its coverage sums to its area), reaching out
+    # by half its width plus the fringe at both ends (square caps), at any angle: a GL line is
+    # widened along one axis only, so a diagonal one must be drawn wider (tract_lines.raster_width)
+    off_centre = np.array([0.3, 0.3, 0.0])  # millimetres: no edge on a pixel's centre
+    start, end = off_centre - end, off_centre + end
+    half = 2.0  # pixels: a radius of 1 mm at 2 pixels a millimetre
+    cov = _line_coverage(start, end, radius=1.0)
+    length = np.linalg.norm(end - start) * 2.0
+    area = 2.0 * half * (length + 2.0 * (half + 0.5))
+    assert abs(cov.sum() - area) < 0.04 * area, (cov.sum(), area)
+    # across the middle, the profile is as wide as the line, fully covered at its centre
+    direction = (end - start)[:2] / np.linalg.norm(end - start)
+    centre = (start + end)[:2] / 2.0 * 2.0 + 100.0  # pixel coordinates (x, y)
+    rows, cols = np.mgrid[0:200, 0:200]
+    across = (cols + 0.5 - centre[0]) * -direction[1] + (rows + 0.5 - centre[1]) * direction[0]
+    along = (cols + 0.5 - centre[0]) * direction[0] + (rows + 0.5 - centre[1]) * direction[1]
+    assert cov[(np.abs(across) < 0.5) & (np.abs(along) < length / 2)].min() > 0.99
+    assert cov[np.abs(across) > half + 1.5].max() == 0.0
+    # both ends covered, the centreline out to its cap; nothing beyond (a wide GL line's ends are
+    # cut along its minor axis: slanted by up to 45 degrees, they reach a half width further on one
+    # side and fall short on the other)
+    for sign in (-1.0, 1.0):
+        beyond = sign * along - length / 2
+        assert cov[(np.abs(across) < half - 0.5) & (beyond > -2.0) & (beyond < 0.5)].min() > 0.99
+        assert cov[(np.abs(across) < 0.5) & (beyond > 0.0) & (beyond < half)].min() > 0.99
+        assert cov[sign * along > length / 2 + 2.0 * (half + 0.5) + 0.5].max() == 0.0
+
+
 MAGMA_ENDS = ((0.001462, 0.000466, 0.013866), (0.987053, 0.991438, 0.749504))  # magma's first and last
 
 
