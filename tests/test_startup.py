@@ -168,6 +168,28 @@ def test_cycles_renders_before_and_after_the_gpu_path_in_one_process(tiny):
     assert lean_first[1]["red"] > 50 and lean_first[1]["blue"] > 50
 
 
+def test_a_run_without_a_progress_bar_does_not_import_tqdm(tiny, tmp_path):
+    """``tqdm.auto`` takes ~25 ms CPU to import (its asyncio part): a ``-q`` run needs no bar."""
+    import subprocess
+
+    code = ("import sys\n"
+            "from brainpainter.rendering.run import render\n"
+            "from brainpainter.testing import StandInRenderer, stand_in\n"
+            "with stand_in('solid', StandInRenderer.with_(layout='solid', regions=('Left-insula',))) as r:\n"
+            "    render({'Left-insula': [0.5]}, 'dk', out=sys.argv[2], template=sys.argv[1], renderer=r,\n"
+            "           width=16, height=16, views='lateral-left', progress=sys.argv[3] == 'bar')\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'tqdm'))\n")
+    loaded = {}
+    for progress in ("quiet", "bar"):
+        proc = subprocess.run([sys.executable, "-c", code, str(tiny), str(tmp_path / progress), progress],
+                              capture_output=True, text=True, timeout=120)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        assert (tmp_path / progress / "1_lateral-left.png").is_file()
+        loaded[progress] = proc.stdout.strip().splitlines()[-1]
+    assert loaded["quiet"] == "[]"
+    assert "tqdm.auto" in loaded["bar"]
+
+
 # -- the user's cache folder ---------------------------------------------------------------------
 def test_a_cache_file_is_read_back_for_its_key_only():
     user_cache.write("x.json", "key-1", {"a": [1, 2]})
