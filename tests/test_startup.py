@@ -128,7 +128,11 @@ for quality in sys.argv[2:]:
     img = renderers[quality].render({"Left-insula": (1.0, 0.0, 0.0), "Left-precuneus": (0.0, 0.0, 1.0)},
                                     get_view("lateral-left")).astype(int)
     import addon_utils, bpy
+    from brainpainter_blender import _bpy
     out.append({"ui": hasattr(bpy.types, "VIEW3D_HT_header"), "cycles": addon_utils.check("cycles")[1],
+                "blender's own": [bpy.utils.load_scripts.__qualname__,
+                                  bpy.utils.load_scripts_extensions.__qualname__,
+                                  any(isinstance(f, _bpy._DeferScripts) for f in sys.meta_path)],
                 "red": int((img[..., 0] - img[..., 1:3].max(-1) > 60).sum()),
                 "blue": int((img[..., 2] - img[..., 0:2].max(-1) > 60).sum()),
                 "sha": hashlib.sha256(img.tobytes()).hexdigest()})
@@ -152,6 +156,7 @@ def test_the_gpu_path_starts_blender_without_its_ui_scripts_or_add_ons(tiny):
     pytest.importorskip("bpy")
     (image,) = _render_sequence(tiny, "default")
     assert (image["ui"], image["cycles"]) == (False, False)
+    assert image["blender's own"] == ["load_scripts", "load_scripts_extensions", False]  # the finder gone
     assert image["red"] > 50 and image["blue"] > 50
 
 
