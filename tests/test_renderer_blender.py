@@ -502,8 +502,9 @@ def test_the_memory_check_sees_a_small_leak_beside_blender(template):
 
 @pytest.mark.render
 def test_close_frees_blender_data_and_refuses_to_render(template):
-    import bpy
+    from brainpainter_blender import _bpy
 
+    bpy = _bpy.import_bpy()  # Blender's full start (the gpu path's lean one skips its factory reset)
     gpu_path = _renderer(template, quality="fast")  # draws with the gpu module: no Blender objects
     gpu_path.close()  # (its process-wide 4x4 dummy scene stays, made once)
     with pytest.raises(BrainPainterError, match="closed"):

@@ -109,6 +109,92 @@ def test_a_cortex_read_from_the_cache_draws_the_pixels_of_one_computed(monkeypat
     np.testing.assert_array_equal(images[0], images[2])
 
 
+# -- Blender's lean start (the gpu path) ---------------------------------------------------------
+
+#: Renders the tiny template's lateral-left in one fresh process, a renderer per quality kept open,
+#: in the order of argv[2:]; prints, per image, Blender's state after it and the image's digest.
+_RENDER_SEQUENCE = """
+import hashlib, json, sys
+from brainpainter.atlas.template import load_template
+from brainpainter.rendering.scene import RenderSettings, Scene
+from brainpainter.rendering.views import get_view
+from brainpainter_blender import BlenderRenderer
+
+template, renderers, out = load_template(sys.argv[1]), {}, []
+for quality in sys.argv[2:]:
+    if quality not in renderers:
+        renderers[quality] = BlenderRenderer(Scene(template, "dk", settings=RenderSettings(
+            96, 72, quality=quality, background=(1.0, 1.0, 1.0))))
+    img = renderers[quality].render({"Left-insula": (1.0, 0.0, 0.0), "Left-precuneus": (0.0, 0.0, 1.0)},
+                                    get_view("lateral-left")).astype(int)
+    import addon_utils, bpy
+    from brainpainter_blender import _bpy
+    out.append({"ui": hasattr(bpy.types, "VIEW3D_HT_header"), "cycles": addon_utils.check("cycles")[1],
+                "blender's own": [bpy.utils.load_scripts.__qualname__,
+                                  bpy.utils.load_scripts_extensions.__qualname__,
+                                  any(isinstance(f, _bpy._DeferScripts) for f in sys.meta_path)],
+                "red": int((img[..., 0] - img[..., 1:3].max(-1) > 60).sum()),
+                "blue": int((img[..., 2] - img[..., 0:2].max(-1) > 60).sum()),
+                "sha": hashlib.sha256(img.tobytes()).hexdigest()})
+for renderer in renderers.values():
+    renderer.close()
+print(json.dumps(out))
+"""
+
+
+def _render_sequence(tiny: Path, *qualities: str) -> list[dict]:
+    import subprocess
+
+    proc = subprocess.run([sys.executable, "-c", _RENDER_SEQUENCE, str(tiny), *qualities],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+@pytest.mark.render
+def test_the_gpu_path_starts_blender_without_its_ui_scripts_or_add_ons(tiny):
+    pytest.importorskip("bpy")
+    (image,) = _render_sequence(tiny, "default")
+    assert (image["ui"], image["cycles"]) == (False, False)
+    assert image["blender's own"] == ["load_scripts", "load_scripts_extensions", False]  # the finder gone
+    assert image["red"] > 50 and image["blue"] > 50
+
+
+@pytest.mark.render
+def test_cycles_renders_before_and_after_the_gpu_path_in_one_process(tiny):
+    """A lean start completed for Cycles draws Cycles' image of a full start; the gpu renderer kept
+    open across Blender's factory reset draws its first image again."""
+    pytest.importorskip("bpy")
+    lean_first = _render_sequence(tiny, "default", "high", "default")
+    cycles_first = _render_sequence(tiny, "high", "default")
+    assert [(i["ui"], i["cycles"]) for i in lean_first] == [(False, False), (True, True), (True, True)]
+    assert lean_first[0]["sha"] == lean_first[2]["sha"] == cycles_first[1]["sha"]
+    assert lean_first[1]["sha"] == cycles_first[0]["sha"] != lean_first[0]["sha"]
+    assert lean_first[1]["red"] > 50 and lean_first[1]["blue"] > 50
+
+
+def test_a_run_without_a_progress_bar_does_not_import_tqdm(tiny, tmp_path):
+    """``tqdm.auto`` takes ~25 ms CPU to import (its asyncio part): a ``-q`` run needs no bar."""
+    import subprocess
+
+    code = ("import sys\n"
+            "from brainpainter.rendering.run import render\n"
+            "from brainpainter.testing import StandInRenderer, stand_in\n"
+            "with stand_in('solid', StandInRenderer.with_(layout='solid', regions=('Left-insula',))) as r:\n"
+            "    render({'Left-insula': [0.5]}, 'dk', out=sys.argv[2], template=sys.argv[1], renderer=r,\n"
+            "           width=16, height=16, views='lateral-left', progress=sys.argv[3] == 'bar')\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'tqdm'))\n")
+    loaded = {}
+    for progress in ("quiet", "bar"):
+        proc = subprocess.run([sys.executable, "-c", code, str(tiny), str(tmp_path / progress), progress],
+                              capture_output=True, text=True, timeout=120)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        assert (tmp_path / progress / "1_lateral-left.png").is_file()
+        loaded[progress] = proc.stdout.strip().splitlines()[-1]
+    assert loaded["quiet"] == "[]"
+    assert "tqdm.auto" in loaded["bar"]
+
+
 # -- the user's cache folder ---------------------------------------------------------------------
 def test_a_cache_file_is_read_back_for_its_key_only():
     user_cache.write("x.json", "key-1", {"a": [1, 2]})

@@ -386,8 +386,6 @@ def write_images(run: Run, painter: Painter, runner: Runner, chosen: Sequence[in
         Empty when written to files.
     manifest : dict
     """
-    from tqdm.auto import tqdm
-
     from brainpainter import __version__
     from brainpainter.io.output import safe_name
     from brainpainter.io.transaction import FolderTransaction
@@ -398,8 +396,7 @@ def write_images(run: Run, painter: Painter, runner: Runner, chosen: Sequence[in
     tx = FolderTransaction(out) if out is not None else None  # lock, stage, verify, publish
     files = [tx.out / f"{names[i]}_{view.name}.png" for i, view in plan] if tx is not None else []
     images: dict[tuple[str, str], NDArray[Any]] = ImagesByView()
-    with tx or nullcontext(), tqdm(total=len(plan), unit="img", desc="rendering",
-                                   disable=not progress) as bar:
+    with tx or nullcontext(), progress_bar(len(plan), progress) as bar:
         painted = paint(run, runner, plan, settings if tx is not None else None)
         if tx is None:
             for (i, view), pixels in painted:
@@ -437,6 +434,29 @@ def paint(run: Run, runner: Runner, plan: Sequence[tuple[int, View]],
                        else None) for i, view in chunk] for chunk in chunks)
     for index, results in runner.map(items, ordered=not encode, encode=encode):
         yield from zip(chunks[index], results, strict=True)
+
+
+class _NoBar:
+    """What :func:`progress_bar` gives when no bar is shown (tqdm not imported)."""
+
+    def __enter__(self) -> _NoBar:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+    def update(self, n: int = 1) -> None:
+        """Count nothing."""
+
+
+def progress_bar(total: int, show: bool) -> Any:
+    """A tqdm bar over `total` images, or with `show` false a silent stand-in: ``tqdm.auto`` takes
+    ~25 ms CPU to import (its asyncio part), a fortieth of a one-image run's start-up."""
+    if not show:
+        return _NoBar()
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, unit="img", desc="rendering")
 
 
 def write_pngs(tx: FolderTransaction, painted: Iterable[tuple[tuple[int, View], Any]], names: Sequence[str],

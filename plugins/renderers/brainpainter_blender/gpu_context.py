@@ -5,7 +5,9 @@ are not available in background mode") except inside a ``RenderEngine`` whose
 ``bl_use_gpu_context`` is true. So a tiny render engine is registered once per
 process and started with ``bpy.ops.render.render()`` on a 4x4-pixel dummy
 scene (about 0.3 ms); each call runs one Python function with a GPU context
-current (:func:`in_gpu_context`).
+current (:func:`in_gpu_context`). Blender's lean start is enough for it
+(``_bpy.import_bpy(full=False)``); when a full start later resets Blender to
+its factory scene, which deletes the dummy scene, the next call makes it again.
 """
 
 from __future__ import annotations
@@ -46,12 +48,13 @@ def in_gpu_context(job):
 
     Call with :data:`brainpainter_blender._bpy.LOCK` held.
     """
-    bpy = _bpy.import_bpy()
-    if "scene" not in _engine:
-        cls = _engine_class()
-        bpy.utils.register_class(cls)
+    bpy = _bpy.import_bpy(full=False)
+    if "class" not in _engine:
+        _engine["class"] = _engine_class()
+        bpy.utils.register_class(_engine["class"])
+    if bpy.data.scenes.get(_engine.get("scene", "")) is None:  # the first call, or a factory reset since
         scene = bpy.data.scenes.new("brainpainter:gpu")
-        scene.render.engine = cls.bl_idname
+        scene.render.engine = _engine["class"].bl_idname
         scene.render.resolution_x = scene.render.resolution_y = 4
         scene.render.resolution_percentage = 100
         scene.render.use_compositing = scene.render.use_sequencer = False

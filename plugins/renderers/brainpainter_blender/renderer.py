@@ -54,13 +54,13 @@ class BlenderRenderer:
 
     def __init__(self, scene: Scene) -> None:
         self.scene = scene
-        self._bpy = bpy = _bpy.import_bpy()
+        self.cycles = lighting.uses_cycles(scene.settings)
+        self._bpy = bpy = _bpy.import_bpy(full=self.cycles)  # the gpu path: Blender's lean start
         self._tag = f"bp{next(_ids)}"
         self._closed = False
         self._colors: dict[int, tuple[float, ...]] = {}
         self._as_glass: dict[str, bool] = {}  # Cycles: the cortex parts drawn as glass (--cortex glass)
         self._gpu = None
-        self.cycles = lighting.uses_cycles(scene.settings)
         #: the renderer contract's capability: Cycles draws a tract part's tubes, the gpu path its centrelines
         self.draws_tubes = self.cycles
         if self.cycles and getattr(scene, "coloring", "regions") == "vertices":
