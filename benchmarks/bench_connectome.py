@@ -13,7 +13,8 @@ Three painters in one process, each warmed on each view, then their images inter
 * ``both``: the region values with the connectome inside the cortex drawn as glass;
 * ``glass``: the region values on the cortex drawn as glass, nothing inside (what the glass costs).
 
-Prints the median seconds per image of each, the ratios to ``regions``, the scene's triangles
+Prints the median seconds per image of each (wall clock, and the process's CPU seconds: all threads,
+less swayed by other jobs on a shared machine), the ratios to ``regions``, the scene's triangles
 and the time to build the connectome's parts.
 
     python benchmarks/bench_connectome.py                       # 1200x900, dorsal and lateral-left
@@ -72,19 +73,22 @@ def main() -> None:
         for item in items[name]:  # warm: the renderer starts, each view's parts are uploaded
             painters[name].paint_colors(item.colors, item.view)
     times: dict[str, list[float]] = {name: [] for name in runs}
+    cpu: dict[str, list[float]] = {name: [] for name in runs}
     for _ in range(args.repeats):
         for name in runs:
             for item in items[name]:
-                t0 = time.perf_counter()
+                t0, c0 = time.perf_counter(), time.process_time()
                 painters[name].paint_colors(item.colors, item.view)
                 times[name].append(time.perf_counter() - t0)
-    base = statistics.median(times["regions"])
+                cpu[name].append(time.process_time() - c0)
+    base, base_cpu = statistics.median(times["regions"]), statistics.median(cpu["regions"])
     edges = runs["connectome"].connectome
     n_edges = 0 if edges is None else len(edges.edges()[2])
     print(f"{args.size}, views {args.views}, {args.repeats} rounds, {n_edges} edges drawn")
     for name, ts in times.items():
-        m = statistics.median(ts)
-        print(f"  {name:10s} median {m * 1000:7.1f} ms/image  ({m / base:.2f}x regions)")
+        m, c = statistics.median(ts), statistics.median(cpu[name])
+        print(f"  {name:10s} median {m * 1000:7.1f} ms/image  ({m / base:.2f}x regions), "
+              f"CPU {c * 1000:7.1f} ms  ({c / base_cpu:.2f}x)")
     for painter in painters.values():
         painter.close()
 

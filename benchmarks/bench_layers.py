@@ -6,7 +6,8 @@ Both runs are made as ``render`` makes them (:func:`brainpainter.rendering.run.p
 composition, its scales and lines), their painters loaded once; then image after image, interleaved
 (A, B, A, B, ... so that load on the machine falls on both alike), each image's colours are
 composited (``run.item``: the map over the sulcal underlay, the tract values on their scale) and
-drawn. Prints the median seconds per image of each and B over A::
+drawn. Prints the median seconds per image of each and B over A, in wall clock and in the process's
+CPU seconds (all threads; ``... CPU``: less swayed by other jobs on a shared machine)::
 
     python benchmarks/bench_layers.py [--n 12] [--size 1200x900] [--views lateral-left,medial-left]
 """
@@ -102,6 +103,7 @@ def main() -> None:
         }
         painters = {name: run.painter() for name, run in runs.items()}
         seconds: dict[str, list[float]] = {name: [] for name in runs}
+        cpu: dict[str, list[float]] = {name: [] for name in runs}
         compose: dict[str, list[float]] = {name: [] for name in runs}  # of which: the colours composited
         try:
             for name, painter in painters.items():  # load and warm each (first image not counted)
@@ -111,11 +113,12 @@ def main() -> None:
             for i in range(args.n):
                 view = views[i % len(views)]
                 for name, run in runs.items():  # interleaved
-                    t = time.perf_counter()
+                    t, c = time.perf_counter(), time.process_time()
                     colors = run.item(i, view).colors
                     composed = time.perf_counter()
                     painters[name].paint_colors(colors, view)
                     seconds[name].append(time.perf_counter() - t)
+                    cpu[name].append(time.process_time() - c)
                     compose[name].append(composed - t)
         finally:
             for painter in painters.values():
@@ -124,6 +127,8 @@ def main() -> None:
     out.update({f"{name} compositing": round(statistics.median(s), 4) for name, s in compose.items()})
     base = statistics.median(seconds["map"])
     out.update({f"{name} / map": round(statistics.median(s) / base, 3) for name, s in seconds.items()})
+    base_cpu = statistics.median(cpu["map"])
+    out.update({f"{name} / map, CPU": round(statistics.median(s) / base_cpu, 3) for name, s in cpu.items()})
     print(json.dumps(out, indent=1))
 
 

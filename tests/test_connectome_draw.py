@@ -64,6 +64,14 @@ def test_a_cylinder_runs_from_node_to_node_at_its_radius_with_outward_normals():
     assert (np.einsum("ij,ij->i", face_n, normals[tris[:, 0]]) > 0).all()
 
 
+def test_a_cylinder_seen_from_any_side_is_nearly_as_wide_as_a_round_tube():
+    # its width across the image is what tells a weight from another (8 sides: >= cos(22.5 degrees))
+    ring = cylinder_mesh(np.zeros((1, 3)), np.array([[0.0, 0.0, 10.0]]), np.array([1.0]), np.array([0]))[0]
+    for angle in np.linspace(0.0, np.pi, 37):
+        across = ring[:, :2] @ np.array([np.cos(angle), np.sin(angle)])
+        assert 2.0 * np.cos(np.pi / 8) - 1e-5 <= np.ptp(across) <= 2.0 + 1e-5
+
+
 def test_nodes_and_edges_are_parts_with_a_slot_each_drawn_inside_the_glass(tiny):
     scene = Scene(load_template(tiny), "dk", connectome=tiny_connectome())
     g = scene.geometry
@@ -91,7 +99,7 @@ def test_four_hundred_nodes_and_eight_hundred_edges_are_cheap(tiny):
     t2 = time.perf_counter()
     extra = (t2 - t1) - (t1 - t0)
     parts = {p.name: p for p in g.parts}
-    assert len(parts["nodes"].triangles) == 400 * 320 and len(parts["edges"].triangles) == 800 * 24
+    assert len(parts["nodes"].triangles) == 400 * 320 and len(parts["edges"].triangles) == 800 * 16
     assert len(g.keys) == len(plain.keys) + 1200
     assert extra < 0.5, f"400 nodes and 800 edges cost {extra:.2f} s more to build"
 

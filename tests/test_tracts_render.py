@@ -203,6 +203,21 @@ def test_region_borders_are_drawn_on_the_glass_cortex(tiny, bundles):
     assert dark[0.0] == 0 and dark[2.0] > 100, dark
 
 
+def test_the_borders_on_the_glass_are_its_near_sides_alone(tiny, bundles):
+    """The glass's borders are depth-tested on its near side (drawn into the depth alone): those of
+    its far side stay hidden, so they lie where the opaque cortex draws its borders in that view."""
+    from scipy.ndimage import binary_dilation
+
+    colors = {"Left-antsup": (1.0, 0.8, 0.0)}
+    dark = {}
+    for cortex in ("glass", "opaque"):
+        with _painter(tiny, bundles, glass_opacity=0.25, outline_width=2.0, cortex=cortex) as p:
+            img = p.paint_colors(colors, get_view("dorsal"))[..., :3].astype(int)
+        dark[cortex] = img.max(axis=-1) < 60
+    assert dark["glass"].sum() > 100
+    assert not (dark["glass"] & ~binary_dilation(dark["opaque"])).any()  # far side's: ~400 pixels
+
+
 def test_render_command_with_a_bundle_table(tmp_path, bundles, tiny):
     from click.testing import CliRunner
     from PIL import Image

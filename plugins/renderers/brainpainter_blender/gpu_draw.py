@@ -429,8 +429,11 @@ class GpuDraw:
             # its front faces go into the depth buffer alone, then the lines are depth-tested on them.
             gpu.state.color_mask_set(False, False, False, False)
             gpu.state.face_culling_set("BACK")
+            depth = gpu_shaders.depth_shader()
+            depth.bind()
+            depth.uniform_float("mvp", aim.mvp)
             for p in glass:
-                self._front(p, aim).draw(shader)
+                self._front(p, aim).draw(depth)
             gpu.state.color_mask_set(True, True, True, True)
             self._draw_outlines(aim, glass, shader, tex)
             mark("glass outlines")

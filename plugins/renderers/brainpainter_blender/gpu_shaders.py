@@ -57,6 +57,20 @@ void main()
 }
 """
 
+_DEPTH_VERTEX = """
+void main()
+{
+  gl_Position = mvp * vec4(pos, 1.0);  /* as the part shader places it: the same depth */
+}
+"""
+
+_DEPTH_FRAGMENT = """
+void main()
+{
+  fragColor = vec4(0.0);
+}
+"""
+
 _RESOLVE_VERTEX = """
 void main()
 {
@@ -245,6 +259,12 @@ def part_shader() -> Any:
     return _build("part", _VERTEX, _FRAGMENT, defines={"PALETTE_WIDTH": PALETTE_WIDTH},
                   constants=_PART_CONSTANTS, samplers=("palette",), inputs=_PART_INPUTS,
                   varyings=(("smooth", "VEC4", "color"),))
+
+
+def depth_shader() -> Any:
+    """A part's depth alone (its position, no colour to interpolate: cheaper for llvmpipe to set up)."""
+    return _build("depth", _DEPTH_VERTEX, _DEPTH_FRAGMENT, constants=(("MAT4", "mvp"),),
+                  inputs=(("VEC3", "pos"),))
 
 
 def resolve_shader(factor: int, edges: bool = False) -> Any:
