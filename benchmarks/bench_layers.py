@@ -96,10 +96,10 @@ def main() -> None:
             "regions+map+contour": prepare_run(given["table"], lh=given["series"]["lh"],  # type: ignore[index]
                                                rh=given["series"]["rh"], map_alpha=0.6,  # type: ignore[index]
                                                contour=given["contour"], **common),
-            # tracts make the cortex glass in cortex views (--cortex auto), as a region render's
+            # --cortex auto: a cortex that carries a map is opaque (its colours), the tracts inside it
             "map+contour+tracts": prepare_run(given["series"], contour=given["contour"], **tracts, **common),
-            "map+contour+tracts, --cortex opaque": prepare_run(given["series"], contour=given["contour"],
-                                                               cortex="opaque", **tracts, **common),
+            "map+contour+tracts, --cortex glass": prepare_run(given["series"], contour=given["contour"],
+                                                              cortex="glass", **tracts, **common),
         }
         painters = {name: run.painter() for name, run in runs.items()}
         seconds: dict[str, list[float]] = {name: [] for name in runs}

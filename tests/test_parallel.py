@@ -221,13 +221,13 @@ def test_tracts_travel_to_jobs_and_dask_workers(tmp_path, tiny, cluster):
     table.write_text("Image-name-unique,Left-insula,Right-insula,AF_L,CST_R\n"
                      + "".join(f"S{i},{i},{4 - i},{(i * 3) % 5},{i % 2 * 4}\n" for i in range(4)))
     kw = {**KW, "views": "lateral-left,subcortical", "tracts": [str(folder)], "tracts_space": "template",
-          "vmin": 0, "vmax": 4}
+          "vmin": 0, "vmax": 4, "cortex": "glass"}  # the insulas carry values: auto would be opaque
     with stand_in() as renderer:
         serial = render(table, "dk", out=tmp_path / "serial", template=str(tiny), renderer=renderer, **kw)
         render(table, "dk", out=tmp_path / "jobs", template=str(tiny), renderer=renderer, jobs=2, **kw)
         render(table, "dk", out=tmp_path / "dask", template=str(tiny), renderer=renderer, client=cluster,
                **kw)
-        opaque = render(table, "dk", template=str(tiny), renderer=renderer, cortex="opaque", **kw)
+        opaque = render(table, "dk", template=str(tiny), renderer=renderer, **{**kw, "cortex": "opaque"})
     assert same_files(tmp_path / "serial", tmp_path / "jobs") == []
     assert same_files(tmp_path / "serial", tmp_path / "dask") == []
     assert len(serial.files) == 8
