@@ -172,8 +172,8 @@ def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None, me
 
     The map's scale is its own (``--map-cmap``, ...; else the automatic scale of a map,
     :func:`brainpainter.maps.layers.map_scale`); drawn over region values it covers them by
-    ``--map-alpha``. `meshes` are the meshes the map is drawn on, by hemisphere. Tract values take
-    their own options (``--tracts-cmap``, ...; a gradient spans their values), else the first layer's scale.
+    ``--map-alpha``. `meshes` are the meshes the map is drawn on, by hemisphere. Tract values have a
+    scale of their own (:func:`tract_layer`).
     `others`: the kinds the run draws besides (a connectome's edges and nodes).
     """
     given = options.layers.label("map")
@@ -187,7 +187,7 @@ def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None, me
         own = options.layers.scale_options("map", options.scale, first=True)
         assert own is not None
         layers: tuple[Layer, ...] = (Layer("map", map_scale(own, maps, threshold), alpha, label),)
-        return layers + tract_layer(options, tract_values, layers[0]), None
+        return layers + tract_layer(options, tract_values), None
     if maps.n_images not in (1, len(table.images)):
         raise BrainPainterError(
             f"a map drawn over region values has one image, or one per row of the table; the map has "
@@ -198,19 +198,26 @@ def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None, me
     plain = ScaleOptions(nan_color=options.scale.nan_color, missing_color=options.scale.missing_color)
     scale = map_scale(own if own is not None else plain, maps, threshold)
     layers = (regions, Layer("map", scale, alpha, label))
-    return layers + tract_layer(options, tract_values, regions), RegionsBelow.of(table, regions.scale, meshes)
+    return layers + tract_layer(options, tract_values), RegionsBelow.of(table, regions.scale, meshes)
 
 
-def tract_layer(options: Options, tract_values: TractValues | None, first: Layer) -> tuple[Layer, ...]:
-    """The tract values' layer of a map run (none without them): their own scale, else `first`'s."""
+def tract_layer(options: Options, tract_values: TractValues | None) -> tuple[Layer, ...]:
+    """The tract values' layer of a map run (none without them), always on a scale of its own.
+
+    A map and bundle values are two measures (thickness 2-3 mm and FA 0.3-0.7), and the map's scale
+    spans the map alone: shared, every bundle took the colour of one end of the map's colour bar.
+    Their scale is made from their own options (``--tracts-cmap``, ...; else the default gradient)
+    over their values (a gradient given no range spans them).
+    """
     if tract_values is None:
         return ()
     own = options.layers.scale_options("tracts", options.scale, first=False)
-    scale = first.scale if own is None else run_scale(own, tract_values.values, True)
+    plain = ScaleOptions(nan_color=options.scale.nan_color, missing_color=options.scale.missing_color)
+    scale = run_scale(own if own is not None else plain, tract_values.values, True)
     given = options.layers.label("tracts")
     scene = options.scene
     label = given if given is not None else scene.tract_value or Path(str(scene.tract_values)).name
-    return (Layer("tracts", scale, 1.0, label, own_scale=own is not None),)
+    return (Layer("tracts", scale, 1.0, label, own_scale=True),)
 
 
 def line_layers(options: Options, drawn: str,
