@@ -77,6 +77,8 @@ class FigureResult:
         Where each render is: ``(image name, view name) -> Axes``.
     colorbar_axes : list of Axes
         Every colour bar's: the first layer's, then each later layer's with a scale of its own.
+    input : dict
+        How the input was read (a render manifest's ``input``: unmatched names, notes).
     """
 
     figure: Figure
@@ -86,6 +88,7 @@ class FigureResult:
     colorbar_ax: Axes
     image_axes: dict[tuple[str, str], Axes] = field(default_factory=dict)
     colorbar_axes: list[Axes] = field(default_factory=list)
+    input: dict[str, Any] = field(default_factory=dict)
 
     def __repr__(self) -> str:
         """One short line."""
@@ -211,4 +214,4 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
             tx.commit()
     assert layout.colorbar_ax is not None
     return FigureResult(layout.figure, path, run.scale, images, layout.colorbar_ax, layout.image_axes,
-                        layout.colorbar_axes)
+                        layout.colorbar_axes, table.summary())

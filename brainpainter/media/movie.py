@@ -163,6 +163,8 @@ class MovieResult:
         Wall time spent making the movie (rendering, composing, encoding).
     scale : ColourScale, optional
         The colour scale of every frame.
+    input : dict
+        How the input was read (a render manifest's ``input``: unmatched names, notes).
     """
 
     path: Path
@@ -173,6 +175,7 @@ class MovieResult:
     key_times: list[float]
     seconds: float
     scale: ColourScale | None = None
+    input: dict[str, Any] = field(default_factory=dict)
 
     def __repr__(self) -> str:
         """One short line."""
@@ -248,7 +251,7 @@ def make_movie(data: Any, atlas: Atlas | str | None = None, *, out: str | Path,
                          n_items=len(frames.states))
     size = encode(path, frames, runner, float(movie.fps), progress, on_progress)
     return MovieResult(path, len(plan), size, float(movie.fps), keys.names, keys.times,
-                       time.perf_counter() - start, run.scale)
+                       time.perf_counter() - start, run.scale, run.table.summary())
 
 
 def check_frames(n: int, fmt: str, run: Run) -> None:
