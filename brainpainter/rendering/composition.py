@@ -10,6 +10,7 @@ is where ``--outline ATLAS`` and ``--contour FILE`` enter every run (of regions 
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -276,6 +277,13 @@ def read_contours(options: MapOptions) -> Contours | None:
         raise BrainPainterError(f"--contour takes a map of one image; {maps.source} has {maps.n_images}. "
                                 "Give one image (a cluster mask, a p-map).")
     values = {hemi: np.asarray(maps.on_fsaverage(hemi, 0), np.float32) for hemi in maps.values}
+    finite = np.concatenate([v[np.isfinite(v)] for v in values.values()])
+    lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (np.nan, np.nan)
+    below = -np.inf if finite.size < sum(v.size for v in values.values()) else lo  # NaN: below every level
+    if not any(below < level <= hi for level in options.levels):  # an empty mask drew nothing, silently
+        warnings.warn(f"--contour {maps.source}: its values are {lo:g}..{hi:g}, which no level of "
+                      f"{list(options.levels)} divides, so it draws no line; give --contour-levels "
+                      "between its values (a mask of 0 and 1: 0.5).", stacklevel=2)
     return Contours(values, options.levels, regions=options.outline is not None)
 
 
