@@ -64,6 +64,14 @@ def colorbar_layers(layers: tuple[Layer, ...]) -> list[Layer]:
     return [layer for k, layer in enumerate(layers) if k == 0 or layer.own_scale]
 
 
+def first_bar_label(layers: tuple[Layer, ...], label: str | None, own: str | None) -> str | None:
+    """The first colour bar's label: `label` (``--label``), else its layer's own (`own`: ``--map-label``,
+    a Scene layer's ``label=``), else beside other bars its layer's (its file's name); None: none."""
+    if label is not None or own is not None:
+        return label if label is not None else own
+    return layers[0].label if len(colorbar_layers(layers)) > 1 else None
+
+
 class LayerKwargs(TypedDict, total=False):
     """The keyword arguments of :class:`LayerOptions`."""
 
