@@ -56,6 +56,18 @@ def test_a_long_label_of_an_upright_bar_stays_inside_a_short_figure():
     assert layout.figure.get_size_inches()[1] < 1.5 and _inside(layout.figure, layout.colorbar_ax)
 
 
+def test_a_label_on_two_lines_breaks_at_a_space_never_in_a_word():
+    """``thickness (mm)`` beside a short row of images: ``thickness`` / ``(mm)`` (was ``thicknes`` /
+    ``s (mm)``)."""
+    from brainpainter.media.layout import colorbar_width
+
+    scale = make_scale(cmap="viridis", vmin=1.5, vmax=4)
+    for text, lines in (("thickness (mm)", ["thickness", "(mm)"]),
+                        ("atrophy (SD from controls)", ["atrophy (SD", "from controls)"])):
+        _, label = colorbar_width(scale, label=text, room=0.3)
+        assert label is not None and label.split("\n") == lines
+
+
 def test_a_colorbar_position_not_known_is_one_line():
     with pytest.raises(BrainPainterError, match=r"colorbar_position must be one of \['bottom', 'right'\]; "
                                                 r"'left' was given"):

@@ -202,6 +202,20 @@ def test_cli_figure_with_stand_in_renderer(tmp_path, stripes, tiny):
     assert out.is_file() and sorted(p.name for p in out.parent.iterdir()) == ["grid.png"]
 
 
+def test_cli_figure_warns_of_a_column_it_did_not_draw(tmp_path, stripes, tiny):
+    """A misspelt region column: the figure says so, as render does (it drew the region in the missing
+    colour without a word)."""
+    from brainpainter.cli.main import cli
+
+    data = table(tmp_path, "Image-name-unique,Left-insula,Left-precuneus,Left-insular\nA,1,2,3\n")
+    result = CliRunner().invoke(cli, [
+        "figure", str(data), "--atlas", "dk", "--out", str(tmp_path / "f.png"), "--views", "lateral-left",
+        "--size", f"{W}x{H}", "--template", str(tiny), "--renderer", stripes, "-q"])
+    assert result.exit_code == 0, result.output
+    assert ("warning: 1 name(s) match no dk region and were not drawn: 'Left-insular' (did you mean "
+            "'Left-insula'?)") in result.output
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [

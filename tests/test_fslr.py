@@ -115,7 +115,8 @@ def test_refusals_are_one_line(tmp_path):
     img = nib.Nifti2Image(np.zeros((1, 1, 1, 1, 1, 3), np.float32), np.eye(4))
     img.header.extensions.append(nib.nifti1.Nifti1Extension(32, b'<CIFTI Version="1.0"><Matrix/></CIFTI>'))
     img.to_filename(str(cifti1))
-    for path, pattern in ((dconn, "connectome"), (odd, r"1000 values.*32492 fsLR 32k"),
+    for path, pattern in ((dconn, r"\(dconn/pconn\), not a map: draw a pconn with --connectome"),
+                          (odd, r"1000 values.*32492 fsLR 32k"),
                           (cifti1, r"CIFTI-1.*-cifti-version-convert old\.dscalar\.nii 2 OUT")):
         with pytest.raises(BrainPainterError, match=pattern) as e:
             read_maps(path)

@@ -21,3 +21,18 @@ def test_no_region_column_names_the_atlas_that_fits(tmp_path):
     with pytest.raises(BrainPainterError) as other:
         read_table(path, "dk", image_column="nope")
     assert not isinstance(other.value, NoRegionColumnError)
+
+
+def test_a_table_read_with_the_wrong_atlas_says_which_fits(tmp_path):
+    """DK names read with --atlas destrieux: its subcortical columns match, its cortical ones do not; a
+    note says the names fit dk (the cortex was drawn grey, the names listed with destrieux look-alikes)."""
+    path = tmp_path / "dk.csv"
+    path.write_text("Image-name-unique,Left-insula,Left-precuneus,Right-insula,Left-Hippocampus\na,1,2,3,4\n")
+    table = read_table(path, "destrieux")
+    assert len(table.unmatched) == 3
+    assert "the names fit atlas 'dk' better (4 of its regions against 1 of 'destrieux'): give --atlas dk" \
+        in table.notes
+    assert not read_table(path, "dk").notes  # the right atlas: no note
+    typo = tmp_path / "typo.csv"
+    typo.write_text("Image-name-unique,Left-insula,Left-insular\na,1,2\n")
+    assert not read_table(typo, "dk").notes  # an unmatched name that fits no atlas better: no note

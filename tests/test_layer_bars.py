@@ -107,3 +107,68 @@ def test_a_map_with_tracts_is_opaque_and_shows_the_tracts_in_a_subcortical_view(
     assert run.settings.cortex == "opaque" and "subcortical" in [v.name for v in run.views]
     run = prepare_run({"lh": np.zeros(10242), "rh": np.zeros(10242)}, **options, cortex="glass")
     assert run.settings.cortex == "glass"
+
+
+def test_tract_values_with_a_map_get_a_scale_of_their_own(tmp_path, layers):
+    """FA with a thickness map: the bundles on FA's own range, under a bar of their own (they shared
+    the map's scale, spanning the map alone: every bundle the colour of the map bar's first end)."""
+    from brainpainter.rendering.layers import colorbar_layers
+    from brainpainter.rendering.run import prepare_run
+
+    _, options = layers
+    fa = tmp_path / "fa.csv"
+    fa.write_text("bundle,fa\nAF_L,0.35\nCST_R,0.6\n")
+    thickness = {"lh": np.linspace(2, 3, 10242), "rh": np.linspace(2, 3, 10242)}
+    run = prepare_run(thickness, tracts=options["tracts"], tracts_space="template", tract_values=str(fa))
+    by_kind = {layer.kind: layer for layer in run.layers}
+    assert [layer.kind for layer in colorbar_layers(run.layers)] == ["map", "tracts"]
+    tracts = by_kind["tracts"].scale
+    assert (tracts.vmin, tracts.vmax) == pytest.approx((0.35, 0.6))
+    assert not np.allclose(tracts(np.array([0.35]))[0], tracts(np.array([0.6]))[0])
+
+
+def test_a_tracts_label_alone_gives_the_tracts_a_bar_of_their_own(tmp_path, layers):
+    """``--tracts-label FA`` without other tract options: a bar named FA (the label was dropped, the
+    bundles drawn on the regions' scale under the regions' bar)."""
+    from brainpainter.rendering.layers import colorbar_layers
+    from brainpainter.rendering.run import prepare_run
+
+    table, options = layers
+    run = prepare_run(table, tracts=options["tracts"], tracts_space="template", tracts_label="FA")
+    assert [(la.kind, la.label) for la in colorbar_layers(run.layers)] == [("regions", "thick.csv"),
+                                                                            ("tracts", "FA")]
+    tracts = run.layers[1].scale
+    assert (tracts.vmin, tracts.vmax) == pytest.approx((0.3, 0.7))
+    shared = prepare_run(table, tracts=options["tracts"], tracts_space="template")
+    assert [la.kind for la in colorbar_layers(shared.layers)] == ["regions"]
+
+
+@pytest.mark.parametrize(("views", "labels"), [("lateral-left", ["thickness"]),
+                                               ("lateral-left,subcortical", ["thickness", "FA"])])
+def test_a_figure_draws_the_tracts_bar_only_where_a_view_shows_them(tmp_path, layers, tiny, views, labels):
+    """A map with FA in cortex views only (the cortex opaque): one bar, the map's, named by its
+    ``map_label`` (an FA bar named what no view showed, and the map's own label was dropped)."""
+    from brainpainter.media.figure import make_figure
+    from brainpainter.testing import stand_in
+
+    _, options = layers
+    fa = tmp_path / "fa.csv"
+    fa.write_text("bundle,fa\nAF_L,0.3\nCST_R,0.7\n")
+    with stand_in() as renderer:
+        result = make_figure({"lh": np.linspace(2, 3, 10242), "rh": np.linspace(2, 3, 10242)},
+                             tracts=options["tracts"], tracts_space="template", tract_values=str(fa),
+                             template=str(tiny), renderer=renderer, views=views, width=160, height=120,
+                             map_label="thickness", tracts_label="FA", progress=False)
+    assert [ax.get_xlabel() for ax in result.colorbar_axes] == labels
+
+
+def test_the_first_bar_is_named_by_label_else_its_layer_s_own_label():
+    from brainpainter.rendering.layers import Layer, first_bar_label
+
+    scale = make_scale(cmap="viridis", vmin=0, vmax=1)
+    one = (Layer("map", scale, label="lh.thick"),)
+    two = (*one, Layer("tracts", scale, label="FA"))
+    assert first_bar_label(one, None, None) is None  # one bar, nothing given: no file name under it
+    assert first_bar_label(one, None, "thickness (mm)") == "thickness (mm)"  # --map-label, Scene label=
+    assert first_bar_label(one, "z", "thickness (mm)") == "z"  # --label first
+    assert first_bar_label(two, None, None) == "lh.thick"  # beside another bar: each names its layer

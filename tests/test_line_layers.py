@@ -91,3 +91,27 @@ def test_a_map_with_a_contour_and_tracts_on_their_own_scale(tmp_path):
     assert [(la.kind, la.label, la.scale.name) for la in result.layers] == [
         ("map", "thickness (mm)", "viridis"), ("tracts", "FA", "magma")]
     assert result.manifest["settings"]["lines"] == [{"kind": "contour", "levels": [0.5]}]
+
+
+def test_a_contour_that_no_level_divides_is_a_warning(tmp_path):
+    """An empty mask (all 0) at level 0.5 draws no line: said (it drew nothing without a word); a mask
+    of 0 and 1, or NaN beside values above the level, draws lines and says nothing."""
+    import warnings
+
+    from brainpainter.maps.options import MapOptions
+    from brainpainter.rendering.composition import read_contours
+
+    def write(values):
+        nib.MGHImage(np.asarray(values, np.float32).reshape(-1, 1, 1), np.eye(4)).to_filename(
+            tmp_path / "lh.mask.mgh")
+        return str(tmp_path / "lh.mask.mgh")
+
+    with pytest.warns(UserWarning, match=r"lh.mask.mgh: its values are 0..0, which no level of \[0.5\] "
+                                         r"divides, so it draws no line; give --contour-levels"):
+        read_contours(MapOptions(contour=write(np.zeros(10242))))
+    with pytest.warns(UserWarning, match="no level of"):
+        read_contours(MapOptions(contour=write(np.zeros(10242)), contour_levels="1.5,2"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read_contours(MapOptions(contour=write(np.arange(10242) % 2)))
+        read_contours(MapOptions(contour=write(np.where(np.arange(10242) % 2, 1.0, np.nan))))

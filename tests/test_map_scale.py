@@ -121,3 +121,19 @@ def test_cli_says_which_scale_was_chosen_and_why(tmp_path):
             "--size", "80x60", "--renderer", renderer, "--out", str(tmp_path / "given.png"), "-q"])
         assert given.exit_code == 0, given.output
         assert "scale:" not in given.output  # limits given: nothing was chosen
+
+
+def test_a_thresholded_map_is_scaled_over_the_values_it_draws():
+    """Two small blobs of z up to +-4 in a map of noise, --threshold 2.3: the scale reaches the blobs
+    (it was -2.24..2.24 over all values, the blobs its outliers in the end colours, and the colour
+    bar greyed out from end to end), and the bar's colours start at the threshold."""
+    rng = np.random.default_rng(0)
+    z = rng.normal(0.0, 0.5, N5)
+    z[:40], z[40:80] = np.linspace(2.3, 4.0, 40), -np.linspace(2.3, 4.0, 40)
+    z = np.clip(z, -4.0, 4.0)
+    scale = map_scale(ScaleOptions(), read_maps({"lh": z}), threshold=2.3)
+    assert (scale.name, scale.center) == ("RdBu_r", 0.0) and scale.vmax == pytest.approx(4.0)
+    unthresholded = map_scale(ScaleOptions(), read_maps({"lh": z}))
+    assert unthresholded.vmax < 2.3  # over all values: the whole scale under the threshold
+    given = map_scale(ScaleOptions(vmin=-3, vmax=3), read_maps({"lh": z}), threshold=2.3)
+    assert (given.vmin, given.vmax) == (-3, 3)  # limits given are kept

@@ -128,6 +128,27 @@ def test_pair_found_from_one_name(tmp_path):
         pair_of(tmp_path / "thickness.mgh")
 
 
+@pytest.mark.parametrize(("lh", "rh"), [("rh.thickness", "lh.thickness"), ("lh.thickness", "lh.thickness"),
+                                        ("sub-01_hemi-R_thickness.shape.gii", None),
+                                        (None, "thick_left.gii")])
+def test_a_file_whose_name_says_the_other_hemisphere_is_refused(tmp_path, lh, rh):
+    """``--lh rh.thickness``: the right hemisphere's values were drawn on the left without a word."""
+    given = {k: tmp_path / name for k, name in (("lh", lh), ("rh", rh)) if name is not None}
+    for path in given.values():
+        nib.freesurfer.write_morph_data(str(path), _values()[0])
+    with pytest.raises(BrainPainterError, match=r"its name says the (right|left) hemisphere, but "
+                                                r"--(lh|rh) takes the (left|right) one's values; give it "
+                                                r"with --(rh|lh)"):
+        read_maps(**given)
+
+
+def test_a_file_named_for_its_own_hemisphere_or_for_none_is_read(tmp_path):
+    for name in ("lh.thickness", "rh.thickness", "thickness_both"):
+        nib.freesurfer.write_morph_data(str(tmp_path / name), _values()[0])
+    assert set(read_maps(lh=tmp_path / "lh.thickness", rh=tmp_path / "rh.thickness").values) == {"lh", "rh"}
+    assert set(read_maps(rh=tmp_path / "thickness_both").values) == {"rh"}
+
+
 def test_label_maps(tmp_path):
     labels = np.arange(N5) % 3
     ctab = np.array([[25, 5, 25, 0, 0], [255, 0, 0, 0, 1], [0, 0, 255, 0, 2]])

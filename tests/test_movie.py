@@ -256,6 +256,17 @@ def test_cli_movie_with_stand_in_renderer(tmp_path, stripes, tiny):
     assert "4 frames" in result.output and out.is_file()
 
 
+def test_cli_movie_warns_of_a_column_it_did_not_draw(tmp_path, stripes, tiny):
+    from brainpainter.cli.main import cli
+
+    data = table(tmp_path, "Image-name-unique,Left-insula,Left-hipocampus\nA,0,1\nB,3,2\n")
+    result = CliRunner().invoke(cli, [
+        "movie", str(data), "--atlas", "dk", "--out", str(tmp_path / "m.gif"), "--views", "lateral-left",
+        "--frames-per-step", "2", "--size", f"{W}x{H}", "--template", str(tiny), "--renderer", stripes, "-q"])
+    assert result.exit_code == 0, result.output
+    assert "warning: 1 name(s) match no dk region and were not drawn: 'Left-hipocampus'" in result.output
+
+
 # -- errors: one line, exit code 2, no file -----------------------------------------------
 @pytest.mark.parametrize(
     ("rows", "args", "message"),

@@ -54,6 +54,14 @@ def test_an_unknown_keyword_is_a_type_error_naming_the_function():
         Options.of({"colour": "red"}, "make_figure")
 
 
+def test_an_unknown_keyword_says_which_was_meant():
+    """The command line's names in Python: ``size=`` is width/height, ``thresold=`` close to threshold."""
+    with pytest.raises(TypeError, match=r"'size'; the command line's --size WxH is width=W, height=H$"):
+        Options.of({"size": "800x600"}, "render")
+    with pytest.raises(TypeError, match=r"'thresold'; did you mean 'threshold'\?$"):
+        Options.of({"thresold": 2.3}, "render")
+
+
 @pytest.mark.parametrize("kwargs, message", [
     ({"width": 9000}, "width must be between 16 and 8192 pixels"),
     ({"height": 12.5}, "height must be between 16 and 8192 pixels (a whole number)"),

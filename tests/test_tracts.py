@@ -359,6 +359,19 @@ def test_tract_values_naming_no_bundle_drawn_are_a_one_line_error(tmp_path, monk
     assert not (tmp_path / "o").exists()
 
 
+def test_tract_values_of_a_bundle_not_drawn_are_a_warning(tmp_path, bundles):
+    """A value for UF_L with no UF_L tractogram: said, and left out of the values (the input line
+    counted it among the bundles drawn, and nothing said it was not)."""
+    from brainpainter.rendering.run import prepare_run
+
+    (tmp_path / "fa.csv").write_text("bundle,fa\nAF_L,0.3\nUF_L,0.4\n")
+    with pytest.warns(UserWarning, match=r"'fa.csv': 1 bundle\(s\) with a value have no tractogram and "
+                                         r"were not drawn: \['UF_left'\]"):
+        run = prepare_run({"Left-insula": 1.0}, "dk", tracts=[str(bundles)], tracts_space="template",
+                          tract_values=str(tmp_path / "fa.csv"))
+    assert run.tract_values is not None and run.tract_values.bundles == ("AF_left",)
+
+
 def test_without_tracts_the_cortex_stays_opaque_and_hidden_explains_an_empty_view(tiny):
     g = _scene(tiny, None).geometry
     assert g.cortex == "opaque" and [p.kind for p in g.visible(get_view("lateral-left"))] == ["cortex"]

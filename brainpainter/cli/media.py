@@ -22,6 +22,7 @@ from brainpainter.cli.options import (
     tables_or_maps,
 )
 from brainpainter.cli.params import CONTEXT, OutPath, echo_scale
+from brainpainter.cli.render import echo_warnings
 from brainpainter.media.layout import FigureOptions
 from brainpainter.media.movie import MovieOptions, make_movie
 
@@ -82,6 +83,7 @@ def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, ti
     click.echo(f"figure written to {result.path} ({n_images} row(s) x {n_views} view(s), "
                f"{w:.2f} x {h:.2f} in" + (f" at {dpi:g} dpi)" if out.suffix.lower() in
                                         (".png", ".tif", ".tiff") else ")"))
+    echo_warnings(result.input)
     echo_scale(result.scale)
 
 
@@ -127,4 +129,5 @@ def movie(inputs: tuple[Path, ...], out: Path, frames_per_step: int, easing: str
     click.echo(f"movie written to {result.path}: {result.n_frames} frames of {w}x{h} at {result.fps:g} fps "
                f"({result.duration:.1f} s; key frames {', '.join(result.keys)}; "
                f"made in {result.seconds:.0f} s)")
+    echo_warnings(result.input)
     echo_scale(result.scale)

@@ -35,6 +35,19 @@ def echo_input(summary: dict[str, Any]) -> None:
         click.echo(f"warning: {line}")
 
 
+def echo_warnings(summary: dict[str, Any]) -> None:
+    """The notes and warnings about an input that ``render`` prints with it, for ``figure`` and ``movie``:
+    a map's notes, and a table's (one under a map too) unmatched names and notes."""
+    from brainpainter.table.report import input_warnings
+
+    if summary.get("kind") == "vertex map":
+        for note in summary.get("notes", []):
+            click.echo(f"note: {note}")
+        summary = summary.get("table", {})
+    for line in input_warnings(summary) if summary else []:
+        click.echo(f"warning: {line}")
+
+
 # -- check --------------------------------------------------------------------
 @click.command(context_settings=CONTEXT)
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...",

@@ -119,8 +119,9 @@ def read_cifti(path: str | Path, frames: Any = None, *, own_mesh: bool = False) 
     name = p.name.lower()
     if name.endswith(CONNECTOMES):
         raise BrainPainterError(
-            f"{p.name!r} is a CIFTI connectome (dconn/pconn): brainpainter draws maps, not connectomes yet; "
-            "give one row of it as a dscalar (wb_command -cifti-merge ... or -cifti-reduce).")
+            f"{p.name!r} is a CIFTI connectome (dconn/pconn), not a map: draw a pconn with --connectome "
+            f"{p.name} (its parcels as nodes; docs/connectomes.md), or give one row of it as a dscalar "
+            "(wb_command -cifti-merge ... or -cifti-reduce).")
     check_input(p, "CIFTI file", limit=MAX_BYTES, hint="give a CIFTI-2 file")  # a regular file, not a FIFO
     what = f"CIFTI file {p.name!r}"
     _refuse_cifti1(p, what)

@@ -148,6 +148,27 @@ def pair_of(path: str | Path) -> dict[str, Path]:
         "give it with --lh FILE or --rh FILE.")
 
 
+def named_hemi(name: str) -> str | None:
+    """The hemisphere a file name says (``rh.thickness``, ``hemi-L``, ``thick_left.gii``), or None."""
+    said = {hemi for lh_pat, rh_sub in _PAIRS
+            for hemi, pat in (("lh", lh_pat), ("rh", _swap(lh_pat, rh_sub)[0])) if re.search(pat, name)}
+    return said.pop() if len(said) == 1 else None
+
+
+def _check_side(hemi: str, value: Any) -> None:
+    """Refuse a file given for `hemi` whose name says the other hemisphere (``--lh rh.thickness``: the
+    right hemisphere's values were drawn on the left without a word)."""
+    if not isinstance(value, str | Path):
+        return
+    said = named_hemi(Path(value).name)
+    if said is not None and said != hemi:
+        side = {"lh": "left", "rh": "right"}
+        raise BrainPainterError(
+            f"--{hemi} {Path(value).name!r}: its name says the {side[said]} hemisphere, but --{hemi} takes "
+            f"the {side[hemi]} one's values; give it with --{said} (and the {side[hemi]} hemisphere's file "
+            f"with --{hemi}), or rename it if it holds the {side[hemi]} hemisphere.")
+
+
 def _swap(lh_pat: str, rh_sub: str) -> tuple[str, str]:
     """The rh pattern and its lh substitution, from an lh pattern and its rh substitution."""
     table = {r"(^|[._-])lh([._-])": (r"(^|[._-])rh([._-])", r"\1lh\2"), r"hemi-L": (r"hemi-R", "hemi-L"),
@@ -292,6 +313,7 @@ def _given(data: Any, lh: Any, rh: Any, mesh: Mapping[str, int] | None) -> dict[
                 "given.")
     for hemi, value in (("lh", lh), ("rh", rh)):
         if value is not None:
+            _check_side(hemi, value)
             given[hemi] = value
     if not given:
         raise BrainPainterError("no map given: give --lh FILE and/or --rh FILE (or a dict of arrays).")

@@ -37,16 +37,19 @@ def map_scale(options: ScaleOptions, maps: VertexMaps, threshold: float | None =
 
     No ``cmap``/``gradient``: ``viridis``, or ``RdBu_r`` for data substantially of both
     signs, which are then symmetric about 0 (:func:`brainpainter.maps.autoscale.choose_scale`;
-    the scale's ``chosen`` says why). The scale carries `threshold`, so that its colour bar
-    greys out ``|v| < threshold``. A label map's scale carries its categories (the colour bar
-    is their key).
+    the scale's ``chosen`` says why), over the values drawn (``|v| >= threshold``). The scale
+    carries `threshold`, so that its colour bar greys out ``|v| < threshold``. A label map's
+    scale carries its categories (the colour bar is their key).
     """
     data = maps.finite()
     if maps.categories is not None and maps.category_colors is not None:  # a key of the categories
         if options.cmap is None and options.gradient is None:
             options = replace(options, cmap=DEFAULT_CMAP)
         return replace(options.scale(data), categories=_drawn_categories(maps))
-    options, chosen = choose_scale(options, data)
+    shown = data[np.abs(data) >= threshold] if threshold else data
+    # limits chosen over the values drawn: over all, a few blobs above --threshold 2.3 were outliers of a
+    # -2.24..2.24 scale, drawn in its end colours under a bar greyed out from end to end
+    options, chosen = choose_scale(options, shown if shown.size else data)
     return replace(options.scale(data), threshold=threshold, chosen=chosen)
 
 

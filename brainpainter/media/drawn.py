@@ -39,6 +39,11 @@ def drawn_keys(geometry: SceneGeometry, views: Sequence[View]) -> list[str]:
     return [k for k in geometry.keys if k in drawn]
 
 
+def drawn_kinds(geometry: SceneGeometry, views: Sequence[View]) -> set[str]:
+    """The kinds of part (``cortex``, ``tract``, ...) that some view draws (:meth:`SceneGeometry.visible`)."""
+    return {part.kind for view in views for part in geometry.visible(view)}
+
+
 def swatches_needed(table: RegionTable, rows: Sequence[int], views: Sequence[View],
                     geometry: SceneGeometry) -> tuple[bool, bool]:
     """Whether the NaN colour and the missing colour appear in the drawn regions of `rows`.

@@ -420,14 +420,13 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
         from brainpainter.io.output import png_bytes
         from brainpainter.media.colorbar import colorbar_image
         from brainpainter.media.drawn import swatches_needed
-        from brainpainter.rendering.layers import colorbar_layers
+        from brainpainter.rendering.layers import colorbar_layers, first_bar_label
         from brainpainter.rendering.views import parse_views
 
         views = run.views if isinstance(run, MapRun) else parse_views("lateral-left,medial-right,subcortical")
         nan, missing = swatches_needed(table, [i], views, scene.geometry)
         layers = colorbar_layers(run.layers)
-        if label is None and len(layers) > 1:  # several bars: each names its layer
-            label = layers[0].label
+        label = first_bar_label(run.layers, label, run.options.layers.label(run.layers[0].kind))
         bars = [colorbar_image(layer.scale, (420, 64 if lb else 48), background=run.settings.background,
                                label=lb, fontsize=9.0, **({"nan": nan, "missing": missing} if k == 0 else {}))
                 for k, (layer, lb) in enumerate(zip(layers, [label, *(la.label for la in layers[1:])],

@@ -34,10 +34,10 @@ from numpy.typing import NDArray
 from brainpainter.atlas.model import Atlas
 from brainpainter.color.scale import ColourScale
 from brainpainter.media.colorbar import quiet_glyphs
-from brainpainter.media.drawn import common_crop, content_box, swatches_needed
+from brainpainter.media.drawn import common_crop, content_box, drawn_kinds, swatches_needed
 from brainpainter.media.layout import FigureKwargs, FigureOptions, compose_figure
 from brainpainter.media.outfile import check_out_file
-from brainpainter.rendering.layers import colorbar_layers
+from brainpainter.rendering.layers import colorbar_layers, first_bar_label
 from brainpainter.rendering.options import Options, RenderKwargs, take
 from brainpainter.rendering.run import make_runner, paint, prepare_run
 from brainpainter.rendering.views import ImagesByView
@@ -77,6 +77,8 @@ class FigureResult:
         Where each render is: ``(image name, view name) -> Axes``.
     colorbar_axes : list of Axes
         Every colour bar's: the first layer's, then each later layer's with a scale of its own.
+    input : dict
+        How the input was read (a render manifest's ``input``: unmatched names, notes).
     """
 
     figure: Figure
@@ -86,6 +88,7 @@ class FigureResult:
     colorbar_ax: Axes
     image_axes: dict[tuple[str, str], Axes] = field(default_factory=dict)
     colorbar_axes: list[Axes] = field(default_factory=list)
+    input: dict[str, Any] = field(default_factory=dict)
 
     def __repr__(self) -> str:
         """One short line."""
@@ -198,9 +201,12 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
                 bar.update(1)
                 if on_progress is not None:
                     on_progress(len(images), len(plan))
-        more = [(layer.scale, layer.label) for layer in colorbar_layers(run.layers)[1:]]
-        if more and figure_opts.label is None:  # several bars: each names its layer
-            figure_opts = replace(figure_opts, label=run.layers[0].label)
+        # a bar for tracts that no view shows (cortex views, the cortex opaque) would name what is not there
+        tracts_shown = "tract" in drawn_kinds(painter.scene.geometry, run.views)
+        more = [(layer.scale, layer.label) for layer in colorbar_layers(run.layers)[1:]
+                if layer.kind != "tracts" or tracts_shown]
+        figure_opts = replace(figure_opts, label=first_bar_label(
+            run.layers, figure_opts.label, run.options.layers.label(run.layers[0].kind)))
         layout = compose_figure(images, [table.images[i] for i in chosen], [v.name for v in run.views],
                                 run.scale, figure_opts, nan=nan, missing=missing, background=background,
                                 more_bars=more)
@@ -211,4 +217,4 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
             tx.commit()
     assert layout.colorbar_ax is not None
     return FigureResult(layout.figure, path, run.scale, images, layout.colorbar_ax, layout.image_axes,
-                        layout.colorbar_axes)
+                        layout.colorbar_axes, table.summary())

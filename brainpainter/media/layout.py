@@ -362,8 +362,6 @@ def colorbar_width(scale: ColourScale, *, dpi: float = 100.0, fontsize: float = 
 
     Parameters as :func:`draw_colorbar` (``label``, ``ticks``, ``nan``, ``missing``).
     """
-    import textwrap
-
     from brainpainter.media.colorbar import decorations_bbox, draw_colorbar, new_figure
 
     fig = new_figure((6.0, 3.0), dpi)
@@ -373,7 +371,9 @@ def colorbar_width(scale: ColourScale, *, dpi: float = 100.0, fontsize: float = 
     label = ax.yaxis.label
     text = label.get_text()
     if room is not None and " " in text and label.get_window_extent().height > room * dpi:
-        label.set_text(textwrap.fill(text, width=len(text) // 2 + 1))
+        # at the space nearest the middle: two lines, no word cut ("thicknes" / "s (mm)" was)
+        cut = min((i for i, c in enumerate(text) if c == " "), key=lambda i: abs(2 * i - len(text)))
+        label.set_text(f"{text[:cut]}\n{text[cut + 1:]}")
         fig.draw_without_rendering()
     box = decorations_bbox(ax)
     return float(box.x1 - ax.get_window_extent().x0) / dpi + 0.02, label.get_text() or None

@@ -57,7 +57,7 @@ from brainpainter.media.timeline import (
 )
 from brainpainter.rendering.composition import tract_colors
 from brainpainter.rendering.connectome_layers import connectome_colors
-from brainpainter.rendering.layers import colorbar_layers
+from brainpainter.rendering.layers import colorbar_layers, first_bar_label
 from brainpainter.rendering.options import Options, RenderKwargs, take
 from brainpainter.rendering.painter import region_colors
 from brainpainter.rendering.parallel import Item, Runner
@@ -163,6 +163,8 @@ class MovieResult:
         Wall time spent making the movie (rendering, composing, encoding).
     scale : ColourScale, optional
         The colour scale of every frame.
+    input : dict
+        How the input was read (a render manifest's ``input``: unmatched names, notes).
     """
 
     path: Path
@@ -173,6 +175,7 @@ class MovieResult:
     key_times: list[float]
     seconds: float
     scale: ColourScale | None = None
+    input: dict[str, Any] = field(default_factory=dict)
 
     def __repr__(self) -> str:
         """One short line."""
@@ -248,7 +251,7 @@ def make_movie(data: Any, atlas: Atlas | str | None = None, *, out: str | Path,
                          n_items=len(frames.states))
     size = encode(path, frames, runner, float(movie.fps), progress, on_progress)
     return MovieResult(path, len(plan), size, float(movie.fps), keys.names, keys.times,
-                       time.perf_counter() - start, run.scale)
+                       time.perf_counter() - start, run.scale, run.table.summary())
 
 
 def check_frames(n: int, fmt: str, run: Run) -> None:
@@ -341,8 +344,7 @@ class MovieFrames:
         w, h = run.settings.width, run.settings.height
         assert run.settings.background is not None
         more = [(layer.scale, layer.label) for layer in colorbar_layers(run.layers)[1:]]
-        # several bars: each names its layer
-        label = movie.label if movie.label is not None or not more else run.layers[0].label
+        label = first_bar_label(run.layers, movie.label, run.options.layers.label(run.layers[0].kind))
         composer = FrameComposer(len(run.views), (w, h), run.scale, keys.times,
                                  background=run.settings.background, label=label, ticks=movie.ticks,
                                  nan=nan, missing=missing, title=movie.title, more_bars=more)

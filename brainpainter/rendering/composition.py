@@ -10,6 +10,7 @@ is where ``--outline ATLAS`` and ``--contour FILE`` enter every run (of regions 
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -172,8 +173,8 @@ def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None, me
 
     The map's scale is its own (``--map-cmap``, ...; else the automatic scale of a map,
     :func:`brainpainter.maps.layers.map_scale`); drawn over region values it covers them by
-    ``--map-alpha``. `meshes` are the meshes the map is drawn on, by hemisphere. Tract values take
-    their own options (``--tracts-cmap``, ...; a gradient spans their values), else the first layer's scale.
+    ``--map-alpha``. `meshes` are the meshes the map is drawn on, by hemisphere. Tract values have a
+    scale of their own (:func:`tract_layer`).
     `others`: the kinds the run draws besides (a connectome's edges and nodes).
     """
     given = options.layers.label("map")
@@ -187,7 +188,7 @@ def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None, me
         own = options.layers.scale_options("map", options.scale, first=True)
         assert own is not None
         layers: tuple[Layer, ...] = (Layer("map", map_scale(own, maps, threshold), alpha, label),)
-        return layers + tract_layer(options, tract_values, layers[0]), None
+        return layers + tract_layer(options, tract_values), None
     if maps.n_images not in (1, len(table.images)):
         raise BrainPainterError(
             f"a map drawn over region values has one image, or one per row of the table; the map has "
@@ -198,19 +199,26 @@ def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None, me
     plain = ScaleOptions(nan_color=options.scale.nan_color, missing_color=options.scale.missing_color)
     scale = map_scale(own if own is not None else plain, maps, threshold)
     layers = (regions, Layer("map", scale, alpha, label))
-    return layers + tract_layer(options, tract_values, regions), RegionsBelow.of(table, regions.scale, meshes)
+    return layers + tract_layer(options, tract_values), RegionsBelow.of(table, regions.scale, meshes)
 
 
-def tract_layer(options: Options, tract_values: TractValues | None, first: Layer) -> tuple[Layer, ...]:
-    """The tract values' layer of a map run (none without them): their own scale, else `first`'s."""
+def tract_layer(options: Options, tract_values: TractValues | None) -> tuple[Layer, ...]:
+    """The tract values' layer of a map run (none without them), always on a scale of its own.
+
+    A map and bundle values are two measures (thickness 2-3 mm and FA 0.3-0.7), and the map's scale
+    spans the map alone: shared, every bundle took the colour of one end of the map's colour bar.
+    Their scale is made from their own options (``--tracts-cmap``, ...; else the default gradient)
+    over their values (a gradient given no range spans them).
+    """
     if tract_values is None:
         return ()
     own = options.layers.scale_options("tracts", options.scale, first=False)
-    scale = first.scale if own is None else run_scale(own, tract_values.values, True)
+    plain = ScaleOptions(nan_color=options.scale.nan_color, missing_color=options.scale.missing_color)
+    scale = run_scale(own if own is not None else plain, tract_values.values, True)
     given = options.layers.label("tracts")
     scene = options.scene
     label = given if given is not None else scene.tract_value or Path(str(scene.tract_values)).name
-    return (Layer("tracts", scale, 1.0, label, own_scale=own is not None),)
+    return (Layer("tracts", scale, 1.0, label, own_scale=True),)
 
 
 def line_layers(options: Options, drawn: str,
@@ -269,6 +277,13 @@ def read_contours(options: MapOptions) -> Contours | None:
         raise BrainPainterError(f"--contour takes a map of one image; {maps.source} has {maps.n_images}. "
                                 "Give one image (a cluster mask, a p-map).")
     values = {hemi: np.asarray(maps.on_fsaverage(hemi, 0), np.float32) for hemi in maps.values}
+    finite = np.concatenate([v[np.isfinite(v)] for v in values.values()])
+    lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (np.nan, np.nan)
+    below = -np.inf if finite.size < sum(v.size for v in values.values()) else lo  # NaN: below every level
+    if not any(below < level <= hi for level in options.levels):  # an empty mask drew nothing, silently
+        warnings.warn(f"--contour {maps.source}: its values are {lo:g}..{hi:g}, which no level of "
+                      f"{list(options.levels)} divides, so it draws no line; give --contour-levels "
+                      "between its values (a mask of 0 and 1: 0.5).", stacklevel=2)
     return Contours(values, options.levels, regions=options.outline is not None)
 
 

@@ -5,7 +5,7 @@ layers are ordered, the first being its main input (a region table, a map, or tr
 alone). :class:`LayerOptions` holds the options of each kind (``--regions-cmap``,
 ``--map-vmin``, ``--tracts-vmax``, ``--map-alpha``, ...), one definition from which the CLI
 is made (:mod:`brainpainter.rendering.options`). The plain ``--cmap``/``--vmin``/``--vmax``
-are the first layer's; a later layer given options of its own gets a scale of its own
+are the first layer's; a later layer given options of its own (or a label) gets a scale of its own
 (:meth:`LayerOptions.scale_options`), one given none shares the first layer's scale.
 """
 
@@ -62,6 +62,14 @@ class Layer:
 def colorbar_layers(layers: tuple[Layer, ...]) -> list[Layer]:
     """The layers that need a colour bar of their own: the first, and every later one with its own scale."""
     return [layer for k, layer in enumerate(layers) if k == 0 or layer.own_scale]
+
+
+def first_bar_label(layers: tuple[Layer, ...], label: str | None, own: str | None) -> str | None:
+    """The first colour bar's label: `label` (``--label``), else its layer's own (`own`: ``--map-label``,
+    a Scene layer's ``label=``), else beside other bars its layer's (its file's name); None: none."""
+    if label is not None or own is not None:
+        return label if label is not None else own
+    return layers[0].label if len(colorbar_layers(layers)) > 1 else None
 
 
 class LayerKwargs(TypedDict, total=False):
@@ -211,12 +219,12 @@ class LayerOptions:
     def scale_options(self, kind: str, base: ScaleOptions, first: bool) -> ScaleOptions | None:
         """The scale options of layer `kind`: `base` (the plain options) for the first layer, with its own.
 
-        A later layer given none of its own shares the first layer's scale (None); given some, its
-        scale is its own: its options, else the colour map or gradient of `base`, and its range from
-        its own values.
+        A later layer given none of its own shares the first layer's scale (None); given some, or a
+        label (``--tracts-label FA``: a colour bar of its own to name), its scale is its own: its
+        options, else the colour map or gradient of `base`, and its range from its own values.
         """
         own = self.given(kind)
-        if not first and not own:
+        if not first and not own and self.label(kind) is None:
             return None
         if "cmap" in own or "gradient" in own:  # its own colour map replaces the plain one
             base = replace(base, cmap=None, gradient=None)

@@ -351,7 +351,13 @@ class Options:
         known = {name for group in GROUPS.values() for name in option_names(group)}
         unknown = sorted(set(given) - known)
         if unknown:
-            raise TypeError(f"{caller}() got an unexpected keyword argument {unknown[0]!r}")
+            import difflib
+
+            name = unknown[0]
+            close = difflib.get_close_matches(name, sorted(known), n=1)
+            hint = ("; the command line's --size WxH is width=W, height=H" if name == "size"
+                    else f"; did you mean {close[0]!r}?" if close else "")
+            raise TypeError(f"{caller}() got an unexpected keyword argument {name!r}{hint}")
         if given.get("background") is not None:
             given["background"] = to_rgb(given["background"])
         made = {key: group(**{n: given[n] for n in option_names(group) if n in given})

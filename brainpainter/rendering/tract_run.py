@@ -8,6 +8,7 @@ one image's bundles.
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -75,10 +76,16 @@ def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, b
         raise _none_drawn("the table", tv, known)
     if not keep:
         return None, False
+    return _only(tv, known), len(keep) == len(tv.nodes)
+
+
+def _only(tv: TractValues, known: set[str]) -> TractValues:
+    """`tv` with the values of the bundles in `known` only."""
+    keep = [j for j, (name, _) in enumerate(tv.nodes) if name in known]
     names = {tv.nodes[j][0] for j in keep}
     cols = [j for j, key in enumerate(tv.keys) if key.split(":")[1] in names]
-    return (TractValues(tv.images, tuple(tv.keys[j] for j in cols), tv.values[:, cols],
-                        tuple(tv.nodes[j] for j in keep)), len(keep) == len(tv.nodes))
+    return TractValues(tv.images, tuple(tv.keys[j] for j in cols), tv.values[:, cols],
+                       tuple(tv.nodes[j] for j in keep))
 
 
 def _none_drawn(what: str, tv: TractValues, known: set[str]) -> BrainPainterError:
@@ -89,14 +96,27 @@ def _none_drawn(what: str, tv: TractValues, known: set[str]) -> BrainPainterErro
 
 
 def given_tract_values(scene: SceneOptions) -> TractValues | None:
-    """``--tract-values`` read, checked to name at least one bundle of ``--tracts`` (None: not given)."""
+    """``--tract-values`` read, checked to name at least one bundle of ``--tracts`` (None: not given).
+
+    Values of bundles that are not drawn (no ``--tracts`` file) are left out, with a warning.
+    """
     if scene.tract_values is None:
         return None
     tv = read_tract_values(scene.tract_values, scene.tract_value)
     spec = scene.tract_spec()
-    if spec is not None and not set(tv.bundles) & bundle_names(spec):
-        name = Path(scene.tract_values).name if isinstance(scene.tract_values, str | Path) else "tract values"
-        raise _none_drawn(f"--tract-values {name!r}", tv, bundle_names(spec))
+    if spec is None:
+        return tv
+    known = bundle_names(spec)
+    name = Path(scene.tract_values).name if isinstance(scene.tract_values, str | Path) else "tract values"
+    if not set(tv.bundles) & known:
+        raise _none_drawn(f"--tract-values {name!r}", tv, known)
+    left = [b for b in tv.bundles if b not in known]
+    if left:
+        warnings.warn(f"--tract-values {name!r}: {len(left)} bundle(s) with a value have no tractogram and "
+                      f"were not drawn: {left[:6]}{' ...' if len(left) > 6 else ''} (the tractograms: "
+                      f"{sorted(known)[:6]}); give their files to --tracts, named after the bundles.",
+                      stacklevel=2)
+        return _only(tv, known)
     return tv
 
 

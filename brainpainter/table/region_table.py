@@ -272,6 +272,8 @@ def inspect_table(data: Any, atlas: Atlas | str | None = None, *, image_column: 
         parts.append(part)
     table = _merge(parts, atlas, guess)
     _check_file_names(table)
+    if guess is None and table.unmatched:  # --atlas destrieux on a DK table: its cortex silently grey
+        table = _replace(table, notes=(*table.notes, *_better_atlas(raws, table)))
     errors = [p.message for p in table.problems]
     if not table.regions:
         errors.append(_no_regions_error(table, resolver))
@@ -284,6 +286,19 @@ def inspect_table(data: Any, atlas: Atlas | str | None = None, *, image_column: 
             + "; rename them or drop --strict."
         )
     return _replace(table, errors=tuple(errors))
+
+
+def _better_atlas(raws: list[RawTable], table: RegionTable) -> list[str]:
+    """A note where the names of a table read with the atlas given fit another installed atlas better."""
+    other = infer_atlas([n for raw in raws for n in _candidate_names(raw)], installed_atlases())
+    if other is None or other.atlas.name == table.atlas.name:
+        return []
+    here = other.scores.get(table.atlas.name, len(table.regions))
+    there = other.scores[other.atlas.name]
+    if there <= here:
+        return []
+    return [f"the names fit atlas {other.atlas.name!r} better ({there} of its regions against {here} of "
+            f"{table.atlas.name!r}): give --atlas {other.atlas.name}"]
 
 
 def _check_file_names(table: RegionTable) -> None:
