@@ -47,6 +47,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
+    from brainpainter.rendering.maprun import MapRun
+    from brainpainter.rendering.painter import Painter
+    from brainpainter.rendering.run import Run
+
 __all__ = ["FigureResult", "check_out_file", "common_crop", "compose_figure", "content_box", "figure_bytes",
            "make_figure", "save_figure", "select_rows"]
 
@@ -137,6 +141,18 @@ def figure_bytes(fig: Figure, path: Path, dpi: float, transparent: bool = False)
 
 
 @quiet_glyphs
+def _bars(run: Run | MapRun, painter: Painter, figure_opts: FigureOptions) -> tuple[FigureOptions, list[Any]]:
+    """The first bar's label and the other layers' bars (scale, label) of a figure of `run`.
+
+    A bar for tracts that no view shows (cortex views, the cortex opaque) would name what is not there.
+    """
+    tracts_shown = "tract" in drawn_kinds(painter.scene.geometry, run.views)
+    more = [(layer.scale, layer.label) for layer in colorbar_layers(run.layers)[1:]
+            if layer.kind != "tracts" or tracts_shown]
+    return replace(figure_opts, label=first_bar_label(
+        run.layers, figure_opts.label, run.options.layers.label(run.layers[0].kind))), more
+
+
 def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path | None = None,
                 rows: Iterable[str | int] | str | None = None, progress: bool = True,
                 on_progress: Callable[[int, int], None] | None = None,
@@ -201,12 +217,7 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
                 bar.update(1)
                 if on_progress is not None:
                     on_progress(len(images), len(plan))
-        # a bar for tracts that no view shows (cortex views, the cortex opaque) would name what is not there
-        tracts_shown = "tract" in drawn_kinds(painter.scene.geometry, run.views)
-        more = [(layer.scale, layer.label) for layer in colorbar_layers(run.layers)[1:]
-                if layer.kind != "tracts" or tracts_shown]
-        figure_opts = replace(figure_opts, label=first_bar_label(
-            run.layers, figure_opts.label, run.options.layers.label(run.layers[0].kind)))
+        figure_opts, more = _bars(run, painter, figure_opts)
         layout = compose_figure(images, [table.images[i] for i in chosen], [v.name for v in run.views],
                                 run.scale, figure_opts, nan=nan, missing=missing, background=background,
                                 more_bars=more)
