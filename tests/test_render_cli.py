@@ -171,3 +171,21 @@ def test_a_bpy_that_draws_nothing_is_one_line_and_writes_nothing(tmp_path):
     assert line.startswith("error: ") and proc.stderr.count("error:") == 1, proc.stderr
     assert "drew nothing" in line and "Blender " in line and "pip install 'bpy" in line
     assert not out.exists() or not any(out.iterdir())
+
+
+@pytest.mark.parametrize(("limits", "noted"), [(["--vmax", "1"], True), ([], False),
+                                               (["--vmax", "3"], False)])
+def test_values_beyond_a_given_scale_are_a_note(tmp_path, monkeypatch, capsys, tiny, limits, noted):
+    """Values past --vmin/--vmax are drawn in the end colours: render says so (only check did)."""
+    from brainpainter.cli.main import main
+    from brainpainter.testing import stand_in
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "t.csv").write_text("Left-insula,Left-precuneus\n0,2.5\n")
+    with stand_in() as renderer, pytest.raises(SystemExit) as exit_:
+        main(["render", "t.csv", "--template", str(tiny), "--renderer", renderer, "--views", "lateral-left",
+              "--size", "40x30", "--vmin", "0", *limits, "--out", "o", "-q"])
+    assert exit_.value.code in (0, None)
+    out = capsys.readouterr().out
+    assert ("note: values 0..2.5 reach beyond the colour scale 0..1" in out) == noted, out
+    assert ("reach beyond" in out) == noted

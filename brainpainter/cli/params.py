@@ -36,6 +36,22 @@ def echo_scale(scale: Any, layers: Any = ()) -> None:
         click.echo(f"scale: {scale.describe()}")
 
 
+def beyond_scale_note(value_range: Any, scale: Any) -> str | None:
+    """A note where the values reach beyond the colour scale: they are drawn in its end colours.
+
+    `value_range` is ``[min, max]`` of the values (``manifest["input"]["value_range"]``) or None.
+    """
+    if not value_range or scale is None or getattr(scale, "vmin", None) is None:
+        return None
+    low, high = (float(v) for v in value_range)
+    span = max(abs(scale.vmax - scale.vmin), 1e-12)
+    if low >= scale.vmin - 1e-9 * span and high <= scale.vmax + 1e-9 * span:
+        return None
+    return (f"values {low:g}..{high:g} reach beyond the colour scale {scale.vmin:g}..{scale.vmax:g}: those "
+            "beyond it are drawn in its end colours (set --vmin/--vmax to the values' range to tell them "
+            "apart)")
+
+
 class FiniteFloat(click.ParamType):  # type: ignore[type-arg]
     """A float option that refuses NaN and infinities (``--vmin nan``) before anything runs."""
 

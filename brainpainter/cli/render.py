@@ -16,7 +16,7 @@ from brainpainter.cli.options import (
     render_options,
     tables_or_maps,
 )
-from brainpainter.cli.params import CONTEXT, OutPath, echo_json, echo_scale
+from brainpainter.cli.params import CONTEXT, OutPath, beyond_scale_note, echo_json, echo_scale
 from brainpainter.color.scale import ScaleOptions
 from brainpainter.errors import BrainPainterError
 
@@ -133,6 +133,8 @@ def render(inputs: tuple[Path, ...], out: Path, rows: str | None, quiet: bool, *
             f"({rendered} row(s){of}; {s['n_regions_matched']}/{s['n_regions_in_atlas']} regions matched, "
             f"{len(s['unmatched_columns'])} unmatched column(s))"
         )
+        if (note := beyond_scale_note(s.get("value_range"), result.scale)) is not None:
+            click.echo(f"note: {note}")
     if connectome:
         series = connectome.get("series")  # a matrix per image: the edges any of them keeps
         click.echo(f"connectome: {connectome['n_nodes']} node(s), {connectome['n_edges']} edge(s) drawn"
