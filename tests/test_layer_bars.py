@@ -172,3 +172,13 @@ def test_the_first_bar_is_named_by_label_else_its_layer_s_own_label():
     assert first_bar_label(one, None, "thickness (mm)") == "thickness (mm)"  # --map-label, Scene label=
     assert first_bar_label(one, "z", "thickness (mm)") == "z"  # --label first
     assert first_bar_label(two, None, None) == "lh.thick"  # beside another bar: each names its layer
+
+
+def test_one_hemisphere_s_map_is_drawn_in_its_own_views(tmp_path):
+    """``--lh`` alone: lateral- and medial-left (before: the right views too, plain underlay)."""
+    from brainpainter.rendering.run import prepare_run
+
+    run = prepare_run({"lh": np.arange(10242.0)})
+    assert [v.name for v in run.views] == ["lateral-left", "medial-left"]
+    run = prepare_run({"rh": np.arange(10242.0)}, views="lateral-left")
+    assert [v.name for v in run.views] == ["lateral-left"]

@@ -202,6 +202,9 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
         if len(surfaces) == 1:  # one surface of your own: the views of its hemisphere
             side = "left" if "lh" in surfaces else "right"
             views = f"lateral-{side},medial-{side}"
+        elif len(maps.values) == 1 and not maps.regions:  # one hemisphere's map (--lh alone): its side
+            side = "left" if "lh" in maps.values else "right"
+            views = f"lateral-{side},medial-{side}" + (",subcortical" if options.scene.tracts else "")
     view_list = parse_views(views if isinstance(views, str) else list(views))
     source_vertex = {hemi: np.asarray(m.source_vertex) for hemi, m in meshes.items()}
     edges = ({hemi: mesh_edges(m.faces) for hemi, m in meshes.items()} if options.maps.outline_threshold
