@@ -293,6 +293,28 @@ def box_shader(step: str, factor: int = 1) -> Any:
                   constants=(("VEC4", "box"),), samplers=samplers, inputs=(("VEC2", "pos"),))
 
 
+def draw_box(step: str, box: tuple[float, float, float, float], samplers: dict[str, Any],
+             factor: int = 1) -> None:
+    """Run :func:`box_shader` `step` over `box` (x0, y0, x1, y1, normalised device coordinates) in the
+    bound framebuffer, its samplers bound to `samplers` (name: texture)."""
+    import gpu
+
+    shader = box_shader(step, factor)
+    shader.bind()
+    for name, texture in samplers.items():
+        shader.uniform_sampler(name, texture)
+    shader.uniform_float("box", box)
+    gpu.state.depth_test_set("NONE")
+    gpu.state.face_culling_set("NONE")
+    square = _shaders.get("square")
+    if square is None:  # two triangles over the unit square, kept with the shaders
+        from gpu_extras.batch import batch_for_shader
+
+        corners = [(0, 0), (1, 0), (1, 1), (0, 0), (1, 1), (0, 1)]
+        square = _keep("square", batch_for_shader(shader, "TRIS", {"pos": corners}))
+    square.draw(shader)
+
+
 def line_shader() -> Any:
     """Tract centrelines as anti-aliased, lit lines: their light and their slots (compiled once)."""
     return _build("line", _LINE_VERTEX, _LINE_FRAGMENT,
