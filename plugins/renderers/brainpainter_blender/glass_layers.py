@@ -21,7 +21,6 @@ the serial run's bytes.
 
 from __future__ import annotations
 
-import hashlib
 from collections import OrderedDict
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass
@@ -40,10 +39,10 @@ LAYERS_PER_VIEW = 2
 
 @dataclass
 class _Layer:
-    """A kept layer: its texture and the digest of the glass colours it was drawn in."""
+    """A kept layer: its texture and the glass colours it was drawn in."""
 
     texture: Any
-    colours: bytes
+    colours: NDArray[Any]
 
 
 class GlassLayers:
@@ -70,35 +69,58 @@ class GlassLayers:
         """Whether a view's layers fit in :data:`MAX_LAYER_PIXELS` (else the glass is drawn per image)."""
         return LAYERS_PER_VIEW * self.width * self.height <= MAX_LAYER_PIXELS
 
-    def colours(self, rgb: NDArray[Any], parts: list[PartGeometry]) -> bytes:
-        """A digest of the colours of the glass `parts` in the palette `rgb` (sRGB, shape (n_slots, 3))."""
+    def colours(self, rgb: NDArray[Any], parts: list[PartGeometry]) -> NDArray[Any]:
+        """The colours of the glass `parts` in the palette `rgb` (sRGB, shape (n_slots, 3)), shape (n, 3)."""
         names = tuple(p.name for p in parts)
         slots = self._slots.get(names)
         if slots is None:
             slots = self._slots[names] = np.unique(np.concatenate([p.palette_index for p in parts]))
-        return hashlib.blake2b(np.ascontiguousarray(rgb[slots]).tobytes(), digest_size=16).digest()
+        if len(slots) and slots[-1] - slots[0] + 1 == len(slots):  # a map's: a view, not a copy
+            return np.asarray(rgb[slots[0]:slots[-1] + 1])
+        return np.asarray(rgb[slots])
 
-    def over(self, key: Hashable, colours: bytes, draw: Callable[[], None], mark: Callable[[str], None],
-             fresh: bool = False) -> None:
-        """Put the layer of `key` over the bound framebuffer, drawn first with `draw` when not kept in
-        `colours` (:meth:`colours`) or when `fresh`.
+    def passes(self, view: Hashable, colours: NDArray[Any], draw: Callable[[tuple[str, ...]], None],
+               mark: Callable[[str], None], fresh: bool = False) -> Callable[[tuple[str, ...]], Any]:
+        """What draws the glass sides `culled` (``draw(culled)``) of `view` in an image through their
+        layer (:meth:`layer`): the far side's, under tract lines, put over the bound framebuffer
+        (returns None); a layer with the near side, the last drawn, returned for the resolve to put
+        over the image."""
+
+        def layered(culled: tuple[str, ...]) -> Any:
+            texture = self.layer((view, culled), colours, lambda: draw(culled), fresh)
+            if "BACK" in culled:
+                return texture
+            self.over(texture, mark)
+            return None
+
+        return layered
+
+    def layer(self, key: Hashable, colours: NDArray[Any], draw: Callable[[], None],
+              fresh: bool = False) -> Any:
+        """The texture of the layer of `key`, drawn first with `draw` when not kept in `colours`
+        (:meth:`colours`) or when `fresh`.
 
         `draw` draws the glass passes into the bound framebuffer (its depth the opaque parts').
         """
+        layer = self._layers.get(key)
+        if layer is None or fresh or not np.array_equal(layer.colours, colours):
+            layer = self._draw(key, np.array(colours), draw)
+        self._layers.move_to_end(key)
+        return layer.texture
+
+    @staticmethod
+    def over(texture: Any, mark: Callable[[str], None]) -> None:
+        """Put a layer over the bound framebuffer (blended, premultiplied)."""
         import gpu
 
         from brainpainter_blender import gpu_shaders
 
-        layer = self._layers.get(key)
-        if layer is None or layer.colours != colours or fresh:
-            layer = self._draw(key, colours, draw)
-        self._layers.move_to_end(key)
         gpu.state.blend_set("ALPHA_PREMULT")
-        gpu_shaders.draw_box("over", (-1.0, -1.0, 1.0, 1.0), {"layer": layer.texture})
+        gpu_shaders.draw_box("over", (-1.0, -1.0, 1.0, 1.0), {"layer": texture})
         gpu.state.blend_set("NONE")
         mark("glass layer")
 
-    def _draw(self, key: Hashable, colours: bytes, draw: Callable[[], None]) -> _Layer:
+    def _draw(self, key: Hashable, colours: NDArray[Any], draw: Callable[[], None]) -> _Layer:
         """Draw the layer of `key` (into the texture of the one it replaces, or of the oldest dropped)."""
         import gpu
 

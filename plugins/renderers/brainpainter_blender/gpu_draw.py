@@ -309,23 +309,27 @@ class GpuDraw:
         tracts = [p for p in aim.visible if p.kind == "tract" and p.centrelines is not None]
         glass = self._glass_pass(rgb, aim, view, tex, mark)
         with self._hi.bind():
-            self._draw_parts(aim, tex, mark, tracts, glass)
+            top = self._draw_parts(aim, tex, mark, tracts, glass)
         if tracts:
             self._lines.draw_over(tracts, view, aim, tex, self.lighting, self._hi,
                                   lambda: self._draw_opaque(aim, tex, tracts), mark,
                                   self._hi_depth if self.factor == 1 else None)
             with self._hi.bind():
-                glass(("BACK",))
+                top = glass(("BACK",))
         edges = None if self._edges is None else self._edges.texture(aim.visible, view, aim)
         if edges is not None:
             mark("edges")
         with self._lo.bind():
             # the resolve writes every pixel: no clear
-            resolve, s = self._resolve, self.settings
+            s, resolve = self.settings, self._resolve
+            if top is not None:
+                resolve = gpu_shaders.resolve_shader(self.factor, edges is not None, glass=True)
             resolve.bind()
             resolve.uniform_sampler("image", self._hi_color)  # samplers first: see _bind_part_shader
             if edges is not None:
                 resolve.uniform_sampler("edges", edges)
+            if top is not None:  # the glass's last layer, put over the image here
+                resolve.uniform_sampler("glass", top)
             resolve.uniform_int("out_height", s.height)
             self._quad.draw(resolve)
             mark("resolve")
@@ -336,12 +340,9 @@ class GpuDraw:
         return np.frombuffer(buf, dtype=np.uint8).reshape(s.height, s.width, 4)
 
     def _draw_parts(self, aim: _Aim, tex: Any, mark: Callable[[str], None],
-                    tracts: list[PartGeometry], glass: Callable[[tuple[str, ...]], None]) -> None:
-        """Clear the supersampled buffer, draw the opaque parts, then the glass (by `glass`:
-        :meth:`_glass_pass`).
-
-        With `tracts` (drawn afterwards as lines), only the far side of the glass.
-        """
+                    tracts: list[PartGeometry], glass: Callable[[tuple[str, ...]], Any]) -> Any:
+        """Clear the supersampled buffer, draw the opaque parts, then the glass (`glass`: :meth:`_glass_pass`;
+        its result returned); with `tracts` (drawn afterwards as lines), only the far side of the glass."""
         import gpu
 
         s = self.settings
@@ -353,12 +354,12 @@ class GpuDraw:
         if self._draw_outlines(aim, [p for p in aim.visible if p.kind != "glass"], shader, tex):
             mark("outlines")
         # the far side first, then the near side over it (after the tracts, when there are)
-        glass(("FRONT",) if tracts else ("FRONT", "BACK"))
+        return glass(("FRONT",) if tracts else ("FRONT", "BACK"))
 
     def _glass_pass(self, rgb: np.ndarray, aim: _Aim, view: View, tex: Any,
-                    mark: Callable[[str], None]) -> Callable[[tuple[str, ...]], None]:
-        """What draws the glass sides `culled` (:meth:`_draw_glass`) into the bound supersampled buffer
-        in this image: the view's glass layer put over it (:mod:`brainpainter_blender.glass_layers`)."""
+                    mark: Callable[[str], None]) -> Callable[[tuple[str, ...]], Any]:
+        """What draws the glass sides `culled` (:meth:`_draw_glass`) in this image: through the view's
+        layers (:meth:`.glass_layers.GlassLayers.passes`), or without, into the bound buffer (None)."""
         glass, s, layers = [p for p in aim.visible if p.kind == "glass"], self.settings, self._glass
         outlined = s.outline_width > 0 and any(p.outline is not None for p in glass)
 
@@ -371,7 +372,7 @@ class GpuDraw:
         colours = layers.colours(rgb, glass)
         # the depth of the borders' pass on the glass is read by the view's edge buffer when it is drawn
         fresh = outlined and self._edges is not None and not self._edges.kept(view)
-        return lambda culled: layers.over((view, culled), colours, lambda: draw(culled), mark, fresh)
+        return layers.passes(view, colours, draw, mark, fresh)
 
     def _draw_opaque(self, aim: _Aim, tex: Any, tracts: list[PartGeometry],
                      mark: Callable[[str], None] | None = None) -> Any:
