@@ -695,3 +695,71 @@ def test_cycles_draws_a_glass_cortex_in_its_colours(template):
     # see-through: paler than the opaque cortex, nearer the background
     solid_red = solid[..., 0] - solid[..., 1:3].max(-1) > 60
     assert np.abs(seen[red][:, :3] - bg).sum(-1).mean() < np.abs(solid[solid_red][:, :3] - bg).sum(-1).mean()
+
+
+@pytest.mark.render
+def test_the_glass_is_drawn_once_per_view_and_glass_colours(template, monkeypatch):
+    """Issue 36: a view's glass is drawn into a layer that later images of the view put over their
+    opaque parts while the glass's colours stay (glass_layers); its pixels are an uncached draw's
+    within a level, and every image of a view is the same whatever was drawn before it."""
+    from brainpainter_blender import glass_layers
+    from brainpainter_blender.gpu_draw import GpuDraw
+
+    drawn: list[str] = []
+    draw_glass = GpuDraw._draw_glass
+
+    def counted(self, aim, tex, culled, mark):
+        drawn.append("".join(culled))
+        return draw_glass(self, aim, tex, culled, mark)
+
+    monkeypatch.setattr(GpuDraw, "_draw_glass", counted)
+    # room for two views' layers: a third view's drops the oldest
+    monkeypatch.setattr(glass_layers, "MAX_LAYER_PIXELS", 2 * glass_layers.LAYERS_PER_VIEW * 320 * 240)
+    lateral, dorsal, medial = get_view("lateral-left"), get_view("dorsal"), get_view("medial-left")
+    sub = get_view("subcortical-dorsal")  # the glass hull over the structures
+    colours = _quadrant_colors()
+    glass = _renderer(template, cortex="glass", glass_opacity=0.3, outline_width=1.5)
+    direct = _renderer(template, cortex="glass", glass_opacity=0.3, outline_width=1.5)
+    direct._gpu._glass = None  # every image draws its glass
+    try:
+        first = glass.render(colours, lateral)
+        assert len(drawn) == 1
+        again = glass.render(colours, lateral)
+        assert len(drawn) == 1, "the second image of the view drew its glass again"
+        assert np.array_equal(first, again)
+        ref = direct.render(colours, lateral)
+        d = np.abs(again.astype(int) - ref.astype(int))
+        assert d.max() <= 2 and (d.max(axis=-1) > 0).mean() < 0.01, (d.max(), (d.max(axis=-1) > 0).mean())
+        assert (np.abs(again[..., :3].astype(int) - 255).max(axis=-1) > 30).mean() > 0.2  # the glass is seen
+
+        recoloured = {**colours, "Left-antsup": CYAN}  # a glass colour: drawn again, in it
+        n = len(drawn)
+        cyan = glass.render(recoloured, lateral)
+        assert len(drawn) == n + 1 and not np.array_equal(cyan, again)
+        assert np.abs(cyan.astype(int) - direct.render(recoloured, lateral).astype(int)).max() <= 2
+
+        # the structures' colours change, the glass hull's do not: it is drawn once
+        n = len(drawn)
+        caudate_blue = {**colours, "Left-Caudate": BLUE, "Right-Caudate": BLUE}
+        red = glass.render(colours, sub)
+        blue = glass.render(caudate_blue, sub)
+        assert len(drawn) == n + 1
+        def reddish(img):
+            rgb = img[..., :3].astype(int)
+            return (rgb[..., 0] - rgb[..., 1:].max(axis=-1) > 60).sum()
+
+        assert reddish(red) > 50 and reddish(blue) < reddish(red) / 2, (reddish(red), reddish(blue))
+        assert np.abs(blue.astype(int) - direct.render(caudate_blue, sub).astype(int)).max() <= 2
+
+        # another view draws its own; two views' layers are kept, the oldest dropped for a third
+        n = len(drawn)
+        glass.render(colours, dorsal)
+        glass.render(colours, medial)
+        assert len(drawn) == n + 2
+        glass.render(colours, medial)
+        assert len(drawn) == n + 2
+        assert np.array_equal(glass.render(colours, lateral), first)  # dropped: drawn again, the same
+        assert len(drawn) == n + 3
+    finally:
+        glass.close()
+        direct.close()

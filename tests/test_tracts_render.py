@@ -515,3 +515,35 @@ def test_a_figure_of_regions_and_tracts_draws_two_labelled_colour_bars(tmp_path,
         bar = np.asarray(ax.get_images()[0].get_array())[..., :3].reshape(-1, 3)
         ends = np.asarray([colormaps[cmap](0.0)[:3], colormaps[cmap](1.0)[:3]])
         assert np.abs(bar[[0, -1]] - ends).max() < 0.02, cmap
+
+
+def test_tracts_recoloured_through_the_glass_draw_the_glass_once(tiny, bundles, monkeypatch):
+    """Issue 36: with tract lines between the glass's far and near sides, each side is a layer of
+    the view (glass_layers), drawn on its first image; recoloured tracts draw neither again, and the
+    pixels are a direct draw's within a level."""
+    from brainpainter_blender.gpu_draw import GpuDraw
+
+    drawn: list[str] = []
+    draw_glass = GpuDraw._draw_glass
+
+    def counted(self, aim, tex, culled, mark):
+        drawn.append("".join(culled))
+        return draw_glass(self, aim, tex, culled, mark)
+
+    monkeypatch.setattr(GpuDraw, "_draw_glass", counted)
+    nodes = (("AF_left", 1), ("CST_right", 1))
+    view = get_view("lateral-left")
+    red, blue = ({"tract:AF_left": c, "tract:CST_right": c} for c in (RED, BLUE))
+    kw = {"glass_opacity": 0.25, "quality": "default", "shading": "default"}
+    with _painter(tiny, bundles, nodes, **kw) as p, _painter(tiny, bundles, nodes, **kw) as direct:
+        first = p.paint_colors(red, view)
+        assert drawn == ["FRONT", "BACK"]
+        recoloured = p.paint_colors(blue, view)
+        assert drawn == ["FRONT", "BACK"], "recoloured tracts drew the glass again"
+        assert np.array_equal(p.paint_colors(red, view), first)
+        direct.load()._gpu._glass = None
+        for colours, img in ((red, first), (blue, recoloured)):
+            d = np.abs(img.astype(int) - direct.paint_colors(colours, view).astype(int))
+            assert d.max() <= 2 and (d.max(axis=-1) > 0).mean() < 0.01, (d.max(), (d.max(axis=-1) > 0).mean())
+    rgb = recoloured[..., :3].astype(int)
+    assert ((rgb[..., 2] > rgb[..., 0] + 60) & (rgb[..., 2] > rgb[..., 1] + 60)).sum() > 300  # blue, drawn

@@ -124,6 +124,10 @@ class EdgeAA:
         self._buffers.move_to_end(view)
         return texture
 
+    def kept(self, view: Any) -> bool:
+        """Whether the edge buffer of `view` is kept (else the view's next image draws it)."""
+        return view in self._buffers
+
     def _draw(self, parts: list[PartGeometry], aim: Any, texture: Any = None) -> Any:
         """Draw the edges of `parts` seen in `aim` into `texture` (a new one if None), cleared first."""
         import gpu

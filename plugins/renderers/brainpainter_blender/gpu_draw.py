@@ -13,7 +13,8 @@ the vertex shader: a map's per-vertex colours are interpolated across each
 triangle; a region's three vertices share one slot), draws the visible parts
 into a buffer of 16-bit linear light (opaque parts with depth, then the glass:
 back faces, then front faces, blended, no depth writes; per view only the triangles
-that side shows), at output resolution
+that side shows; drawn once per view and glass colours into a layer put over each image:
+:mod:`brainpainter_blender.glass_layers`), at output resolution
 for the default quality, and resolves it in a second pass: averaging each SxS
 block of a supersampled buffer (S a compile-time constant, :data:`SUPERSAMPLING`),
 or, at the default quality, mixing each pixel that a region border or
@@ -54,7 +55,7 @@ from brainpainter.rendering.framing import view_projection
 from brainpainter.rendering.geometry import PartGeometry, SceneGeometry
 from brainpainter.rendering.scene import RenderSettings
 from brainpainter.rendering.views import View
-from brainpainter_blender import edge_aa, gpu_shaders, meshorder, outlines, tract_lines
+from brainpainter_blender import edge_aa, glass_layers, gpu_shaders, meshorder, outlines, tract_lines
 from brainpainter_blender.facing import facing, triangle_normals
 from brainpainter_blender.gpu_context import in_gpu_context
 from brainpainter_blender.gpu_lighting import FLAT, LIGHTING, Lighting, for_maps
@@ -144,6 +145,7 @@ class GpuDraw:
         self._resolve: Any = None
         self._quad: Any = None
         self._edges: edge_aa.EdgeAA | None = None
+        self._glass: glass_layers.GlassLayers | None = None
         in_gpu_context(self._upload)
 
     def _factor(self) -> int:
@@ -170,6 +172,7 @@ class GpuDraw:
         self._hi_color = gpu.types.GPUTexture(size, format=HI_FORMAT)
         self._hi_depth = gpu.types.GPUTexture(size, format="DEPTH_COMPONENT32F")  # read by tract_lines
         self._hi = gpu.types.GPUFrameBuffer(depth_slot=self._hi_depth, color_slots=self._hi_color)
+        self._glass = glass_layers.GlassLayers(*size, self._hi_depth)
         if edges:
             self._edges = edge_aa.EdgeAA(s.width, s.height, self._hi_depth)
         # The resolve writes linear light; the sRGB target encodes it (cheaper than pow() per pixel).
@@ -271,9 +274,9 @@ class GpuDraw:
         Returns
         -------
         dict of str to float
-            ``palette``, ``clear``, ``draw <part>`` per opaque part, ``glass``,
-            ``resolve`` and ``read-back``; waiting for each step to finish
-            (a 1-pixel read) removes the overlap of an ordinary image.
+            ``palette``, ``clear``, ``draw <part>`` per opaque part, ``glass`` (its sides, drawn
+            into the view's layer), ``glass layer`` (put over), ``resolve`` and ``read-back``;
+            waiting for each step to finish (a 1-pixel read) removes the overlap of an ordinary image.
         """
         import gpu
 
@@ -304,25 +307,29 @@ class GpuDraw:
         mark("palette")
         # tract parts are drawn as lines at output resolution (tract_lines), between the glass's sides
         tracts = [p for p in aim.visible if p.kind == "tract" and p.centrelines is not None]
+        glass = self._glass_pass(rgb, aim, view, tex, mark)
         with self._hi.bind():
-            self._draw_parts(aim, tex, mark, tracts)
+            top = self._draw_parts(aim, tex, mark, tracts, glass)
         if tracts:
             self._lines.draw_over(tracts, view, aim, tex, self.lighting, self._hi,
                                   lambda: self._draw_opaque(aim, tex, tracts), mark,
                                   self._hi_depth if self.factor == 1 else None)
             with self._hi.bind():
-                self._bind_part_shader(aim, tex)
-                self._draw_glass(aim, tex, ("BACK",), mark)
+                top = glass(("BACK",))
         edges = None if self._edges is None else self._edges.texture(aim.visible, view, aim)
         if edges is not None:
             mark("edges")
         with self._lo.bind():
             # the resolve writes every pixel: no clear
-            resolve, s = self._resolve, self.settings
+            s, resolve = self.settings, self._resolve
+            if top is not None:
+                resolve = gpu_shaders.resolve_shader(self.factor, edges is not None, glass=True)
             resolve.bind()
             resolve.uniform_sampler("image", self._hi_color)  # samplers first: see _bind_part_shader
             if edges is not None:
                 resolve.uniform_sampler("edges", edges)
+            if top is not None:  # the glass's last layer, put over the image here
+                resolve.uniform_sampler("glass", top)
             resolve.uniform_int("out_height", s.height)
             self._quad.draw(resolve)
             mark("resolve")
@@ -333,11 +340,9 @@ class GpuDraw:
         return np.frombuffer(buf, dtype=np.uint8).reshape(s.height, s.width, 4)
 
     def _draw_parts(self, aim: _Aim, tex: Any, mark: Callable[[str], None],
-                    tracts: list[PartGeometry]) -> None:
-        """Clear the supersampled buffer, draw the opaque parts, then the glass.
-
-        With `tracts` (drawn afterwards as lines), only the far side of the glass.
-        """
+                    tracts: list[PartGeometry], glass: Callable[[tuple[str, ...]], Any]) -> Any:
+        """Clear the supersampled buffer, draw the opaque parts, then the glass (`glass`: :meth:`_glass_pass`;
+        its result returned); with `tracts` (drawn afterwards as lines), only the far side of the glass."""
         import gpu
 
         s = self.settings
@@ -349,7 +354,25 @@ class GpuDraw:
         if self._draw_outlines(aim, [p for p in aim.visible if p.kind != "glass"], shader, tex):
             mark("outlines")
         # the far side first, then the near side over it (after the tracts, when there are)
-        self._draw_glass(aim, tex, ("FRONT",) if tracts else ("FRONT", "BACK"), mark)
+        return glass(("FRONT",) if tracts else ("FRONT", "BACK"))
+
+    def _glass_pass(self, rgb: np.ndarray, aim: _Aim, view: View, tex: Any,
+                    mark: Callable[[str], None]) -> Callable[[tuple[str, ...]], Any]:
+        """What draws the glass sides `culled` (:meth:`_draw_glass`) in this image: through the view's
+        layers (:meth:`.glass_layers.GlassLayers.passes`), or without, into the bound buffer (None)."""
+        glass, s, layers = [p for p in aim.visible if p.kind == "glass"], self.settings, self._glass
+        outlined = s.outline_width > 0 and any(p.outline is not None for p in glass)
+
+        def draw(culled: tuple[str, ...]) -> None:
+            self._bind_part_shader(aim, tex)
+            self._draw_glass(aim, tex, culled, mark)
+
+        if layers is None or not layers.enabled or not glass or not (s.glass_opacity > 0 or outlined):
+            return draw
+        colours = layers.colours(rgb, glass)
+        # the depth of the borders' pass on the glass is read by the view's edge buffer when it is drawn
+        fresh = outlined and self._edges is not None and not self._edges.kept(view)
+        return layers.passes(view, colours, draw, mark, fresh)
 
     def _draw_opaque(self, aim: _Aim, tex: Any, tracts: list[PartGeometry],
                      mark: Callable[[str], None] | None = None) -> Any:
@@ -461,6 +484,8 @@ class GpuDraw:
             self._hi = self._hi_color = self._hi_depth = None
             self._lo = self._lo_tex = self._quad = self._palette_tex = None
             self._lines.close()
+            if self._glass is not None:
+                self._glass.close()
             if self._edges is not None:
                 self._edges.close()
                 self._edges = None

@@ -79,6 +79,20 @@ void main()
 """
 
 _RESOLVE_FRAGMENT = """
+#if GLASS
+/* the image under the glass's last layer (glass_layers), blended as the glass passes blend */
+vec4 fetch(ivec2 q)
+{
+  vec4 g = texelFetch(glass, q, 0);
+  return g + (1.0 - g.a) * texelFetch(image, q, 0);
+}
+#else
+vec4 fetch(ivec2 q)
+{
+  return texelFetch(image, q, 0);
+}
+#endif
+
 void main()
 {
   /* FACTOR (the supersampling factor) is a compile-time constant, so the loops unroll */
@@ -88,7 +102,7 @@ void main()
   vec4 sum = vec4(0.0);
   for (int j = 0; j < FACTOR; j++) {
     for (int i = 0; i < FACTOR; i++) {
-      sum += texelFetch(image, src + ivec2(i, j), 0);
+      sum += fetch(src + ivec2(i, j));
     }
   }
   sum *= 1.0 / float(FACTOR * FACTOR);
@@ -98,7 +112,7 @@ void main()
   vec4 e = texelFetch(edges, src, 0);
   if (e.a > 0.0) {
     ivec2 across = clamp(src + ivec2(round(e.xy * 2.0 - 1.0)), ivec2(0), textureSize(image, 0) - 1);
-    sum = mix(sum, texelFetch(image, across, 0), e.z);
+    sum = mix(sum, fetch(across), e.z);
   }
 #endif
   /* linear light out: the sRGB target encodes it */
@@ -267,12 +281,14 @@ def depth_shader() -> Any:
                   inputs=(("VEC3", "pos"),))
 
 
-def resolve_shader(factor: int, edges: bool = False) -> Any:
-    """The resolve shader for one supersampling factor (compiled once per process and factor);
-    `edges`: factor 1, mixing the edges' pixels as the edge buffer says (:mod:`.edge_aa`)."""
-    return _build(("resolve", factor, edges), _RESOLVE_VERTEX, _RESOLVE_FRAGMENT,
-                  defines={"FACTOR": factor, "EDGES": int(edges)}, constants=(("INT", "out_height"),),
-                  samplers=("image", "edges") if edges else ("image",), inputs=(("VEC2", "pos"),))
+def resolve_shader(factor: int, edges: bool = False, glass: bool = False) -> Any:
+    """The resolve shader for one supersampling factor (compiled once per process and variant);
+    `edges`: factor 1, mixing the edges' pixels as the edge buffer says (:mod:`.edge_aa`); `glass`:
+    a glass layer put over the image first (:mod:`.glass_layers`)."""
+    samplers = ("image", "edges")[:1 + edges] + ("glass",) * glass
+    return _build(("resolve", factor, edges, glass), _RESOLVE_VERTEX, _RESOLVE_FRAGMENT,
+                  defines={"FACTOR": factor, "EDGES": int(edges), "GLASS": int(glass)},
+                  constants=(("INT", "out_height"),), samplers=samplers, inputs=(("VEC2", "pos"),))
 
 
 def edge_shader() -> Any:
@@ -291,6 +307,28 @@ def box_shader(step: str, factor: int = 1) -> Any:
     return _build(("box", step, factor), _BOX_VERTEX, source,
                   defines={"FACTOR": factor, "PALETTE_WIDTH": PALETTE_WIDTH},
                   constants=(("VEC4", "box"),), samplers=samplers, inputs=(("VEC2", "pos"),))
+
+
+def draw_box(step: str, box: tuple[float, float, float, float], samplers: dict[str, Any],
+             factor: int = 1) -> None:
+    """Run :func:`box_shader` `step` over `box` (x0, y0, x1, y1, normalised device coordinates) in the
+    bound framebuffer, its samplers bound to `samplers` (name: texture)."""
+    import gpu
+
+    shader = box_shader(step, factor)
+    shader.bind()
+    for name, texture in samplers.items():
+        shader.uniform_sampler(name, texture)
+    shader.uniform_float("box", box)
+    gpu.state.depth_test_set("NONE")
+    gpu.state.face_culling_set("NONE")
+    square = _shaders.get("square")
+    if square is None:  # two triangles over the unit square, kept with the shaders
+        from gpu_extras.batch import batch_for_shader
+
+        corners = [(0, 0), (1, 0), (1, 1), (0, 0), (1, 1), (0, 1)]
+        square = _keep("square", batch_for_shader(shader, "TRIS", {"pos": corners}))
+    square.draw(shader)
 
 
 def line_shader() -> Any:

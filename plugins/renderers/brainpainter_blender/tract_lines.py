@@ -79,7 +79,6 @@ class TractLines:
         self._depth: Any = None
         self._layers: OrderedDict[Any, _Layer] = OrderedDict()
         self._buffers: dict[str, Any] = {}
-        self._square: Any = None
         self._framebuffers: dict[str, Any] = {}
         self._textures: dict[str, Any] = {}
 
@@ -178,6 +177,8 @@ class TractLines:
         """
         import gpu
 
+        from brainpainter_blender import gpu_shaders
+
         layer = self._layers.get(view)
         if layer is None:
             spare = None
@@ -187,12 +188,12 @@ class TractLines:
                                                           depth)
         self._layers.move_to_end(view)
         with self._scratch("coloured").bind():
-            self._box_pass("colour", layer.box, {"shade": layer.shade, "slots": layer.slots,
+            gpu_shaders.draw_box("colour", layer.box, {"shade": layer.shade, "slots": layer.slots,
                                                  "palette": palette})
         with supersampled.bind():
             factor = supersampled.viewport_get()[2] // self.width
             gpu.state.blend_set("ALPHA_PREMULT")
-            self._box_pass("over", layer.box, {"layer": self._textures["coloured"]}, factor)
+            gpu_shaders.draw_box("over", layer.box, {"layer": self._textures["coloured"]}, factor)
             gpu.state.blend_set("NONE")
             mark("tract layer")
 
@@ -206,27 +207,6 @@ class TractLines:
             tex = self._textures[name] = gpu.types.GPUTexture((self.width, self.height), format=fmt)
             fb = self._framebuffers[name] = gpu.types.GPUFrameBuffer(color_slots=tex)
         return fb
-
-    def _box_pass(self, step: str, box: tuple[float, float, float, float], samplers: dict[str, Any],
-                  factor: int = 1) -> None:
-        """Run :func:`~brainpainter_blender.gpu_shaders.box_shader` `step` over `box` (NDC)."""
-        import gpu
-
-        from brainpainter_blender import gpu_shaders
-
-        shader = gpu_shaders.box_shader(step, factor)
-        shader.bind()
-        for name, texture in samplers.items():
-            shader.uniform_sampler(name, texture)
-        shader.uniform_float("box", box)
-        gpu.state.depth_test_set("NONE")
-        gpu.state.face_culling_set("NONE")
-        if self._square is None:  # two triangles over the unit square
-            from gpu_extras.batch import batch_for_shader
-
-            corners = [(0, 0), (1, 0), (1, 1), (0, 0), (1, 1), (0, 1)]
-            self._square = batch_for_shader(shader, "TRIS", {"pos": corners})
-        self._square.draw(shader)
 
     def _draw_layer(self, parts: list[PartGeometry], aim: Any, lighting: Any,
                     draw_opaque: Callable[[], None], mark: Callable[[str], None],
@@ -284,13 +264,13 @@ class TractLines:
         box = self._box(parts, aim)
         fill = gpu.types.GPUFrameBuffer(color_slots=slots)
         with fill.bind():
-            self._box_pass("fill", box, {"slots": self._textures["slots"]})
+            gpu_shaders.draw_box("fill", box, {"slots": self._textures["slots"]})
             mark("tract fill")
         return _Layer(shade, slots, box)
 
     def close(self) -> None:
         """Drop the buffers and batches (call in a GPU context)."""
-        self._depth = self._square = None
+        self._depth = None
         for cache in (self._layers, self._buffers, self._framebuffers, self._textures):
             cache.clear()
 
