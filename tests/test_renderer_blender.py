@@ -697,6 +697,20 @@ def test_cycles_draws_a_glass_cortex_in_its_colours(template):
     assert np.abs(seen[red][:, :3] - bg).sum(-1).mean() < np.abs(solid[solid_red][:, :3] - bg).sum(-1).mean()
 
 
+def test_only_a_glass_of_many_triangles_is_kept_in_layers():
+    """The subcortical views' hull (~6,000 triangles) is drawn per image: a layer would cost a region
+    render 8.6 MB at 1200x900 (its peak memory bar is 500 MB) and save nothing; a glass cortex is kept."""
+    from types import SimpleNamespace
+
+    from brainpainter_blender.glass_layers import GlassLayers
+
+    def parts(*sizes):
+        return [SimpleNamespace(triangles=np.zeros((n, 3), np.uint32)) for n in sizes]
+
+    assert not GlassLayers.worth(parts(3_000, 3_000))
+    assert GlassLayers.worth(parts(120_000, 120_000))
+
+
 @pytest.mark.render
 def test_the_glass_is_drawn_once_per_view_and_glass_colours(template, monkeypatch):
     """Issue 36: a view's glass is drawn into a layer that later images of the view put over their
@@ -713,6 +727,7 @@ def test_the_glass_is_drawn_once_per_view_and_glass_colours(template, monkeypatc
         return draw_glass(self, aim, tex, culled, mark)
 
     monkeypatch.setattr(GpuDraw, "_draw_glass", counted)
+    monkeypatch.setattr(glass_layers, "MIN_TRIANGLES", 0)  # the tiny template's glass is kept too
     # room for two views' layers: a third view's drops the oldest
     monkeypatch.setattr(glass_layers, "MAX_LAYER_PIXELS", 2 * glass_layers.LAYERS_PER_VIEW * 320 * 240)
     lateral, dorsal, medial = get_view("lateral-left"), get_view("dorsal"), get_view("medial-left")

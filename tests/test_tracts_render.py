@@ -531,6 +531,9 @@ def test_tracts_recoloured_through_the_glass_draw_the_glass_once(tiny, bundles, 
         return draw_glass(self, aim, tex, culled, mark)
 
     monkeypatch.setattr(GpuDraw, "_draw_glass", counted)
+    from brainpainter_blender import glass_layers
+
+    monkeypatch.setattr(glass_layers, "MIN_TRIANGLES", 0)  # the tiny template's glass cortex is kept too
     nodes = (("AF_left", 1), ("CST_right", 1))
     view = get_view("lateral-left")
     red, blue = ({"tract:AF_left": c, "tract:CST_right": c} for c in (RED, BLUE))

@@ -35,6 +35,9 @@ from brainpainter.rendering.geometry import PartGeometry
 MAX_LAYER_PIXELS = 8 * 1200 * 900
 #: The most layers a view has (the far and near sides, with tract lines between them).
 LAYERS_PER_VIEW = 2
+#: Glass of fewer triangles is drawn per image (the subcortical views' hull, ~6,000: as cheap as
+#: putting a layer over the image, and a region render's memory does not grow by a layer for it).
+MIN_TRIANGLES = 50_000
 
 
 @dataclass
@@ -68,6 +71,11 @@ class GlassLayers:
     def enabled(self) -> bool:
         """Whether a view's layers fit in :data:`MAX_LAYER_PIXELS` (else the glass is drawn per image)."""
         return LAYERS_PER_VIEW * self.width * self.height <= MAX_LAYER_PIXELS
+
+    @staticmethod
+    def worth(parts: list[PartGeometry]) -> bool:
+        """Whether the glass `parts` have enough triangles to be kept in layers (:data:`MIN_TRIANGLES`)."""
+        return sum(len(p.triangles) for p in parts) >= MIN_TRIANGLES
 
     def colours(self, rgb: NDArray[Any], parts: list[PartGeometry]) -> NDArray[Any]:
         """The colours of the glass `parts` in the palette `rgb` (sRGB, shape (n_slots, 3)), shape (n, 3)."""

@@ -367,7 +367,8 @@ class GpuDraw:
             self._bind_part_shader(aim, tex)
             self._draw_glass(aim, tex, culled, mark)
 
-        if layers is None or not layers.enabled or not glass or not (s.glass_opacity > 0 or outlined):
+        if (layers is None or not layers.enabled or not layers.worth(glass)
+                or not (s.glass_opacity > 0 or outlined)):
             return draw
         colours = layers.colours(rgb, glass)
         # the depth of the borders' pass on the glass is read by the view's edge buffer when it is drawn
