@@ -140,7 +140,6 @@ def figure_bytes(fig: Figure, path: Path, dpi: float, transparent: bool = False)
     return buf.getvalue()
 
 
-@quiet_glyphs
 def _bars(run: Run | MapRun, painter: Painter, figure_opts: FigureOptions) -> tuple[FigureOptions, list[Any]]:
     """The first bar's label and the other layers' bars (scale, label) of a figure of `run`.
 
@@ -153,6 +152,7 @@ def _bars(run: Run | MapRun, painter: Painter, figure_opts: FigureOptions) -> tu
         run.layers, figure_opts.label, run.options.layers.label(run.layers[0].kind))), more
 
 
+@quiet_glyphs
 def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path | None = None,
                 rows: Iterable[str | int] | str | None = None, progress: bool = True,
                 on_progress: Callable[[int, int], None] | None = None,
