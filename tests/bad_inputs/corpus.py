@@ -746,7 +746,7 @@ INPROCESS += [
     Case("cifti-version-1", {"x.dscalar.nii": _cifti("version-1")}, ["x.dscalar.nii", "--out", "o", *RENDER],
          "-cifti-version-convert x.dscalar.nii 2 OUT.dscalar.nii", command="render"),
     Case("cifti-dconn", {"x.dconn.nii": _cifti("dconn")}, ["x.dconn.nii", "--out", "o", *RENDER],
-         "not connectomes yet", command="render"),
+         "is a CIFTI connectome (dconn/pconn), not a map", command="render"),
     Case("cifti-two-grayordinate-axes", {"x.dscalar.nii": _cifti("dconn")},
          ["x.dscalar.nii", "--out", "o", *RENDER], "grayordinates on both axes", command="render"),
     Case("cifti-mesh-of-no-known-count", {"x.dscalar.nii": _cifti("odd-mesh")},
