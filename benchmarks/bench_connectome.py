@@ -9,7 +9,9 @@ Three painters in one process, each warmed on each view, then their images inter
 (``--repeats`` rounds of every view):
 
 * ``regions``: random values on the 400 regions (the cortex opaque);
-* ``connectome``: the connectome alone (400 node spheres, 798 edge cylinders, the glass cortex);
+* ``connectome``: the connectome alone (400 node spheres, 798 edge cylinders, the smooth glass
+  brain: ``--cortex auto``);
+* ``connectome, --cortex glass``: the same inside the pial cortex drawn as glass (kept per view);
 * ``both``: the region values with the connectome inside the cortex drawn as glass;
 * ``glass``: the region values on the cortex drawn as glass, nothing inside (what the glass costs).
 
@@ -57,6 +59,8 @@ def main() -> None:
     t0 = time.perf_counter()
     runs = {"regions": prepare_run(values, atlas, **common),
             "connectome": prepare_run(None, atlas, connectome=matrix, edge_threshold=args.top, **common),
+            "connectome, --cortex glass": prepare_run(None, atlas, connectome=matrix, edge_threshold=args.top,
+                                                      cortex="glass", **common),
             "both": prepare_run(values, atlas, connectome=matrix, edge_threshold=args.top, **common),
             "glass": prepare_run(values, atlas, cortex="glass", **common)}
     print(f"read the matrix and placed its nodes twice: {time.perf_counter() - t0:.1f} s")

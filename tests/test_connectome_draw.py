@@ -115,3 +115,25 @@ def test_connectome_check_passes_and_catches_a_mirrored_renderer():
     assert report["connectome_pixels"]["node:1"] > 3 * report["connectome_pixels"]["node:0"]
     with pytest.raises(AssertionError, match="connectome: dorsal: node:0 is centred"):
         check_renderer(_Mirrored, checks=("connectome",))
+
+
+def test_a_connectome_over_a_cortex_without_values_is_drawn_in_the_smooth_glass_brain(tiny, tmp_path):
+    """``--cortex auto``: a connectome alone draws the template's glass hulls in the cortex views, not
+    the pial cortex as glass (~300,000 triangles drawn twice, its folds crowding the nodes); with
+    cortical region values the glass cortex in their colours stays; without hulls, the cortex."""
+    from brainpainter.rendering.run import prepare_run
+    from brainpainter.rendering.settings import RenderSettings
+
+    matrix = tmp_path / "m.csv"
+    matrix.write_text(",Left-insula,Right-insula\nLeft-insula,0,0.5\nRight-insula,0.5,0\n")
+    run = prepare_run(None, "dk", template=str(tiny), connectome=str(matrix))
+    assert run.settings.cortex == "hull"
+    with_values = prepare_run({"Left-insula": 1.0}, "dk", template=str(tiny), connectome=str(matrix))
+    assert with_values.settings.cortex == "auto"  # glass, in the regions' colours (geometry's auto)
+    g = Scene(load_template(tiny), "dk", connectome=tiny_connectome(),
+              settings=RenderSettings(cortex="hull")).geometry
+    for view, hulls in (("dorsal", {"glass-lh", "glass-rh"}), ("lateral-left", {"glass-lh"})):
+        shown = {p.name: p.kind for p in g.visible(get_view(view))}
+        assert {n for n, k in shown.items() if k == "glass"} == hulls and "cortex-lh" not in shown
+        assert {"nodes", "edges"} <= set(shown)
+    assert not framing.shows(get_view("dorsal"), "cortex", "lh", "hull")

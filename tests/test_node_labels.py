@@ -126,7 +126,8 @@ def test_a_node_files_labels_change_no_picture_by_default_and_travel_to_jobs(
 
     nodes, edges = write_brainnet(tmp_path)
     kw = {"template": str(tiny), "views": "dorsal,lateral-left", "width": 240, "height": 180,
-          "progress": False, "connectome": edges, "nodes": nodes}
+          "progress": False, "connectome": edges, "nodes": nodes,
+          "cortex": "glass"}  # the stand-in draws the cortex's stripes (auto: the hull, no cortex)
     with stand_in() as renderer:
         default = brainpainter.render(None, renderer=renderer, **kw)
         # the same nodes without their labels: the labels column changes nothing drawn

@@ -55,23 +55,23 @@ def shows(view: View, kind: str, hemi: str | None, cortex: str = "opaque") -> bo
         Nodes and edges are drawn as tracts are.
     hemi : {"lh", "rh"} or None
         None for the subcortical part and for commissural tracts.
-    cortex : {"opaque", "glass", "hidden"}
+    cortex : {"opaque", "glass", "hull", "hidden"}
         How cortex views draw the cortex (``RenderSettings.cortex``, resolved:
         :attr:`brainpainter.rendering.geometry.SceneGeometry.cortex`); ``glass``
         draws it (as glass: :meth:`~brainpainter.rendering.geometry.SceneGeometry.visible`),
-        ``hidden`` does not.
+        ``hull`` draws the glass hulls of ``view.hemis`` instead, ``hidden`` neither.
     """
     if view.content == "flat" or kind == "flat":
         return view.content == "flat" and kind == "flat" and hemi in view.hemis
     if kind == "glass":
-        return hemi in view.glass
+        return hemi in view.glass or (cortex == "hull" and view.content == "cortex" and hemi in view.hemis)
     if kind in INSIDE:
         if view.content == "subcortical":
             return True
         return cortex != "opaque" and (hemi is None or hemi in view.hemis)
     if view.content == "subcortical":
         return kind == "subcortical"
-    return kind == "cortex" and hemi in view.hemis and cortex != "hidden"
+    return kind == "cortex" and hemi in view.hemis and cortex not in ("hidden", "hull")
 
 
 @dataclass(frozen=True)

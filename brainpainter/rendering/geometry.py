@@ -219,7 +219,7 @@ class SceneGeometry:
     Attributes
     ----------
     parts : tuple of PartGeometry
-    cortex : {"opaque", "glass", "hidden"}
+    cortex : {"opaque", "glass", "hull", "hidden"}
         How cortex views draw the cortex (``settings.cortex``; ``auto`` resolved:
         glass when the scene has tracts).
     keys : tuple of str
@@ -299,8 +299,10 @@ class SceneGeometry:
             if hemi in template.manifest.get("glass", {}):
                 self._lazy.later_glass(template, hemi)
         check_slots(len(defaults))
-        #: how cortex views draw the cortex: "opaque", "glass" or "hidden" (``settings.cortex`` resolved)
+        #: how cortex views draw the cortex: opaque, glass, hull or hidden (``settings.cortex`` resolved)
         self.cortex: str = cortex_mode(settings.cortex, self._lazy.built_parts())
+        if self.cortex == "hull" and not template.manifest.get("glass"):
+            self.cortex = "glass"  # a template without glass hulls (a mouse's, own surfaces'): its cortex
         #: rotation from the template's coordinates to RAS (its anterior and superior axes)
         self.to_ras: NDArray[Any] = np.asarray(template.to_ras, dtype=float)
         self.keys: tuple[str, ...] = tuple(keys)

@@ -24,7 +24,7 @@ SULC_LIGHTINGS = ("flat-studio", "sulc")
 DEFAULT_OUTLINE_WIDTH, MAX_OUTLINE_WIDTH = 1.5, 20.0
 #: How the cortex views (lateral, medial, dorsal, ...) draw the cortex: ``auto`` is ``glass`` when the
 #: scene has white-matter tracts, else ``opaque``.
-CORTEX_MODES = ("auto", "opaque", "glass", "hidden")
+CORTEX_MODES = ("auto", "opaque", "glass", "hull", "hidden")
 #: Smallest and largest width or height of one image, pixels.
 MIN_PIXELS, MAX_PIXELS = 16, 8192
 
@@ -95,10 +95,11 @@ class RenderSettings:
         every image size (``--outline``); 0: none.
     outline_color : colour
         Their colour, stored as sRGB 0-1 (default black; white reads well on dark maps).
-    cortex : {"auto", "opaque", "glass", "hidden"}
+    cortex : {"auto", "opaque", "glass", "hull", "hidden"}
         How the cortex views draw the cortex: ``opaque``; ``glass``, transparent
         in its colours (``glass_opacity``) with the white-matter tracts of the
-        view's hemispheres inside; ``hidden``, the tracts alone; ``auto``
+        view's hemispheres inside; ``hull``, the smooth glass brain of the subcortical
+        views (the template's glass hulls) instead of the cortex; ``hidden``, the tracts alone; ``auto``
         (default): ``glass`` when the scene has tracts, else ``opaque`` (a run whose
         cortex carries values draws it ``opaque`` with tracts too:
         :func:`brainpainter.rendering.composition.cortex_for`).
@@ -122,9 +123,9 @@ class RenderSettings:
         "help": "Colour of the region borders (--outline), e.g. black or white.", "cli_default": "black"})
     cortex: str = field(default="auto", metadata={"choices": CORTEX_MODES, "help": (
         "How cortex views (lateral, medial, dorsal, ...) draw the cortex: glass shows the --tracts inside "
-        "a transparent cortex in its colours, hidden the tracts alone; auto: glass with --tracts or a "
-        "connectome, opaque where the cortex carries values (a map, cortical region values) or with "
-        "neither.")})
+        "a transparent cortex in its colours, hull the smooth glass brain of the subcortical views instead, "
+        "hidden the tracts alone; auto: glass with --tracts, hull with a connectome, opaque where the "
+        "cortex carries values (a map, cortical region values; glass with a connectome) or with neither.")})
 
     def __post_init__(self) -> None:
         for name, allowed in (("quality", QUALITIES), ("shading", SHADINGS), ("lighting", LIGHTINGS),
