@@ -278,6 +278,9 @@ def test_a_long_table_without_nodes_gives_one_value_per_bundle():
     assert np.isnan(tv.row("b")["tract:CST_right"])
     with pytest.raises(BrainPainterError, match="names a bundle twice for one image"):
         read_tract_values(pd.DataFrame({"bundle": ["AF_L", "AF_left"], "fa": [0.3, 0.7]}))
+    with pytest.raises(BrainPainterError, match="names a bundle twice for one image"):  # image names stripped
+        read_tract_values(pd.DataFrame({"subject": ["a", "a "], "bundle": ["AF_L", "AF_L"],
+                                        "fa": [0.3, 0.7]}))
 
 
 def test_wide_profiles_have_a_node_column():

@@ -206,11 +206,10 @@ def _long_profile(source: str, header: list[str], rows: list[list[Any]], dc: boo
     n = int(node.max()) + 1 if len(node) else 1
     names = [canonical(str(r[bundle_col])) for r in rows]
     bundles = list(dict.fromkeys(names))
-    if node_col is None and len(set(zip(names, [r[image_col] if image_col is not None else "" for r in rows],
-                                        strict=True))) < len(rows):
+    images_all = [str(r[image_col]).strip() for r in rows] if image_col is not None else [""] * len(rows)
+    if node_col is None and len(set(zip(names, images_all, strict=True))) < len(rows):
         raise BrainPainterError(f"the bundle table {source!r} names a bundle twice for one image; give one "
                                 "row per bundle (and image), or a node column for along-tract profiles.")
-    images_all = [str(r[image_col]).strip() for r in rows] if image_col is not None else [""] * len(rows)
     images = list(dict.fromkeys(images_all))
     keys = tuple(bundle_key(b, k if node_col is not None else None) for b in bundles for k in range(n))
     col_of: Mapping[str, int] = {b: i * n for i, b in enumerate(bundles)}
