@@ -121,3 +121,23 @@ def big_files(tmp_path_factory) -> dict:
     path = tmp_path_factory.mktemp("big") / "50mb.csv"
     corpus._big_table(path)
     return {corpus._big_table: path}
+
+
+@pytest.fixture
+def glass_draws(monkeypatch) -> list[str]:
+    """The glass sides each ``GpuDraw._draw_glass`` call draws (``"FRONT"``, ``"BACK"``, ``"FRONTBACK"``),
+    in order; every glass is kept in layers (a tiny template's has fewer triangles than
+    ``glass_layers.MIN_TRIANGLES``)."""
+    from brainpainter_blender import glass_layers
+    from brainpainter_blender.gpu_draw import GpuDraw
+
+    drawn: list[str] = []
+    draw_glass = GpuDraw._draw_glass
+
+    def counted(self, aim, tex, culled, mark):
+        drawn.append("".join(culled))
+        return draw_glass(self, aim, tex, culled, mark)
+
+    monkeypatch.setattr(GpuDraw, "_draw_glass", counted)
+    monkeypatch.setattr(glass_layers, "MIN_TRIANGLES", 0)
+    return drawn

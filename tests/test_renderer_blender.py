@@ -712,22 +712,13 @@ def test_only_a_glass_of_many_triangles_is_kept_in_layers():
 
 
 @pytest.mark.render
-def test_the_glass_is_drawn_once_per_view_and_glass_colours(template, monkeypatch):
+def test_the_glass_is_drawn_once_per_view_and_glass_colours(template, monkeypatch, glass_draws):
     """Issue 36: a view's glass is drawn into a layer that later images of the view put over their
     opaque parts while the glass's colours stay (glass_layers); its pixels are an uncached draw's
     within a level, and every image of a view is the same whatever was drawn before it."""
     from brainpainter_blender import glass_layers
-    from brainpainter_blender.gpu_draw import GpuDraw
 
-    drawn: list[str] = []
-    draw_glass = GpuDraw._draw_glass
-
-    def counted(self, aim, tex, culled, mark):
-        drawn.append("".join(culled))
-        return draw_glass(self, aim, tex, culled, mark)
-
-    monkeypatch.setattr(GpuDraw, "_draw_glass", counted)
-    monkeypatch.setattr(glass_layers, "MIN_TRIANGLES", 0)  # the tiny template's glass is kept too
+    drawn = glass_draws
     # room for two views' layers: a third view's drops the oldest
     monkeypatch.setattr(glass_layers, "MAX_LAYER_PIXELS", 2 * glass_layers.LAYERS_PER_VIEW * 320 * 240)
     lateral, dorsal, medial = get_view("lateral-left"), get_view("dorsal"), get_view("medial-left")

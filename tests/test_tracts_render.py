@@ -517,23 +517,11 @@ def test_a_figure_of_regions_and_tracts_draws_two_labelled_colour_bars(tmp_path,
         assert np.abs(bar[[0, -1]] - ends).max() < 0.02, cmap
 
 
-def test_tracts_recoloured_through_the_glass_draw_the_glass_once(tiny, bundles, monkeypatch):
+def test_tracts_recoloured_through_the_glass_draw_the_glass_once(tiny, bundles, glass_draws):
     """Issue 36: with tract lines between the glass's far and near sides, each side is a layer of
     the view (glass_layers), drawn on its first image; recoloured tracts draw neither again, and the
     pixels are a direct draw's within a level."""
-    from brainpainter_blender.gpu_draw import GpuDraw
-
-    drawn: list[str] = []
-    draw_glass = GpuDraw._draw_glass
-
-    def counted(self, aim, tex, culled, mark):
-        drawn.append("".join(culled))
-        return draw_glass(self, aim, tex, culled, mark)
-
-    monkeypatch.setattr(GpuDraw, "_draw_glass", counted)
-    from brainpainter_blender import glass_layers
-
-    monkeypatch.setattr(glass_layers, "MIN_TRIANGLES", 0)  # the tiny template's glass cortex is kept too
+    drawn = glass_draws
     nodes = (("AF_left", 1), ("CST_right", 1))
     view = get_view("lateral-left")
     red, blue = ({"tract:AF_left": c, "tract:CST_right": c} for c in (RED, BLUE))
