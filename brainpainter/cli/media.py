@@ -25,6 +25,7 @@ from brainpainter.cli.params import CONTEXT, OutPath, echo_scale
 from brainpainter.cli.render import echo_warnings
 from brainpainter.media.layout import FigureOptions
 from brainpainter.media.movie import MovieOptions, make_movie
+from brainpainter.media.volume_panels import PanelOptions
 
 
 def _one_or_many(inputs: tuple[Path, ...]) -> Path | list[Path]:
@@ -46,6 +47,9 @@ def _rows(value: str | None) -> list[str] | None:
               help="Image names to show, comma-separated, in this order (default: all rows).")
 @option_group(FigureOptions, ("title", "label", "ticks", "dpi", "fig_width", "font_size", "view_labels",
                               "colorbar_position"))
+@option_group(PanelOptions, ("slices", "projections", "convention", "slice_outline"),
+              slices={"multiple": True, "metavar": "AXIS=MM[,MM...]"}, projections={"metavar": "AXES"},
+              slice_outline={"metavar": "FILE"})
 @render_options
 @map_options
 @input_options
@@ -53,12 +57,15 @@ def _rows(value: str | None) -> list[str] | None:
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, title: str | None,
            label: str | None, ticks: str | None, dpi: float, fig_width: float | None, font_size: float,
-           view_labels: bool, colorbar_position: str, quiet: bool, **options: Any) -> None:
+           view_labels: bool, colorbar_position: str, slices: tuple[str, ...], projections: str | None,
+           convention: str, slice_outline: str | None, quiet: bool, **options: Any) -> None:
     """A publication figure of INPUT rows (or maps, --lh/--rh): renders, titles and one colour bar.
 
     \b
     Default: each row is a line of the chosen views side by side.
     --grid:  rows of the input as columns (stages), views as rows.
+    --slices, --projections: a volume's slices and glass-brain projections
+    beside the views, on the same colour bar (docs/maps-volumes.md).
     One colour scale, computed over all rows, for the whole figure. Swatches
     for the NaN and missing colours appear when those colours are drawn.
 
@@ -74,8 +81,8 @@ def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, ti
         tables_or_maps(inputs, kwargs), out=out, rows=_rows(rows), grid=grid, title=title, label=label,
         ticks=ticks,
         dpi=dpi, fig_width=fig_width, font_size=font_size, view_labels=view_labels,
-        colorbar_position=colorbar_position, progress=not quiet,
-        **kwargs,
+        colorbar_position=colorbar_position, slices=slices, projections=projections, convention=convention,
+        slice_outline=slice_outline, progress=not quiet, **kwargs,
     )
     w, h = result.figure.get_size_inches()
     n_images = len({image for image, _ in result.images})
@@ -83,6 +90,9 @@ def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, ti
     click.echo(f"figure written to {result.path} ({n_images} row(s) x {n_views} view(s), "
                f"{w:.2f} x {h:.2f} in" + (f" at {dpi:g} dpi)" if out.suffix.lower() in
                                         (".png", ".tif", ".tiff") else ")"))
+    if slices or projections:
+        click.echo(f"slice and projection panels: {convention} convention (left on the "
+                   f"{'left' if convention == 'neurological' else 'right'}, labelled L/R)")
     echo_warnings(result.input)
     echo_scale(result.scale)
 

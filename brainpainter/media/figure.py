@@ -35,8 +35,9 @@ from brainpainter.atlas.model import Atlas
 from brainpainter.color.scale import ColourScale
 from brainpainter.media.colorbar import quiet_glyphs
 from brainpainter.media.drawn import common_crop, content_box, drawn_kinds, swatches_needed
-from brainpainter.media.layout import FigureKwargs, FigureOptions, compose_figure
+from brainpainter.media.layout import FigureKwargs, FigureLayout, FigureOptions, compose_figure
 from brainpainter.media.outfile import check_out_file
+from brainpainter.media.volume_panels import PanelKwargs, PanelOptions, label_panels, volume_panels
 from brainpainter.rendering.layers import colorbar_layers, first_bar_label
 from brainpainter.rendering.options import Options, RenderKwargs, take
 from brainpainter.rendering.run import make_runner, paint, prepare_run
@@ -58,8 +59,9 @@ FIGURE_FORMATS = {".png": "png", ".pdf": "pdf", ".svg": "svg", ".tif": "tiff", "
 VECTOR_FORMATS = ("pdf", "svg")
 
 
-class MakeFigureKwargs(FigureKwargs, RenderKwargs, total=False):
-    """The keywords of :func:`make_figure`: :class:`FigureOptions` and the run's options."""
+class MakeFigureKwargs(FigureKwargs, PanelKwargs, RenderKwargs, total=False):
+    """The keywords of :func:`make_figure`: :class:`FigureOptions`, :class:`PanelOptions` and the run's
+    options."""
 
 
 # -- the job -----------------------------------------------------------------------
@@ -152,6 +154,21 @@ def _bars(run: Run | MapRun, painter: Painter, figure_opts: FigureOptions) -> tu
         run.layers, figure_opts.label, run.options.layers.label(run.layers[0].kind))), more
 
 
+def _with_panels(images: dict[tuple[str, str], NDArray[Any]], panels: dict[tuple[str, str], NDArray[Any]],
+                 panel_opts: PanelOptions, image_names: list[str], run: Run | MapRun,
+                 figure_opts: FigureOptions, **bars: Any) -> FigureLayout:
+    """The figure of the renders and the volume's panels (after the views, whole, labelled)."""
+    from brainpainter.media.colorbar import text_color
+
+    images.update(panels)
+    names = [s.name for s in panel_opts.sections]
+    background = run.settings.background
+    layout = compose_figure(images, image_names, [v.name for v in run.views] + names, run.scale, figure_opts,
+                            background=background, uncropped=names, **bars)
+    label_panels(layout.image_axes, panel_opts, text_color(background), figure_opts.font_size - 1)
+    return layout
+
+
 @quiet_glyphs
 def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path | None = None,
                 rows: Iterable[str | int] | str | None = None, progress: bool = True,
@@ -178,7 +195,9 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     **options
         The layout: :class:`brainpainter.media.layout.FigureOptions` (``grid``,
         ``title``, ``label``, ``ticks``, ``dpi``, ``fig_width``, ``font_size``,
-        ``view_labels``); and every option of a run, as for
+        ``view_labels``); the volume's slice and glass-brain panels beside the views:
+        :class:`brainpainter.media.volume_panels.PanelOptions` (``slices``, ``projections``,
+        ``convention``, ``slice_outline``); and every option of a run, as for
         :func:`brainpainter.render` (:class:`brainpainter.rendering.options.Options`;
         width, height: pixels of each render).
 
@@ -196,12 +215,14 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
 
     kwargs: dict[str, Any] = dict(options)
     figure_opts = FigureOptions(**take(kwargs, FigureOptions))
+    panel_opts = PanelOptions(**take(kwargs, PanelOptions))
     path = check_out_file(out, FIGURE_FORMATS) if out is not None else None
     checked = Options.of(kwargs, "make_figure")
     run = prepare_run(data, atlas, options=checked)
     resolve_ticks(run.scale, figure_opts.ticks)
     table = run.table
     chosen = select_rows(table.images, rows)
+    panels = volume_panels(data, run, panel_opts, chosen) if panel_opts.sections else {}
     painter = run.painter()
     nan, missing = ((False, False) if run.layers[0].kind == "edges"  # a connectome alone: no region swatch
                     else swatches_needed(table, chosen, run.views, painter.scene.geometry))
@@ -218,9 +239,8 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
                 if on_progress is not None:
                     on_progress(len(images), len(plan))
         figure_opts, more = _bars(run, painter, figure_opts)
-        layout = compose_figure(images, [table.images[i] for i in chosen], [v.name for v in run.views],
-                                run.scale, figure_opts, nan=nan, missing=missing, background=background,
-                                more_bars=more)
+        layout = _with_panels(images, panels, panel_opts, [table.images[i] for i in chosen], run, figure_opts,
+                              nan=nan, missing=missing, more_bars=more)
         node_size_legend(run, layout.colorbar_axes, text_color(background), figure_opts.font_size)
         if tx is not None and path is not None:
             tx.tmp.write_bytes(figure_bytes(layout.figure, path, figure_opts.dpi,

@@ -111,8 +111,8 @@ class FigureOptions:
 
 
 def pretty_view(name: str) -> str:
-    """``lateral-left`` -> ``lateral left``."""
-    return name.replace("-", " ")
+    """``lateral-left`` -> ``lateral left``; a slice panel's name as it is (``z=-20``)."""
+    return name if "=" in name else name.replace("-", " ")
 
 
 @dataclass
@@ -216,7 +216,8 @@ def compose_figure(images: Mapping[tuple[str, str], NDArray[Any]], image_names: 
                    view_names: Sequence[str], scale: ColourScale, opts: FigureOptions | None = None, *,
                    nan: bool = False, missing: bool = False,
                    background: ColorLike | None = "white",
-                   more_bars: Sequence[tuple[ColourScale, str]] = ()) -> FigureLayout:
+                   more_bars: Sequence[tuple[ColourScale, str]] = (),
+                   uncropped: Sequence[str] = ()) -> FigureLayout:
     """Lay out renders, titles and a colour bar in a matplotlib figure.
 
     Parameters
@@ -235,6 +236,8 @@ def compose_figure(images: Mapping[tuple[str, str], NDArray[Any]], image_names: 
     more_bars : sequence of (ColourScale, str)
         Colour bars of further layers and their labels, beside the first (which has `opts`'
         label, ticks and swatches).
+    uncropped : sequence of str
+        Views drawn whole (panels of a fixed field of view, such as slices), not cropped to what they show.
 
     Returns
     -------
@@ -243,7 +246,7 @@ def compose_figure(images: Mapping[tuple[str, str], NDArray[Any]], image_names: 
     from brainpainter.media.colorbar import colorbar_height, new_figure, text_color
 
     opts = opts or FigureOptions()
-    crops = {v: common_crop([images[(i, v)] for i in image_names], background) for v in view_names}
+    crops = view_crops(images, image_names, view_names, background, uncropped)
     aspect = {v: (crops[v][0].stop - crops[v][0].start) / max(1, crops[v][1].stop - crops[v][1].start)
               for v in view_names}
 
@@ -288,6 +291,15 @@ def compose_figure(images: Mapping[tuple[str, str], NDArray[Any]], image_names: 
         layout.colorbar_axes.append(draw_bar(fig, grid, s, bar_opts, n, m, color, slot))
     layout.colorbar_ax = layout.colorbar_axes[0]
     return layout
+
+
+def view_crops(images: Mapping[tuple[str, str], NDArray[Any]], image_names: Sequence[str],
+               view_names: Sequence[str], background: ColorLike | None, uncropped: Sequence[str] = ()
+               ) -> dict[str, tuple[slice, slice]]:
+    """Each view's crop (rows, columns): what it shows in any image, or the whole of an `uncropped` view."""
+    shapes = {v: images[(image_names[0], v)].shape for v in uncropped}
+    return {v: (slice(0, shapes[v][0]), slice(0, shapes[v][1])) if v in shapes
+            else common_crop([images[(i, v)] for i in image_names], background) for v in view_names}
 
 
 def thinned_ticks(scale: ColourScale) -> list[float]:

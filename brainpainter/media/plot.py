@@ -17,7 +17,7 @@ The colour bar is :func:`brainpainter.media.colorbar.draw_colorbar`, the same as
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Unpack
 
@@ -32,6 +32,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.image import AxesImage
 
     from brainpainter.atlas.model import Atlas
+    from brainpainter.maps.sections import Section
     from brainpainter.rendering.options import RenderKwargs
     from brainpainter.rendering.painter import Painter, RenderResult
 
@@ -71,8 +72,13 @@ class PlotResult:
 def plot(values: Any, view: str = "lateral-left", *, ax: Axes | None = None, row: str | int = 0,
          atlas: Atlas | str | None = None, colorbar: bool = True, label: str | None = None,
          ticks: Sequence[float] | str | None = None, orientation: str = "vertical", crop: bool = True,
-         painter: Painter | None = None, **render_options: Unpack[RenderKwargs]) -> PlotResult:
+         painter: Painter | None = None, convention: str = "neurological",
+         **render_options: Unpack[RenderKwargs]) -> PlotResult:
     """Render one row of a table from one view into `ax`, with an optional colour bar beside it.
+
+    A view ``"z=50"`` (``x=``, ``y=``) or ``"glass-z"`` (``glass-x``, ``glass-y``) draws a slice or
+    glass-brain panel of the run's volume (``volume=``) instead, on the map's colour scale
+    (:mod:`brainpainter.media.volume_panels`).
 
     Parameters
     ----------
@@ -102,6 +108,8 @@ def plot(values: Any, view: str = "lateral-left", *, ax: Axes | None = None, row
         Cut the background around the brain, so the brain fills `ax`.
     painter : Painter, optional
         A loaded :class:`~brainpainter.rendering.painter.Painter` to reuse (no new scene).
+    convention : {"neurological", "radiological"}
+        A slice or glass-brain panel: left on the left (default) or on the right.
     **render_options
         The options of a run, as for :func:`brainpainter.render`
         (:class:`brainpainter.rendering.options.Options`: ``gradient``, ``cmap``,
@@ -112,15 +120,15 @@ def plot(values: Any, view: str = "lateral-left", *, ax: Axes | None = None, row
     -------
     PlotResult
     """
-    if orientation not in ORIENTATIONS:
-        raise choice_error("orientation", orientation, ORIENTATIONS)
-    for reserved in ("views", "out", "rows", "progress"):
-        if reserved in render_options:
-            raise BrainPainterError(f"plot() draws one view of one row into an Axes; {reserved}= is not "
-                                    "one of its options (use view=, row=, or brainpainter.render).")
+    _check_plot_options(orientation, render_options)
+    from brainpainter.maps.sections import parse_panel
     from brainpainter.media.drawn import common_crop
     from brainpainter.rendering.run import render
 
+    section = parse_panel(view)
+    if section is not None:
+        return _plot_panel(values, section, ax, row, atlas, (colorbar, label, ticks, orientation), convention,
+                           dict(render_options))
     options: dict[str, Any] = {**render_options, "views": [view]}
     result = render(values, atlas, rows=[row], painter=painter, progress=False, **options)
     (_, view_name), image = next(iter(result.images.items()))
@@ -151,10 +159,7 @@ def _colorbar(ax: Axes, result: RenderResult, row: str | int, view_name: str, la
     from brainpainter.rendering.views import parse_views
     from brainpainter.table.rows import select_rows
 
-    if orientation == "vertical":
-        cax = ax.inset_axes((1.03, 0.15, 0.045, 0.7))
-    else:
-        cax = ax.inset_axes((0.15, -0.09, 0.7, 0.05))
+    cax = _bar_axes(ax, orientation)
     table, scale = result.table, result.scale
     assert table is not None and scale is not None
     if painter is not None:
@@ -168,3 +173,51 @@ def _colorbar(ax: Axes, result: RenderResult, row: str | int, view_name: str, la
                                    scene.geometry)
     draw_colorbar(cax, scale, label=label, ticks=ticks, orientation=orientation, nan=nan, missing=missing)
     return cax
+
+
+def _plot_panel(values: Any, section: Section, ax: Axes | None, row: str | int, atlas: Atlas | str | None,
+                bar: tuple[bool, str | None, Sequence[float] | str | None, str], convention: str,
+                options: dict[str, Any]) -> PlotResult:
+    """A slice or glass-brain panel of the run's volume into `ax`; `bar`: colorbar, label, ticks,
+    orientation."""
+    from brainpainter.media.colorbar import draw_colorbar, text_color
+    from brainpainter.media.volume_panels import PanelOptions, label_panel, volume_panels
+    from brainpainter.rendering.run import prepare_run
+    from brainpainter.table.rows import select_rows
+
+    run: Any = prepare_run(values, atlas, **options)
+    i = select_rows(run.table.images, [row])[0]
+    opts = PanelOptions(slices=(section.name,) if section.coord is not None else (),
+                        projections=None if section.coord is not None else section.axis,
+                        convention=convention)
+    image = volume_panels(values, run, opts, [i])[(run.table.images[i], section.name)]
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        ax = plt.gca()
+    artist = ax.imshow(image, interpolation="antialiased")
+    ax.set_axis_off()
+    ax.set_aspect("equal")
+    label_panel(ax, section, convention, text_color(run.settings.background), 8.0)
+    colorbar, label, ticks, orientation = bar
+    scale = run.scale_of("map")
+    cax = None
+    if colorbar:
+        cax = _bar_axes(ax, orientation)
+        draw_colorbar(cax, scale, label=label, ticks=ticks, orientation=orientation)
+    return PlotResult(ax, artist, cax, image, scale)
+
+
+def _bar_axes(ax: Axes, orientation: str) -> Axes:
+    """The colour bar's inset of `ax`: right of it (vertical) or under it (horizontal)."""
+    return ax.inset_axes((1.03, 0.15, 0.045, 0.7) if orientation == "vertical" else (0.15, -0.09, 0.7, 0.05))
+
+
+def _check_plot_options(orientation: str, render_options: Mapping[str, Any]) -> None:
+    """Refuse an unknown orientation and the options of several views or rows (one line)."""
+    if orientation not in ORIENTATIONS:
+        raise choice_error("orientation", orientation, ORIENTATIONS)
+    for reserved in ("views", "out", "rows", "progress"):
+        if reserved in render_options:
+            raise BrainPainterError(f"plot() draws one view of one row into an Axes; {reserved}= is not "
+                                    "one of its options (use view=, row=, or brainpainter.render).")
