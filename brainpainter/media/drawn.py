@@ -85,8 +85,8 @@ def content_box(image: NDArray[Any], background: ColorLike | None, tol: int = 6)
     if background is None:
         mask = alpha
     else:
-        bg = np.round(np.array(to_rgb(background)) * 255).astype(int)
-        mask = alpha & (np.abs(image[..., :3].astype(int) - bg).max(axis=-1) > tol)
+        bg = np.round(np.array(to_rgb(background)) * 255).astype(np.int16)
+        mask = alpha & (np.abs(image[..., :3].astype(np.int16) - bg).max(axis=-1) > tol)  # int16: small
     rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
     if rows.size == 0:
         return 0, 0, 0, 0

@@ -9,7 +9,8 @@ layer, horizontal side by side under the images, or upright in a column at their
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, TypedDict
 
@@ -359,12 +360,30 @@ def draw_bar(fig: Figure, grid: Grid, scale: ColourScale, opts: FigureOptions, n
     draw_colorbar(cb_ax, scale, label=opts.label, ticks=opts.ticks, nan=nan, missing=missing,
                   fontsize=opts.font_size, color=color)
     avail = grid.box(x, cb_top, width, grid.height - cb_top)
-    fit_axes(cb_ax, avail, grow="x", max_width=share * min(0.55 * grid.width, 3.2) / grid.width)
+    with other_images_hidden(cb_ax):  # its text measured in draws of the figure that resample no render
+        fit_axes(cb_ax, avail, grow="x", max_width=share * min(0.55 * grid.width, 3.2) / grid.width)
     # fit_axes centres vertically; keep the bar right under the images instead.
     pos = cb_ax.get_position()
     cb_ax.set_position((pos.x0, 1 - (cb_top + bar_h) / grid.height, pos.width, bar_h / grid.height))
     return cb_ax
 
+
+
+@contextmanager
+def other_images_hidden(ax: Axes) -> Iterator[None]:
+    """The images of the figure's other axes hidden, shown again after: a draw of the figure that
+    measures `ax`'s text then resamples no render (the figure's pixels are the same)."""
+    from brainpainter.media.colorbar import figure_of
+
+    hidden = [im for other in figure_of(ax).axes if other is not ax for im in other.get_images()
+              if im.get_visible()]
+    for im in hidden:
+        im.set_visible(False)
+    try:
+        yield
+    finally:
+        for im in hidden:
+            im.set_visible(True)
 
 
 def colorbar_width(scale: ColourScale, *, dpi: float = 100.0, fontsize: float = 8.0,
