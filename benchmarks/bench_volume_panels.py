@@ -11,7 +11,8 @@ process:
   ``plot_glass_brain(display_mode="z")`` of the same file, each saved as a PNG.
 
 Both at the same dpi. The first call of each (imports, Blender's start, the template read) is
-reported apart; the medians are of the ``--repeat`` calls after it, alternating the two.
+reported apart; the medians are of the ``--repeat`` calls after it, alternating the two, in wall
+seconds and in the process's CPU seconds (every thread: less sensitive to a loaded machine).
 
     python benchmarks/bench_volume_panels.py [--repeat 7] [--dpi 300] [--size 1200x900] [--views ...]
 """
@@ -104,21 +105,26 @@ def main() -> None:
                  "nilearn": nilearn_plots(path, out, args)}
         first: dict[str, float] = {}
         times: dict[str, list[float]] = {name: [] for name in calls}
+        cpu: dict[str, list[float]] = {name: [] for name in calls}
         for k in range(args.repeat + 1):
             for name, call in (calls.items() if k % 2 == 0 else reversed(calls.items())):
-                start = time.perf_counter()
+                start, cpu_start = time.perf_counter(), time.process_time()
                 call()
                 took = time.perf_counter() - start
                 if k == 0:
                     first[name] = took
                 else:
                     times[name].append(took)
+                    cpu[name].append(time.process_time() - cpu_start)
         medians = {name: statistics.median(t) for name, t in times.items()}
+        cpu_medians = {name: statistics.median(t) for name, t in cpu.items()}
         result = {"machine": machine(), "repeat": args.repeat, "dpi": args.dpi, "size": args.size,
                   "views": args.views, "first_s": {n: round(t, 3) for n, t in first.items()},
                   "median_s": {n: round(t, 3) for n, t in medians.items()},
                   "range_s": {n: [round(min(t), 3), round(max(t), 3)] for n, t in times.items()},
-                  "ratio_brainpainter_over_nilearn": round(medians["brainpainter"] / medians["nilearn"], 2)}
+                  "ratio_brainpainter_over_nilearn": round(medians["brainpainter"] / medians["nilearn"], 2),
+                  "cpu_median_s": {n: round(t, 3) for n, t in cpu_medians.items()},
+                  "cpu_ratio": round(cpu_medians["brainpainter"] / cpu_medians["nilearn"], 2)}
         print(json.dumps(result, indent=1))
 
 

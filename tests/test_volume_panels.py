@@ -232,3 +232,28 @@ def test_bad_panel_input_is_one_line_exit_2_nothing_written(sphere, elsewhere, t
     lines = err.getvalue().decode().strip().splitlines()
     assert len(lines) == 1 and expected in lines[0] and not out.getvalue(), lines
     assert not (tmp_path / "fig.png").exists()
+
+
+def test_panels_with_jobs_are_the_serial_ones(sphere, tmp_path):
+    kw: dict[str, Any] = {"volume": sphere, "threshold": THRESHOLD, "views": "dorsal,lateral-right", "width": 60,
+                          "height": 45, "slices": ["z=50"], "projections": "x", "progress": False}
+    with stand_in() as renderer:
+        serial = brainpainter.figure(None, renderer=renderer, **kw)
+        jobs = brainpainter.figure(None, renderer=renderer, jobs=2, **kw)
+    assert list(jobs.images) == list(serial.images)
+    assert [name for _, name in serial.images] == ["dorsal", "lateral-right", "z=50", "glass-x"]
+    assert all(np.array_equal(jobs.images[k], v) for k, v in serial.images.items())
+
+
+def test_slice_outline_draws_the_label_volumes_borders(sphere, tmp_path):
+    ijk = np.stack(np.meshgrid(*[np.arange(n) for n in SHAPE_2MM], indexing="ij"), axis=-1)
+    x = (ijk @ MNI_2MM[:3, :3].T + MNI_2MM[:3, 3])[..., 0]
+    labels = _save(np.where(x < 0, 1, 2).astype(np.int16), tmp_path / "halves.nii.gz")  # border at x = -1
+    result = _figure(sphere, tmp_path, slices=["z=20"], slice_outline=labels)
+    panel = result.images[("sphere", "z=20")]
+    black = (panel[..., :3].max(axis=-1) == 0) & (panel[..., 3] == 255)
+    columns, _ = panel_grid("z")
+    cols = np.nonzero(black.sum(axis=0) > 100)[0]                # a line from the front to the back
+    assert len(cols) >= 1 and all(abs(columns[c] + 1) <= 1 for c in cols)
+    plain = _figure(sphere, tmp_path / "plain", slices=["z=20"])
+    assert not ((plain.images[("sphere", "z=20")][..., :3].max(axis=-1) == 0).sum(axis=0) > 100).any()
