@@ -7,6 +7,7 @@ process:
 * **brainpainter**: ``brainpainter.figure(volume=..., threshold=2.3, views=V1,V2,
   slices=["z=-20,10,50"], projections="z")``: 3 slices, 1 glass projection and 2 rendered 3-D
   views (volume projected onto the cortex, Blender renders, the figure laid out and written);
+* **brainpainter, views only**: the same figure without its panels (what the panels add);
 * **nilearn**: ``plot_stat_map(display_mode="z", cut_coords=[-20, 10, 50])`` and
   ``plot_glass_brain(display_mode="z")`` of the same file, each saved as a PNG.
 
@@ -52,15 +53,17 @@ def write_volume(folder: Path, stat: bool) -> Path:
     return path
 
 
-def brainpainter_figure(path: Path, out: Path, args: argparse.Namespace) -> Callable[[], None]:
+def brainpainter_figure(path: Path, out: Path, args: argparse.Namespace, panels: bool = True
+                        ) -> Callable[[], None]:
     import brainpainter
 
     width, height = (int(v) for v in args.size.split("x"))
+    extra = {"slices": [f"z={','.join(f'{z:g}' for z in SLICES)}"], "projections": "z"} if panels else {}
 
     def call() -> None:
         brainpainter.figure(None, volume=path, threshold=2.3, views=args.views, width=width, height=height,
-                            slices=[f"z={','.join(f'{z:g}' for z in SLICES)}"], projections="z",
-                            out=out / "brainpainter.png", dpi=args.dpi, progress=False)
+                            out=out / f"brainpainter{'' if panels else '_views'}.png", dpi=args.dpi,
+                            progress=False, **extra)
     return call
 
 
@@ -102,12 +105,13 @@ def main() -> None:
         out.mkdir(parents=True, exist_ok=True)
         path = write_volume(Path(tmp), args.stat)
         calls = {"brainpainter": brainpainter_figure(path, out, args),
+                 "brainpainter_views_only": brainpainter_figure(path, out, args, panels=False),
                  "nilearn": nilearn_plots(path, out, args)}
         first: dict[str, float] = {}
         times: dict[str, list[float]] = {name: [] for name in calls}
         cpu: dict[str, list[float]] = {name: [] for name in calls}
         for k in range(args.repeat + 1):
-            for name, call in (calls.items() if k % 2 == 0 else reversed(calls.items())):
+            for name, call in (list(calls.items()) if k % 2 == 0 else list(reversed(calls.items()))):
                 start, cpu_start = time.perf_counter(), time.process_time()
                 call()
                 took = time.perf_counter() - start
