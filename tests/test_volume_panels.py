@@ -235,8 +235,9 @@ def test_bad_panel_input_is_one_line_exit_2_nothing_written(sphere, elsewhere, t
 
 
 def test_panels_with_jobs_are_the_serial_ones(sphere, tmp_path):
-    kw: dict[str, Any] = {"volume": sphere, "threshold": THRESHOLD, "views": "dorsal,lateral-right", "width": 60,
-                          "height": 45, "slices": ["z=50"], "projections": "x", "progress": False}
+    kw: dict[str, Any] = {"volume": sphere, "threshold": THRESHOLD, "views": "dorsal,lateral-right",
+                          "width": 60, "height": 45, "slices": ["z=50"], "projections": "x",
+                          "progress": False}
     with stand_in() as renderer:
         serial = brainpainter.figure(None, renderer=renderer, **kw)
         jobs = brainpainter.figure(None, renderer=renderer, jobs=2, **kw)

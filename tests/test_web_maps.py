@@ -188,6 +188,36 @@ def test_a_gifti_that_names_another_file_reads_nothing_and_tells_nothing(server,
 
 
 # -- a volume ----------------------------------------------------------------------------------
+def _figure_job(server, uid: str, figure: dict, views: str = "lateral-left") -> dict:
+    body = {"upload_id": uid, "kind": "figure", "options": {"size": "64x48", "views": views},
+            "figure": {"format": "png", **figure}}
+    r = server.post("/api/jobs", json=body)
+    assert r.status_code == 202, r.text
+    url = r.json()["url"]
+    job = wait_for(lambda: (j := server.get(url).json())["status"] in ("done", "failed") and j, 120)
+    assert job, "the job did not finish"
+    return job
+
+
+def test_a_volume_uploads_figure_holds_its_slice_and_glass_brain_panels(server, tmp_path):
+    """Issue 45: the page's figure job shows the volume upload's slices and projections (the bundle keeps
+    the NIfTI), on the map's colour bar."""
+    uid = post(server, [("zstat1.nii.gz", mni_volume())]).json()["upload_id"]
+    plain = _figure_job(server, uid, {"dpi": 100})
+    job = _figure_job(server, uid, {"dpi": 100, "slices": ["z=10"], "projections": "z"})
+    assert plain["status"] == job["status"] == "done", job
+    images = [png_pixels(server.get(j["files"][0]["url"]).content) for j in (plain, job)]
+    assert images[1].shape[1] > images[0].shape[1]             # two panels beside the view
+    rgb = images[1][..., :3].astype(int)
+    grey = (rgb.max(-1) - rgb.min(-1) < 6) & (rgb[..., 0] > 60) & (rgb[..., 0] < 240)  # the template's greys
+    assert grey.sum() > 2000
+    ball = (rgb.max(-1) - rgb.min(-1) > 60)[: int(0.8 * rgb.shape[0])]    # coloured pixels above the bar:
+    assert ball[:, images[0].shape[1]:].sum() > 50                 # in the panels, right of the view's width
+    failed = _figure_job(server, post(server, [("lh.thickness", morph(np.ones(N5), tmp_path, "lh.x"))]
+                                      ).json()["upload_id"], {"slices": ["z=10"]})
+    assert failed["status"] == "failed" and "show a volume in MNI152" in failed["error"], failed
+
+
 def test_volume_upload_is_projected_onto_the_cortex(server):
     r = post(server, [("zstat1.nii.gz", mni_volume())])
     assert r.status_code == 200, r.text

@@ -49,6 +49,7 @@ class PanelKwargs(TypedDict, total=False):
     projections: str | None
     convention: str
     slice_outline: Any
+    volume_image: Any
 
 
 @dataclass(frozen=True)
@@ -65,6 +66,9 @@ class PanelOptions:
         Left on the left (default, as nilearn) or on the right, in axial and coronal panels.
     slice_outline : path or nibabel image, optional
         A label volume in MNI152 (an atlas) whose region borders are drawn on the slices.
+    volume_image : path or nibabel image, optional
+        The volume the panels show where the run's maps were read from it already (the web page's
+        volume upload); default: the run's ``--volume``, or a volume given as INPUT.
     """
 
     slices: Sequence[str] | str = field(default=(), metadata={
@@ -82,6 +86,7 @@ class PanelOptions:
                 "(radiological); each panel is labelled L/R."})
     slice_outline: Any = field(default=None, metadata={
         "help": "A label volume in MNI152 (an atlas .nii.gz) whose region borders are drawn on the slices."})
+    volume_image: Any = field(default=None, metadata={"cli": False})
 
     def __post_init__(self) -> None:
         if self.convention not in CONVENTIONS:
@@ -97,13 +102,13 @@ class PanelOptions:
         return parse_slices(self.slices) + parse_projections(self.projections)
 
 
-def panel_volume(data: Any, maps: MapOptions) -> Any:
-    """The run's volume the panels show (a path or nibabel image), or None: ``--volume``, else a
-    volume given as INPUT."""
+def panel_volume(data: Any, maps: MapOptions, given: Any = None) -> Any:
+    """The run's volume the panels show (a path or nibabel image), or None: `given`
+    (:attr:`PanelOptions.volume_image`), ``--volume``, else a volume given as INPUT."""
     from brainpainter.maps.volume import is_volume
 
-    if maps.volume is not None:
-        return maps.volume
+    if given is not None or maps.volume is not None:
+        return given if given is not None else maps.volume
     return data if data is not None and not isinstance(data, list) and is_volume(data) else None
 
 
@@ -132,7 +137,7 @@ def volume_panels(data: Any, run: Any, opts: PanelOptions, rows: Sequence[int]
     """
     from brainpainter.maps.volume import check_mni152, load_volume
 
-    given = panel_volume(data, run.options.maps)
+    given = panel_volume(data, run.options.maps, opts.volume_image)
     if given is None:
         raise BrainPainterError("slice and glass-brain panels (--slices, --projections) show a volume in "
                                 "MNI152; give one with --volume FILE.")

@@ -249,7 +249,7 @@ def _volume_bundle(work: Path, path: Path, shown: str, shape: tuple[int, ...],
     maps = read_volume(path)  # the cortex by registration fusion, the structures by their means
     report = base_report(maps, "volume", [shown], f"volume: {shown} (MNI152, {'x'.join(map(str, shape))}) "
                          f"projected onto fsaverage, {_images(maps.n_images)}")
-    _write_bundle(work, "volume", maps, f"volume={shown}", report)
+    _write_bundle(work, "volume", maps, f"volume={shown}", report, volume=path)
     return report, list(maps.images)
 
 
@@ -319,8 +319,10 @@ def base_report(maps: Any, kind: str, names: list[str], summary: str) -> dict[st
     }
 
 
-def _write_bundle(work: Path, kind: str, maps: Any, source: str, report: dict[str, Any]) -> None:
-    """Write ``work/bundle.bin``: the maps as read (:class:`brainpainter.maps.inputs.VertexMaps`).
+def _write_bundle(work: Path, kind: str, maps: Any, source: str, report: dict[str, Any],
+                  volume: Path | None = None) -> None:
+    """Write ``work/bundle.bin``: the maps as read (:class:`brainpainter.maps.inputs.VertexMaps`), and
+    a volume upload's NIfTI file (gzipped), which a figure's slice and glass-brain panels show.
 
     Each hemisphere's values, ndarray of float32, shape (n_images, n_vertices), as an ``.npy``,
     gzipped where its first megabyte halves (a constant or sparse map stays small; noisy values, which
@@ -346,13 +348,16 @@ def _write_bundle(work: Path, kind: str, maps: Any, source: str, report: dict[st
               "categories": None if maps.categories is None else list(maps.categories),
               "category_colors": None if colors is None else np.asarray(colors, float).tolist(),
               "regions": {k: [float(x) for x in v] for k, v in (maps.regions or {}).items()}}
+    if volume is not None:
+        (out / "volume.nii.gz").write_bytes(gzip.compress(volume.read_bytes(), compresslevel=1))
+        stored.append(("volume", out / "volume.nii.gz"))
     write_bundle(work / "bundle.bin", MAGIC, header, "hemi", list(stored))
 
 
 # -- reading a stored bundle -----------------------------------------------------------------
 def bundle_header(data: bytes) -> tuple[dict[str, Any], int]:
     """The JSON header of a bundle and where its files start."""
-    return read_header(data, MAGIC, "hemi", ("lh", "rh"),
+    return read_header(data, MAGIC, "hemi", ("lh", "rh", "volume"),
                        "the stored map upload is damaged; upload the map again.")
 
 
@@ -383,7 +388,8 @@ def read_bundle(data: bytes) -> Any:
     header, start = bundle_header(data)
     try:
         values = {str(f["hemi"]): np.load(io.BytesIO(gzip.decompress(content) if str(f["name"]).endswith(
-            ".gz") else content), allow_pickle=False) for f, content in members(data, header, start)}
+            ".gz") else content), allow_pickle=False) for f, content in members(data, header, start)
+            if f["hemi"] != "volume"}
         images = tuple(str(i) for i in header["images"])
         if any(v.ndim != 2 or v.shape[0] != len(images) for v in values.values()):
             raise ValueError("shapes")
@@ -395,3 +401,29 @@ def read_bundle(data: bytes) -> Any:
             str(header.get("space") or "fsaverage"))
     except (OSError, EOFError, ValueError, KeyError, TypeError):
         raise BrainPainterError("the stored map upload is damaged; upload the map again.") from None
+
+
+def bundle_volume(data: bytes) -> Any:
+    """The NIfTI volume of a volume upload's bundle `data` (a nibabel image in memory), or None for
+    other uploads (a table, surface maps, CIFTI)."""
+    import nibabel as nib
+
+    if not is_bundle(data):
+        return None
+    header, start = bundle_header(data)
+    for f, content in members(data, header, start):
+        if f["hemi"] == "volume":
+            try:
+                return nib.Nifti1Image.from_bytes(gzip.decompress(content))
+            except (OSError, EOFError, ValueError):
+                raise BrainPainterError("the stored volume upload is damaged; upload it again.") from None
+    return None
+
+
+def figure_panels(params: Any, data: bytes) -> dict[str, Any]:
+    """The slice and glass-brain panels of figure job `params` (``FigureParams``) as
+    :func:`brainpainter.media.figure.make_figure` keywords, with the volume of upload `data`."""
+    if not params.slices and not params.projections:
+        return {}
+    return {"slices": params.slices, "projections": params.projections or None,
+            "convention": params.convention, "volume_image": bundle_volume(data)}

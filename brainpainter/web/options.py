@@ -369,6 +369,10 @@ class FigureParams(BaseModel):
                                     description="Figure width in inches (default: from the layout).")
     font_size: float = Field(core(_figure_options(), "font_size").default, ge=1, le=72,
                              description="Text size in points.")
+    slices: list[Annotated[str, Field(max_length=200)]] = Field([], max_length=24, description=(
+        "A volume upload's slice panels: AXIS=MM[,MM...] (x, y, z; MNI mm), e.g. z=-20,0,20,40."))
+    projections: str | None = Field(None, max_length=40, description="Glass-brain panels: xyz, z, ...")
+    convention: Literal["neurological", "radiological"] = "neurological"
 
 
 class ExportParams(BaseModel):

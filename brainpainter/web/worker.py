@@ -268,8 +268,7 @@ def _prepared(folder: Path, job: dict[str, Any]) -> Any:
 
 
 def _media_input(data: bytes, name: str, prep: Any) -> Any:
-    """What figure and movie read: the table as a named stream, a map's maps (read from its files), or
-    the table of bundle values of tracts drawn alone."""
+    """What figure and movie read: a table as a named stream, a map's maps, or tracts' bundle values."""
     from brainpainter.web.maps import is_bundle, read_bundle
     from brainpainter.web.options import table_stream
 
@@ -398,6 +397,7 @@ def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
 
 def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
     from brainpainter.media.figure import make_figure, save_figure
+    from brainpainter.web.maps import figure_panels
     from brainpainter.web.options import FigureParams, check_figure_pixels
 
     data, prep = _prepared(folder, job)
@@ -409,7 +409,7 @@ def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
     made = make_figure(_media_input(data, job["input_name"], prep), grid=params.grid,
                        title=params.title or None, label=params.label or None, dpi=params.dpi,
                        fig_width=params.fig_width, font_size=params.font_size, on_progress=tick,
-                       **_media_kwargs(prep, painters.renderer))
+                       **figure_panels(params, data), **_media_kwargs(prep, painters.renderer))
     if max_pixels is not None:  # composed now: its real size, before the PNG is drawn
         w, h = (round(x) for x in made.figure.get_size_inches() * params.dpi)
         check_figure_pixels(w, h, max_pixels)

@@ -692,7 +692,9 @@ async function submit(kind, format) {
   const body = { upload_id: state.uploadId, kind, options: options() };
   if (kind === "figure") {
     body.figure = { format, dpi: Number($("dpi").value), font_size: Number($("font_size").value),
-                    fig_width: numberOrNull("fig_width") };
+                    fig_width: numberOrNull("fig_width"),
+                    slices: $("slices").value.split(";").map((s) => s.trim()).filter(Boolean),
+                    projections: $("projections").value.trim() || null };
   }
   if (kind === "movie") {
     body.movie = { format, frames_per_step: Number($("frames_per_step").value), hold: Number($("hold").value),
