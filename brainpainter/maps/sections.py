@@ -39,6 +39,10 @@ PIXEL_MM = 0.5
 MARGIN_MM = 4.0                 # around the template's brain
 MAX_SECTIONS = 24
 TEMPLATE_FILE = "mni_icbm152_t1_tal_nlin_sym_09a_converted.nii.gz"
+WHITE_MATTER_FILE = "mni_icbm152_wm_tal_nlin_sym_09a_converted.nii.gz"
+#: A glass brain's inner lines: where the white matter's mean along the ray crosses these shares of its
+#: largest (the white matter's edge, the midline, the cerebellum), as nilearn's glass brain sketches them.
+GLASS_LEVELS = (0.12, 0.25)
 #: Each axis's panel: its column axis and row axis (world axes 0, 1, 2 = x, y, z).
 IN_PLANE = {"x": (1, 2), "y": (0, 2), "z": (0, 1)}
 
@@ -138,9 +142,9 @@ def parse_panel(name: str) -> Section | None:
 
 # -- the template ---------------------------------------------------------------------
 @cache
-def template() -> tuple[NDArray[np.float32], NDArray[np.float64]]:
-    """The ICBM152 2009 T1 template nilearn's wheel carries: its voxels (1 mm, shape (197, 233, 189),
-    0 outside the brain) and affine, shape (4, 4).
+def template(name: str = TEMPLATE_FILE) -> tuple[NDArray[np.float32], NDArray[np.float64]]:
+    """The ICBM152 2009 T1 template nilearn's wheel carries (or its white-matter map, `name`): its
+    voxels (1 mm, shape (197, 233, 189), 0 outside the brain) and affine, shape (4, 4).
 
     Raises
     ------
@@ -152,7 +156,7 @@ def template() -> tuple[NDArray[np.float32], NDArray[np.float64]]:
     import nibabel as nib
 
     spec = importlib.util.find_spec("nilearn")
-    path = Path(spec.origin).parent / "datasets" / "data" / TEMPLATE_FILE if spec and spec.origin else None
+    path = Path(spec.origin).parent / "datasets" / "data" / name if spec and spec.origin else None
     if path is None or not path.is_file():
         raise BrainPainterError("slice and glass-brain panels are drawn over the ICBM152 2009 template that "
                                 "nilearn ships; install it: pip install 'brainpainter[panels]'.")
@@ -289,6 +293,22 @@ def silhouette(axis: Axis, convention: str) -> NDArray[np.bool_]:
     """The template brain seen along `axis` on the panel's pixels, shape (h, w)."""
     inside, ras_affine = _template_inside()
     return _on_panel(inside.any(axis="xyz".index(axis)), ras_affine, axis, convention) > 0
+
+
+@cache
+def glass_lines(axis: Axis, convention: str) -> NDArray[np.bool_]:
+    """A glass brain's inner lines on the panel's pixels, shape (h, w): the edges of where the
+    template's white matter, averaged along `axis`, exceeds :data:`GLASS_LEVELS` of its largest."""
+    from scipy.ndimage import binary_erosion
+
+    data, affine = template(WHITE_MATTER_FILE)
+    grid, ras_affine = _on_mni_axes(data, affine)
+    mean = _on_panel(grid.mean(axis="xyz".index(axis)), ras_affine, axis, convention)
+    lines = np.zeros(mean.shape, dtype=bool)
+    for level in GLASS_LEVELS:
+        inside = mean > level * mean.max()
+        lines |= inside & ~binary_erosion(inside, iterations=2)
+    return lines
 
 
 def check_inside(section: Section, affine: NDArray[np.float64], shape: Sequence[int], name: str) -> None:

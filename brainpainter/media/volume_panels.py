@@ -25,6 +25,7 @@ from brainpainter.maps.sections import (
     CONVENTIONS,
     Section,
     check_inside,
+    glass_lines,
     parse_projections,
     parse_slices,
     project,
@@ -38,6 +39,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
 
 GLASS_LINE = (0.3, 0.3, 0.3)     # the brain's outline in a projection
+GLASS_INNER = (0.8, 0.8, 0.8)    # its inner lines (white matter, midline, cerebellum)
 GLASS_LINE_PX = 3                 # its width, pixels of 0.5 mm
 GREYS = (0.2, 0.95)               # the template's darkest and lightest grey
 
@@ -211,6 +213,7 @@ def panel_rgba(section: Section, values: NDArray[Any], scale: ColourScale, thres
     if section.coord is None:
         inside = silhouette(section.axis, convention)
         edge = inside & ~binary_erosion(inside, iterations=GLASS_LINE_PX)
+        rgba[glass_lines(section.axis, convention) & inside] = (*GLASS_INNER, 1.0)
         rgba[edge] = (*GLASS_LINE, 1.0)
     else:
         t1, affine = template()
