@@ -234,6 +234,19 @@ def test_bad_panel_input_is_one_line_exit_2_nothing_written(sphere, elsewhere, t
     assert not (tmp_path / "fig.png").exists()
 
 
+def test_cli_says_views_panels_and_the_convention(sphere, tmp_path):
+    from brainpainter.cli.main import cli
+
+    with stand_in("solid", StandInRenderer.with_(layout="solid")) as renderer:
+        result = CliRunner().invoke(cli, [
+            "figure", "--volume", str(sphere), "--threshold", "2.3", "--views", "dorsal", "--size", "80x60",
+            "--slices", "z=-20,50", "--slices", "x=40", "--projections", "xz", "--convention", "radiological",
+            "--renderer", renderer, "-q", "--out", str(tmp_path / "fig.png")])
+    assert result.exit_code == 0, result.output
+    assert "(1 row(s) x 1 view(s) + 5 panel(s)," in result.output
+    assert "radiological convention (left on the right, labelled L/R)" in result.output
+
+
 def test_panels_with_jobs_are_the_serial_ones(sphere, tmp_path):
     kw: dict[str, Any] = {"volume": sphere, "threshold": THRESHOLD, "views": "dorsal,lateral-right",
                           "width": 60, "height": 45, "slices": ["z=50"], "projections": "x",

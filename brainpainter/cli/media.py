@@ -86,11 +86,13 @@ def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, ti
     )
     w, h = result.figure.get_size_inches()
     n_images = len({image for image, _ in result.images})
-    n_views = len({view for _, view in result.images})
-    click.echo(f"figure written to {result.path} ({n_images} row(s) x {n_views} view(s), "
-               f"{w:.2f} x {h:.2f} in" + (f" at {dpi:g} dpi)" if out.suffix.lower() in
-                                        (".png", ".tif", ".tiff") else ")"))
-    if slices or projections:
+    panels = {s.name for s in PanelOptions(slices=slices, projections=projections).sections}
+    n_views = len({view for _, view in result.images} - panels)
+    click.echo(f"figure written to {result.path} ({n_images} row(s) x {n_views} view(s)"
+               + (f" + {len(panels)} panel(s), " if panels else ", ")
+               + f"{w:.2f} x {h:.2f} in" + (f" at {dpi:g} dpi)" if out.suffix.lower() in
+                                            (".png", ".tif", ".tiff") else ")"))
+    if panels:
         click.echo(f"slice and projection panels: {convention} convention (left on the "
                    f"{'left' if convention == 'neurological' else 'right'}, labelled L/R)")
     echo_warnings(result.input)
