@@ -271,3 +271,23 @@ def test_slice_outline_draws_the_label_volumes_borders(sphere, tmp_path):
     assert len(cols) >= 1 and all(abs(columns[c] + 1) <= 1 for c in cols)
     plain = _figure(sphere, tmp_path / "plain", slices=["z=20"])
     assert not ((plain.images[("sphere", "z=20")][..., :3].max(axis=-1) == 0).sum(axis=0) > 100).any()
+
+
+@pytest.mark.render
+def test_the_issues_figure_with_blender_views_three_slices_and_a_projection(sphere, tmp_path):
+    result = brainpainter.figure(None, volume=sphere, threshold=THRESHOLD, views="lateral-right,dorsal",
+                                 width=400, height=300, slices=["z=-20,10,50"], projections="z",
+                                 out=tmp_path / "fig.png", progress=False, dpi=150)
+    names = [name for _, name in result.images]
+    assert names == ["lateral-right", "dorsal", "z=-20", "z=10", "z=50", "glass-z"]
+    for view in ("lateral-right", "dorsal"):                      # the renders: a brain, not empty
+        assert (result.images[("sphere", view)][..., 3] > 0).mean() > 0.2
+    png = np.asarray(Image.open(result.path).convert("RGBA"))
+    h, w = png.shape[:2]
+    for name in ("z=50", "glass-z"):
+        box = result.image_axes[("sphere", name)].get_position()
+        crop = png[round((1 - box.y1) * h):round((1 - box.y0) * h), round(box.x0 * w):round(box.x1 * w)]
+        blob = _coloured(crop)
+        assert blob.sum() > 20 and _bar_error(crop[blob], result.scale) < 10, name
+        assert _centre(blob)[1] > 0.6 * crop.shape[1], name
+    assert not _coloured(result.images[("sphere", "z=-20")]).any()  # the sphere is not at z = -20
