@@ -150,3 +150,66 @@ def test_the_manifest_lists_the_clusters(sphere, tmp_path):
     assert run.returncode == 0, run.stderr
     blobs = json.loads((out / "manifest.json").read_text())["blobs"]
     assert blobs["threshold"] == 2.3 and blobs["clusters"][0]["sign"] == 1
+
+
+def test_the_conformance_suite_holds_a_renderer_to_its_clip_planes():
+    from dataclasses import replace
+
+    from brainpainter.testing import check_renderer
+    from brainpainter_blender.renderer import BlenderRenderer
+
+    report = check_renderer("blender", checks=("clip",))
+    assert report["clip_pixels"]["left_cortex_after"] == 0 and report["clip_inside_px"] < 2
+
+    class _Uncut(BlenderRenderer):  # draws every view whole: fails
+        def render(self, palette, view):
+            return super().render(palette, replace(view, clip=()))
+
+    with pytest.raises(AssertionError, match="clip:"):
+        check_renderer(_Uncut, checks=("clip",))
+
+
+def test_the_stand_in_draws_cut_faces_in_the_cap_colour_and_the_structures_inside(tiny):
+    from brainpainter.atlas.template import load_template
+    from brainpainter.rendering.clip import CAP_COLOR
+    from brainpainter.rendering.scene import RenderSettings, Scene
+    from brainpainter.rendering.views import View
+    from brainpainter.testing.stand_in import StandInRenderer
+
+    scene = Scene(load_template(tiny), "dk", settings=RenderSettings(width=400, height=20))
+    colors = {"Left-insula": (1.0, 0.0, 0.0), "Left-Hippocampus": (0.0, 0.0, 1.0)}
+    whole = View("v", "cortex", ("lh",), 180.0, 0.0)
+    cut = View("v", "cortex", ("lh",), 180.0, 0.0, clip=(ClipPlane("x", "<", -60.0),))
+    a, b = (StandInRenderer(scene).render(colors, v) for v in (whole, cut))
+    assert not near(a, CAP_COLOR, 1).any() and near(b, CAP_COLOR, 1).sum() > 1000
+    assert not near(a, (0, 0, 1), 1).any() and near(b, (0, 0, 1), 1).any()
+
+
+def test_cycles_refuses_a_cut_view_in_one_line(tiny):
+    from brainpainter.atlas.template import load_template
+    from brainpainter.rendering.geometry import Palette
+    from brainpainter.rendering.scene import RenderSettings, Scene
+    from brainpainter.rendering.views import get_view
+    from brainpainter_blender.renderer import BlenderRenderer
+
+    scene = Scene(load_template(tiny), "dk", settings=RenderSettings(width=40, height=30, quality="high"))
+    renderer = BlenderRenderer(scene)
+    try:
+        with pytest.raises(BrainPainterError, match=r"--clip.*not Cycles"):
+            renderer.render(Palette({}, scene.geometry), get_view("cutaway-left"))
+    finally:
+        renderer.close()
+
+
+def test_a_movie_sweeps_a_cut_through_the_brain(tmp_path):
+    from PIL import Image, ImageSequence
+
+    out = tmp_path / "sweep.gif"
+    brainpainter.movie(SUBCORTICAL, atlas="dk", out=out, views="lateral-left", clip_sweep="x", shading="flat",
+                       frames_per_step=4, width=320, height=240, progress=False)
+    with Image.open(out) as gif:
+        frames = [np.asarray(f.convert("RGB"))[:240] for f in ImageSequence.Iterator(gif)]
+    red = [int(((f[..., 0] > 200) & (f[..., 1] < 60) & (f[..., 2] < 60)).sum()) for f in frames]
+    assert len(frames) == 5 and red[0] == 0 and red[-1] > 200, red  # the cut passes the left structures
+    with pytest.raises(BrainPainterError, match="clip-sweep 'w'"):
+        brainpainter.movie(SUBCORTICAL, atlas="dk", out=tmp_path / "bad.gif", clip_sweep="w")

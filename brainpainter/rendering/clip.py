@@ -86,6 +86,23 @@ def parse_clips(spec: str | Sequence[str] | None) -> tuple[ClipPlane, ...]:
     return tuple(dict.fromkeys(planes))
 
 
+def parse_sweep(spec: str) -> tuple[str, str]:
+    """``"x"``, ``"x<"`` or ``"x>"`` (a movie's ``--clip-sweep``) as (axis, side); ``"x"`` is ``"x<"``: a
+    plane sweeping from left to right, removing what lies left of it.
+
+    Raises
+    ------
+    BrainPainterError
+        Anything else.
+    """
+    text = str(spec).strip().lower()
+    if len(text) in (1, 2) and text[0] in AXES and text[1:] in ("", "<", ">"):
+        return text[0], text[1:] or "<"
+    raise BrainPainterError(f"--clip-sweep {spec!r} must be an axis and the side removed: x, x<, x>, "
+                            "y<, z>, ... (x right, y anterior, z superior); e.g. --clip-sweep x sweeps a cut "
+                            "from left to right.")
+
+
 def removed(points: NDArray[Any], planes: Sequence[ClipPlane]) -> NDArray[np.bool_]:
     """Which `points` (shape (n, 3), RAS mm) the planes remove (on the named side of every one),
     shape (n,)."""

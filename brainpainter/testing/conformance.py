@@ -37,6 +37,13 @@ the renderer needs none:
     with ``outline_width`` set, each cortex part's border segments
     (``PartGeometry.outline``) are drawn in ``outline_color`` as lines of constant
     pixel width: twice the image size, about twice the outline pixels (not four times).
+``connectome``
+    node spheres and edge cylinders in their flat colours, where the camera puts them
+    (:mod:`~brainpainter.testing.connectome_check`).
+``clip``
+    a view's cutaway planes (``View.clip``) remove the cortex on their side, the cut face is drawn
+    closed in ``CAP_COLOR`` and the structure inside shows where the camera puts it
+    (:mod:`~brainpainter.testing.clip_check`).
 """
 
 from __future__ import annotations
@@ -49,6 +56,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .clip_check import clip_check
 from .connectome_check import connectome_check
 from .memory import can_measure, growth_per_image
 from .pixels import WHITE, near
@@ -65,7 +73,7 @@ COLORS: dict[str, RGB] = {
     "Left-Hippocampus": (0.60, 0.05, 0.05), "Right-Hippocampus": (0.05, 0.35, 0.60),
 }
 CONFORMANCE_CHECKS = ("orientation", "flat_colors", "nan_missing", "transparent", "glass", "no_holes",
-                      "repeatable", "tracts", "memory", "vertex_colors", "outlines", "connectome")
+                      "repeatable", "tracts", "memory", "vertex_colors", "outlines", "connectome", "clip")
 #: Colours of the tracts check's two bundles (not among :data:`COLORS`).
 TRACT_COLORS: dict[str, RGB] = {"tract:AF_left": (1.0, 0.0, 0.5), "tract:CST_right": (0.0, 0.5, 1.0)}
 #: Largest resident-memory growth per image a renderer may show (MB).
@@ -459,7 +467,7 @@ def check_renderer(renderer: str | type, size: tuple[int, int] = (160, 120),
         for check, step in (("flat_colors", _antialiased), ("nan_missing", _nan_missing),
                             ("transparent", _transparent), ("glass", _glass), ("tracts", _tracts),
                             ("vertex_colors", _vertex_colors), ("outlines", _outlines),
-                            ("connectome", connectome_check)):
+                            ("connectome", connectome_check), ("clip", clip_check)):
             if check in checks:
                 step(run)
         if "memory" in checks and can_measure():
