@@ -213,3 +213,19 @@ def test_a_movie_sweeps_a_cut_through_the_brain(tmp_path):
     assert len(frames) == 5 and red[0] == 0 and red[-1] > 200, red  # the cut passes the left structures
     with pytest.raises(BrainPainterError, match="clip-sweep 'w'"):
         brainpainter.movie(SUBCORTICAL, atlas="dk", out=tmp_path / "bad.gif", clip_sweep="w")
+
+
+def test_a_scene_layer_and_a_map_run_draw_the_blobs_as_the_command_line_does(sphere):
+    scene = brainpainter.Scene(views="dorsal", width=200, height=150, clip="z>60")
+    scene.add(str(sphere), kind="volume-surface", threshold=2.3, cmap="autumn", label="z")
+    result = scene.render(progress=False)
+    (layer,) = result.layers
+    assert layer.kind == "blobs" and layer.label == "z" and result.manifest["blobs"]["clusters"]
+    assert result.manifest["settings"]["views"][0]["clip"] == ["z>60"]
+    direct = brainpainter.render(None, volume_surface=str(sphere), threshold=2.3, blobs_cmap="autumn",
+                                 blobs_label="z", views="dorsal", width=200, height=150, clip="z>60",
+                                 progress=False)
+    assert np.array_equal(result.images[("sphere", "dorsal")], direct.images[("sphere", "dorsal")])
+    mapped = brainpainter.render(None, volume=str(sphere), volume_surface=str(sphere), threshold=2.3,
+                                 views="dorsal", width=200, height=150, progress=False)
+    assert [la.kind for la in mapped.layers] == ["map", "blobs"] and mapped.manifest["blobs"]["clusters"]

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .pixels import WHITE, near
+from .pixels import COLORS, WHITE, near
 
 RGB = tuple[float, float, float]
 
@@ -25,8 +25,6 @@ def clip_check(run: Any) -> None:
     from brainpainter.rendering import framing
     from brainpainter.rendering.clip import CAP_COLOR, ClipPlane
     from brainpainter.rendering.views import View
-
-    from .conformance import COLORS
 
     cut = View("cutaway-tiny", "cortex", ("lh", "rh"), 180.0, 0.0, clip=(ClipPlane("x", "<", -60.0),))
     whole = View("cutaway-tiny", "cortex", ("lh", "rh"), 180.0, 0.0)

@@ -59,19 +59,11 @@ from numpy.typing import NDArray
 from .clip_check import clip_check
 from .connectome_check import connectome_check
 from .memory import can_measure, growth_per_image
-from .pixels import WHITE, near
+from .pixels import COLORS, WHITE, near
 from .templates import write_tiny_template
 from .tiny_tracts import tiny_tracts
 
 RGB = tuple[float, float, float]
-#: Distinct flat colours of the tiny template's regions (sRGB 0-1).
-COLORS: dict[str, RGB] = {
-    "Left-insula": (0.90, 0.10, 0.10), "Left-precuneus": (0.10, 0.75, 0.20),
-    "Left-superiorfrontal": (0.15, 0.25, 0.95), "Left-unknown": (0.95, 0.85, 0.10),
-    "Right-insula": (0.85, 0.15, 0.85), "Right-precuneus": (0.10, 0.80, 0.85),
-    "Right-superiorfrontal": (1.00, 0.55, 0.05), "Right-unknown": (0.45, 0.20, 0.70),
-    "Left-Hippocampus": (0.60, 0.05, 0.05), "Right-Hippocampus": (0.05, 0.35, 0.60),
-}
 CONFORMANCE_CHECKS = ("orientation", "flat_colors", "nan_missing", "transparent", "glass", "no_holes",
                       "repeatable", "tracts", "memory", "vertex_colors", "outlines", "connectome", "clip")
 #: Colours of the tracts check's two bundles (not among :data:`COLORS`).
