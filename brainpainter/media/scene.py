@@ -17,8 +17,8 @@ The layers stack in the composition's order whatever the order they were added i
 values, the map over them (by its ``alpha``), tracts, a connectome (its edges and nodes), a volume's
 clusters as surfaces (``kind="volume-surface"``), then the lines (a contour, an atlas's outline).
 Each kind is drawn once: a second layer of a kind already added is refused (two maps cannot be
-stacked in one composition; draw them in two scenes). A new kind joins :data:`KINDS` (how it is recognised and which options it becomes) and
-nothing else.
+stacked in one composition; draw them in two scenes). A new kind joins :data:`KINDS` (how it is
+recognised and which options it becomes) and nothing else.
 """
 
 from __future__ import annotations
