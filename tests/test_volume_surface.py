@@ -229,3 +229,16 @@ def test_a_scene_layer_and_a_map_run_draw_the_blobs_as_the_command_line_does(sph
     mapped = brainpainter.render(None, volume=str(sphere), volume_surface=str(sphere), threshold=2.3,
                                  views="dorsal", width=200, height=150, progress=False)
     assert [la.kind for la in mapped.layers] == ["map", "blobs"] and mapped.manifest["blobs"]["clusters"]
+
+
+def test_a_gaussian_blob_s_surface_is_the_sphere_where_it_crosses_the_threshold(tmp_path):
+    affine, shape = _mni_grid()
+    ijk = np.stack(np.meshgrid(*[np.arange(n) for n in shape], indexing="ij"), axis=-1)
+    xyz = ijk @ affine[:3, :3].T + affine[:3, 3]
+    sigma, peak, threshold = 6.0, 5.0, 2.3
+    data = peak * np.exp(-((xyz - np.asarray(CENTRE)) ** 2).sum(-1) / (2 * sigma**2))
+    nib.save(nib.Nifti1Image(data.astype(np.float32), affine), tmp_path / "gauss.nii.gz")
+    (cluster,) = find_blobs(tmp_path / "gauss.nii.gz", threshold).clusters
+    radius = sigma * np.sqrt(2 * np.log(peak / threshold))  # where the blob falls to the threshold
+    assert abs(cluster.volume_mm3 / (4 / 3 * np.pi * radius**3) - 1) < 0.10
+    assert np.linalg.norm(np.subtract(cluster.centre, CENTRE)) < 1.0

@@ -183,10 +183,13 @@ def _sign_clusters(sign: int, data: NDArray[np.float64], affine: NDArray[np.floa
         found.append(size)
         if size < min_mm3:
             continue
-        lo = np.array([s.start for s in where]) - 2
-        field = np.zeros(tuple(s.stop - s.start + 4 for s in where))  # 0 < threshold: the surface closes
-        field[2:-2, 2:-2, 2:-2] = np.where(own | ~mask[where], data[where], 0.0)
-        peak_ijk_full = _peak(np.where(own, data[where], -np.inf)) + lo + 2
+        # the cluster's box and one voxel around it, the volume's own values (those of other clusters:
+        # 0), padded with 0 < threshold so that a cluster at the volume's edge closes too
+        box = tuple(slice(max(s.start - 1, 0), min(s.stop + 1, n))
+                    for s, n in zip(where, data.shape, strict=True))
+        lo = np.array([s.start for s in box]) - 1
+        field = np.pad(np.where((labels[box] == k) | ~mask[box], data[box], 0.0), 1)
+        peak_ijk_full = _peak(np.where(own, data[where], -np.inf)) + np.array([s.start for s in where])
         mesh = _surface(field, lo, affine, threshold)
         values = sign * np.maximum(_inner_values(data, affine, mesh), threshold)
         peak_mni = tuple(float(x) for x in (affine @ np.r_[peak_ijk_full, 1.0])[:3])

@@ -350,7 +350,7 @@ class MovieFrames:
     @classmethod
     def of(cls, run: Run, keys: MovieKeys, plan: list[FramePlan], movie: MovieOptions) -> MovieFrames:
         painter = run.painter()
-        nan, missing = ((False, False) if run.layers[0].kind == "edges"  # a connectome alone: no swatch
+        nan, missing = ((False, False) if run.layers[0].kind in ("edges", "blobs")  # alone: no swatch
                         else swatches_needed(run.table, keys.rows, run.views, painter.scene.geometry))
         w, h = run.settings.width, run.settings.height
         assert run.settings.background is not None

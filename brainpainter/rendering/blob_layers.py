@@ -43,7 +43,7 @@ def blob_layer(options: Options, blobs: Blobs, first: bool) -> Layer:
     own = options.layers.scale_options("blobs", options.scale, first) or plain
     values = blobs.values
     if own.vmin is None and own.vmax is None and own.center is None:  # from the threshold to the peak
-        top, signs = float(np.abs(values).max()), {c.sign for c in blobs.clusters}
+        top, signs = max(abs(c.peak) for c in blobs.clusters), {c.sign for c in blobs.clusters}
         lo, hi = ((-top, top) if len(signs) == 2 else (blobs.threshold, top) if 1 in signs
                   else (-top, -blobs.threshold))
         own = replace(own, vmin=lo, vmax=hi, center=0.0 if len(signs) == 2 else None)
