@@ -10,8 +10,6 @@ from __future__ import annotations
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
-
 from brainpainter.color.scale import ScaleOptions
 from brainpainter.maps.autoscale import choose_scale
 from brainpainter.maps.clusters import Blobs

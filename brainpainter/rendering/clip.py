@@ -113,11 +113,12 @@ def removed(points: NDArray[Any], planes: Sequence[ClipPlane]) -> NDArray[np.boo
     return out
 
 
-def check_cut(parts: Sequence[tuple[str, NDArray[Any]]], planes: Sequence[ClipPlane], view: str) -> None:
-    """Refuse a clip that leaves none of the cortex and glass of `parts` (``(kind, vertices)`` each, vertices
-    of shape (n, 3)) drawn in `view` (:func:`check_kept`)."""
+def check_cut(parts: Sequence[Any], planes: Sequence[ClipPlane], view: str) -> None:
+    """Refuse a clip that leaves none of the cortex and glass of `parts` (each with ``kind`` and ``vertices``,
+    shape (n, 3): :class:`~brainpainter.rendering.parts.PartGeometry`) drawn in `view` (:func:`check_kept`);
+    the vertices of no other part are read (a tract part builds its tubes when they are)."""
     if planes:
-        cut = [v for kind, v in parts if kind in CLIPPED]
+        cut = [p.vertices for p in parts if p.kind in CLIPPED]
         check_kept(np.vstack(cut) if cut else np.zeros((0, 3)), planes, view)
 
 

@@ -472,7 +472,7 @@ class SceneGeometry:
                 + (" (--cortex hidden draws no cortex: give --tracts, or --cortex opaque)."
                    if self.cortex == "hidden" and view.content == "cortex" else ".")
             )
-        check_cut([(p.kind, p.vertices) for p in parts], view.clip, view.name)  # a cut that leaves nothing
+        check_cut(parts, view.clip, view.name)  # a cut that leaves none of the cortex and glass: an error
         return sorted(parts, key=lambda p: p.kind == "glass")
 
     def view_points(self, view: View) -> NDArray[Any]:
