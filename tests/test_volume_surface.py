@@ -242,3 +242,24 @@ def test_a_gaussian_blob_s_surface_is_the_sphere_where_it_crosses_the_threshold(
     radius = sigma * np.sqrt(2 * np.log(peak / threshold))  # where the blob falls to the threshold
     assert abs(cluster.volume_mm3 / (4 / 3 * np.pi * radius**3) - 1) < 0.10
     assert np.linalg.norm(np.subtract(cluster.centre, CENTRE)) < 1.0
+
+
+def test_the_export_holds_the_blobs_in_their_colours(sphere, tmp_path):
+    import trimesh
+
+    brainpainter.export(None, tmp_path / "b.glb", volume_surface=str(sphere), threshold=2.3)
+    blob = trimesh.load(tmp_path / "b.glb").geometry["blobs"]
+    rgb = np.asarray(blob.visual.vertex_colors)[:, :3] / 255
+    import matplotlib
+
+    top = np.asarray(matplotlib.colormaps["viridis"](1.0)[:3])  # value 5, the peak: the bar's top
+    linear = np.where(top <= 0.04045, top / 12.92, ((top + 0.055) / 1.055) ** 2.4)  # glTF's COLOR_0
+    assert np.abs(rgb - linear).max() < 0.03 and abs(blob.volume / SPHERE_MM3 - 1) < 0.10
+
+
+def test_jobs_draw_the_serial_run_s_pixels(sphere):
+    kwargs = {"volume_surface": str(sphere), "threshold": 2.3, "views": "dorsal,cutaway-left", "width": 160,
+              "height": 120, "progress": False}
+    one, two = brainpainter.render(None, **kwargs), brainpainter.render(None, jobs=2, **kwargs)
+    for key, img in one.images.items():
+        assert np.array_equal(img, two.images[key])
