@@ -32,6 +32,8 @@ class Aim:
     #: the view's cutaway planes as the clipped shader's ``clips`` (columns a, b, c, d), or None: none
     clips: Any = None
     n_clip: int = 0
+    #: the view's planes (:class:`~brainpainter.rendering.clip.ClipPlane`)
+    planes: tuple[Any, ...] = ()
 
     def cut(self, part: PartGeometry) -> bool:
         """Whether the view's planes cut `part` (its kind is cortex or glass)."""
@@ -53,4 +55,4 @@ def aim_for(geometry: SceneGeometry, view: View, settings: RenderSettings, light
     clips, n_clip = cutaway.clip_uniforms(view)
     return Aim(geometry.visible(view), Matrix(view_projection(pose, aspect).tolist()),
                world((0.0, 0.0, 1.0)), world(light.key_dir), world(light.fill_dir), clips=clips,
-               n_clip=n_clip)
+               n_clip=n_clip, planes=view.clip)

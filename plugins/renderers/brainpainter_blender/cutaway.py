@@ -33,6 +33,16 @@ def clip_uniforms(view: View) -> tuple[Any, int]:
     return Matrix(clips.tolist()), len(view.clip)
 
 
+def left_whole(triangles: Any, vertices: Any, planes: Any) -> Any:
+    """`triangles` (shape (n, 3)) without those whose three `vertices` (shape (n_vertices, 3)) the
+    `planes` remove: the removed region (on the named side of every plane) is convex, so such a
+    triangle lies wholly in it."""
+    from brainpainter.rendering.clip import removed
+
+    gone = removed(np.asarray(vertices, np.float64), planes)
+    return triangles[~gone[triangles].all(axis=1)]
+
+
 def bind_clip(shader: Any, clips: Any, n_clip: int, to_linear: Callable[[Any], Any]) -> None:
     """Set the clipped shader's planes, the cut face's colour (linear light), and no part cut yet."""
     shader.uniform_float("clips", clips)

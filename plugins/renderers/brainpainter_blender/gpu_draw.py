@@ -169,7 +169,7 @@ class GpuDraw:
             vbo = gpu.types.GPUVertBuf(fmt, len(order))
             for name, values in attrs.items():
                 vbo.attr_fill(name, np.ascontiguousarray(values, np.float32))
-            self._meshes[part.name] = (vbo, triangle_normals(attrs["pos"], triangles), triangles)
+            self._meshes[part.name] = (vbo, triangle_normals(attrs["pos"], triangles), triangles, order)
             batch = self._batches[part.name] = gpu.types.GPUBatch(
                 type="TRIS", buf=vbo, elem=gpu.types.GPUIndexBuf(type="TRIS", seq=triangles))
         return batch
@@ -192,8 +192,10 @@ class GpuDraw:
                 if len(self._fronts) > MAX_FRONT_VIEWS:
                     self._fronts.popleft().front.clear()
             self._batch(part)
-            vbo, normals, triangles = self._meshes[part.name]
+            vbo, normals, triangles, order = self._meshes[part.name]
             seq = triangles[facing(normals, np.asarray(aim.mvp, np.float64), back)]
+            if aim.cut(part):  # nor those the cut removes whole (fragments would be discarded one by one)
+                seq = cutaway.left_whole(seq, part.vertices[order], aim.planes)
             batch = aim.front[key] = gpu.types.GPUBatch(
                 type="TRIS", buf=vbo, elem=gpu.types.GPUIndexBuf(type="TRIS", seq=seq))
         return batch
@@ -361,8 +363,13 @@ class GpuDraw:
         gpu.state.face_culling_set(CULL_OPAQUE)
         shader.uniform_int("mode", gpu_shaders.MODE_LIT)
         drawn_as_lines = {t.name for t in tracts}
+        clipped = aim.n_clip > 0
         for p in aim.visible:
             if p.kind != "glass" and p.name not in drawn_as_lines:
+                if clipped != aim.cut(p):  # parts left whole: the plain shader (no discard: early depth)
+                    clipped = aim.cut(p)
+                    shader = self._bind_part_shader(aim, tex, clipped)
+                    shader.uniform_int("mode", gpu_shaders.MODE_LIT)
                 mapped = p.kind == "cortex" and bool(self.geometry.vertex_slots)
                 # a flat map is a 2-D picture: unlit, its colours exact
                 light = FLAT if p.kind == "flat" else self.map_lighting if mapped else self.lighting
@@ -373,8 +380,8 @@ class GpuDraw:
                                     ("ao_strength", light.occlusion),
                                     ("rim", light.rim if p.kind == "subcortical" else 0.0)):
                     shader.uniform_float(name, value)
-                if aim.n_clip:
-                    shader.uniform_int("clip_on", int(aim.cut(p)))
+                if clipped:
+                    shader.uniform_int("clip_on", 1)
                 self._front(p, aim).draw(shader)
                 if aim.cut(p):  # its cut face, closed (cutaway)
                     cutaway.draw_cap(self._front(p, aim, back=True), shader,
@@ -383,15 +390,17 @@ class GpuDraw:
                     mark(f"draw {p.name}")
         return shader
 
-    def _bind_part_shader(self, aim: _Aim, tex: Any) -> Any:
-        """Bind the part shader with the view's and the lighting's constants; returns it."""
+    def _bind_part_shader(self, aim: _Aim, tex: Any, clipped: bool | None = None) -> Any:
+        """Bind the part shader with the view's and the lighting's constants; returns it. `clipped`: its
+        variant that cuts (default: for a view with cutaway planes)."""
         s, light = self.settings, self.lighting
-        shader = gpu_shaders.part_shader(aim.n_clip > 0)
+        clipped = aim.n_clip > 0 if clipped is None else clipped
+        shader = gpu_shaders.part_shader(clipped)
         shader.bind()
         # Samplers before push constants: bpy 5.3 drops an integer push constant set before a
         # sampler of the same shader (the resolve's row count read 0 and every image came out empty).
         shader.uniform_sampler("palette", tex)
-        if aim.n_clip:
+        if clipped:
             cutaway.bind_clip(shader, aim.clips, aim.n_clip, srgb_to_linear)
         for name, value in (("mvp", aim.mvp), ("back", aim.back), ("key_dir", aim.key_dir),
                             ("fill_dir", aim.fill_dir), ("ambient", light.ambient),
