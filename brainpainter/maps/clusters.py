@@ -129,8 +129,9 @@ def find_blobs(img: ImageLike, threshold: float | None, min_cluster_mm3: float =
     volume = load_volume(img)
     name = volume.name
     if threshold is None or not threshold > 0:
+        given = "none was given" if threshold is None else f"{threshold!r} was given"
         raise BrainPainterError(f"--volume-surface {name} draws the clusters above --threshold; give "
-                                f"--threshold T > 0 (e.g. 2.3 for a z-map); {threshold!r} was given.")
+                                f"--threshold T > 0 (e.g. 2.3 for a z-map); {given}.")
     if volume.n_volumes != 1:
         raise BrainPainterError(f"--volume-surface draws one 3-D volume; {name} has {volume.n_volumes} "
                                 "volumes. Give one of them (fslroi, nilearn.image.index_img).")
