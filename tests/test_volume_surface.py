@@ -133,8 +133,8 @@ def test_bad_input_is_one_line_exit_2_and_nothing_written(sphere, tmp_path):
     cases = {"not an MNI152 volume": [f"--volume-surface={far}", "--threshold=2.3"],
              "at or above the largest": [f"--volume-surface={sphere}", "--threshold=7"],
              "min-cluster-mm3": [f"--volume-surface={sphere}", "--threshold=2.3", "--min-cluster-mm3=9000"],
-             "removes the whole brain": [f"--volume-surface={sphere}", "--threshold=2.3", "--clip=x<200",
-                                         "--views=dorsal"]}
+             "removes all the cortex and glass": [f"--volume-surface={sphere}", "--threshold=2.3",
+                                                  "--clip=x<200", "--views=dorsal"]}
     for words, args in cases.items():
         out = tmp_path / words.replace(" ", "_")
         run = _cli(*args, "--out", str(out), "--size", "80x60")

@@ -135,5 +135,7 @@ def check_kept(points: NDArray[Any], planes: Sequence[ClipPlane], view: str) -> 
     lo, hi = np.asarray(points).min(axis=0), np.asarray(points).max(axis=0)
     extent = ", ".join(f"{a} {lo[AXES.index(a)]:.0f}..{hi[AXES.index(a)]:.0f}"
                        for a in dict.fromkeys(p.axis for p in planes))
-    raise BrainPainterError(f"--clip {','.join(map(str, planes))} removes the whole brain in view {view!r} "
-                            f"(it spans {extent} mm); give a plane that cuts through it, e.g. --clip x<0.")
+    raise BrainPainterError(f"--clip {','.join(map(str, planes))} removes all the cortex and glass of "
+                            f"view {view!r} (they span {extent} mm), so nothing is cut open; give a plane "
+                            "that cuts through them, e.g. --clip x<0, or a view that draws more "
+                            "(cutaway-left).")

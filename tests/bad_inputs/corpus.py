@@ -794,7 +794,7 @@ INPROCESS += [
     Case("volume-surface-no-cluster-left", {"z.nii.gz": _sphere_volume()},
          ["--volume-surface", "z.nii.gz", "--threshold", "2.3", "--min-cluster-mm3", "1e6", "--out", "o",
           *RENDER], "give a smaller --min-cluster-mm3", command="render"),
-    _render(["--out", "o", "--clip", "x<500"], "removes the whole brain", "clip-removes-everything"),
+    _render(["--out", "o", "--clip", "x<500"], "removes all the cortex and glass", "clip-removes-everything"),
     _render(["--out", "o", "--clip", "left"], "is not a plane", "clip-not-a-plane"),
 ]
 
