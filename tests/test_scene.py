@@ -29,7 +29,7 @@ def test_each_kind_is_inferred_as_the_command_line_reads_it(tmp_path):
     assert infer_kind(tmp_path / "t.csv", values="fa.csv") == "tracts"
     assert infer_kind(mask, outline=True) == "contour"
     assert infer_kind("dk", outline=True) == "outline"
-    assert list(KINDS) == ["regions", "map", "tracts", "connectome", "contour", "outline"]
+    assert list(KINDS) == ["regions", "map", "tracts", "connectome", "volume-surface", "contour", "outline"]
 
 
 def test_layers_become_the_command_line_options(tmp_path):
@@ -65,7 +65,7 @@ def test_layers_become_the_command_line_options(tmp_path):
 @pytest.mark.parametrize(("add", "message"), [
     (lambda s: s.add({"lh": np.zeros(N5)}).add({"rh": np.zeros(N5)}),
      r"^the scene has a map layer already \(dict\); a composition draws one of each kind \(regions, map, "
-     r"tracts, connectome, contour, outline\), so dict cannot be stacked on it\. "
+     r"tracts, connectome, volume-surface, contour, outline\), so dict cannot be stacked on it\. "
      r"Draw it in a second Scene\.$"),
     (lambda s: s.add({"lh_insula": [1.0]}, alpha=0.5),
      r"^a regions layer takes \[.*'label'\]; 'alpha' was given\. Leave it out"),

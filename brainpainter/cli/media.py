@@ -105,7 +105,8 @@ def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, ti
                 type=click.Path(path_type=Path, dir_okay=False))
 @click.option("--out", "-o", required=True, type=OutPath(path_type=Path),
               help="Movie file: .mp4 (H.264) or .gif.")
-@option_group(MovieOptions, ("frames_per_step", "easing", "time_column", "hold", "fps", "orbit"))
+@option_group(MovieOptions, ("frames_per_step", "easing", "time_column", "hold", "fps", "orbit",
+                             "clip_sweep"))
 @click.option("--rows", default=None,
               help="Image names to use as key frames, comma-separated (default: all).")
 @option_group(MovieOptions, ("title", "label", "ticks"))
@@ -115,8 +116,8 @@ def figure(inputs: tuple[Path, ...], out: Path, grid: bool, rows: str | None, ti
 @parallel_options
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def movie(inputs: tuple[Path, ...], out: Path, frames_per_step: int, easing: str, time_column: str | None,
-          hold: int, fps: float, orbit: float, rows: str | None, title: str | None, label: str | None,
-          ticks: str | None, quiet: bool, **options: Any) -> None:
+          hold: int, fps: float, orbit: float, clip_sweep: str | None, rows: str | None, title: str | None,
+          label: str | None, ticks: str | None, quiet: bool, **options: Any) -> None:
     """A movie through the rows of INPUT (or a map series, --lh/--rh): key frames, values interpolated.
 
     \b
@@ -134,7 +135,8 @@ def movie(inputs: tuple[Path, ...], out: Path, frames_per_step: int, easing: str
     result = make_movie(
         tables_or_maps(inputs, kwargs), out=out, rows=_rows(rows), frames_per_step=frames_per_step,
         easing=easing,
-        time_column=time_column, hold=hold, fps=fps, orbit=orbit, title=title, label=label, ticks=ticks,
+        time_column=time_column, hold=hold, fps=fps, orbit=orbit, clip_sweep=clip_sweep, title=title,
+        label=label, ticks=ticks,
         progress=not quiet, **kwargs,
     )
     w, h = result.frame_size

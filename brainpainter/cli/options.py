@@ -42,7 +42,8 @@ RENDER_OPTION_NAMES = (
     "glass_opacity", "cortex", "outline_width", "outline_color", "renderer", "atlas_config", "tracts",
     "tracts_space", "tracts_affine", "max_streamlines", "tract_values", "tract_value", "tract_radius",
     "connectome", "nodes", "node_values", "node_categories", "directed", "edge_threshold", "top_edges",
-    "edges_of", "nodes_space", "node_labels", "node_labels_top", *(f.name for f in fields(LayerOptions)),
+    "edges_of", "nodes_space", "node_labels", "node_labels_top", "volume_surface", "min_cluster_mm3", "clip",
+    *(f.name for f in fields(LayerOptions)),
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
@@ -128,6 +129,10 @@ def render_option_list(views: str | None = None, size: str = DEFAULT_SIZE) -> di
         "tract_values": field_option(scene, "tract_values", type=click.Path(dir_okay=False)),
         "tract_value": field_option(scene, "tract_value"),
         "tract_radius": field_option(scene, "tract_radius"),
+        "volume_surface": field_option(scene, "volume_surface", type=click.Path(dir_okay=False),
+                                       metavar="FILE"),
+        "min_cluster_mm3": field_option(scene, "min_cluster_mm3", type=FINITE, metavar="MM3"),
+        "clip": field_option(scene, "clip", multiple=True, default=(), show_default=False, metavar="AXIS<MM"),
         # several matrices, one per image: a folder, a.csv,b.csv or a glob (docs/connectomes.md)
         "connectome": field_option(ConnectomeOptions, "connectome", type=click.Path(), metavar="FILE"),
         **{name: field_option(ConnectomeOptions, name, type=click.Path(dir_okay=False), metavar="FILE")
@@ -220,7 +225,7 @@ def tables_or_maps(inputs: Sequence[Any], kwargs: dict[str, Any]) -> Any:
     """
     from brainpainter.errors import BrainPainterError
 
-    maps = any(kwargs.get(name) is not None for name in ("lh", "rh", "volume"))
+    maps = any(kwargs.get(name) is not None for name in ("lh", "rh", "volume", "volume_surface"))
     if not inputs and not maps and kwargs.get("tract_values") is None and kwargs.get("connectome") is None:
         raise BrainPainterError("give INPUT tables, or maps: --lh FILE and/or --rh FILE, or --volume FILE, "
                                 "or tract values alone: --tract-values FILE --tracts DIR, or a connectivity "
@@ -247,4 +252,6 @@ def render_kwargs(options: dict[str, Any]) -> dict[str, Any]:
         out["hide"] = list(out["hide"])
     if "tracts" in out:
         out["tracts"] = list(out["tracts"])
+    if "clip" in out:
+        out["clip"] = list(out["clip"]) or None
     return out

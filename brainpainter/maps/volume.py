@@ -235,6 +235,13 @@ def _check_coverage(volume: Volume, inside: NDArray[np.bool_], subject: bool) ->
         "that subject's surfaces: project_volume(img, white={'lh': ..., 'rh': ...}, pial={...}).")
 
 
+def check_mni152(volume: Volume) -> None:
+    """Refuse a volume whose extent does not cover the cortex in MNI152 space (or a FreeSurfer
+    conformed one)."""
+    _, inside = _voxel_coordinates(volume, _fsaverage_points()[::16])  # a sample of the cortex is enough
+    _check_coverage(volume, inside, subject=False)
+
+
 def _sample(volume: Volume, ijk: NDArray[np.float64], inside: NDArray[np.bool_], order: int
             ) -> NDArray[np.float32]:
     """Every volume at the voxel coordinates: shape (n_volumes, n); NaN outside the grid."""
@@ -424,9 +431,7 @@ def subcortical_means(img: ImageLike, *, method: Method = "linear") -> dict[str,
     volume = load_volume(img)
     points, structure, names = aseg_mni152()
     ijk, inside = _voxel_coordinates(volume, points)
-    cortex = _fsaverage_points()[::16]                  # a sample of the cortex is enough here
-    _, cortex_inside = _voxel_coordinates(volume, cortex)
-    _check_coverage(volume, cortex_inside, subject=False)
+    check_mni152(volume)
     samples = _sample(volume, ijk, inside, ORDERS[method])
     finite = np.isfinite(samples)
     n = len(names)

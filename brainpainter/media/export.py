@@ -137,19 +137,23 @@ def tract_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
     list of RegionMesh
         One per tract part (``tracts-lh``, ``tracts-rh``, ``tracts``), part ``tracts``.
     """
-    if scene.tracts is None:
-        return []
+    return [] if scene.tracts is None else coloured_meshes(scene, colors, "tract", "tracts")
+
+
+def coloured_meshes(scene: Scene, colors: Mapping[str, RGB], kind: str, part: str) -> list[RegionMesh]:
+    """The scene's parts of `kind` (``tract``, ``blob``), one mesh each, coloured per vertex by `colors`
+    (sRGB 0-1 by palette key), as export part `part`."""
     from brainpainter.rendering.geometry import Palette
 
     geometry = scene.geometry
     rgb = Palette(colors, geometry).rgb
     out = []
     for p in geometry.parts:
-        if p.kind != "tract":
+        if p.kind != kind:
             continue
         per_vertex = rgb[p.palette_index]
         mean = per_vertex.mean(axis=0)
-        out.append(RegionMesh(p.name, "tracts", p.vertices, p.triangles.astype(np.int32), p.normals,
+        out.append(RegionMesh(p.name, part, p.vertices, p.triangles.astype(np.int32), p.normals,
                               (float(mean[0]), float(mean[1]), float(mean[2])), per_vertex))
     return out
 
@@ -266,7 +270,7 @@ def html_page(glb: bytes, *, title: str, meshes: Sequence[RegionMesh], backgroun
     parts = [p for p in ("lh", "rh", "subcortical", "tracts", "connectome")
              if any(m.part == p for m in meshes)]
     # what lies inside the cortex shows through it: the cortex drawn as glass
-    glass = [p for p in ("lh", "rh") if p in parts and "connectome" in parts]
+    glass = [p for p in ("lh", "rh") if p in parts and ("connectome" in parts or "blobs" in parts)]
     config = {"azimuth": azimuth, "parts": parts, "background": bg, "glass": glass}
     attrs = ['id="colorbar"', *['class="colorbar"'] * len(more_bars)]
 
@@ -329,13 +333,14 @@ EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cm
                   "underlay", "underlay_contrast", "threshold", "outline", "outline_threshold", "space",
                   "frames", "lh_surface", "rh_surface", *option_names(LayerOptions),  # each layer's own scale
                   "connectome", "nodes", "node_values", "node_categories", "directed", "edge_threshold",
-                  "top_edges", "edges_of", "nodes_space")
+                  "top_edges", "edges_of", "nodes_space", "volume_surface", "min_cluster_mm3")
 
 
 def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
     """The scene of a run and the meshes of its row `i`: a map's cortex coloured per vertex, or
     the regions, then the tracts' tubes."""
     from brainpainter.connectome.series import image_connectome
+    from brainpainter.rendering.blob_layers import blob_colors
     from brainpainter.rendering.composition import tract_colors
     from brainpainter.rendering.connectome_layers import connectome_colors
     from brainpainter.rendering.painter import load_scene, region_colors
@@ -343,10 +348,12 @@ def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
     opts, tv = run.options.scene, run.tract_values
     atlas_obj, scene = load_scene(run.table.atlas, opts.template, opts.surface, opts.hide,
                                   tracts=opts.tract_spec(), tract_nodes=tv.nodes if tv is not None else (),
-                                  tract_radius=opts.tract_radius, connectome=run.connectome)
+                                  tract_radius=opts.tract_radius, connectome=run.connectome, blobs=run.blobs)
     shown = None if run.connectome is None else image_connectome(run.connectome, i)  # a series: row i's
     inside = connectome_meshes(scene, shown, connectome_colors(shown, run.layers)
                                if shown is not None else {})  # a connectome's nodes and edges
+    if run.blobs is not None:  # a volume's clusters, per vertex on their bar
+        inside += coloured_meshes(scene, blob_colors(run.blobs, run.layers), "blob", "blobs")
     if isinstance(run, MapRun):  # the map, then the tracts drawn with it
         colors = run.colors(i)
         return scene, vertex_meshes(scene, colors) + tract_meshes(scene, colors.regions) + inside

@@ -224,7 +224,7 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     chosen = select_rows(table.images, rows)
     panels = volume_panels(data, run, panel_opts, chosen) if panel_opts.sections else {}
     painter = run.painter()
-    nan, missing = ((False, False) if run.layers[0].kind == "edges"  # a connectome alone: no region swatch
+    nan, missing = ((False, False) if run.layers[0].kind in ("edges", "blobs")  # alone: no region swatch
                     else swatches_needed(table, chosen, run.views, painter.scene.geometry))
     plan = run.items(chosen)
     background = run.settings.background

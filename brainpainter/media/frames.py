@@ -36,6 +36,22 @@ def orbit_views(painter: Painter, view: View, azimuths: Sequence[float], aspect:
     return out
 
 
+def sweep_views(painter: Painter, views: list[View], spec: str) -> list[View]:
+    """`views` (one per frame) each cut by a plane that sweeps across the brain over the frames
+    (``--clip-sweep x``: ``x<v``, v from the brain's left edge to just short of its right one, so the
+    last frame keeps a slice)."""
+    from brainpainter.rendering.clip import AXES, ClipPlane, parse_sweep
+
+    axis, side = parse_sweep(spec)
+    along = painter.scene.geometry.view_points(views[0])[:, AXES.index(axis)]
+    lo, hi, n = float(along.min()), float(along.max()), len(views)
+    out = []
+    for i, view in enumerate(views):
+        at = lo + (hi - lo) * i / n if side == "<" else hi - (hi - lo) * i / n
+        out.append(replace(view, clip=(*view.clip, ClipPlane(axis, side, round(at, 3)))))
+    return out
+
+
 # -- frame composition ------------------------------------------------------------------
 def _font(size: int) -> Any:
     """DejaVu Sans (shipped with matplotlib) at `size` pixels."""

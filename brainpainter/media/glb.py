@@ -41,7 +41,7 @@ class RegionMesh:
     name : str
         Region key (``"Left-insula"``), or ``"Left-medial-wall"`` for the
         cortex labels that are no region of the atlas.
-    part : {"lh", "rh", "subcortical", "tracts", "connectome"}
+    part : {"lh", "rh", "subcortical", "tracts", "connectome", "blobs"}
     vertices : ndarray of float32, shape (n_vertices, 3)
         RAS millimetres.
     faces : ndarray of int32, shape (n_faces, 3)

@@ -42,7 +42,7 @@ from brainpainter.errors import BrainPainterError
 from brainpainter.media.colorbar import quiet_glyphs
 from brainpainter.media.drawn import swatches_needed
 from brainpainter.media.encode import GIF_PALETTE_FRAMES, MAX_GIF_FRAMES, _GifWriter, _Mp4Writer
-from brainpainter.media.frames import FrameComposer, orbit_views
+from brainpainter.media.frames import FrameComposer, orbit_views, sweep_views
 from brainpainter.media.outfile import check_out_file
 from brainpainter.media.timeline import (
     EASINGS,
@@ -55,6 +55,8 @@ from brainpainter.media.timeline import (
     plan_frames,
     read_times,
 )
+from brainpainter.rendering.blob_layers import blob_colors
+from brainpainter.rendering.clip import parse_sweep
 from brainpainter.rendering.composition import tract_colors
 from brainpainter.rendering.connectome_layers import connectome_colors
 from brainpainter.rendering.layers import colorbar_layers, first_bar_label
@@ -95,6 +97,9 @@ class MovieOptions:
     orbit : float
         Degrees the camera turns about the vertical axis over the whole movie
         (360: one full turn that loops seamlessly); 0: fixed camera.
+    clip_sweep : str, optional
+        A cut plane sweeping through the brain over the movie (``"x"``: ``x<v`` from left to right; ``"z>"``:
+        from the top down), removing the cortex and glass on its side (:mod:`brainpainter.rendering.clip`).
     title : str, optional
         A line above the views.
     label, ticks
@@ -112,6 +117,9 @@ class MovieOptions:
     fps: float = field(default=24.0, metadata={"help": "Frames per second."})
     orbit: float = field(default=0.0, metadata={
         "help": "Degrees the camera turns around the brain over the movie (360: one full turn)."})
+    clip_sweep: str | None = field(default=None, metadata={
+        "help": "A cut plane sweeping through the brain over the movie: x (x<v from left to right), x>, y<, "
+                "y>, z<, z> (z>: from the top down); what lies inside shows as it passes."})
     title: str | None = field(default=None, metadata={"help": "A title above the views."})
     label: str | None = field(default=None, metadata={"help": "Colour-bar label, e.g. 'z-score'."})
     ticks: Sequence[float] | str | None = field(default=None, metadata={
@@ -120,6 +128,8 @@ class MovieOptions:
     def __post_init__(self) -> None:
         if not math.isfinite(float(self.orbit)):
             raise BrainPainterError(f"orbit must be a number of degrees; {self.orbit!r} was given.")
+        if self.clip_sweep is not None:
+            parse_sweep(self.clip_sweep)
         ease(0.0, self.easing)
 
     def check_format(self, fmt: str) -> None:
@@ -139,6 +149,7 @@ class MakeMovieKwargs(RenderKwargs, total=False):
     hold: int
     fps: float
     orbit: float
+    clip_sweep: str | None
     title: str | None
     label: str | None
     ticks: Sequence[float] | str | None
@@ -299,7 +310,7 @@ class MovieKeys:
                     f"--strict: column {unmatched[0]!r} matches no region of atlas {table.atlas.name!r} "
                     f"({len(unmatched)} such name(s)); see 'brainpainter check' for the closest names."
                 )
-        if len(chosen) == 1 and movie.orbit and times is None:  # one image turning (a connectome alone)
+        if len(chosen) == 1 and (movie.orbit or movie.clip_sweep) and times is None:  # one image turning, cut
             rows, key_times = [chosen[0], chosen[0]], [0.0, 1.0]
         else:
             rows, key_times = key_frames(table, chosen, times, time_name)
@@ -339,7 +350,7 @@ class MovieFrames:
     @classmethod
     def of(cls, run: Run, keys: MovieKeys, plan: list[FramePlan], movie: MovieOptions) -> MovieFrames:
         painter = run.painter()
-        nan, missing = ((False, False) if run.layers[0].kind == "edges"  # a connectome alone: no swatch
+        nan, missing = ((False, False) if run.layers[0].kind in ("edges", "blobs")  # alone: no swatch
                         else swatches_needed(run.table, keys.rows, run.views, painter.scene.geometry))
         w, h = run.settings.width, run.settings.height
         assert run.settings.background is not None
@@ -354,6 +365,8 @@ class MovieFrames:
             per_view = [orbit_views(painter, v, [v.azimuth + a for a in azimuths], w / h) for v in run.views]
         else:
             per_view = [[v] * n for v in run.views]
+        if movie.clip_sweep:
+            per_view = [sweep_views(painter, views, movie.clip_sweep) for views in per_view]
         states: list[tuple[int, int, float, tuple[View, ...]]] = []
         frame_state: list[int] = []
         for i, f in enumerate(plan):
@@ -387,6 +400,9 @@ class MovieFrames:
                 connectome = getattr(self.run, "connectome", None)
                 if connectome is not None:  # a series' edge weights change between key frames like regions
                     colors.update(connectome_colors(connectome, self.run.layers, (rows[a], rows[b], weight)))
+            blobs = getattr(self.run, "blobs", None)
+            if blobs is not None:  # one volume's clusters: the same colours in every frame
+                colors.update(blob_colors(blobs, self.run.layers))
             label = names[a] if a == b else f"{names[a]} {ARROW} {names[b]} ({weight:.3f})"
             yield [Item(colors, view, label=label) for view in state_views]
 

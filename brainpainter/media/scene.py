@@ -14,11 +14,11 @@ functions as the commands (:func:`brainpainter.render`, :func:`brainpainter.figu
 >>> scene.figure("fig.pdf", views=["lateral-left", "lateral-right"])
 
 The layers stack in the composition's order whatever the order they were added in: region
-values, the map over them (by its ``alpha``), tracts, a connectome (its edges and nodes), then
-the lines (a contour, an atlas's outline). Each kind is drawn once: a second layer of a kind
-already added is refused (two maps cannot be stacked in one composition; draw them in two
-scenes). A new kind joins :data:`KINDS` (how it is recognised and which options it becomes) and
-nothing else.
+values, the map over them (by its ``alpha``), tracts, a connectome (its edges and nodes), a volume's
+clusters as surfaces (``kind="volume-surface"``), then the lines (a contour, an atlas's outline).
+Each kind is drawn once: a second layer of a kind already added is refused (two maps cannot be
+stacked in one composition; draw them in two scenes). A new kind joins :data:`KINDS` (how it is
+recognised and which options it becomes) and nothing else.
 """
 
 from __future__ import annotations
@@ -136,6 +136,13 @@ def _connectome(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:
     return None, {"connectome": layer.data, **_scale("edges", layer.keywords), **chosen}
 
 
+def _volume_surface(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:
+    """A volume's clusters as surfaces (``--volume-surface``): its threshold, minimum size and scale."""
+    size = layer.keywords.get("min_cluster_mm3")
+    more = {"min_cluster_mm3": size} if size is not None else {}
+    return None, {"volume_surface": layer.data, **_scale("blobs", layer.keywords), **more}
+
+
 def _lines(layer: SceneLayer) -> dict[str, Any]:
     """The line keywords (``color``, ``width``) as the run's outline settings."""
     names = {"color": "outline_color", "width": "outline_width"}
@@ -163,6 +170,7 @@ KINDS: dict[str, Kind] = {
     "map": Kind(_map, (*_SCALED, "alpha", "threshold"), first=True),
     "tracts": Kind(_tracts, (*_SCALED, "values", "value")),
     "connectome": Kind(_connectome, (*_SCALED, *CONNECTOME_KEYWORDS)),
+    "volume-surface": Kind(_volume_surface, (*_SCALED, "threshold", "min_cluster_mm3")),
     "contour": Kind(_contour, ("levels", "color", "width")),
     "outline": Kind(_outline, ("color", "width")),
 }
@@ -231,7 +239,7 @@ class Scene:
             A region table; a map (``{"lh": ndarray (n,), "rh": ndarray (n,)}``, a map, CIFTI or
             volume file); tractograms (a folder, files); with ``outline=True`` a mask or p-map
             (a contour of it) or an atlas's name (its region borders).
-        kind : {"regions", "map", "tracts", "connectome", "contour", "outline"}, optional
+        kind : {"regions", "map", "tracts", "connectome", "volume-surface", "contour", "outline"}
             Inferred as the command line infers it (:func:`infer_kind`) when not given.
         outline : bool
             Draw `data` as lines: a map's iso-lines (``levels``, default 0.5), an atlas's borders.
@@ -240,7 +248,9 @@ class Scene:
             ``alpha`` and ``threshold`` (a map); ``values`` (tract values: a table, or the
             bundle columns of the region table), ``value`` (its column); a connectome's nodes
             and edges (``nodes``, ``node_values``, ``node_categories``, ``top_edges``, ...,
-            ``nodes_cmap``; its ``cmap``, ... are its edges'); ``color``, ``width`` and ``levels`` (lines).
+            ``nodes_cmap``; its ``cmap``, ... are its edges'); a volume's clusters as surfaces
+            (``kind="volume-surface"``: ``threshold``, ``min_cluster_mm3``, and its scale);
+            ``color``, ``width`` and ``levels`` (lines).
 
         Raises
         ------

@@ -14,7 +14,7 @@ import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,6 +32,10 @@ from brainpainter.rendering.painter import region_colors
 from brainpainter.rendering.settings import RGB, RenderSettings, outlined
 from brainpainter.table.region_table import RegionTable
 from brainpainter.tracts.values import TractValues
+
+if TYPE_CHECKING:
+    from brainpainter.connectome.model import Connectome
+    from brainpainter.maps.clusters import Blobs
 
 
 def run_layers(options: Options, table: RegionTable, tract_values: TractValues | None,
@@ -200,6 +204,28 @@ def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None, me
     scale = map_scale(own if own is not None else plain, maps, threshold)
     layers = (regions, Layer("map", scale, alpha, label))
     return layers + tract_layer(options, tract_values), RegionsBelow.of(table, regions.scale, meshes)
+
+
+def region_run_layers(options: Options, table: RegionTable, tract_values: TractValues | None,
+                      only_tracts: bool, connectome: Connectome | None, blobs: Blobs | None,
+                      alone: str | None) -> tuple[Layer, ...]:
+    """A region run's layers: the table's (or, `alone`, a connectome's or blobs' first), then a
+    connectome's edges and nodes, then the blobs."""
+    from brainpainter.rendering.blob_layers import blob_kinds, blob_layer
+    from brainpainter.rendering.connectome_layers import connectome_kinds, connectome_layers
+
+    others = (*connectome_kinds(connectome), *blob_kinds(blobs))
+    layers: tuple[Layer, ...] = ()
+    if alone is None:
+        layers = run_layers(options, table, tract_values, only_tracts and tract_values is not None,
+                            others=others)
+    else:
+        options.layers.check_drawn(others)
+    if connectome is not None:
+        layers += connectome_layers(options, connectome, first=not layers)
+    if blobs is not None:
+        layers += (blob_layer(options, blobs, first=not layers),)
+    return layers
 
 
 def tract_layer(options: Options, tract_values: TractValues | None) -> tuple[Layer, ...]:

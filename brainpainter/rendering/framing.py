@@ -27,13 +27,14 @@ _POLE_TOLERANCE = 1e-6
 #: Kinds of scene part: cortex of one hemisphere, all subcortical structures, one glass hull, the
 #: white-matter tracts of one hemisphere (or the commissural and midline ones: hemi None), the flat
 #: map of one hemisphere (drawn unlit, by flat views only), a connectome's nodes and its edges.
-PART_KINDS = ("cortex", "subcortical", "glass", "tract", "flat", "node", "edge")
+PART_KINDS = ("cortex", "subcortical", "glass", "tract", "flat", "node", "edge", "blob")
 #: Least depth a camera frames, millimetres: a flat map (no depth) keeps its borders, lifted off it, in view.
 MIN_DEPTH = 1.0
 
 
-#: Kinds of parts that lie inside the cortex (tracts, a connectome's nodes and edges): drawn where tracts are.
-INSIDE = ("tract", "node", "edge")
+#: Kinds of parts that lie inside the cortex (tracts, a connectome's nodes and edges, a volume's blobs):
+#: drawn where tracts are.
+INSIDE = ("tract", "node", "edge", "blob")
 
 
 def shows(view: View, kind: str, hemi: str | None, cortex: str = "opaque") -> bool:
@@ -51,7 +52,7 @@ def shows(view: View, kind: str, hemi: str | None, cortex: str = "opaque") -> bo
     Parameters
     ----------
     view : View
-    kind : {"cortex", "subcortical", "glass", "tract", "flat", "node", "edge"}
+    kind : {"cortex", "subcortical", "glass", "tract", "flat", "node", "edge", "blob"}
         Nodes and edges are drawn as tracts are.
     hemi : {"lh", "rh"} or None
         None for the subcortical part and for commissural tracts.
@@ -65,6 +66,8 @@ def shows(view: View, kind: str, hemi: str | None, cortex: str = "opaque") -> bo
         return view.content == "flat" and kind == "flat" and hemi in view.hemis
     if kind == "glass":
         return hemi in view.glass or (cortex == "hull" and view.content == "cortex" and hemi in view.hemis)
+    if view.clip and view.content == "cortex" and (kind in INSIDE or kind == "subcortical"):
+        return True
     if kind in INSIDE:
         if view.content == "subcortical":
             return True

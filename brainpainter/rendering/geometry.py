@@ -1,16 +1,14 @@
 """Ready-to-draw geometry of a scene: what core hands every renderer.
 
-A renderer does not read templates. For a :class:`~brainpainter.rendering.scene.Scene`
-core builds, once, one :class:`PartGeometry` per drawable part (cortex of
-each hemisphere, the subcortical structures, each glass hull): vertices,
-normals, triangles and a per-vertex **palette index**. Every image is then a
-:class:`Palette` (one colour per palette slot) plus a
+A renderer does not read templates. For a :class:`~brainpainter.rendering.scene.Scene` core builds,
+once, one :class:`PartGeometry` per drawable part (cortex of each hemisphere, the subcortical
+structures, each glass hull): vertices, normals, triangles and a per-vertex **palette index**. Every
+image is then a :class:`Palette` (one colour per palette slot) plus a
 :class:`~brainpainter.rendering.views.View`; recolouring never touches the geometry.
 
-A vertex shared by faces of two regions is stored once per region, so each
-triangle's three vertices carry its region's palette index (flat colours
-stay exact) while normals are those of the shared surface (lighting stays
-smooth across region borders).
+A vertex shared by faces of two regions is stored once per region, so each triangle's three vertices
+carry its region's palette index (flat colours stay exact) while normals are those of the shared
+surface (lighting stays smooth across region borders).
 
 Palette slots ``0, 1, 2`` are fixed: the medial-wall colour (cortex labels
 without a colour), the neutral grey (subcortical structures without a
@@ -19,11 +17,11 @@ colour) and the glass colour; slots from 3 on are region keys
 bundle's one colour, ``tract:AF_left:17`` for node 17 of an along-tract
 profile, ``tract-direction:i`` for the fixed direction colours).
 
-White-matter tracts are parts of kind ``tract`` (``tracts-lh``, ``tracts-rh``
-and ``tracts`` for commissural bundles): centrelines, and triangle tubes
-(:func:`brainpainter.tracts.tubes.tube_mesh`) built when first read
-(:class:`~brainpainter.rendering.tract_parts.TractPart`), so a renderer that draws
-tubes draws them as any opaque part; so are a connectome's ``nodes`` and ``edges`` (:mod:`.connectome_parts`).
+White-matter tracts are parts of kind ``tract`` (``tracts-lh``, ``tracts-rh`` and ``tracts`` for
+commissural bundles): centrelines, and triangle tubes (:func:`brainpainter.tracts.tubes.tube_mesh`)
+built when first read (:class:`~brainpainter.rendering.tract_parts.TractPart`), so a renderer that
+draws tubes draws them as any opaque part; so are a connectome's ``nodes`` and ``edges``
+(:mod:`.connectome_parts`) and a volume's ``blobs`` (:mod:`.blob_parts`, keys ``blob:0`` ...).
 
 A scene coloured per vertex (``Scene.coloring == "vertices"``, a map) keeps
 one drawing path: its cortex parts are the template's stored meshes, not
@@ -47,6 +45,8 @@ from numpy.typing import NDArray
 from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.rendering import framing
+from brainpainter.rendering.blob_parts import blob_parts
+from brainpainter.rendering.clip import check_cut
 from brainpainter.rendering.connectome_parts import connectome_parts
 from brainpainter.rendering.lazy_parts import LazyParts, cortex_arrays
 from brainpainter.rendering.part_cache import cortex_kept
@@ -295,6 +295,7 @@ class SceneGeometry:
             self._lazy.entries += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for,
                                               scene.tract_radius)
         self._lazy.entries += connectome_parts(getattr(scene, "connectome", None), slots_for)
+        self._lazy.entries += blob_parts(getattr(scene, "blobs", None), template, slots_for)
         for hemi in HEMIS:
             if hemi in template.manifest.get("glass", {}):
                 self._lazy.later_glass(template, hemi)
@@ -471,6 +472,7 @@ class SceneGeometry:
                 + (" (--cortex hidden draws no cortex: give --tracts, or --cortex opaque)."
                    if self.cortex == "hidden" and view.content == "cortex" else ".")
             )
+        check_cut(parts, view.clip, view.name)  # a cut that leaves none of the cortex and glass: an error
         return sorted(parts, key=lambda p: p.kind == "glass")
 
     def view_points(self, view: View) -> NDArray[Any]:

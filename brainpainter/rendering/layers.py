@@ -19,15 +19,16 @@ from brainpainter.color.scale import ColourScale, ScaleOptions
 from brainpainter.errors import BrainPainterError, within
 
 #: The kinds of data a layer draws, in the order of their options.
-LAYER_KINDS = ("regions", "map", "tracts", "nodes", "edges")
+LAYER_KINDS = ("regions", "map", "tracts", "nodes", "edges", "blobs")
 #: The colour-scale options each layer has (the fields of :class:`ScaleOptions` that make its colours).
 SCALE_FIELDS = ("gradient", "cmap", "vmin", "vmax", "center")
 _WHAT = {"regions": "Region values", "map": "The map", "tracts": "Tract values",
-         "nodes": "Node values", "edges": "Edge weights"}
+         "nodes": "Node values", "edges": "Edge weights", "blobs": "Blob values"}
 _GIVE = {"regions": "give a region table as INPUT", "map": "give a map (--lh/--rh or --volume)",
          "tracts": "give tract values (--tract-values, or bundle columns in INPUT, with --tracts)",
          "nodes": "give a connectome (--connectome) with --node-values or --node-categories",
-         "edges": "give a connectome (--connectome)"}
+         "edges": "give a connectome (--connectome)",
+         "blobs": "give a volume's clusters (--volume-surface FILE --threshold T)"}
 
 
 @dataclass(frozen=True)
@@ -36,7 +37,7 @@ class Layer:
 
     Attributes
     ----------
-    kind : {"regions", "map", "tracts", "nodes", "edges"}
+    kind : {"regions", "map", "tracts", "nodes", "edges", "blobs"}
     scale : ColourScale
         A categorical layer's (node categories) carries them (``scale.categories``).
     opacity : float
@@ -106,6 +107,12 @@ class LayerKwargs(TypedDict, total=False):
     edges_vmax: float | None
     edges_center: float | None
     edges_label: str | None
+    blobs_gradient: str | None
+    blobs_cmap: str | None
+    blobs_vmin: float | None
+    blobs_vmax: float | None
+    blobs_center: float | None
+    blobs_label: str | None
 
 
 def _scale_field(kind: str, name: str) -> Any:
@@ -136,7 +143,9 @@ class LayerOptions:
         A connectome's node values' scale.
     edges_gradient, edges_cmap, edges_vmin, edges_vmax, edges_center : optional
         A connectome's edge weights' scale (default: diverging, ``RdBu_r`` centred at 0).
-    regions_label, map_label, tracts_label, nodes_label, edges_label : str, optional
+    blobs_gradient, blobs_cmap, blobs_vmin, blobs_vmax, blobs_center : optional
+        A volume's blobs' scale (``--volume-surface``; default: automatic from the threshold to the peak).
+    regions_label, map_label, tracts_label, nodes_label, edges_label, blobs_label : str, optional
         Each layer's colour-bar label.
     map_alpha : float
         Opacity of a map drawn over region colours, 0-1.
@@ -174,6 +183,12 @@ class LayerOptions:
     edges_vmax: float | None = _scale_field("edges", "vmax")
     edges_center: float | None = _scale_field("edges", "center")
     edges_label: str | None = _label_field("edges")
+    blobs_gradient: str | None = _scale_field("blobs", "gradient")
+    blobs_cmap: str | None = _scale_field("blobs", "cmap")
+    blobs_vmin: float | None = _scale_field("blobs", "vmin")
+    blobs_vmax: float | None = _scale_field("blobs", "vmax")
+    blobs_center: float | None = _scale_field("blobs", "center")
+    blobs_label: str | None = _label_field("blobs")
 
     def __post_init__(self) -> None:
         if not within(self.map_alpha, 0.0, 1.0):

@@ -21,11 +21,13 @@ from brainpainter.atlas.template import Template, load_template
 from brainpainter.connectome.model import Connectome
 from brainpainter.connectome.series import check_images
 from brainpainter.errors import BrainPainterError
+from brainpainter.maps.clusters import Blobs
 from brainpainter.maps.flat import check_flat, flat_labels, flat_sheet, flat_values
 from brainpainter.maps.inputs import VertexMaps, is_map_input, read_maps
 from brainpainter.maps.layers import vertex_colors
 from brainpainter.maps.outlines import Contours, mesh_edges
 from brainpainter.maps.resolution import map_mesh, own_vertex_count
+from brainpainter.rendering.blob_layers import blob_colors, blob_kinds, blob_layer, load_blobs
 from brainpainter.rendering.composition import RegionsBelow, cortex_for, line_layers, map_layers, tract_colors
 from brainpainter.rendering.connectome_layers import connectome_colors, connectome_kinds, connectome_layers
 from brainpainter.rendering.geometry import VertexColors
@@ -36,7 +38,7 @@ from brainpainter.rendering.parallel import Item
 from brainpainter.rendering.settings import with_aspect
 from brainpainter.rendering.sulc import convexity
 from brainpainter.rendering.tract_run import given_tract_values
-from brainpainter.rendering.views import View, parse_views
+from brainpainter.rendering.views import View, parse_views, with_clip
 from brainpainter.table.region_table import RegionTable, read_table
 from brainpainter.tracts.values import TractValues
 
@@ -91,6 +93,7 @@ class MapRun:
     flat: dict[str, NDArray[Any]] | None = None  # flat views: each sheet vertex's nearest fsaverage vertex
     flat_edges: dict[str, NDArray[Any]] | None = None  # the sheets' edges (--outline-threshold on flat views)
     connectome: Connectome | None = None  # nodes and edges inside the cortex, drawn as glass
+    blobs: Blobs | None = None  # a volume's clusters as surfaces (--volume-surface)
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
     @property
@@ -111,7 +114,8 @@ class MapRun:
         nodes = self.tract_values.nodes if self.tract_values is not None else ()
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
                        scene.renderer, coloring="vertices", contours=self.contours, tracts=scene.tract_spec(),
-                       tract_nodes=nodes, tract_radius=scene.tract_radius, connectome=self.connectome)
+                       tract_nodes=nodes, tract_radius=scene.tract_radius, connectome=self.connectome,
+                       blobs=self.blobs)
 
     def items(self, rows: Any) -> list[tuple[int, View]]:
         return [(i, view) for i in rows for view in self.views]
@@ -149,6 +153,8 @@ class MapRun:
                                             self.scale_of("tracts")))
             if self.connectome is not None:
                 regions.update(connectome_colors(self.connectome, self.layers, image))
+            if self.blobs is not None:
+                regions.update(blob_colors(self.blobs, self.layers))
             self._cache[image] = VertexColors(regions, cortex)
         return self._cache[image]
 
@@ -205,7 +211,7 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
         elif len(maps.values) == 1 and not maps.regions:  # one hemisphere's map (--lh alone): its side
             side = "left" if "lh" in maps.values else "right"
             views = f"lateral-{side},medial-{side}" + (",subcortical" if options.scene.tracts else "")
-    view_list = parse_views(views if isinstance(views, str) else list(views))
+    view_list = with_clip(parse_views(views if isinstance(views, str) else list(views)), options.scene.clips)
     source_vertex = {hemi: np.asarray(m.source_vertex) for hemi, m in meshes.items()}
     edges = ({hemi: mesh_edges(m.faces) for hemi, m in meshes.items()} if options.maps.outline_threshold
              else None)
@@ -214,11 +220,13 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     tract_values = given_tract_values(scene)
     connectome = options.connectome.load(atlas_obj if atlas is None else atlas, tpl, options.scene.surface)
     check_images(connectome, maps.n_images, "the maps have")
+    blobs = load_blobs(options)
     layers, below = map_layers(options, maps, table, meshes, tract_values,
-                               others=connectome_kinds(connectome))
+                               others=(*connectome_kinds(connectome), *blob_kinds(blobs)))
     settings = cortex_for(settings, cortex_values=True, tracts=bool(options.scene.tracts),
-                          connectome=connectome is not None)
+                          connectome=connectome is not None or blobs is not None)
     layers += connectome_layers(options, connectome, first=False) if connectome is not None else ()
+    layers += (blob_layer(options, blobs, first=False),) if blobs is not None else ()
     flat = flat_edges = None
     if any(v.content == "flat" for v in view_list):  # the flat maps: fsaverage's templates only
         check_flat(tpl, labels)
@@ -233,7 +241,7 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
         settings = with_aspect(settings, aspect)
     return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list, settings, options,
                   source_vertex, edges, depth, contours, tract_values, layers=layers, below=below,
-                  mesh_masks=masks, flat=flat, flat_edges=flat_edges, connectome=connectome)
+                  mesh_masks=masks, flat=flat, flat_edges=flat_edges, connectome=connectome, blobs=blobs)
 
 
 def _own_surfaces(options: Options, surfaces: dict[str, Any]) -> dict[str, Surface]:

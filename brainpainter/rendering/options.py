@@ -41,8 +41,9 @@ from brainpainter.atlas.model import SPACES, SURFACES
 from brainpainter.color.rgb import to_rgb
 from brainpainter.color.scale import ScaleKwargs, ScaleOptions
 from brainpainter.connectome.options import ConnectomeKwargs, ConnectomeOptions
-from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.errors import BrainPainterError, choice_error, within
 from brainpainter.maps.options import MapKwargs, MapOptions
+from brainpainter.rendering.clip import ClipPlane, parse_clips
 from brainpainter.rendering.layers import LayerKwargs, LayerOptions
 from brainpainter.rendering.settings import RenderSettings, SettingsKwargs
 from brainpainter.rendering.views import PRESETS, parse_views
@@ -74,6 +75,9 @@ class SceneKwargs(TypedDict, total=False):
     tract_values: Any
     tract_value: str | None
     tract_radius: float | None
+    volume_surface: Any
+    min_cluster_mm3: float
+    clip: str | Sequence[str] | None
 
 
 class RunnerKwargs(TypedDict, total=False):
@@ -126,6 +130,13 @@ class SceneOptions:
     tract_radius : float, optional
         Radius of the streamlines' tubes, millimetres; default by their number
         (0.3 mm up to 2,000 streamlines, thinner beyond, 0.13 mm at 10,000).
+    volume_surface : path or nibabel image, optional
+        An MNI152 volume whose clusters above ``threshold`` (``--threshold``, both signs) are drawn
+        as lit surfaces inside the glass brain (:mod:`brainpainter.maps.clusters`).
+    min_cluster_mm3 : float
+        Its clusters smaller than this (cubic millimetres) are not drawn.
+    clip : str or list of str, optional
+        Cutaway planes (``"x<0"``, ``"x<0,z>20"``; :mod:`brainpainter.rendering.clip`) applied to every view.
     """
 
     views: str | Sequence[str] | None = field(default=None, metadata={
@@ -161,9 +172,26 @@ class SceneOptions:
         "help": "Radius of the streamline tubes in millimetres (default: 0.3 up to 2,000 streamlines, "
                 "thinner beyond)."})
 
+    volume_surface: Any = field(default=None, metadata={
+        "help": "An MNI152 volume whose clusters above --threshold (both signs) are drawn as smooth lit "
+                "surfaces inside the glass brain, on a colour scale of their own; see docs/maps-volumes.md."})
+    min_cluster_mm3: float = field(default=0.0, metadata={
+        "help": "Clusters of --volume-surface smaller than this many cubic millimetres are not drawn."})
+    clip: Any = field(default=None, metadata={
+        "help": "Cut the cortex and glass away where AXIS<MM or AXIS>MM (x right, y anterior, z superior), "
+                "e.g. x<0; several planes (repeated or comma-separated) cut out a wedge. What lies inside "
+                "stays whole and shows. Repeatable."})
+
     def __post_init__(self) -> None:
         if self.surface not in SURFACES:
             raise choice_error("surface", self.surface, SURFACES)
+        object.__setattr__(self, "clip", tuple(str(p) for p in parse_clips(self.clip)))
+        if not within(self.min_cluster_mm3, 0.0, 1e9):
+            raise BrainPainterError(f"--min-cluster-mm3 must be a number of cubic millimetres >= 0; "
+                                    f"{self.min_cluster_mm3!r} was given.")
+        if self.volume_surface is None and float(self.min_cluster_mm3) != 0.0:
+            raise BrainPainterError("--min-cluster-mm3 drops small clusters of --volume-surface, but no "
+                                    "--volume-surface was given; give the volume, or leave it out.")
         hide = [self.hide] if isinstance(self.hide, str) else list(self.hide)
         object.__setattr__(self, "hide", tuple(str(h) for h in hide))
         if self.views is not None:
@@ -178,6 +206,11 @@ class SceneOptions:
         if not self.tracts and self.tract_values is not None:
             raise BrainPainterError("--tract-values colours bundles, but no --tracts were given; give the "
                                     "tractograms to draw with --tracts FILE_OR_FOLDER.")
+
+    @property
+    def clips(self) -> tuple[ClipPlane, ...]:
+        """The ``clip`` planes (:mod:`brainpainter.rendering.clip`)."""
+        return parse_clips(self.clip)
 
     def tract_spec(self) -> TractSpec | None:
         """What tractograms to load (None without ``tracts``)."""

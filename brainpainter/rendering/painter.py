@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,6 +30,9 @@ from brainpainter.rendering.settings import RGB, RenderSettings
 from brainpainter.rendering.views import View
 from brainpainter.table.region_table import RegionTable
 from brainpainter.tracts.model import TractSpec
+
+if TYPE_CHECKING:
+    from brainpainter.maps.clusters import Blobs
 
 # Named groups for --hide: structure names (hemisphere-free) they cover.
 HIDE_GROUPS: dict[str, tuple[str, ...]] = {
@@ -136,6 +139,7 @@ def load_scene(
     coloring: str = "regions",
     contours: Contours | None = None,
     connectome: Connectome | None = None,
+    blobs: Blobs | None = None,
 ) -> tuple[Atlas, Scene]:
     """The atlas and the scene a renderer (or an exporter) draws; nothing is rendered.
 
@@ -175,6 +179,7 @@ def load_scene(
         coloring=coloring,
         contours=contours,
         connectome=connectome,
+        blobs=blobs,
     )
     return atlas, scene
 
@@ -209,6 +214,8 @@ class Painter:
         A second map's iso-lines (:attr:`brainpainter.rendering.scene.Scene.contours`).
     connectome : Connectome, optional
         Nodes and edges drawn inside the cortex (:attr:`brainpainter.rendering.scene.Scene.connectome`).
+    blobs : Blobs, optional
+        A volume's clusters drawn as surfaces (:attr:`brainpainter.rendering.scene.Scene.blobs`).
     """
 
     atlas: Atlas | str = "dk"
@@ -225,6 +232,7 @@ class Painter:
     coloring: str = "regions"
     contours: Contours | None = None
     connectome: Connectome | None = None
+    blobs: Blobs | None = None
     _renderer: Any = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -232,7 +240,7 @@ class Painter:
         self.atlas, self.scene = load_scene(self.atlas, self.template, self.surface, self.hidden,
                                             self.settings, self.medial_wall_color, self.atlas_config,
                                             self.tracts, self.tract_nodes, self.tract_radius,
-                                            self.coloring, self.contours, self.connectome)
+                                            self.coloring, self.contours, self.connectome, self.blobs)
         self.template = self.scene.template
         from brainpainter.atlas import registry
         from brainpainter.rendering.pythons import require_bpy

@@ -46,6 +46,8 @@ class PainterSpec:
         A second map's iso-lines (its values travel with the spec: about 1.3 MB for both hemispheres).
     connectome : Connectome, optional
         Its nodes and edges travel with the spec (400 nodes: about 1.3 MB of weights).
+    blobs : Blobs, optional
+        A volume's clusters' surfaces travel with the spec (a few hundred kB).
     """
 
     atlas: Any
@@ -62,6 +64,7 @@ class PainterSpec:
     coloring: str = "regions"
     contours: Any = None
     connectome: Any = None
+    blobs: Any = None
 
     @classmethod
     def of(cls, painter: Painter, template: Any = None) -> PainterSpec:
@@ -81,7 +84,7 @@ class PainterSpec:
             medial_wall_color=tuple(float(c) for c in painter.scene.medial_wall_color),  # type: ignore[arg-type]
             tracts=painter.tracts, tract_nodes=tuple(painter.tract_nodes), tract_radius=painter.tract_radius,
             coloring=painter.scene.coloring, contours=painter.scene.contours,
-            connectome=painter.scene.connectome,
+            connectome=painter.scene.connectome, blobs=painter.scene.blobs,
         )
 
     @property
@@ -110,4 +113,4 @@ class PainterSpec:
         return Painter(self.atlas, self.template, self.surface, self.hidden, self.settings,
                        self.renderer, self.medial_wall_color, tracts=self.tracts,
                        tract_nodes=self.tract_nodes, tract_radius=self.tract_radius, coloring=self.coloring,
-                       contours=self.contours, connectome=self.connectome)
+                       contours=self.contours, connectome=self.connectome, blobs=self.blobs)

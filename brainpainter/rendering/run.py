@@ -25,15 +25,18 @@ from brainpainter.color.scale import ColourScale
 from brainpainter.connectome.model import Connectome
 from brainpainter.connectome.series import check_images
 from brainpainter.errors import BrainPainterError, NoRegionColumnError
+from brainpainter.maps.clusters import Blobs
 from brainpainter.maps.inputs import is_map_input
 from brainpainter.maps.outlines import Contours
-from brainpainter.rendering.composition import cortex_for, line_entries, line_layers, run_layers, tract_colors
-from brainpainter.rendering.connectome_layers import (
-    connectome_colors,
-    connectome_kinds,
-    connectome_layers,
-    connectome_summary,
+from brainpainter.rendering.blob_layers import blob_colors, load_blobs
+from brainpainter.rendering.composition import (
+    cortex_for,
+    line_entries,
+    line_layers,
+    region_run_layers,
+    tract_colors,
 )
+from brainpainter.rendering.connectome_layers import connectome_colors, connectome_summary
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
 from brainpainter.rendering.painter import (
@@ -53,7 +56,7 @@ from brainpainter.rendering.tract_run import (
     tracts_only_table,
     without_bundle_columns,
 )
-from brainpainter.rendering.views import ImagesByView, View, parse_views
+from brainpainter.rendering.views import ImagesByView, View, parse_views, with_clip
 from brainpainter.table.region_table import RegionTable, read_table
 from brainpainter.table.rows import select_rows
 from brainpainter.tracts.values import TractValues
@@ -79,6 +82,7 @@ class Run:
     layers: tuple[Layer, ...] = ()
     contours: Contours | None = None  # a second map's iso-lines (--contour)
     connectome: Connectome | None = None
+    blobs: Blobs | None = None  # a volume's clusters as surfaces (--volume-surface)
 
     def scale_of(self, kind: str) -> ColourScale:
         """The colour scale of layer `kind` (``"regions"``, ``"tracts"``); the run's scale if it has none."""
@@ -90,7 +94,8 @@ class Run:
         nodes = self.tract_values.nodes if self.tract_values is not None else ()
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
                        scene.renderer, tracts=scene.tract_spec(), tract_nodes=nodes,
-                       tract_radius=scene.tract_radius, contours=self.contours, connectome=self.connectome)
+                       tract_radius=scene.tract_radius, contours=self.contours, connectome=self.connectome,
+                       blobs=self.blobs)
 
     def items(self, rows: Sequence[int]) -> list[tuple[int, View]]:
         """The images of `rows`: ``(row, view)`` for every row and view, row by row."""
@@ -103,6 +108,8 @@ class Run:
             colors.update(tract_colors(self.tract_values.row(self.table.images[i]), self.scale_of("tracts")))
         if self.connectome is not None:
             colors.update(connectome_colors(self.connectome, self.layers, i))
+        if self.blobs is not None:
+            colors.update(blob_colors(self.blobs, self.layers))
         return Item(colors, view, metadata, self.table.images[i])
 
 
@@ -147,12 +154,15 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     if views is not None:  # a given option's errors before a big input file is read
         view_list = parse_views(views if isinstance(views, str) else list(views))
     tract_values, only_tracts = run_tract_values(data, options)
+    blobs = load_blobs(options)
     only_connectome = data is None and tract_values is None and options.connectome.given
+    only_blobs = data is None and tract_values is None and not only_connectome and blobs is not None
     if only_tracts and tract_values is not None:
         source = data if data is not None else options.scene.tract_values
         table = tracts_only_table(tract_values, atlas_obj, source)
-    elif only_connectome:
-        table = connectome_only_table(atlas_obj, options.connectome.connectome)
+    elif only_connectome or only_blobs:
+        table = connectome_only_table(atlas_obj, options.connectome.connectome if only_connectome
+                                      else options.scene.volume_surface)
     else:
         if tract_values is not None and options.scene.tract_values is None:
             data = without_bundle_columns(data, {name for name, _ in tract_values.nodes})
@@ -170,26 +180,23 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
                                       connectome.series.names)
     check_images(connectome, len(table.images), f"table {table.source!r} has")
     if views is None:
-        view_list = parse_views(CONNECTOME_VIEWS if only_connectome
+        view_list = parse_views(CONNECTOME_VIEWS if only_connectome or only_blobs
                                 else default_views(table.atlas, only_tracts))
+    view_list = with_clip(view_list, options.scene.clips)
     own = (table.atlas.name, table.atlas.template_labels)
     contours, settings = line_layers(options, "a region render", own)
     cortical = {r.key for r in table.atlas.cortical()}
     settings = cortex_for(settings, cortex_values=bool(cortical.intersection(table.regions)),
-                          tracts=bool(options.scene.tracts), connectome=connectome is not None)
+                          tracts=bool(options.scene.tracts), connectome=connectome is not None or bool(blobs))
     if not options.size_given and table.atlas.image_aspect:  # a brain of another shape: frame the views
         settings = with_aspect(settings, shown_aspect(table.atlas, options.scene.template, view_list))
     elif not options.size_given and (aspect := flat_aspect(view_list)):  # flat maps: wider than a brain
         settings = with_aspect(settings, aspect)
-    if only_connectome:
-        options.layers.check_drawn(connectome_kinds(connectome))
-        layers = connectome_layers(options, connectome, first=True)  # type: ignore[arg-type]
-    else:
-        layers = run_layers(options, table, tract_values, only_tracts and tract_values is not None,
-                            others=connectome_kinds(connectome))
-        layers += connectome_layers(options, connectome, first=False) if connectome is not None else ()
+    layers = region_run_layers(options, table, tract_values, only_tracts, connectome, blobs,
+                     "connectome" if only_connectome else "blobs" if only_blobs else None)
     return Run(table, layers[0].scale, view_list, settings, options, tract_values, layers, contours,
-               connectome)
+               connectome, blobs)
+
 
 
 def layer_summaries(run: Run, painter: Painter) -> dict[str, Any]:
@@ -200,6 +207,8 @@ def layer_summaries(run: Run, painter: Painter) -> dict[str, Any]:
         out["tracts"] = painter.scene.tracts.summary()
     if run.connectome is not None:
         out["connectome"] = connectome_summary(run.connectome)
+    if getattr(run, "blobs", None) is not None:
+        out["blobs"] = run.blobs.summary()  # type: ignore[union-attr]
     return out
 
 
@@ -319,6 +328,8 @@ def render(data: Any = None, atlas: Atlas | str | None = None, *, out: str | Pat
         raise BrainPainterError(
             f"the table was read with atlas {run.table.atlas.name!r} but the painter draws "
             f"{painter.atlas.name!r}; give atlas= the painter's atlas, or make a Painter for this one.")  # type: ignore[union-attr]
+    for view in (v for v in run.views if v.clip):  # a cut that leaves nothing: an error before any output
+        painter.scene.geometry.visible(view)
     runner = make_runner(painter, run.options.scene.template, checked.runner,
                          n_items=len(chosen) * len(run.views))
     # The renderer (or every worker's) starts before any output exists: one that cannot start leaves none.

@@ -39,6 +39,7 @@ __all__ = ["LIGHTINGS", "QUALITIES", "RGB", "SHADINGS", "SULC_LIGHTINGS", "Blank
 
 if TYPE_CHECKING:
     from brainpainter.connectome.model import Connectome
+    from brainpainter.maps.clusters import Blobs
     from brainpainter.maps.outlines import Contours
     from brainpainter.rendering.geometry import Palette, SceneGeometry
     from brainpainter.tracts.model import Tracts
@@ -82,6 +83,9 @@ class Scene:
     connectome : Connectome, optional
         Nodes drawn as lit spheres and edges as lit cylinders, inside the glass cortex
         (:mod:`brainpainter.rendering.connectome_parts`; palette keys ``node:i``, ``edge:k``).
+    blobs : Blobs, optional
+        A volume's supra-threshold clusters drawn as lit surfaces inside the cortex
+        (:mod:`brainpainter.rendering.blob_parts`; palette keys ``blob:0`` ... of its value levels).
     """
 
     template: Template
@@ -96,6 +100,7 @@ class Scene:
     coloring: str = "regions"
     contours: Contours | None = None
     connectome: Connectome | None = None
+    blobs: Blobs | None = None
 
     def __post_init__(self) -> None:
         if self.surface not in SURFACES:

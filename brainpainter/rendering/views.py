@@ -18,6 +18,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from brainpainter.errors import BrainPainterError, nearest
+from brainpainter.rendering.clip import ClipPlane
 
 
 @dataclass(frozen=True)
@@ -39,6 +40,9 @@ class View:
         Camera direction in degrees (see module docstring).
     zoom : float
         > 1 moves the camera closer.
+    clip : tuple of ClipPlane
+        Cutaway planes (:mod:`brainpainter.rendering.clip`): the cortex and the glass on their side
+        are removed, and a cortex view also draws what lies inside (structures, blobs, tracts, nodes).
     """
 
     name: str
@@ -48,13 +52,17 @@ class View:
     elevation: float
     zoom: float = 1.0
     glass: tuple[str, ...] = ()
+    clip: tuple[ClipPlane, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
-        return {
+        out = {
             "name": self.name, "content": self.content, "hemis": list(self.hemis),
             "glass": list(self.glass), "azimuth": self.azimuth,
             "elevation": self.elevation, "zoom": self.zoom,
         }
+        if self.clip:
+            out["clip"] = [str(p) for p in self.clip]
+        return out
 
 
 _BOTH = ("lh", "rh")
@@ -79,6 +87,18 @@ PRESETS: dict[str, View] = {
     )
 }
 DEFAULT_VIEWS = ("lateral-left", "medial-left", "subcortical")
+#: Views that cut the cortex open (a clip with a camera); not among ``all``.
+CUTAWAYS: dict[str, View] = {
+    v.name: v
+    for v in (
+        View("cutaway-left", "cortex", _BOTH, 180.0, 0.0, clip=(ClipPlane("x", "<", 0.0),)),
+        View("cutaway-right", "cortex", _BOTH, 0.0, 0.0, clip=(ClipPlane("x", ">", 0.0),)),
+        View("cutaway-dorsal", "cortex", _BOTH, 0.0, 90.0, clip=(ClipPlane("z", ">", 10.0),)),
+        View("cutaway-anterior", "cortex", _BOTH, 90.0, 0.0, clip=(ClipPlane("y", ">", 0.0),)),
+        View("cutaway-corner", "cortex", _BOTH, 135.0, 30.0,
+             clip=(ClipPlane("x", "<", 0.0), ClipPlane("z", ">", 10.0))),
+    )
+}
 
 # The original BrainPainter's names, and common synonyms.
 ALIASES: dict[str, str] = {
@@ -109,12 +129,15 @@ def get_view(name: str) -> View:
     """A preset view by name or alias (case-insensitive)."""
     key = str(name).strip().lower()
     key = ALIASES.get(key, key)
+    if key in CUTAWAYS:
+        return CUTAWAYS[key]
     if key not in PRESETS:
         # current names first (in preset order), the original BrainPainter's names after them
-        close = nearest(str(name), [*PRESETS, *ALIASES])
+        close = nearest(str(name), [*PRESETS, *CUTAWAYS, *ALIASES])
         hint = f" Did you mean {ALIASES.get(close[0], close[0])!r}?" if close else ""
         raise BrainPainterError(
-            f"view must be one of {[*PRESETS, 'all', 'camera:AZ:EL[:ZOOM]']}; {name!r} was given.{hint} "
+            f"view must be one of {[*PRESETS, *CUTAWAYS, 'all', 'camera:AZ:EL[:ZOOM]']}; {name!r} was "
+            f"given.{hint} "
             f"The original BrainPainter's names work too: {[*list(ALIASES)[:6], '...']}."
         )
     return PRESETS[key]
@@ -174,6 +197,13 @@ def parse_views(spec: str | list[str] | tuple[str, ...] | None) -> list[View]:
 
 def with_zoom(view: View, zoom: float) -> View:
     return replace(view, zoom=zoom)
+
+
+def with_clip(views: list[View], planes: tuple[ClipPlane, ...]) -> list[View]:
+    """`views` each cut by `planes` too (``--clip``), the view's own planes first; none: as given."""
+    if not planes:
+        return views
+    return [replace(v, clip=tuple(dict.fromkeys(v.clip + planes))) for v in views]
 
 
 class ImagesByView(dict[tuple[str, str], Any]):

@@ -37,6 +37,13 @@ the renderer needs none:
     with ``outline_width`` set, each cortex part's border segments
     (``PartGeometry.outline``) are drawn in ``outline_color`` as lines of constant
     pixel width: twice the image size, about twice the outline pixels (not four times).
+``connectome``
+    node spheres and edge cylinders in their flat colours, where the camera puts them
+    (:mod:`~brainpainter.testing.connectome_check`).
+``clip``
+    a view's cutaway planes (``View.clip``) remove the cortex on their side, the cut face is drawn
+    closed in ``CAP_COLOR`` and the structure inside shows where the camera puts it
+    (:mod:`~brainpainter.testing.clip_check`).
 """
 
 from __future__ import annotations
@@ -49,23 +56,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .clip_check import clip_check
 from .connectome_check import connectome_check
 from .memory import can_measure, growth_per_image
-from .pixels import WHITE, near
+from .pixels import COLORS, WHITE, near
 from .templates import write_tiny_template
 from .tiny_tracts import tiny_tracts
 
 RGB = tuple[float, float, float]
-#: Distinct flat colours of the tiny template's regions (sRGB 0-1).
-COLORS: dict[str, RGB] = {
-    "Left-insula": (0.90, 0.10, 0.10), "Left-precuneus": (0.10, 0.75, 0.20),
-    "Left-superiorfrontal": (0.15, 0.25, 0.95), "Left-unknown": (0.95, 0.85, 0.10),
-    "Right-insula": (0.85, 0.15, 0.85), "Right-precuneus": (0.10, 0.80, 0.85),
-    "Right-superiorfrontal": (1.00, 0.55, 0.05), "Right-unknown": (0.45, 0.20, 0.70),
-    "Left-Hippocampus": (0.60, 0.05, 0.05), "Right-Hippocampus": (0.05, 0.35, 0.60),
-}
 CONFORMANCE_CHECKS = ("orientation", "flat_colors", "nan_missing", "transparent", "glass", "no_holes",
-                      "repeatable", "tracts", "memory", "vertex_colors", "outlines", "connectome")
+                      "repeatable", "tracts", "memory", "vertex_colors", "outlines", "connectome", "clip")
 #: Colours of the tracts check's two bundles (not among :data:`COLORS`).
 TRACT_COLORS: dict[str, RGB] = {"tract:AF_left": (1.0, 0.0, 0.5), "tract:CST_right": (0.0, 0.5, 1.0)}
 #: Largest resident-memory growth per image a renderer may show (MB).
@@ -459,7 +459,7 @@ def check_renderer(renderer: str | type, size: tuple[int, int] = (160, 120),
         for check, step in (("flat_colors", _antialiased), ("nan_missing", _nan_missing),
                             ("transparent", _transparent), ("glass", _glass), ("tracts", _tracts),
                             ("vertex_colors", _vertex_colors), ("outlines", _outlines),
-                            ("connectome", connectome_check)):
+                            ("connectome", connectome_check), ("clip", clip_check)):
             if check in checks:
                 step(run)
         if "memory" in checks and can_measure():

@@ -42,7 +42,10 @@ class StandInRenderer:
         ``faces`` (default): full-height stripes, one per face of the view's
         structures sampled evenly (grouped by label), each in its colour
         (medial wall / neutral grey where the key has no colour), then one per
-        value-coloured bundle (or node) of the view's tracts, then one per connectome node and edge.
+        value-coloured bundle (or node) of the view's tracts, then one per connectome node and edge,
+        then one per blob level. A cutaway view (``view.clip``) draws each cortex face its planes
+        remove in the cut face's colour (:data:`~brainpainter.rendering.clip.CAP_COLOR`), and the
+        structures, tracts, nodes and blobs inside.
         ``band``: the background (transparent when ``background`` is None)
         with a "brain" in the middle half of the rows and the middle 3/4 of the
         columns, one stripe per key of `regions` (a smaller band in
@@ -105,12 +108,16 @@ class StandInRenderer:
     def __init__(self, scene: Any) -> None:
         self.scene = scene
         self.parts: dict[str, tuple[list[str], NDArray[Any]]] = {}
+        self.centres: dict[str, NDArray[Any]] = {}  # each cortex face's centre, in the order of its labels
         for hemi in ("lh", "rh"):
             cm = scene.template.cortex(scene.labels, hemi)
             if scene.surface not in cm.vertices:
                 raise AssertionError(f"template {scene.template.name!r} has no {scene.surface} surface")
             prefix = {"lh": "Left-", "rh": "Right-"}[hemi]
-            self.parts[hemi] = ([prefix + n for n in cm.label_names], np.sort(cm.face_label))
+            order = np.argsort(cm.face_label, kind="stable")
+            self.parts[hemi] = ([prefix + n for n in cm.label_names], np.asarray(cm.face_label)[order])
+            corners = np.asarray(cm.vertices[scene.surface])[np.asarray(cm.faces)[order]]
+            self.centres[hemi] = corners.mean(axis=1)
         if scene.template.manifest.get("subcortical"):
             sub = scene.template.subcortical()
             self.parts["subcortical"] = (list(sub.label_names), np.sort(sub.face_label))
@@ -132,9 +139,14 @@ class StandInRenderer:
 
             keys = node_keys(connectome.n_nodes) + edge_keys(len(connectome.edges()[2]))
             self.tract_keys += [(None, k) for k in keys]
+        blobs = getattr(scene, "blobs", None)
+        if blobs is not None:  # drawn where tracts are: a stripe per value level
+            from brainpainter.rendering.blob_parts import blob_keys
+
+            self.tract_keys += [(None, k) for k in blob_keys(len(blobs.levels))]
         # how cortex views draw the cortex (scene.geometry.cortex, resolved without building the geometry)
         cortex = getattr(getattr(scene, "settings", None), "cortex", "opaque")
-        inside = getattr(scene, "tracts", None) is not None or connectome is not None
+        inside = getattr(scene, "tracts", None) is not None or connectome is not None or blobs is not None
         self.cortex = ("glass" if inside else "opaque") if cortex == "auto" else cortex
         type(self).scenes += 1
 
@@ -167,6 +179,7 @@ class StandInRenderer:
         return draw(colors, view, s.height, s.width)
 
     def _faces(self, colors: Mapping[str, Any], view: Any, height: int, width: int) -> Image:
+        from brainpainter.rendering.clip import CAP_COLOR, removed
         from brainpainter.rendering.framing import shows
 
         kinds = {"lh": ("cortex", "lh"), "rh": ("cortex", "rh"), "subcortical": ("subcortical", None)}
@@ -183,8 +196,10 @@ class StandInRenderer:
                 start, n = slots[hemi]  # a map: the cortex's per-vertex colours, in vertex order
                 stripes += [tuple(c) for c in colors.rgb[start:start + n]]  # type: ignore[attr-defined]
                 continue
-            stripes += [colors.get(keys[i]) or default.get(part, self.scene.medial_wall_color)
-                        for i in labels if keys[i] not in self.scene.hidden]
+            cut = removed(self.centres[part], getattr(view, "clip", ())) if part in self.centres else ()
+            stripes += [CAP_COLOR if len(cut) and cut[k] else
+                        colors.get(keys[i]) or default.get(part, self.scene.medial_wall_color)
+                        for k, i in enumerate(labels) if keys[i] not in self.scene.hidden]
         stripes += [colors.get(key) or default["subcortical"] for hemi, key in self.tract_keys
                     if shows(view, "tract", hemi, self.cortex)]
         img = np.zeros((height, width, 4), np.uint8)

@@ -709,6 +709,23 @@ INPROCESS: list[Case] = [
 ]
 
 
+def _sphere_volume(shift: float = 0.0) -> Callable[[Path], None]:
+    """A 4 mm MNI152-grid volume: 5 in a sphere of radius 12 mm at (40, -20, 50), 0 elsewhere; `shift`
+    moves the grid that many millimetres along every axis (off MNI152)."""
+    def make(path: Path) -> None:
+        import nibabel as nib
+        import numpy as np
+
+        affine = np.array([[4.0, 0, 0, -96 + shift], [0, 4, 0, -132 + shift], [0, 0, 4, -72 + shift],
+                           [0, 0, 0, 1]])
+        ijk = np.stack(np.meshgrid(*[np.arange(n) for n in (49, 58, 47)], indexing="ij"), axis=-1)
+        xyz = ijk @ affine[:3, :3].T + affine[:3, 3]
+        inside = np.linalg.norm(xyz - (np.array([40.0, -20.0, 50.0]) + shift), axis=-1) <= 12
+        nib.save(nib.Nifti1Image(np.where(inside, 5.0, 0.0).astype(np.float32), affine), path)
+
+    return make
+
+
 def _cifti(kind: str) -> Callable[[Path], None]:
     """A CIFTI file that brainpainter refuses (issue 34): CIFTI-1, a connectome, a mesh of no known
     count, a truncated dscalar."""
@@ -767,6 +784,18 @@ INPROCESS += [
     Case("fslr-32k-said-fsaverage", {"lh.x.shape.gii": _fslr_gifti(32492)},
          ["--lh", "lh.x.shape.gii", "--space", "fsaverage", "--out", "o", *RENDER], "not fsaverage",
          command="render"),
+    # -- blobs and cutaways (issue 45) ---------------------------------------------------------------------------
+    Case("volume-surface-not-mni", {"z.nii.gz": _sphere_volume(500.0)},
+         ["--volume-surface", "z.nii.gz", "--threshold", "2.3", "--out", "o", *RENDER], "is not an MNI152 volume",
+         command="render"),
+    Case("volume-surface-threshold-above-max", {"z.nii.gz": _sphere_volume()},
+         ["--volume-surface", "z.nii.gz", "--threshold", "6", "--out", "o", *RENDER],
+         "at or above the largest |value| of z (5)", command="render"),
+    Case("volume-surface-no-cluster-left", {"z.nii.gz": _sphere_volume()},
+         ["--volume-surface", "z.nii.gz", "--threshold", "2.3", "--min-cluster-mm3", "1e6", "--out", "o",
+          *RENDER], "give a smaller --min-cluster-mm3", command="render"),
+    _render(["--out", "o", "--clip", "x<500"], "removes all the cortex and glass", "clip-removes-everything"),
+    _render(["--out", "o", "--clip", "left"], "is not a plane", "clip-not-a-plane"),
 ]
 
 # Hostile image names that are accepted: each becomes a safe file name inside the output folder.

@@ -46,19 +46,19 @@ from __future__ import annotations
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from brainpainter.rendering.framing import view_projection
 from brainpainter.rendering.geometry import PartGeometry, SceneGeometry
 from brainpainter.rendering.scene import RenderSettings
 from brainpainter.rendering.views import View
-from brainpainter_blender import edge_aa, glass_layers, gpu_shaders, meshorder, outlines, tract_lines
+from brainpainter_blender import cutaway, edge_aa, glass_layers, gpu_shaders, meshorder, outlines, tract_lines
+from brainpainter_blender.aim import Aim as _Aim
+from brainpainter_blender.aim import aim_for as _aim_for
 from brainpainter_blender.facing import facing, triangle_normals
 from brainpainter_blender.gpu_context import in_gpu_context
-from brainpainter_blender.gpu_lighting import FLAT, LIGHTING, Lighting, for_maps
+from brainpainter_blender.gpu_lighting import FLAT, LIGHTING, for_maps
 
 #: Supersampling factor per quality (per axis); ``high`` reaches here only for flat shading.
 SUPERSAMPLING = {"fast": 1, "default": 1, "high": 3}
@@ -83,36 +83,6 @@ def srgb_to_linear(rgb: np.ndarray) -> np.ndarray:
     """The IEC 61966-2-1 sRGB transfer function inverted, for an array of sRGB 0-1 values."""
     c = np.clip(np.asarray(rgb, dtype=np.float64), 0.0, 1.0)
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-
-
-@dataclass(frozen=True)
-class _Aim:
-    """A view's parts and camera uniforms (``mathutils`` values, world space)."""
-
-    visible: list[PartGeometry]
-    mvp: Any
-    back: Any
-    key_dir: Any
-    fill_dir: Any
-    #: per part, its batch of the triangles facing the camera; per glass part also of those turned
-    #: away (:meth:`GpuDraw._front`)
-    front: dict[str, Any] = field(default_factory=dict)
-
-
-def _aim_for(geometry: SceneGeometry, view: View, settings: RenderSettings, light: Lighting) -> _Aim:
-    """The parts `view` shows, its view-projection matrix and the camera-fixed light directions."""
-    from mathutils import Matrix, Vector
-
-    aspect = settings.width / settings.height
-    pose = geometry.camera(view, aspect)
-    cam = pose.rotation  # columns: right, up, back (camera space -> world)
-
-    def world(d: tuple[float, float, float]) -> Vector:
-        v = cam @ np.asarray(d, float)
-        return Vector((v / np.linalg.norm(v)).tolist())
-
-    return _Aim(geometry.visible(view), Matrix(view_projection(pose, aspect).tolist()),
-                world((0.0, 0.0, 1.0)), world(light.key_dir), world(light.fill_dir))
 
 
 class GpuDraw:
@@ -199,7 +169,7 @@ class GpuDraw:
             vbo = gpu.types.GPUVertBuf(fmt, len(order))
             for name, values in attrs.items():
                 vbo.attr_fill(name, np.ascontiguousarray(values, np.float32))
-            self._meshes[part.name] = (vbo, triangle_normals(attrs["pos"], triangles), triangles)
+            self._meshes[part.name] = (vbo, triangle_normals(attrs["pos"], triangles), triangles, order)
             batch = self._batches[part.name] = gpu.types.GPUBatch(
                 type="TRIS", buf=vbo, elem=gpu.types.GPUIndexBuf(type="TRIS", seq=triangles))
         return batch
@@ -222,8 +192,10 @@ class GpuDraw:
                 if len(self._fronts) > MAX_FRONT_VIEWS:
                     self._fronts.popleft().front.clear()
             self._batch(part)
-            vbo, normals, triangles = self._meshes[part.name]
+            vbo, normals, triangles, order = self._meshes[part.name]
             seq = triangles[facing(normals, np.asarray(aim.mvp, np.float64), back)]
+            if aim.cut(part):  # nor those the cut removes whole (fragments would be discarded one by one)
+                seq = cutaway.left_whole(seq, part.vertices[order], aim.planes)
             batch = aim.front[key] = gpu.types.GPUBatch(
                 type="TRIS", buf=vbo, elem=gpu.types.GPUIndexBuf(type="TRIS", seq=seq))
         return batch
@@ -316,7 +288,9 @@ class GpuDraw:
                                   self._hi_depth if self.factor == 1 else None)
             with self._hi.bind():
                 top = glass(("BACK",))
-        edges = None if self._edges is None else self._edges.texture(aim.visible, view, aim)
+        # a cut part's edges are not where its silhouette was: anti-aliased are the parts left whole
+        edges = None if self._edges is None else self._edges.texture(
+            [p for p in aim.visible if not aim.cut(p)], view, aim)
         if edges is not None:
             mark("edges")
         with self._lo.bind():
@@ -351,7 +325,8 @@ class GpuDraw:
         gpu.state.active_framebuffer_get().clear(color=clear, depth=1.0)
         mark("clear")
         shader = self._draw_opaque(aim, tex, tracts, mark)
-        if self._draw_outlines(aim, [p for p in aim.visible if p.kind != "glass"], shader, tex):
+        if self._draw_outlines(aim, [p for p in aim.visible if p.kind != "glass" and not aim.cut(p)], shader,
+                               tex):
             mark("outlines")
         # the far side first, then the near side over it (after the tracts, when there are)
         return glass(("FRONT",) if tracts else ("FRONT", "BACK"))
@@ -388,8 +363,13 @@ class GpuDraw:
         gpu.state.face_culling_set(CULL_OPAQUE)
         shader.uniform_int("mode", gpu_shaders.MODE_LIT)
         drawn_as_lines = {t.name for t in tracts}
+        clipped = aim.n_clip > 0
         for p in aim.visible:
             if p.kind != "glass" and p.name not in drawn_as_lines:
+                if clipped != aim.cut(p):  # parts left whole: the plain shader (no discard: early depth)
+                    clipped = aim.cut(p)
+                    shader = self._bind_part_shader(aim, tex, clipped)
+                    shader.uniform_int("mode", gpu_shaders.MODE_LIT)
                 mapped = p.kind == "cortex" and bool(self.geometry.vertex_slots)
                 # a flat map is a 2-D picture: unlit, its colours exact
                 light = FLAT if p.kind == "flat" else self.map_lighting if mapped else self.lighting
@@ -400,19 +380,28 @@ class GpuDraw:
                                     ("ao_strength", light.occlusion),
                                     ("rim", light.rim if p.kind == "subcortical" else 0.0)):
                     shader.uniform_float(name, value)
+                if clipped:
+                    shader.uniform_int("clip_on", 1)
                 self._front(p, aim).draw(shader)
+                if aim.cut(p):  # its cut face, closed (cutaway)
+                    cutaway.draw_cap(self._front(p, aim, back=True), shader,
+                                     (gpu_shaders.MODE_CAP, gpu_shaders.MODE_LIT), CULL_OPAQUE)
                 if mark is not None:
                     mark(f"draw {p.name}")
         return shader
 
-    def _bind_part_shader(self, aim: _Aim, tex: Any) -> Any:
-        """Bind the part shader with the view's and the lighting's constants; returns it."""
+    def _bind_part_shader(self, aim: _Aim, tex: Any, clipped: bool | None = None) -> Any:
+        """Bind the part shader with the view's and the lighting's constants; returns it. `clipped`: its
+        variant that cuts (default: for a view with cutaway planes)."""
         s, light = self.settings, self.lighting
-        shader = gpu_shaders.part_shader()
+        clipped = aim.n_clip > 0 if clipped is None else clipped
+        shader = gpu_shaders.part_shader(clipped)
         shader.bind()
         # Samplers before push constants: bpy 5.3 drops an integer push constant set before a
         # sampler of the same shader (the resolve's row count read 0 and every image came out empty).
         shader.uniform_sampler("palette", tex)
+        if clipped:
+            cutaway.bind_clip(shader, aim.clips, aim.n_clip, srgb_to_linear)
         for name, value in (("mvp", aim.mvp), ("back", aim.back), ("key_dir", aim.key_dir),
                             ("fill_dir", aim.fill_dir), ("ambient", light.ambient),
                             ("key", light.key if light.lit else 0.0),
@@ -431,7 +420,7 @@ class GpuDraw:
         import gpu
 
         s = self.settings
-        shader = gpu_shaders.part_shader()
+        shader = gpu_shaders.part_shader(aim.n_clip > 0)
         glass = [p for p in aim.visible if p.kind == "glass"]
         if glass and s.glass_opacity > 0:
             gpu.state.depth_test_set("LESS_EQUAL")
@@ -441,6 +430,8 @@ class GpuDraw:
             shader.uniform_float("sulc_strength", 0.0)
             shader.uniform_float("ao_strength", 0.0)
             shader.uniform_float("rim", 0.0)
+            if aim.n_clip:
+                shader.uniform_int("clip_on", 1)
             for cull in culled:
                 gpu.state.face_culling_set(cull)
                 for p in glass:  # only the triangles the culling keeps (see _front)
@@ -448,7 +439,8 @@ class GpuDraw:
             mark({"FRONT": "glass, far side", "BACK": "glass, near side"}.get("".join(culled), "glass"))
             gpu.state.blend_set("NONE")
             gpu.state.depth_mask_set(True)
-        if "BACK" in culled and any(p.outline is not None for p in glass) and s.outline_width > 0:
+        if "BACK" in culled and any(p.outline is not None for p in glass) and s.outline_width > 0 \
+                and not aim.n_clip:  # a cut glass's borders would float over what the cut removed
             # A cortex drawn as glass (``--cortex glass``) keeps its borders, on its near side only:
             # its front faces go into the depth buffer alone, then the lines are depth-tested on them.
             gpu.state.color_mask_set(False, False, False, False)

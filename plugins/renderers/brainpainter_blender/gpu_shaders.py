@@ -9,8 +9,9 @@ from __future__ import annotations
 import atexit
 from typing import Any
 
-#: Values of the part shader's ``mode``: lit opaque surface, or glass.
-MODE_LIT, MODE_GLASS = 0, 1
+#: Values of the part shader's ``mode``: lit opaque surface, glass, or (a clipped view's variant) the cut
+#: face: a cut part's inside, in one colour, lit as the cutting plane.
+MODE_LIT, MODE_GLASS, MODE_CAP = 0, 1, 2
 
 #: Width of the 2-D palette texture: slot ``i`` is texel ``(i % PALETTE_WIDTH, i / PALETTE_WIDTH)``.
 PALETTE_WIDTH = 4096
@@ -46,6 +47,9 @@ void main()
   } else {
     color = vec4(c, 1.0);
   }
+#if CLIP
+  world = pos;
+#endif
   gl_Position = mvp * vec4(pos, 1.0);
 }
 """
@@ -53,6 +57,37 @@ void main()
 _FRAGMENT = """
 void main()
 {
+#if CLIP
+  /* a cutaway (rendering.clip): a fragment on the removed side of every plane is cut away; a cut
+     part's inside (its faces turned away, mode 2) is the cut face, lit as the plane nearest it */
+  if (clip_on != 0) {
+    bool cut = n_clip > 0;
+    float nearest = -1e30;
+    vec3 normal = vec3(0.0, 0.0, 1.0);
+    for (int i = 0; i < 4; i++) {
+      if (i < n_clip) {
+        float d = dot(clips[i].xyz, world) + clips[i].w;
+        if (d <= 0.0) {
+          cut = false;
+          if (d > nearest) {
+            nearest = d;
+            normal = clips[i].xyz;
+          }
+        }
+      }
+    }
+    if (cut) {
+      discard;
+    }
+    if (mode == 2) {
+      float shade = ambient + key * max(dot(normal, key_dir), 0.0) + fill * max(dot(normal, fill_dir), 0.0);
+      float s = clamp(shade, 0.0, 1.0);
+      shade = mix(shade, s * s * (3.0 - 2.0 * s), contrast);
+      fragColor = vec4(cap_rgb * shade, 1.0);
+      return;
+    }
+  }
+#endif
   fragColor = color;
 }
 """
@@ -268,9 +303,19 @@ _PART_CONSTANTS = (("MAT4", "mvp"), ("VEC3", "back"), ("VEC3", "key_dir"), ("VEC
 _PART_INPUTS = (("VEC3", "pos"), ("VEC3", "nrm"), ("FLOAT", "pal"), ("FLOAT", "sulc"), ("FLOAT", "ao"))
 
 
-def part_shader() -> Any:
-    """The shader of every part (compiled once per process, in a GPU context)."""
-    return _build("part", _VERTEX, _FRAGMENT, defines={"PALETTE_WIDTH": PALETTE_WIDTH},
+#: The clipped variant's extra push constants: the planes (columns ``a, b, c, d``: cut where ``a*x + b*y +
+#: c*z + d > 0`` for every plane), how many, whether this part is cut, and the cut face's linear colour.
+_CLIP_CONSTANTS = (("MAT4", "clips"), ("INT", "n_clip"), ("INT", "clip_on"), ("VEC3", "cap_rgb"))
+
+
+def part_shader(clip: bool = False) -> Any:
+    """The shader of every part (compiled once per process and variant, in a GPU context); `clip`: the
+    variant of views with cutaway planes (the world position goes to the fragments, which it cuts)."""
+    if clip:
+        return _build("part_clip", _VERTEX, _FRAGMENT, defines={"PALETTE_WIDTH": PALETTE_WIDTH, "CLIP": 1},
+                      constants=_PART_CONSTANTS + _CLIP_CONSTANTS, samplers=("palette",), inputs=_PART_INPUTS,
+                      varyings=(("smooth", "VEC4", "color"), ("smooth", "VEC3", "world")))
+    return _build("part", _VERTEX, _FRAGMENT, defines={"PALETTE_WIDTH": PALETTE_WIDTH, "CLIP": 0},
                   constants=_PART_CONSTANTS, samplers=("palette",), inputs=_PART_INPUTS,
                   varyings=(("smooth", "VEC4", "color"),))
 

@@ -132,6 +132,11 @@ class BlenderRenderer:
             if self._gpu is not None:
                 pixels = self._gpu.render(palette.rgb, view)
             else:
+                if view.clip:
+                    raise BrainPainterError(
+                        f"view {view.name!r} cuts the brain open (--clip, cutaway views), which the gpu path "
+                        "draws, not Cycles (--quality high with smooth shading); use --quality default, or "
+                        "--quality high --shading flat.")
                 if view.content == "flat":
                     raise BrainPainterError(
                         f"view {view.name!r} (a flat map) is drawn by the gpu path, not by Cycles (--quality "

@@ -158,7 +158,7 @@ class TractLines:
             Tract parts (with :attr:`~PartGeometry.centrelines`).
         view : View
             Key of the kept layers.
-        aim : brainpainter_blender.gpu_draw._Aim
+        aim : brainpainter_blender.aim.Aim
             The view's matrix and camera axes.
         palette : gpu.types.GPUTexture
             The image's palette (linear colours, as the part shader reads it).
