@@ -208,12 +208,6 @@ def _check_not_conformed(volume: Volume) -> None:
             "(white={'lh': 'surf/lh.white', ...}, pial={...}) or register the volume to MNI152.")
 
 
-def check_mni152(volume: Volume) -> None:
-    """Refuse a volume that is not in MNI152 (one line): a FreeSurfer conformed volume, or one whose
-    extent holds less than half of the cortex's MNI152 positions."""
-    _check_coverage(volume, _voxel_coordinates(volume, _fsaverage_points())[1], subject=False)
-
-
 def _check_coverage(volume: Volume, inside: NDArray[np.bool_], subject: bool) -> None:
     if not subject:
         _check_not_conformed(volume)
@@ -236,8 +230,8 @@ def _check_coverage(volume: Volume, inside: NDArray[np.bool_], subject: bool) ->
 
 
 def check_mni152(volume: Volume) -> None:
-    """Refuse a volume whose extent does not cover the cortex in MNI152 space (or a FreeSurfer
-    conformed one)."""
+    """Refuse a volume that is not in MNI152 (one line): a FreeSurfer conformed volume, or one whose
+    extent holds less than half of the cortex's MNI152 positions (a sample of them is enough)."""
     _, inside = _voxel_coordinates(volume, _fsaverage_points()[::16])  # a sample of the cortex is enough
     _check_coverage(volume, inside, subject=False)
 
