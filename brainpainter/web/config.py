@@ -76,6 +76,9 @@ class ServerConfig:
         Requests that may wait for a work thread; beyond it they get 503 + Retry-After.
     parse_time_limit_s : float
         Seconds a spreadsheet (``.xlsx``) upload may take to read (in its own process, killed after).
+    work_time_limit_s : float
+        Seconds the work of one check, preview or job submission may take (reading the upload into a run,
+        laying out a figure), in a request process killed after (:mod:`brainpainter.web.work_processes`).
     upload_time_limit_s : float
         Seconds a request may take to send its body (uploads); slower ones get 408.
     max_uploads_in_flight : int
@@ -108,6 +111,7 @@ class ServerConfig:
     work_threads: int = 2
     max_waiting_work: int = 16
     parse_time_limit_s: float = 20.0
+    work_time_limit_s: float = 30.0
     upload_time_limit_s: float = 60.0
     max_uploads_in_flight: int = 4
 

@@ -380,44 +380,6 @@ class ExportParams(BaseModel):
                               description="The page's heading (default: the row's name).")
 
 
-def figure_pixels(prep: Prepared, params: FigureParams) -> tuple[int, int]:
-    """``(width, height)`` in pixels of a figure job's PNG, laid out as ``brainpainter figure`` does
-    (:func:`brainpainter.media.layout.plan_grid`) before anything is rendered.
-
-    The width is exact; the height takes each view's crop to have its render's shape (a content box can
-    be taller or wider than its frame, so the worker checks the composed figure again:
-    :func:`check_figure_pixels`).
-    """
-    from brainpainter.media.colorbar import colorbar_height
-    from brainpainter.media.layout import FigureOptions, plan_grid
-
-    opts = FigureOptions(grid=params.grid, title=params.title or None, label=params.label or None,
-                         dpi=params.dpi, fig_width=params.fig_width, font_size=params.font_size)
-    settings, views = prep.run.settings, [v.name for v in prep.run.views]
-
-    def bar_h(usable: float) -> float:  # inches, whatever the dpi: measured at 100 to keep it cheap
-        return colorbar_height(prep.run.scale, usable, dpi=100.0, label=opts.label, fontsize=opts.font_size)
-
-    grid = plan_grid({v: settings.height / settings.width for v in views}, list(prep.run.table.images), views,
-                     opts, bar_h)
-    return round(grid.width * opts.dpi), round(grid.height * opts.dpi)
-
-
-def check_figure_pixels(width: int, height: int, max_pixels: int) -> None:
-    """Refuse a figure of more than `max_pixels` pixels.
-
-    Raises
-    ------
-    BrainPainterError
-        One line: the figure's size, the limit and what to do.
-    """
-    if width * height > max_pixels:
-        raise BrainPainterError(
-            f"the figure would be {width}x{height} = {width * height} pixels; this server makes figures of "
-            f"at most {max_pixels} pixels. Choose a lower dpi or fig_width, fewer rows or views, or a PDF."
-        )
-
-
 class MovieParams(BaseModel):
     """``movie`` job options, with ``brainpainter movie``'s defaults."""
 

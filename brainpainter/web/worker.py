@@ -268,16 +268,15 @@ def _prepared(folder: Path, job: dict[str, Any]) -> Any:
 
 
 def _media_input(data: bytes, name: str, prep: Any) -> Any:
-    """What figure and movie read: the table as a named stream, a map's maps (read from its files), or
-    the table of bundle values of tracts drawn alone."""
+    """What figure, movie and export read: the table as a named stream, a map's maps, the bundle values of
+    tracts alone, or None for a connectome alone (its files are in the run's keywords)."""
+    from brainpainter.web.connectomes import is_connectome_bundle
     from brainpainter.web.maps import is_bundle, read_bundle
     from brainpainter.web.options import table_stream
 
-    if prep.tract_table is not None:
-        return str(prep.tract_table)
-    if not is_bundle(data):
-        return table_stream(data, name)
-    return read_bundle(data)
+    if prep.tract_table is not None or is_connectome_bundle(data):
+        return None if prep.tract_table is None else str(prep.tract_table)
+    return read_bundle(data) if is_bundle(data) else table_stream(data, name)
 
 
 def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
@@ -398,7 +397,8 @@ def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
 
 def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
     from brainpainter.media.figure import make_figure, save_figure
-    from brainpainter.web.options import FigureParams, check_figure_pixels
+    from brainpainter.web.job_plan import check_figure_pixels
+    from brainpainter.web.options import FigureParams
 
     data, prep = _prepared(folder, job)
     p = dict(job["params"])
