@@ -58,8 +58,8 @@ def draw_category_key(ax: Axes, scale: ColourScale, horizontal: bool, fontsize: 
     if not summarised:
         for edge in np.arange(1, n) / n:  # a thin line between blocks of similar colour
             (ax.axvline if horizontal else ax.axhline)(edge, color=color, linewidth=0.4)
-    ax.tick_params(labelsize=max(fontsize - 1 - (2 if n > 20 else 0), 4), length=2.5, width=0.6, pad=1.5,
-                   colors=color)
+    ax.tick_params(labelsize=max(fontsize - 1 - (2 if len(names) > 20 else 0), 4), length=2.5, width=0.6,
+                   pad=1.5, colors=color)
     for spine in ax.spines.values():
         spine.set_linewidth(0.6)
         spine.set_edgecolor(color)
