@@ -24,9 +24,10 @@ if TYPE_CHECKING:
 
 T = TypeVar("T")
 #: Most characters of one string, and entries of one list, a check report echoes (names of nodes, labels,
-#: categories): a report of an upload's own text stays a few hundred kilobytes whatever the names.
+#: images): a report of an upload's own text stays bounded whatever the names (5000: the image names a
+#: tract upload's report lists).
 MAX_ECHO_CHARS = 200
-MAX_ECHO_ITEMS = 256
+MAX_ECHO_ITEMS = 5000
 
 
 class Work:

@@ -40,6 +40,8 @@ TRACT_FIELDS = ("tracts", "tracts_space", "tracts_affine", "max_streamlines", "t
 #: The options that name another upload drawn as a layer of the main one (a map over a table, tracts, a
 #: contour map's iso-lines).
 LAYER_UPLOADS = ("map", "tracts", "contour", "connectome")
+#: Categories of a label map's key a check report lists (the figure names at most 60).
+MAX_KEY_LISTED = 256
 
 #: Suffixes an uploaded file name may have (only used to sniff the format; never a path).
 UPLOAD_SUFFIXES = (".csv", ".tsv", ".tab", ".txt", ".dat", ".xlsx", ".xlsm", ".xls")
@@ -417,13 +419,15 @@ def map_check(data: bytes, name: str, options: RenderOptions, data_dir: Path | N
 
 def scale_report(scale: Any) -> dict[str, Any]:
     """A run's colour scale as the check report gives it (the page's colour bar: ``ramp``, ``ticks``; a
-    label map's ``categories``, its key: ``name`` and ``color`` each)."""
+    label map's ``categories``, its key: ``name`` and ``color`` each, the first :data:`MAX_KEY_LISTED`,
+    and ``n_categories``)."""
     from brainpainter.color.rgb import to_hex
     from brainpainter.table.report import colour_bar
 
     return {"name": scale.name, "vmin": scale.vmin, "vmax": scale.vmax, "center": scale.center,
             "threshold": getattr(scale, "threshold", None), **colour_bar(scale),
-            "categories": [{"name": n, "color": to_hex(c)} for n, c in scale.categories]}
+            "categories": [{"name": n, "color": to_hex(c)} for n, c in scale.categories[:MAX_KEY_LISTED]],
+            "n_categories": len(scale.categories)}
 
 
 def layers_report(run: Any) -> list[dict[str, Any]]:
