@@ -246,3 +246,11 @@ def test_control_characters_are_escaped_in_the_command(server):
     assert not any(ord(ch) < 32 and ch != "\n" for ch in c.json()["reproduce"]["python"])
     words = shlex.split(command.replace("$'a\\x1b[201~b\\x03c\\x0dd'", "LABEL"))
     assert words[words.index("--edges-label") + 1] == "LABEL"  # one shell word
+
+
+def test_no_server_path_in_a_message(tmp_path):
+    """A file of the data folder is named by its name (before: ``DATA_DIR/incoming/connectome-.../m.npy``)."""
+    from brainpainter.web.config import no_paths
+
+    said = f"connectome matrix '{tmp_path}/incoming/connectome-ab12/matrix.npy' is damaged (in {tmp_path})"
+    assert no_paths(said, tmp_path) == "connectome matrix 'matrix.npy' is damaged (in DATA_DIR)"

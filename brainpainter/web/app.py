@@ -33,7 +33,6 @@ logged as one JSON line on the ``brainpainter.web.access`` logger (both by
 from __future__ import annotations
 
 import logging
-import re
 import sqlite3
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
@@ -52,7 +51,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.requests import ClientDisconnect
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.web.config import ServerConfig
+from brainpainter.web.config import ServerConfig, no_paths
 from brainpainter.web.disk import FULL_BELOW, disk_free, disk_full
 from brainpainter.web.guard import Guard
 from brainpainter.web.http import (
@@ -142,7 +141,7 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
                               "volume; check it, preview and render it.",
                   redirect_slashes=False)  # a redirect would build its Location from the Host header
     app.state.config, app.state.store, app.state.pool = config, store, pool
-    processes = WorkProcesses(config.work_threads, config.work_time_limit_s, config.worker_memory_bytes)
+    processes = WorkProcesses(config.work_processes, config.work_time_limit_s, config.worker_memory_bytes)
     app.state.work = Work(config.work_threads, config.max_waiting_work, processes)
     app.add_middleware(Guard, config=config)
 
@@ -157,13 +156,8 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
 
 def _add_error_handlers(app: FastAPI, config: ServerConfig) -> None:
     """Every error becomes ``{"error": "one line"}`` with its status (no server path in it)."""
-    root = str(config.data_dir.resolve())
-
     def line(exc: BaseException) -> str:
-        text = one_line(exc)
-        for folder in (root, str(config.data_dir)):  # a file of the data folder: its name only
-            text = re.sub(re.escape(folder) + r"/(?:[^\s'\"/]+/)*", "", text).replace(folder, "DATA_DIR")
-        return text
+        return no_paths(one_line(exc), config.data_dir)  # a file of the data folder: its name only
 
     @app.exception_handler(BrainPainterError)
     async def _bp_error(request: Request, exc: BrainPainterError) -> JSONResponse:

@@ -251,11 +251,11 @@ def run_job(store: Any, job: dict[str, Any], painters: PainterCache, *, ttl_s: f
 
 
 def _no_paths(message: str, store: Any) -> str:
-    """`message` without the server's own paths (clients see job errors)."""
-    root = Path(store.root)
-    for shown in {str(root.resolve()), str(root)}:
-        message = message.replace(shown, "DATA_DIR")
-    return message
+    """`message` without the server's own paths (clients see job errors): :func:`~brainpainter.web.config.
+    no_paths`."""
+    from brainpainter.web.config import no_paths
+
+    return no_paths(message, Path(store.root))
 
 
 def _prepared(folder: Path, job: dict[str, Any]) -> Any:
