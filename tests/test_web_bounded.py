@@ -254,3 +254,46 @@ def test_no_server_path_in_a_message(tmp_path):
 
     said = f"connectome matrix '{tmp_path}/incoming/connectome-ab12/matrix.npy' is damaged (in {tmp_path})"
     assert no_paths(said, tmp_path) == "connectome matrix 'matrix.npy' is damaged (in DATA_DIR)"
+
+
+def test_sigterm_stops_a_server_busy_with_a_hostile_request_within_seconds(tmp_path):
+    """Before: a figure request of a label map of 8000 long names survived SIGTERM (its thread kept the
+    interpreter alive at exit) until SIGKILL."""
+    import signal
+    import threading
+
+    import httpx
+    from web_support import CLIENT, STANDIN, Server, alive, env_with_site
+
+    site = standin_site(tmp_path / "site")
+    server = Server(tmp_path / "data", env_with_site(site), tmp_path / "server.log",
+                    ["--workers", "1", "--no-preview", "--renderer", STANDIN])
+    server.start()
+    labels = dlabel(tmp_path, 8000, 900)
+    sent = threading.Event()
+
+    def hostile() -> None:
+        try:
+            with httpx.Client(base_url=server.url, headers=CLIENT, timeout=600) as c:
+                uid = c.post("/api/uploads", params={"name": "p.dlabel.nii"}, content=labels,
+                             headers={"content-type": "application/octet-stream"}).json()["upload_id"]
+                sent.set()
+                figure = {"upload_id": uid, "kind": "figure", "options": {"size": "160x120"},
+                          "figure": {"format": "png"}}
+                for _ in range(20):
+                    c.post("/api/jobs", json=figure)
+        except httpx.HTTPError:
+            pass  # the server stopped under it
+
+    thread = threading.Thread(target=hostile, daemon=True)
+    thread.start()
+    try:
+        assert sent.wait(120)
+        time.sleep(1.0)
+        t0 = time.monotonic()
+        server.proc.send_signal(signal.SIGTERM)
+        server.proc.wait(timeout=30)
+        assert time.monotonic() - t0 < 15
+        assert wait_for(lambda: not alive(server.proc.pid), 5)
+    finally:
+        server.stop()
