@@ -74,3 +74,37 @@ def test_bad_top_and_unknown_edges_of_node():
     with pytest.raises(BrainPainterError) as exc:
         select_edges(conn, edges_of="n44")
     assert "'n44' is not a node of the connectome" in str(exc.value) and "did you mean 'n4'" in str(exc.value)
+
+
+# -- issue 46: at most MAX_EDGES_DRAWN edges, labels of a bounded length ---------------------------
+def test_a_dense_matrix_draws_its_strongest_5000_edges_with_a_note():
+    """1000 nodes, every edge (499,500): the strongest 5000 are drawn, whatever the options."""
+    from brainpainter.connectome.edges import MAX_EDGES_DRAWN
+    from brainpainter.connectome.options import ConnectomeOptions
+    from brainpainter.rendering.connectome_layers import connectome_summary
+
+    conn = connectome(1000)
+    _, _, w = conn.edges()
+    assert len(w) == 499_500 and MAX_EDGES_DRAWN == 5000
+    out = ConnectomeOptions(connectome="given").chosen(conn)  # no option given: the cap still applies
+    _, _, drawn = out.edges()
+    assert len(drawn) == 5000 and out.edges_left_out == 494_500
+    assert np.abs(drawn).min() >= np.sort(np.abs(w))[-5000]  # the strongest
+    summary = connectome_summary(out)
+    assert summary["n_edges"] == 5000 and summary["edges_left_out"] == 494_500
+    assert "the strongest 5000 of 499500 edges are drawn" in summary["note"]
+    top = select_edges(conn, top=1_000_000)
+    assert top.edges_left_out == 494_500
+    few = select_edges(conn, top=10)
+    assert few.edges_left_out == 0 and len(few.edges()[2]) == 10
+
+
+def test_node_labels_are_drawn_at_most_60_characters_without_control_characters():
+    import dataclasses
+
+    from brainpainter.connectome.model import MAX_LABEL_CHARS
+
+    conn = dataclasses.replace(connectome(3), node_labels=("a" * 100_000, "b\x1b[31mc\r", ""))
+    texts = conn.label_texts()
+    assert MAX_LABEL_CHARS == 60 and len(texts[0]) == 60 and texts[0].endswith("\u2026")
+    assert texts[1] == "b [31mc " and texts[2] == ""

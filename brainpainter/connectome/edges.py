@@ -4,7 +4,10 @@ The three combine, in this order: ``edges_of`` keeps the edges of one node;
 ``threshold`` then keeps those with ``|weight| >= threshold`` (a number), or
 the strongest ``100 - p`` % of them (a percentile ``"p%"``, as nilearn's
 ``edge_threshold="95%"``; counted, so ``"95%"`` keeps round(5 % of E) edges);
-``top`` then keeps the K strongest. The edges counted are those
+``top`` then keeps the K strongest; last, at most :data:`MAX_EDGES_DRAWN` are kept
+(the strongest), so a dense matrix of a thousand nodes (half a million edges) draws
+in seconds and bounded memory instead of minutes and gigabytes; the connectome's
+``edges_left_out`` says how many the cap left out (the manifest's note). The edges counted are those
 :meth:`Connectome.edges` gives: the upper triangle of an undirected connectome,
 every off-diagonal weight of a directed one. Ties go to the earlier edge (row
 by row).
@@ -23,6 +26,8 @@ from numpy.typing import NDArray
 from brainpainter.connectome.model import Connectome
 from brainpainter.errors import BrainPainterError, nearest
 
+#: Most edges drawn of one connectome (the strongest by |weight|); more are left out, with a note.
+MAX_EDGES_DRAWN = 5000
 _PERCENT = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*%\s*$")
 
 
@@ -57,7 +62,7 @@ def _strongest(weight: NDArray[np.float64], k: int) -> NDArray[np.intp]:
 
 
 def select_edges(conn: Connectome, *, threshold: Any = None, top: int | None = None,
-                 edges_of: str | None = None) -> Connectome:
+                 edges_of: str | None = None, max_edges: int = MAX_EDGES_DRAWN) -> Connectome:
     """`conn` with only the chosen edges.
 
     Parameters
@@ -69,6 +74,8 @@ def select_edges(conn: Connectome, *, threshold: Any = None, top: int | None = N
         Keep the `top` strongest by |weight|.
     edges_of : str or None
         A node name: keep only its edges (case-insensitive).
+    max_edges : int
+        Keep at most this many (the strongest) of those chosen; ``edges_left_out`` counts the others.
 
     Returns
     -------
@@ -96,11 +103,14 @@ def select_edges(conn: Connectome, *, threshold: Any = None, top: int | None = N
             raise BrainPainterError(f"the number of top edges must be a whole number >= 0; {top!r} was "
                                     "given.")
         keep = keep[_strongest(weight[keep], int(top))]
+    left_out = max(0, len(keep) - max_edges)
+    if left_out:
+        keep = keep[_strongest(weight[keep], max_edges)]
     weights = np.full_like(conn.weights, np.nan)
     weights[source[keep], target[keep]] = weight[keep]
     if not conn.directed:
         weights[target[keep], source[keep]] = weight[keep]
-    return dataclasses.replace(conn, weights=weights)
+    return dataclasses.replace(conn, weights=weights, edges_left_out=left_out)
 
 
 def _node_index(conn: Connectome, name: str) -> int:

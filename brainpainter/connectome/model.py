@@ -8,6 +8,15 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+#: Most characters of a node's label drawn on an image (a longer one ends with an ellipsis).
+MAX_LABEL_CHARS = 60
+
+
+def _label(text: str) -> str:
+    """A node's label as drawn: control characters as spaces, at most :data:`MAX_LABEL_CHARS` characters."""
+    shown = "".join(" " if ord(c) < 32 or 127 <= ord(c) < 160 else c for c in str(text)[:MAX_LABEL_CHARS + 1])
+    return shown if len(shown) <= MAX_LABEL_CHARS else shown[:MAX_LABEL_CHARS - 1] + "\u2026"
+
 
 class EdgeSeries(Protocol):
     """What a connectome drawn from a series of matrices knows of them
@@ -60,6 +69,9 @@ class Connectome:
     series : EdgeSeries, optional
         A series of matrices, one per image (:mod:`brainpainter.connectome.series`): `weights` are then
         the edges drawn in every image at their largest ``|weight|``, and the series gives each image's.
+    edges_left_out : int
+        Edges chosen but not drawn: beyond :data:`brainpainter.connectome.edges.MAX_EDGES_DRAWN` (the
+        strongest are drawn).
     """
 
     names: tuple[str, ...]
@@ -71,6 +83,7 @@ class Connectome:
     node_labels: tuple[str, ...] | None = None
     labelled: tuple[int, ...] = ()
     series: EdgeSeries | None = None
+    edges_left_out: int = 0
 
     @property
     def n_nodes(self) -> int:
@@ -78,8 +91,11 @@ class Connectome:
         return len(self.names)
 
     def label_texts(self) -> tuple[str, ...]:
-        """The label of each node, (N,): its ``node_labels`` entry where given, else its name."""
-        return self.names if self.node_labels is None else self.node_labels
+        """The label drawn of each node, (N,): its ``node_labels`` entry where given, else its name; at most
+        :data:`MAX_LABEL_CHARS` characters (a longer one ends with an ellipsis), control characters as
+        spaces."""
+        texts = self.names if self.node_labels is None else self.node_labels
+        return tuple(_label(text) for text in texts)
 
     def digest(self) -> str:
         """A SHA-256 of everything drawn (names, positions, weights, per-node vectors): equal connectomes,

@@ -8,11 +8,12 @@ export) are made from these fields (:mod:`brainpainter.rendering.options`);
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, TypedDict
 
 from brainpainter.atlas.model import SPACES
-from brainpainter.connectome.edges import parse_threshold, select_edges
+from brainpainter.connectome.edges import MAX_EDGES_DRAWN, parse_threshold, select_edges
 from brainpainter.connectome.labels import labelled_nodes
 from brainpainter.connectome.model import Connectome
 from brainpainter.errors import BrainPainterError, choice_error
@@ -20,6 +21,8 @@ from brainpainter.errors import BrainPainterError, choice_error
 if TYPE_CHECKING:
     from brainpainter.atlas.model import Atlas
     from brainpainter.atlas.template import Template
+
+log = logging.getLogger(__name__)
 
 
 class ConnectomeKwargs(TypedDict, total=False):
@@ -91,7 +94,8 @@ class ConnectomeOptions:
         "help": "Edges drawn: |weight| at least this (0.3), or a percentile of |weight| (95%: the "
                 "strongest 5 %)."})
     top_edges: int | None = field(default=None, metadata={
-        "help": "Only the K strongest edges (by |weight|) are drawn."})
+        "help": "Only the K strongest edges (by |weight|) are drawn (at most 5000 are drawn, the strongest, "
+                "whatever is given)."})
     edges_of: str | None = field(default=None, metadata={
         "help": "Only the edges of this node (Left-precentral) are drawn."})
     nodes_space: str = field(default="template", metadata={
@@ -127,9 +131,8 @@ class ConnectomeOptions:
         return self.connectome is not None
 
     def chosen(self, connectome: Connectome) -> Connectome:
-        """`connectome` with only the edges drawn (``edge_threshold``, ``top_edges``, ``edges_of``)."""
-        if self.edge_threshold is None and self.top_edges is None and self.edges_of is None:
-            return connectome
+        """`connectome` with only the edges drawn (``edge_threshold``, ``top_edges``, ``edges_of``; at most
+        :data:`~brainpainter.connectome.edges.MAX_EDGES_DRAWN`, the strongest, whatever is given)."""
         return select_edges(connectome, threshold=self.edge_threshold, top=self.top_edges,
                             edges_of=self.edges_of)
 
@@ -171,6 +174,10 @@ class ConnectomeOptions:
             series = matrix_series(self.connectome)
             connectome = (self.chosen(read(self.connectome)) if series is None
                           else series_connectome(series, read, self.chosen))
+        if connectome.edges_left_out:
+            log.warning("connectome: the strongest %d edges are drawn; %d more were chosen (at most %d are "
+                        "drawn: give --top-edges or --edge-threshold)", MAX_EDGES_DRAWN,
+                        connectome.edges_left_out, MAX_EDGES_DRAWN)
         if not self.node_labels and self.node_labels_top is None:
             return connectome
         return replace(connectome, labelled=labelled_nodes(connectome, self.node_labels_top))

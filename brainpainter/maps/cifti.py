@@ -289,7 +289,7 @@ def _image_names(axis: Any, rows: list[int], path: Path) -> tuple[str, ...]:
 
 def _label_table(axis: Any, rows: list[int]) -> tuple[tuple[str, ...], Any, NDArray[Any]]:
     """(category names, keys -> category indices (NaN = none), colours (n, 3)) of a dlabel's rows."""
-    names: list[str] = []
+    index: dict[str, int] = {}  # category name -> its index (a dict: thousands of labels stay linear)
     rgb: list[tuple[float, float, float]] = []
     lookups: list[dict[int, float]] = []
     for i in rows:
@@ -298,11 +298,12 @@ def _label_table(axis: Any, rows: list[int]) -> tuple[tuple[str, ...], Any, NDAr
             label = str(label)
             if label in ("???", "") or label.lower() == "unknown" or "medial_wall" in label.lower():
                 continue
-            if label not in names:
-                names.append(label)
-                rgb.append(tuple(float(c) for c in colour[:3]))  # type: ignore[arg-type]
-            lookup[int(key)] = float(names.index(label))
+            if label not in index:
+                index[label] = len(index)
+                rgb.append(_label_colour(label, colour))
+            lookup[int(key)] = float(index[label])
         lookups.append(lookup)
+    names = list(index)
 
     def code(data: NDArray[Any]) -> NDArray[Any]:
         out = np.full(data.shape, np.nan, np.float32)
@@ -313,3 +314,23 @@ def _label_table(axis: Any, rows: list[int]) -> tuple[tuple[str, ...], Any, NDAr
         return out
 
     return tuple(names), code, np.asarray(rgb, float).reshape(-1, 3)
+
+
+def _label_colour(label: str, colour: Any) -> tuple[float, float, float]:
+    """A label table's colour as (r, g, b) in 0..1.
+
+    Raises
+    ------
+    BrainPainterError
+        A component that is not a number from 0 to 1 (NaN, inf).
+    """
+    try:
+        rgb = tuple(float(c) for c in list(colour)[:3])
+    except (TypeError, ValueError):
+        rgb = ()
+    if len(rgb) != 3 or not all(0.0 <= c <= 1.0 for c in rgb):  # NaN fails every comparison
+        shown = label if len(label) <= 40 else label[:39] + "\u2026"
+        raise BrainPainterError(f"the colour of label {shown!r} in the file's label table is {list(rgb)}; "
+                                "each of red, green and blue must be a number from 0 to 1. Fix the label "
+                                "table (e.g. wb_command -cifti-label-import) and give the file again.")
+    return rgb[0], rgb[1], rgb[2]

@@ -1,13 +1,12 @@
 """Colour bars for a :class:`~brainpainter.color.scale.ColourScale`, drawn with matplotlib.
 
-The bar shows exactly the colours the renders use: it samples the scale
-itself (``scale(values)``), so a BrainPainter gradient appears with its
-control colours at its ticks and a matplotlib colour map as a smooth ramp.
-Ticks default to round numbers (:meth:`ColourScale.ticks`: a gradient's control points where round);
-NaN and missing swatches are added when asked; a label map's scale draws a key of its
-categories (:mod:`brainpainter.media.category_key`). :func:`draw_colorbar` draws into an
-Axes (figures); :func:`colorbar_image` returns an RGBA array of an exact pixel size (movie
-frames). matplotlib is imported inside the functions only.
+The bar shows exactly the colours the renders use: it samples the scale itself (``scale(values)``), so
+a BrainPainter gradient appears with its control colours at its ticks and a matplotlib colour map as a
+smooth ramp. Ticks default to round numbers (:meth:`ColourScale.ticks`: a gradient's control points where
+round); NaN and missing swatches are added when asked; a label map's scale draws a key of its categories
+(:mod:`brainpainter.media.category_key`). Labels are the user's text, never mathtext
+(:mod:`brainpainter.media.plain_text`). :func:`draw_colorbar` draws into an Axes (figures);
+:func:`colorbar_image` returns an RGBA array of an exact pixel size (movie frames).
 """
 
 from __future__ import annotations
@@ -23,6 +22,7 @@ from numpy.typing import NDArray
 from brainpainter.color.scale import ColourScale, between, fraction
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.media.category_key import draw_category_key
+from brainpainter.media.plain_text import plain, plain_lines
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -41,9 +41,8 @@ ORIENTATIONS = ("horizontal", "vertical")
 def quiet_glyphs(func: F) -> F:
     """Run `func` without matplotlib's "Glyph ... missing from font" warnings.
 
-    Image names in any script (``患者 1``) are drawn in figures and movies; where the installed fonts
-    lack a glyph matplotlib warns once per character. The file is still right (the name is in its
-    file name and manifest); the warnings would flood the output or, where warnings are errors, stop it.
+    Image names in any script (``患者 1``) are drawn in figures and movies; where the fonts lack a glyph
+    matplotlib warns once per character (the name is still in the file name and manifest).
     """
     @functools.wraps(func)
     def run(*args: Any, **kwargs: Any) -> Any:
@@ -214,7 +213,7 @@ def draw_colorbar(
         spine.set_linewidth(0.6)
         spine.set_edgecolor(color)
     if label:
-        axis.set_label_text(label, fontsize=fontsize, color=color)
+        axis.set_label_text(plain_lines(label), fontsize=fontsize, color=color)  # the user's text as text
         if not horizontal:
             ax.yaxis.set_label_position("right")
     _swatches(ax, scale, nan, missing, nan_label, missing_label, fontsize, color, horizontal)
@@ -228,10 +227,11 @@ def _swatches(ax: Axes, scale: ColourScale, nan: bool, missing: bool, nan_label:
 
     handles = []
     if nan:
-        handles.append(Patch(facecolor=scale.nan_color, edgecolor=color, linewidth=0.6, label=nan_label))
+        handles.append(Patch(facecolor=scale.nan_color, edgecolor=color, linewidth=0.6,
+                             label=plain(nan_label)))
     if missing:
         handles.append(Patch(facecolor=scale.missing_color, edgecolor=color, linewidth=0.6,
-                             label=missing_label))
+                             label=plain(missing_label)))
     if handles:
         loc, anchor, ncol = (("center left", (1.0, 0.5), len(handles)) if horizontal
                              else ("upper center", (0.5, -0.02), 1))

@@ -20,6 +20,7 @@ from brainpainter.color.rgb import ColorLike
 from brainpainter.color.scale import ColourScale
 from brainpainter.errors import BrainPainterError, choice_error, within
 from brainpainter.media.drawn import common_crop
+from brainpainter.media.plain_text import plain, plain_lines
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -336,15 +337,15 @@ def draw_headings(fig: Figure, grid: Grid, opts: FigureOptions, color: str) -> N
     pt, size = opts.font_size / 72.0, opts.font_size
     y = grid.top
     for head, rh in zip(grid.row_heads, grid.row_h, strict=False):
-        fig.text((grid.left - 0.4 * pt) / grid.width, 1 - (y + rh / 2) / grid.height, head, rotation=90,
-                 ha="right", va="center", fontsize=size, color=color)
+        fig.text((grid.left - 0.4 * pt) / grid.width, 1 - (y + rh / 2) / grid.height, plain(head),
+                 rotation=90, ha="right", va="center", fontsize=size, color=color)
         y += rh + GAP_IN
     for x, w, head in zip(grid.col_x, grid.col_w, grid.col_heads, strict=False):
-        fig.text((x + w / 2) / grid.width, 1 - (grid.top - 0.35 * pt) / grid.height, head,
+        fig.text((x + w / 2) / grid.width, 1 - (grid.top - 0.35 * pt) / grid.height, plain(head),
                  ha="center", va="bottom", fontsize=size, color=color)
     if opts.title:
-        fig.text(0.5, 1 - PAD_IN / grid.height, opts.title, ha="center", va="top", fontsize=size + 2,
-                 color=color, fontweight="bold")
+        fig.text(0.5, 1 - PAD_IN / grid.height, plain_lines(opts.title), ha="center", va="top",
+                 fontsize=size + 2, color=color, fontweight="bold")
 
 
 def draw_bar(fig: Figure, grid: Grid, scale: ColourScale, opts: FigureOptions, nan: bool, missing: bool,

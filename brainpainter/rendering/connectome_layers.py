@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.color.scale import ColourScale, ScaleOptions
+from brainpainter.connectome.edges import MAX_EDGES_DRAWN
 from brainpainter.connectome.model import Connectome
 from brainpainter.maps.autoscale import choose_scale
 from brainpainter.rendering.connectome_parts import edge_keys, node_keys
@@ -139,6 +140,11 @@ def connectome_summary(connectome: Connectome) -> dict[str, Any]:
         "n_nodes": connectome.n_nodes, "n_edges": len(weights), "directed": connectome.directed,
         "weight_range": [float(weights.min()), float(weights.max())] if len(weights) else None,
         "nodes": nodes}
+    if connectome.edges_left_out:
+        out["edges_left_out"] = connectome.edges_left_out
+        chosen = len(weights) + connectome.edges_left_out
+        out["note"] = (f"the strongest {len(weights)} of {chosen} edges are drawn (at most "
+                       f"{MAX_EDGES_DRAWN}); choose fewer with --top-edges or --edge-threshold")
     if connectome.labelled:
         out["labelled"] = [connectome.names[i] for i in connectome.labelled]
     if connectome.series is not None:

@@ -51,12 +51,13 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.requests import ClientDisconnect
 
 from brainpainter.errors import BrainPainterError
-from brainpainter.web.config import ServerConfig
+from brainpainter.web.config import ServerConfig, no_paths
 from brainpainter.web.disk import FULL_BELOW, disk_free, disk_full
 from brainpainter.web.guard import Guard
 from brainpainter.web.http import (
     ApiError,
     Work,
+    bounded,
     client_of,
     disk_budget,
     keep_upload,
@@ -65,6 +66,7 @@ from brainpainter.web.http import (
     require_octet_stream,
     validation_line,
 )
+from brainpainter.web.job_plan import job_plan
 from brainpainter.web.layer_uploads import LayerUploads
 from brainpainter.web.maps import file_name, is_bundle, is_map_upload
 from brainpainter.web.options import (
@@ -73,10 +75,7 @@ from brainpainter.web.options import (
     MovieParams,
     RenderOptions,
     TableOptions,
-    check_figure_pixels,
-    figure_pixels,
     map_check,
-    prepare,
     table_layers,
     upload_name,
 )
@@ -90,6 +89,7 @@ from brainpainter.web.upload import (
     read_and_check,
     read_map_upload,
 )
+from brainpainter.web.work_processes import WorkProcesses
 
 log = logging.getLogger("brainpainter.web")
 
@@ -129,9 +129,11 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         pool.start()
+        processes.start()
         try:
             yield
         finally:
+            processes.stop()
             pool.stop()
 
     app = FastAPI(title="brainpainter", version=_version(), lifespan=lifespan, docs_url=None, redoc_url=None,
@@ -139,7 +141,8 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
                               "volume; check it, preview and render it.",
                   redirect_slashes=False)  # a redirect would build its Location from the Host header
     app.state.config, app.state.store, app.state.pool = config, store, pool
-    app.state.work = Work(config.work_threads, config.max_waiting_work)
+    processes = WorkProcesses(config.work_processes, config.work_time_limit_s, config.worker_memory_bytes)
+    app.state.work = Work(config.work_threads, config.max_waiting_work, processes)
     app.add_middleware(Guard, config=config)
 
     _add_error_handlers(app, config)
@@ -153,10 +156,8 @@ def create_app(config: ServerConfig | None = None) -> FastAPI:
 
 def _add_error_handlers(app: FastAPI, config: ServerConfig) -> None:
     """Every error becomes ``{"error": "one line"}`` with its status (no server path in it)."""
-    root = str(config.data_dir.resolve())
-
     def line(exc: BaseException) -> str:
-        return one_line(exc).replace(root, "DATA_DIR").replace(str(config.data_dir), "DATA_DIR")
+        return no_paths(one_line(exc), config.data_dir)  # a file of the data folder: its name only
 
     @app.exception_handler(BrainPainterError)
     async def _bp_error(request: Request, exc: BrainPainterError) -> JSONResponse:
@@ -196,11 +197,8 @@ def _add_error_handlers(app: FastAPI, config: ServerConfig) -> None:
         return JSONResponse({"error": f"internal error: {type(exc).__name__} (logged on the server)"},
                             status_code=500)
 
-    @app.exception_handler(Exception)
-    async def _internal(request: Request, exc: Exception) -> JSONResponse:
-        log.exception("internal error on %s %s", request.method, request.url.path)
-        return JSONResponse({"error": f"internal error: {type(exc).__name__} (logged on the server)"},
-                            status_code=500)
+    # any other error is answered by the guard (brainpainter.web.guard): 500 with the security headers, and
+    # logged with its status (Starlette's handler of Exception runs outside every middleware)
 
 
 def _add_page_and_probes(app: FastAPI, config: ServerConfig, store: Store, pool: Pool) -> None:
@@ -304,7 +302,7 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
         o = body.options
         layers = LayerUploads() if is_tract_bundle(data) else await run_in_threadpool(layer_uploads, store, o,
                                                                                      owner_of(request))
-        report = await _check_report(data, name, o, layers)
+        report: dict[str, Any] = bounded(await _check_report(data, name, o, layers))  # echo bounded
         # the command line and the Python call that make these images again
         report["reproduce"] = await work.run(reproduce, data, name, o, layers.tracts,
                                              **{k: v for k, v in layers.kwargs().items() if k != "tracts"})
@@ -362,22 +360,16 @@ def _add_job_routes(app: FastAPI, config: ServerConfig, store: Store) -> None:
         name, data = await run_in_threadpool(_upload, store, body.upload_id, owner_of(request))
         await disk_budget(store, config)
         layers = await run_in_threadpool(layer_uploads, store, body.options, owner_of(request))
-        prep = await work.run(prepare, data, name, body.options, max_images=config.max_images,
-                              max_pixels=config.max_pixels, data_dir=store.root, **layers.kwargs())
-        n_rows, n_views = len(prep.run.table.images), len(prep.run.views)
-        if body.kind == "movie" and n_rows < 2:
-            raise BrainPainterError(f"a movie needs at least 2 rows (key frames); the table has {n_rows}.")
-        if body.kind == "export" and body.export.row >= n_rows:
-            raise BrainPainterError(f"row must be 0..{n_rows - 1}; {body.export.row} was given.")
+        # the run, its limits and a PNG figure's layout, in a request process (killed past its time limit)
+        total, _ = await work.run(job_plan, data, name, body.options, body.kind, body.figure, body.movie,
+                                  body.export, max_images=config.max_images, max_pixels=config.max_pixels,
+                                  max_figure_pixels=config.max_figure_pixels, data_dir=store.root,
+                                  **layers.kwargs())
         params = body.figure.model_dump() if body.kind == "figure" else (
             body.movie.model_dump() if body.kind == "movie" else
             body.export.model_dump() if body.kind == "export" else {})
-        if body.kind == "figure" and body.figure.format == "png":  # a PDF embeds the renders as they are
-            size = await work.run(figure_pixels, prep, body.figure)
-            check_figure_pixels(*size, config.max_figure_pixels)
+        if body.kind == "figure" and body.figure.format == "png":
             params["max_pixels"] = config.max_figure_pixels  # the worker checks the composed figure too
-        total = (n_rows * n_views if body.kind == "images" else
-                 body.movie.n_frames(n_rows) if body.kind == "movie" else 1)  # movie: progress per frame
         try:
             job_id = await run_in_threadpool(
                 store.submit, client_of(request), body.kind, body.options.model_dump(), params, name, data,

@@ -76,6 +76,11 @@ class ServerConfig:
         Requests that may wait for a work thread; beyond it they get 503 + Retry-After.
     parse_time_limit_s : float
         Seconds a spreadsheet (``.xlsx``) upload may take to read (in its own process, killed after).
+    work_time_limit_s : float
+        Seconds the work of one check, preview or job submission may take (reading the upload into a run,
+        laying out a figure), in a request process killed after (:mod:`brainpainter.web.work_processes`).
+    work_processes : int
+        Request processes: calls run at once (3: two clients' slowest requests leave one for the others).
     upload_time_limit_s : float
         Seconds a request may take to send its body (uploads); slower ones get 408.
     max_uploads_in_flight : int
@@ -108,6 +113,8 @@ class ServerConfig:
     work_threads: int = 2
     max_waiting_work: int = 16
     parse_time_limit_s: float = 20.0
+    work_time_limit_s: float = 30.0
+    work_processes: int = 3
     upload_time_limit_s: float = 60.0
     max_uploads_in_flight: int = 4
 
@@ -129,3 +136,13 @@ class ServerConfig:
             return self.threads_per_worker
         procs = max(1, self.workers) + (1 if self.preview else 0)
         return max(1, (os.cpu_count() or 1) // procs)
+
+
+def no_paths(message: str, root: Path) -> str:
+    """`message` without the server's own paths (clients see it): a file in the data folder `root` by its
+    name only, the folder itself as ``DATA_DIR``."""
+    import re
+
+    for folder in {str(root.resolve()), str(root)}:
+        message = re.sub(re.escape(folder) + r"/(?:[^\s'\"/]+/)*", "", message).replace(folder, "DATA_DIR")
+    return message

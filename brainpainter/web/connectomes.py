@@ -23,11 +23,13 @@ gets them as the CLI's ``--connectome``, ``--nodes``, ``--node-values`` and ``--
 from __future__ import annotations
 
 import csv
+import json
 import tempfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.web.bundle import bundle_header as read_header
@@ -57,6 +59,7 @@ def connectome_fields() -> dict[str, Any]:
 
     from pydantic import Field
 
+    from brainpainter.connectome.edges import MAX_EDGES_DRAWN
     from brainpainter.connectome.options import ConnectomeOptions
 
     of = {f.name: f for f in fields(ConnectomeOptions)}
@@ -66,7 +69,7 @@ def connectome_fields() -> dict[str, Any]:
 
     return {"directed": made("directed", bool),
             "edge_threshold": made("edge_threshold", str | None, max_length=40),
-            "top_edges": made("top_edges", int | None, ge=0, le=1_000_000),
+            "top_edges": made("top_edges", int | None, ge=0, le=MAX_EDGES_DRAWN),
             "edges_of": made("edges_of", str | None, max_length=200),
             "nodes_space": made("nodes_space", Literal[of["nodes_space"].metadata["choices"]]),
             "node_labels": made("node_labels", bool),
@@ -132,7 +135,7 @@ def build_connectome_bundle(work: Path, files: dict[str, Path], max_nodes: int) 
         What the readers refuse (one line), or more than `max_nodes` nodes.
     """
     from brainpainter.connectome.matrix import read_matrix
-    from brainpainter.connectome.nodefiles import _vector_file, read_nodes
+    from brainpainter.connectome.nodefiles import read_nodes
 
     m = read_matrix(files["matrix"])
     n = m.weights.shape[0]
@@ -144,7 +147,8 @@ def build_connectome_bundle(work: Path, files: dict[str, Path], max_nodes: int) 
     kept = work / "kept"
     kept.mkdir()
     out: list[tuple[str | None, Path]] = [("matrix", kept / "matrix.npy")]
-    np.save(out[0][1], m.weights.astype(np.float32))
+    np.save(out[0][1], _float32_weights(m.weights, shown))
+    names: list[str] | None = None if m.names is None else [str(x) for x in m.names]
     if "nodes" in files:
         table = read_nodes(files["nodes"])
         if len(table.names) != n:
@@ -152,13 +156,13 @@ def build_connectome_bundle(work: Path, files: dict[str, Path], max_nodes: int) 
                 f"nodes file {files['nodes'].name!r} has {len(table.names)} nodes but connectome matrix "
                 f"{shown!r} has {n} rows; give one node per row of the matrix, in its order.")
         out.append(("nodes", _write_nodes(table, kept, files["nodes"].name.lower().endswith(".node"))))
-    for role in ("node_values", "node_categories"):
-        if role in files:
-            rows = _vector_file(files[role], role.replace("_", " "), n)
-            path = kept / f"{role}.csv"
-            with path.open("w", newline="") as fh:
-                csv.writer(fh).writerows(rows)
-            out.append((role, path))
+        names = names or [str(x) for x in table.names]
+    cells = {role: _node_cells(files[role], role, n, names) for role in ("node_values", "node_categories")
+             if role in files}
+    for role, entries in cells.items():  # as read and checked: one JSON list per role, in the nodes' order
+        path = kept / f"{role}.json"
+        path.write_text(json.dumps(entries))
+        out.append((role, path))
     off = ~np.eye(n, dtype=bool)
     edges = int((np.isfinite(m.weights) & (m.weights != 0) & off).sum())
     report = {"kind": "connectome", "summary": f"{n} nodes, {edges} weights", "nodes": n,
@@ -166,6 +170,46 @@ def build_connectome_bundle(work: Path, files: dict[str, Path], max_nodes: int) 
               "files": {role: path.name for role, path in files.items()}}
     write_bundle(work / "bundle.bin", MAGIC, {"report": report, "names": list(m.names or [])}, "role", out)
     return report
+
+
+def _float32_weights(weights: NDArray[np.float64], shown: str) -> NDArray[np.float32]:
+    """`weights` as kept (float32), refused where a weight is infinite or beyond float32's range.
+
+    Raises
+    ------
+    BrainPainterError
+        One line: the largest weight, the range allowed.
+    """
+    kept = weights.astype(np.float32)
+    bad = np.isinf(kept) & ~np.isnan(weights)
+    if bad.any():
+        i, j = (int(k) for k in np.argwhere(bad)[0])
+        raise BrainPainterError(
+            f"connectome matrix {shown!r} has weight {float(weights[i, j])!r} (row {i + 1}, column {j + 1}); "
+            f"this server keeps weights within +-{float(np.finfo(np.float32).max):.3g} (float32). Rescale "
+            "the matrix, or give NaN where there is no edge.")
+    return kept
+
+
+def _node_cells(path: Path, role: str, n: int, names: list[str] | None) -> list[Any]:
+    """The node values (numbers, None where empty) or categories (texts) of an uploaded file, one per node
+    in the matrix's order, read and checked as the CLI reads them (``--node-values``, ``--node-categories``).
+
+    Raises
+    ------
+    BrainPainterError
+        What the CLI refuses: another count of entries than `n`, a value that is not a finite number, a
+        name that is no node.
+    """
+    from brainpainter.connectome.nodefiles import node_cells, node_texts, node_values
+
+    what = role.replace("_", " ")
+    entries = node_cells(str(path), n, what, names=names)
+    if entries is None:  # pragma: no cover - a file is always given
+        return []
+    if role == "node_values":
+        return [None if np.isnan(v) else float(v) for v in node_values(entries, path.name)]
+    return list(node_texts(entries, numbers=True))
 
 
 def _write_nodes(table: Any, folder: Path, brainnet: bool) -> Path:
@@ -198,9 +242,10 @@ def report_of(data: bytes) -> dict[str, Any]:
     return report
 
 
-def materialise(data: bytes, root: Path) -> dict[str, str]:
+def materialise(data: bytes, root: Path) -> dict[str, Any]:
     """The files of connectome bundle `data` in ``root/incoming/connectome-<sha256>`` (written once, then
-    reused), as the keywords of a run (``connectome``, ``nodes``, ``node_values``, ``node_categories``).
+    reused), as the keywords of a run (``connectome``, ``nodes``: paths; ``node_values``, ``node_categories``:
+    one entry per node, as the upload read them).
 
     A matrix that named its nodes is written as a CSV with its names (read back by name, as uploaded),
     else as the ``.npy`` kept (:func:`~brainpainter.web.bundle.written_once`).
@@ -215,15 +260,19 @@ def materialise(data: bytes, root: Path) -> dict[str, str]:
             _named_csv(work / "matrix.npy", [str(n) for n in header["names"]], work / "matrix.csv")
 
     folder = written_once(data, root, "connectome", fill)
-    out = {"connectome": str(folder / ("matrix.csv" if (folder / "matrix.csv").is_file() else "matrix.npy"))}
+    out: dict[str, Any] = {
+        "connectome": str(folder / ("matrix.csv" if (folder / "matrix.csv").is_file() else "matrix.npy"))}
     for f in header["files"]:
-        if f["role"] != "matrix":
-            out[str(f["role"])] = str(folder / Path(str(f["name"])).name)
+        path = folder / Path(str(f["name"])).name
+        if f["role"] == "nodes":
+            out["nodes"] = str(path)
+        elif f["role"] != "matrix":  # values and categories: the entries as read (a JSON list), in order
+            out[str(f["role"])] = json.loads(path.read_text())
     return out
 
 
 def connectome_files(data: bytes, options: Any, connectome: bytes | None,
-                     data_dir: Path | None) -> dict[str, str] | None:
+                     data_dir: Path | None) -> dict[str, Any] | None:
     """The files on disk of the connectome of a run (the run's keywords ``connectome``, ``nodes``, ...,
     and its layers' labels where `options` give none): the upload itself (the connectome alone) or option
     ``connectome``'s; None without one."""

@@ -29,6 +29,7 @@ from starlette.types import Message, Receive, Scope, Send
 from brainpainter.web.config import ServerConfig
 
 access_log = logging.getLogger("brainpainter.web.access")
+log = logging.getLogger(__name__)
 
 CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' blob: data:; "
        "media-src 'self'; connect-src 'self'; font-src 'self'; form-action 'none'; base-uri 'none'; "
@@ -245,12 +246,13 @@ class Guard:
         except (_TooLarge, _TooSlow) as exc:
             if not state["started"]:
                 await _send_json(send_wrapper, exc.status_code, {"error": exc.detail})
+        except Exception as exc:  # an error no handler answered: 500 here, with the headers, logged as 500
+            if state["started"]:  # a body half sent: nothing more can be said to the client
+                raise
+            await _internal_error(send_wrapper, method, path, exc)
         finally:
             release()
-            access_log.info(json.dumps({
-                "t": round(time.time(), 3), "id": rid, "client": client, "method": method, "path": path,
-                "status": state["status"], "ms": round((time.perf_counter() - t0) * 1000, 1),
-                "bytes_in": received, "bytes_out": state["bytes"]}))
+            _log_access(rid, client, method, path, state, t0, received)
 
 
 def _own(scope: Scope) -> bytes | None:
@@ -265,6 +267,21 @@ def _own(scope: Scope) -> bytes | None:
                   f"SameSite=Strict{secure}").encode()
     scope.setdefault("state", {})["owner"] = owner_key(token)
     return cookie
+
+
+def _log_access(rid: str, client: str, method: str, path: str, state: dict[str, Any], t0: float,
+                received: int) -> None:
+    """The request's one JSON line on the access log (its status as sent)."""
+    access_log.info(json.dumps({
+        "t": round(time.time(), 3), "id": rid, "client": client, "method": method, "path": path,
+        "status": state["status"], "ms": round((time.perf_counter() - t0) * 1000, 1),
+        "bytes_in": received, "bytes_out": state["bytes"]}))
+
+
+async def _internal_error(send: Send, method: str, path: str, exc: Exception) -> None:
+    """Log an error no route handled (with its traceback) and answer 500 with one line."""
+    log.error("internal error on %s %s", method, path, exc_info=exc)
+    await _send_json(send, 500, {"error": f"internal error: {type(exc).__name__} (logged on the server)"})
 
 
 async def _send_json(send: Send, status: int, body: dict[str, Any],

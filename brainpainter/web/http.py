@@ -3,6 +3,7 @@ receiving an upload's body, a request that does not fit the schema as one line."
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import Callable
 from functools import partial
 from typing import TYPE_CHECKING, Any, TypeVar
@@ -19,23 +20,49 @@ if TYPE_CHECKING:
 
     from brainpainter.web.config import ServerConfig
     from brainpainter.web.store import Store
+    from brainpainter.web.work_processes import WorkProcesses
 
 T = TypeVar("T")
+#: Most characters of one string, and entries of one list, a check report echoes (names of nodes, labels,
+#: images): a report of an upload's own text stays bounded whatever the names (5000: the image names a
+#: tract upload's report lists).
+MAX_ECHO_CHARS = 200
+MAX_ECHO_ITEMS = 5000
 
 
 class Work:
-    """Threads for work that grows with the table (reading it, checking options), apart from the threads
-    that answer status reads: at most `threads` run and `max_waiting` wait; more get 503 at once."""
+    """Work that grows with the upload (reading it into a run, checking options), apart from the threads
+    that answer status reads: at most `threads` run and `max_waiting` wait; more get 503 at once.
 
-    def __init__(self, threads: int, max_waiting: int) -> None:
+    :meth:`run` runs a call in one of `processes` (:class:`~brainpainter.web.work_processes.WorkProcesses`:
+    killed past their time limit), or on a thread without them; :meth:`run_thread` on a thread (receiving
+    an upload, whose readers bound their own work in processes of their own).
+    """
+
+    def __init__(self, threads: int, max_waiting: int, processes: WorkProcesses | None = None) -> None:
         self.limiter = anyio.CapacityLimiter(max(1, threads))
         self.max_waiting = max_waiting
         self.pending = 0
+        self.processes = processes
 
-    async def run(self, func: Callable[..., T], *args: Any, **kwargs: Any) -> T:
+    def _admit(self) -> None:
         if self.pending >= self.limiter.total_tokens + self.max_waiting:
             raise ApiError(503, f"the server is reading {self.pending} tables already; try again in a few "
                                 "seconds.", {"retry-after": "5"})
+
+    async def run(self, func: Callable[..., T], *args: Any, **kwargs: Any) -> T:
+        if self.processes is None:
+            return await self.run_thread(func, *args, **kwargs)
+        self._admit()
+        self.pending += 1
+        try:
+            result: T = await asyncio.wrap_future(self.processes.submit(func, *args, **kwargs))
+            return result
+        finally:
+            self.pending -= 1
+
+    async def run_thread(self, func: Callable[..., T], *args: Any, **kwargs: Any) -> T:
+        self._admit()
         self.pending += 1
         try:
             return await anyio.to_thread.run_sync(partial(func, *args, **kwargs), limiter=self.limiter)
@@ -128,7 +155,7 @@ async def keep_upload(request: Request, store: Store, config: ServerConfig, work
     """
     path, size = await receive_body(request, store.root)
     try:
-        data, report = await work.run(read, path, *args, **kwargs)
+        data, report = await work.run_thread(read, path, *args, **kwargs)
     finally:
         path.unlink(missing_ok=True)
     upload_id = await run_in_threadpool(store.add_upload, client_of(request), shown, data,
@@ -148,3 +175,17 @@ def validation_line(exc: RequestValidationError) -> str:
     shown = "" if isinstance(given, dict | list) or given is None else f"; {str(given)[:80]!r} was given"
     more = f" ({len(errors) - 1} more problem(s))" if len(errors) > 1 else ""
     return f"option {loc or 'body'!r}: {e.get('msg', 'invalid')}{shown}.{more}"
+
+
+def bounded(value: Any) -> Any:
+    """`value` (a report: dicts, lists, strings, numbers) with each string cut to :data:`MAX_ECHO_CHARS`
+    characters (ending with an ellipsis) and each list to :data:`MAX_ECHO_ITEMS` entries (then a last
+    entry saying how many more there were)."""
+    if isinstance(value, str):
+        return value if len(value) <= MAX_ECHO_CHARS else value[:MAX_ECHO_CHARS - 1] + "\u2026"
+    if isinstance(value, dict):
+        return {bounded(k): bounded(v) for k, v in list(value.items())[:MAX_ECHO_ITEMS * 4]}
+    if isinstance(value, list | tuple):
+        kept = [bounded(v) for v in value[:MAX_ECHO_ITEMS]]
+        return kept + ([f"\u2026 {len(value) - MAX_ECHO_ITEMS} more"] if len(value) > MAX_ECHO_ITEMS else [])
+    return value

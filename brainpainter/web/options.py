@@ -40,6 +40,8 @@ TRACT_FIELDS = ("tracts", "tracts_space", "tracts_affine", "max_streamlines", "t
 #: The options that name another upload drawn as a layer of the main one (a map over a table, tracts, a
 #: contour map's iso-lines).
 LAYER_UPLOADS = ("map", "tracts", "contour", "connectome")
+#: Categories of a label map's key a check report lists (the figure names at most 60).
+MAX_KEY_LISTED = 256
 
 #: Suffixes an uploaded file name may have (only used to sniff the format; never a path).
 UPLOAD_SUFFIXES = (".csv", ".tsv", ".tab", ".txt", ".dat", ".xlsx", ".xlsm", ".xls")
@@ -384,44 +386,6 @@ class ExportParams(BaseModel):
                               description="The page's heading (default: the row's name).")
 
 
-def figure_pixels(prep: Prepared, params: FigureParams) -> tuple[int, int]:
-    """``(width, height)`` in pixels of a figure job's PNG, laid out as ``brainpainter figure`` does
-    (:func:`brainpainter.media.layout.plan_grid`) before anything is rendered.
-
-    The width is exact; the height takes each view's crop to have its render's shape (a content box can
-    be taller or wider than its frame, so the worker checks the composed figure again:
-    :func:`check_figure_pixels`).
-    """
-    from brainpainter.media.colorbar import colorbar_height
-    from brainpainter.media.layout import FigureOptions, plan_grid
-
-    opts = FigureOptions(grid=params.grid, title=params.title or None, label=params.label or None,
-                         dpi=params.dpi, fig_width=params.fig_width, font_size=params.font_size)
-    settings, views = prep.run.settings, [v.name for v in prep.run.views]
-
-    def bar_h(usable: float) -> float:  # inches, whatever the dpi: measured at 100 to keep it cheap
-        return colorbar_height(prep.run.scale, usable, dpi=100.0, label=opts.label, fontsize=opts.font_size)
-
-    grid = plan_grid({v: settings.height / settings.width for v in views}, list(prep.run.table.images), views,
-                     opts, bar_h)
-    return round(grid.width * opts.dpi), round(grid.height * opts.dpi)
-
-
-def check_figure_pixels(width: int, height: int, max_pixels: int) -> None:
-    """Refuse a figure of more than `max_pixels` pixels.
-
-    Raises
-    ------
-    BrainPainterError
-        One line: the figure's size, the limit and what to do.
-    """
-    if width * height > max_pixels:
-        raise BrainPainterError(
-            f"the figure would be {width}x{height} = {width * height} pixels; this server makes figures of "
-            f"at most {max_pixels} pixels. Choose a lower dpi or fig_width, fewer rows or views, or a PDF."
-        )
-
-
 class MovieParams(BaseModel):
     """``movie`` job options, with ``brainpainter movie``'s defaults."""
 
@@ -459,13 +423,15 @@ def map_check(data: bytes, name: str, options: RenderOptions, data_dir: Path | N
 
 def scale_report(scale: Any) -> dict[str, Any]:
     """A run's colour scale as the check report gives it (the page's colour bar: ``ramp``, ``ticks``; a
-    label map's ``categories``, its key: ``name`` and ``color`` each)."""
+    label map's ``categories``, its key: ``name`` and ``color`` each, the first :data:`MAX_KEY_LISTED`,
+    and ``n_categories``)."""
     from brainpainter.color.rgb import to_hex
     from brainpainter.table.report import colour_bar
 
     return {"name": scale.name, "vmin": scale.vmin, "vmax": scale.vmax, "center": scale.center,
             "threshold": getattr(scale, "threshold", None), **colour_bar(scale),
-            "categories": [{"name": n, "color": to_hex(c)} for n, c in scale.categories]}
+            "categories": [{"name": n, "color": to_hex(c)} for n, c in scale.categories[:MAX_KEY_LISTED]],
+            "n_categories": len(scale.categories)}
 
 
 def layers_report(run: Any) -> list[dict[str, Any]]:

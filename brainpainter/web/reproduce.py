@@ -13,6 +13,7 @@ uploaded. Nothing here imports bpy.
 
 from __future__ import annotations
 
+import re
 import shlex
 from pathlib import PurePosixPath
 from typing import Any
@@ -26,6 +27,8 @@ MAP_ONLY = ("underlay", "threshold", "outline_threshold")
 COLOURS = ("nan_color", "missing_color", "background", "outline_color")
 #: The output folder the command and the call write to.
 OUT = "brainpainter-out"
+#: Characters a terminal acts on (C0, DEL, C1): never verbatim in a command to copy.
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f]")
 #: The file the command reads the tracts' affine from (the page's affine field, saved as text).
 AFFINE = "affine.txt"
 
@@ -146,13 +149,24 @@ def _flag(name: str) -> str:
 
 
 def _cli_value(value: Any) -> str:
-    return shlex.quote(repr(value) if isinstance(value, float) else str(value))
+    return shell_word(repr(value) if isinstance(value, float) else str(value))
+
+
+def shell_word(text: str) -> str:
+    """`text` as one shell word: quoted (:func:`shlex.quote`), or, where it holds a control character (ESC,
+    CR, a bracketed-paste end), as bash's ``$'...'`` with each such character escaped, so the copied
+    command holds none of them and the shell still gives the program `text` exactly."""
+    if not _CONTROL.search(text):
+        return shlex.quote(text)
+    escaped = text.replace("\\", "\\\\").replace("'", "\\'")
+    return "$'" + _CONTROL.sub(lambda m: f"\\x{ord(m.group()):02x}" if ord(m.group()) < 128
+                               else f"\\u{ord(m.group()):04x}", escaped) + "'"
 
 
 def command_line(positional: list[str], pairs: list[tuple[str, Any]], command: str = "render",
                  out: str = OUT) -> str:
     """``brainpainter render INPUT -o OUT --flag value ...`` (booleans as bare flags, lists repeated)."""
-    words = ["brainpainter", command, *(shlex.quote(p) for p in positional), "-o", shlex.quote(out)]
+    words = ["brainpainter", command, *(shell_word(p) for p in positional), "-o", shell_word(out)]
     for name, value in pairs:
         if value is True:
             words.append(_flag(name))

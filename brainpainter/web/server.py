@@ -16,7 +16,9 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import os
 import socket
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -140,3 +142,11 @@ def run(app: Any, *, host: str, port: int, log_level: str, max_connections: int,
     config.load()  # configures uvicorn's loggers, so their handlers exist for the filter
     quiet_repeats()
     server.run()
+    # Stopped (SIGINT/SIGTERM: connections closed, the app's lifespan ended, its processes stopped). Leave
+    # now: Python would wait for every thread at exit, and a thread can be busy (an upload waiting for its
+    # reading process) for as long as its limit.
+    if server.started:
+        logging.shutdown()
+        for stream in (sys.stdout, sys.stderr):
+            stream.flush()
+        os._exit(0)

@@ -2,9 +2,8 @@
 
 Each process sets ``LP_NUM_THREADS`` (Mesa's rendering threads) before the
 renderer loads, keeps up to two warm :class:`~brainpainter.rendering.painter.Painter`\\ s
-(the renderer and template load once per process; a new scene is built only
-when the atlas, surface, hidden structures or image settings change) and
-stops by itself when the server process that started it is gone.
+(the renderer and template load once per process; a new scene only when the atlas,
+surface, hidden structures or image settings change); it stops when its server is gone.
 
 A job worker takes queued jobs from the :class:`~brainpainter.web.store.Store`
 one at a time. Outputs are published into ``jobs/<id>/out/`` through the
@@ -251,11 +250,11 @@ def run_job(store: Any, job: dict[str, Any], painters: PainterCache, *, ttl_s: f
 
 
 def _no_paths(message: str, store: Any) -> str:
-    """`message` without the server's own paths (clients see job errors)."""
-    root = Path(store.root)
-    for shown in {str(root.resolve()), str(root)}:
-        message = message.replace(shown, "DATA_DIR")
-    return message
+    """`message` without the server's own paths (clients see job errors): :func:`~brainpainter.web.config.
+    no_paths`."""
+    from brainpainter.web.config import no_paths
+
+    return no_paths(message, Path(store.root))
 
 
 def _prepared(folder: Path, job: dict[str, Any]) -> Any:
@@ -268,15 +267,15 @@ def _prepared(folder: Path, job: dict[str, Any]) -> Any:
 
 
 def _media_input(data: bytes, name: str, prep: Any) -> Any:
-    """What figure and movie read: a table as a named stream, a map's maps, or tracts' bundle values."""
+    """What figure, movie and export read: the table as a named stream, a map's maps, the bundle values of
+    tracts alone, or None for a connectome alone (its files are in the run's keywords)."""
+    from brainpainter.web.connectomes import is_connectome_bundle
     from brainpainter.web.maps import is_bundle, read_bundle
     from brainpainter.web.options import table_stream
 
-    if prep.tract_table is not None:
-        return str(prep.tract_table)
-    if not is_bundle(data):
-        return table_stream(data, name)
-    return read_bundle(data)
+    if prep.tract_table is not None or is_connectome_bundle(data):
+        return None if prep.tract_table is None else str(prep.tract_table)
+    return read_bundle(data) if is_bundle(data) else table_stream(data, name)
 
 
 def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
@@ -398,7 +397,8 @@ def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
 def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
     from brainpainter.media.figure import make_figure, save_figure
     from brainpainter.web.maps import figure_panels
-    from brainpainter.web.options import FigureParams, check_figure_pixels
+    from brainpainter.web.job_plan import check_figure_pixels
+    from brainpainter.web.options import FigureParams
 
     data, prep = _prepared(folder, job)
     p = dict(job["params"])
