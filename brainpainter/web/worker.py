@@ -396,8 +396,8 @@ def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
 
 def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
     from brainpainter.media.figure import make_figure, save_figure
-    from brainpainter.web.maps import figure_panels
     from brainpainter.web.job_plan import check_figure_pixels
+    from brainpainter.web.maps import figure_panels
     from brainpainter.web.options import FigureParams
 
     data, prep = _prepared(folder, job)
