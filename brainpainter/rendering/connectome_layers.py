@@ -46,7 +46,7 @@ def connectome_layers(options: Options, connectome: Connectome, first: bool) -> 
     (``--cmap``, ``--vmin``, ...) are theirs too.
     """
     plain = ScaleOptions(nan_color=options.scale.nan_color, missing_color=options.scale.missing_color)
-    own = options.layers.scale_options("edges", options.scale, first) or plain
+    own = _own_options(options, "edges", first, plain)
     if all(getattr(own, name) is None for name in SCALE_FIELDS):
         own = replace(own, center=EDGE_CENTER)
     weights = connectome.edges()[2] if connectome.series is None else connectome.series.sample  # all images'
@@ -62,11 +62,26 @@ def connectome_layers(options: Options, connectome: Connectome, first: bool) -> 
     else:
         assert connectome.node_values is not None
         values = np.asarray(connectome.node_values, dtype=float)
-        node_options, chosen = choose_scale(options.layers.scale_options("nodes", options.scale, False)
-                                            or plain, values)
+        node_options, chosen = choose_scale(_own_options(options, "nodes", False, plain), values)
         scale = replace(node_options.scale(values), chosen=chosen)
         source, fallback = options.connectome.node_values, "node value"
     return edges, Layer("nodes", scale, 1.0, _label(options, "nodes", source, fallback))
+
+
+def _own_options(options: Options, kind: str, first: bool, plain: ScaleOptions) -> ScaleOptions:
+    """Scale options of connectome layer `kind`: the plain ``--cmap``/``--vmin``/... with its own where it is
+    the run's first layer, else its own ``--edges-*``/``--nodes-*`` alone.
+
+    A connectome's layers after region values or a map always have a scale of their own (edge weights
+    are not region values): the plain options are the first layer's, and a label (``--edges-label``)
+    names a bar without taking them (``--cmap viridis --edges-label FC`` drew the edges in viridis over
+    their own range instead of ``RdBu_r`` about 0).
+    """
+    if first:
+        own = options.layers.scale_options(kind, options.scale, True)
+        assert own is not None
+        return own
+    return replace(plain, **options.layers.given(kind))
 
 
 def _label(options: Options, kind: str, source: Any, fallback: str) -> str:
