@@ -296,7 +296,8 @@ def cortex_for(settings: RenderSettings, *, cortex_values: bool, tracts: bool,
     So with tracts, ``auto`` draws glass only where the cortex carries no values (the tracts then
     show through a grey cortex); where it carries them the cortex views draw it opaque and the
     tracts show in the subcortical views (``--cortex glass`` shows them through it). A connectome
-    keeps the glass in the cortex's colours where the cortex carries values (its nodes sit inside);
+    over a cortex that carries values is drawn over the opaque cortex (its nodes and edges are drawn
+    on top of every other part: the regions' or the map's colours read true around them, issue 44);
     a connectome over a cortex without values is drawn in the smooth glass brain (``hull``: the
     subcortical views' glass hulls, ~6,000 triangles, where the pial cortex as glass is ~300,000
     drawn twice and its folds crowd the nodes). Other settings are returned unchanged.
@@ -305,6 +306,6 @@ def cortex_for(settings: RenderSettings, *, cortex_values: bool, tracts: bool,
         return settings
     if connectome and not cortex_values:
         return replace(settings, cortex="hull")
-    if cortex_values and tracts and not connectome:
+    if cortex_values and (tracts or connectome):
         return replace(settings, cortex="opaque")
     return settings

@@ -46,19 +46,20 @@ from __future__ import annotations
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from brainpainter.rendering.framing import view_projection
 from brainpainter.rendering.geometry import PartGeometry, SceneGeometry
 from brainpainter.rendering.scene import RenderSettings
 from brainpainter.rendering.views import View
 from brainpainter_blender import edge_aa, glass_layers, gpu_shaders, meshorder, outlines, tract_lines
+from brainpainter_blender.aim import Aim as _Aim
+from brainpainter_blender.aim import aim_for as _aim_for
+from brainpainter_blender.aim import on_top
 from brainpainter_blender.facing import facing, triangle_normals
 from brainpainter_blender.gpu_context import in_gpu_context
-from brainpainter_blender.gpu_lighting import FLAT, LIGHTING, Lighting, for_maps
+from brainpainter_blender.gpu_lighting import FLAT, LIGHTING, for_maps
 
 #: Supersampling factor per quality (per axis); ``high`` reaches here only for flat shading.
 SUPERSAMPLING = {"fast": 1, "default": 1, "high": 3}
@@ -83,36 +84,6 @@ def srgb_to_linear(rgb: np.ndarray) -> np.ndarray:
     """The IEC 61966-2-1 sRGB transfer function inverted, for an array of sRGB 0-1 values."""
     c = np.clip(np.asarray(rgb, dtype=np.float64), 0.0, 1.0)
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-
-
-@dataclass(frozen=True)
-class _Aim:
-    """A view's parts and camera uniforms (``mathutils`` values, world space)."""
-
-    visible: list[PartGeometry]
-    mvp: Any
-    back: Any
-    key_dir: Any
-    fill_dir: Any
-    #: per part, its batch of the triangles facing the camera; per glass part also of those turned
-    #: away (:meth:`GpuDraw._front`)
-    front: dict[str, Any] = field(default_factory=dict)
-
-
-def _aim_for(geometry: SceneGeometry, view: View, settings: RenderSettings, light: Lighting) -> _Aim:
-    """The parts `view` shows, its view-projection matrix and the camera-fixed light directions."""
-    from mathutils import Matrix, Vector
-
-    aspect = settings.width / settings.height
-    pose = geometry.camera(view, aspect)
-    cam = pose.rotation  # columns: right, up, back (camera space -> world)
-
-    def world(d: tuple[float, float, float]) -> Vector:
-        v = cam @ np.asarray(d, float)
-        return Vector((v / np.linalg.norm(v)).tolist())
-
-    return _Aim(geometry.visible(view), Matrix(view_projection(pose, aspect).tolist()),
-                world((0.0, 0.0, 1.0)), world(light.key_dir), world(light.fill_dir))
 
 
 class GpuDraw:
@@ -316,9 +287,21 @@ class GpuDraw:
                                   self._hi_depth if self.factor == 1 else None)
             with self._hi.bind():
                 top = glass(("BACK",))
-        edges = None if self._edges is None else self._edges.texture(aim.visible, view, aim)
+        over = on_top(aim.visible)
+        fresh = self._edges is not None and not self._edges.kept(view)
+        edges = None if self._edges is None else self._edges.texture(
+            [p for p in aim.visible if p.name not in {q.name for q in over}], view, aim)
         if edges is not None:
             mark("edges")
+        if over:  # drawn over the rest and the glass (put over here), each pixel in its own colour
+            with self._hi.bind():
+                if top is not None:
+                    glass_layers.GlassLayers.over(top, mark)
+                top = None
+                gpu.state.active_framebuffer_get().clear(depth=1.0)
+                self._draw_opaque(aim, tex, tracts, mark, over)
+            if fresh and self._edges is not None:
+                self._edges.add(over, view, aim)
         with self._lo.bind():
             # the resolve writes every pixel: no clear
             s, resolve = self.settings, self._resolve
@@ -376,8 +359,10 @@ class GpuDraw:
         return layers.passes(view, colours, draw, mark, fresh)
 
     def _draw_opaque(self, aim: _Aim, tex: Any, tracts: list[PartGeometry],
-                     mark: Callable[[str], None] | None = None) -> Any:
-        """The visible parts but the glass and `tracts`, lit, with depth; returns the bound shader."""
+                     mark: Callable[[str], None] | None = None,
+                     only: list[PartGeometry] | None = None) -> Any:
+        """The visible parts but the glass, `tracts` and those drawn on top (:func:`.aim.on_top`; `only`:
+        these parts alone), lit, with depth; returns the bound shader."""
         import gpu
 
         shader = self._bind_part_shader(aim, tex)
@@ -387,9 +372,9 @@ class GpuDraw:
         # Parts are closed surfaces: faces turned away are always hidden behind others.
         gpu.state.face_culling_set(CULL_OPAQUE)
         shader.uniform_int("mode", gpu_shaders.MODE_LIT)
-        drawn_as_lines = {t.name for t in tracts}
-        for p in aim.visible:
-            if p.kind != "glass" and p.name not in drawn_as_lines:
+        skip = {t.name for t in tracts} | {p.name for p in on_top(aim.visible)}
+        for p in aim.visible if only is None else only:
+            if only is not None or (p.kind != "glass" and p.name not in skip):
                 mapped = p.kind == "cortex" and bool(self.geometry.vertex_slots)
                 # a flat map is a 2-D picture: unlit, its colours exact
                 light = FLAT if p.kind == "flat" else self.map_lighting if mapped else self.lighting
