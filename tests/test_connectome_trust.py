@@ -158,3 +158,26 @@ def test_connectome_parts_split_by_hemisphere_and_the_views_that_draw_them(tiny)
     assert drawn["dorsal"] == set(parts)
     assert drawn["lateral-left"] == {"nodes-lh", "edges-lh"}
     assert drawn["medial-right"] == {"nodes-rh", "edges-rh"}
+
+
+def test_yeo_network_categories_take_yeo_s_published_colours():
+    """Item 8: Schaefer/Yeo network names as node categories take Yeo's colours (tab10 gave salience red)."""
+    import matplotlib
+
+    from brainpainter.color.scale import ScaleOptions
+    from brainpainter.rendering.connectome_layers import category_scale
+
+    seven = ("Vis", "SomMot", "DorsAttn", "SalVentAttn", "Limbic", "Cont", "Default")
+    scale = category_scale(seven, ScaleOptions())
+    got = {name: tuple(round(255 * c) for c in rgb) for name, rgb in scale.categories}
+    assert got == {"Vis": (120, 18, 134), "SomMot": (70, 130, 180), "DorsAttn": (0, 118, 14),
+                   "SalVentAttn": (196, 58, 250), "Limbic": (220, 248, 164), "Cont": (230, 148, 34),
+                   "Default": (205, 62, 78)}
+    assert dict(category_scale(("DefaultB", "TempPar"), ScaleOptions()).categories)["TempPar"] == \
+        pytest.approx((12 / 255, 48 / 255, 1.0))
+    assert dict(category_scale(("DMN", "Visual"), ScaleOptions()).categories)["DMN"] == \
+        pytest.approx((205 / 255, 62 / 255, 78 / 255))
+    # categories that are not all networks keep the categorical colour map
+    other = category_scale(("Default", "module 3"), ScaleOptions())
+    tab10 = matplotlib.colormaps["tab10"].colors[:2]  # type: ignore[attr-defined]
+    assert [tuple(rgb) for _, rgb in other.categories] == [tuple(c) for c in tab10]

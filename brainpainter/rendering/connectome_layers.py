@@ -11,6 +11,7 @@ in one neutral colour (:data:`~brainpainter.rendering.connectome_parts.NODE_COLO
 from __future__ import annotations
 
 from dataclasses import replace
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -93,7 +94,11 @@ def _label(options: Options, kind: str, source: Any, fallback: str) -> str:
 
 
 def category_scale(categories: tuple[str, ...], plain: ScaleOptions) -> ColourScale:
-    """A categorical scale of node `categories` (N,): one colour each, in order of first appearance."""
+    """A categorical scale of node `categories` (N,): one colour each, in order of first appearance.
+
+    Categories that all name Yeo's networks (``Vis``, ``Default``, ``SalVentAttnB``, ``DMN``, ...:
+    :func:`network_colors`) take Yeo's published colours; others those of ``tab10``/``tab20``/``turbo``.
+    """
     import matplotlib
 
     names = list(dict.fromkeys(categories))
@@ -101,9 +106,30 @@ def category_scale(categories: tuple[str, ...], plain: ScaleOptions) -> ColourSc
     cmap = next((name for most, name in CATEGORY_CMAPS if n <= most), "turbo")
     where = np.arange(n) if cmap != "turbo" else np.linspace(0.05, 0.95, n)  # a listed map: its i-th colour
     colors = np.asarray(matplotlib.colormaps[cmap](where), dtype=float)[:, :3]
+    networks = network_colors()
+    if all(name.strip().lower() in networks for name in names):  # Yeo's networks: their published colours
+        colors = np.array([networks[name.strip().lower()] for name in names], dtype=float).reshape(n, 3)
     keyed = tuple(_keyed(names, colors).items())
     base = replace(plain, cmap=cmap, vmin=0.0, vmax=float(max(n - 1, 1))).scale()
     return replace(base, colors=np.vstack([colors, colors[-1:]]), categories=keyed)
+
+
+@cache
+def network_colors() -> dict[str, RGB]:
+    """Yeo et al. 2011's network colours by lower-case network name or alias (``data/network_colors.tsv``)."""
+    from importlib import resources
+
+    from brainpainter.color.rgb import to_rgb
+
+    text = resources.files("brainpainter.data").joinpath("network_colors.tsv").read_text("utf-8")
+    rows = [line.split("\t") for line in text.splitlines() if line and not line.startswith("#")][1:]
+    out: dict[str, RGB] = {}
+    for name, color, *aliases in rows:
+        rgb = to_rgb(color)
+        for key in [name, *"|".join(aliases).split("|")]:
+            if key.strip():
+                out[key.strip().lower()] = rgb
+    return out
 
 
 def connectome_colors(connectome: Connectome, layers: tuple[Layer, ...],
