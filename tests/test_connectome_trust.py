@@ -181,3 +181,40 @@ def test_yeo_network_categories_take_yeo_s_published_colours():
     other = category_scale(("Default", "module 3"), ScaleOptions())
     tab10 = matplotlib.colormaps["tab10"].colors[:2]  # type: ignore[attr-defined]
     assert [tuple(rgb) for _, rgb in other.categories] == [tuple(c) for c in tab10]
+
+
+def test_a_connectome_figure_s_bars_are_named_by_layer_and_their_tick_labels_never_overprint(tiny, tmp_path):
+    """Item 6: a figure of one narrow view has an edge bar (ticks -0.75 ... 0.75 at 0.25 steps) and a
+    network key: no two tick labels shown overlap, and the bars are named by their layer, not by files."""
+    from brainpainter.media.colorbar import agg_canvas
+    from brainpainter.testing import stand_in
+
+    rng = np.random.default_rng(0)
+    n = 6
+    w = rng.uniform(-0.91, 0.91, (n, n))
+    w = (w + w.T) / 2
+    w[0, 1] = w[1, 0] = 0.91
+    matrix = tmp_path / "schaefer_400_mean_connectivity_matrix.csv"
+    np.savetxt(matrix, w, delimiter=",")
+    nodes = tmp_path / "nodes.csv"
+    nodes.write_text("name,x,y,z\n" + "".join(f"n{i},{(-1) ** i * 30},{10 * i - 25},20\n" for i in range(n)))
+    categories = tmp_path / "net400.txt"
+    categories.write_text("\n".join(["Vis", "Default"] * (n // 2)) + "\n")
+    kw = {"connectome": str(matrix), "nodes": str(nodes), "node_categories": str(categories),
+          "template": str(tiny), "views": "dorsal", "width": 300, "height": 400, "progress": False}
+    with stand_in() as renderer:
+        fig = brainpainter.figure(None, renderer=renderer, **kw)
+        # a long label of one's own: a narrow bar, the four tick labels too wide for it
+        long = brainpainter.figure(None, renderer=renderer, edges_label="functional connectivity (Fisher z)",
+                                   **kw)
+    edges_ax, nodes_ax = fig.colorbar_axes
+    assert edges_ax.xaxis.get_label().get_text() == "edge weight"
+    assert nodes_ax.xaxis.get_label().get_text() == "network"
+    for result in (fig, long):
+        ax, renderer_ = result.colorbar_axes[0], agg_canvas(result.figure).get_renderer()
+        shown = [t for t in ax.xaxis.get_ticklabels() if t.get_visible() and t.get_text()]
+        boxes = sorted((b.x0, b.x1) for b in (t.get_window_extent(renderer_) for t in shown))
+        space = renderer_.points_to_pixels(0.4 * shown[0].get_fontsize())  # a space between: 0.4 em
+        assert len(boxes) >= 2  # was "-0.75-0.25 0.25 0.75": 0.2 em between the first two
+        assert all(b[0] - a[1] >= space for a, b in zip(boxes, boxes[1:], strict=False)), \
+            [t.get_text() for t in shown]

@@ -16,12 +16,17 @@ if TYPE_CHECKING:
     from brainpainter.color.scale import ColourScale
 
 
+#: The gid of a category key's axes.
+CATEGORY_KEY = "category-key"
+
+
 def draw_category_key(ax: Axes, scale: ColourScale, horizontal: bool, fontsize: float, color: Any,
                       label: str | None) -> Axes:
     """A label map's key in the bar's place: one block per category in its colour, named."""
     import numpy as np
 
     names = [name for name, _ in scale.categories]
+    ax.set_gid(CATEGORY_KEY)  # its names are never thinned (:mod:`brainpainter.media.tick_labels`)
     colors = np.array([rgb for _, rgb in scale.categories], dtype=float)
     n = len(names)
     where = (np.arange(n) + 0.5) / n

@@ -1,13 +1,12 @@
 """Colour bars for a :class:`~brainpainter.color.scale.ColourScale`, drawn with matplotlib.
 
-The bar shows exactly the colours the renders use: it samples the scale
-itself (``scale(values)``), so a BrainPainter gradient appears with its
-control colours at its ticks and a matplotlib colour map as a smooth ramp.
-Ticks default to round numbers (:meth:`ColourScale.ticks`: a gradient's control points where round);
-NaN and missing swatches are added when asked; a label map's scale draws a key of its
-categories (:mod:`brainpainter.media.category_key`). :func:`draw_colorbar` draws into an
-Axes (figures); :func:`colorbar_image` returns an RGBA array of an exact pixel size (movie
-frames). matplotlib is imported inside the functions only.
+The bar shows exactly the colours the renders use: it samples the scale itself (``scale(values)``), so
+a BrainPainter gradient appears with its control colours at its ticks and a matplotlib colour map as
+a smooth ramp; tick labels that would overprint are thinned (:mod:`brainpainter.media.tick_labels`).
+Ticks default to round numbers (:meth:`ColourScale.ticks`: a gradient's control points where round); NaN
+and missing swatches are added when asked; a label map's scale draws a key of its categories
+(:mod:`brainpainter.media.category_key`). :func:`draw_colorbar` draws into an Axes (figures);
+:func:`colorbar_image` an RGBA array of an exact pixel size (movie frames). matplotlib: imported on use.
 """
 
 from __future__ import annotations
@@ -23,6 +22,7 @@ from numpy.typing import NDArray
 from brainpainter.color.scale import ColourScale, between, fraction
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.media.category_key import draw_category_key
+from brainpainter.media.tick_labels import thin_tick_labels
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -41,9 +41,8 @@ ORIENTATIONS = ("horizontal", "vertical")
 def quiet_glyphs(func: F) -> F:
     """Run `func` without matplotlib's "Glyph ... missing from font" warnings.
 
-    Image names in any script (``患者 1``) are drawn in figures and movies; where the installed fonts
-    lack a glyph matplotlib warns once per character. The file is still right (the name is in its
-    file name and manifest); the warnings would flood the output or, where warnings are errors, stop it.
+    Image names in any script (``患者 1``) are drawn in figures and movies; where the installed fonts lack
+    a glyph matplotlib warns once per character, flooding the output (or stopping it: warnings as errors).
     """
     @functools.wraps(func)
     def run(*args: Any, **kwargs: Any) -> Any:
@@ -360,6 +359,7 @@ def fit_axes(ax: Axes, box: tuple[float, float, float, float], *, grow: str = "x
             y0 = bb + (bh - outer.height) / 2 + (inner.y0 - outer.y0)
         ax.set_position((x0 / fw, y0 / fh, w / fw, h / fh))
     _keep_label_inside(ax, bl, bl + bw)
+    thin_tick_labels(ax, agg_canvas(fig).get_renderer())
 
 
 def _legend_below(ax: Axes) -> None:

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from dataclasses import replace
 from functools import cache
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -53,20 +52,19 @@ def connectome_layers(options: Options, connectome: Connectome, first: bool) -> 
     weights = connectome.edges()[2] if connectome.series is None else connectome.series.sample  # all images'
     edge_options, chosen = choose_scale(own, weights)
     edges = Layer("edges", replace(edge_options.scale(weights), chosen=chosen), 1.0,
-                  _label(options, "edges", options.connectome.connectome, "edge weight"))
+                  _label(options, "edges", "edge weight"))
     if "nodes" not in connectome_kinds(connectome):
         return (edges,)
     if connectome.node_categories is not None:
         scale = category_scale(connectome.node_categories, plain)
-        source: Any = options.connectome.node_categories
         fallback = "network"
     else:
         assert connectome.node_values is not None
         values = np.asarray(connectome.node_values, dtype=float)
         node_options, chosen = choose_scale(_own_options(options, "nodes", False, plain), values)
         scale = replace(node_options.scale(values), chosen=chosen)
-        source, fallback = options.connectome.node_values, "node value"
-    return edges, Layer("nodes", scale, 1.0, _label(options, "nodes", source, fallback))
+        fallback = "node value"
+    return edges, Layer("nodes", scale, 1.0, _label(options, "nodes", fallback))
 
 
 def _own_options(options: Options, kind: str, first: bool, plain: ScaleOptions) -> ScaleOptions:
@@ -85,12 +83,12 @@ def _own_options(options: Options, kind: str, first: bool, plain: ScaleOptions) 
     return replace(plain, **options.layers.given(kind))
 
 
-def _label(options: Options, kind: str, source: Any, fallback: str) -> str:
-    """A connectome layer's colour-bar label: as given, else its file's name, else `fallback`."""
+def _label(options: Options, kind: str, fallback: str) -> str:
+    """A connectome layer's colour-bar label: as given (``--edges-label FC``), else the layer's name
+    (`fallback`: ``edge weight``, ``node value``, ``network``), never a file's name (issue 44: a bar named
+    ``net400.txt`` or the matrix's file said where the numbers came from, not what they are)."""
     given = options.layers.label(kind)
-    if given is not None:
-        return given
-    return Path(source).name if isinstance(source, str | Path) else fallback
+    return given if given is not None else fallback
 
 
 def category_scale(categories: tuple[str, ...], plain: ScaleOptions) -> ColourScale:
