@@ -3,6 +3,8 @@ graphs that read (one hemisphere per lateral view, Yeo's network colours, labels
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -216,5 +218,5 @@ def test_a_connectome_figure_s_bars_are_named_by_layer_and_their_tick_labels_nev
         boxes = sorted((b.x0, b.x1) for b in (t.get_window_extent(renderer_) for t in shown))
         space = renderer_.points_to_pixels(0.4 * shown[0].get_fontsize())  # a space between: 0.4 em
         assert len(boxes) >= 2  # was "-0.75-0.25 0.25 0.75": 0.2 em between the first two
-        assert all(b[0] - a[1] >= space for a, b in zip(boxes, boxes[1:], strict=False)), \
+        assert all(b[0] - a[1] >= space for a, b in itertools.pairwise(boxes)), \
             [t.get_text() for t in shown]
