@@ -220,3 +220,45 @@ def test_a_connectome_figure_s_bars_are_named_by_layer_and_their_tick_labels_nev
         assert len(boxes) >= 2  # was "-0.75-0.25 0.25 0.75": 0.2 em between the first two
         assert all(b[0] - a[1] >= space for a, b in itertools.pairwise(boxes)), \
             [t.get_text() for t in shown]
+
+
+def test_node_labels_top_can_rank_within_each_category():
+    """Item 9: ``--node-labels-top 1 --node-labels-per-category`` names each network's strongest."""
+    from brainpainter.connectome.labels import labelled_nodes
+    from brainpainter.errors import BrainPainterError
+
+    c = Connectome(tuple("abcdef"), np.zeros((6, 3)), np.full((6, 6), np.nan),
+                   node_values=np.array([9.0, 8.0, 7.0, 1.0, 2.0, 0.5]),
+                   node_categories=("Vis", "Vis", "Vis", "Default", "Default", "Limbic"))
+    assert labelled_nodes(c, 2) == (0, 1)  # all visual
+    assert labelled_nodes(c, 1, per_category=True) == (0, 4, 5)
+    assert labelled_nodes(c, 2, per_category=True) == (0, 1, 3, 4, 5)
+    with pytest.raises(BrainPainterError, match="give --node-categories"):
+        labelled_nodes(Connectome(c.names, c.positions, c.weights), 1, per_category=True)
+
+
+def test_node_labels_print_at_least_7_points_in_a_figure(tiny, monkeypatch):
+    """Item 9: in a three-view figure 7.2 in wide, the labels' text is at least 7 pt tall as printed (it was
+    9 px of a 300 px render shown 1.6 in tall: 3.5 pt); a lateral view labels only its hemisphere's nodes."""
+    from brainpainter.rendering import node_labels
+    from brainpainter.testing import stand_in
+
+    drawn: list[tuple[int, int]] = []
+    height_of = node_labels.text_height
+    monkeypatch.setattr(node_labels, "text_height",
+                        lambda h, *a: drawn.append((h, height_of(h, *a))) or drawn[-1][1])
+    labelled = []
+    draw = node_labels.draw_node_labels
+    monkeypatch.setattr(node_labels, "draw_node_labels",
+                        lambda p, c, pose: labelled.append(c.labelled) or draw(p, c, pose))
+    with stand_in() as renderer:
+        fig = brainpainter.figure(None, connectome=ladder(), template=str(tiny), renderer=renderer,
+                                  views="lateral-left,dorsal,lateral-right", width=400, height=300,
+                                  node_labels=True, progress=False)
+    assert len(drawn) == 3
+    for ax in fig.image_axes.values():
+        inches = ax.get_position().height * fig.figure.get_figheight()
+        rows = ax.get_images()[0].get_array().shape[0]  # the render as shown (cropped)
+        for _, px in drawn:
+            assert px * inches * 72 / rows >= 7.0
+    assert sorted(labelled, key=len) == [(0, 1, 2, 3), (4, 5, 6, 7), tuple(range(8))]

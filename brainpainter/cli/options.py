@@ -42,7 +42,8 @@ RENDER_OPTION_NAMES = (
     "glass_opacity", "cortex", "outline_width", "outline_color", "renderer", "atlas_config", "tracts",
     "tracts_space", "tracts_affine", "max_streamlines", "tract_values", "tract_value", "tract_radius",
     "connectome", "nodes", "node_values", "node_categories", "directed", "edge_threshold", "top_edges",
-    "edges_of", "nodes_space", "node_labels", "node_labels_top", *(f.name for f in fields(LayerOptions)),
+    "edges_of", "nodes_space", "node_labels", "node_labels_top", "node_labels_per_category",
+    *(f.name for f in fields(LayerOptions)),
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
 PARALLEL_OPTION_NAMES = ("jobs", "scheduler")
@@ -140,6 +141,7 @@ def render_option_list(views: str | None = None, size: str = DEFAULT_SIZE) -> di
         "node_labels": field_option(ConnectomeOptions, "node_labels"),
         "node_labels_top": field_option(ConnectomeOptions, "node_labels_top", type=click.IntRange(min=1),
                                         metavar="K"),
+        "node_labels_per_category": field_option(ConnectomeOptions, "node_labels_per_category"),
         **{f.name: field_option(LayerOptions, f.name, **_layer_click(f.name)) for f in fields(LayerOptions)},
     }
 

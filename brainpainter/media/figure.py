@@ -27,7 +27,7 @@ import io
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Unpack
+from typing import TYPE_CHECKING, Any, TypeVar, Unpack
 
 from numpy.typing import NDArray
 
@@ -35,7 +35,7 @@ from brainpainter.atlas.model import Atlas
 from brainpainter.color.scale import ColourScale
 from brainpainter.media.colorbar import quiet_glyphs
 from brainpainter.media.drawn import common_crop, content_box, drawn_kinds, swatches_needed
-from brainpainter.media.layout import FigureKwargs, FigureOptions, compose_figure
+from brainpainter.media.layout import FigureKwargs, FigureOptions, compose_figure, plan_grid
 from brainpainter.media.outfile import check_out_file
 from brainpainter.rendering.layers import colorbar_layers, first_bar_label
 from brainpainter.rendering.options import Options, RenderKwargs, take
@@ -54,6 +54,7 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["FigureResult", "check_out_file", "common_crop", "compose_figure", "content_box", "figure_bytes",
            "make_figure", "save_figure", "select_rows"]
 
+RunT = TypeVar("RunT", "Run", "MapRun")
 FIGURE_FORMATS = {".png": "png", ".pdf": "pdf", ".svg": "svg", ".tif": "tiff", ".tiff": "tiff"}
 VECTOR_FORMATS = ("pdf", "svg")
 
@@ -140,6 +141,30 @@ def figure_bytes(fig: Figure, path: Path, dpi: float, transparent: bool = False)
     return buf.getvalue()
 
 
+#: The smallest printed height of a connectome's node labels in a figure, points (issue 44).
+MIN_LABEL_PT = 7.0
+
+
+def printed_labels(run: RunT, image_names: list[str], figure_opts: FigureOptions) -> RunT:
+    """`run` with its connectome's labels tall enough to print at :data:`MIN_LABEL_PT` or more in the figure.
+
+    The text is a share of each render's height (:func:`~brainpainter.rendering.node_labels.text_height`);
+    a figure shows a render `row_h` inches tall (:func:`~brainpainter.media.layout.plan_grid`, from the
+    uncropped renders: a crop only enlarges them), so the share is at least ``MIN_LABEL_PT / 72 / row_h``.
+    """
+    from brainpainter.rendering.node_labels import TEXT_SHARE
+
+    connectome = run.connectome
+    if connectome is None or not connectome.labelled:
+        return run
+    s = run.settings
+    views = [v.name for v in run.views]
+    grid = plan_grid(dict.fromkeys(views, s.height / s.width), image_names, views, figure_opts,
+                     lambda usable: 0.0)
+    share = max(TEXT_SHARE, MIN_LABEL_PT / 72.0 / min(grid.row_h))
+    return replace(run, connectome=replace(connectome, label_share=share))
+
+
 def _bars(run: Run | MapRun, painter: Painter, figure_opts: FigureOptions) -> tuple[FigureOptions, list[Any]]:
     """The first bar's label and the other layers' bars (scale, label) of a figure of `run`.
 
@@ -202,6 +227,7 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     resolve_ticks(run.scale, figure_opts.ticks)
     table = run.table
     chosen = select_rows(table.images, rows)
+    run = printed_labels(run, [table.images[i] for i in chosen], figure_opts)
     painter = run.painter()
     nan, missing = ((False, False) if run.layers[0].kind == "edges"  # a connectome alone: no region swatch
                     else swatches_needed(table, chosen, run.views, painter.scene.geometry))

@@ -127,6 +127,7 @@ def _tracts(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:
 #: The connectome keywords of :meth:`Scene.add` besides its edges' scale: its nodes and which edges.
 CONNECTOME_KEYWORDS = ("nodes", "node_values", "node_categories", "directed", "edge_threshold", "top_edges",
                        "edges_of", "nodes_space", "node_labels", "node_labels_top",
+                       "node_labels_per_category",
                        *(f"nodes_{name}" for name in (*SCALE_FIELDS, "label")))
 
 
