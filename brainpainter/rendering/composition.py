@@ -30,6 +30,7 @@ from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import Options
 from brainpainter.rendering.painter import region_colors
 from brainpainter.rendering.settings import RGB, RenderSettings, outlined
+from brainpainter.rendering.tract_parts import MISSING_TRACT_KEY
 from brainpainter.table.region_table import RegionTable
 from brainpainter.tracts.values import TractValues
 
@@ -84,12 +85,15 @@ def layer_label(options: Options, kind: str, table: RegionTable) -> str:
 
 
 def tract_colors(values: Mapping[str, float], scale: ColourScale) -> dict[str, RGB]:
-    """Colour of each bundle (or bundle node) key for one image; NaN: the scale's NaN colour."""
+    """Colour of each bundle (or bundle node) key for one image; NaN: the scale's NaN colour; the bundles
+    drawn without a value (:data:`~brainpainter.rendering.tract_parts.MISSING_TRACT_KEY`): missing colour."""
     keys = list(values)
+    m = scale.missing_color
+    missing: dict[str, RGB] = {MISSING_TRACT_KEY: (float(m[0]), float(m[1]), float(m[2]))}
     if not keys:
-        return {}
+        return missing
     rgb = scale(np.array([values[k] for k in keys], dtype=float))
-    return {k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(keys, rgb, strict=True)}
+    return {k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(keys, rgb, strict=True)} | missing
 
 
 def run_scale(options: ScaleOptions, values: NDArray[Any], measures: bool) -> ColourScale:

@@ -261,8 +261,9 @@ class Painter:
         palette = Palette(self.atlas.expand(colors), lambda: scene.geometry, vertex_rgb)
         pixels: NDArray[Any] = self.load().render(palette, view)
         connectome = scene.connectome
-        sides = {part.hemi for part in scene.geometry.visible(view) if part.kind == "node"}
-        if connectome is not None and connectome.labelled and sides:
+        sides = ({part.hemi for part in scene.geometry.visible(view) if part.kind == "node"}
+                 if connectome is not None and connectome.labelled else set())
+        if connectome is not None and sides:
             from brainpainter.rendering.connectome_parts import node_hemis
             from brainpainter.rendering.node_labels import draw_node_labels
 
