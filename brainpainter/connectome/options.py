@@ -36,6 +36,7 @@ class ConnectomeKwargs(TypedDict, total=False):
     nodes_space: str
     node_labels: bool
     node_labels_top: int | None
+    node_labels_per_category: bool
 
 
 @dataclass(frozen=True)

@@ -165,6 +165,25 @@ def printed_labels(run: RunT, image_names: list[str], figure_opts: FigureOptions
     return replace(run, connectome=replace(connectome, label_share=share))
 
 
+def line_legend(run: Run | MapRun, image_axes: list[Axes], font_size: float) -> None:
+    """A legend of the run's line layers (``--outline``: its atlas's borders; ``--contour``: its levels), each
+    in its own colour, width and dash, in the upper right of the last image (none without lines)."""
+    from matplotlib.lines import Line2D
+
+    from brainpainter.rendering.composition import line_entries
+
+    entries = line_entries(run.options, run.contours, run.settings)
+    if not entries or not image_axes:
+        return
+    handles = [Line2D([], [], color=e["color"], linewidth=max(0.8, 0.6 * e["width"]),
+                      linestyle="--" if e["style"] == "dashed" else "-",
+                      label=(f"{e['atlas']} borders" if e["kind"] == "outline"
+                             else "contour at " + ", ".join(f"{v:g}" for v in e["levels"])))
+               for e in entries]
+    image_axes[-1].legend(handles=handles, loc="upper right", fontsize=font_size - 1, frameon=False,
+                          handlelength=2.5, borderaxespad=0.1)
+
+
 def _bars(run: Run | MapRun, painter: Painter, figure_opts: FigureOptions) -> tuple[FigureOptions, list[Any]]:
     """The first bar's label and the other layers' bars (scale, label) of a figure of `run`.
 
@@ -248,6 +267,7 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
                                 run.scale, figure_opts, nan=nan, missing=missing, background=background,
                                 more_bars=more)
         node_size_legend(run, layout.colorbar_axes, text_color(background), figure_opts.font_size)
+        line_legend(run, list(layout.image_axes.values()), figure_opts.font_size)
         if tx is not None and path is not None:
             tx.tmp.write_bytes(figure_bytes(layout.figure, path, figure_opts.dpi,
                                             transparent=background is None))

@@ -43,7 +43,7 @@ __all__ = ["KINDS", "Kind", "Scene", "SceneLayer", "infer_kind"]
 #: The scale keywords of :meth:`Scene.add` besides the colour scale's own (:data:`SCALE_FIELDS`).
 LAYER_KEYWORDS = ("threshold", "alpha", "label")
 #: The keywords of a line layer (a contour, an outline).
-LINE_KEYWORDS = ("color", "width", "levels")
+LINE_KEYWORDS = ("color", "width", "style", "levels")
 
 
 @dataclass(frozen=True)
@@ -137,10 +137,10 @@ def _connectome(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:
     return None, {"connectome": layer.data, **_scale("edges", layer.keywords), **chosen}
 
 
-def _lines(layer: SceneLayer) -> dict[str, Any]:
-    """The line keywords (``color``, ``width``) as the run's outline settings."""
-    names = {"color": "outline_color", "width": "outline_width"}
-    return {names[k]: v for k, v in layer.keywords.items() if k in names}
+def _lines(layer: SceneLayer, kind: str) -> dict[str, Any]:
+    """The line keywords (``color``, ``width``, ``style``) as the run's settings of line layer `kind`
+    (``outline_color``, ``contour_width``, ...): each line layer is drawn in its own line."""
+    return {f"{kind}_{k}": v for k, v in layer.keywords.items() if k in ("color", "width", "style")}
 
 
 def _contour(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:
@@ -150,11 +150,11 @@ def _contour(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:
     if isinstance(levels, Iterable) and not isinstance(levels, str):
         levels = ",".join(str(v) for v in levels)
     more = {"contour_levels": levels} if levels is not None else {}
-    return None, {"contour": given, **_lines(layer), **more}
+    return None, {"contour": given, **_lines(layer, "contour"), **more}
 
 
 def _outline(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:
-    return None, {"outline": str(layer.data), **_lines(layer)}
+    return None, {"outline": str(layer.data), **_lines(layer, "outline")}
 
 
 _SCALED = (*SCALE_FIELDS, "label")
@@ -164,8 +164,8 @@ KINDS: dict[str, Kind] = {
     "map": Kind(_map, (*_SCALED, "alpha", "threshold"), first=True),
     "tracts": Kind(_tracts, (*_SCALED, "values", "value")),
     "connectome": Kind(_connectome, (*_SCALED, *CONNECTOME_KEYWORDS)),
-    "contour": Kind(_contour, ("levels", "color", "width")),
-    "outline": Kind(_outline, ("color", "width")),
+    "contour": Kind(_contour, ("levels", "color", "width", "style")),
+    "outline": Kind(_outline, ("color", "width", "style")),
 }
 
 
@@ -278,16 +278,10 @@ class Scene:
         """
         layers = sorted(self.layers if layers is None else layers, key=lambda la: list(KINDS).index(la.kind))
         data, options = None, dict(self.options)
-        lines: dict[str, Any] = {}
         for layer in layers:
             given, more = KINDS[layer.kind].options(layer, data is not None)
             if given is not None:
                 data = given
-            for name in ("outline_color", "outline_width"):  # one line style for every line layer
-                if name in more and lines.setdefault(name, more[name]) != more[name]:
-                    raise BrainPainterError(f"the contour and the outline are drawn in one line style; "
-                                            f"{name.split('_')[1]} {lines[name]!r} and {more[name]!r} were "
-                                            "given. Give one.")
             options.update(more)
         Options.of(options, "Scene")
         return data, options

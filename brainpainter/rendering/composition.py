@@ -257,11 +257,18 @@ def line_layers(options: Options, drawn: str,
     return contours, outlined(options.settings, outline if contours is None else "contour")
 
 
-def line_entries(options: Options, contours: Contours | None) -> list[dict[str, Any]]:
-    """The manifest's ``lines``: the outline's atlas and the contour's levels, as drawn."""
+def line_entries(options: Options, contours: Contours | None,
+                 settings: RenderSettings | None = None) -> list[dict[str, Any]]:
+    """The manifest's ``lines`` (and a figure's line legend): the outline's atlas and the contour's levels,
+    each with its line as drawn (colour, width in pixels, style) where `settings` (the run's) are given."""
     outline = options.maps.outline
-    return ([{"kind": "outline", "atlas": outline}] if outline is not None else []) + (
-        [{"kind": "contour", "levels": list(contours.levels)}] if contours is not None else [])
+    entries: list[dict[str, Any]] = [{"kind": "outline", "atlas": outline}] if outline is not None else []
+    entries += [{"kind": "contour", "levels": list(contours.levels)}] if contours is not None else []
+    for entry in entries:
+        if settings is not None:
+            color, width, style = settings.line(str(entry["kind"]))
+            entry.update({"color": list(color), "width": width, "style": style})
+    return entries
 
 
 def read_contours(options: MapOptions) -> Contours | None:

@@ -344,7 +344,7 @@ class GpuDraw:
         """What draws the glass sides `culled` (:meth:`_draw_glass`) in this image: through the view's
         layers (:meth:`.glass_layers.GlassLayers.passes`), or without, into the bound buffer (None)."""
         glass, s, layers = [p for p in aim.visible if p.kind == "glass"], self.settings, self._glass
-        outlined = s.outline_width > 0 and any(p.outline is not None for p in glass)
+        outlined = s.outline_width > 0 and any(outlines.has_lines(p) for p in glass)
 
         def draw(culled: tuple[str, ...]) -> None:
             self._bind_part_shader(aim, tex)
@@ -433,7 +433,7 @@ class GpuDraw:
             mark({"FRONT": "glass, far side", "BACK": "glass, near side"}.get("".join(culled), "glass"))
             gpu.state.blend_set("NONE")
             gpu.state.depth_mask_set(True)
-        if "BACK" in culled and any(p.outline is not None for p in glass) and s.outline_width > 0:
+        if "BACK" in culled and any(outlines.has_lines(p) for p in glass) and s.outline_width > 0:
             # A cortex drawn as glass (``--cortex glass``) keeps its borders, on its near side only:
             # its front faces go into the depth buffer alone, then the lines are depth-tested on them.
             gpu.state.color_mask_set(False, False, False, False)
