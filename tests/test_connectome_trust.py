@@ -262,3 +262,22 @@ def test_node_labels_print_at_least_7_points_in_a_figure(tiny, monkeypatch):
         for _, px in drawn:
             assert px * inches * 72 / rows >= 7.0
     assert sorted(labelled, key=len) == [(0, 1, 2, 3), (4, 5, 6, 7), tuple(range(8))]
+
+
+@pytest.mark.render
+@pytest.mark.integration
+def test_edges_labelled_keep_their_bar_s_colours_beside_regions_in_viridis(tmp_path):
+    """Item 3, read back: with region values in viridis and ``edges_label="FC"`` the edge pixels are the
+    colour of their weight on RdBu_r about 0 (they were viridis over 0.6..0.6)."""
+    c = ladder()
+    bare = Connectome(c.names, c.positions, np.full((8, 8), np.nan), node_categories=c.node_categories)
+    table = {"Left-superiorfrontal": 1.0, "Right-superiorfrontal": 2.0}
+    kw = {"cmap": "viridis", "edges_label": "FC", "views": "dorsal", **FLAT}
+    result = brainpainter.render(table, "dk", connectome=c, **kw)
+    img = next(iter(result.images.values()))[..., :3].astype(float)
+    nodes_only = next(iter(brainpainter.render(table, "dk", connectome=bare, **{**kw, "edges_label": None})
+                           .images.values()))[..., :3]
+    edges = np.abs(img - nodes_only).max(axis=-1) > 30
+    bar = _rgb255({la.kind: la.scale for la in result.layers}["edges"](np.array([0.6]))[0])
+    assert np.allclose(bar, [103, 0, 31], atol=2)  # RdBu_r's darkest red: 0.6 is the largest |weight|
+    assert edges.sum() > 1000 and np.median(np.abs(img[edges] - bar).max(axis=-1)) <= 10
