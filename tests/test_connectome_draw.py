@@ -76,16 +76,22 @@ def test_nodes_and_edges_are_parts_with_a_slot_each_drawn_inside_the_glass(tiny)
     scene = Scene(load_template(tiny), "dk", connectome=tiny_connectome())
     g = scene.geometry
     parts = {p.name: p for p in g.parts}
-    assert parts["nodes"].kind == "node" and parts["edges"].kind == "edge"
+    # one node a hemisphere, the edge between them: of neither (issue 44: views of one hemisphere skip it)
+    assert (parts["nodes-lh"].kind, parts["nodes-rh"].kind, parts["edges"].kind) == ("node", "node", "edge")
+    assert (parts["nodes-lh"].hemi, parts["nodes-rh"].hemi, parts["edges"].hemi) == ("lh", "rh", None)
     assert {"node:0", "node:1", "edge:0"} <= set(g.slot_of)
     # the larger node value, the larger sphere
-    nodes = parts["nodes"]
-    spread = [np.ptp(nodes.vertices[nodes.palette_index == g.slot_of[f"node:{i}"]][:, 0]) for i in (0, 1)]
+    spread = [np.ptp(p.vertices[p.palette_index == g.slot_of[f"node:{i}"]][:, 0])
+              for i, p in ((0, parts["nodes-lh"]), (1, parts["nodes-rh"]))]
     np.testing.assert_allclose(spread, [2 * NODE_RADIUS[0], 2 * NODE_RADIUS[1]], rtol=0.01)
     assert g.cortex == "glass"  # a connectome alone shows the cortex as glass
-    for view in ("dorsal", "lateral-left", "subcortical"):
-        assert {"nodes", "edges"} <= {p.name for p in g.visible(get_view(view))}
-    assert framing.shows(get_view("dorsal"), "node", None, "opaque") is False
+    for view in ("dorsal", "subcortical"):
+        assert {"nodes-lh", "nodes-rh", "edges"} <= {p.name for p in g.visible(get_view(view))}
+    assert {p.name for p in g.visible(get_view("lateral-left")) if p.kind in ("node", "edge")} == {"nodes-lh"}
+    # drawn over an opaque cortex too (on top of it: issue 44), the edges between hemispheres in views of both
+    assert framing.shows(get_view("dorsal"), "node", "lh", "opaque") is True
+    assert framing.shows(get_view("dorsal"), "edge", None, "opaque") is True
+    assert framing.shows(get_view("lateral-left"), "edge", None, "glass") is False
 
 
 def test_four_hundred_nodes_and_eight_hundred_edges_are_cheap(tiny):
@@ -98,8 +104,8 @@ def test_four_hundred_nodes_and_eight_hundred_edges_are_cheap(tiny):
     g = Scene(template, "dk", connectome=connectome).geometry
     t2 = time.perf_counter()
     extra = (t2 - t1) - (t1 - t0)
-    parts = {p.name: p for p in g.parts}
-    assert len(parts["nodes"].triangles) == 400 * 320 and len(parts["edges"].triangles) == 800 * 16
+    triangles = {kind: sum(len(p.triangles) for p in g.parts if p.kind == kind) for kind in ("node", "edge")}
+    assert triangles == {"node": 400 * 320, "edge": 800 * 16}
     assert len(g.keys) == len(plain.keys) + 1200
     assert extra < 0.5, f"400 nodes and 800 edges cost {extra:.2f} s more to build"
 
@@ -120,7 +126,8 @@ def test_connectome_check_passes_and_catches_a_mirrored_renderer():
 def test_a_connectome_over_a_cortex_without_values_is_drawn_in_the_smooth_glass_brain(tiny, tmp_path):
     """``--cortex auto``: a connectome alone draws the template's glass hulls in the cortex views, not
     the pial cortex as glass (~300,000 triangles drawn twice, its folds crowding the nodes); with
-    cortical region values the glass cortex in their colours stays; without hulls, the cortex."""
+    cortical region values the cortex is opaque in their colours, the connectome drawn over it (issue 44);
+    without hulls, the cortex."""
     from brainpainter.rendering.run import prepare_run
     from brainpainter.rendering.settings import RenderSettings
 
@@ -129,11 +136,11 @@ def test_a_connectome_over_a_cortex_without_values_is_drawn_in_the_smooth_glass_
     run = prepare_run(None, "dk", template=str(tiny), connectome=str(matrix))
     assert run.settings.cortex == "hull"
     with_values = prepare_run({"Left-insula": 1.0}, "dk", template=str(tiny), connectome=str(matrix))
-    assert with_values.settings.cortex == "auto"  # glass, in the regions' colours (geometry's auto)
+    assert with_values.settings.cortex == "opaque"  # the regions' colours true to their bar
     g = Scene(load_template(tiny), "dk", connectome=tiny_connectome(),
               settings=RenderSettings(cortex="hull")).geometry
     for view, hulls in (("dorsal", {"glass-lh", "glass-rh"}), ("lateral-left", {"glass-lh"})):
         shown = {p.name: p.kind for p in g.visible(get_view(view))}
         assert {n for n, k in shown.items() if k == "glass"} == hulls and "cortex-lh" not in shown
-        assert {"nodes", "edges"} <= set(shown)
+        assert {"nodes-lh"} <= set(shown) and ("edges" in shown) == (view == "dorsal")
     assert not framing.shows(get_view("dorsal"), "cortex", "lh", "hull")

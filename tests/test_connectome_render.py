@@ -176,7 +176,8 @@ def test_node_values_and_categories_files_give_the_node_layer(tmp_path, cli):
     nodes = manifest["connectome"]["nodes"]
     assert [n["value"] for n in nodes] == [0, 1, 2, 3, 4, 5]
     assert [n["category"] for n in nodes][:2] == ["other", "DMN"]
-    assert [(la["kind"], la["label"]) for la in manifest["settings"]["layers"]] == [("edges", "m.csv"),
+    # each bar named by its layer, not by the matrix's file (issue 44)
+    assert [(la["kind"], la["label"]) for la in manifest["settings"]["layers"]] == [("edges", "edge weight"),
                                                                                    ("nodes", "network")]
 
 

@@ -115,3 +115,39 @@ def test_a_contour_that_no_level_divides_is_a_warning(tmp_path):
         warnings.simplefilter("error")
         read_contours(MapOptions(contour=write(np.arange(10242) % 2)))
         read_contours(MapOptions(contour=write(np.where(np.arange(10242) % 2, 1.0, np.nan))))
+
+
+@pytest.mark.render
+def test_a_red_dashed_contour_with_black_dk_borders_each_in_its_own_line(tmp_path):
+    """Issue 44 item 4: Scene takes a red contour with black DK borders (it refused: "drawn in one line
+    style"); each is drawn in its own colour and width, the contour's dashes leave gaps, and a figure's
+    legend names both lines in their colours."""
+    import brainpainter
+
+    table = {f"lh_{r}": 0.0 for r in LATERAL}
+    image = {"gradient": "white,blue", "vmin": 0, "vmax": 1, "shading": "flat", "quality": "fast",
+             "width": 480, "height": 360}
+    contour = _mask(tmp_path)
+
+    def scene(style: str) -> brainpainter.Scene:
+        s = brainpainter.Scene("dk", **image)
+        s.add(table)
+        s.add(contour.split(","), outline=True, color="red", width=4, style=style)
+        return s.add("dk", outline=True, color="black", width=2)
+
+    from PIL import Image
+
+    solid, dashed = (next(iter(scene(style).render("lateral-left", progress=False).images.values()))[..., :3]
+                     .astype(int) for style in ("solid", "dashed"))
+    Image.fromarray(np.hstack([solid, dashed]).astype(np.uint8)).save(tmp_path / "contour_outline.png")
+    red = [int((np.abs(img - [255, 0, 0]).max(axis=-1) <= 10).sum()) for img in (solid, dashed)]
+    black = [int((img.max(axis=-1) <= 10).sum()) for img in (solid, dashed)]
+    assert red[0] > 300 and black[0] > 300  # each line in its own colour, true to it (within 10)
+    assert 0.35 < red[1] / red[0] < 0.85, red  # dashes: about 3 mm of every 5
+    assert abs(black[1] - black[0]) < 0.1 * black[0]  # the borders stay solid
+    fig = scene("dashed").figure(views="lateral-left", progress=False)
+    (legend,) = [ax.get_legend() for ax in fig.image_axes.values() if ax.get_legend() is not None]
+    lines = {t.get_text(): h for t, h in zip(legend.get_texts(), legend.legend_handles, strict=True)}
+    assert set(lines) == {"dk borders", "contour at 0.5"}
+    assert lines["contour at 0.5"].get_color() == [1.0, 0.0, 0.0]
+    assert lines["contour at 0.5"].get_linestyle() == "--" and lines["dk borders"].get_linestyle() == "-"

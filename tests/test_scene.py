@@ -52,7 +52,7 @@ def test_layers_become_the_command_line_options(tmp_path):
         "map_cmap": "viridis", "map_alpha": 0.5, "threshold": 1.0,
         "lh": str(thickness), "tracts": (str(tmp_path / "bundles"),), "tracts_cmap": "magma",
         "tracts_vmin": 0.3, "tracts_vmax": 0.7, "tracts_label": "FA", "tract_values": "fa.csv",
-        "contour": mask, "outline_color": "white", "contour_levels": "0.05,0.01", "outline": "dk"}
+        "contour": mask, "contour_color": "white", "contour_levels": "0.05,0.01", "outline": "dk"}
     alone = Scene().add({"lh": np.zeros(N5)}, cmap="magma")
     assert alone.run_options()[0].keys() == {"lh"}  # a map alone is INPUT
     from types import SimpleNamespace
@@ -71,8 +71,6 @@ def test_layers_become_the_command_line_options(tmp_path):
      r"^a regions layer takes \[.*'label'\]; 'alpha' was given\. Leave it out"),
     (lambda s: s.add({"lh_insula": [1.0]}, kind="nodes"), r"kind must be one of .*'nodes' was given"),
     (lambda s: s.add({"lh_insula": [1.0]}, cmap="viridiss"), r"colour map 'viridiss' is not a matplotlib"),
-    (lambda s: s.add("a/lh.m.mgh", outline=True, color="red").add("dk", outline=True, color="blue"),
-     r"^the contour and the outline are drawn in one line style; color 'red' and 'blue' were given"),
     (lambda s: s.render(), r"^the scene has no layers: add one"),
 ])
 def test_what_a_scene_cannot_draw_is_one_line(add, message):

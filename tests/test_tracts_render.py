@@ -218,19 +218,27 @@ def test_the_borders_on_the_glass_are_its_near_sides_alone(tiny, bundles):
     assert not (dark["glass"] & ~binary_dilation(dark["opaque"])).any()  # far side's: ~400 pixels
 
 
-def test_render_command_with_a_bundle_table(tmp_path, bundles, tiny):
+def _render_bundle_table(tmp_path, bundles, tiny, table, *more):
+    """``render`` of a bundle table (its header after the image column, then its rows) seen from above."""
     from click.testing import CliRunner
-    from PIL import Image
 
     from brainpainter.cli.main import cli
 
-    (tmp_path / "fa.csv").write_text("Image-name-unique,AF_L,CST_R\nctrl,3,0\n")
+    (tmp_path / "fa.csv").write_text(f"Image-name-unique,{table}\n")
     out = tmp_path / "out"
     result = CliRunner().invoke(cli, [
         "render", str(tmp_path / "fa.csv"), "--tracts", str(bundles), "--tracts-space", "template",
         "--template", str(tiny), "--views", "subcortical-dorsal", "--size", "320x240", "--shading", "flat",
         "--glass-opacity", "0", "--vmin", "0", "--vmax", "3", "--gradient", "blue,red",
-        "--max-streamlines", "60", "--quality", "fast", "--tract-radius", "1", "--out", str(out)])
+        "--max-streamlines", "60", "--quality", "fast", *more, "--out", str(out)])
+    return result, out
+
+
+def test_render_command_with_a_bundle_table(tmp_path, bundles, tiny):
+    from PIL import Image
+
+
+    result, out = _render_bundle_table(tmp_path, bundles, tiny, "AF_L,CST_R\nctrl,3,0", "--tract-radius", "1")
     assert result.exit_code == 0, result.output
     img = np.asarray(Image.open(out / "ctrl_subcortical-dorsal.png").convert("RGB"))
     red, blue = _mask(img, RED, 20), _mask(img, BLUE, 20)
@@ -538,3 +546,20 @@ def test_tracts_recoloured_through_the_glass_draw_the_glass_once(tiny, bundles, 
             assert d.max() <= 2 and (d.max(axis=-1) > 0).mean() < 0.01, (d.max(), (d.max(axis=-1) > 0).mean())
     rgb = recoloured[..., :3].astype(int)
     assert ((rgb[..., 2] > rgb[..., 0] + 60) & (rgb[..., 2] > rgb[..., 1] + 60)).sum() > 300  # blue, drawn
+
+
+def test_a_bundle_without_a_value_beside_valued_ones_is_drawn_in_the_missing_colour(tmp_path, bundles, tiny):
+    """Issue 44 item 5: a table naming AF_L only draws CST_R in the tract scale's missing colour (as regions
+    without values), not in direction colours beside a white-red bar."""
+    from PIL import Image
+
+
+    result, out = _render_bundle_table(tmp_path, bundles, tiny, "AF_L\nctrl,3", "--missing-color", "#00ff00")
+    assert result.exit_code == 0, result.output
+    img = np.asarray(Image.open(out / "ctrl_subcortical-dorsal.png").convert("RGB"))
+    right = np.arange(img.shape[1]) >= img.shape[1] // 2
+    drawn = (np.ptp(img.astype(int), axis=-1) > 60) & right[None, :]  # CST_R: the subject's right
+    assert drawn.sum() > 200
+    err = np.abs(img[drawn].astype(float) - [0, 255, 0]).max(axis=-1)
+    assert np.median(err) <= 10  # lines: their anti-aliased fringes mix with the background
+    assert _mask(img, RED, 20)[:, ~right].sum() > 200  # AF_L: its value's colour

@@ -39,10 +39,12 @@ DEFAULT_SIZE = RenderSettings().size
 RENDER_OPTION_NAMES = (
     "atlas", "views", "template", "surface", "gradient", "cmap", "vmin", "vmax", "center", "nan_color",
     "missing_color", "hide", "background", "transparent", "size", "quality", "shading", "lighting",
-    "glass_opacity", "cortex", "outline_width", "outline_color", "renderer", "atlas_config", "tracts",
+    "glass_opacity", "cortex", "outline_width", "outline_color", "outline_style", "contour_width",
+    "contour_color", "contour_style", "renderer", "atlas_config", "tracts",
     "tracts_space", "tracts_affine", "max_streamlines", "tract_values", "tract_value", "tract_radius",
     "connectome", "nodes", "node_values", "node_categories", "directed", "edge_threshold", "top_edges",
-    "edges_of", "nodes_space", "node_labels", "node_labels_top", "volume_surface", "min_cluster_mm3", "clip",
+    "edges_of", "nodes_space", "node_labels", "node_labels_top", "node_labels_per_category",
+    "volume_surface", "min_cluster_mm3", "clip",
     *(f.name for f in fields(LayerOptions)),
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
@@ -119,6 +121,10 @@ def render_option_list(views: str | None = None, size: str = DEFAULT_SIZE) -> di
            for name in ("quality", "shading", "lighting", "glass_opacity", "cortex")},
         "outline_width": field_option(settings, "outline_width", metavar="PX", show_default=False),
         "outline_color": field_option(settings, "outline_color", metavar="COLOUR"),
+        "outline_style": field_option(settings, "outline_style"),
+        "contour_width": field_option(settings, "contour_width", metavar="PX", show_default=False),
+        "contour_color": field_option(settings, "contour_color", metavar="COLOUR"),
+        "contour_style": field_option(settings, "contour_style"),
         "renderer": field_option(scene, "renderer"),
         "atlas_config": field_option(scene, "atlas_config", type=click.Path(dir_okay=False)),
         "tracts": field_option(scene, "tracts", multiple=True, default=(), show_default=False,
@@ -145,6 +151,7 @@ def render_option_list(views: str | None = None, size: str = DEFAULT_SIZE) -> di
         "node_labels": field_option(ConnectomeOptions, "node_labels"),
         "node_labels_top": field_option(ConnectomeOptions, "node_labels_top", type=click.IntRange(min=1),
                                         metavar="K"),
+        "node_labels_per_category": field_option(ConnectomeOptions, "node_labels_per_category"),
         **{f.name: field_option(LayerOptions, f.name, **_layer_click(f.name)) for f in fields(LayerOptions)},
     }
 

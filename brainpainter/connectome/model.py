@@ -66,6 +66,9 @@ class Connectome:
         Text of each node's label ("" for none; None: the node names).
     labelled : tuple of int
         The nodes whose labels are drawn on the images (``--node-labels``), in order; none by default.
+    label_share : float, optional
+        Height of the labels' text as a share of the image's (None: the renderer's default; a figure sets
+        it so that its labels print at least 7 pt).
     series : EdgeSeries, optional
         A series of matrices, one per image (:mod:`brainpainter.connectome.series`): `weights` are then
         the edges drawn in every image at their largest ``|weight|``, and the series gives each image's.
@@ -82,6 +85,7 @@ class Connectome:
     node_categories: tuple[str, ...] | None = None
     node_labels: tuple[str, ...] | None = None
     labelled: tuple[int, ...] = ()
+    label_share: float | None = None
     series: EdgeSeries | None = None
     edges_left_out: int = 0
 

@@ -39,6 +39,7 @@ class ConnectomeKwargs(TypedDict, total=False):
     nodes_space: str
     node_labels: bool
     node_labels_top: int | None
+    node_labels_per_category: bool
 
 
 @dataclass(frozen=True)
@@ -73,6 +74,8 @@ class ConnectomeOptions:
     node_labels_top : int, optional
         Label only the K nodes of the largest node value (no values: the largest strength, the sum of
         the ``|weight|`` of their drawn edges); implies ``node_labels``.
+    node_labels_per_category : bool
+        ``node_labels_top`` ranks within each node category (the top K of every network).
     """
 
     connectome: Any = field(default=None, metadata={
@@ -105,12 +108,16 @@ class ConnectomeOptions:
     node_labels_top: int | None = field(default=None, metadata={
         "help": "Label only the K nodes of the largest node value (no values: the largest strength, the "
                 "sum of |weight| of their drawn edges); implies --node-labels."})
+    node_labels_per_category: bool = field(default=False, metadata={
+        "help": "With --node-labels-top K: the top K of each node category (network), so every network "
+                "is named, not only the strongest."})
 
     def __post_init__(self) -> None:
         if self.connectome is None:
             given = [f"--{name.replace('_', '-')}" for name in ("nodes", "node_values", "node_categories",
                                                                 "edge_threshold", "top_edges", "edges_of",
-                                                                "node_labels_top", "directed", "node_labels")
+                                                                "node_labels_top", "directed", "node_labels",
+                                                                "node_labels_per_category")
                      if getattr(self, name) not in (None, False)]
             if given:
                 raise BrainPainterError(f"{given[0]} describes a connectome's nodes or edges, but no "
@@ -180,4 +187,5 @@ class ConnectomeOptions:
                         connectome.edges_left_out, MAX_EDGES_DRAWN)
         if not self.node_labels and self.node_labels_top is None:
             return connectome
-        return replace(connectome, labelled=labelled_nodes(connectome, self.node_labels_top))
+        return replace(connectome, labelled=labelled_nodes(connectome, self.node_labels_top,
+                                                           self.node_labels_per_category))

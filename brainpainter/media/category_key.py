@@ -27,12 +27,17 @@ if TYPE_CHECKING:
 MAX_NAMED_CATEGORIES = 60
 
 
+#: The gid of a category key's axes.
+CATEGORY_KEY = "category-key"
+
+
 def draw_category_key(ax: Axes, scale: ColourScale, horizontal: bool, fontsize: float, color: Any,
                       label: str | None) -> Axes:
     """A label map's key in the bar's place: one block per category in its colour, named."""
     import numpy as np
 
     names = [plain(name, MAX_NAME_CHARS) for name, _ in scale.categories]
+    ax.set_gid(CATEGORY_KEY)  # its names are never thinned (:mod:`brainpainter.media.tick_labels`)
     colors = np.array([rgb for _, rgb in scale.categories], dtype=float)
     n = len(names)
     ax.imshow(colors[None, :, :] if horizontal else colors[::-1, None, :], extent=(0.0, 1.0, 0.0, 1.0),

@@ -2,8 +2,9 @@
 
 The bar shows exactly the colours the renders use: it samples the scale itself (``scale(values)``), so
 a BrainPainter gradient appears with its control colours at its ticks and a matplotlib colour map as a
-smooth ramp. Ticks default to round numbers (:meth:`ColourScale.ticks`: a gradient's control points where
-round); NaN and missing swatches are added when asked; a label map's scale draws a key of its categories
+smooth ramp; tick labels that would overprint are thinned (:mod:`brainpainter.media.tick_labels`). Ticks
+default to round numbers (:meth:`ColourScale.ticks`: a gradient's control points where round); NaN and
+missing swatches are added when asked; a label map's scale draws a key of its categories
 (:mod:`brainpainter.media.category_key`). Labels are the user's text, never mathtext
 (:mod:`brainpainter.media.plain_text`). :func:`draw_colorbar` draws into an Axes (figures);
 :func:`colorbar_image` returns an RGBA array of an exact pixel size (movie frames).
@@ -11,10 +12,8 @@ round); NaN and missing swatches are added when asked; a label map's scale draws
 
 from __future__ import annotations
 
-import functools
-import warnings
-from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any, TypeVar, cast
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -23,33 +22,18 @@ from brainpainter.color.scale import ColourScale, between, fraction
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.media.category_key import draw_category_key
 from brainpainter.media.plain_text import plain, plain_lines
+from brainpainter.media.tick_labels import thin_tick_labels
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
     from matplotlib.axis import Axis
     from matplotlib.figure import Figure
 
-F = TypeVar("F", bound=Callable[..., Any])
-
 #: Samples along the bar; enough for a smooth ramp at print resolution.
 N_SAMPLES = 512
 NAN_LABEL = "no data"
 MISSING_LABEL = "not measured"
 ORIENTATIONS = ("horizontal", "vertical")
-
-
-def quiet_glyphs(func: F) -> F:
-    """Run `func` without matplotlib's "Glyph ... missing from font" warnings.
-
-    Image names in any script (``患者 1``) are drawn in figures and movies; where the fonts lack a glyph
-    matplotlib warns once per character (the name is still in the file name and manifest).
-    """
-    @functools.wraps(func)
-    def run(*args: Any, **kwargs: Any) -> Any:
-        with warnings.catch_warnings():
-            warnings.filterwarnings("ignore", message=r"Glyph \d+ .*missing from", category=UserWarning)
-            return func(*args, **kwargs)
-    return cast(F, run)
 
 
 def format_tick(value: float) -> str:
@@ -360,6 +344,7 @@ def fit_axes(ax: Axes, box: tuple[float, float, float, float], *, grow: str = "x
             y0 = bb + (bh - outer.height) / 2 + (inner.y0 - outer.y0)
         ax.set_position((x0 / fw, y0 / fh, w / fw, h / fh))
     _keep_label_inside(ax, bl, bl + bw)
+    thin_tick_labels(ax, agg_canvas(fig).get_renderer())
 
 
 def _legend_below(ax: Axes) -> None:

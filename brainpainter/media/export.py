@@ -194,12 +194,16 @@ def connectome_meshes(scene: Scene, connectome: Connectome | None,
         "edge": [(connectome.names[a] + arrow + connectome.names[b], key, value_text(w))
                  for a, b, w, key in zip(source, target, weight, edge_keys(len(weight)), strict=True)]}
     out = []
-    for p in scene.geometry.parts:
+    by_key = {key: (name, value) for kind in about for name, key, value in about[kind]}
+    key_of = {slot: key for key, slot in scene.geometry.slot_of.items() if key in by_key}
+    for p in scene.geometry.parts:  # a hemisphere's nodes or edges (or those between): instances in order
         if p.kind not in about or not about[p.kind]:
             continue
-        n = len(about[p.kind])
+        n = len(np.unique(p.palette_index))  # a slot each
         m, t = len(p.vertices) // n, len(p.triangles) // n  # vertices and triangles of one instance
-        for k, (name, key, value) in enumerate(about[p.kind]):
+        for k in range(n):
+            key = key_of[int(p.palette_index[k * m])]
+            name, value = by_key[key]
             faces = p.triangles[k * t:(k + 1) * t].astype(np.int32) - k * m
             out.append(RegionMesh(name, "connectome", p.vertices[k * m:(k + 1) * m], faces,
                                   p.normals[k * m:(k + 1) * m], colors.get(key, NODE_COLOR), value=value))

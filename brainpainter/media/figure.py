@@ -27,16 +27,16 @@ import io
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Unpack
+from typing import TYPE_CHECKING, Any, TypeVar, Unpack
 
 from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.color.scale import ColourScale
-from brainpainter.media.colorbar import quiet_glyphs
 from brainpainter.media.drawn import common_crop, content_box, drawn_kinds, swatches_needed
-from brainpainter.media.layout import FigureKwargs, FigureLayout, FigureOptions, compose_figure
+from brainpainter.media.layout import FigureKwargs, FigureLayout, FigureOptions, compose_figure, plan_grid
 from brainpainter.media.outfile import check_out_file
+from brainpainter.media.plain_text import quiet_glyphs
 from brainpainter.media.volume_panels import PanelKwargs, PanelOptions, label_panels, volume_panels
 from brainpainter.rendering.layers import colorbar_layers, first_bar_label
 from brainpainter.rendering.options import Options, RenderKwargs, take
@@ -55,6 +55,7 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["FigureResult", "check_out_file", "common_crop", "compose_figure", "content_box", "figure_bytes",
            "make_figure", "save_figure", "select_rows"]
 
+RunT = TypeVar("RunT", "Run", "MapRun")
 FIGURE_FORMATS = {".png": "png", ".pdf": "pdf", ".svg": "svg", ".tif": "tiff", ".tiff": "tiff"}
 VECTOR_FORMATS = ("pdf", "svg")
 
@@ -142,6 +143,49 @@ def figure_bytes(fig: Figure, path: Path, dpi: float, transparent: bool = False)
     return buf.getvalue()
 
 
+#: The smallest printed height of a connectome's node labels in a figure, points (issue 44).
+MIN_LABEL_PT = 7.0
+
+
+def printed_labels(run: RunT, image_names: list[str], figure_opts: FigureOptions) -> RunT:
+    """`run` with its connectome's labels tall enough to print at :data:`MIN_LABEL_PT` or more in the figure.
+
+    The text is a share of each render's height (:func:`~brainpainter.rendering.node_labels.text_height`);
+    a figure shows a render `row_h` inches tall (:func:`~brainpainter.media.layout.plan_grid`, from the
+    uncropped renders: a crop only enlarges them), so the share is at least ``MIN_LABEL_PT / 72 / row_h``.
+    """
+    from brainpainter.rendering.node_labels import TEXT_SHARE
+
+    connectome = run.connectome
+    if connectome is None or not connectome.labelled:
+        return run
+    s = run.settings
+    views = [v.name for v in run.views]
+    grid = plan_grid(dict.fromkeys(views, s.height / s.width), image_names, views, figure_opts,
+                     lambda usable: 0.0)
+    share = max(TEXT_SHARE, MIN_LABEL_PT / 72.0 / min(grid.row_h))
+    return replace(run, connectome=replace(connectome, label_share=share))
+
+
+def line_legend(run: Run | MapRun, image_axes: list[Axes], font_size: float) -> None:
+    """A legend of the run's line layers (``--outline``: its atlas's borders; ``--contour``: its levels), each
+    in its own colour, width and dash, in the upper right of the last image (none without lines)."""
+    from matplotlib.lines import Line2D
+
+    from brainpainter.rendering.composition import line_entries
+
+    entries = line_entries(run.options, run.contours, run.settings)
+    if not entries or not image_axes:
+        return
+    handles = [Line2D([], [], color=e["color"], linewidth=max(0.8, 0.6 * e["width"]),
+                      linestyle="--" if e["style"] == "dashed" else "-",
+                      label=(f"{e['atlas']} borders" if e["kind"] == "outline"
+                             else "contour at " + ", ".join(f"{v:g}" for v in e["levels"])))
+               for e in entries]
+    image_axes[-1].legend(handles=handles, loc="upper right", fontsize=font_size - 1, frameon=False,
+                          handlelength=2.5, borderaxespad=0.1)
+
+
 def _bars(run: Run | MapRun, painter: Painter, figure_opts: FigureOptions) -> tuple[FigureOptions, list[Any]]:
     """The first bar's label and the other layers' bars (scale, label) of a figure of `run`.
 
@@ -170,6 +214,15 @@ def _with_panels(images: dict[tuple[str, str], NDArray[Any]], panels: dict[tuple
 
 
 @quiet_glyphs
+def _legends(run: Any, layout: FigureLayout, background: Any, font_size: float) -> None:
+    """A connectome's node-size legend under its bars and the line layers' legend over the views."""
+    from brainpainter.media.colorbar import text_color
+    from brainpainter.media.node_sizes import node_size_legend
+
+    node_size_legend(run, layout.colorbar_axes, text_color(background), font_size)
+    line_legend(run, list(layout.image_axes.values()), font_size)
+
+
 def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path | None = None,
                 rows: Iterable[str | int] | str | None = None, progress: bool = True,
                 on_progress: Callable[[int, int], None] | None = None,
@@ -210,8 +263,7 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     from tqdm.auto import tqdm
 
     from brainpainter.io.transaction import FileTransaction
-    from brainpainter.media.colorbar import resolve_ticks, text_color
-    from brainpainter.media.node_sizes import node_size_legend
+    from brainpainter.media.colorbar import resolve_ticks
 
     kwargs: dict[str, Any] = dict(options)
     figure_opts = FigureOptions(**take(kwargs, FigureOptions))
@@ -223,6 +275,7 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     table = run.table
     chosen = select_rows(table.images, rows)
     panels = volume_panels(data, run, panel_opts, chosen) if panel_opts.sections else {}
+    run = printed_labels(run, [table.images[i] for i in chosen], figure_opts)
     painter = run.painter()
     nan, missing = ((False, False) if run.layers[0].kind in ("edges", "blobs")  # alone: no region swatch
                     else swatches_needed(table, chosen, run.views, painter.scene.geometry))
@@ -241,7 +294,7 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
         figure_opts, more = _bars(run, painter, figure_opts)
         layout = _with_panels(images, panels, panel_opts, [table.images[i] for i in chosen], run, figure_opts,
                               nan=nan, missing=missing, more_bars=more)
-        node_size_legend(run, layout.colorbar_axes, text_color(background), figure_opts.font_size)
+        _legends(run, layout, background, figure_opts.font_size)
         if tx is not None and path is not None:
             tx.tmp.write_bytes(figure_bytes(layout.figure, path, figure_opts.dpi,
                                             transparent=background is None))

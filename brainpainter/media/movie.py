@@ -39,11 +39,11 @@ from numpy.typing import NDArray
 from brainpainter.atlas.model import Atlas
 from brainpainter.color.scale import ColourScale
 from brainpainter.errors import BrainPainterError
-from brainpainter.media.colorbar import quiet_glyphs
 from brainpainter.media.drawn import swatches_needed
 from brainpainter.media.encode import GIF_PALETTE_FRAMES, MAX_GIF_FRAMES, _GifWriter, _Mp4Writer
 from brainpainter.media.frames import FrameComposer, orbit_views, sweep_views
 from brainpainter.media.outfile import check_out_file
+from brainpainter.media.plain_text import quiet_glyphs
 from brainpainter.media.timeline import (
     EASINGS,
     MAX_FRAMES,

@@ -10,7 +10,13 @@ string to a number of characters.
 
 from __future__ import annotations
 
+import functools
 import re
+import warnings
+from collections.abc import Callable
+from typing import Any, TypeVar, cast
+
+F = TypeVar("F", bound=Callable[..., Any])
 
 _CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f]")
 #: Most characters of one name in a label map's key (a longer one ends with an ellipsis).
@@ -29,3 +35,17 @@ def plain(text: str, max_chars: int | None = None) -> str:
 def plain_lines(text: str) -> str:
     """As :func:`plain`, keeping newlines (a title of several lines)."""
     return "\n".join(plain(line) for line in str(text).split("\n"))
+
+
+def quiet_glyphs(func: F) -> F:
+    """Run `func` without matplotlib's "Glyph ... missing from font" warnings.
+
+    Image names in any script (``患者 1``) are drawn in figures and movies; where the fonts lack a glyph
+    matplotlib warns once per character (the name is still in the file name and manifest).
+    """
+    @functools.wraps(func)
+    def run(*args: Any, **kwargs: Any) -> Any:
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message=r"Glyph \d+ .*missing from", category=UserWarning)
+            return func(*args, **kwargs)
+    return cast(F, run)

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from brainpainter.color.scale import ColourScale
 from brainpainter.errors import BrainPainterError, choice_error
-from brainpainter.media.colorbar import quiet_glyphs
+from brainpainter.media.plain_text import quiet_glyphs
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes

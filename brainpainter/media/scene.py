@@ -43,7 +43,7 @@ __all__ = ["KINDS", "Kind", "Scene", "SceneLayer", "infer_kind"]
 #: The scale keywords of :meth:`Scene.add` besides the colour scale's own (:data:`SCALE_FIELDS`).
 LAYER_KEYWORDS = ("threshold", "alpha", "label")
 #: The keywords of a line layer (a contour, an outline).
-LINE_KEYWORDS = ("color", "width", "levels")
+LINE_KEYWORDS = ("color", "width", "style", "levels")
 
 
 @dataclass(frozen=True)
@@ -127,6 +127,7 @@ def _tracts(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:
 #: The connectome keywords of :meth:`Scene.add` besides its edges' scale: its nodes and which edges.
 CONNECTOME_KEYWORDS = ("nodes", "node_values", "node_categories", "directed", "edge_threshold", "top_edges",
                        "edges_of", "nodes_space", "node_labels", "node_labels_top",
+                       "node_labels_per_category",
                        *(f"nodes_{name}" for name in (*SCALE_FIELDS, "label")))
 
 
@@ -143,10 +144,10 @@ def _volume_surface(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]
     return None, {"volume_surface": layer.data, **_scale("blobs", layer.keywords), **more}
 
 
-def _lines(layer: SceneLayer) -> dict[str, Any]:
-    """The line keywords (``color``, ``width``) as the run's outline settings."""
-    names = {"color": "outline_color", "width": "outline_width"}
-    return {names[k]: v for k, v in layer.keywords.items() if k in names}
+def _lines(layer: SceneLayer, kind: str) -> dict[str, Any]:
+    """The line keywords (``color``, ``width``, ``style``) as the run's settings of line layer `kind`
+    (``outline_color``, ``contour_width``, ...): each line layer is drawn in its own line."""
+    return {f"{kind}_{k}": v for k, v in layer.keywords.items() if k in ("color", "width", "style")}
 
 
 def _contour(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:
@@ -156,11 +157,11 @@ def _contour(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:
     if isinstance(levels, Iterable) and not isinstance(levels, str):
         levels = ",".join(str(v) for v in levels)
     more = {"contour_levels": levels} if levels is not None else {}
-    return None, {"contour": given, **_lines(layer), **more}
+    return None, {"contour": given, **_lines(layer, "contour"), **more}
 
 
 def _outline(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:
-    return None, {"outline": str(layer.data), **_lines(layer)}
+    return None, {"outline": str(layer.data), **_lines(layer, "outline")}
 
 
 _SCALED = (*SCALE_FIELDS, "label")
@@ -171,8 +172,8 @@ KINDS: dict[str, Kind] = {
     "tracts": Kind(_tracts, (*_SCALED, "values", "value")),
     "connectome": Kind(_connectome, (*_SCALED, *CONNECTOME_KEYWORDS)),
     "volume-surface": Kind(_volume_surface, (*_SCALED, "threshold", "min_cluster_mm3")),
-    "contour": Kind(_contour, ("levels", "color", "width")),
-    "outline": Kind(_outline, ("color", "width")),
+    "contour": Kind(_contour, ("levels", "color", "width", "style")),
+    "outline": Kind(_outline, ("color", "width", "style")),
 }
 
 
@@ -287,16 +288,10 @@ class Scene:
         """
         layers = sorted(self.layers if layers is None else layers, key=lambda la: list(KINDS).index(la.kind))
         data, options = None, dict(self.options)
-        lines: dict[str, Any] = {}
         for layer in layers:
             given, more = KINDS[layer.kind].options(layer, data is not None)
             if given is not None:
                 data = given
-            for name in ("outline_color", "outline_width"):  # one line style for every line layer
-                if name in more and lines.setdefault(name, more[name]) != more[name]:
-                    raise BrainPainterError(f"the contour and the outline are drawn in one line style; "
-                                            f"{name.split('_')[1]} {lines[name]!r} and {more[name]!r} were "
-                                            "given. Give one.")
             options.update(more)
         Options.of(options, "Scene")
         return data, options

@@ -16,7 +16,8 @@ Two ways a border runs, as the colours run:
   triangle (:func:`vertex_borders`, marching triangles).
 
 A second map's iso-lines (``--contour``) are drawn the same way: :func:`iso_lines` joins the
-points where the map crosses the level along each edge, interpolated linearly.
+points where the map crosses the level along each edge, interpolated linearly. Either line can be
+dashed (:func:`dashed`: the segments chained into lines, every other stretch of them left out).
 """
 
 from __future__ import annotations
@@ -26,6 +27,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+#: A dashed line's dash and gap along the surface, millimetres (at 1200 x 900, about 20 and 13 pixels).
+DASH_MM, GAP_MM = 3.0, 2.0
+#: How near two segment ends are to be one point of a line, millimetres.
+JOIN_MM = 1e-3
 #: How far a border is lifted off the surface along its normals, millimetres (a fraction of a
 #: voxel: enough to win the depth test against the surface it lies on, never to show through a fold).
 LIFT_MM = 0.15
@@ -147,3 +152,33 @@ def _segments(p: NDArray[Any], pn: NDArray[Any], q: NDArray[Any], qn: NDArray[An
     """Segments p -> q, each end lifted along its normal, float32 (m, 2, 3)."""
     out: NDArray[np.float32] = np.stack([_lift(p, pn, lift), _lift(q, qn, lift)], axis=1).astype(np.float32)
     return out
+
+
+def dashed(segments: NDArray[Any], dash: float = DASH_MM, gap: float = GAP_MM) -> NDArray[np.float32]:
+    """The dashes of line `segments`, shape (m, 2, 3): chained end to end into lines, the segments whose
+    middle lies in a dash (the first `dash` mm of every ``dash + gap`` along its line) kept, shape (k, 2, 3).
+
+    A line starts anew at each segment not reached from another (its dashes then start there).
+    """
+    seg = np.asarray(segments, np.float32).reshape(-1, 2, 3)
+    m = len(seg)
+    if not m:
+        return seg
+    _, point = np.unique(np.round(seg.reshape(-1, 3) / JOIN_MM).astype(np.int64), axis=0, return_inverse=True)
+    point = point.reshape(m, 2)
+    at: dict[int, list[int]] = {}
+    for s, (p, q) in enumerate(point.tolist()):
+        at.setdefault(p, []).append(s)
+        at.setdefault(q, []).append(s)
+    length = np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1).astype(float)
+    middle = np.full(m, np.nan)
+    for first in range(m):
+        s, end, along = first, int(point[first, 1]), 0.0
+        while s >= 0 and np.isnan(middle[s]):
+            middle[s] = along + length[s] / 2
+            along += length[s]
+            nxt = [t for t in at[end] if np.isnan(middle[t])]
+            s = nxt[0] if nxt else -1
+            if s >= 0:
+                end = int(point[s, 1] if point[s, 0] == end else point[s, 0])
+    return seg[np.mod(middle, dash + gap) < dash]

@@ -30,6 +30,7 @@ from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import Options
 from brainpainter.rendering.painter import region_colors
 from brainpainter.rendering.settings import RGB, RenderSettings, outlined
+from brainpainter.rendering.tract_parts import MISSING_TRACT_KEY
 from brainpainter.table.region_table import RegionTable
 from brainpainter.tracts.values import TractValues
 
@@ -88,12 +89,15 @@ def layer_label(options: Options, kind: str, table: RegionTable) -> str:
 
 
 def tract_colors(values: Mapping[str, float], scale: ColourScale) -> dict[str, RGB]:
-    """Colour of each bundle (or bundle node) key for one image; NaN: the scale's NaN colour."""
+    """Colour of each bundle (or bundle node) key for one image; NaN: the scale's NaN colour; the bundles
+    drawn without a value (:data:`~brainpainter.rendering.tract_parts.MISSING_TRACT_KEY`): missing colour."""
     keys = list(values)
+    m = scale.missing_color
+    missing: dict[str, RGB] = {MISSING_TRACT_KEY: (float(m[0]), float(m[1]), float(m[2]))}
     if not keys:
-        return {}
+        return missing
     rgb = scale(np.array([values[k] for k in keys], dtype=float))
-    return {k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(keys, rgb, strict=True)}
+    return {k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(keys, rgb, strict=True)} | missing
 
 
 def run_scale(options: ScaleOptions, values: NDArray[Any], measures: bool) -> ColourScale:
@@ -279,11 +283,18 @@ def line_layers(options: Options, drawn: str,
     return contours, outlined(options.settings, outline if contours is None else "contour")
 
 
-def line_entries(options: Options, contours: Contours | None) -> list[dict[str, Any]]:
-    """The manifest's ``lines``: the outline's atlas and the contour's levels, as drawn."""
+def line_entries(options: Options, contours: Contours | None,
+                 settings: RenderSettings | None = None) -> list[dict[str, Any]]:
+    """The manifest's ``lines`` (and a figure's line legend): the outline's atlas and the contour's levels,
+    each with its line as drawn (colour, width in pixels, style) where `settings` (the run's) are given."""
     outline = options.maps.outline
-    return ([{"kind": "outline", "atlas": outline}] if outline is not None else []) + (
-        [{"kind": "contour", "levels": list(contours.levels)}] if contours is not None else [])
+    entries: list[dict[str, Any]] = [{"kind": "outline", "atlas": outline}] if outline is not None else []
+    entries += [{"kind": "contour", "levels": list(contours.levels)}] if contours is not None else []
+    for entry in entries:
+        if settings is not None:
+            color, width, style = settings.line(str(entry["kind"]))
+            entry.update({"color": list(color), "width": width, "style": style})
+    return entries
 
 
 def read_contours(options: MapOptions) -> Contours | None:
@@ -322,7 +333,8 @@ def cortex_for(settings: RenderSettings, *, cortex_values: bool, tracts: bool,
     So with tracts, ``auto`` draws glass only where the cortex carries no values (the tracts then
     show through a grey cortex); where it carries them the cortex views draw it opaque and the
     tracts show in the subcortical views (``--cortex glass`` shows them through it). A connectome
-    keeps the glass in the cortex's colours where the cortex carries values (its nodes sit inside);
+    over a cortex that carries values is drawn over the opaque cortex (its nodes and edges are drawn
+    on top of every other part: the regions' or the map's colours read true around them, issue 44);
     a connectome over a cortex without values is drawn in the smooth glass brain (``hull``: the
     subcortical views' glass hulls, ~6,000 triangles, where the pial cortex as glass is ~300,000
     drawn twice and its folds crowd the nodes). Other settings are returned unchanged.
@@ -331,6 +343,6 @@ def cortex_for(settings: RenderSettings, *, cortex_values: bool, tracts: bool,
         return settings
     if connectome and not cortex_values:
         return replace(settings, cortex="hull")
-    if cortex_values and tracts and not connectome:
+    if cortex_values and (tracts or connectome):
         return replace(settings, cortex="opaque")
     return settings

@@ -11,7 +11,7 @@ in one neutral colour (:data:`~brainpainter.rendering.connectome_parts.NODE_COLO
 from __future__ import annotations
 
 from dataclasses import replace
-from pathlib import Path
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -47,39 +47,57 @@ def connectome_layers(options: Options, connectome: Connectome, first: bool) -> 
     (``--cmap``, ``--vmin``, ...) are theirs too.
     """
     plain = ScaleOptions(nan_color=options.scale.nan_color, missing_color=options.scale.missing_color)
-    own = options.layers.scale_options("edges", options.scale, first) or plain
+    own = _own_options(options, "edges", first, plain)
     if all(getattr(own, name) is None for name in SCALE_FIELDS):
         own = replace(own, center=EDGE_CENTER)
     weights = connectome.edges()[2] if connectome.series is None else connectome.series.sample  # all images'
     edge_options, chosen = choose_scale(own, weights)
     edges = Layer("edges", replace(edge_options.scale(weights), chosen=chosen), 1.0,
-                  _label(options, "edges", options.connectome.connectome, "edge weight"))
+                  _label(options, "edges", "edge weight"))
     if "nodes" not in connectome_kinds(connectome):
         return (edges,)
     if connectome.node_categories is not None:
         scale = category_scale(connectome.node_categories, plain)
-        source: Any = options.connectome.node_categories
         fallback = "network"
     else:
         assert connectome.node_values is not None
         values = np.asarray(connectome.node_values, dtype=float)
-        node_options, chosen = choose_scale(options.layers.scale_options("nodes", options.scale, False)
-                                            or plain, values)
+        node_options, chosen = choose_scale(_own_options(options, "nodes", False, plain), values)
         scale = replace(node_options.scale(values), chosen=chosen)
-        source, fallback = options.connectome.node_values, "node value"
-    return edges, Layer("nodes", scale, 1.0, _label(options, "nodes", source, fallback))
+        fallback = "node value"
+    return edges, Layer("nodes", scale, 1.0, _label(options, "nodes", fallback))
 
 
-def _label(options: Options, kind: str, source: Any, fallback: str) -> str:
-    """A connectome layer's colour-bar label: as given, else its file's name, else `fallback`."""
+def _own_options(options: Options, kind: str, first: bool, plain: ScaleOptions) -> ScaleOptions:
+    """Scale options of connectome layer `kind`: the plain ``--cmap``/``--vmin``/... with its own where it is
+    the run's first layer, else its own ``--edges-*``/``--nodes-*`` alone.
+
+    A connectome's layers after region values or a map always have a scale of their own (edge weights
+    are not region values): the plain options are the first layer's, and a label (``--edges-label``)
+    names a bar without taking them (``--cmap viridis --edges-label FC`` drew the edges in viridis over
+    their own range instead of ``RdBu_r`` about 0).
+    """
+    if first:
+        own = options.layers.scale_options(kind, options.scale, True)
+        assert own is not None
+        return own
+    return replace(plain, **options.layers.given(kind))
+
+
+def _label(options: Options, kind: str, fallback: str) -> str:
+    """A connectome layer's colour-bar label: as given (``--edges-label FC``), else the layer's name
+    (`fallback`: ``edge weight``, ``node value``, ``network``), never a file's name (issue 44: a bar named
+    ``net400.txt`` or the matrix's file said where the numbers came from, not what they are)."""
     given = options.layers.label(kind)
-    if given is not None:
-        return given
-    return Path(source).name if isinstance(source, str | Path) else fallback
+    return given if given is not None else fallback
 
 
 def category_scale(categories: tuple[str, ...], plain: ScaleOptions) -> ColourScale:
-    """A categorical scale of node `categories` (N,): one colour each, in order of first appearance."""
+    """A categorical scale of node `categories` (N,): one colour each, in order of first appearance.
+
+    Categories that all name Yeo's networks (``Vis``, ``Default``, ``SalVentAttnB``, ``DMN``, ...:
+    :func:`network_colors`) take Yeo's published colours; others those of ``tab10``/``tab20``/``turbo``.
+    """
     import matplotlib
 
     names = list(dict.fromkeys(categories))
@@ -87,9 +105,30 @@ def category_scale(categories: tuple[str, ...], plain: ScaleOptions) -> ColourSc
     cmap = next((name for most, name in CATEGORY_CMAPS if n <= most), "turbo")
     where = np.arange(n) if cmap != "turbo" else np.linspace(0.05, 0.95, n)  # a listed map: its i-th colour
     colors = np.asarray(matplotlib.colormaps[cmap](where), dtype=float)[:, :3]
+    networks = network_colors()
+    if all(name.strip().lower() in networks for name in names):  # Yeo's networks: their published colours
+        colors = np.array([networks[name.strip().lower()] for name in names], dtype=float).reshape(n, 3)
     keyed = tuple(_keyed(names, colors).items())
     base = replace(plain, cmap=cmap, vmin=0.0, vmax=float(max(n - 1, 1))).scale()
     return replace(base, colors=np.vstack([colors, colors[-1:]]), categories=keyed)
+
+
+@cache
+def network_colors() -> dict[str, RGB]:
+    """Yeo et al. 2011's network colours by lower-case network name or alias (``data/network_colors.tsv``)."""
+    from importlib import resources
+
+    from brainpainter.color.rgb import to_rgb
+
+    text = resources.files("brainpainter.data").joinpath("network_colors.tsv").read_text("utf-8")
+    rows = [line.split("\t") for line in text.splitlines() if line and not line.startswith("#")][1:]
+    out: dict[str, RGB] = {}
+    for name, color, *aliases in rows:
+        rgb = to_rgb(color)
+        for key in [name, *"|".join(aliases).split("|")]:
+            if key.strip():
+                out[key.strip().lower()] = rgb
+    return out
 
 
 def connectome_colors(connectome: Connectome, layers: tuple[Layer, ...],

@@ -162,8 +162,13 @@ def cylinder_mesh(starts: NDArray[Any], ends: NDArray[Any], radii: NDArray[Any],
     return _instances(ring, triangles, vertices, out, slots)
 
 
+def node_hemis(positions: NDArray[Any]) -> NDArray[np.str_]:
+    """The hemisphere of each node, ``lh`` (x < 0, RAS) or ``rh``, shape (n,)."""
+    return np.where(np.asarray(positions, dtype=float)[:, 0] < 0, "lh", "rh")
+
+
 def connectome_parts(connectome: Connectome | None, slots_for: SlotsFor) -> list[PartGeometry]:
-    """The parts of a connectome: ``nodes`` (kind ``node``) and ``edges`` (kind ``edge``, if any).
+    """The parts of a connectome: nodes (kind ``node``) and edges (kind ``edge``), by hemisphere.
 
     Parameters
     ----------
@@ -175,24 +180,35 @@ def connectome_parts(connectome: Connectome | None, slots_for: SlotsFor) -> list
     Returns
     -------
     list of PartGeometry
-        Neither of a hemisphere (drawn in every view that shows what lies inside the cortex).
+        ``nodes-lh`` and ``nodes-rh`` (:func:`node_hemis`), ``edges-lh`` and ``edges-rh`` (both ends in
+        that hemisphere) and ``edges`` (between the hemispheres, hemisphere None), those that have any:
+        a lateral view draws its hemisphere's (:data:`brainpainter.rendering.framing.CONNECTOME_KINDS`).
     """
     parts: list[PartGeometry] = []
     if connectome is None:
         return parts
     positions = np.asarray(connectome.positions, dtype=float)
     n = connectome.n_nodes
-    if n:
-        slots = slots_for(node_keys(n), NODE_COLOR, frozenset())
-        radii = node_radii(connectome.node_values, n)
-        verts, normals, tris, pal = sphere_mesh(positions, radii, slots)
-        parts.append(PartGeometry("nodes", "node", None, verts, normals, tris, pal,
-                                  np.zeros(len(verts), np.float32), verts))
+    hemi = node_hemis(positions)
+    keys = node_keys(n)
+    radii = node_radii(connectome.node_values, n)
+    for side in ("lh", "rh"):
+        mine = np.flatnonzero(hemi == side)
+        if len(mine):
+            slots = slots_for([keys[i] for i in mine], NODE_COLOR, frozenset())
+            verts, normals, tris, pal = sphere_mesh(positions[mine], radii[mine], slots)
+            parts.append(PartGeometry(f"nodes-{side}", "node", side, verts, normals, tris, pal,
+                                      np.zeros(len(verts), np.float32), verts))
     source, target, weight = connectome.edges()
-    if len(weight):
-        slots = slots_for(edge_keys(len(weight)), NODE_COLOR, frozenset())
-        verts, normals, tris, pal = cylinder_mesh(positions[source], positions[target], edge_radii(weight),
-                                                  slots)
-        parts.append(PartGeometry("edges", "edge", None, verts, normals, tris, pal,
-                                  np.zeros(len(verts), np.float32), positions[np.r_[source, target]]))
+    keys, radii = edge_keys(len(weight)), edge_radii(weight)
+    side_of = np.where(hemi[source] == hemi[target], hemi[source], "")
+    for side in ("lh", "rh", ""):
+        mine = np.flatnonzero(side_of == side)
+        if len(mine):
+            slots = slots_for([keys[k] for k in mine], NODE_COLOR, frozenset())
+            a, b = source[mine], target[mine]
+            verts, normals, tris, pal = cylinder_mesh(positions[a], positions[b], radii[mine], slots)
+            parts.append(PartGeometry(f"edges-{side}" if side else "edges", "edge", side or None, verts,
+                                      normals, tris, pal, np.zeros(len(verts), np.float32),
+                                      positions[np.r_[a, b]]))
     return parts

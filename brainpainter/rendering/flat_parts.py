@@ -74,11 +74,11 @@ def flat_parts(scene: Any, slot_of: Mapping[str, int], vertex_slots: Mapping[str
             slot = [-1 if k in scene.hidden else slot_of.get(k, MEDIAL_SLOT) for k in names]
             face_slot = np.asarray(slot, np.int64)[label_of_face]
         verts = sheet_vertices @ to_ras  # the template's coordinates (the camera turns them back)
-        outline = None
+        outline = contour = None
         if outlined:
-            outline = _borders(scene, sheet, verts, faces, labels, label_of_face, per_vertex, to_ras)
+            outline, contour = _borders(scene, sheet, verts, faces, labels, label_of_face, per_vertex, to_ras)
         part = build_part(f"flat-{hemi}", "flat", hemi, verts, faces, face_slot,
-                          np.zeros(len(verts), np.float32), occlusion=False, outline=outline,
+                          np.zeros(len(verts), np.float32), occlusion=False, outline=outline, contour=contour,
                           first_slot=vertex_slots[f"flat-{hemi}"][0] if per_vertex else None)
         if part is not None:
             drawn = np.unique(faces[face_slot >= 0])  # the hull: the sheet drawn, not its cuts
@@ -192,19 +192,25 @@ def split_at_borders(vertices: NDArray[Any], faces: NDArray[Any], vertex_label: 
 
 
 def _borders(scene: Any, sheet: FlatSheet, verts: NDArray[Any], faces: NDArray[Any], labels: NDArray[Any],
-             label_of_face: NDArray[Any], per_vertex: bool, to_ras: NDArray[Any]) -> NDArray[Any]:
+             label_of_face: NDArray[Any], per_vertex: bool,
+             to_ras: NDArray[Any]) -> tuple[NDArray[Any] | None, NDArray[Any] | None]:
     """Region borders and ``--contour``'s iso-lines on a flat sheet (`verts`, `faces`: as drawn), lifted
-    towards the camera (+z)."""
-    from brainpainter.rendering.borders import face_borders, iso_lines, vertex_borders
+    towards the camera (+z), each in its own line style (dashed where asked)."""
+    from brainpainter.rendering.borders import dashed, face_borders, iso_lines, vertex_borders
 
     normals = np.tile(np.asarray([0.0, 0.0, 1.0]) @ to_ras, (len(verts), 1))
+    s = scene.settings
     if not per_vertex:
-        return face_borders(verts, faces, label_of_face, normals)
+        regions = face_borders(verts, faces, label_of_face, normals)
+        return (dashed(regions) if s.outline_style == "dashed" else regions), None
     contours = getattr(scene, "contours", None)
-    lines: list[NDArray[np.float32]] = []
-    if contours is not None and sheet.hemi in contours.values:
-        values = to_flat(contours.values[sheet.hemi], sheet.hemi)
-        lines = [iso_lines(verts, sheet.faces, values, level, normals) for level in contours.levels]
-    if contours is None or contours.regions:
-        lines.append(vertex_borders(verts, sheet.faces, labels, normals))
-    return np.concatenate(lines) if lines else np.zeros((0, 2, 3), np.float32)
+    contour = None
+    if contours is not None:
+        lines = ([iso_lines(verts, sheet.faces, to_flat(contours.values[sheet.hemi], sheet.hemi), level,
+                            normals) for level in contours.levels] if sheet.hemi in contours.values else [])
+        contour = np.concatenate(lines) if lines else np.zeros((0, 2, 3), np.float32)
+        contour = dashed(contour) if s.contour_style == "dashed" else contour
+        if not contours.regions:
+            return None, contour
+    regions = vertex_borders(verts, sheet.faces, labels, normals)
+    return (dashed(regions) if s.outline_style == "dashed" else regions), contour

@@ -35,6 +35,10 @@ MIN_DEPTH = 1.0
 #: Kinds of parts that lie inside the cortex (tracts, a connectome's nodes and edges, a volume's blobs):
 #: drawn where tracts are.
 INSIDE = ("tract", "node", "edge", "blob")
+#: A connectome's parts: drawn by every view of a cortex (over it, opaque or glass), a lateral or medial
+#: view only its hemisphere's nodes and the edges between them (nilearn's ``l``/``r`` display modes), a
+#: view of both hemispheres (dorsal) all, the edges between the hemispheres too (`hemi` None).
+CONNECTOME_KINDS = ("node", "edge")
 
 
 def shows(view: View, kind: str, hemi: str | None, cortex: str = "opaque") -> bool:
@@ -46,14 +50,16 @@ def shows(view: View, kind: str, hemi: str | None, cortex: str = "opaque") -> bo
     ``cortex`` views draw those of ``view.hemis`` and the commissural ones
     (`hemi` None) when the cortex is drawn as glass or hidden, and none under
     an opaque cortex (it hides them; the other hemisphere's would stand in
-    front of a medial wall). ``flat`` views draw the flat maps of
+    front of a medial wall). A connectome's nodes and edges: ``cortex`` views
+    draw those of ``view.hemis`` (over the cortex, see :data:`CONNECTOME_KINDS`),
+    and those between hemispheres (`hemi` None) in views of both. ``flat`` views draw the flat maps of
     ``view.hemis`` and nothing else; no other view draws a flat map.
 
     Parameters
     ----------
     view : View
     kind : {"cortex", "subcortical", "glass", "tract", "flat", "node", "edge", "blob"}
-        Nodes and edges are drawn as tracts are.
+        Nodes and edges: see :data:`CONNECTOME_KINDS`; blobs are drawn as tracts are.
     hemi : {"lh", "rh"} or None
         None for the subcortical part and for commissural tracts.
     cortex : {"opaque", "glass", "hull", "hidden"}
@@ -71,6 +77,8 @@ def shows(view: View, kind: str, hemi: str | None, cortex: str = "opaque") -> bo
     if kind in INSIDE:
         if view.content == "subcortical":
             return True
+        if kind in CONNECTOME_KINDS:  # drawn over the cortex; a view of one hemisphere shows its own
+            return hemi in view.hemis or (hemi is None and len(view.hemis) > 1)
         return cortex != "opaque" and (hemi is None or hemi in view.hemis)
     if view.content == "subcortical":
         return kind == "subcortical"

@@ -10,12 +10,10 @@ A vertex shared by faces of two regions is stored once per region, so each trian
 carry its region's palette index (flat colours stay exact) while normals are those of the shared
 surface (lighting stays smooth across region borders).
 
-Palette slots ``0, 1, 2`` are fixed: the medial-wall colour (cortex labels
-without a colour), the neutral grey (subcortical structures without a
-colour) and the glass colour; slots from 3 on are region keys
-(:attr:`SceneGeometry.keys`), then the tracts' keys (``tract:AF_left`` for a
-bundle's one colour, ``tract:AF_left:17`` for node 17 of an along-tract
-profile, ``tract-direction:i`` for the fixed direction colours).
+Palette slots ``0, 1, 2`` are fixed: the medial-wall colour (cortex labels without a colour), the
+neutral grey (subcortical structures without a colour) and the glass colour; slots from 3 on are region
+keys (:attr:`SceneGeometry.keys`), then the tracts' keys (``tract:AF_left`` for a bundle's one colour,
+``tract:AF_left:17`` for node 17 of an along-tract profile, ``tract-direction:i`` for direction colours).
 
 White-matter tracts are parts of kind ``tract`` (``tracts-lh``, ``tracts-rh`` and ``tracts`` for
 commissural bundles): centrelines, and triangle tubes (:func:`brainpainter.tracts.tubes.tube_mesh`)
@@ -366,34 +364,36 @@ class SceneGeometry:
 
     @staticmethod
     def _borders(scene: SceneParts, hemi: str, cm: Any, verts: NDArray[Any], face_slot: NDArray[Any],
-                 per_vertex: bool) -> NDArray[Any] | None:
-        """The region borders of a cortex part as segments (:mod:`brainpainter.rendering.borders`).
+                 per_vertex: bool) -> tuple[NDArray[Any] | None, NDArray[Any] | None]:
+        """The region borders and the contour of a cortex part as segments (:mod:`.borders`).
 
-        Per region, the edges between faces of two regions (hidden regions included: their
-        border with what is drawn is drawn); per vertex, the lines through the midpoints of the
-        edges between vertices of two labels of the scene's label set. A second map's iso-lines
-        (``scene.contours``) are added to either, drawn without the regions' borders unless
-        ``contours.regions``.
+        Per region, the edges between faces of two regions (hidden regions included); per vertex, the
+        lines through the midpoints of the edges between vertices of two labels of the scene's label
+        set; none with a contour unless ``contours.regions``. A second map's iso-lines
+        (``scene.contours``): the contour, in its own line (:meth:`RenderSettings.line`), dashed where asked.
         """
-        from brainpainter.rendering.borders import face_borders, vertex_borders
+        from brainpainter.rendering.borders import dashed, face_borders, vertex_borders
 
         contours = getattr(scene, "contours", None)
         lines = SceneGeometry._contour_lines(scene, hemi, cm if per_vertex else None)
-        if contours is not None and not contours.regions:
-            return np.concatenate(lines) if lines else np.zeros((0, 2, 3), np.float32)
+        contour = None
+        if contours is not None:
+            contour = np.concatenate(lines) if lines else np.zeros((0, 2, 3), np.float32)
+            contour = dashed(contour) if scene.settings.contour_style == "dashed" else contour
+            if not contours.regions:
+                return None, contour
         normals = vertex_normals(verts, cm.faces)
         if not per_vertex:
-            regions: NDArray[Any] = np.concatenate([face_borders(verts, cm.faces, np.asarray(cm.face_label),
-                                                                 normals), *lines])
-            return regions
-        from brainpainter.maps.outlines import mesh_labels
+            regions: NDArray[Any] = face_borders(verts, cm.faces, np.asarray(cm.face_label), normals)
+        else:
+            from brainpainter.maps.outlines import mesh_labels
 
-        labels = mesh_labels(scene.template, scene.labels, hemi, cm)
-        if labels is None:
-            raise BrainPainterError(f"template {scene.template.name!r} has no per-vertex labels for "
-                                    f"{scene.labels!r}, so its region borders cannot be drawn.")
-        borders: NDArray[Any] = np.concatenate([vertex_borders(verts, cm.faces, labels, normals), *lines])
-        return borders
+            labels = mesh_labels(scene.template, scene.labels, hemi, cm)
+            if labels is None:
+                raise BrainPainterError(f"template {scene.template.name!r} has no per-vertex labels for "
+                                        f"{scene.labels!r}, so its region borders cannot be drawn.")
+            regions = vertex_borders(verts, cm.faces, labels, normals)
+        return (dashed(regions) if scene.settings.outline_style == "dashed" else regions), contour
 
     @staticmethod
     def _contour_lines(scene: SceneParts, hemi: str, cm: Any) -> list[NDArray[np.float32]]:

@@ -117,9 +117,10 @@ class LazyParts:
 
 def cortex_arrays(scene: Any, hemi: str, label_slot: NDArray[Any], mesh: Any, with_sulc: bool,
                   cortex_mesh: Callable[[Any, str, bool], Any],
-                  borders: Callable[..., NDArray[Any] | None]) -> dict[str, Any]:
+                  borders: Callable[..., tuple[NDArray[Any] | None, NDArray[Any] | None]]) -> dict[str, Any]:
     """A cortex part's arrays for :func:`build_part` (`mesh`: a map's, else ``cortex_mesh(scene, hemi,
-    False)``, the template's split one); `borders` gives its outline (``SceneGeometry._borders``)."""
+    False)``, the template's split one); `borders` gives its outline and contour
+    (``SceneGeometry._borders``)."""
     from brainpainter.errors import choice_error
     from brainpainter.rendering.sulc import part_sulc
 
@@ -130,8 +131,9 @@ def cortex_arrays(scene: Any, hemi: str, label_slot: NDArray[Any], mesh: Any, wi
     face_slot = label_slot[np.asarray(cm.face_label, np.int64)]
     verts = cm.vertices[scene.surface]
     occlusion = getattr(cm, "occlusion", None)
+    outline, contour = (borders(scene, hemi, cm, verts, face_slot, mesh is not None)
+                        if scene.settings.outline_width > 0 else (None, None))
     return {"verts": verts, "faces": cm.faces, "face_slot": face_slot,
             "sulc": part_sulc(scene.template, scene.labels, hemi, cm, verts, with_sulc),
             "ao": None if occlusion is None else occlusion.get(scene.surface),
-            "outline": (borders(scene, hemi, cm, verts, face_slot, mesh is not None)
-                        if scene.settings.outline_width > 0 else None)}
+            "outline": outline, "contour": contour}

@@ -44,9 +44,10 @@ Placed = tuple[int, tuple[float, float], str]
 _log = logging.getLogger(__name__)
 
 
-def text_height(image_height: int) -> int:
-    """The labels' font size in pixels for an image `image_height` pixels tall."""
-    return max(MIN_TEXT, round(TEXT_SHARE * image_height))
+def text_height(image_height: int, share: float | None = None) -> int:
+    """The labels' font size in pixels for an image `image_height` pixels tall (`share` of it, default
+    :data:`TEXT_SHARE`; a figure's: :attr:`~brainpainter.connectome.model.Connectome.label_share`)."""
+    return max(MIN_TEXT, round((TEXT_SHARE if share is None else share) * image_height))
 
 
 def draw_node_labels(pixels: NDArray[Any], connectome: Connectome, pose: framing.CameraPose) -> NDArray[Any]:
@@ -74,7 +75,7 @@ def draw_node_labels(pixels: NDArray[Any], connectome: Connectome, pose: framing
     centre = framing.to_pixels(connectome.positions[index], pose, width, height)
     rim = framing.to_pixels(connectome.positions[index] + pose.right * node_radii(
         connectome.node_values, connectome.n_nodes)[index, None], pose, width, height)
-    size = text_height(height)
+    size = text_height(height, connectome.label_share)
     font = ImageFont.load_default(size=size)
     image = Image.fromarray(np.ascontiguousarray(pixels))
     draw = ImageDraw.Draw(image)

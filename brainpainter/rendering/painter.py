@@ -9,7 +9,7 @@ writer and a cluster worker reuse :class:`Painter` the same way.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -269,12 +269,16 @@ class Painter:
         palette = Palette(self.atlas.expand(colors), lambda: scene.geometry, vertex_rgb)
         pixels: NDArray[Any] = self.load().render(palette, view)
         connectome = scene.connectome
-        if connectome is not None and connectome.labelled and any(
-                part.kind == "node" for part in scene.geometry.visible(view)):
+        sides = ({part.hemi for part in scene.geometry.visible(view) if part.kind == "node"}
+                 if connectome is not None and connectome.labelled else set())
+        if connectome is not None and sides:
+            from brainpainter.rendering.connectome_parts import node_hemis
             from brainpainter.rendering.node_labels import draw_node_labels
 
+            hemis = node_hemis(connectome.positions)  # a lateral view: its hemisphere's nodes' labels
+            shown = replace(connectome, labelled=tuple(i for i in connectome.labelled if hemis[i] in sides))
             pose = scene.geometry.camera(view, pixels.shape[1] / pixels.shape[0])
-            pixels = draw_node_labels(pixels, connectome, pose)
+            pixels = draw_node_labels(pixels, shown, pose)
         return pixels
 
     def paint(self, values: Mapping[str, float], view: View, scale: ColourScale) -> NDArray[Any]:

@@ -82,6 +82,9 @@ class PartGeometry:
         Region borders on the part as line segments (RAS millimetres, lifted off the
         surface; :mod:`brainpainter.rendering.borders`), drawn as lines
         ``RenderSettings.outline_width`` pixels wide in the outline colour; None: no outline.
+    contour : ndarray of float32, shape (k, 2, 3), or None
+        A second map's iso-lines on the part (``--contour``), drawn in the contour's own colour, width
+        and style (:meth:`RenderSettings.line`); None: none.
     centrelines : Centrelines or None
         A ``tract`` part's streamlines; a renderer draws either them, as lines of the
         tubes' width, or the tubes (the triangles); None for every other kind.
@@ -104,6 +107,7 @@ class PartGeometry:
     outline: NDArray[Any] | None = None
     centrelines: Centrelines | None = None
     edges: EdgeTable | None = None
+    contour: NDArray[Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -157,13 +161,13 @@ MAX_SLOTS = 4096 * 16_384
 def build_part(name: str, kind: str, hemi: str | None, verts: NDArray[Any], faces: NDArray[Any],
           face_slot: NDArray[Any], sulc: NDArray[Any], *, first_slot: int | None = None,
           ao: NDArray[Any] | None = None, occlusion: bool = True,
-          outline: NDArray[Any] | None = None) -> PartGeometry | None:
+          outline: NDArray[Any] | None = None, contour: NDArray[Any] | None = None) -> PartGeometry | None:
     """One part from its mesh and per-face slots (faces of slot -1 are hidden); None when nothing is left.
 
     With `first_slot` (a per-vertex scene) the mesh is kept as stored and vertex ``i`` gets slot
     ``first_slot + i``; else it is split by slot (:func:`split_by_label`). `ao` (baked occlusion per
     vertex) is dropped when `occlusion` is false (flat shading) or its length does not fit.
-    `outline` (border segments, shape (m, 2, 3)) is kept as given.
+    `outline` (border segments, shape (m, 2, 3)) and `contour` (iso-lines, (k, 2, 3)) are kept as given.
     """
     keep = face_slot >= 0
     faces, face_slot = np.asarray(faces)[keep], face_slot[keep]
@@ -181,7 +185,7 @@ def build_part(name: str, kind: str, hemi: str | None, verts: NDArray[Any], face
         v, tri, pal, extra = split_by_label(verts, faces, face_slot, per_vertex)
     return PartGeometry(name, kind, hemi, v.astype(np.float32), extra[0].astype(np.float32),
                         tri, pal, extra[1].astype(np.float32), v,
-                        None if ao is None else extra[2].astype(np.float32), outline)
+                        None if ao is None else extra[2].astype(np.float32), outline, contour=contour)
 
 
 def check_slots(n: int) -> None:

@@ -22,6 +22,9 @@ LIGHTINGS = ("studio", "soft", "flat-studio", "sulc")
 SULC_LIGHTINGS = ("flat-studio", "sulc")
 #: Width of region borders drawn by ``--outline`` when ``--outline-width`` is not given, and the most.
 DEFAULT_OUTLINE_WIDTH, MAX_OUTLINE_WIDTH = 1.5, 20.0
+#: How a line layer (the outline, the contour) is drawn: a solid line, or dashes 3 mm long 2 mm apart on
+#: the surface (:func:`brainpainter.rendering.borders.dashed`).
+LINE_STYLES = ("solid", "dashed")
 #: How the cortex views (lateral, medial, dorsal, ...) draw the cortex: ``auto`` is ``glass`` when the
 #: scene has white-matter tracts, else ``opaque``.
 CORTEX_MODES = ("auto", "opaque", "glass", "hull", "hidden")
@@ -50,6 +53,10 @@ class SettingsKwargs(TypedDict, total=False):
     glass_opacity: float
     outline_width: float
     outline_color: ColorLike
+    outline_style: str
+    contour_width: float
+    contour_color: ColorLike | None
+    contour_style: str
     cortex: str
 
 
@@ -95,6 +102,12 @@ class RenderSettings:
         every image size (``--outline``); 0: none.
     outline_color : colour
         Their colour, stored as sRGB 0-1 (default black; white reads well on dark maps).
+    outline_style, contour_style : {"solid", "dashed"}
+        How the region borders and the contour's iso-lines are drawn (:data:`LINE_STYLES`).
+    contour_width : float
+        Width in pixels of the contour's iso-lines (``--contour``); 0: ``outline_width``.
+    contour_color : colour, optional
+        Their colour; None: ``outline_color``.
     cortex : {"auto", "opaque", "glass", "hull", "hidden"}
         How the cortex views draw the cortex: ``opaque``; ``glass``, transparent
         in its colours (``glass_opacity``) with the white-matter tracts of the
@@ -121,6 +134,14 @@ class RenderSettings:
         f"size (0: none; --outline ATLAS alone draws them {DEFAULT_OUTLINE_WIDTH:g} px wide).")})
     outline_color: RGB = field(default=(0.0, 0.0, 0.0), metadata={
         "help": "Colour of the region borders (--outline), e.g. black or white.", "cli_default": "black"})
+    outline_style: str = field(default="solid", metadata={
+        "choices": LINE_STYLES, "help": "Line of the region borders (--outline): solid or dashed."})
+    contour_width: float = field(default=0.0, metadata={"help": (
+        "Width in pixels of the contour's lines (--contour); 0: the --outline-width.")})
+    contour_color: RGB | None = field(default=None, metadata={
+        "help": "Colour of the contour's lines (--contour), e.g. red; default: the --outline-color."})
+    contour_style: str = field(default="solid", metadata={
+        "choices": LINE_STYLES, "help": "Line of the contour (--contour): solid or dashed."})
     cortex: str = field(default="auto", metadata={"choices": CORTEX_MODES, "help": (
         "How cortex views (lateral, medial, dorsal, ...) draw the cortex: glass shows the --tracts inside "
         "a transparent cortex in its colours, hull the smooth glass brain of the subcortical views instead, "
@@ -129,7 +150,8 @@ class RenderSettings:
 
     def __post_init__(self) -> None:
         for name, allowed in (("quality", QUALITIES), ("shading", SHADINGS), ("lighting", LIGHTINGS),
-                              ("cortex", CORTEX_MODES)):
+                              ("cortex", CORTEX_MODES), ("outline_style", LINE_STYLES),
+                              ("contour_style", LINE_STYLES)):
             if getattr(self, name) not in allowed:
                 raise choice_error(name, getattr(self, name), allowed)
         object.__setattr__(self, "width", check_pixels("width", self.width))
@@ -137,15 +159,19 @@ class RenderSettings:
         if not within(self.glass_opacity, 0.0, 1.0):
             raise BrainPainterError(f"glass opacity must be in [0, 1]; {self.glass_opacity} was given.")
         object.__setattr__(self, "glass_opacity", float(self.glass_opacity))
-        try:
-            width = float(self.outline_width)
-        except (TypeError, ValueError):
-            width = float("nan")
-        if not 0.0 <= width <= MAX_OUTLINE_WIDTH:
-            raise BrainPainterError(f"outline width must be 0 (none) to {MAX_OUTLINE_WIDTH:g} pixels; "
-                                    f"{self.outline_width!r} was given.")
-        object.__setattr__(self, "outline_width", width)
+        for name in ("outline_width", "contour_width"):
+            try:
+                width = float(getattr(self, name))
+            except (TypeError, ValueError):
+                width = float("nan")
+            if not 0.0 <= width <= MAX_OUTLINE_WIDTH:
+                what = name.split("_")[0]
+                raise BrainPainterError(f"{what} width must be 0 (none) to {MAX_OUTLINE_WIDTH:g} pixels; "
+                                        f"{getattr(self, name)!r} was given.")
+            object.__setattr__(self, name, width)
         object.__setattr__(self, "outline_color", to_rgb(self.outline_color))
+        if self.contour_color is not None:
+            object.__setattr__(self, "contour_color", to_rgb(self.contour_color))
         if self.background is not None:
             object.__setattr__(self, "background", to_rgb(self.background))
 
@@ -163,7 +189,19 @@ class RenderSettings:
             "lighting": self.lighting, "glass_opacity": self.glass_opacity, "cortex": self.cortex,
             **({"outline_width": self.outline_width, "outline_color": list(self.outline_color)}
                if self.outline_width else {}),
+            **{name: value for name, value in (
+                ("outline_style", self.outline_style), ("contour_width", self.contour_width or None),
+                ("contour_color", None if self.contour_color is None else list(self.contour_color)),
+                ("contour_style", self.contour_style)) if value not in (None, "solid")},
         }
+
+    def line(self, kind: str) -> tuple[RGB, float, str]:
+        """The colour (sRGB), width (pixels) and style of line layer `kind` (``outline``, ``contour``): the
+        contour's own where given, else the outline's."""
+        if kind == "contour":
+            return (self.contour_color or self.outline_color, self.contour_width or self.outline_width,
+                    self.contour_style)
+        return self.outline_color, self.outline_width, self.outline_style
 
 
 def outlined(settings: RenderSettings, outline: str | None) -> RenderSettings:

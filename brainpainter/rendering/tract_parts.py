@@ -17,6 +17,9 @@ if TYPE_CHECKING:
 
 #: Palette key prefix of the direction colours' slots.
 DIRECTION_KEY = "tract-direction:"
+#: Palette key of the bundles drawn without a value where other bundles have values (issue 44): the tract
+#: scale's missing colour, as regions without values (not direction colours beside a value bar).
+MISSING_TRACT_KEY = "tract-missing"
 
 
 def _rgb(c: NDArray[Any]) -> RGB:
@@ -40,8 +43,8 @@ def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
     ----------
     tracts : Tracts
     nodes : mapping of str to int
-        Bundle name -> 1 (one colour) or the number of nodes of its profile;
-        bundles absent are coloured by direction.
+        Bundle name -> 1 (one colour) or the number of nodes of its profile; bundles absent are
+        coloured by direction where none has values, else take :data:`MISSING_TRACT_KEY`'s slot.
     slots_for : callable
         ``slots_for(keys, default_colour, hidden)``: the palette slot of each key, made on first use.
     radius : float, optional
@@ -157,7 +160,10 @@ def _points(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,
         n_points = m
     point_slot = np.zeros((n_lines, n_points), np.int64)
     direction = [i for i, name in enumerate(tracts.names) if nodes.get(name, 0) < 1]
-    if direction:
+    if direction and any(n >= 1 for n in nodes.values()):  # values for others: the missing colour
+        point_slot[np.isin(tracts.bundle, direction)] = slots_for([MISSING_TRACT_KEY], NEUTRAL_SLOT,
+                                                                  frozenset())[0]
+    elif direction:
         pick = np.isin(tracts.bundle, direction)
         bins, colors = direction_bins(lines[pick])
         used = np.unique(bins)

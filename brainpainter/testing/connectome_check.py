@@ -64,8 +64,8 @@ def connectome_check(run: Any) -> None:
             run.problems.append(f"connectome: dorsal: {key} is not drawn in its flat colour {rgb}")
             continue
         kind = key.partition(":")[0]
-        part = next(p for p in scene.geometry.parts if p.kind == kind)
         slot = scene.geometry.slot_of[key]
+        part = next(p for p in scene.geometry.parts if p.kind == kind and (p.palette_index == slot).any())
         expected = framing.to_pixels(part.vertices[part.palette_index == slot], pose, width,
                                      height).mean(axis=0)
         ys, xs = np.nonzero(mask)

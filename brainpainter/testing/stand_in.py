@@ -134,11 +134,17 @@ class StandInRenderer:
         if self.draws_tubes and scene.tracts is not None:
             self.tube_triangles = sum(len(p.triangles) for p in scene.geometry.parts if p.kind == "tract")
         connectome = getattr(scene, "connectome", None)
-        if connectome is not None:  # drawn where tracts are: a stripe per node and per edge
-            from brainpainter.rendering.connectome_parts import edge_keys, node_keys
+        #: (kind, hemisphere, key) of a connectome's nodes and edges: a stripe each where a view draws them
+        self.connectome_keys: list[tuple[str, str | None, str]] = []
+        if connectome is not None:
+            from brainpainter.rendering.connectome_parts import edge_keys, node_hemis, node_keys
 
-            keys = node_keys(connectome.n_nodes) + edge_keys(len(connectome.edges()[2]))
-            self.tract_keys += [(None, k) for k in keys]
+            sides = node_hemis(connectome.positions)
+            source, target, weight = connectome.edges()
+            self.connectome_keys = [("node", str(h), k) for h, k in zip(sides, node_keys(connectome.n_nodes),
+                                                                           strict=True)]
+            self.connectome_keys += [("edge", str(sides[a]) if sides[a] == sides[b] else None, k)
+                                     for a, b, k in zip(source, target, edge_keys(len(weight)), strict=True)]
         blobs = getattr(scene, "blobs", None)
         if blobs is not None:  # drawn where tracts are: a stripe per value level
             from brainpainter.rendering.blob_parts import blob_keys
@@ -202,6 +208,8 @@ class StandInRenderer:
                         for k, i in enumerate(labels) if keys[i] not in self.scene.hidden]
         stripes += [colors.get(key) or default["subcortical"] for hemi, key in self.tract_keys
                     if shows(view, "tract", hemi, self.cortex)]
+        stripes += [colors.get(key) or default["subcortical"] for kind, hemi, key in self.connectome_keys
+                    if shows(view, kind, hemi, self.cortex)]
         img = np.zeros((height, width, 4), np.uint8)
         if stripes:
             cols = np.asarray(stripes, dtype=float)[np.linspace(0, len(stripes) - 1, width).astype(int)]

@@ -1,5 +1,6 @@
 """What a view draws and its camera's uniforms, computed once per view (:class:`Aim`), for the default
-draw path (:mod:`brainpainter_blender.gpu_draw`)."""
+draw path (:mod:`brainpainter_blender.gpu_draw`), and which of its parts are drawn on top of all others (a
+connectome's nodes and edges: :func:`on_top`)."""
 
 from __future__ import annotations
 
@@ -15,6 +16,17 @@ from brainpainter.rendering.scene import RenderSettings
 from brainpainter.rendering.views import View
 from brainpainter_blender import cutaway
 from brainpainter_blender.gpu_lighting import Lighting
+
+#: Kinds of parts drawn over every other part and the glass, each pixel in its own colour (issue 44): a
+#: connectome's nodes and edges. Under the glass cortex an edge was paler than its colour bar and in the
+#: midline gap (no glass over it) saturated, so a dorsal view showed a dark-red "spine" that is not in
+#: the data; over an opaque cortex in its values' colours they were hidden.
+ON_TOP = ("node", "edge")
+
+
+def on_top(parts: list[PartGeometry]) -> list[PartGeometry]:
+    """The parts of `parts` drawn on top (:data:`ON_TOP`), in their order."""
+    return [p for p in parts if p.kind in ON_TOP]
 
 
 @dataclass(frozen=True)

@@ -124,12 +124,18 @@ class EdgeAA:
         self._buffers.move_to_end(view)
         return texture
 
+    def add(self, parts: list[PartGeometry], view: Any, aim: Any) -> None:
+        """Draw the edges of `parts` too into the kept buffer of `view` (the depth now theirs: parts drawn
+        on top of the others, :func:`brainpainter_blender.aim.on_top`)."""
+        self._draw(parts, aim, self._buffers[view], clear=False)
+
     def kept(self, view: Any) -> bool:
         """Whether the edge buffer of `view` is kept (else the view's next image draws it)."""
         return view in self._buffers
 
-    def _draw(self, parts: list[PartGeometry], aim: Any, texture: Any = None) -> Any:
-        """Draw the edges of `parts` seen in `aim` into `texture` (a new one if None), cleared first."""
+    def _draw(self, parts: list[PartGeometry], aim: Any, texture: Any = None, clear: bool = True) -> Any:
+        """Draw the edges of `parts` seen in `aim` into `texture` (a new one if None), cleared first (unless
+        not `clear`)."""
         import gpu
 
         from brainpainter_blender import gpu_shaders
@@ -140,7 +146,8 @@ class EdgeAA:
         batches = [b for b in (self._batch(p, back) for p in parts if p.kind != "tract") if b is not None]
         fb = gpu.types.GPUFrameBuffer(depth_slot=self._depth, color_slots=texture)
         with fb.bind():
-            fb.clear(color=(0.0, 0.0, 0.0, 0.0))
+            if clear:
+                fb.clear(color=(0.0, 0.0, 0.0, 0.0))
             if not batches:
                 return texture
             shader = gpu_shaders.edge_shader()

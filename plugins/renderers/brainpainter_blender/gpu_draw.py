@@ -56,6 +56,7 @@ from brainpainter.rendering.views import View
 from brainpainter_blender import cutaway, edge_aa, glass_layers, gpu_shaders, meshorder, outlines, tract_lines
 from brainpainter_blender.aim import Aim as _Aim
 from brainpainter_blender.aim import aim_for as _aim_for
+from brainpainter_blender.aim import on_top
 from brainpainter_blender.facing import facing, triangle_normals
 from brainpainter_blender.gpu_context import in_gpu_context
 from brainpainter_blender.gpu_lighting import FLAT, LIGHTING, for_maps
@@ -288,11 +289,22 @@ class GpuDraw:
                                   self._hi_depth if self.factor == 1 else None)
             with self._hi.bind():
                 top = glass(("BACK",))
+        over = on_top(aim.visible)
+        fresh = self._edges is not None and not self._edges.kept(view)
         # a cut part's edges are not where its silhouette was: anti-aliased are the parts left whole
         edges = None if self._edges is None else self._edges.texture(
-            [p for p in aim.visible if not aim.cut(p)], view, aim)
+            [p for p in aim.visible if p.name not in {q.name for q in over} and not aim.cut(p)], view, aim)
         if edges is not None:
             mark("edges")
+        if over:  # drawn over the rest and the glass (put over here), each pixel in its own colour
+            with self._hi.bind():
+                if top is not None:
+                    glass_layers.GlassLayers.over(top, mark)
+                top = None
+                gpu.state.active_framebuffer_get().clear(depth=1.0)
+                self._draw_opaque(aim, tex, tracts, mark, over)
+            if fresh and self._edges is not None:
+                self._edges.add(over, view, aim)
         with self._lo.bind():
             # the resolve writes every pixel: no clear
             s, resolve = self.settings, self._resolve
@@ -336,7 +348,7 @@ class GpuDraw:
         """What draws the glass sides `culled` (:meth:`_draw_glass`) in this image: through the view's
         layers (:meth:`.glass_layers.GlassLayers.passes`), or without, into the bound buffer (None)."""
         glass, s, layers = [p for p in aim.visible if p.kind == "glass"], self.settings, self._glass
-        outlined = s.outline_width > 0 and any(p.outline is not None for p in glass)
+        outlined = s.outline_width > 0 and any(outlines.has_lines(p) for p in glass)
 
         def draw(culled: tuple[str, ...]) -> None:
             self._bind_part_shader(aim, tex)
@@ -351,8 +363,10 @@ class GpuDraw:
         return layers.passes(view, colours, draw, mark, fresh)
 
     def _draw_opaque(self, aim: _Aim, tex: Any, tracts: list[PartGeometry],
-                     mark: Callable[[str], None] | None = None) -> Any:
-        """The visible parts but the glass and `tracts`, lit, with depth; returns the bound shader."""
+                     mark: Callable[[str], None] | None = None,
+                     only: list[PartGeometry] | None = None) -> Any:
+        """The visible parts but the glass, `tracts` and those drawn on top (:func:`.aim.on_top`; `only`:
+        these parts alone), lit, with depth; returns the bound shader."""
         import gpu
 
         shader = self._bind_part_shader(aim, tex)
@@ -362,10 +376,10 @@ class GpuDraw:
         # Parts are closed surfaces: faces turned away are always hidden behind others.
         gpu.state.face_culling_set(CULL_OPAQUE)
         shader.uniform_int("mode", gpu_shaders.MODE_LIT)
-        drawn_as_lines = {t.name for t in tracts}
+        skip = {t.name for t in tracts} | {p.name for p in on_top(aim.visible)}
         clipped = aim.n_clip > 0
-        for p in aim.visible:
-            if p.kind != "glass" and p.name not in drawn_as_lines:
+        for p in aim.visible if only is None else only:
+            if only is not None or (p.kind != "glass" and p.name not in skip):
                 if clipped != aim.cut(p):  # parts left whole: the plain shader (no discard: early depth)
                     clipped = aim.cut(p)
                     shader = self._bind_part_shader(aim, tex, clipped)
@@ -439,7 +453,7 @@ class GpuDraw:
             mark({"FRONT": "glass, far side", "BACK": "glass, near side"}.get("".join(culled), "glass"))
             gpu.state.blend_set("NONE")
             gpu.state.depth_mask_set(True)
-        if "BACK" in culled and any(p.outline is not None for p in glass) and s.outline_width > 0 \
+        if "BACK" in culled and any(outlines.has_lines(p) for p in glass) and s.outline_width > 0 \
                 and not aim.n_clip:  # a cut glass's borders would float over what the cut removed
             # A cortex drawn as glass (``--cortex glass``) keeps its borders, on its near side only:
             # its front faces go into the depth buffer alone, then the lines are depth-tested on them.
