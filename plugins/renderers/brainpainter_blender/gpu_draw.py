@@ -1,13 +1,11 @@
 """The default draw path: Blender's ``gpu`` module, indexed batches and a palette texture.
 
-Everything runs inside :func:`brainpainter_blender.gpu_context.in_gpu_context`
-(background mode allows ``gpu`` drawing only there). Shaders, batches and
-offscreen buffers survive between calls.
+Everything runs inside :func:`brainpainter_blender.gpu_context.in_gpu_context` (background mode allows
+``gpu`` drawing only there). Shaders, batches and offscreen buffers survive between calls.
 
-Per renderer, every part of ``scene.geometry`` becomes one indexed batch
-(uploaded once, in an order that suits a software rasteriser's vertex
-cache: :mod:`brainpainter_blender.meshorder`); an image uploads only the
-palette (a 2-D float texture of linear colours,
+Per renderer, every part of ``scene.geometry`` becomes one indexed batch (uploaded once, in an order
+that suits a software rasteriser's vertex cache: :mod:`brainpainter_blender.meshorder`); an image
+uploads only the palette (a 2-D float texture of linear colours,
 :data:`~brainpainter_blender.gpu_shaders.PALETTE_WIDTH` texels a row, looked up in
 the vertex shader: a map's per-vertex colours are interpolated across each
 triangle; a region's three vertices share one slot), draws the visible parts
@@ -30,15 +28,14 @@ strides) is already the image. The GLSL sources are in
 :mod:`brainpainter_blender.gpu_shaders`; :meth:`GpuDraw.profile` times the
 steps of one image.
 
-Lighting is per vertex, in linear light, from lights fixed to the camera:
-a key light from the upper left, a fill light from the right and an
-ambient term (:data:`~brainpainter_blender.gpu_lighting.LIGHTING`), all multiplied by the ambient occlusion
-the template has baked per vertex (an extra vertex attribute, ones for old
-templates), then an S-curve; on a map's cortex, less of the occlusion and
-the S-curve (:func:`for_maps`), so its colours read as its values; a flat map (a part of kind
-``flat``) is unlit (:data:`FLAT`); subcortical structures get a darker outline
-and the glass a Fresnel-like edge. Colours are multiplied, never mixed
-towards white or black, and the peak stays <= 1, so hues stay pure.
+Lighting is per vertex, in linear light, from lights fixed to the camera: a key light from the upper
+left, a fill light from the right and an ambient term
+(:data:`~brainpainter_blender.gpu_lighting.LIGHTING`), all multiplied by the ambient occlusion the
+template has baked per vertex (an extra vertex attribute, ones for old templates), then an S-curve; on a
+map's cortex, less of the occlusion and the S-curve (:func:`for_maps`), so its colours read as its
+values; a flat map (``flat``) is unlit (:data:`FLAT`); subcortical structures get a darker outline and
+the glass a Fresnel-like edge. Colours are multiplied, never mixed towards white or black, and the peak
+stays <= 1, so hues stay pure.
 """
 
 from __future__ import annotations
