@@ -3,30 +3,24 @@
 Everything runs inside :func:`brainpainter_blender.gpu_context.in_gpu_context` (background mode allows
 ``gpu`` drawing only there). Shaders, batches and offscreen buffers survive between calls.
 
-Per renderer, every part of ``scene.geometry`` becomes one indexed batch (uploaded once, in an order
-that suits a software rasteriser's vertex cache: :mod:`brainpainter_blender.meshorder`); an image
-uploads only the palette (a 2-D float texture of linear colours,
-:data:`~brainpainter_blender.gpu_shaders.PALETTE_WIDTH` texels a row, looked up in
-the vertex shader: a map's per-vertex colours are interpolated across each
-triangle; a region's three vertices share one slot), draws the visible parts
-into a buffer of 16-bit linear light (opaque parts with depth, then the glass:
-back faces, then front faces, blended, no depth writes; per view only the triangles
-that side shows; drawn once per view and glass colours into a layer put over each image:
-:mod:`brainpainter_blender.glass_layers`), at output resolution
-for the default quality, and resolves it in a second pass: averaging each SxS
-block of a supersampled buffer (S a compile-time constant, :data:`SUPERSAMPLING`),
-or, at the default quality, mixing each pixel that a region border or
-silhouette crosses with its neighbour across it by the share of the pixel
-beyond the edge (:mod:`brainpainter_blender.edge_aa`: 2x2 supersampling cost
-llvmpipe about four times the pixels for as smooth a picture). The resolve
-also un-premultiplies alpha and flips rows into an sRGB target, which encodes
-linear light to sRGB as it is written. Tract parts are drawn as lines at
-output resolution between the glass's far and near sides
-(:mod:`brainpainter_blender.tract_lines`), not through the edge buffer. So the read-back (into a flat
-``gpu.types.Buffer``; ``np.array`` of a multi-dimensional Buffer gives wrong
-strides) is already the image. The GLSL sources are in
-:mod:`brainpainter_blender.gpu_shaders`; :meth:`GpuDraw.profile` times the
-steps of one image.
+Per renderer, every part of ``scene.geometry`` becomes one indexed batch (uploaded once, in an order that
+suits a software rasteriser's vertex cache: :mod:`brainpainter_blender.meshorder`); an image uploads only
+the palette (a 2-D float texture of linear colours, :data:`~brainpainter_blender.gpu_shaders.PALETTE_WIDTH`
+texels a row, looked up in the vertex shader: a map's per-vertex colours are interpolated across each
+triangle; a region's three vertices share one slot), draws the visible parts into a buffer of 16-bit linear
+light (opaque parts with depth, then the glass: back faces, then front faces, blended, no depth writes; per
+view only the triangles that side shows; drawn once per view and glass colours into a layer put over each
+image: :mod:`brainpainter_blender.glass_layers`), at output resolution for the default quality, and resolves
+it in a second pass: averaging each SxS block of a supersampled buffer (S a compile-time constant,
+:data:`SUPERSAMPLING`), or, at the default quality, mixing each pixel that a region border or silhouette
+crosses with its neighbour across it by the share of the pixel beyond the edge
+(:mod:`brainpainter_blender.edge_aa`: 2x2 supersampling cost llvmpipe about four times the pixels for as
+smooth a picture). The resolve also un-premultiplies alpha and flips rows into an sRGB target, which encodes
+linear light to sRGB as it is written. Tract parts are drawn as lines at output resolution between the
+glass's far and near sides (:mod:`brainpainter_blender.tract_lines`), not through the edge buffer. So the
+read-back (into a flat ``gpu.types.Buffer``; ``np.array`` of a multi-dimensional Buffer gives wrong strides)
+is already the image. The GLSL sources are in :mod:`brainpainter_blender.gpu_shaders`;
+:meth:`GpuDraw.profile` times the steps of one image.
 
 Lighting is per vertex, in linear light, from lights fixed to the camera: a key light from the upper
 left, a fill light from the right and an ambient term
