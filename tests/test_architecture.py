@@ -14,8 +14,8 @@ REPO = Path(__file__).resolve().parents[1]
 CORE = REPO / "brainpainter"
 
 # Lowest first: a module may import from its own layer or a lower one, never from a higher one.
-LAYERS = ["errors", "io", "color", "atlas", "tracts", "table", "maps", "connectome", "rendering", "media",
-          "web", "cli", "testing"]
+LAYERS = ["errors", "io", "color", "atlas", "tracts", "table", "maps", "connectome", "layers", "rendering",
+          "media", "web", "cli", "testing"]
 NOT_CORE = ("brainpainter_builder", "brainpainter_blender", "brainpainter_atlases")
 # (module, longest function, longest module) limits
 MAX_FUNCTION_LINES = 80

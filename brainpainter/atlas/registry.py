@@ -27,7 +27,8 @@ from brainpainter.atlas.model import Atlas, combine_atlases, load_atlas_dir
 from brainpainter.errors import BrainPainterError, PluginError, choice_error
 
 CONFIG_FILE = "atlas.toml"
-GROUPS = ("brainpainter.atlases", "brainpainter.renderers", "brainpainter.templates")
+GROUPS = ("brainpainter.atlases", "brainpainter.renderers", "brainpainter.templates", "brainpainter.layers",
+          "brainpainter.readers")
 
 # The optional distributions of this repository (plugins/atlases/<distribution>) and the atlases
 # each provides (its "brainpainter.atlases" entry points).
@@ -52,6 +53,8 @@ KNOWN_ELSEWHERE: Mapping[str, Mapping[str, str]] = MappingProxyType({
     "brainpainter.atlases": MappingProxyType({
         name: install_hint(name, dist) for dist, names in KNOWN_ATLAS_PLUGINS.items() for name in names}),
     "brainpainter.templates": MappingProxyType({}),
+    "brainpainter.layers": MappingProxyType({}),
+    "brainpainter.readers": MappingProxyType({}),
 })
 
 
@@ -281,6 +284,22 @@ def _validate_template(name: str, obj: Any) -> Any:
     return path
 
 
+def _validate_reader(name: str, obj: Any) -> Any:
+    for attribute in ("kind", "suffixes", "magic", "claims", "load"):
+        if not hasattr(obj, attribute):
+            raise PluginError(f"the reader plugin {name!r} gave a {type(obj).__name__}, not a "
+                              "brainpainter.layers.readers.Reader")
+    return obj
+
+
+def _validate_layer_kind(name: str, obj: Any) -> Any:
+    for attribute in ("name", "description", "options", "open"):
+        if not hasattr(obj, attribute):
+            raise PluginError(f"the layer plugin {name!r} gave a {type(obj).__name__}, not a "
+                              "brainpainter.layers.kinds.LayerKind")
+    return obj
+
+
 # -- looking atlases up --------------------------------------------------------------------
 def get_atlas(name: str) -> Atlas:
     """The registered atlas called `name` (or one of its aliases).
@@ -344,9 +363,13 @@ def local_entries() -> Mapping[str, tuple[str, Callable[[], Any]]]:
 atlases = Registry("brainpainter.atlases", "atlas", _validate_atlas, local_source=local_entries)
 renderers = Registry("brainpainter.renderers", "renderer", _validate_renderer)
 templates = Registry("brainpainter.templates", "template", _validate_template)
+#: Layer kinds (:class:`brainpainter.layers.kinds.LayerKind`) and input formats
+#: (:class:`brainpainter.layers.readers.Reader`): the built-in ones and plugins'.
+layer_kinds = Registry("brainpainter.layers", "layer kind", _validate_layer_kind)
+readers = Registry("brainpainter.readers", "reader", _validate_reader)
 
 
 def reset_all() -> None:
     """Forget every registry's discovery (after installing or removing plugins)."""
-    for reg in (atlases, renderers, templates):
+    for reg in (atlases, renderers, templates, layer_kinds, readers):
         reg.reset()

@@ -182,7 +182,13 @@ MAP_ONLY_SUFFIXES = (".mgh", ".mgz", ".gii", ".gii.gz", ".nii", ".nii.gz", ".npy
 #: FreeSurfer morphometry files ("curv" format, no ending), e.g. ``lh.thickness``, ``rh.sulc``.
 _MORPH = re.compile(r"^[lr]h\.(thickness|sulc|curv|area|volume|jacobian_white|avg_curv|pial_lgi|w-g\.pct)"
                     r"(\.|$)")
-_TABLE_SUFFIXES = (".csv", ".tsv", ".tab", ".txt", ".dat", ".xlsx", ".xlsm", ".xls", ".json")
+TABLE_SUFFIXES = (".csv", ".tsv", ".tab", ".txt", ".dat", ".xlsx", ".xlsm", ".xls", ".json")
+
+
+def is_morph_name(name: str) -> bool:
+    """Whether the lower-case file name `name` is a FreeSurfer morphometry file's (``lh.thickness``,
+    ``rh.sulc.fwhm10``; not ``lh.aparc.thickness.table`` nor a ``.csv``: tables)."""
+    return bool(_MORPH.match(name)) and not name.endswith(TABLE_SUFFIXES)
 
 
 def is_map_input(data: Any) -> bool:
@@ -194,9 +200,7 @@ def is_map_input(data: Any) -> bool:
     """
     if isinstance(data, str | Path):
         name = Path(data).name.lower()
-        if name.endswith(MAP_ONLY_SUFFIXES):
-            return True
-        return bool(_MORPH.match(name)) and not name.endswith(_TABLE_SUFFIXES)
+        return name.endswith(MAP_ONLY_SUFFIXES) or is_morph_name(name)
     if isinstance(data, Mapping):
         keys = {str(k).lower() for k in data}
         return bool(keys) and keys <= {"lh", "rh", "left", "right"}

@@ -191,7 +191,7 @@ def infer_kind(data: Any, outline: bool = False, values: Any = None) -> str:
     (``{"lh": ..., "rh": ...}``, a map or CIFTI file, a volume): a map; else a region table.
     """
     from brainpainter.connectome.model import Connectome
-    from brainpainter.maps.inputs import is_map_input
+    from brainpainter.layers.readers import is_map_data
     from brainpainter.maps.volume import is_volume
     from brainpainter.tracts.model import SUFFIXES
 
@@ -205,7 +205,7 @@ def infer_kind(data: Any, outline: bool = False, values: Any = None) -> str:
         return "contour"
     if values is not None or (path is not None and (path.is_dir() or path.name.lower().endswith(SUFFIXES))):
         return "tracts"
-    if is_map_input(data) or is_volume(data):
+    if is_map_data(data) or is_volume(data):
         return "map"
     return "regions"
 

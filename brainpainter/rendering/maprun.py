@@ -21,9 +21,10 @@ from brainpainter.atlas.template import Template, load_template
 from brainpainter.connectome.model import Connectome
 from brainpainter.connectome.series import check_images
 from brainpainter.errors import BrainPainterError
+from brainpainter.layers.readers import is_map_data
 from brainpainter.maps.clusters import Blobs
 from brainpainter.maps.flat import check_flat, flat_labels, flat_sheet, flat_values
-from brainpainter.maps.inputs import VertexMaps, is_map_input, read_maps
+from brainpainter.maps.inputs import VertexMaps, read_maps
 from brainpainter.maps.layers import vertex_colors
 from brainpainter.maps.outlines import Contours, mesh_edges
 from brainpainter.maps.resolution import map_mesh, own_vertex_count
@@ -171,7 +172,7 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     from brainpainter.atlas.registry import get_atlas
 
     table = None
-    if data is not None and not is_map_input(data):  # a region table, the map drawn over its colours
+    if data is not None and not is_map_data(data):  # a region table, the map drawn over its colours
         table = read_table(data, atlas, **options.table.kwargs())
         data, atlas = None, table.atlas
     m = options.maps

@@ -25,8 +25,8 @@ from brainpainter.color.scale import ColourScale
 from brainpainter.connectome.model import Connectome
 from brainpainter.connectome.series import check_images
 from brainpainter.errors import BrainPainterError, NoRegionColumnError
+from brainpainter.layers.readers import is_map_data
 from brainpainter.maps.clusters import Blobs
-from brainpainter.maps.inputs import is_map_input
 from brainpainter.maps.outlines import Contours
 from brainpainter.rendering.blob_layers import blob_colors, load_blobs
 from brainpainter.rendering.composition import (
@@ -146,7 +146,7 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     if options is None:
         options = Options.of(kwargs, "prepare_run")
     atlas_obj = resolve_atlas(atlas, options.scene.atlas_config)
-    if options.maps.given or is_map_input(data):  # per-vertex maps: the same run, coloured per vertex
+    if options.maps.given or is_map_data(data):  # per-vertex maps: the same run, coloured per vertex
         from brainpainter.rendering.maprun import prepare_map_run
 
         return prepare_map_run(data, atlas_obj, options)  # type: ignore[return-value]
