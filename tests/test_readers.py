@@ -13,8 +13,10 @@ from brainpainter.maps.inputs import is_map_input
 
 
 def test_the_built_in_readers_and_kinds_are_entry_points():
-    assert {"table", "surface-map", "volume", "cifti", "tractogram", "matrix", "nodes"} <= set(readers.names())
-    assert {"regions", "map", "tracts", "connectome", "contour", "outline", "blobs"} <= set(layer_kinds.names())
+    assert {"table", "surface-map", "volume", "cifti", "tractogram", "matrix", "nodes"} <= set(
+        readers.names())
+    assert {"regions", "map", "tracts", "connectome", "contour", "outline", "blobs"} <= set(
+        layer_kinds.names())
     assert {e.distribution for e in readers.entries()} == {"brainpainter"}
 
 

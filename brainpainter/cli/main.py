@@ -29,6 +29,8 @@ LAZY_COMMANDS = {
     "check": ("brainpainter.cli.render:check",
               "Read INPUT tables exactly as render would and report how, without rendering."),
     "plugins": ("brainpainter.cli.plugins:plugins", "Installed plugins, and which failed to load and why."),
+    "layers": ("brainpainter.cli.plugins:layers",
+               "Installed layer kinds (built-in and plugins') and their options (--layer KIND:FILE)."),
     "render": ("brainpainter.cli.render:render",
                "Render every image of INPUT tables (CSV, TSV, .xlsx; see \"check\") or maps (--lh/--rh), "
                "from every view."),

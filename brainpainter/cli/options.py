@@ -44,7 +44,7 @@ RENDER_OPTION_NAMES = (
     "tracts_space", "tracts_affine", "max_streamlines", "tract_values", "tract_value", "tract_radius",
     "connectome", "nodes", "node_values", "node_categories", "directed", "edge_threshold", "top_edges",
     "edges_of", "nodes_space", "node_labels", "node_labels_top", "node_labels_per_category",
-    "volume_surface", "min_cluster_mm3", "clip",
+    "volume_surface", "min_cluster_mm3", "clip", "layer", "layer_opt",
     *(f.name for f in fields(LayerOptions)),
 )
 INPUT_OPTION_NAMES = ("image_column", "value", "region_column", "strict")
@@ -139,6 +139,10 @@ def render_option_list(views: str | None = None, size: str = DEFAULT_SIZE) -> di
                                        metavar="FILE"),
         "min_cluster_mm3": field_option(scene, "min_cluster_mm3", type=FINITE, metavar="MM3"),
         "clip": field_option(scene, "clip", multiple=True, default=(), show_default=False, metavar="AXIS<MM"),
+        "layer": field_option(scene, "layer", multiple=True, default=(), show_default=False,
+                              metavar="KIND:FILE"),
+        "layer_opt": field_option(scene, "layer_opt", multiple=True, default=(), show_default=False,
+                                  metavar="KIND.NAME=VALUE"),
         # several matrices, one per image: a folder, a.csv,b.csv or a glob (docs/connectomes.md)
         "connectome": field_option(ConnectomeOptions, "connectome", type=click.Path(), metavar="FILE"),
         **{name: field_option(ConnectomeOptions, name, type=click.Path(dir_okay=False), metavar="FILE")
@@ -233,10 +237,11 @@ def tables_or_maps(inputs: Sequence[Any], kwargs: dict[str, Any]) -> Any:
     from brainpainter.errors import BrainPainterError
 
     maps = any(kwargs.get(name) is not None for name in ("lh", "rh", "volume", "volume_surface"))
-    if not inputs and not maps and kwargs.get("tract_values") is None and kwargs.get("connectome") is None:
+    alone = ("tract_values", "connectome")
+    if not (inputs or maps or any(kwargs.get(name) is not None for name in alone) or kwargs.get("layer")):
         raise BrainPainterError("give INPUT tables, or maps: --lh FILE and/or --rh FILE, or --volume FILE, "
                                 "or tract values alone: --tract-values FILE --tracts DIR, or a connectivity "
-                                "matrix: --connectome FILE.")
+                                "matrix: --connectome FILE, or a layer: --layer KIND:FILE.")
     if not inputs:
         return None
     return inputs[0] if len(inputs) == 1 else list(inputs)

@@ -177,6 +177,33 @@ KINDS: dict[str, Kind] = {
 }
 
 
+def _plugin_kind(name: str) -> Kind | None:
+    """A plugin layer kind (``brainpainter.layers``, drawn by ``--layer KIND:FILE``) as a :class:`Kind`;
+    None where `name` is no installed kind or a built-in one (drawn by its own options)."""
+    from brainpainter.atlas.registry import layer_kinds
+    from brainpainter.layers.kinds import kind_of
+
+    if name not in layer_kinds.names() or kind_of(name).open is None:
+        return None
+
+    def options(layer: SceneLayer, taken: bool) -> tuple[Any, dict[str, Any]]:
+        opts = tuple(f"{name}.{k}={v}" for k, v in layer.keywords.items())
+        return None, {"layer": (f"{name}:{layer.data}",), "layer_opt": opts}
+
+    return Kind(options, tuple(kind_of(name).options))
+
+
+def kind_named(name: str) -> Kind:
+    """The :class:`Kind` of a built-in kind (:data:`KINDS`) or an installed plugin's."""
+    kind = KINDS.get(name) or _plugin_kind(name)
+    if kind is None:
+        from brainpainter.atlas.registry import layer_kinds
+
+        plugins = [n for n in layer_kinds.names() if n not in KINDS and _plugin_kind(n) is not None]
+        raise choice_error("kind", name, [*KINDS, *plugins])
+    return kind
+
+
 def _a(kind: str) -> str:
     return f"{'an' if kind[0] in 'aeiou' else 'a'} {kind}"
 
@@ -259,11 +286,10 @@ class Scene:
             A kind not known, a keyword the kind does not take, or a second layer of a kind.
         """
         chosen = kind if kind is not None else infer_kind(data, outline, keywords.get("values"))
-        if chosen not in KINDS:
-            raise choice_error("kind", chosen, list(KINDS))
-        wrong = sorted(set(keywords) - set(KINDS[chosen].allowed))
+        allowed = kind_named(chosen).allowed
+        wrong = sorted(set(keywords) - set(allowed))
         if wrong:
-            raise BrainPainterError(f"{_a(chosen)} layer takes {list(KINDS[chosen].allowed)}; {wrong[0]!r} "
+            raise BrainPainterError(f"{_a(chosen)} layer takes {list(allowed)}; {wrong[0]!r} "
                                     "was given. Leave it out, or give kind= if the layer is of another kind.")
         for layer in self.layers:
             if layer.kind == chosen:
@@ -286,12 +312,17 @@ class Scene:
         options : dict
             The scene's options and each layer's (``regions_cmap``, ``map_alpha``, ``tracts``, ...).
         """
-        layers = sorted(self.layers if layers is None else layers, key=lambda la: list(KINDS).index(la.kind))
+        layers = list(self.layers if layers is None else layers)
+        order = [*KINDS, *(la.kind for la in layers if la.kind not in KINDS)]  # plugins' last, as added
+        layers.sort(key=lambda la: order.index(la.kind))
         data, options = None, dict(self.options)
         for layer in layers:
-            given, more = KINDS[layer.kind].options(layer, data is not None)
+            given, more = kind_named(layer.kind).options(layer, data is not None)
             if given is not None:
                 data = given
+            for name in ("layer", "layer_opt"):  # plugin layers: each adds its --layer and --layer-opt
+                if name in more:
+                    more[name] = (*options.get(name, ()), *more[name])
             options.update(more)
         Options.of(options, "Scene")
         return data, options

@@ -56,3 +56,12 @@ def blob_parts(blobs: Blobs | None, template: Template, slots_for: SlotsFor) -> 
     return [PartGeometry("blobs", "blob", None, v32, normals.astype(np.float32),
                          np.asarray(blobs.triangles, np.uint32), pal, np.zeros(len(verts), np.float32),
                          verts)]
+
+
+def inside_parts(scene: Any, template: Template, slots_for: SlotsFor) -> list[PartGeometry]:
+    """The parts drawn inside the brain besides a connectome's: the blobs, then each plugin layer's
+    (:attr:`brainpainter.rendering.scene.Scene.drawn`, in the order given); `scene` is the Scene."""
+    parts = blob_parts(getattr(scene, "blobs", None), template, slots_for)
+    for layer in getattr(scene, "drawn", ()):
+        parts += layer.parts(template, slots_for)
+    return parts

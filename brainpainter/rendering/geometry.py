@@ -43,7 +43,7 @@ from numpy.typing import NDArray
 from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.rendering import framing
-from brainpainter.rendering.blob_parts import blob_parts
+from brainpainter.rendering.blob_parts import inside_parts
 from brainpainter.rendering.clip import check_cut
 from brainpainter.rendering.connectome_parts import connectome_parts
 from brainpainter.rendering.lazy_parts import LazyParts, cortex_arrays
@@ -293,7 +293,7 @@ class SceneGeometry:
             self._lazy.entries += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for,
                                               scene.tract_radius)
         self._lazy.entries += connectome_parts(getattr(scene, "connectome", None), slots_for)
-        self._lazy.entries += blob_parts(getattr(scene, "blobs", None), template, slots_for)
+        self._lazy.entries += inside_parts(scene, template, slots_for)  # blobs, plugin layers
         for hemi in HEMIS:
             if hemi in template.manifest.get("glass", {}):
                 self._lazy.later_glass(template, hemi)

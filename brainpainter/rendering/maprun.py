@@ -21,6 +21,7 @@ from brainpainter.atlas.template import Template, load_template
 from brainpainter.connectome.model import Connectome
 from brainpainter.connectome.series import check_images
 from brainpainter.errors import BrainPainterError
+from brainpainter.layers.kinds import DrawnLayer, open_layers
 from brainpainter.layers.readers import is_map_data
 from brainpainter.maps.clusters import Blobs
 from brainpainter.maps.flat import check_flat, flat_labels, flat_sheet, flat_values
@@ -95,6 +96,7 @@ class MapRun:
     flat_edges: dict[str, NDArray[Any]] | None = None  # the sheets' edges (--outline-threshold on flat views)
     connectome: Connectome | None = None  # nodes and edges inside the cortex, drawn as glass
     blobs: Blobs | None = None  # a volume's clusters as surfaces (--volume-surface)
+    drawn: tuple[DrawnLayer, ...] = ()  # plugin layers (--layer KIND:FILE)
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
     @property
@@ -116,7 +118,7 @@ class MapRun:
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
                        scene.renderer, coloring="vertices", contours=self.contours, tracts=scene.tract_spec(),
                        tract_nodes=nodes, tract_radius=scene.tract_radius, connectome=self.connectome,
-                       blobs=self.blobs)
+                       blobs=self.blobs, drawn=self.drawn)
 
     def items(self, rows: Any) -> list[tuple[int, View]]:
         return [(i, view) for i in rows for view in self.views]
@@ -156,6 +158,8 @@ class MapRun:
                 regions.update(connectome_colors(self.connectome, self.layers, image))
             if self.blobs is not None:
                 regions.update(blob_colors(self.blobs, self.layers))
+            for layer in self.drawn:
+                regions.update(layer.colors(row))
             self._cache[image] = VertexColors(regions, cortex)
         return self._cache[image]
 
@@ -228,6 +232,8 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
                           connectome=connectome is not None or blobs is not None)
     layers += connectome_layers(options, connectome, first=False) if connectome is not None else ()
     layers += (blob_layer(options, blobs, first=False),) if blobs is not None else ()
+    drawn = open_layers(options.scene.layer, options.scene.layer_opt)
+    layers += tuple(layer.layer() for layer in drawn)
     flat = flat_edges = None
     if any(v.content == "flat" for v in view_list):  # the flat maps: fsaverage's templates only
         check_flat(tpl, labels)
@@ -242,7 +248,8 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
         settings = with_aspect(settings, aspect)
     return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list, settings, options,
                   source_vertex, edges, depth, contours, tract_values, layers=layers, below=below,
-                  mesh_masks=masks, flat=flat, flat_edges=flat_edges, connectome=connectome, blobs=blobs)
+                  mesh_masks=masks, flat=flat, flat_edges=flat_edges, connectome=connectome, blobs=blobs,
+                  drawn=drawn)
 
 
 def _own_surfaces(options: Options, surfaces: dict[str, Any]) -> dict[str, Surface]:

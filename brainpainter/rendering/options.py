@@ -42,6 +42,7 @@ from brainpainter.color.rgb import to_rgb
 from brainpainter.color.scale import ScaleKwargs, ScaleOptions
 from brainpainter.connectome.options import ConnectomeKwargs, ConnectomeOptions
 from brainpainter.errors import BrainPainterError, choice_error, within
+from brainpainter.layers.kinds import parse_layer, parse_layer_opts
 from brainpainter.maps.options import MapKwargs, MapOptions
 from brainpainter.rendering.clip import ClipPlane, parse_clips
 from brainpainter.rendering.layers import LayerKwargs, LayerOptions
@@ -78,6 +79,8 @@ class SceneKwargs(TypedDict, total=False):
     volume_surface: Any
     min_cluster_mm3: float
     clip: str | Sequence[str] | None
+    layer: str | Sequence[str]
+    layer_opt: str | Sequence[str]
 
 
 class RunnerKwargs(TypedDict, total=False):
@@ -137,6 +140,10 @@ class SceneOptions:
         Its clusters smaller than this (cubic millimetres) are not drawn.
     clip : str or list of str, optional
         Cutaway planes (``"x<0"``, ``"x<0,z>20"``; :mod:`brainpainter.rendering.clip`) applied to every view.
+    layer : tuple of str
+        Plugin layers as ``KIND:FILE`` (``foci:peaks.csv``; :mod:`brainpainter.layers.kinds`).
+    layer_opt : tuple of str
+        Their options as ``KIND.NAME=VALUE`` (``foci.cmap=magma``).
     """
 
     views: str | Sequence[str] | None = field(default=None, metadata={
@@ -181,6 +188,11 @@ class SceneOptions:
         "help": "Cut the cortex and glass away where AXIS<MM or AXIS>MM (x right, y anterior, z superior), "
                 "e.g. x<0; several planes (repeated or comma-separated) cut out a wedge. What lies inside "
                 "stays whole and shows. Repeatable."})
+    layer: tuple[str, ...] = field(default=(), metadata={
+        "help": "A layer of an installed kind, KIND:FILE (e.g. foci:peaks.csv: MNI152 points drawn as "
+                "spheres); 'brainpainter layers' lists the kinds and their options. Repeatable."})
+    layer_opt: tuple[str, ...] = field(default=(), metadata={
+        "help": "An option of a --layer, KIND.NAME=VALUE (e.g. foci.cmap=magma). Repeatable."})
 
     def __post_init__(self) -> None:
         if self.surface not in SURFACES:
@@ -192,6 +204,13 @@ class SceneOptions:
         if self.volume_surface is None and float(self.min_cluster_mm3) != 0.0:
             raise BrainPainterError("--min-cluster-mm3 drops small clusters of --volume-surface, but no "
                                     "--volume-surface was given; give the volume, or leave it out.")
+        for name in ("layer", "layer_opt"):
+            given = getattr(self, name)
+            object.__setattr__(self, name, (given,) if isinstance(given, str)
+                               else tuple(str(g) for g in given))
+        for given in self.layer:
+            parse_layer(given)
+        parse_layer_opts(self.layer_opt)
         hide = [self.hide] if isinstance(self.hide, str) else list(self.hide)
         object.__setattr__(self, "hide", tuple(str(h) for h in hide))
         if self.views is not None:

@@ -140,6 +140,7 @@ def load_scene(
     contours: Contours | None = None,
     connectome: Connectome | None = None,
     blobs: Blobs | None = None,
+    drawn: tuple[Any, ...] = (),
 ) -> tuple[Atlas, Scene]:
     """The atlas and the scene a renderer (or an exporter) draws; nothing is rendered.
 
@@ -180,6 +181,7 @@ def load_scene(
         contours=contours,
         connectome=connectome,
         blobs=blobs,
+        drawn=tuple(drawn),
     )
     return atlas, scene
 
@@ -216,6 +218,8 @@ class Painter:
         Nodes and edges drawn inside the cortex (:attr:`brainpainter.rendering.scene.Scene.connectome`).
     blobs : Blobs, optional
         A volume's clusters drawn as surfaces (:attr:`brainpainter.rendering.scene.Scene.blobs`).
+    drawn : tuple of DrawnLayer
+        Plugin layers (``--layer KIND:FILE``, :attr:`brainpainter.rendering.scene.Scene.drawn`).
     """
 
     atlas: Atlas | str = "dk"
@@ -233,6 +237,7 @@ class Painter:
     contours: Contours | None = None
     connectome: Connectome | None = None
     blobs: Blobs | None = None
+    drawn: tuple[Any, ...] = ()
     _renderer: Any = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -240,7 +245,8 @@ class Painter:
         self.atlas, self.scene = load_scene(self.atlas, self.template, self.surface, self.hidden,
                                             self.settings, self.medial_wall_color, self.atlas_config,
                                             self.tracts, self.tract_nodes, self.tract_radius,
-                                            self.coloring, self.contours, self.connectome, self.blobs)
+                                            self.coloring, self.contours, self.connectome, self.blobs,
+                                            self.drawn)
         self.template = self.scene.template
         from brainpainter.atlas import registry
         from brainpainter.rendering.pythons import require_bpy

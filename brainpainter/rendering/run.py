@@ -24,7 +24,8 @@ from brainpainter.atlas.registry import get_atlas, load_atlas_config
 from brainpainter.color.scale import ColourScale
 from brainpainter.connectome.model import Connectome
 from brainpainter.connectome.series import check_images
-from brainpainter.errors import BrainPainterError, NoRegionColumnError
+from brainpainter.errors import BrainPainterError
+from brainpainter.layers.kinds import DrawnLayer, open_layers, parse_layer
 from brainpainter.layers.readers import is_map_data
 from brainpainter.maps.clusters import Blobs
 from brainpainter.maps.outlines import Contours
@@ -51,13 +52,12 @@ from brainpainter.rendering.painter import (
 from brainpainter.rendering.parallel import Item, LocalRunner, PainterSpec, Runner, SerialRunner, chunked
 from brainpainter.rendering.settings import RenderSettings, with_aspect
 from brainpainter.rendering.tract_run import (
-    bundle_names,
+    read_run_table,
     run_tract_values,
     tracts_only_table,
-    without_bundle_columns,
 )
 from brainpainter.rendering.views import ImagesByView, View, parse_views, with_clip
-from brainpainter.table.region_table import RegionTable, read_table
+from brainpainter.table.region_table import RegionTable
 from brainpainter.table.rows import select_rows
 from brainpainter.tracts.values import TractValues
 
@@ -83,6 +83,7 @@ class Run:
     contours: Contours | None = None  # a second map's iso-lines (--contour)
     connectome: Connectome | None = None
     blobs: Blobs | None = None  # a volume's clusters as surfaces (--volume-surface)
+    drawn: tuple[DrawnLayer, ...] = ()  # plugin layers (--layer KIND:FILE)
 
     def scale_of(self, kind: str) -> ColourScale:
         """The colour scale of layer `kind` (``"regions"``, ``"tracts"``); the run's scale if it has none."""
@@ -95,7 +96,7 @@ class Run:
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
                        scene.renderer, tracts=scene.tract_spec(), tract_nodes=nodes,
                        tract_radius=scene.tract_radius, contours=self.contours, connectome=self.connectome,
-                       blobs=self.blobs)
+                       blobs=self.blobs, drawn=self.drawn)
 
     def items(self, rows: Sequence[int]) -> list[tuple[int, View]]:
         """The images of `rows`: ``(row, view)`` for every row and view, row by row."""
@@ -110,6 +111,8 @@ class Run:
             colors.update(connectome_colors(self.connectome, self.layers, i))
         if self.blobs is not None:
             colors.update(blob_colors(self.blobs, self.layers))
+        for layer in self.drawn:
+            colors.update(layer.colors(i))
         return Item(colors, view, metadata, self.table.images[i])
 
 
@@ -155,47 +158,46 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
         view_list = parse_views(views if isinstance(views, str) else list(views))
     tract_values, only_tracts = run_tract_values(data, options)
     blobs = load_blobs(options)
+    drawn = open_layers(options.scene.layer, options.scene.layer_opt)
     only_connectome = data is None and tract_values is None and options.connectome.given
     only_blobs = data is None and tract_values is None and not only_connectome and blobs is not None
+    only_drawn = (bool(drawn) and data is None and tract_values is None and not only_connectome
+                  and not only_blobs)
     if only_tracts and tract_values is not None:
         source = data if data is not None else options.scene.tract_values
         table = tracts_only_table(tract_values, atlas_obj, source)
-    elif only_connectome or only_blobs:
+    elif only_connectome or only_blobs or only_drawn:
         table = connectome_only_table(atlas_obj, options.connectome.connectome if only_connectome
-                                      else options.scene.volume_surface)
+                                      else options.scene.volume_surface if only_blobs
+                                      else parse_layer(options.scene.layer[0])[1])
     else:
-        if tract_values is not None and options.scene.tract_values is None:
-            data = without_bundle_columns(data, {name for name, _ in tract_values.nodes})
-        try:
-            table = read_table(data, atlas_obj, **options.table.kwargs())
-        except NoRegionColumnError as exc:
-            spec = options.scene.tract_spec()
-            if spec is None or tract_values is not None:
-                raise
-            raise NoRegionColumnError(f"{exc} Nor does any column name a bundle of --tracts "
-                                      f"{sorted(bundle_names(spec))[:6]}.") from None
+        table = read_run_table(data, atlas_obj, options, tract_values)
     connectome = options.connectome.load(table.atlas, options.scene.template, options.scene.surface)
     if only_connectome and connectome is not None and connectome.series is not None:  # an image per matrix
         table = connectome_only_table(table.atlas, options.connectome.connectome,
                                       connectome.series.names)
     check_images(connectome, len(table.images), f"table {table.source!r} has")
     if views is None:
-        view_list = parse_views(CONNECTOME_VIEWS if only_connectome or only_blobs
+        view_list = parse_views(CONNECTOME_VIEWS if only_connectome or only_blobs or only_drawn
                                 else default_views(table.atlas, only_tracts))
     view_list = with_clip(view_list, options.scene.clips)
     own = (table.atlas.name, table.atlas.template_labels)
     contours, settings = line_layers(options, "a region render", own)
     cortical = {r.key for r in table.atlas.cortical()}
     settings = cortex_for(settings, cortex_values=bool(cortical.intersection(table.regions)),
-                          tracts=bool(options.scene.tracts), connectome=connectome is not None or bool(blobs))
+                          tracts=bool(options.scene.tracts),
+                          connectome=connectome is not None or bool(blobs) or bool(drawn))
     if not options.size_given and table.atlas.image_aspect:  # a brain of another shape: frame the views
         settings = with_aspect(settings, shown_aspect(table.atlas, options.scene.template, view_list))
     elif not options.size_given and (aspect := flat_aspect(view_list)):  # flat maps: wider than a brain
         settings = with_aspect(settings, aspect)
     layers = region_run_layers(options, table, tract_values, only_tracts, connectome, blobs,
-                     "connectome" if only_connectome else "blobs" if only_blobs else None)
+                               "connectome" if only_connectome else "blobs" if only_blobs
+                               else "drawn" if only_drawn else None)
+    layers += tuple(layer.layer() for layer in drawn)
     return Run(table, layers[0].scale, view_list, settings, options, tract_values, layers, contours,
-               connectome, blobs)
+               connectome, blobs, drawn)
+
 
 
 
@@ -209,6 +211,8 @@ def layer_summaries(run: Run, painter: Painter) -> dict[str, Any]:
         out["connectome"] = connectome_summary(run.connectome)
     if getattr(run, "blobs", None) is not None:
         out["blobs"] = run.blobs.summary()  # type: ignore[union-attr]
+    for layer in getattr(run, "drawn", ()):
+        out[layer.kind] = layer.summary()
     return out
 
 

@@ -86,6 +86,9 @@ class Scene:
     blobs : Blobs, optional
         A volume's supra-threshold clusters drawn as lit surfaces inside the cortex
         (:mod:`brainpainter.rendering.blob_parts`; palette keys ``blob:0`` ... of its value levels).
+    drawn : tuple of DrawnLayer
+        Plugin layers (:class:`brainpainter.layers.kinds.DrawnLayer`, ``--layer KIND:FILE``): each
+        adds its own parts and palette keys.
     """
 
     template: Template
@@ -101,6 +104,7 @@ class Scene:
     contours: Contours | None = None
     connectome: Connectome | None = None
     blobs: Blobs | None = None
+    drawn: tuple[Any, ...] = ()
 
     def __post_init__(self) -> None:
         if self.surface not in SURFACES:

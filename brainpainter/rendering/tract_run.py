@@ -16,9 +16,9 @@ import numpy as np
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.registry import get_atlas
-from brainpainter.errors import BrainPainterError
+from brainpainter.errors import BrainPainterError, NoRegionColumnError
 from brainpainter.rendering.options import Options, SceneOptions
-from brainpainter.table.region_table import RegionTable
+from brainpainter.table.region_table import RegionTable, read_table
 from brainpainter.tracts.model import TractSpec
 from brainpainter.tracts.values import TractValues, is_long, read_tract_values
 
@@ -144,3 +144,18 @@ def without_bundle_columns(data: Any, bundles: set[str]) -> Any:
         return raw
     return replace(raw, header=[raw.header[j] for j in keep],
                    rows=[[row[j] if j < len(row) else None for j in keep] for row in raw.rows])
+
+
+def read_run_table(data: Any, atlas: Atlas | None, options: Options,
+                   tract_values: TractValues | None) -> RegionTable:
+    """The region table of a run's INPUT (its bundle columns left out where they are the tract values)."""
+    if tract_values is not None and options.scene.tract_values is None:
+        data = without_bundle_columns(data, {name for name, _ in tract_values.nodes})
+    try:
+        return read_table(data, atlas, **options.table.kwargs())
+    except NoRegionColumnError as exc:
+        spec = options.scene.tract_spec()
+        if spec is None or tract_values is not None:
+            raise
+        raise NoRegionColumnError(f"{exc} Nor does any column name a bundle of --tracts "
+                                  f"{sorted(bundle_names(spec))[:6]}.") from None
