@@ -267,8 +267,10 @@ class Scene:
             A region table; a map (``{"lh": ndarray (n,), "rh": ndarray (n,)}``, a map, CIFTI or
             volume file); tractograms (a folder, files); with ``outline=True`` a mask or p-map
             (a contour of it) or an atlas's name (its region borders).
-        kind : {"regions", "map", "tracts", "connectome", "volume-surface", "contour", "outline"}
-            Inferred as the command line infers it (:func:`infer_kind`) when not given.
+        kind : {"regions", "map", "tracts", "connectome", "volume-surface", "contour", "outline"} or str
+            Inferred as the command line infers it (:func:`infer_kind`) when not given; or an
+            installed plugin's kind (``"foci"``: ``brainpainter layers`` lists them), whose
+            options are its keywords (``--layer KIND:FILE``, ``--layer-opt``).
         outline : bool
             Draw `data` as lines: a map's iso-lines (``levels``, default 0.5), an atlas's borders.
         **keywords
