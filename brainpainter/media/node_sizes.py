@@ -66,7 +66,7 @@ def node_size_legend(run: Run, bar_axes: Sequence[Axes], color: Any, fontsize: f
     where its connectome's nodes have values; False where there is none."""
     from brainpainter.rendering.layers import colorbar_layers
 
-    connectome = getattr(run, "connectome", None)
+    connectome = run.connectome
     kinds = [layer.kind for layer in colorbar_layers(run.layers)]
     if connectome is None or connectome.node_values is None or "nodes" not in kinds:
         return False

@@ -10,7 +10,7 @@ So ``render``, ``--jobs`` and Dask paint maps exactly as they paint tables.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -97,6 +97,7 @@ class MapRun:
     connectome: Connectome | None = None  # nodes and edges inside the cortex, drawn as glass
     blobs: Blobs | None = None  # a volume's clusters as surfaces (--volume-surface)
     drawn: tuple[DrawnLayer, ...] = ()  # plugin layers (--layer KIND:FILE)
+    coloring: ClassVar[str] = "vertices"  # the painter colours each cortex vertex
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
     @property

@@ -14,7 +14,7 @@ from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import nullcontext
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Unpack
+from typing import TYPE_CHECKING, Any, ClassVar, Unpack
 
 import numpy as np
 from numpy.typing import NDArray
@@ -84,6 +84,8 @@ class Run:
     connectome: Connectome | None = None
     blobs: Blobs | None = None  # a volume's clusters as surfaces (--volume-surface)
     drawn: tuple[DrawnLayer, ...] = ()  # plugin layers (--layer KIND:FILE)
+    #: How the painter colours it: a region table per region (a map run, ``"vertices"``: per vertex).
+    coloring: ClassVar[str] = "regions"
 
     def scale_of(self, kind: str) -> ColourScale:
         """The colour scale of layer `kind` (``"regions"``, ``"tracts"``); the run's scale if it has none."""
@@ -209,9 +211,9 @@ def layer_summaries(run: Run, painter: Painter) -> dict[str, Any]:
         out["tracts"] = painter.scene.tracts.summary()
     if run.connectome is not None:
         out["connectome"] = connectome_summary(run.connectome)
-    if getattr(run, "blobs", None) is not None:
-        out["blobs"] = run.blobs.summary()  # type: ignore[union-attr]
-    for layer in getattr(run, "drawn", ()):
+    if run.blobs is not None:
+        out["blobs"] = run.blobs.summary()
+    for layer in run.drawn:
         out[layer.kind] = layer.summary()
     return out
 
@@ -319,10 +321,10 @@ def render(data: Any = None, atlas: Atlas | str | None = None, *, out: str | Pat
     own = painter is None
     if painter is None:
         painter = run.painter()
-    elif (painter.scene.coloring == "vertices") != hasattr(run, "source_vertex"):
+    elif painter.scene.coloring != run.coloring:
         raise BrainPainterError(
             f"the painter colours {painter.scene.coloring} but the data is "
-            f"{'a map' if hasattr(run, 'source_vertex') else 'a region table'}; make a Painter for it "
+            f"{'a map' if run.coloring == 'vertices' else 'a region table'}; make a Painter for it "
             "(brainpainter.Painter(coloring='vertices') draws maps).")
     elif checked.maps.surfaces and str(run.options.scene.template) != str(painter.scene.template.path):
         raise BrainPainterError(

@@ -232,7 +232,7 @@ class Prepared:
     @property
     def coloring(self) -> str:
         """``"vertices"`` for a map run (its painter draws a per-vertex scene), else ``"regions"``."""
-        return "vertices" if hasattr(self.run, "source_vertex") else "regions"
+        return str(self.run.coloring)
 
     def painter_args(self) -> dict[str, Any]:
         """The tract and contour arguments of the run's painter (as
