@@ -11,7 +11,8 @@ and saves every image as an array::
 The corpus: a DK table; a Destrieux table with the subcortical views; a map with a threshold and an outline;
 a CIFTI dscalar on the flat maps (../shared/data/fslr); dipy's bundles with bundle values; the Schaefer-400
 group connectome (brainspace's matrix); a map with a contour and tracts; the mouse atlas; a movie frame;
-a figure. Items whose data is missing on this machine are left out (and said so).
+a volume's clusters as surfaces; a figure. Items whose data is missing on this machine are left out
+(and said so).
 """
 
 from __future__ import annotations
@@ -134,6 +135,21 @@ def mouse(tmp: Path) -> dict[str, np.ndarray]:
     return {"_".join(key): img for key, img in result.images.items()}
 
 
+def blobs(tmp: Path) -> dict[str, np.ndarray]:
+    """A volume's clusters as surfaces (--volume-surface): two Gaussian blobs, one negative, in MNI152."""
+    import nibabel as nib
+
+    ijk = np.indices((91, 109, 91)).reshape(3, -1).T
+    affine = np.array([[-2, 0, 0, 90], [0, 2, 0, -126], [0, 0, 2, -72], [0, 0, 0, 1]], float)
+    xyz = ijk @ affine[:3, :3].T + affine[:3, 3]
+    data = sum(sign * 5 * np.exp(-np.sum((xyz - c) ** 2, axis=1) / 60)
+               for sign, c in ((1, (-40, -20, 50)), (-1, (30, 10, 20))))
+    path = tmp / "z.nii.gz"
+    nib.save(nib.Nifti1Image(data.reshape(91, 109, 91).astype(np.float32), affine), path)
+    return _render(tmp, "blobs", ["--volume-surface", str(path), "--threshold", "2",
+                                  "--views", "dorsal,lateral-left"])
+
+
 def movie_frame(tmp: Path) -> dict[str, np.ndarray]:
     from PIL import Image
 
@@ -158,7 +174,7 @@ CORPUS: dict[str, Callable[[Path], dict[str, np.ndarray]]] = {
     "dk": dk, "destrieux": destrieux, "map_threshold_outline": map_threshold_outline,
     "cifti_flat": cifti_flat,
     "tracts": tracts, "schaefer400": schaefer400, "map_contour_tracts": map_contour_tracts, "mouse": mouse,
-    "movie_frame": movie_frame, "figure": figure,
+    "blobs": blobs, "movie_frame": movie_frame, "figure": figure,
 }
 
 

@@ -27,7 +27,9 @@ class DrawnLayer(Protocol):
     It travels to every worker (``--jobs``, Dask) with the painter, so it pickles.
     """
 
-    kind: str
+    @property
+    def kind(self) -> str:
+        """Its kind's name (``foci``): its key in the manifest."""
 
     def parts(self, template: Any, slots_for: Callable[..., Any]) -> list[Any]:
         """Its :class:`~brainpainter.rendering.parts.PartGeometry` in `template`'s coordinates;

@@ -7,15 +7,18 @@ from -peak to +peak, centred at 0), so the bar starts where the blobs do.
 
 from __future__ import annotations
 
-from dataclasses import replace
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 from brainpainter.color.scale import ScaleOptions
 from brainpainter.maps.autoscale import choose_scale
 from brainpainter.maps.clusters import Blobs
-from brainpainter.rendering.blob_parts import blob_keys
+from brainpainter.rendering.blob_parts import blob_keys, blob_parts
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import Options
+from brainpainter.rendering.parts import PartGeometry
 from brainpainter.rendering.settings import RGB
 
 
@@ -59,3 +62,36 @@ def blob_colors(blobs: Blobs, layers: tuple[Layer, ...]) -> dict[str, RGB]:
     scale = next(layer.scale for layer in layers if layer.kind == "blobs")
     rgb = scale(blobs.levels)
     return {k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(blob_keys(len(rgb)), rgb, strict=True)}
+
+
+@dataclass(frozen=True)
+class BlobLayer:
+    """The blobs drawn, as any drawn layer (:class:`brainpainter.layers.kinds.DrawnLayer`): their part,
+    their value levels' colours on `own`'s scale, their layer and their manifest entry."""
+
+    blobs: Blobs
+    own: Layer
+    kind: str = "blobs"
+
+    def parts(self, template: Any, slots_for: Callable[..., Any]) -> list[PartGeometry]:
+        """Their one part, kind ``blob`` (:func:`~brainpainter.rendering.blob_parts.blob_parts`)."""
+        return blob_parts(self.blobs, template, slots_for)
+
+    def colors(self, row: int) -> dict[str, RGB]:
+        """Each value level's colour (the same in every image)."""
+        return blob_colors(self.blobs, (self.own,))
+
+    def layer(self) -> Layer:
+        """Their layer (made with the run's others: :func:`blob_layer`)."""
+        return self.own
+
+    def summary(self) -> dict[str, Any]:
+        """The manifest's ``blobs``: the clusters drawn."""
+        return self.blobs.summary()
+
+
+def drawn_blobs(blobs: Blobs | None, layers: tuple[Layer, ...]) -> tuple[BlobLayer, ...]:
+    """The blobs as a drawn layer (with their layer among `layers`); none without blobs."""
+    if blobs is None:
+        return ()
+    return (BlobLayer(blobs, next(layer for layer in layers if layer.kind == "blobs")),)

@@ -59,9 +59,9 @@ def blob_parts(blobs: Blobs | None, template: Template, slots_for: SlotsFor) -> 
 
 
 def inside_parts(scene: Any, template: Template, slots_for: SlotsFor) -> list[PartGeometry]:
-    """The parts drawn inside the brain besides a connectome's: the blobs, then each plugin layer's
-    (:attr:`brainpainter.rendering.scene.Scene.drawn`, in the order given); `scene` is the Scene."""
-    parts = blob_parts(getattr(scene, "blobs", None), template, slots_for)
-    for layer in getattr(scene, "drawn", ()):
+    """The parts of each drawn layer besides a connectome's, in order (the blobs, then plugin layers:
+    :attr:`brainpainter.rendering.scene.Scene.drawn`); `scene` is the Scene."""
+    parts: list[PartGeometry] = []
+    for layer in scene.drawn:
         parts += layer.parts(template, slots_for)
     return parts

@@ -29,7 +29,7 @@ from brainpainter.maps.inputs import VertexMaps, read_maps
 from brainpainter.maps.layers import vertex_colors
 from brainpainter.maps.outlines import Contours, mesh_edges
 from brainpainter.maps.resolution import map_mesh, own_vertex_count
-from brainpainter.rendering.blob_layers import blob_colors, blob_kinds, blob_layer, load_blobs
+from brainpainter.rendering.blob_layers import blob_kinds, blob_layer, drawn_blobs, load_blobs
 from brainpainter.rendering.composition import RegionsBelow, cortex_for, line_layers, map_layers, tract_colors
 from brainpainter.rendering.connectome_layers import connectome_colors, connectome_kinds, connectome_layers
 from brainpainter.rendering.geometry import VertexColors
@@ -96,7 +96,7 @@ class MapRun:
     flat_edges: dict[str, NDArray[Any]] | None = None  # the sheets' edges (--outline-threshold on flat views)
     connectome: Connectome | None = None  # nodes and edges inside the cortex, drawn as glass
     blobs: Blobs | None = None  # a volume's clusters as surfaces (--volume-surface)
-    drawn: tuple[DrawnLayer, ...] = ()  # plugin layers (--layer KIND:FILE)
+    drawn: tuple[DrawnLayer, ...] = ()  # what adds its own parts: the blobs, plugin layers (--layer)
     coloring: ClassVar[str] = "vertices"  # the painter colours each cortex vertex
     _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
 
@@ -119,7 +119,7 @@ class MapRun:
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
                        scene.renderer, coloring="vertices", contours=self.contours, tracts=scene.tract_spec(),
                        tract_nodes=nodes, tract_radius=scene.tract_radius, connectome=self.connectome,
-                       blobs=self.blobs, drawn=self.drawn)
+                       drawn=self.drawn)
 
     def items(self, rows: Any) -> list[tuple[int, View]]:
         return [(i, view) for i in rows for view in self.views]
@@ -157,9 +157,7 @@ class MapRun:
                                             self.scale_of("tracts")))
             if self.connectome is not None:
                 regions.update(connectome_colors(self.connectome, self.layers, image))
-            if self.blobs is not None:
-                regions.update(blob_colors(self.blobs, self.layers))
-            for layer in self.drawn:
+            for layer in self.drawn:  # the blobs, plugin layers
                 regions.update(layer.colors(row))
             self._cache[image] = VertexColors(regions, cortex)
         return self._cache[image]
@@ -235,6 +233,7 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     layers += (blob_layer(options, blobs, first=False),) if blobs is not None else ()
     drawn = open_layers(options.scene.layer, options.scene.layer_opt)
     layers += tuple(layer.layer() for layer in drawn)
+    drawn = (*drawn_blobs(blobs, layers), *drawn)
     flat = flat_edges = None
     if any(v.content == "flat" for v in view_list):  # the flat maps: fsaverage's templates only
         check_flat(tpl, labels)

@@ -32,7 +32,7 @@ from brainpainter.table.region_table import RegionTable
 from brainpainter.tracts.model import TractSpec
 
 if TYPE_CHECKING:
-    from brainpainter.maps.clusters import Blobs
+    pass
 
 # Named groups for --hide: structure names (hemisphere-free) they cover.
 HIDE_GROUPS: dict[str, tuple[str, ...]] = {
@@ -139,7 +139,6 @@ def load_scene(
     coloring: str = "regions",
     contours: Contours | None = None,
     connectome: Connectome | None = None,
-    blobs: Blobs | None = None,
     drawn: tuple[Any, ...] = (),
 ) -> tuple[Atlas, Scene]:
     """The atlas and the scene a renderer (or an exporter) draws; nothing is rendered.
@@ -180,7 +179,6 @@ def load_scene(
         coloring=coloring,
         contours=contours,
         connectome=connectome,
-        blobs=blobs,
         drawn=tuple(drawn),
     )
     return atlas, scene
@@ -216,10 +214,9 @@ class Painter:
         A second map's iso-lines (:attr:`brainpainter.rendering.scene.Scene.contours`).
     connectome : Connectome, optional
         Nodes and edges drawn inside the cortex (:attr:`brainpainter.rendering.scene.Scene.connectome`).
-    blobs : Blobs, optional
-        A volume's clusters drawn as surfaces (:attr:`brainpainter.rendering.scene.Scene.blobs`).
     drawn : tuple of DrawnLayer
-        Plugin layers (``--layer KIND:FILE``, :attr:`brainpainter.rendering.scene.Scene.drawn`).
+        What adds its own parts: a volume's clusters (``BlobLayer``), plugin layers (``--layer
+        KIND:FILE``; :attr:`brainpainter.rendering.scene.Scene.drawn`).
     """
 
     atlas: Atlas | str = "dk"
@@ -236,7 +233,6 @@ class Painter:
     coloring: str = "regions"
     contours: Contours | None = None
     connectome: Connectome | None = None
-    blobs: Blobs | None = None
     drawn: tuple[Any, ...] = ()
     _renderer: Any = field(default=None, init=False, repr=False)
 
@@ -245,8 +241,7 @@ class Painter:
         self.atlas, self.scene = load_scene(self.atlas, self.template, self.surface, self.hidden,
                                             self.settings, self.medial_wall_color, self.atlas_config,
                                             self.tracts, self.tract_nodes, self.tract_radius,
-                                            self.coloring, self.contours, self.connectome, self.blobs,
-                                            self.drawn)
+                                            self.coloring, self.contours, self.connectome, self.drawn)
         self.template = self.scene.template
         from brainpainter.atlas import registry
         from brainpainter.rendering.pythons import require_bpy

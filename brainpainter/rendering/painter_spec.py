@@ -46,10 +46,9 @@ class PainterSpec:
         A second map's iso-lines (its values travel with the spec: about 1.3 MB for both hemispheres).
     connectome : Connectome, optional
         Its nodes and edges travel with the spec (400 nodes: about 1.3 MB of weights).
-    blobs : Blobs, optional
-        A volume's clusters' surfaces travel with the spec (a few hundred kB).
     drawn : tuple of DrawnLayer
-        Plugin layers (``--layer``), pickled with the spec.
+        The blobs (a volume's clusters' surfaces: a few hundred kB) and plugin layers (``--layer``),
+        pickled with the spec.
     """
 
     atlas: Any
@@ -66,7 +65,6 @@ class PainterSpec:
     coloring: str = "regions"
     contours: Any = None
     connectome: Any = None
-    blobs: Any = None
     drawn: tuple[Any, ...] = ()
 
     @classmethod
@@ -87,7 +85,7 @@ class PainterSpec:
             medial_wall_color=tuple(float(c) for c in painter.scene.medial_wall_color),  # type: ignore[arg-type]
             tracts=painter.tracts, tract_nodes=tuple(painter.tract_nodes), tract_radius=painter.tract_radius,
             coloring=painter.scene.coloring, contours=painter.scene.contours,
-            connectome=painter.scene.connectome, blobs=painter.scene.blobs, drawn=painter.scene.drawn,
+            connectome=painter.scene.connectome, drawn=painter.scene.drawn,
         )
 
     @property
@@ -116,5 +114,4 @@ class PainterSpec:
         return Painter(self.atlas, self.template, self.surface, self.hidden, self.settings,
                        self.renderer, self.medial_wall_color, tracts=self.tracts,
                        tract_nodes=self.tract_nodes, tract_radius=self.tract_radius, coloring=self.coloring,
-                       contours=self.contours, connectome=self.connectome, blobs=self.blobs,
-                       drawn=self.drawn)
+                       contours=self.contours, connectome=self.connectome, drawn=self.drawn)

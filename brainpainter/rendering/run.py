@@ -29,7 +29,7 @@ from brainpainter.layers.kinds import DrawnLayer, open_layers, parse_layer
 from brainpainter.layers.readers import is_map_data
 from brainpainter.maps.clusters import Blobs
 from brainpainter.maps.outlines import Contours
-from brainpainter.rendering.blob_layers import blob_colors, load_blobs
+from brainpainter.rendering.blob_layers import drawn_blobs, load_blobs
 from brainpainter.rendering.composition import (
     cortex_for,
     line_entries,
@@ -83,7 +83,7 @@ class Run:
     contours: Contours | None = None  # a second map's iso-lines (--contour)
     connectome: Connectome | None = None
     blobs: Blobs | None = None  # a volume's clusters as surfaces (--volume-surface)
-    drawn: tuple[DrawnLayer, ...] = ()  # plugin layers (--layer KIND:FILE)
+    drawn: tuple[DrawnLayer, ...] = ()  # what adds its own parts: the blobs, plugin layers (--layer)
     #: How the painter colours it: a region table per region (a map run, ``"vertices"``: per vertex).
     coloring: ClassVar[str] = "regions"
 
@@ -98,7 +98,7 @@ class Run:
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
                        scene.renderer, tracts=scene.tract_spec(), tract_nodes=nodes,
                        tract_radius=scene.tract_radius, contours=self.contours, connectome=self.connectome,
-                       blobs=self.blobs, drawn=self.drawn)
+                       drawn=self.drawn)
 
     def items(self, rows: Sequence[int]) -> list[tuple[int, View]]:
         """The images of `rows`: ``(row, view)`` for every row and view, row by row."""
@@ -111,9 +111,7 @@ class Run:
             colors.update(tract_colors(self.tract_values.row(self.table.images[i]), self.scale_of("tracts")))
         if self.connectome is not None:
             colors.update(connectome_colors(self.connectome, self.layers, i))
-        if self.blobs is not None:
-            colors.update(blob_colors(self.blobs, self.layers))
-        for layer in self.drawn:
+        for layer in self.drawn:  # the blobs, plugin layers
             colors.update(layer.colors(i))
         return Item(colors, view, metadata, self.table.images[i])
 
@@ -198,7 +196,7 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
                                else "drawn" if only_drawn else None)
     layers += tuple(layer.layer() for layer in drawn)
     return Run(table, layers[0].scale, view_list, settings, options, tract_values, layers, contours,
-               connectome, blobs, drawn)
+               connectome, blobs, (*drawn_blobs(blobs, layers), *drawn))
 
 
 
@@ -211,9 +209,7 @@ def layer_summaries(run: Run, painter: Painter) -> dict[str, Any]:
         out["tracts"] = painter.scene.tracts.summary()
     if run.connectome is not None:
         out["connectome"] = connectome_summary(run.connectome)
-    if run.blobs is not None:
-        out["blobs"] = run.blobs.summary()
-    for layer in run.drawn:
+    for layer in run.drawn:  # the blobs, plugin layers
         out[layer.kind] = layer.summary()
     return out
 

@@ -39,7 +39,6 @@ __all__ = ["LIGHTINGS", "QUALITIES", "RGB", "SHADINGS", "SULC_LIGHTINGS", "Blank
 
 if TYPE_CHECKING:
     from brainpainter.connectome.model import Connectome
-    from brainpainter.maps.clusters import Blobs
     from brainpainter.maps.outlines import Contours
     from brainpainter.rendering.geometry import Palette, SceneGeometry
     from brainpainter.tracts.model import Tracts
@@ -83,12 +82,11 @@ class Scene:
     connectome : Connectome, optional
         Nodes drawn as lit spheres and edges as lit cylinders, inside the glass cortex
         (:mod:`brainpainter.rendering.connectome_parts`; palette keys ``node:i``, ``edge:k``).
-    blobs : Blobs, optional
-        A volume's supra-threshold clusters drawn as lit surfaces inside the cortex
-        (:mod:`brainpainter.rendering.blob_parts`; palette keys ``blob:0`` ... of its value levels).
     drawn : tuple of DrawnLayer
-        Plugin layers (:class:`brainpainter.layers.kinds.DrawnLayer`, ``--layer KIND:FILE``): each
-        adds its own parts and palette keys.
+        What adds its own parts and palette keys (:class:`brainpainter.layers.kinds.DrawnLayer`): a
+        volume's supra-threshold clusters drawn as lit surfaces inside the cortex
+        (:class:`brainpainter.rendering.blob_layers.BlobLayer`; palette keys ``blob:0`` ... of its
+        value levels), plugin layers (``--layer KIND:FILE``).
     """
 
     template: Template
@@ -103,7 +101,6 @@ class Scene:
     coloring: str = "regions"
     contours: Contours | None = None
     connectome: Connectome | None = None
-    blobs: Blobs | None = None
     drawn: tuple[Any, ...] = ()
 
     def __post_init__(self) -> None:
