@@ -547,8 +547,9 @@ def brainspace_matrix(name: str) -> Path:
 def test_real_schaefer400_group_matrix_top_1_percent():
     from brainpainter.connectome.edges import select_edges
 
-    conn = read_connectome(brainspace_matrix("schaefer_400_mean_connectivity_matrix.csv"),
-                           load_atlas_dir(SCHAEFER400))
+    with pytest.warns(UserWarning, match="the atlases that take 400 rows: .*schaefer400_17n"):  # no names
+        conn = read_connectome(brainspace_matrix("schaefer_400_mean_connectivity_matrix.csv"),
+                               load_atlas_dir(SCHAEFER400))
     assert conn.n_nodes == 400 and conn.names[0] == "Left-Vis_1" and conn.names[-1].startswith("Right-")
     assert len(conn.edges()[0]) == 400 * 399 // 2
     top = select_edges(conn, threshold="99%")

@@ -4,12 +4,15 @@ streamlines outside the brain, fsLR arrays given to the other hemisphere)."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 import brainpainter
 from brainpainter.errors import BrainPainterError
 
+REPO = Path(__file__).resolve().parents[1]
 TINY_DK = ["Left-insula", "Left-precuneus", "Left-superiorfrontal", "Right-insula", "Right-precuneus",
            "Right-superiorfrontal"]
 SMALL = {"views": "dorsal", "width": 160, "height": 120, "progress": False, "shading": "flat",
@@ -66,3 +69,85 @@ def test_a_series_warns_for_the_matrices_a_threshold_empties_and_refuses_when_it
     with pytest.raises(BrainPainterError, match=r"keeps no edge of 3 of the 3 matrices .* largest \|weight\| "
                                                 r"is 0.9;"):
         brainpainter.render(None, edge_threshold=1, **kw)
+
+
+# -- item 10 and 15: a matrix without names, the atlases of its size ------------------------------------
+SCHAEFER = REPO / "plugins" / "atlases" / "brainpainter-atlas-schaefer-yeo" / "bp_atlas_schaefer_yeo" / "data"
+
+
+@pytest.fixture
+def schaefer400():
+    """schaefer400_7n and schaefer400_17n registered as installed atlases for the test."""
+    from brainpainter.atlas import registry
+    from brainpainter.atlas.model import load_atlas_dir
+
+    names = ("schaefer400_7n", "schaefer400_17n")
+    for name in names:
+        registry.atlases.register(name, lambda name=name: load_atlas_dir(SCHAEFER / name), replace=True)
+    yield {name: registry.get_atlas(name) for name in names}
+    for name in names:
+        registry.atlases.unregister(name)
+
+
+def brainspace_400() -> np.ndarray:
+    """The group FC matrix of Schaefer-400 in its 7-network order (brainspace's holdout group)."""
+    import importlib.metadata
+
+    try:
+        dist = importlib.metadata.distribution("brainspace")
+    except importlib.metadata.PackageNotFoundError:
+        pytest.skip("brainspace (a test extra) is not installed")
+    path = dist.locate_file("brainspace/datasets/matrices/holdout_group/"
+                            "schaefer_400_mean_connectivity_matrix.csv")
+    return np.loadtxt(str(path), delimiter=",")
+
+
+def test_a_7_network_matrix_on_the_17_network_atlas_warns_naming_the_order_it_fits(schaefer400):
+    """Issue 44 item 10: the 7- and 17-network orders are the same 400 parcels in other orders; a 7-network
+    matrix given the 17-network atlas put every node in another parcel, silently."""
+    from brainpainter.connectome.centroids import region_centroids
+    from brainpainter.connectome.order import ordered_keys
+
+    def place(atlas, keys):
+        return region_centroids(atlas, keys, "fsaverage", "pial")
+
+    weights = brainspace_400()
+    wrong = (r"has no names; its 400 rows were placed in the node order of atlas 'schaefer400_17n', but its "
+             r"weights follow the places of 'schaefer400_7n''s regions far better \(correlation of weight "
+             r"with nearness 0.27 vs 0.14\): give --atlas schaefer400_7n")
+    with pytest.warns(UserWarning, match=wrong) as said:
+        ordered_keys(schaefer400["schaefer400_17n"], weights, "fc.csv", place=place)
+    assert len(said) == 1
+    right = (r"placed in the node order of atlas 'schaefer400_7n' \(its cortical regions, left hemisphere "
+             r"then right, in its label order\); the atlases that take 400 rows: "
+             r"schaefer400_7n, schaefer400_17n")
+    with pytest.warns(UserWarning, match=right) as said:
+        keys = ordered_keys(schaefer400["schaefer400_7n"], weights, "fc.csv", place=place)
+    assert len(said) == 1 and "far better" not in str(said[0].message) and keys[0] == "Left-Vis_1"
+
+
+def test_a_matrix_of_68_rows_on_dk_alone_is_quiet_and_without_atlas_says_dk_was_assumed(tmp_path):
+    import warnings
+
+    from brainpainter.atlas.registry import get_atlas
+    from brainpainter.connectome.order import ordered_keys
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(ordered_keys(get_atlas("dk"), np.ones((68, 68)), "m.txt")) == 68
+    with pytest.warns(UserWarning, match=r"has no names and no --atlas was given; its 68 rows were placed in "
+                                         r"the node order of atlas 'dk'"):
+        ordered_keys(get_atlas("dk"), np.ones((68, 68)), "m.txt", atlas_given=False)
+
+
+@pytest.mark.parametrize("atlas", [(), ("--atlas", "dkt")])
+def test_a_matrix_of_another_size_names_the_atlases_of_its_size_and_not_dk_unasked(tmp_path, capsys, atlas):
+    np.savetxt(tmp_path / "m.txt", np.ones((400, 400)))
+    code, lines = command(tmp_path, capsys, "--connectome", str(tmp_path / "m.txt"), *atlas)
+    assert code == 2 and len(lines) == 1, lines
+    assert "has 400 rows and no names" in lines[0]
+    assert ("the atlases that take 400 rows: schaefer400_7n, schaefer400_17n (pip install "
+            "brainpainter-atlas-schaefer-yeo)") in lines[0]
+    assert ("'dk'" in lines[0]) is False
+    assert ("atlas 'dkt' takes a matrix without names of 62 or 89 rows" in lines[0]) == bool(atlas)
+    assert not (tmp_path / "out").exists()

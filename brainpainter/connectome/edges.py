@@ -117,8 +117,8 @@ def kept_none(conn: Connectome, chosen: Connectome, threshold: Any) -> float | N
 
 def kept_none_text(threshold: Any, largest: float, what: str, whose: str = "its") -> str:
     """``--edge-threshold 99 keeps no edge of WHAT: its largest |weight| is 0.91`` (a message's start)."""
-    return (f"--edge-threshold {str(threshold).strip()[:40]} keeps no edge of {what}: {whose} largest |weight| "
-            f"is {largest:.4g}")
+    return (f"--edge-threshold {str(threshold).strip()[:40]} keeps no edge of {what}: {whose} largest "
+            f"|weight| is {largest:.4g}")
 
 
 def _node_index(conn: Connectome, name: str) -> int:

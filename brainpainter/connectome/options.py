@@ -143,7 +143,8 @@ class ConnectomeOptions:
         largest = kept_none(connectome, chosen, self.edge_threshold)
         if largest is not None:
             raise BrainPainterError(
-                kept_none_text(self.edge_threshold, largest, f"connectome matrix {str(self.connectome)[:80]!r}")
+                kept_none_text(self.edge_threshold, largest,
+                               f"connectome matrix {str(self.connectome)[:80]!r}")
                 + "; give a smaller threshold, or a percentage (e.g. '99%': the strongest 1 % of the edges).")
         return chosen
 
@@ -177,7 +178,7 @@ class ConnectomeOptions:
         return connectome
 
     def load(self, atlas: Atlas | None, template: Template | str = "fsaverage",
-             surface: str = "pial") -> Connectome | None:
+             surface: str = "pial", atlas_given: bool = True) -> Connectome | None:
         """The connectome to draw (None: none given), its nodes placed in `template`, its edges chosen.
 
         A matrix is read by :func:`~brainpainter.connectome.read.read_connectome` (nodes at the
@@ -209,7 +210,7 @@ class ConnectomeOptions:
                 return read_connectome(
                     matrix, atlas, nodes=self.nodes, node_values=self.node_values,
                     node_categories=self.node_categories, directed=bool(self.directed),
-                    space=self.nodes_space, template=template, surface=surface)
+                    space=self.nodes_space, template=template, surface=surface, atlas_given=atlas_given)
 
             series = matrix_series(self.connectome)
             connectome = (self._chosen_some(read(self.connectome)) if series is None
