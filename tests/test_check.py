@@ -84,7 +84,8 @@ def test_strict_turns_unmatched_into_an_error(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["check", str(path), "--strict"])
     assert exc.value.code == 2
-    assert "2 name(s) match no dk region, e.g. 'Age'" in capsys.readouterr().err
+    assert ("2 name(s) match no dk region: 'Age', 'Left-insulaa' (did you mean 'Left-insula'?)"
+            in capsys.readouterr().err)
 
 
 def test_several_inputs_are_merged(tmp_path):

@@ -375,10 +375,14 @@ def test_non_square_matrix_says_its_shape(tmp_path, dk):
 
 
 def test_names_that_match_no_region_get_suggestions(tmp_path, dk):
-    path = write_csv(tmp_path / "m.csv", np.ones((2, 2)), ["Left-precentrall", "Right-precentral"])
+    """Each name that matches nothing is listed with its closest region (issue 44 item 15), not the first."""
+    path = write_csv(tmp_path / "m.csv", np.ones((4, 4)), ["Left-precentrall", "Right-precentrall", "foo",
+                                                           "Left-insula"])
     with pytest.raises(BrainPainterError) as exc:
         read_connectome(path, dk)
-    assert "'Left-precentrall' matches no region (did you mean 'Left-precentral'?)" in one_line(exc)
+    assert ("3 of 4 node name(s) name no single region of atlas 'dk': 'Left-precentrall' (did you mean "
+            "'Left-precentral'?), 'Right-precentrall' (did you mean 'Right-precentral'?), 'foo'. Rename them"
+            ) in one_line(exc)
 
 
 @pytest.mark.parametrize(("names", "message"), [

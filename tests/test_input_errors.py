@@ -36,3 +36,30 @@ def test_a_table_read_with_the_wrong_atlas_says_which_fits(tmp_path):
     typo = tmp_path / "typo.csv"
     typo.write_text("Image-name-unique,Left-insula,Left-insular\na,1,2\n")
     assert not read_table(typo, "dk").notes  # an unmatched name that fits no atlas better: no note
+
+
+def test_names_that_match_nothing_are_each_listed_with_their_closest_region(tmp_path):
+    """Issue 44 item 15: every unmatched name with its closest match, not only the first (nor none)."""
+    path = tmp_path / "in.csv"
+    path.write_text("Image-name-unique,Left-insular,Left-precuneous,bar\na,1,2,3\n")
+    listed = (r"the columns: 'Left-insular' \(did you mean 'Left-insula'\?\), 'Left-precuneous' \(did you "
+              r"mean 'Left-precuneus'\?\), 'bar'")
+    with pytest.raises(NoRegionColumnError, match=listed + r"\. Use names"):
+        read_table(path)
+    with pytest.raises(NoRegionColumnError, match=r"\(" + listed + r"\); use region names"):
+        read_table(path, "dk")
+
+
+@pytest.mark.parametrize("spelt", ["fslr", "FSLR", "fsLR"])
+def test_space_fslr_is_case_insensitive(tmp_path, capsys, spelt):
+    """Issue 44 item 15: ``--space fslr`` was "Invalid value for '--space'"; any case names fsLR."""
+    from brainpainter.cli.main import main
+    from brainpainter.maps.options import MapOptions
+
+    assert MapOptions(space=spelt).space == "fsLR"
+    with pytest.raises(SystemExit) as exit_:
+        main(["render", "--lh", str(tmp_path / "none.gii"), "--space", spelt, "--out", str(tmp_path / "out")])
+    said = capsys.readouterr().err
+    assert exit_.value.code == 2 and "Invalid value" not in said and "does not exist" in said, said
+    with pytest.raises(BrainPainterError, match="space must be one of"):
+        MapOptions(space="fslrr")

@@ -142,15 +142,14 @@ def matched_keys(names: Sequence[str], atlas: Atlas, source: str) -> tuple[str, 
         seen[key] = name
         keys.append(key)
     if unmatched:
-        first = unmatched[0]
-        both = resolver.lookup(first)
+        both = resolver.lookup(unmatched[0])
         if len(both.keys) > 1:
-            why = f"means both {list(both.keys)}; give the hemisphere (e.g. {both.keys[0]!r})"
+            why = (f"{unmatched[0]!r} means both {list(both.keys)}; give the hemisphere (e.g. "
+                   f"{both.keys[0]!r})")
         else:
-            close = resolver.suggest(first)
-            why = "matches no region" + (f" (did you mean {close[0]!r}?)" if close else "")
+            why = resolver.closest_each(unmatched)
         raise BrainPainterError(
             f"connectome matrix {source!r}: {len(unmatched)} of {len(names)} node name(s) name no single "
-            f"region of atlas {atlas.name!r}: {first!r} {why}. Rename them ('brainpainter atlas show "
+            f"region of atlas {atlas.name!r}: {why}. Rename them ('brainpainter atlas show "
             f"{atlas.name}' lists the regions), give --atlas the matrix's atlas, or give a nodes file.")
     return tuple(keys)
