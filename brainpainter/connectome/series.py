@@ -190,8 +190,8 @@ def _check_stack(shape: tuple[int, ...], source: str, time_last: bool = False) -
     t, n, m = shape
     if time_last and t == m and n:  # the .mat is T x N x N
         raise BrainPainterError(
-            f"connectome matrix {source!r} is {n} x {t} x {m}: {n} matrices of {t} x {m} with time first, but "
-            f"a .mat series is N x N x T (MATLAB keeps time last); move the first axis last (MATLAB: "
+            f"connectome matrix {source!r} is {n} x {t} x {m}: {n} matrices of {t} x {m} with time first, "
+            f"but a .mat series is N x N x T (MATLAB keeps time last); move the first axis last (MATLAB: "
             f"permute(fc, [2 3 1]); numpy: numpy.moveaxis(fc, 0, -1)), or save it as a T x N x N .npy.")
     if not time_last and t == n and m:  # an .npy or array of N x N x T
         raise BrainPainterError(
