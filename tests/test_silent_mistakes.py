@@ -151,3 +151,38 @@ def test_a_matrix_of_another_size_names_the_atlases_of_its_size_and_not_dk_unask
     assert ("'dk'" in lines[0]) is False
     assert ("atlas 'dkt' takes a matrix without names of 62 or 89 rows" in lines[0]) == bool(atlas)
     assert not (tmp_path / "out").exists()
+
+
+# -- item 12: streamlines outside the brain ----------------------------------------------------------------
+def write_tck(path, shift: float) -> str:
+    """A .tck of 10 streamlines along y through the left hemisphere, moved `shift` mm along x."""
+    import nibabel as nib
+
+    t = np.linspace(-30.0, 30.0, 20)
+    lines = [np.column_stack([np.full(20, -35.0 + shift + k), t, np.full(20, 20.0)]).astype(np.float32)
+             for k in range(10)]
+    tractogram = nib.streamlines.Tractogram(lines, affine_to_rasmm=np.eye(4))
+    nib.streamlines.save(tractogram, str(path))
+    return str(path)
+
+
+def test_streamlines_mostly_outside_the_brain_warn_with_their_share(tmp_path, tiny):
+    """Issue 44 item 12: dipy's bundles without their affine (voxel coordinates) were drawn beside the
+    brain in silence."""
+    import warnings
+
+    from brainpainter.atlas.template import load_template
+    from brainpainter.tracts.model import TractSpec
+
+    template = load_template(str(tiny))
+    outside = TractSpec((write_tck(tmp_path / "AF_left.tck", 200.0),), space="template")
+    said = (r"^100% of the streamlines' points lie outside the brain: they span x 165\.\.174, y -30\.\.30, z "
+            r"20\.\.20 mm, the template x -\d+\.\.\d+, .*Give their affine \(--tracts-affine\) or their "
+            r"--tracts-space")
+    with pytest.warns(UserWarning, match=said):
+        outside.load(template)
+    (tmp_path / "inside").mkdir()
+    inside = TractSpec((write_tck(tmp_path / "inside" / "AF_left.tck", 0.0),), space="template")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(inside.load(template).lines) == 10
