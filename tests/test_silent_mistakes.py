@@ -186,3 +186,35 @@ def test_streamlines_mostly_outside_the_brain_warn_with_their_share(tmp_path, ti
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert len(inside.load(template).lines) == 10
+
+
+# -- item 13: fsLR maps given as the other hemisphere ----------------------------------------------------
+FSLR = REPO.parent / "shared" / "data" / "fslr"
+
+
+def test_an_fslr_map_on_the_other_hemispheres_cortex_warns(tmp_path):
+    """Issue 44 item 13: HCP's right-hemisphere cortex mask (values 1 on its cortex, 0 on its medial wall)
+    given to --lh was drawn on the left hemisphere in silence; the two masks differ by 106 vertices."""
+    import re
+    import shutil
+    import warnings
+
+    from brainpainter.maps.inputs import read_maps
+
+    if not (FSLR / "L.atlasroi.32k_fs_LR.shape.gii").is_file():
+        pytest.skip("../shared/data/fslr is not here")
+    left, right = tmp_path / "roi_a.32k_fs_LR.shape.gii", tmp_path / "roi_b.32k_fs_LR.shape.gii"  # names
+    shutil.copy(FSLR / "L.atlasroi.32k_fs_LR.shape.gii", left)  # that do not say the hemisphere
+    shutil.copy(FSLR / "R.atlasroi.32k_fs_LR.shape.gii", right)
+    said = (r"map 'roi_b.32k_fs_LR.shape.gii' given as --lh has values on exactly the right hemisphere's "
+            r"fsLR cortex \(HCP's atlasroi: 29,716 vertices, 63 of them on the left hemisphere's medial "
+            r"wall\): it looks like the right hemisphere's map; give it to --rh if it is\.")
+    with pytest.warns(UserWarning) as caught:
+        read_maps(lh=str(right), rh=str(left))
+    assert len(caught) == 2 and re.fullmatch(said, str(caught[0].message)), [str(w.message) for w in caught]
+    assert "'roi_a.32k_fs_LR.shape.gii' given as --rh" in str(caught[1].message)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read_maps(lh=str(left), rh=str(right))  # the right way round: quiet
+        rng = np.random.default_rng(0)
+        read_maps({"lh": rng.uniform(1, 3, 32492)})  # values everywhere: nothing to tell
