@@ -117,10 +117,12 @@ def _robust(values: NDArray[Any]) -> tuple[float, float]:
     :data:`REACH` of the range from the data's extreme is that extreme (evenly spread data keep their
     ends)."""
     nonzero = values[values != 0]
-    base = nonzero if nonzero.size else values
+    base = nonzero if nonzero.size and np.ptp(nonzero) > 0 else values  # a 0/1 mask: all of them
     p_lo, q1, q3, p_hi = (float(p) for p in np.percentile(base, (PERCENTILES[0], 25, 75, PERCENTILES[1])))
     fence = TUKEY * (q3 - q1)
-    if p_hi > 0 and p_hi >= -p_lo:  # values >= 0: the low end is the one toward 0
+    if fence <= 0:  # half the values or more are one value (a mask): no fence
+        pass
+    elif p_hi > 0 and p_hi >= -p_lo:  # values >= 0: the low end is the one toward 0
         p_lo = max(p_lo, q1 - fence)
     else:
         p_hi = min(p_hi, q3 + fence)

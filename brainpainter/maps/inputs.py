@@ -284,10 +284,15 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
     chosen, notes = decide_space({h: v.shape[1] for h, v in maps.values.items()}, space, says, "the map",
                                  declared)
     if chosen == "fsLR" and maps.categories is None:
-        named = {h: f"map {Path(v).name!r}" for h, v in given.items() if isinstance(v, str | Path)}
-        for line in swapped_hemispheres(maps.values, named):
-            warnings.warn(line, UserWarning, stacklevel=2)
+        _warn_swapped(maps, given)
     return pick_images(replace(maps, space=chosen, notes=notes), frames)
+
+
+def _warn_swapped(maps: VertexMaps, given: Mapping[str, Any]) -> None:
+    """Warn for an fsLR map on the other hemisphere's cortex (:func:`.fslr.swapped_hemispheres`)."""
+    named = {h: f"map {Path(v).name!r}" for h, v in given.items() if isinstance(v, str | Path)}
+    for line in swapped_hemispheres(maps.values, named):
+        warnings.warn(line, UserWarning, stacklevel=3)
 
 
 #: Why a volume is not drawn on the user's own surfaces.
