@@ -174,7 +174,8 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
                 raise
             raise NoRegionColumnError(f"{exc} Nor does any column name a bundle of --tracts "
                                       f"{sorted(bundle_names(spec))[:6]}.") from None
-    connectome = options.connectome.load(table.atlas, options.scene.template, options.scene.surface)
+    connectome = options.connectome.load(table.atlas, options.scene.template, options.scene.surface,
+                                         atlas_given=not only_connectome or atlas_obj is not None)
     if only_connectome and connectome is not None and connectome.series is not None:  # an image per matrix
         table = connectome_only_table(table.atlas, options.connectome.connectome,
                                       connectome.series.names)
