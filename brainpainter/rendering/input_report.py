@@ -31,6 +31,8 @@ def input_kind(path: Path) -> str | None:
     """``"map"`` or ``"connectome"`` where `path` is one by its ending or content, else None (a table)."""
     from brainpainter.maps.inputs import is_map_input
 
+    if not path.is_file():  # a FIFO, a device, a folder: never opened here (the table reader says why)
+        return None
     name = path.name.lower()
     if name.endswith(MATRIX_ONLY):
         return "connectome"
