@@ -84,7 +84,8 @@ def test_strict_turns_unmatched_into_an_error(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["check", str(path), "--strict"])
     assert exc.value.code == 2
-    assert "2 name(s) match no dk region, e.g. 'Age'" in capsys.readouterr().err
+    assert ("2 name(s) match no dk region: 'Age', 'Left-insulaa' (did you mean 'Left-insula'?)"
+            in capsys.readouterr().err)
 
 
 def test_several_inputs_are_merged(tmp_path):
@@ -117,3 +118,74 @@ def test_render_prints_the_summary_line_and_writes_it_to_the_manifest(tmp_path, 
         assert summary["value_range"] == [0.5, 1.25] and summary["inputs"][0]["shape"]["value_column"] == "d"
         assert any("decimal commas" in n for n in summary["notes"])
         assert sorted(p.name for p in out.iterdir()) == ["d_lateral-left.png", "manifest.json"]
+
+
+# -- issue 44 item 14: maps and connectomes are reported as what they are ------------------------------
+def _run_check(path, *args):
+    return CliRunner().invoke(cli, ["check", str(path), *args])
+
+
+def test_check_reports_a_cifti_dscalar_as_a_map_and_how_it_is_drawn():
+    """A valid dscalar got "contains NUL bytes: it is binary, not a text table; give a CSV"."""
+    from pathlib import Path
+
+    dscalar = Path(__file__).resolve().parents[2] / "shared" / "data" / "fslr" / \
+        "MSMSulc.refsulc.164k_fs_LR.dscalar.nii"
+    if not dscalar.is_file():
+        pytest.skip("../shared/data/fslr is not here")
+    result = _run_check(dscalar)
+    assert result.exit_code == 0, result.output
+    out = result.output
+    assert f"input   {dscalar}: a CIFTI-2 dense scalar file" in out
+    assert "mesh    lh: 163,842 vertices (fsLR 164k)" in out and "images  1: 100307_Sulc" in out
+    assert "scale   RdBu_r -1.69 to 1.69 (values of both signs)" in out
+    assert "draws   a map on the cortex, resampled onto fsaverage with HCP's fsLR weights" in out
+    assert f"command brainpainter render {dscalar} --out DIR" in out and "NUL" not in out
+    assert out.rstrip().splitlines()[-1] == "OK      map: render would draw it"
+    report = json.loads(_run_check(dscalar, "--json").output)
+    assert (report["kind"], report["space"], report["n_images"]) == ("map", "fsLR", 1)
+
+
+@pytest.mark.parametrize("kind", ["curv", "gifti", "mgh"])
+def test_check_reports_a_curv_gifti_or_mgh_map(tmp_path, kind):
+    import nibabel as nib
+    import numpy as np
+
+    values = (np.arange(10242) % 300 / 100).astype(np.float32)
+    if kind == "curv":
+        path = tmp_path / "lh.thickness"
+        nib.freesurfer.write_morph_data(str(path), values)
+    elif kind == "gifti":
+        path = tmp_path / "lh.thickness.func.gii"
+        nib.save(nib.gifti.GiftiImage(darrays=[nib.gifti.GiftiDataArray(values)]), path)
+    else:
+        path = tmp_path / "lh.thickness.mgh"
+        nib.save(nib.MGHImage(values.reshape(-1, 1, 1), np.eye(4)), path)
+    result = _run_check(path)
+    assert result.exit_code == 0, result.output
+    fmt = {"curv": "a FreeSurfer curv file", "gifti": "a GIfTI file", "mgh": "an MGH image"}[kind]
+    assert f"input   {path}: {fmt}" in result.output
+    assert "mesh    lh: 10,242 vertices (fsaverage5)" in result.output
+    assert "values  0 .. 2.99 (10,242 finite" in result.output and "scale   viridis 0-2.99" in result.output
+    assert "draws   a map on the cortex, on fsaverage" in result.output
+
+
+def test_check_reports_a_connectome_with_names_or_in_an_atlas_order(tmp_path):
+    import numpy as np
+
+    names = ["Left-insula", "Left-precuneus", "Right-insula"]
+    rows = [",".join(["", *names])] + [f"{n},{','.join(str(w) for w in row)}" for n, row in
+                                       zip(names, [[0, 0.5, -0.2], [0.5, 0, 0], [-0.2, 0, 0]], strict=True)]
+    (tmp_path / "fc.csv").write_text("\n".join(rows) + "\n")
+    result = _run_check(tmp_path / "fc.csv")
+    assert result.exit_code == 0, result.output
+    out = result.output
+    assert f"input   {tmp_path / 'fc.csv'}: a connectivity matrix, 3 x 3" in out
+    assert "nodes   names in the first row and column (e.g. 'Left-insula'); they fit atlas 'dk'" in out
+    assert "edges   2 with a weight, -0.2 .. 0.5" in out
+    assert f"command brainpainter render --connectome {tmp_path / 'fc.csv'} --atlas dk --out DIR" in out
+    w = np.ones((68, 68))
+    np.savetxt(tmp_path / "m68.txt", w)
+    out = _run_check(tmp_path / "m68.txt").output
+    assert "nodes   no names: the rows are placed in an atlas's node order; the atlases that take 68 rows: " \
+        "dk" in out and out.rstrip().endswith("OK      connectome: render would draw it")

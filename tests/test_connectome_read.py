@@ -375,10 +375,14 @@ def test_non_square_matrix_says_its_shape(tmp_path, dk):
 
 
 def test_names_that_match_no_region_get_suggestions(tmp_path, dk):
-    path = write_csv(tmp_path / "m.csv", np.ones((2, 2)), ["Left-precentrall", "Right-precentral"])
+    """Each name that matches nothing is listed with its closest region (issue 44 item 15), not the first."""
+    path = write_csv(tmp_path / "m.csv", np.ones((4, 4)), ["Left-precentrall", "Right-precentrall", "foo",
+                                                           "Left-insula"])
     with pytest.raises(BrainPainterError) as exc:
         read_connectome(path, dk)
-    assert "'Left-precentrall' matches no region (did you mean 'Left-precentral'?)" in one_line(exc)
+    assert ("3 of 4 node name(s) name no single region of atlas 'dk': 'Left-precentrall' (did you mean "
+            "'Left-precentral'?), 'Right-precentrall' (did you mean 'Right-precentral'?), 'foo'. Rename them"
+            ) in one_line(exc)
 
 
 @pytest.mark.parametrize(("names", "message"), [
@@ -547,8 +551,9 @@ def brainspace_matrix(name: str) -> Path:
 def test_real_schaefer400_group_matrix_top_1_percent():
     from brainpainter.connectome.edges import select_edges
 
-    conn = read_connectome(brainspace_matrix("schaefer_400_mean_connectivity_matrix.csv"),
-                           load_atlas_dir(SCHAEFER400))
+    with pytest.warns(UserWarning, match="the atlases that take 400 rows: .*schaefer400_17n"):  # no names
+        conn = read_connectome(brainspace_matrix("schaefer_400_mean_connectivity_matrix.csv"),
+                               load_atlas_dir(SCHAEFER400))
     assert conn.n_nodes == 400 and conn.names[0] == "Left-Vis_1" and conn.names[-1].startswith("Right-")
     assert len(conn.edges()[0]) == 400 * 399 // 2
     top = select_edges(conn, threshold="99%")

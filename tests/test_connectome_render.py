@@ -389,9 +389,10 @@ def test_bar_schaefer400_top_1_percent_inside_the_cortex(tmp_path):
     atlas = load_atlas_dir(Path(__file__).resolve().parents[1] / "plugins" / "atlases"
                            / "brainpainter-atlas-schaefer-yeo" / "bp_atlas_schaefer_yeo" / "data"
                            / "schaefer400_7n")
-    result = brainpainter.render(None, atlas, connectome=str(matrix), edge_threshold="99%", views="dorsal",
-                                 width=600, height=500, progress=False, glass_opacity=0.0, shading="flat",
-                                 quality="fast")
+    with pytest.warns(UserWarning, match="the atlases that take 400 rows: .*schaefer400_17n"):  # no names
+        result = brainpainter.render(None, atlas, connectome=str(matrix), edge_threshold="99%",
+                                     views="dorsal", width=600, height=500, progress=False, glass_opacity=0.0,
+                                     shading="flat", quality="fast")
     c = result.manifest["connectome"]
     assert c["n_nodes"] == 400 and c["n_edges"] == round(0.01 * 400 * 399 / 2)
     positions = np.array([n["position"] for n in c["nodes"]])

@@ -172,3 +172,26 @@ def test_the_export_of_a_series_row_shows_that_matrix_weight(tmp_path, tiny, nod
     doc = json.loads(glb[20:20 + struct.unpack("<I", glb[12:16])[0]])
     extras = {node["name"]: node["extras"] for node in doc["nodes"] if node["extras"]["part"] == "connectome"}
     assert extras["left \u2013 right"]["value"] == "0.3"  # not -0.6, its largest over the series
+
+
+@pytest.mark.parametrize(("suffix", "shape", "message"), [
+    (".npy", (6, 6, 3), r"is 6 x 6 x 3: 3 matrices of 6 x 6 with time last, but a series array or \.npy "
+                        r"is T x N x N \(time first\); move the last axis first \(numpy\.moveaxis\(fc, -1, "
+                        r"0\)\)"),
+    (".mat", (3, 6, 6), r"is 3 x 6 x 6: 3 matrices of 6 x 6 with time first, but a \.mat series is N x N "
+                        r"x T \(MATLAB keeps time last\); move the first axis last \(MATLAB: permute\(fc, "
+                        r"\[2 3 1\]\)"),
+])
+def test_a_series_with_time_on_the_other_axis_says_which_axis_to_move(tmp_path, suffix, shape, message):
+    """Issue 44 item 15: a T x N x N .mat or an N x N x T .npy said only 'holds 6 matrices of 6 x 3'."""
+    import scipy.io
+
+    path = tmp_path / f"fc{suffix}"
+    if suffix == ".npy":
+        np.save(path, np.ones(shape))
+    else:
+        scipy.io.savemat(path, {"fc": np.ones(shape)})
+    with pytest.raises(BrainPainterError, match=message):
+        matrix_series(str(path))
+    with pytest.raises(BrainPainterError, match="holds 2 matrices of 6 x 5; a series is T x N x N"):
+        matrix_series(np.ones((2, 6, 5)))

@@ -28,13 +28,22 @@ def _scale(lh: np.ndarray, rh: np.ndarray | None = None, **options: object):
     return map_scale(ScaleOptions(**options), read_maps({"lh": lh} if rh is None else {"lh": lh, "rh": rh}))
 
 
-def test_real_thickness_is_sequential_from_0_despite_a_stray_negative_vertex():
+def test_real_thickness_is_sequential_over_its_robust_range_despite_a_stray_negative_vertex():
+    """Issue 44 item 16: viridis 0-4.7 put 90 % of the cortex's vertices in a third of the bar (one green);
+    the robust range (2nd-98th percentiles of the non-zero values, the low end at Tukey's fence: the medial
+    wall's partial values) spreads them over two thirds."""
     thick = _thickness()
     assert min(float(v.min()) for v in thick.values()) < 0  # one vertex at -0.0028: once a -4.7..4.7 RdBu_r
     scale = _scale(thick["lh"], thick["rh"])
-    top = max(float(v.max()) for v in thick.values())
-    assert (scale.name, scale.vmin, scale.vmax, scale.center) == ("viridis", 0.0, top, None)
-    assert scale.describe().startswith("viridis 0-4.7 (values >= 0")
+    assert (scale.name, scale.center) == ("viridis", None)
+    assert (round(scale.vmin, 2), round(scale.vmax, 2)) == (1.08, 3.53)
+    assert scale.describe().startswith("viridis 1.08-3.53 (values >= 0, over their 2nd-98th percentiles; ")
+    cortex = np.concatenate(list(thick.values()))
+    cortex = cortex[cortex > 0.5]  # not the medial wall
+    where = np.clip((cortex - scale.vmin) / (scale.vmax - scale.vmin), 0, 1)
+    low, high = np.percentile(where, [5, 95])
+    assert high - low > 0.6  # 90 % of the cortex spans most of the bar (0 to 4.7: 0.35-0.68)
+    assert np.histogram(where, bins=8, range=(0, 1))[0].max() < 0.3 * len(cortex)  # no colour holds it
 
 
 def test_symmetric_and_two_signed_data_are_diverging_about_0():
@@ -57,9 +66,11 @@ def test_positive_data_with_a_few_small_negatives_is_sequential(negatives):
     v = rng.uniform(0.5, 3.0, N5)
     v[: len(negatives)] = negatives
     scale = _scale(v)
-    assert (scale.name, scale.vmin, scale.center) == ("viridis", 0.0, None)
+    assert (scale.name, scale.center) == ("viridis", None)
     assert scale.vmax == pytest.approx(v.max())
-    assert f"; {len(negatives)} value(s) outside the scale take its end colours" in scale.chosen
+    # 3 % at -0.02 reach the 2nd percentile: the scale starts at 0 (their colour); one stray vertex does not
+    assert scale.vmin == (0.0 if len(negatives) > 1 else pytest.approx(np.percentile(v[v != 0], 2)))
+    assert scale.chosen.startswith("values >= 0")
 
 
 def test_one_sign_far_from_0_starts_at_the_data_and_near_0_ends_at_0():
@@ -67,7 +78,7 @@ def test_one_sign_far_from_0_starts_at_the_data_and_near_0_ends_at_0():
     myelin = rng.uniform(1.0, 1.8, N5)
     scale = _scale(myelin)
     assert scale.name == "viridis" and scale.vmin == pytest.approx(myelin.min())
-    assert scale.chosen == "values of one sign, far from 0"
+    assert scale.chosen == "values >= 0, over their 2nd-98th percentiles"
     atrophy = -rng.uniform(0.0, 4.0, N5)  # z-scores of one sign: the scale ends at 0
     scale = _scale(atrophy)
     assert (scale.name, scale.vmax, scale.chosen) == ("viridis", 0.0, "values <= 0")
@@ -80,7 +91,8 @@ def test_an_outlier_does_not_stretch_the_scale():
     v[7] = 1000.0  # a broken vertex
     scale = _scale(v)
     assert scale.vmax < 4.0 + 1e-9 and scale.vmin == 0.0
-    assert scale.chosen == "values >= 0; 1 value(s) outside the scale take its end colours"
+    assert scale.vmax == pytest.approx(np.percentile(v, 98))  # robust: the top 2 % take the end colour
+    assert scale.chosen == "values >= 0; 205 value(s) outside the scale take its end colours"
 
 
 def test_given_limits_and_gradients_keep_their_meaning():
@@ -110,12 +122,12 @@ def test_cli_says_which_scale_was_chosen_and_why(tmp_path):
             "figure", "--lh", str(paths[0]), "--rh", str(paths[1]), "--views", "lateral-left",
             "--size", "80x60", "--renderer", renderer, "--out", str(tmp_path / "fig.png"), "-q"])
         assert result.exit_code == 0, result.output
-        assert "scale: viridis 0-4.7 (values >= 0" in result.output
+        assert "scale: viridis 1.08-3.53 (values >= 0, over their 2nd-98th percentiles" in result.output
         rendered = CliRunner().invoke(cli, [
             "render", "--lh", str(paths[0]), "--views", "lateral-left", "--size", "80x60",
             "--renderer", renderer, "--out", str(tmp_path / "images"), "-q"])
         assert rendered.exit_code == 0, rendered.output
-        assert "scale: viridis 0-4.66 (values >= 0" in rendered.output  # the left hemisphere alone: max 4.655
+        assert "scale: viridis 1.06-3.54 (values >= 0" in rendered.output  # the left hemisphere alone
         given = CliRunner().invoke(cli, [
             "figure", "--lh", str(paths[0]), "--views", "lateral-left", "--vmin", "1", "--vmax", "4",
             "--size", "80x60", "--renderer", renderer, "--out", str(tmp_path / "given.png"), "-q"])

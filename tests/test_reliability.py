@@ -250,3 +250,31 @@ def test_nothing_written_outside_the_output_folder(tmp_path, env, tiny):
     assert {p for p in home.rglob("*") if not p.is_relative_to(kept)} <= {home / ".cache"}
     assert list(tmp.rglob("*")) == []
     assert sorted(p.relative_to(work).as_posix() for p in work.rglob("*")) == ["a.csv", "fig", "fig/f.png"]
+
+
+@pytest.mark.render
+@pytest.mark.parametrize("cache", ["on", "off"])
+def test_the_cache_goes_under_xdg_cache_home_and_off_writes_nothing(tmp_path, env, tiny, cache):
+    """Issue 44 item 17: with XDG_CACHE_HOME set, a Blender render made ``$XDG_CACHE_HOME/thumbnails/``
+    (the user's own variable was left to the libraries), also with BRAINPAINTER_CACHE=off; now the cache is
+    ``$XDG_CACHE_HOME/brainpainter`` and nothing else, and off writes nothing outside the output."""
+    home, xdg, tmp, work = (tmp_path / name for name in ("home", "xdg", "tmp", "work"))
+    for p in (home, xdg, tmp, work):
+        p.mkdir()
+    csv = table(work / "a.csv", 1)
+    clean = {k: v for k, v in env.items() if not k.startswith("XDG_") and k != "BRAINPAINTER_CACHE"}
+    extra = {"HOME": str(home), "TMPDIR": str(tmp), "XDG_CACHE_HOME": str(xdg)}
+    if cache == "off":
+        extra["BRAINPAINTER_CACHE"] = "off"
+    rc, _, err = brainpainter(["render", str(csv), "--out", str(work / "out"), "--template", str(tiny),
+                               "--views", "dorsal", "--size", "64x48", "-q"], clean, **extra)
+    assert rc == 0, err
+    assert list(home.rglob("*")) == [] and list(tmp.rglob("*")) == []
+    written = sorted(p.relative_to(xdg).as_posix() for p in xdg.rglob("*"))
+    if cache == "off":
+        assert written == []
+    else:
+        assert "brainpainter/entry-points.json" in written
+        assert all(p == "brainpainter" or p.startswith("brainpainter/") for p in written), written
+    assert sorted(p.relative_to(work).as_posix() for p in work.rglob("*")) == [
+        "a.csv", "out", "out/manifest.json", "out/s000_dorsal.png"]

@@ -584,8 +584,8 @@ def test_tract_values_alone_render_without_a_region_table(tmp_path, monkeypatch,
 
 @pytest.mark.parametrize(("content", "message"), [
     ("bundle,node,value\nUF_L,0,1\nUF_L,1,2\n", "are none of the tracts drawn ['AF_left', 'CST_right']"),
-    ("foo,bar\n1,2\n", "names a region of any installed atlas (dk, destrieux, dkt); columns start "
-                       "['foo', 'bar']. Use names like 'Left-insula' or 'lh_insula_thickness' (see "
+    ("foo,bar\n1,2\n", "names a region of any installed atlas (dk, destrieux, dkt); the columns: "
+                       "'foo', 'bar'. Use names like 'Left-insula' or 'lh_insula_thickness' (see "
                        "'brainpainter atlas show dk'). Nor does any column name a bundle of --tracts "
                        "['AF_left', 'CST_right']."),
 ])

@@ -394,3 +394,18 @@ def test_cancel_frees_the_clients_slot(limited):
     assert r.status_code == 200 and r.json()["status"] == "cancelled"
     assert limited.post("/api/jobs", json=ok).status_code == 202
     assert limited.get(second["url"]).json()["status"] == "queued"
+
+
+def test_check_with_the_preview_shown_gives_its_command(server):
+    """Issue 44 item 18: /api/check with the preview's row and view answers its command beside the run's."""
+    got = upload(server, b"Image-name-unique,Left-insula,Right-insula\nA,1,2\nB,3,0\n", "t.csv")
+    r = server.post("/api/check", json={"upload_id": got["upload_id"], "options": SMALL,
+                                        "preview": {"row": "B", "view": "dorsal"}})
+    assert r.status_code == 200, r.text
+    report = r.json()
+    assert report["reproduce"]["command"].endswith("--views lateral-left,subcortical --size 64x48")
+    assert report["reproduce_preview"]["command"] == ("brainpainter render t.csv -o brainpainter-out --size "
+                                                      "64x48 --rows B --views dorsal")
+    assert "rows='B'" in report["reproduce_preview"]["python"]
+    plain = server.post("/api/check", json={"upload_id": got["upload_id"], "options": SMALL}).json()
+    assert "reproduce_preview" not in plain

@@ -519,3 +519,28 @@ def test_page_draws_a_connectome_alone_with_its_bars_and_command(served, tmp_pat
         page.locator("#node_labels_top").dispatch_event("change")
         expect(page.locator("#command")).to_contain_text("--node-labels-top 1", timeout=60_000)
         assert errors == []
+
+
+def test_the_preview_shows_its_own_command_as_soon_as_it_is_drawn(served, tmp_path):
+    """Issue 44 item 18: once the preview is drawn (no job), the page shows the `brainpainter render`
+    command and the Python call of that preview (its row, its view) beside it, with copy buttons, and
+    follows the row and view chosen."""
+    from playwright.sync_api import expect
+
+    with _page(tmp_path) as (page, errors):
+        page.goto(served.url + "/")
+        page.locator("#size").fill("320x240")
+        page.get_by_role("button", name="Use the example table").click()
+        expect(page.locator("#preview-status")).to_contain_text("rendered in", timeout=120_000)
+        shown = page.locator("#preview-command")
+        expect(shown).to_be_visible(timeout=60_000)
+        expect(shown).to_contain_text("brainpainter render brainpainter_dk.csv -o brainpainter-out ")
+        expect(shown).to_contain_text(" --size 320x240 --rows stage-4 --views lateral-left")
+        expect(page.locator("#preview-python")).to_contain_text("rows='stage-4', views='lateral-left'")
+        expect(page.get_by_role("button", name="Copy preview command")).to_be_visible()
+        expect(page.get_by_role("button", name="Copy preview Python")).to_be_visible()
+        expect(page.locator("#jobs")).to_be_empty()  # no job was made
+        page.locator("#row").select_option(label="stage-2")
+        page.locator("#pview").select_option("medial-left")
+        expect(shown).to_contain_text("--rows stage-2 --views medial-left", timeout=60_000)
+        assert not errors, errors

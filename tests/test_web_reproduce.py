@@ -151,3 +151,19 @@ def test_a_map_over_a_table_is_the_same_layers_on_the_command_line_and_in_python
                    "map_alpha": 0.5, "map_label": "thickness (mm)", "regions_label": "tau", "threshold": 0.5}
     args, kwargs = called(got["python"])
     assert args == ["t.csv"] and kwargs.pop("out") == OUT and kwargs == cli
+
+
+def test_the_preview_has_its_own_command_its_row_from_its_view():
+    """Issue 44 item 18: the page shows the command of the preview it draws (its row, its view), as the
+    command line parses it and as the Python call takes it."""
+    from brainpainter.cli.render import render
+
+    o = RenderOptions(views="lateral-left,subcortical", gradient="white,blue", size="320x240")
+    got = reproduce(TABLE, "t.csv", o, preview=("sub1", "dorsal"))
+    assert got["command"] == ("brainpainter render t.csv -o brainpainter-out --gradient white,blue --size "
+                              "320x240 --rows sub1 --views dorsal")
+    params = render.make_context("render", shlex.split(got["command"])[2:]).params
+    assert (params["rows"], params["views"], params["gradient"]) == ("sub1", "dorsal", "white,blue")
+    args, kwargs = called(got["python"])
+    assert args == ["t.csv"] and (kwargs["rows"], kwargs["views"]) == ("sub1", "dorsal")
+    assert "--rows" not in reproduce(TABLE, "t.csv", o, preview=(None, "dorsal"))["command"]

@@ -117,7 +117,7 @@ def atlas_show(name: str, as_json: bool, image: Path | None, views: str | None, 
                    "subcortical views.")
 @click.option("--lut", "lut", type=click.Path(path_type=Path, dir_okay=False), default=None,
               help="Look-up table for --volume: FreeSurfer LUT, BIDS dseg.tsv or CSV of index,name.")
-@click.option("--space", default=None, type=click.Choice((*SPACES, "fsLR")),
+@click.option("--space", default=None, type=click.Choice((*SPACES, "fsLR"), case_sensitive=False),
               help="Space of --volume (mapped into the template's; see docs/atlases.md) [default: "
                    "MNI152NLin2009cAsym]; with --dlabel, fsaverage or fsLR: the mesh of a 163842-vertex file "
                    "that does not say.")

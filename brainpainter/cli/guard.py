@@ -48,7 +48,8 @@ EXIT_INTERNAL = 1
 EXIT_SIGINT = 130
 EXIT_SIGTERM = 143
 
-#: Environment variables pointed into the run's temporary folder (unless the user set them).
+#: Environment variables pointed into the run's temporary folder (unless the user set them; the user's
+#: ``XDG_CACHE_HOME`` says only where brainpainter's own cache goes, :data:`ALWAYS_PRIVATE`).
 CACHE_VARIABLES = {
     "MPLCONFIGDIR": "matplotlib",
     "XDG_CACHE_HOME": "cache",
@@ -58,6 +59,11 @@ CACHE_VARIABLES = {
     "BLENDER_USER_EXTENSIONS": "blender/extensions",
     "BLENDER_USER_RESOURCES": "blender/resources",
 }
+
+#: Variables pointed into the run's temporary folder even where the user set them: ``XDG_CACHE_HOME`` has
+#: given brainpainter's cache folder (:func:`_persistent_caches`) before; Blender made ``thumbnails/`` in it,
+#: and with ``BRAINPAINTER_CACHE=off`` a run is to write nothing outside its output.
+ALWAYS_PRIVATE = frozenset({"XDG_CACHE_HOME"})
 
 RUN_PREFIX = "brainpainter-run-"
 #: The lock file of a run's temporary folder, held (``flock``) by the process that made it while it lives.
@@ -171,7 +177,7 @@ def private_temp() -> Iterator[str]:
     saved_tempdir = tempfile.tempdir
     try:
         for var, sub in CACHE_VARIABLES.items():
-            if not os.environ.get(var):
+            if not os.environ.get(var) or var in ALWAYS_PRIVATE:
                 os.environ[var] = os.path.join(root, sub)
         for var, value in persistent.items():
             os.environ.setdefault(var, value)

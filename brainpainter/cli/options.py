@@ -67,7 +67,7 @@ def field_option(cls: type, name: str, *decls: str, **overrides: Any) -> Callabl
     kwargs: dict[str, Any] = {"default": default, "help": meta.get("help") or None}
     kind = str(f.type)
     if "choices" in meta:
-        kwargs["type"] = click.Choice(list(meta["choices"]))
+        kwargs["type"] = click.Choice(list(meta["choices"]), case_sensitive=False)  # fslr is fsLR
     elif kind == "bool":
         kwargs["is_flag"] = True
     elif kind in ("int", "int | None"):

@@ -75,6 +75,8 @@ def check(inputs: tuple[Path, ...], atlas: str | None, image_column: str | None,
     from brainpainter.table.region_table import inspect_table
     from brainpainter.table.report import check_report, format_report
 
+    if len(inputs) == 1 and _check_other(inputs[0], as_json):  # a map or a connectome
+        return
     table = inspect_table(_one_or_many(inputs), atlas, image_column=image_column, value=value,
                           region_column=region_column, strict=strict)
     report = check_report(table, gradient=gradient, cmap=cmap, vmin=vmin, vmax=vmax, center=center)
@@ -84,6 +86,40 @@ def check(inputs: tuple[Path, ...], atlas: str | None, image_column: str | None,
         click.echo(format_report(report))
     if report["errors"]:
         raise BrainPainterError(report["errors"][0])
+
+
+def _check_other(path: Path, as_json: bool) -> bool:
+    """Report a map or a connectome as ``render`` would draw it; False where `path` is a table."""
+    from brainpainter.errors import NoRegionColumnError
+    from brainpainter.rendering import input_report as other
+
+    kind = other.input_kind(path)
+    if kind is None and path.name.lower().endswith((".csv", ".tsv", ".txt")) and other.square_matrix(path):
+        kind = "connectome"
+    if kind is None:
+        from brainpainter.table.region_table import inspect_table
+
+        try:
+            inspect_table(path)
+            return False
+        except NoRegionColumnError:  # numbers without names: a matrix in an atlas's node order?
+            from brainpainter.connectome.matrix import read_matrix
+
+            try:
+                read_matrix(path)
+            except BrainPainterError:
+                return False  # the table's own error, below
+            kind = "connectome"
+        except BrainPainterError:
+            return False
+    report = other.map_report(path) if kind == "map" else other.connectome_report(path)
+    if as_json:
+        echo_json(report)
+    else:
+        click.echo(other.format_input_report(report))
+    if report["errors"]:
+        raise BrainPainterError(report["errors"][0])
+    return True
 
 
 # -- render -------------------------------------------------------------------

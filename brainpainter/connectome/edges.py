@@ -113,6 +113,24 @@ def select_edges(conn: Connectome, *, threshold: Any = None, top: int | None = N
     return dataclasses.replace(conn, weights=weights, edges_left_out=left_out)
 
 
+def kept_none(conn: Connectome, chosen: Connectome, threshold: Any) -> float | None:
+    """The largest |weight| of `conn` where `threshold` left `chosen` no edge of the edges it had; else None.
+
+    A threshold that keeps nothing is mostly a slip (``99`` for ``99%``): the image would show the nodes
+    only, so the caller says so with this number.
+    """
+    if threshold is None or len(chosen.edges()[2]):
+        return None
+    weight = conn.edges()[2]
+    return float(np.abs(weight).max()) if len(weight) else None
+
+
+def kept_none_text(threshold: Any, largest: float, what: str, whose: str = "its") -> str:
+    """``--edge-threshold 99 keeps no edge of WHAT: its largest |weight| is 0.91`` (a message's start)."""
+    return (f"--edge-threshold {str(threshold).strip()[:40]} keeps no edge of {what}: {whose} largest "
+            f"|weight| is {largest:.4g}")
+
+
 def _node_index(conn: Connectome, name: str) -> int:
     lower = [n.lower() for n in conn.names]
     text = str(name).strip()

@@ -9,11 +9,19 @@ export) are made from these fields (:mod:`brainpainter.rendering.options`);
 from __future__ import annotations
 
 import logging
+import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, TypedDict
 
 from brainpainter.atlas.model import SPACES
-from brainpainter.connectome.edges import MAX_EDGES_DRAWN, parse_threshold, select_edges
+from brainpainter.connectome.edges import (
+    MAX_EDGES_DRAWN,
+    kept_none,
+    kept_none_text,
+    parse_threshold,
+    select_edges,
+)
 from brainpainter.connectome.labels import labelled_nodes
 from brainpainter.connectome.model import Connectome
 from brainpainter.errors import BrainPainterError, choice_error
@@ -21,6 +29,7 @@ from brainpainter.errors import BrainPainterError, choice_error
 if TYPE_CHECKING:
     from brainpainter.atlas.model import Atlas
     from brainpainter.atlas.template import Template
+    from brainpainter.connectome.series import MatrixSeries
 
 log = logging.getLogger(__name__)
 
@@ -143,8 +152,49 @@ class ConnectomeOptions:
         return select_edges(connectome, threshold=self.edge_threshold, top=self.top_edges,
                             edges_of=self.edges_of)
 
+    def _chosen_some(self, connectome: Connectome) -> Connectome:
+        """:meth:`chosen`, refusing a threshold that keeps no edge of the matrix (the image would show the
+        nodes only: mostly ``99`` meant as ``99%``)."""
+        chosen = self.chosen(connectome)
+        largest = kept_none(connectome, chosen, self.edge_threshold)
+        if largest is not None:
+            raise BrainPainterError(
+                kept_none_text(self.edge_threshold, largest,
+                               f"connectome matrix {str(self.connectome)[:80]!r}")
+                + "; give a smaller threshold, or a percentage (e.g. '99%': the strongest 1 % of the edges).")
+        return chosen
+
+    def _series_chosen(self, series: MatrixSeries, read: Callable[[Any], Connectome]) -> Connectome:
+        """The series' connectome; a threshold that keeps no edge of some matrices warns (naming them), of
+        every matrix is refused."""
+        from brainpainter.connectome.series import series_connectome
+
+        empty: list[tuple[str, float]] = []
+
+        def choose(connectome: Connectome) -> Connectome:
+            chosen = self.chosen(connectome)
+            largest = kept_none(connectome, chosen, self.edge_threshold)
+            if largest is not None:
+                empty.append((series.names[calls[0]], largest))
+            calls[0] += 1
+            return chosen
+
+        calls = [0]
+        connectome = series_connectome(series, read, choose)
+        if not empty:
+            return connectome
+        largest = max(w for _, w in empty)
+        what = f"{len(empty)} of the {len(series)} matrices of connectome series {series.source!r}"
+        if len(empty) == len(series):
+            raise BrainPainterError(kept_none_text(self.edge_threshold, largest, what, "their")
+                                    + "; give a smaller threshold, or a percentage (e.g. '99%').")
+        names = ", ".join(name for name, _ in empty[:5]) + (", ..." if len(empty) > 5 else "")
+        warnings.warn(kept_none_text(self.edge_threshold, largest, what, "their")
+                      + f" ({names}): those images show the nodes only.", UserWarning, stacklevel=2)
+        return connectome
+
     def load(self, atlas: Atlas | None, template: Template | str = "fsaverage",
-             surface: str = "pial") -> Connectome | None:
+             surface: str = "pial", atlas_given: bool = True) -> Connectome | None:
         """The connectome to draw (None: none given), its nodes placed in `template`, its edges chosen.
 
         A matrix is read by :func:`~brainpainter.connectome.read.read_connectome` (nodes at the
@@ -170,17 +220,17 @@ class ConnectomeOptions:
             connectome = self.chosen(self.connectome)
         else:
             from brainpainter.connectome.read import read_connectome
-            from brainpainter.connectome.series import matrix_series, series_connectome
+            from brainpainter.connectome.series import matrix_series
 
             def read(matrix: Any) -> Connectome:
                 return read_connectome(
                     matrix, atlas, nodes=self.nodes, node_values=self.node_values,
                     node_categories=self.node_categories, directed=bool(self.directed),
-                    space=self.nodes_space, template=template, surface=surface)
+                    space=self.nodes_space, template=template, surface=surface, atlas_given=atlas_given)
 
             series = matrix_series(self.connectome)
-            connectome = (self.chosen(read(self.connectome)) if series is None
-                          else series_connectome(series, read, self.chosen))
+            connectome = (self._chosen_some(read(self.connectome)) if series is None
+                          else self._series_chosen(series, read))
         if connectome.edges_left_out:
             log.warning("connectome: the strongest %d edges are drawn; %d more were chosen (at most %d are "
                         "drawn: give --top-edges or --edge-threshold)", MAX_EDGES_DRAWN,

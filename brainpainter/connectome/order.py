@@ -12,9 +12,14 @@ show NAME`` prints this order.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import warnings
+from collections.abc import Callable, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
+from brainpainter.connectome.sizes import atlases_taking, better_fit, taking_text
 from brainpainter.errors import BrainPainterError
 from brainpainter.table.names import NameResolver
 
@@ -44,24 +49,71 @@ def describe_order(atlas: Atlas) -> str:
             "the subcortical ones as listed)")
 
 
-def ordered_keys(atlas: Atlas, n: int, source: str) -> tuple[str, ...]:
-    """Region keys of the `n` rows of a matrix without names (:func:`node_order`).
+def ordered_keys(atlas: Atlas, weights: NDArray[np.float64], source: str, atlas_given: bool = True,
+                 place: Callable[[Atlas, tuple[str, ...]], NDArray[np.float64]] | None = None
+                 ) -> tuple[str, ...]:
+    """Region keys of the rows of a matrix without names (:func:`node_order`).
+
+    Where other atlases take as many rows, warns naming them and the order assumed (and, where the
+    weights follow another atlas's networks clearly better, that one: :mod:`brainpainter.connectome.sizes`).
+
+    Parameters
+    ----------
+    atlas : Atlas
+    weights : ndarray, (N, N)
+    source : str
+        The matrix, for messages.
+    atlas_given : bool
+        False: `atlas` is the default one, not chosen by the user; the messages then do not name it.
+    place : callable, optional
+        ``place(atlas, keys)``: the regions' centroids, (N, 3); given, the other atlases of N rows are
+        compared with `atlas` (:func:`brainpainter.connectome.sizes.better_fit`).
 
     Raises
     ------
     BrainPainterError
-        `n` is neither the number of cortical regions nor of all regions.
+        N is neither the number of cortical regions nor of all regions (naming the atlases that take N).
     """
+    n = len(weights)
     cortical, every = node_order(atlas)
-    for keys in (cortical, every):
-        if keys and len(keys) == n:
-            return keys
-    counts = sorted({len(cortical), len(every)} - {0})
-    raise BrainPainterError(
-        f"connectome matrix {source!r} has {n} rows and no names; atlas {atlas.name!r} takes a matrix "
-        f"without names of {' or '.join(map(str, counts))} rows ('brainpainter atlas show {atlas.name}' "
-        "lists their order). Give the node names in the matrix's first row or column, a nodes file, or "
-        "another atlas.")
+    installed, elsewhere = atlases_taking(n, node_order)
+    taking = taking_text(n, installed, elsewhere)
+    keys = next((k for k in (cortical, every) if k and len(k) == n), None)
+    if keys is None or not atlas_given:
+        if atlas_given:
+            counts = sorted({len(cortical), len(every)} - {0})
+            said = (f"atlas {atlas.name!r} takes a matrix without names of {' or '.join(map(str, counts))} "
+                    f"rows ('brainpainter atlas show {atlas.name}' lists their order); {taking}")
+        else:
+            said = f"no --atlas was given; {taking}"
+        if keys is None or not installed or installed != [atlas.name]:
+            raise BrainPainterError(
+                f"connectome matrix {source!r} has {n} rows and no names; {said}. Give the node names in the "
+                "matrix's first row or column, a nodes file, or the atlas whose node order it follows "
+                "(--atlas).")
+    others = [name for name in installed + elsewhere if name != atlas.name]
+    better = None if place is None else better_fit(weights, atlas, installed, node_order, place)
+    if better is not None:
+        warnings.warn(
+            f"connectome matrix {source!r} has no names; its {n} rows were placed in the node order of atlas "
+            f"{atlas.name!r}, but its weights follow the places of {better[0]!r}'s regions far better "
+            f"(correlation of weight with nearness {better[1]:.2f} vs {better[2]:.2f}): give --atlas "
+            f"{better[0]} if it was made in that order, or the node names.", UserWarning, stacklevel=3)
+    elif others or not atlas_given:
+        warnings.warn(
+            f"connectome matrix {source!r} has no names{'' if atlas_given else ' and no --atlas was given'}; "
+            f"its {n} rows were placed in the node order of atlas {atlas.name!r} "
+            f"({_order_text(atlas, keys)}); "
+            f"{taking}: give the node names, or --atlas naming the atlas whose order it follows.",
+            UserWarning, stacklevel=3)
+    return keys
+
+
+def _order_text(atlas: Atlas, keys: tuple[str, ...]) -> str:
+    cortical, _ = node_order(atlas)
+    if keys == cortical:
+        return "its cortical regions, left hemisphere then right, in its label order"
+    return "its cortical regions, left then right, then the subcortical ones, in its label order"
 
 
 def matched_keys(names: Sequence[str], atlas: Atlas, source: str) -> tuple[str, ...]:
@@ -90,15 +142,14 @@ def matched_keys(names: Sequence[str], atlas: Atlas, source: str) -> tuple[str, 
         seen[key] = name
         keys.append(key)
     if unmatched:
-        first = unmatched[0]
-        both = resolver.lookup(first)
+        both = resolver.lookup(unmatched[0])
         if len(both.keys) > 1:
-            why = f"means both {list(both.keys)}; give the hemisphere (e.g. {both.keys[0]!r})"
+            why = (f"{unmatched[0]!r} means both {list(both.keys)}; give the hemisphere (e.g. "
+                   f"{both.keys[0]!r})")
         else:
-            close = resolver.suggest(first)
-            why = "matches no region" + (f" (did you mean {close[0]!r}?)" if close else "")
+            why = resolver.closest_each(unmatched)
         raise BrainPainterError(
             f"connectome matrix {source!r}: {len(unmatched)} of {len(names)} node name(s) name no single "
-            f"region of atlas {atlas.name!r}: {first!r} {why}. Rename them ('brainpainter atlas show "
+            f"region of atlas {atlas.name!r}: {why}. Rename them ('brainpainter atlas show "
             f"{atlas.name}' lists the regions), give --atlas the matrix's atlas, or give a nodes file.")
     return tuple(keys)

@@ -29,7 +29,7 @@ def read_connectome(matrix: Any, atlas: Atlas | str | None = None, *,
                     nodes: str | os.PathLike[str] | None = None, node_values: Any = None,
                     node_categories: Any = None, node_labels: Any = None,
                     directed: bool = False, space: str = "template", template: Template | str = "fsaverage",
-                    surface: str = "pial") -> Connectome:
+                    surface: str = "pial", atlas_given: bool = True) -> Connectome:
     """Read a connectivity matrix and place its nodes.
 
     Parameters
@@ -58,6 +58,9 @@ def read_connectome(matrix: Any, atlas: Atlas | str | None = None, *,
         The template the nodes are placed in.
     surface : {"pial", "white", "inflated"}
         Surface the atlas centroids are taken from.
+    atlas_given : bool
+        False where `atlas` is a default the user did not choose: a matrix without names is then refused
+        (naming the atlases that take its size) unless that atlas alone takes it.
 
     Returns
     -------
@@ -72,7 +75,7 @@ def read_connectome(matrix: Any, atlas: Atlas | str | None = None, *,
         raise choice_error("the nodes' space (--space)", space, SPACES)
     m = read_matrix(matrix)
     n = m.weights.shape[0]
-    atlas, table, names, positions = _nodes(m, atlas, nodes, space, template, surface)
+    atlas, table, names, positions = _nodes(m, atlas, nodes, space, template, surface, atlas_given)
     key_of = None
     if table is None and atlas is not None:
         from brainpainter.table.names import NameResolver
@@ -95,8 +98,8 @@ def read_connectome(matrix: Any, atlas: Atlas | str | None = None, *,
 
 
 def _nodes(m: Matrix, atlas: Atlas | str | None, nodes: str | os.PathLike[str] | None, space: str,
-           template: Template | str, surface: str) -> tuple[Atlas | None, NodeTable | None, tuple[str, ...],
-                                                            NDArray[np.float64]]:
+           template: Template | str, surface: str, atlas_given: bool = True
+           ) -> tuple[Atlas | None, NodeTable | None, tuple[str, ...], NDArray[np.float64]]:
     """The atlas (loaded), the nodes file (in the matrix's order), the node names and positions."""
     if isinstance(atlas, str):
         from brainpainter.atlas.registry import get_atlas
@@ -116,7 +119,8 @@ def _nodes(m: Matrix, atlas: Atlas | str | None, nodes: str | os.PathLike[str] |
     from brainpainter.connectome.centroids import region_centroids
 
     names = (matched_keys(m.names, atlas, m.source) if m.names is not None
-             else ordered_keys(atlas, m.weights.shape[0], m.source))
+             else ordered_keys(atlas, m.weights, m.source, atlas_given,
+                               lambda a, keys: region_centroids(a, keys, template, surface)))
     return atlas, None, names, region_centroids(atlas, names, template, surface)
 
 

@@ -140,7 +140,7 @@ def _path_series(text: str) -> MatrixSeries | None:
         return _npy_series(path)
     if name.endswith(".mat") and path.is_file() and _mat_dimensions(path) == [3]:
         stack = np.moveaxis(read_mat(path, ndim=3), 2, 0)  # N x N x T, as MATLAB keeps time last
-        _check_stack(stack.shape, text)
+        _check_stack(stack.shape, text, time_last=True)
         return MatrixSeries(text, _stages(len(stack)), array=stack)
     return None
 
@@ -181,11 +181,25 @@ def _mat_dimensions(path: Path) -> list[int]:
     return [len(shape) for _, shape, _ in variables if min(shape) > 1]
 
 
-def _check_stack(shape: tuple[int, ...], source: str) -> None:
-    """Refuse a T x N x M stack that holds no square matrix."""
-    if shape[0] == 0 or shape[1] != shape[2] or shape[1] == 0:
-        raise BrainPainterError(f"connectome matrix {source!r} holds {shape[0]} matrices of {shape[1]} x "
-                                f"{shape[2]}; a series is T x N x N (a .mat: N x N x T). {SQUARE}")
+def _check_stack(shape: tuple[int, ...], source: str, time_last: bool = False) -> None:
+    """Refuse a T x N x M stack that holds no square matrix (`shape` with the matrices first; `time_last`:
+    a ``.mat``, whose file has them last); where the matrices are square along the other axes, say which
+    axis to move."""
+    if shape[0] and shape[1] == shape[2] and shape[1]:
+        return
+    t, n, m = shape
+    if time_last and t == m and n:  # the .mat is T x N x N
+        raise BrainPainterError(
+            f"connectome matrix {source!r} is {n} x {t} x {m}: {n} matrices of {t} x {m} with time first, "
+            f"but a .mat series is N x N x T (MATLAB keeps time last); move the first axis last (MATLAB: "
+            f"permute(fc, [2 3 1]); numpy: numpy.moveaxis(fc, 0, -1)), or save it as a T x N x N .npy.")
+    if not time_last and t == n and m:  # an .npy or array of N x N x T
+        raise BrainPainterError(
+            f"connectome matrix {source!r} is {t} x {n} x {m}: {m} matrices of {t} x {n} with time last, but "
+            f"a series array or .npy is T x N x N (time first); move the last axis first "
+            f"(numpy.moveaxis(fc, -1, 0)), or save it as a .mat, which keeps time last.")
+    raise BrainPainterError(f"connectome matrix {source!r} holds {shape[0]} matrices of {shape[1]} x "
+                            f"{shape[2]}; a series is T x N x N (a .mat: N x N x T). {SQUARE}")
 
 
 def _file_series(files: list[str], source: str) -> MatrixSeries:

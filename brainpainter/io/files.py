@@ -18,7 +18,9 @@ import errno
 import os
 import stat
 import zlib
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from brainpainter.errors import BrainPainterError
 
@@ -29,6 +31,8 @@ LIMITS = {
     "subject file": 1024 * 2**20,
     "template file": 1024 * 2**20,
 }
+#: Inflated bytes :func:`inflated` shows a format's `used` to learn the size of its data.
+HEAD_BYTES = 4096
 #: Largest data file read (a map, a GIfTI), and largest size a gzipped one may inflate to (bytes).
 MAX_DATA_FILE = 1024 * 2**20
 
@@ -147,9 +151,21 @@ def check_input_dir(path: str | os.PathLike[str], what: str = "folder", hint: st
     return path
 
 
-def inflated(raw: bytes, what: str, limit: int | None = None) -> bytes:
+def inflated(raw: bytes, what: str, limit: int | None = None,
+             used: Callable[[bytes], int | None] | None = None) -> bytes:
     """`raw`, or if it is gzip-compressed (by its magic number), its contents, at most `limit` bytes
     (default :data:`MAX_DATA_FILE`).
+
+    Parameters
+    ----------
+    raw : bytes
+    what : str
+        The file, for messages.
+    limit : int, optional
+    used : callable, optional
+        ``used(head)``: how many bytes the file's format uses, from its first :data:`HEAD_BYTES` inflated
+        bytes (None: all); inflating stops there, so that trailing bytes (1 GiB of zeros after an
+        ``.mgz``'s data) are never held in memory.
 
     Raises
     ------
@@ -161,6 +177,12 @@ def inflated(raw: bytes, what: str, limit: int | None = None) -> bytes:
     limit = MAX_DATA_FILE if limit is None else limit
     d = zlib.decompressobj(wbits=31)
     try:
+        if used is not None:
+            head = d.decompress(raw, HEAD_BYTES)
+            need = used(head)
+            if need is not None and need <= limit:
+                return _inflated_to(d, head, need, what)
+            d = zlib.decompressobj(wbits=31)
         out = d.decompress(raw, limit + 1)
     except zlib.error as exc:
         raise BrainPainterError(f"{what} is not readable gzip data ({exc}); give the file as your software "
@@ -171,3 +193,17 @@ def inflated(raw: bytes, what: str, limit: int | None = None) -> bytes:
     if not d.eof:
         raise BrainPainterError(f"{what} is cut short (its gzip data end early); give the whole file.")
     return out
+
+
+def _inflated_to(d: Any, head: bytes, need: int, what: str) -> bytes:
+    """`head` and the next bytes of decompressor `d`, `need` bytes in all (fewer where the data end)."""
+    parts, have = [head], len(head)
+    while have < need and not d.eof:
+        chunk = d.decompress(d.unconsumed_tail, min(need - have, 1 << 24))
+        if not chunk and not d.unconsumed_tail:
+            break
+        parts.append(chunk)
+        have += len(chunk)
+    if have < need and not d.eof:
+        raise BrainPainterError(f"{what} is cut short (its gzip data end early); give the whole file.")
+    return b"".join(parts)[:need]

@@ -10,6 +10,7 @@ are another format than its name says is one line naming what was found.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -101,7 +102,8 @@ def read_file(path: Path, hemi: str, *, external: External = "folder", n: int | 
             return replace(_gifti(img, what, n), space=_gifti_space(img))
         if name.endswith((".mgh", ".mgz", ".nii", ".nii.gz")):
             # read whole (no file left open by a lazy proxy), inflated if gzip, bounded
-            raw = inflated(read_input(path, "map file", MAX_DATA_FILE), what)
+            raw = inflated(read_input(path, "map file", MAX_DATA_FILE), what,
+                           used=mgh_bytes if name.endswith((".mgh", ".mgz")) else None)
             found = _is_format(raw[:HEAD], name, what)
             klass: Any = {MGH: nib.MGHImage, NIFTI2: nib.Nifti2Image}.get(found or "", nib.Nifti1Image)
             frames = _surface_frames(np.asarray(klass.from_bytes(raw).dataobj), what, n)
@@ -111,6 +113,7 @@ def read_file(path: Path, hemi: str, *, external: External = "folder", n: int | 
         if name.endswith(TEXT):
             delim = "," if name.endswith(".csv") else ("\t" if name.endswith(".tsv") else None)
             return Hemi(native(_as_rows(np.loadtxt(path, delimiter=delim, ndmin=2), what, n), what=what, n=n))
+        _check_old_curv(path, what)
         return Hemi(native(read_morph_data(str(path)), what=what, n=n))  # type: ignore[no-untyped-call]
     except BrainPainterError:
         raise
@@ -118,6 +121,42 @@ def read_file(path: Path, hemi: str, *, external: External = "folder", n: int | 
         text = " ".join(str(exc).split())[:160]
         raise BrainPainterError(
             f"cannot read {what} ({hemi}): {text}. Maps are {', '.join(SUFFIXES)}.") from None
+
+
+#: Bytes of an MGH header, and its element sizes by type code (FreeSurfer's ``mghformat``).
+_MGH_HEADER = 284
+_MGH_ITEM = {0: 1, 1: 4, 3: 4, 4: 2}
+#: Bytes read after an MGH file's data: its footer (TR, flip angle, TE, TI, FoV) and tags.
+_MGH_FOOTER = 64 * 1024
+
+
+def mgh_bytes(head: bytes) -> int | None:
+    """Bytes an MGH file uses by its header (`head`: its first bytes, at least 284): header, data and up
+    to 64 KiB of footer; None where `head` is no MGH header."""
+    if len(head) < _MGH_HEADER or int.from_bytes(head[:4], "big") != 1:
+        return None
+    dims = [int.from_bytes(head[4 + 4 * k:8 + 4 * k], "big", signed=True) for k in range(4)]
+    item = _MGH_ITEM.get(int.from_bytes(head[20:24], "big"))
+    if item is None or min(dims) < 1:
+        return None
+    return _MGH_HEADER + math.prod(dims) * item + _MGH_FOOTER
+
+
+def _check_old_curv(path: Path, what: str) -> None:
+    """Refuse a file read as a curv file that is neither the new format (its magic number) nor the old one
+    (3-byte vertex and face counts, then 2 bytes per vertex: the size says it): random bytes named
+    ``lh.thickness`` were read as thousands of made-up values."""
+    with path.open("rb") as f:
+        head = f.read(6)
+    if what_is(head) == CURV:
+        return
+    size = path.stat().st_size
+    if len(head) == 6 and size == 6 + 2 * int.from_bytes(head[:3], "big"):
+        return
+    raise BrainPainterError(
+        f"cannot read {what}: it is not a FreeSurfer curv file ({size:,} bytes; its first bytes are neither "
+        "a curv, MGH, GIfTI nor any other format known here); give the file FreeSurfer wrote (lh.thickness, "
+        "lh.sulc), an .mgh/.mgz or a .gii, named for what it holds (docs/maps.md: the formats).")
 
 
 def _is_format(head: bytes, name: str, what: str) -> str | None:

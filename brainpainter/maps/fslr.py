@@ -182,3 +182,51 @@ def fslr_to_fsaverage(values: NDArray[Any], hemi: str, categorical: bool = False
     with np.errstate(invalid="ignore", divide="ignore"):
         out = np.where(weight > 0, total / weight, np.nan).T.astype(np.float32)
     return out
+
+
+#: Of the vertices where the two hemispheres' cortex masks differ, the share a map's values must follow
+#: the other hemisphere's mask on (and it must follow that mask on all but this share of the rest).
+SWAP_AGREE, SWAP_SLACK = 0.9, 0.001
+
+
+def swapped_hemispheres(values: Mapping[str, NDArray[Any]], names: Mapping[str, str] | None = None
+                        ) -> list[str]:
+    """Warnings for fsLR maps given as the other hemisphere: where a map has values (finite, not 0) on
+    exactly the other hemisphere's cortex (HCP's ``atlasroi``, which differ by 106 of 32,492 vertices), and
+    none where only its own has them, it is most likely that hemisphere's (``--lh R.func.gii``).
+
+    Parameters
+    ----------
+    values : mapping of str to ndarray, (k, n) or (n,)
+        fsLR maps by hemisphere (``"lh"``, ``"rh"``).
+    names : mapping of str to str, optional
+        What each hemisphere's map is, for the messages (default: ``"the map"``).
+
+    Returns
+    -------
+    list of str
+        One line per hemisphere that looks swapped.
+    """
+    said = []
+    for hemi, v in values.items():
+        data = np.asarray(v, dtype=np.float64)
+        res = RESAMPLED.get(data.shape[-1])
+        if res is None or hemi not in ("lh", "rh"):
+            continue
+        other = "rh" if hemi == "lh" else "lh"
+        has = (np.isfinite(data) & (data != 0)).reshape(-1, data.shape[-1]).any(axis=0)
+        own, theirs = cortex_roi(hemi, res), cortex_roi(other, res)
+        differ = own != theirs
+        if not differ.any() or has.all():
+            continue
+        follows = float(np.mean(has[differ] == theirs[differ]))
+        off = float(np.mean(has[~differ] != theirs[~differ]))
+        if follows >= SWAP_AGREE and off <= SWAP_SLACK:
+            side = {"lh": "left", "rh": "right"}
+            said.append(
+                f"{(names or {}).get(hemi, 'the map')} given as --{hemi} has values on exactly the "
+                f"{side[other]} hemisphere's fsLR cortex "
+                f"(HCP's atlasroi: {int(has.sum()):,} vertices, {int((has & ~own).sum())} of them on the "
+                f"{side[hemi]} hemisphere's medial wall): it looks like the {side[other]} hemisphere's map; "
+                f"give it to --{other} if it is.")
+    return said

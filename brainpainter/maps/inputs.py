@@ -18,6 +18,7 @@ A volume in MNI space is turned into the same arrays by ``brainpainter.maps.volu
 from __future__ import annotations
 
 import re
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -29,7 +30,7 @@ from numpy.typing import NDArray
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.io.gifti import External
 from brainpainter.maps.files import GIFTI_ENDINGS, SUFFIXES, Hemi, read_hemi
-from brainpainter.maps.fslr import SPACES, decide_space, named_space, names_fslr
+from brainpainter.maps.fslr import SPACES, decide_space, named_space, names_fslr, swapped_hemispheres
 from brainpainter.maps.options import frame_rows
 from brainpainter.maps.resolution import native, to_fsaverage
 
@@ -286,7 +287,16 @@ def read_maps(data: Any = None, lh: Any = None, rh: Any = None, volume: Any = No
     declared = named_space(h.space for h in hemis.values() if h.space is not None)
     chosen, notes = decide_space({h: v.shape[1] for h, v in maps.values.items()}, space, says, "the map",
                                  declared)
+    if chosen == "fsLR" and maps.categories is None:
+        _warn_swapped(maps, given)
     return pick_images(replace(maps, space=chosen, notes=notes), frames)
+
+
+def _warn_swapped(maps: VertexMaps, given: Mapping[str, Any]) -> None:
+    """Warn for an fsLR map on the other hemisphere's cortex (:func:`.fslr.swapped_hemispheres`)."""
+    named = {h: f"map {Path(v).name!r}" for h, v in given.items() if isinstance(v, str | Path)}
+    for line in swapped_hemispheres(maps.values, named):
+        warnings.warn(line, UserWarning, stacklevel=3)
 
 
 #: Why a volume is not drawn on the user's own surfaces.

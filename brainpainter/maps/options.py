@@ -174,8 +174,11 @@ class MapOptions:
         t = self.threshold
         if t is not None and (not isinstance(t, int | float) or not math.isfinite(t) or t < 0):
             raise BrainPainterError(f"--threshold must be a number >= 0; {t!r} was given.")
-        if self.space is not None and self.space not in ("fsaverage", "fsLR"):
-            raise choice_error("space", self.space, ("fsaverage", "fsLR"))
+        if self.space is not None:
+            spelt = {s.lower(): s for s in ("fsaverage", "fsLR")}.get(str(self.space).lower())
+            if spelt is None:
+                raise choice_error("space", self.space, ("fsaverage", "fsLR"))
+            object.__setattr__(self, "space", spelt)  # fslr, FSLR: fsLR
         if (self.projection is not None or self.projection_radius is not None) and self.volume is None \
                 and (self.lh is not None or self.rh is not None):
             raise BrainPainterError("--projection and --projection-radius sample a volume (--volume); "

@@ -213,7 +213,6 @@ def _with_panels(images: dict[tuple[str, str], NDArray[Any]], panels: dict[tuple
     return layout
 
 
-@quiet_glyphs
 def _legends(run: Any, layout: FigureLayout, background: Any, font_size: float) -> None:
     """A connectome's node-size legend under its bars and the line layers' legend over the views."""
     from brainpainter.media.colorbar import text_color
@@ -223,6 +222,7 @@ def _legends(run: Any, layout: FigureLayout, background: Any, font_size: float) 
     line_legend(run, list(layout.image_axes.values()), font_size)
 
 
+@quiet_glyphs
 def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path | None = None,
                 rows: Iterable[str | int] | str | None = None, progress: bool = True,
                 on_progress: Callable[[int, int], None] | None = None,

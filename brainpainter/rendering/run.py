@@ -172,7 +172,8 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
                                       else parse_layer(options.scene.layer[0])[1])
     else:
         table = read_run_table(data, atlas_obj, options, tract_values)
-    connectome = options.connectome.load(table.atlas, options.scene.template, options.scene.surface)
+    connectome = options.connectome.load(table.atlas, options.scene.template, options.scene.surface,
+                                         atlas_given=not only_connectome or atlas_obj is not None)
     if only_connectome and connectome is not None and connectome.series is not None:  # an image per matrix
         table = connectome_only_table(table.atlas, options.connectome.connectome,
                                       connectome.series.names)

@@ -33,7 +33,7 @@ from __future__ import annotations
 import csv
 import difflib
 import re
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from functools import cache
 from importlib import resources
@@ -212,6 +212,21 @@ class NameResolver:
             pool = {**lower, **{k: v["bilateral"] for k, v in names.items()}}
             out = [pool[h] for h in difflib.get_close_matches(norm, list(pool), n=n, cutoff=0.5)]
         return out[:n]
+
+    def closest_each(self, names: Sequence[object], limit: int = 6) -> str:
+        """Each of `names` with its closest region key, for a message:
+        ``'Left-insular' (did you mean 'Left-insula'?), 'foo', ... and 3 more``."""
+        return closest_each(names, self.suggest, limit)
+
+
+def closest_each(names: Sequence[object], suggest: Callable[[object], list[str]], limit: int = 6) -> str:
+    """Each of `names` (up to `limit`) with the closest match `suggest` gives it, where one is close."""
+    shown = []
+    for name in names[:limit]:
+        close = suggest(name)
+        shown.append(f"{str(name)!r}" + (f" (did you mean {close[0]!r}?)" if close else ""))
+    more = f" and {len(names) - limit} more" if len(names) > limit else ""
+    return ", ".join(shown) + more
 
 
 def _embedded_hemi(name: str) -> str | None:

@@ -41,9 +41,10 @@ from brainpainter.table.names import (
     UNMATCHED,
     AtlasGuess,
     NameResolver,
+    closest_each,
     infer_atlas,
 )
-from brainpainter.table.shape import IMAGE_COLUMN, SAMPLE_ROWS, TableShape, detect_shape
+from brainpainter.table.shape import IMAGE_COLUMN, IMAGE_COLUMN_NAMES, SAMPLE_ROWS, TableShape, detect_shape
 
 __all__ = ["IMAGE_COLUMN", "MAX_BYTES", "CellProblem", "NameReport", "RegionTable", "inspect_table",
            "read_table"]
@@ -244,10 +245,16 @@ def inspect_table(data: Any, atlas: Atlas | str | None = None, *, image_column: 
         names = [n for raw in raws for n in _candidate_names(raw)]
         guess = infer_atlas(names, candidates)
         if guess is None:
-            shown = [h for raw in raws for h in raw.header][:4]
+            resolvers = [NameResolver.for_atlas(a) for a in candidates]
+
+            def suggest(name: object) -> list[str]:
+                return next((hit for r in resolvers if (hit := r.suggest(name))), [])
+
+            shown = closest_each([h for raw in raws for h in raw.header
+                                  if str(h).strip() and str(h).lower() not in IMAGE_COLUMN_NAMES], suggest)
             raise NoRegionColumnError(
                 f"{', '.join(r.source for r in raws)}: no column name or value names a region of any "
-                f"installed atlas ({', '.join(a.name for a in candidates)}); columns start {shown}. Use "
+                f"installed atlas ({', '.join(a.name for a in candidates)}); the columns: {shown}. Use "
                 "names like 'Left-insula' or 'lh_insula_thickness' (see 'brainpainter atlas show dk')."
             )
         atlas = guess.atlas
@@ -278,12 +285,9 @@ def inspect_table(data: Any, atlas: Atlas | str | None = None, *, image_column: 
     if not table.regions:
         errors.append(_no_regions_error(table, resolver))
     if strict and table.unmatched:
-        first = table.unmatched[0]
-        sugg = resolver.suggest(first)
         errors.append(
-            f"{table.source}: {len(table.unmatched)} name(s) match no {atlas.name} region, e.g. {first!r}"
-            + (f" (did you mean {sugg[0]!r}?)" if sugg else "")
-            + "; rename them or drop --strict."
+            f"{table.source}: {len(table.unmatched)} name(s) match no {atlas.name} region: "
+            f"{resolver.closest_each(table.unmatched)}; rename them or drop --strict."
         )
     return _replace(table, errors=tuple(errors))
 
@@ -317,10 +321,9 @@ def _check_file_names(table: RegionTable) -> None:
 
 
 def _no_regions_error(table: RegionTable, resolver: NameResolver) -> str:
-    sample = table.unmatched[:3]
-    hint = resolver.suggest(sample[0]) if sample else []
-    return (f"{table.source}: no name matches a {table.atlas.name} region (names start {sample}); use names "
-            f"like {table.atlas.keys[:2]}" + (f"; did you mean {hint[0]!r}?" if hint else "."))
+    names = f": {resolver.closest_each(table.unmatched)}" if table.unmatched else ""
+    return (f"{table.source}: no name matches a {table.atlas.name} region{names}; use names like "
+            f"{table.atlas.keys[:2]}.")
 
 
 def _replace(table: RegionTable, **changes: Any) -> RegionTable:

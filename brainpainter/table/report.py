@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from brainpainter.table.names import REGION, UNMATCHED, NameResolver
+from brainpainter.table.names import REGION, UNMATCHED, NameResolver, closest_each
 from brainpainter.table.region_table import RegionTable, installed_atlases
 
 MAX_SUGGESTED = 50
@@ -233,11 +233,8 @@ def input_warnings(summary: dict[str, Any], max_names: int = 8) -> list[str]:
             resolver: NameResolver | None = NameResolver.for_atlas(get_atlas(summary["atlas"]))
         except BrainPainterError:  # an atlas from --atlas-config is not registered
             resolver = None
-        shown = []
-        for name in unmatched[:max_names]:
-            close = resolver.suggest(name) if resolver is not None else []
-            shown.append(f"{name!r}" + (f" (did you mean {close[0]!r}?)" if close else ""))
-        more = f" and {len(unmatched) - max_names} more" if len(unmatched) > max_names else ""
+        shown = closest_each(unmatched, resolver.suggest if resolver is not None else lambda name: [],
+                             max_names)
         lines.append(f"{len(unmatched)} name(s) match no {summary['atlas']} region and were not drawn: "
-                     f"{', '.join(shown)}{more}; see 'brainpainter check' (--strict makes this an error)")
+                     f"{shown}; see 'brainpainter check' (--strict makes this an error)")
     return lines

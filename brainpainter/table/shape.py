@@ -229,11 +229,13 @@ def _long(raw: RawTable, resolver: NameResolver, img: int | None, region_column:
             named = [j for j in candidates if header[j].lower() in REGION_COLUMN_NAMES]
             candidates = named if len(named) == 1 else candidates
         if not candidates:
-            sample = list(header[:3])
+            names = [h for j, h in enumerate(header)
+                     if j != img and str(h).strip() and str(h).lower() not in IMAGE_COLUMN_NAMES]
             raise NoRegionColumnError(
                 f"{raw.source}: no column names a {resolver.atlas.name} region, nor does any column hold "
-                f"region names (columns start {sample}); use region names like {resolver.atlas.keys[:2]} as "
-                "column names, or give a long table's region column with --region-column."
+                f"region names (the columns: {resolver.closest_each(names)}); use region names like "
+                f"{resolver.atlas.keys[:2]} as column names, or give a long table's region column with "
+                "--region-column."
             )
         if len(candidates) > 1:
             raise BrainPainterError(

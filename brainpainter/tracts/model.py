@@ -101,7 +101,9 @@ class TractSpec:
         to_template = space_transform(self.space, template)
         if self.affine is not None:
             to_template = to_template @ read_affine(self.affine)
-        return read_bundles(self.files, to_template, self.max_streamlines, self.n_points, self.seed)
+        tracts = read_bundles(self.files, to_template, self.max_streamlines, self.n_points, self.seed)
+        warn_outside(tracts, template.bounds, self.space, self.affine is not None)
+        return tracts
 
 
 def bundle_files(paths: tuple[str, ...] | list[str]) -> list[Path]:
@@ -159,3 +161,35 @@ def read_affine(path: str | Path) -> NDArray[Any]:
             f"--tracts-affine {str(path)!r} holds a {m.shape[0]}x{m.shape[1] if m.ndim > 1 else 1} matrix; "
             "allowed is a finite 4x4 affine with last row 0 0 0 1 (or its first 3 rows).")
     return m
+
+
+#: Points this far (mm) beyond the template's pial bounding box still count as inside (the brainstem, the
+#: cerebellum's bundles reach below the cortex).
+OUTSIDE_MARGIN = 20.0
+#: A warning where more than this share of the streamlines' points lie outside.
+OUTSIDE_SHARE = 0.25
+
+
+def warn_outside(tracts: Tracts, bounds: Any, space: str, affine_given: bool) -> None:
+    """Warn where most of the streamlines lie outside the brain: their points beyond the template's pial
+    bounding box (`bounds`, shape (2, 3)) by more than :data:`OUTSIDE_MARGIN` mm (dipy's bundles read
+    without their affine: voxel coordinates, drawn beside the brain, in silence)."""
+    import warnings
+
+    import numpy as np
+
+    box = np.asarray(bounds, dtype=np.float64)
+    points = tracts.lines.reshape(-1, 3)
+    outside = np.any((points < box[0] - OUTSIDE_MARGIN) | (points > box[1] + OUTSIDE_MARGIN), axis=1)
+    share = float(outside.mean()) if len(points) else 0.0
+    if share <= OUTSIDE_SHARE:
+        return
+    low, high = points.min(axis=0), points.max(axis=0)
+    extent = ", ".join(f"{axis} {a:.0f}..{b:.0f}" for axis, a, b in zip("xyz", low, high, strict=True))
+    brain = ", ".join(f"{axis} {a:.0f}..{b:.0f}" for axis, a, b in zip("xyz", box[0], box[1], strict=True))
+    how = "Check --tracts-affine" if affine_given else "Give their affine (--tracts-affine)"
+    warnings.warn(
+        f"{share:.0%} of the streamlines' points lie outside the brain: they span {extent} mm, the template "
+        f"{brain} (+-{OUTSIDE_MARGIN:.0f}); voxel coordinates or another space? {how} or their "
+        f"--tracts-space (now {space}).",
+        UserWarning, stacklevel=3)

@@ -18,7 +18,8 @@ API (all JSON unless said; errors are ``{"error": "one line"}`` with the CLI's m
                                    option "tracts" of a table's renders, or an upload_id itself (the tracts
                                    alone, coloured by their values table)
     POST /api/connectomes?name=&size=&role=  a matrix[, nodes, values, categories]: web/connectomes.py
-    POST /api/check                {"upload_id", "options"} -> the check report for those options
+    POST /api/check                {"upload_id", "options", "preview"?} -> the check report for those options
+                                   (with ``preview`` {"row", "view"}: ``reproduce_preview``, its command)
     POST /api/preview              {"upload_id", "options", "row", "view"} -> image/png
     POST /api/jobs                 {"upload_id", "kind", "options", "figure"|"movie"|"export"} -> 202 {job}
     GET  /api/jobs/{id}            status, progress, files
@@ -80,7 +81,7 @@ from brainpainter.web.options import (
     upload_name,
 )
 from brainpainter.web.pool import MAX_PREVIEW_WAITING, Pool, PreviewBusy, PreviewUnavailable, preview_request
-from brainpainter.web.reproduce import reproduce
+from brainpainter.web.reproduce import PreviewShown, reproduce
 from brainpainter.web.store import LimitError, Store, valid_id
 from brainpainter.web.tract_routes import add_tracts_route, alone_check, layer_uploads
 from brainpainter.web.tracts import is_tract_bundle, is_tract_upload
@@ -101,6 +102,7 @@ class CheckRequest(BaseModel):
     model_config = ConfigDict(extra="forbid")
     upload_id: str
     options: RenderOptions = Field(default_factory=RenderOptions)
+    preview: PreviewShown | None = Field(None, description="The preview shown: ``reproduce_preview``.")
 
 
 class PreviewRequest(CheckRequest):
@@ -304,8 +306,11 @@ def _add_table_routes(app: FastAPI, config: ServerConfig, store: Store, pool: Po
                                                                                      owner_of(request))
         report: dict[str, Any] = bounded(await _check_report(data, name, o, layers))  # echo bounded
         # the command line and the Python call that make these images again
-        report["reproduce"] = await work.run(reproduce, data, name, o, layers.tracts,
-                                             **{k: v for k, v in layers.kwargs().items() if k != "tracts"})
+        more = {k: v for k, v in layers.kwargs().items() if k != "tracts"}
+        report["reproduce"] = await work.run(reproduce, data, name, o, layers.tracts, **more)
+        if body.preview is not None:  # the image and view the preview shows, alone
+            report["reproduce_preview"] = await work.run(reproduce, data, name, o, layers.tracts, **more,
+                                                         preview=(body.preview.row, body.preview.view))
         return report
 
     async def _check_report(data: bytes, name: str, o: RenderOptions, layers: LayerUploads) -> dict[str, Any]:

@@ -18,6 +18,8 @@ import shlex
 from pathlib import PurePosixPath
 from typing import Any
 
+from pydantic import BaseModel, ConfigDict, Field
+
 from brainpainter.web.connectomes import CONNECTOME_FIELDS
 from brainpainter.web.options import LAYER_UPLOADS, TRACT_FIELDS, RenderOptions
 
@@ -218,7 +220,8 @@ def media_options(kind: str, params: dict[str, Any]) -> tuple[str, list[tuple[st
 def reproduce(data: bytes, name: str, options: RenderOptions, tracts: bytes | None = None,
               kind: str = "images", params: dict[str, Any] | None = None, *,
               map_upload: bytes | None = None, contour_upload: bytes | None = None,
-              connectome_upload: bytes | None = None) -> dict[str, str]:
+              connectome_upload: bytes | None = None, preview: tuple[str | None, str] | None = None
+              ) -> dict[str, str]:
     """The command and the Python call that make the images of `options` from the upload `data` (named
     `name`): ``brainpainter render``, or ``figure`` / ``movie`` for those jobs (`kind`, with their
     `params`).
@@ -242,6 +245,9 @@ def reproduce(data: bytes, name: str, options: RenderOptions, tracts: bytes | No
         The map bundle option ``contour`` names (``--contour``).
     connectome_upload : bytes, optional
         The connectome bundle option ``connectome`` names (``--connectome``, ``--nodes``, ...).
+    preview : (str or None, str), optional
+        The page's preview, ``(image, view)``: the command draws that image from that view only
+        (``--rows IMAGE --views VIEW``; no image: the view only).
 
     Returns
     -------
@@ -266,6 +272,10 @@ def reproduce(data: bytes, name: str, options: RenderOptions, tracts: bytes | No
         pairs += connectome_inputs(network)
     pairs += changed(options, kind=upload, tracts=drawn is not None, connectome=network is not None)
     command, out = "render", OUT
+    if preview is not None:
+        image, view = preview
+        pairs = [(k, v) for k, v in pairs if k != "views"] + ([("rows", image)] if image else []) + [
+            ("views", view)]
     if kind == "export":  # an export draws no image: no views, size or quality
         from brainpainter.media.export import EXPORT_OPTIONS
 
@@ -277,3 +287,11 @@ def reproduce(data: bytes, name: str, options: RenderOptions, tracts: bytes | No
         pairs += more
     return {"command": command_line(positional, pairs, command, out),
             "python": python_call(positional, pairs, command, out)}
+
+
+class PreviewShown(BaseModel):
+    """The image and view the page's preview shows (``/api/check``: the command that draws it)."""
+
+    model_config = ConfigDict(extra="forbid")
+    row: str | None = Field(None, max_length=500, description="The image's name (a table's row).")
+    view: str = Field(..., max_length=100, description="A view name or camera:AZ:EL[:ZOOM].")

@@ -376,7 +376,8 @@ async function upload(files) {
 
 // Nothing to draw: no image, no colour bar, no command, and a caption that says so.
 function noUpload() {
-  $("preview").hidden = true; showBars([]); $("reproduce").hidden = true;
+  $("preview").hidden = true; showBars([]); $("reproduce").hidden = true; $("preview-reproduce").hidden = true;
+  state.previewShown = false;
   $("preview-status").textContent = "No table or map in use: upload one to see a preview.";
   $("row").replaceChildren();
   setReady(false);
@@ -411,6 +412,7 @@ function showReport(r) {
   state.layers = r.layers || (state.scale ? [{ kind: mainKind(), label: "", scale: state.scale }] : []);
   showBars(state.layers);
   showReproduce(r.reproduce);
+  showPreviewReproduce(r.reproduce_preview);
   if (state.summary !== r.summary) {  // the live region says one line, and only when it changes
     state.summary = r.summary;
     $("report-summary").textContent = `Checked: ${r.summary}`;
@@ -470,6 +472,13 @@ function showReproduce(r) {
   if (!r) return;
   $("command").textContent = r.command; $("python").textContent = r.python;
   $("reproduce").hidden = false;
+}
+
+// The command line and Python call of the preview shown (its row and view), beside it once it is drawn.
+function showPreviewReproduce(r) {
+  if (!r || !state.previewShown) return;
+  $("preview-command").textContent = r.command; $("preview-python").textContent = r.python;
+  $("preview-reproduce").hidden = false;
 }
 
 function showMapReport(r, box, dl, add) {
@@ -650,7 +659,8 @@ async function preview() {
   $("preview-status").textContent = "Rendering preview…";
   const body = { upload_id: state.uploadId, options: options(), row: Number($("row").value || 0),
                  view: $("pview").value };
-  refreshScale(body.options, ctl.signal);
+  const shown = { row: $("row").selectedOptions[0]?.textContent || null, view: body.view };
+  refreshScale(body.options, ctl.signal, shown);
   try {
     const res = await api("/api/preview", { method: "POST", signal: ctl.signal,
       headers: { "content-type": "application/json" }, body: JSON.stringify(body) });
@@ -668,18 +678,23 @@ async function preview() {
       `(round trip ${Math.round(performance.now() - t0)} ms)` +
       (body.options.quality === "high" ? " · previews are drawn at default quality; jobs draw high" : "");
     showPreviewError(""); fieldError("");
+    state.previewShown = true;
+    showPreviewReproduce(state.report && state.report.reproduce_preview);
   } catch (e) {
     if (e.name === "AbortError") return;
     $("preview-status").textContent = "No preview.";
+    state.previewShown = false; $("preview-reproduce").hidden = true;
     showPreviewError(pageWords(fieldError(e.message)));
   }
 }
 
-async function refreshScale(opts, signal) {
-  // the check report again with the colour options: value range against the scale, hints
+async function refreshScale(opts, signal, shown) {
+  // the check report again with the colour options: value range against the scale, hints; with the
+  // preview's row and view, the command that draws the preview
   try {
     const res = await api("/api/check", { method: "POST", signal, headers: { "content-type": "application/json" },
-                                          body: JSON.stringify({ upload_id: state.uploadId, options: opts }) });
+                                          body: JSON.stringify({ upload_id: state.uploadId, options: opts,
+                                                                 preview: shown }) });
     state.report = await res.json();
     showReport(state.report);
   } catch (e) { /* the preview shows the error */ }
@@ -835,12 +850,13 @@ function wire() {
     if (state.tractFiles) uploadTracts(state.tractFiles, $("subject").value);
   });
   for (const b of document.querySelectorAll("button.copy")) {
+    const label = b.textContent;
     b.addEventListener("click", async () => {
       const text = $(b.dataset.copy).textContent;
       try { await navigator.clipboard.writeText(text); b.textContent = "Copied"; } catch (e) {
         getSelection().selectAllChildren($(b.dataset.copy)); b.textContent = "Selected: press Ctrl+C";
       }
-      setTimeout(() => { b.textContent = b.dataset.copy === "command" ? "Copy command" : "Copy Python"; }, 2000);
+      setTimeout(() => { b.textContent = label; }, 2000);
     });
   }
   for (const id of ["frames_per_step", "hold", "fps"]) $(id).addEventListener("input", movieLength);
