@@ -51,3 +51,21 @@ def test_a_name_no_reader_claims_is_read_by_its_first_bytes(tmp_path):
 def test_a_file_of_no_kind_asked_for_says_which_are_read():
     with pytest.raises(BrainPainterError, match=r"\.trk"):
         identify("weights.bin", ("tracts",))
+
+
+def test_check_asks_the_same_readers_what_an_input_is(tmp_path):
+    """``brainpainter check``'s map-or-connectome question (rendering.input_report.input_kind) goes
+    through the readers: an ending, a FreeSurfer name, a .npy by its shape, else the first bytes."""
+    from brainpainter.rendering.input_report import input_kind
+
+    curv = b"\xff\xff\xff" + np.array([3, 0, 1], ">i4").tobytes() + np.zeros(3, ">f4").tobytes()
+    files = {"w.mat": b"", "w.edge": b"1 0\n0 1\n", "lh.thickness": curv, "thick_left": curv,
+             "t.csv": b"a,b\n1,2\n", "n.node": b"1 2 3 1 1 a\n", "notes": b"text\n"}
+    for name, content in files.items():
+        (tmp_path / name).write_bytes(content)
+    np.save(tmp_path / "square.npy", np.eye(4))
+    np.save(tmp_path / "vertices.npy", np.zeros(10242))
+    kinds = {name: input_kind(tmp_path / name) for name in [*files, "square.npy", "vertices.npy"]}
+    assert kinds == {"w.mat": "connectome", "w.edge": "connectome", "lh.thickness": "map",
+                     "thick_left": "map", "t.csv": None, "n.node": None, "notes": None,
+                     "square.npy": "connectome", "vertices.npy": "map"}

@@ -8,7 +8,7 @@ from typing import Any
 
 from brainpainter.io.sniff import CURV, GIFTI, MGH, NIFTI1, NIFTI2, NPY, TCK, TRK
 from brainpainter.layers.readers import Reader
-from brainpainter.maps.cifti import CIFTI_SUFFIXES, CONNECTOMES
+from brainpainter.maps.cifti import CIFTI_SUFFIXES
 from brainpainter.maps.inputs import TABLE_SUFFIXES
 from brainpainter.tracts.model import SUFFIXES as TRACT_SUFFIXES
 from brainpainter.tracts.model import TractSpec
@@ -29,7 +29,7 @@ tractogram = Reader("tractogram", "tracts", "a tractogram (TrackVis .trk, MRtrix
                     suffixes=TRACT_SUFFIXES, magic=(TRK, TCK),
                     read="brainpainter.layers.builtin_readers:tract_spec")
 matrix = Reader("matrix", "connectome", "a connectivity matrix (text, .npy, .mat, CIFTI .pconn.nii, "
-                "BrainNet .edge)", suffixes=(".npy", ".mat", ".edge", *CONNECTOMES),
+                "BrainNet .edge)", suffixes=(".npy", ".mat", ".edge", ".pconn.nii", ".dconn.nii"),
                 read="brainpainter.connectome.matrix:read_matrix")
 nodes = Reader("nodes", "connectome", "node coordinates (BrainNet Viewer .node)", suffixes=(".node",),
                read="brainpainter.connectome.nodefiles:read_nodes")

@@ -16,8 +16,6 @@ import numpy as np
 
 from brainpainter.errors import BrainPainterError
 
-#: File endings of connectivity matrices (the text ones are told apart from tables by their shape).
-MATRIX_ONLY = (".edge", ".pconn.nii", ".dconn.nii", ".mat")
 #: CIFTI-2 file kinds by ending.
 CIFTI_KINDS = {".dscalar.nii": "a CIFTI-2 dense scalar file", ".dtseries.nii": "a CIFTI-2 dense time series",
                ".dlabel.nii": "a CIFTI-2 dense label file", ".pscalar.nii": "a CIFTI-2 parcel scalar file",
@@ -28,26 +26,16 @@ _FORMATS = {".gii": "a GIfTI file", ".gii.gz": "a gzipped GIfTI file", ".mgh": "
 
 
 def input_kind(path: Path) -> str | None:
-    """``"map"`` or ``"connectome"`` where `path` is one by its ending or content, else None (a table)."""
-    from brainpainter.maps.inputs import is_map_input
+    """``"map"`` or ``"connectome"`` where `path` is one by its ending or content
+    (:func:`brainpainter.layers.readers.identify`; a ``.npy`` by its shape), else None (a table)."""
+    from brainpainter.layers.readers import identify
 
     if not path.is_file():  # a FIFO, a device, a folder: never opened here (the table reader says why)
         return None
-    name = path.name.lower()
-    if name.endswith(MATRIX_ONLY):
-        return "connectome"
-    if name.endswith(".npy") and _square_npy(path):
-        return "connectome"
-    if is_map_input(path):
-        return "map"
-    from brainpainter.io.sniff import CURV, GIFTI, HEAD, MGH, what_is
-
-    try:
-        with path.open("rb") as f:
-            head = f.read(HEAD)
-    except OSError:  # the table reader says why
-        return None
-    return "map" if what_is(head) in (CURV, GIFTI, MGH) else None
+    if path.name.lower().endswith(".npy"):  # a map or a matrix: N x N of no mesh's size is a matrix
+        return "connectome" if _square_npy(path) else "map"
+    reader = identify(path, ("regions", "map", "connectome"))
+    return reader.kind if reader.kind != "regions" and reader.name != "nodes" else None
 
 
 def _square_npy(path: Path) -> bool:
