@@ -69,3 +69,13 @@ def test_check_asks_the_same_readers_what_an_input_is(tmp_path):
     assert kinds == {"w.mat": "connectome", "w.edge": "connectome", "lh.thickness": "map",
                      "thick_left": "map", "t.csv": None, "n.node": None, "notes": None,
                      "square.npy": "connectome", "vertices.npy": "map"}
+
+
+def test_an_install_without_the_readers_entry_points_says_to_reinstall(monkeypatch):
+    """Metadata older than the code (no brainpainter.readers): one line saying what to do, never a map
+    file silently read as a table."""
+    from brainpainter.errors import PluginError
+
+    monkeypatch.setattr(readers, "names", lambda: [])
+    with pytest.raises(PluginError, match="reinstall"):
+        is_map_data("lh.thickness.mgh")

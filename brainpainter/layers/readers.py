@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from brainpainter.atlas.registry import load_target, readers
-from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.errors import PluginError, choice_error
 
 
 @dataclass(frozen=True)
@@ -78,7 +78,13 @@ class Reader:
 def all_readers(kinds: Iterable[str] | None = None) -> list[Reader]:
     """The registered readers (of `kinds` only, if given), in name order."""
     wanted = None if kinds is None else set(kinds)
-    found = [readers.get(name) for name in readers.names()]
+    names = readers.names()
+    if "table" not in names:  # an install whose metadata predates the readers' entry points
+        raise PluginError("brainpainter's own readers are not registered (entry-point group "
+                          "brainpainter.readers): its installed metadata is older than its code; reinstall "
+                          "it (pip install -e . in a checkout, else pip install --force-reinstall "
+                          "brainpainter).")
+    found = [readers.get(name) for name in names]
     return [r for r in found if wanted is None or r.kind in wanted]
 
 
@@ -135,9 +141,6 @@ def is_map_data(data: Any) -> bool:
     :func:`brainpainter.maps.inputs.is_map_input` says."""
     from brainpainter.maps.inputs import is_map_input
 
-    if isinstance(data, str | Path):
-        try:
-            return identify(data, ("regions", "map")).kind == "map"
-        except BrainPainterError:
-            return False
+    if isinstance(data, str | Path):  # the table reader takes what no map reader claims
+        return identify(data, ("regions", "map")).kind == "map"
     return is_map_input(data)
