@@ -211,7 +211,7 @@ def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None, me
 
 
 def region_run_layers(options: Options, table: RegionTable, tract_values: TractValues | None,
-                      only_tracts: bool, connectome: Connectome | None, blobs: Blobs | None,
+                      bundles_only: bool, connectome: Connectome | None, blobs: Blobs | None,
                       alone: str | None) -> tuple[Layer, ...]:
     """A region run's layers: the table's (or, `alone`, a connectome's or blobs' first), then a
     connectome's edges and nodes, then the blobs."""
@@ -221,7 +221,7 @@ def region_run_layers(options: Options, table: RegionTable, tract_values: TractV
     others = (*connectome_kinds(connectome), *blob_kinds(blobs))
     layers: tuple[Layer, ...] = ()
     if alone is None:
-        layers = run_layers(options, table, tract_values, only_tracts and tract_values is not None,
+        layers = run_layers(options, table, tract_values, bundles_only and tract_values is not None,
                             others=others)
     else:
         options.layers.check_drawn(others)

@@ -16,7 +16,6 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, Unpack
 
-import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
@@ -25,10 +24,11 @@ from brainpainter.color.scale import ColourScale
 from brainpainter.connectome.model import Connectome
 from brainpainter.connectome.series import check_images
 from brainpainter.errors import BrainPainterError
-from brainpainter.layers.kinds import DrawnLayer, open_layers, parse_layer
+from brainpainter.layers.kinds import DrawnLayer, open_layers
 from brainpainter.layers.readers import is_map_data
 from brainpainter.maps.clusters import Blobs
 from brainpainter.maps.outlines import Contours
+from brainpainter.rendering.alone import alone_source, default_views, drawn_alone, empty_table
 from brainpainter.rendering.blob_layers import drawn_blobs, load_blobs
 from brainpainter.rendering.composition import (
     cortex_for,
@@ -41,7 +41,6 @@ from brainpainter.rendering.connectome_layers import connectome_colors, connecto
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
 from brainpainter.rendering.painter import (
-    VOLUME_VIEWS,
     Painter,
     RenderResult,
     flat_aspect,
@@ -54,7 +53,6 @@ from brainpainter.rendering.settings import RenderSettings, with_aspect
 from brainpainter.rendering.tract_run import (
     read_run_table,
     run_tract_values,
-    tracts_only_table,
 )
 from brainpainter.rendering.views import ImagesByView, View, parse_views, with_clip
 from brainpainter.table.region_table import RegionTable
@@ -156,31 +154,23 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     views = options.scene.views
     if views is not None:  # a given option's errors before a big input file is read
         view_list = parse_views(views if isinstance(views, str) else list(views))
-    tract_values, only_tracts = run_tract_values(data, options)
+    tract_values, bundles_only = run_tract_values(data, options)
     blobs = load_blobs(options)
     drawn = open_layers(options.scene.layer, options.scene.layer_opt)
-    only_connectome = data is None and tract_values is None and options.connectome.given
-    only_blobs = data is None and tract_values is None and not only_connectome and blobs is not None
-    only_drawn = (bool(drawn) and data is None and tract_values is None and not only_connectome
-                  and not only_blobs)
-    if only_tracts and tract_values is not None:
-        source = data if data is not None else options.scene.tract_values
-        table = tracts_only_table(tract_values, atlas_obj, source)
-    elif only_connectome or only_blobs or only_drawn:
-        table = connectome_only_table(atlas_obj, options.connectome.connectome if only_connectome
-                                      else options.scene.volume_surface if only_blobs
-                                      else parse_layer(options.scene.layer[0])[1])
-    else:
+    alone = drawn_alone(data, options, tract_values, bundles_only, blobs, drawn)  # None: a region table
+    if alone is None:
         table = read_run_table(data, atlas_obj, options, tract_values)
+    else:
+        images = (tract_values.images or ("1",)) if alone == "tracts" and tract_values is not None else ()
+        table = empty_table(atlas_obj, alone_source(alone, data, options), images,
+                            "table" if alone == "tracts" else "connectome")
     connectome = options.connectome.load(table.atlas, options.scene.template, options.scene.surface,
-                                         atlas_given=not only_connectome or atlas_obj is not None)
-    if only_connectome and connectome is not None and connectome.series is not None:  # an image per matrix
-        table = connectome_only_table(table.atlas, options.connectome.connectome,
-                                      connectome.series.names)
+                                         atlas_given=alone != "connectome" or atlas_obj is not None)
+    if alone == "connectome" and connectome is not None and connectome.series is not None:
+        table = empty_table(table.atlas, options.connectome.connectome, connectome.series.names)
     check_images(connectome, len(table.images), f"table {table.source!r} has")
     if views is None:
-        view_list = parse_views(CONNECTOME_VIEWS if only_connectome or only_blobs or only_drawn
-                                else default_views(table.atlas, only_tracts))
+        view_list = parse_views(default_views(table.atlas, alone))
     view_list = with_clip(view_list, options.scene.clips)
     own = (table.atlas.name, table.atlas.template_labels)
     contours, settings = line_layers(options, "a region render", own)
@@ -192,9 +182,8 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
         settings = with_aspect(settings, shown_aspect(table.atlas, options.scene.template, view_list))
     elif not options.size_given and (aspect := flat_aspect(view_list)):  # flat maps: wider than a brain
         settings = with_aspect(settings, aspect)
-    layers = region_run_layers(options, table, tract_values, only_tracts, connectome, blobs,
-                               "connectome" if only_connectome else "blobs" if only_blobs
-                               else "drawn" if only_drawn else None)
+    layers = region_run_layers(options, table, tract_values, alone == "tracts", connectome, blobs,
+                               None if alone == "tracts" else alone)
     layers += tuple(layer.layer() for layer in drawn)
     return Run(table, layers[0].scale, view_list, settings, options, tract_values, layers, contours,
                connectome, blobs, (*drawn_blobs(blobs, layers), *drawn))
@@ -213,29 +202,6 @@ def layer_summaries(run: Run, painter: Painter) -> dict[str, Any]:
     for layer in run.drawn:  # the blobs, plugin layers
         out[layer.kind] = layer.summary()
     return out
-
-
-#: The views of a connectome drawn alone: from above and from the left, through the glass cortex.
-CONNECTOME_VIEWS = ("dorsal", "lateral-left")
-
-
-def connectome_only_table(atlas: Atlas | None, source: Any, images: Sequence[str] = ()) -> RegionTable:
-    """An empty region table of one image for a run that draws a connectome alone (named after its file), or
-    of `images` (a series of matrices: one each)."""
-    name = Path(source).name.split(".")[0] if isinstance(source, str | Path) else "connectome"
-    names = tuple(images) or (name or "connectome",)
-    return RegionTable(images=names, regions=(), values=np.zeros((len(names), 0)),
-                       atlas=atlas or get_atlas("dk"), source=str(source) if isinstance(source, str | Path)
-                       else "connectome")
-
-
-def default_views(atlas: Atlas, only_tracts: bool) -> tuple[str, ...] | None:
-    """The views of a run given none: the atlas's own (:attr:`Atlas.views`); the subcortical views for
-    a volumetric atlas (its structures, not a grey cortex) or bundle values alone (the views that show
-    tracts); else None (BrainPainter's three)."""
-    if atlas.views:
-        return atlas.views
-    return VOLUME_VIEWS if only_tracts or not atlas.cortical() else None
 
 
 def make_runner(painter: Painter, template: Any = None, options: RunnerOptions | None = None,

@@ -12,23 +12,12 @@ import warnings
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from brainpainter.atlas.model import Atlas
-from brainpainter.atlas.registry import get_atlas
 from brainpainter.errors import BrainPainterError, NoRegionColumnError
 from brainpainter.rendering.options import Options, SceneOptions
 from brainpainter.table.region_table import RegionTable, read_table
 from brainpainter.tracts.model import TractSpec
 from brainpainter.tracts.values import TractValues, is_long, read_tract_values
-
-
-def tracts_only_table(tract_values: TractValues, atlas: Atlas | None, data: Any) -> RegionTable:
-    """An empty region table for a run whose table holds bundle values only (one row per image)."""
-    images = tract_values.images or ("1",)
-    source = str(data) if isinstance(data, str | Path) else "table"
-    return RegionTable(images=tuple(images), regions=(), values=np.zeros((len(images), 0)),
-                       atlas=atlas or get_atlas("dk"), source=source)
 
 
 def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, bool]:
@@ -44,7 +33,7 @@ def run_tract_values(data: Any, options: Options) -> tuple[TractValues | None, b
     Returns
     -------
     values : TractValues or None
-    only_tracts : bool
+    bundles_only : bool
         Every value column of the main table is a bundle (it holds no region values), or there is
         no main table (``tract_values`` alone).
     """
