@@ -77,10 +77,9 @@ def plot(values: Any, view: str = "lateral-left", *, ax: Axes | None = None, row
     """Render one row of a table from one view into `ax`, with an optional colour bar beside it.
 
     A view ``"z=50"`` (``x=``, ``y=``) or ``"glass-z"`` (``glass-x``, ``glass-y``) draws a slice or
-    glass-brain panel of the run's volume (``volume=``, or ``volume_surface=`` alone) instead, on
-    the map's (or the blobs') colour scale (:mod:`brainpainter.media.volume_panels`). The blobs of
-    ``volume_surface=`` and the cutaways of ``clip=`` (and views such as ``"cutaway-left"``) are drawn
-    as :func:`brainpainter.render` draws them.
+    glass-brain panel of the run's volume (``volume=``, else ``volume_surface=``) instead, on its
+    colour scale (:mod:`brainpainter.media.volume_panels`). Blobs (``volume_surface=``) and cutaways
+    (``clip=``, ``"cutaway-left"``) are drawn as :func:`brainpainter.render` draws them.
 
     Parameters
     ----------
