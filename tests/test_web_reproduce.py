@@ -160,12 +160,14 @@ def test_line_options_are_options_of_the_api_the_run_and_its_command():
     o = RenderOptions(outline="dk", outline_style="dashed", outline_width=2, contour_width=3,
                       contour_color="#ff0000", contour_style="dashed")
     settings = prepare(TABLE, "t.csv", o).run.settings
-    assert (settings.outline_style, settings.contour_width, settings.contour_style) == ("dashed", 3.0, "dashed")
+    assert (settings.outline_style, settings.contour_width, settings.contour_style) == (
+        "dashed", 3.0, "dashed")
     assert settings.contour_color == (1.0, 0.0, 0.0)
     got = reproduce(TABLE, "t.csv", o)
     _, cli = parsed(got["command"])
-    assert {k: cli[k] for k in ("outline_style", "contour_width", "contour_color", "contour_style")} == {
-        "outline_style": "dashed", "contour_width": 3.0, "contour_color": "#ff0000", "contour_style": "dashed"}
+    lines = ("outline_style", "contour_width", "contour_color", "contour_style")
+    assert {k: cli[k] for k in lines} == {"outline_style": "dashed", "contour_width": 3.0,
+                                          "contour_color": "#ff0000", "contour_style": "dashed"}
     assert called(got["python"])[1]["contour_style"] == "dashed"
     with pytest.raises(ValueError, match="dotted"):
         RenderOptions(outline_style="dotted")
