@@ -435,6 +435,9 @@ def test_a_volume_upload_drawn_as_blobs_previews_renders_and_says_its_command(se
     gif = [f for f in movie["files"] if f["name"] == "movie.gif"]
     frames = png_frames(server.get(gif[0]["url"]).content)
     assert len(frames) == 4 and not np.array_equal(frames[0], frames[-1])   # the cut sweeps through
+    export = _job(server, uid, "export", BLOBS, export={"row": 0})
+    page = server.get(next(f["url"] for f in export["files"] if f["name"] == "zstat1.html")).text
+    assert '"blobs"' in page or "blobs" in page                   # the blobs' mesh in the 3D page
 
 
 @pytest.mark.parametrize("options, message", [
