@@ -437,7 +437,11 @@ def test_a_volume_upload_drawn_as_blobs_previews_renders_and_says_its_command(se
     assert len(frames) == 4 and not np.array_equal(frames[0], frames[-1])   # the cut sweeps through
     export = _job(server, uid, "export", BLOBS, export={"row": 0})
     page = server.get(next(f["url"] for f in export["files"] if f["name"] == "zstat1.html")).text
-    assert '"blobs"' in page or "blobs" in page                   # the blobs' mesh in the 3D page
+    import base64
+    import re
+
+    (glb,) = (gzip.decompress(base64.b64decode(m)) for m in re.findall(r"H4sI[A-Za-z0-9+/=]+", page))
+    assert glb[:4] == b"glTF" and b'"blobs"' in glb                # the blobs' mesh in the 3D page
 
 
 @pytest.mark.parametrize("options, message", [
