@@ -105,13 +105,25 @@ class PanelOptions:
 
 
 def panel_volume(data: Any, maps: MapOptions, given: Any = None) -> Any:
-    """The run's volume the panels show (a path or nibabel image), or None: `given`
+    """The run's map volume the panels show (a path or nibabel image), or None: `given`
     (:attr:`PanelOptions.volume_image`), ``--volume``, else a volume given as INPUT."""
     from brainpainter.maps.volume import is_volume
 
     if given is not None or maps.volume is not None:
         return given if given is not None else maps.volume
-    return data if data is not None and not isinstance(data, list) and is_volume(data) else None
+    if data is not None and not isinstance(data, list) and is_volume(data):
+        return data
+    return None
+
+
+def panel_layer(data: Any, run: Any, given: Any = None) -> tuple[Any, str]:
+    """The panels' volume and the kind of the run's layer whose scale they are drawn on: ``"map"``,
+    or ``"blobs"`` where the volume is ``--volume-surface``'s (the panels read on the blobs' bar)."""
+    own = panel_volume(data, run.options.maps, given)
+    if own is not None:
+        return own, "map"
+    blobs = run.options.scene.volume_surface
+    return blobs, ("blobs" if blobs is not None else "map")
 
 
 def volume_panels(data: Any, run: Any, opts: PanelOptions, rows: Sequence[int]
@@ -139,10 +151,10 @@ def volume_panels(data: Any, run: Any, opts: PanelOptions, rows: Sequence[int]
     """
     from brainpainter.maps.volume import check_mni152, load_volume
 
-    given = panel_volume(data, run.options.maps, opts.volume_image)
+    given, kind = panel_layer(data, run, opts.volume_image)
     if given is None:
         raise BrainPainterError("slice and glass-brain panels (--slices, --projections) show a volume in "
-                                "MNI152; give one with --volume FILE.")
+                                "MNI152; give one with --volume FILE (or --volume-surface FILE).")
     volume = load_volume(given)
     check_mni152(volume)
     for section in opts.sections:
@@ -153,8 +165,8 @@ def volume_panels(data: Any, run: Any, opts: PanelOptions, rows: Sequence[int]
     grids = {i: volume.volume(v) for i, v in which.items()}
     _check_threshold(threshold, grids.values(), volume.name)
     labels = _outline_labels(opts)
-    scale, background = run.scale_of("map"), run.settings.background
-    opacity = run.layer("map").opacity
+    scale, background = run.scale_of(kind), run.settings.background
+    opacity = next((layer.opacity for layer in run.layers if layer.kind == kind), 1.0)
     out: dict[tuple[str, str], NDArray[np.uint8]] = {}
     for i, grid in grids.items():
         for section in opts.sections:

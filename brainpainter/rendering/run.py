@@ -220,11 +220,11 @@ CONNECTOME_VIEWS = ("dorsal", "lateral-left")
 def connectome_only_table(atlas: Atlas | None, source: Any, images: Sequence[str] = ()) -> RegionTable:
     """An empty region table of one image for a run that draws a connectome alone (named after its file), or
     of `images` (a series of matrices: one each)."""
-    name = Path(source).name.split(".")[0] if isinstance(source, str | Path) else "connectome"
+    path = source if isinstance(source, str | Path) else getattr(source, "get_filename", lambda: None)()
+    name = Path(path).name.split(".")[0] if path else "connectome"  # a nibabel image: its file's name
     names = tuple(images) or (name or "connectome",)
     return RegionTable(images=names, regions=(), values=np.zeros((len(names), 0)),
-                       atlas=atlas or get_atlas("dk"), source=str(source) if isinstance(source, str | Path)
-                       else "connectome")
+                       atlas=atlas or get_atlas("dk"), source=str(path) if path else "connectome")
 
 
 def default_views(atlas: Atlas, only_tracts: bool) -> tuple[str, ...] | None:
