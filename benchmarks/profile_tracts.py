@@ -102,6 +102,7 @@ def main() -> None:
     args = p.parse_args()
     width, height = (int(v) for v in args.size.split("x"))
 
+    from brainpainter.rendering.mesh_memo import MESH_MEMO
     from brainpainter.rendering.painter import Painter
     from brainpainter.rendering.settings import RenderSettings
     from brainpainter.rendering.views import get_view
@@ -140,12 +141,14 @@ def main() -> None:
                     original = meshorder.cache_friendly
                     if name in KEEP_ORDER:
                         meshorder.cache_friendly = lambda v, t: (np.arange(len(v)), t.astype(np.int32))
+                    MESH_MEMO.clear()  # no variant draws another's kept order
                     try:
                         with _bpy.LOCK:
                             draws[name] = GpuDraw(g, settings)
                             draws[name].render(rgb, view)  # uploads the batches
                     finally:
                         meshorder.cache_friendly = original
+                        MESH_MEMO.clear()
                 cpu: dict[str, list[float]] = {name: [] for name in names}
                 with _bpy.LOCK:
                     usual = gpu_shaders.part_shader()

@@ -129,6 +129,23 @@ def test_slice_in_the_written_figure_reads_back_on_its_bar(sphere, tmp_path):
     assert len(result.colorbar_axes) == 1 and bar.y1 < box.y0
 
 
+def test_blobs_alone_draw_their_panels_on_the_blobs_bar(sphere, tmp_path):
+    with stand_in("solid", StandInRenderer.with_(layout="solid")) as renderer:
+        result = brainpainter.figure(None, volume_surface=sphere, threshold=THRESHOLD, views="dorsal",
+                                     slices="z=50", projections="z", width=80, height=60, renderer=renderer,
+                                     out=tmp_path / "fig.png", progress=False)
+    assert (result.scale.vmin, result.scale.vmax) == (THRESHOLD, 5.0)   # the blobs' own: threshold to peak
+    (name,) = {image for image, _ in result.images}
+    for panel_name in ("z=50", "glass-z"):
+        panel = result.images[(name, panel_name)]
+        blob = _coloured(panel)
+        assert blob.sum() > 100 and _centre(blob)[1] > panel.shape[1] / 2, panel_name   # right of midline
+        assert _bar_error(panel[blob], result.scale) < 10, panel_name
+        inside = panel[blob][:, :3].astype(float)                  # 5, the peak: the bar's top
+        assert np.median(np.linalg.norm(inside - np.asarray(result.scale(5.0)) * 255, axis=-1)) < 10
+    assert len(result.colorbar_axes) == 1
+
+
 @pytest.mark.parametrize("axis", ["x", "y", "z"])
 def test_glass_projection_shows_the_sphere_where_it_is(sphere, tmp_path, axis):
     result = _figure(sphere, tmp_path, projections=axis)

@@ -263,3 +263,44 @@ def test_jobs_draw_the_serial_run_s_pixels(sphere):
     one, two = brainpainter.render(None, **kwargs), brainpainter.render(None, jobs=2, **kwargs)
     for key, img in one.images.items():
         assert np.array_equal(img, two.images[key])
+
+
+def test_dask_draws_the_serial_run_s_blobs_and_cuts(sphere):
+    distributed = pytest.importorskip("distributed")
+    kwargs = {"volume_surface": str(sphere), "threshold": 2.3, "clip": "z>60", "width": 120, "height": 90,
+              "views": "dorsal,cutaway-left", "progress": False}
+    one = brainpainter.render(None, **kwargs)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address="127.0.0.1:0") as cluster, \
+            distributed.Client(cluster, set_as_default=False) as client:
+        two = brainpainter.render(None, client=client, **kwargs)
+    assert list(two.images) == list(one.images)
+    for key, img in one.images.items():
+        assert np.array_equal(img, two.images[key]), key
+    assert two.manifest["blobs"] == one.manifest["blobs"]
+    assert one.manifest["settings"]["views"][0]["clip"] == ["z>60"]
+
+
+def test_plot_draws_the_blobs_their_panel_and_a_cutaway_into_axes(sphere):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (a, b, c) = plt.subplots(1, 3, figsize=(6, 2))
+    blobs = brainpainter.plot(None, view="dorsal", ax=a, volume_surface=str(sphere), threshold=2.3,
+                              crop=False, width=200, height=150)
+    panel = brainpainter.plot(None, view="z=50", ax=b, volume_surface=str(sphere), threshold=2.3)
+    cut = brainpainter.plot(SUBCORTICAL, view="lateral-left", ax=c, atlas="dk", clip="x<0", shading="flat",
+                            colorbar=False, width=320, height=240)
+    plt.close(fig)
+    top = blobs.scale(np.array([5.0]))[0][:3]                  # the blobs' own bar, threshold to peak
+    assert (blobs.scale.vmin, blobs.scale.vmax) == (panel.scale.vmin, panel.scale.vmax) == (2.3, 5.0)
+    seen = _saturated(blobs.image, top)
+    assert seen.sum() > 50 and np.nonzero(seen)[1].min() > blobs.image.shape[1] / 2
+    assert blobs.colorbar_ax is not None and not blobs.colorbar_ax.texts      # no "not measured" swatch
+    rgb = panel.image[..., :3].astype(int)
+    coloured = (rgb.max(-1) - rgb.min(-1) > 40) & (panel.image[..., 3] > 0)
+    assert coloured.sum() > 100 and np.nonzero(coloured)[1].mean() > panel.image.shape[1] / 2
+    assert np.median(np.abs(panel.image[coloured][:, :3] - top * 255).max(-1)) < 10
+    assert int(near(cut.image, RED, 2).sum()) > 200            # the left structures, seen through the cut

@@ -544,3 +544,34 @@ def test_the_preview_shows_its_own_command_as_soon_as_it_is_drawn(served, tmp_pa
         page.locator("#pview").select_option("medial-left")
         expect(shown).to_contain_text("--rows stage-2 --views medial-left", timeout=60_000)
         assert not errors, errors
+
+
+def test_page_draws_a_volume_as_blobs_cut_open(served, tmp_path):
+    """Issue 45: the page's volume upload drawn as blobs (its clusters above the threshold as surfaces) in a
+    cut-away view, on the blobs' bar; the command says --volume-surface and --clip."""
+    from playwright.sync_api import expect
+    from test_web_maps import mni_volume
+
+    (tmp_path / "zstat1.nii.gz").write_bytes(mni_volume())
+    with _page(tmp_path) as (page, errors):
+        page.goto(served.url + "/")
+        expect(page.locator("#atlas option[value=dk]")).to_have_count(1)
+        page.locator("#size").fill("320x240")
+        page.locator("#file").set_input_files([str(tmp_path / "zstat1.nii.gz")])
+        expect(page.locator("#report")).to_contain_text("OK: volume: zstat1.nii.gz", timeout=120_000)
+        page.locator("#threshold").fill("2.3")
+        page.locator("#volume_surface").check()
+        page.locator("#clip").fill("x<0")
+        command = page.locator("#command")
+        expect(command).to_contain_text("--volume-surface zstat1.nii.gz", timeout=120_000)
+        expect(command).to_contain_text("--clip 'x<0'")
+        assert "--volume " not in command.inner_text()   # the volume is the blobs, not projected
+        expect(page.locator("#preview-status")).to_contain_text("rendered in", timeout=120_000)
+        pixels = png_pixels(page.locator("#preview").screenshot())[..., :3].astype(int)
+        yellow = (pixels[..., 0] > 150) & (pixels[..., 1] > 150) & (pixels[..., 2] < 90)  # 5: viridis' top
+        assert yellow.sum() > 30, yellow.sum()
+        shot = tmp_path / "blobs.png"
+        page.screenshot(path=str(shot))
+        if os.environ.get("BRAINPAINTER_SCREENSHOT"):
+            shutil.copy(shot, Path(os.environ["BRAINPAINTER_SCREENSHOT"]).with_name("blobs-page.png"))
+        assert errors == []

@@ -177,3 +177,16 @@ def test_node_labels_are_options_of_the_api_and_its_command(server):
     assert "--node-labels-top 1" in rep["reproduce"]["command"]
     bad = server.post("/api/check", json={"upload_id": uid, "options": {**OPTS, "node_labels_top": 0}})
     assert bad.status_code in (400, 422) and "node_labels_top" in bad.text
+
+
+def test_node_labels_per_category_is_an_option_of_the_api_and_its_command(server):
+    files = [("m.csv", MATRIX), ("nodes.csv", NODES), ("cats.txt", b"Vis\nVis\nDefault\n")]
+    uid = post(server, files, ["matrix", "nodes", "node_categories"]).json()["upload_id"]
+    opts = {**OPTS, "node_labels_top": 1}
+    top = server.post("/api/check", json={"upload_id": uid, "options": opts}).json()
+    each = server.post("/api/check", json={"upload_id": uid, "options": {
+        **opts, "node_labels_per_category": True}})
+    assert each.status_code == 200, each.text
+    assert top["drawn"]["labelled"] == ["Right-precentral"]                       # the strongest of all
+    assert each.json()["drawn"]["labelled"] == ["Right-precentral", "Left-insula"]  # each network's
+    assert "--node-labels-per-category" in each.json()["reproduce"]["command"]

@@ -382,3 +382,77 @@ def test_a_cifti_upload_keeps_its_fslr_164k_mesh(tmp_path):
     assert report["surfaces"] == {"lh": "fsLR 164k"} and images == ["s"]
     maps = read_bundle((work / "bundle.bin").read_bytes())
     assert maps.space == "fsLR" and not maps.notes
+
+
+# -- a volume drawn as blobs, and cut open (issue 45, item 5) ------------------------------------
+BLOBS = {"volume_surface": True, "threshold": 2.3}
+
+
+def png_frames(data: bytes) -> list[np.ndarray]:
+    """The frames of a GIF, RGB."""
+    from PIL import Image, ImageSequence
+
+    with Image.open(io.BytesIO(data)) as gif:
+        return [np.asarray(f.convert("RGB")) for f in ImageSequence.Iterator(gif)]
+
+
+def _job(server, uid: str, kind: str, options: dict, **more) -> dict:
+    r = server.post("/api/jobs", json={"upload_id": uid, "kind": kind, "options": options, **more})
+    assert r.status_code == 202, r.text
+    url = r.json()["url"]
+    job = wait_for(lambda: (j := server.get(url).json())["status"] in ("done", "failed") and j, 120)
+    assert job and job["status"] == "done", job
+    return job
+
+
+def test_a_volume_upload_drawn_as_blobs_previews_renders_and_says_its_command(server):
+    uid = post(server, [("zstat1.nii.gz", mni_volume())]).json()["upload_id"]
+    check = server.post("/api/check", json={"upload_id": uid, "options": {
+        **BLOBS, "clip": ["x<0"], "min_cluster_mm3": 10, "views": "dorsal,cutaway-left"}})
+    assert check.status_code == 200, check.text
+    report = check.json()
+    (layer,) = report["layers"]
+    assert layer["kind"] == "blobs" and layer["label"] == "zstat1.nii.gz"          # the blobs' own bar
+    assert (layer["scale"]["vmin"], layer["scale"]["vmax"]) == (2.3, 5.0)
+    command = report["reproduce"]["command"]
+    assert "--volume-surface zstat1.nii.gz" in command and "--volume " not in command, command
+    assert "--clip 'x<0'" in command and "--min-cluster-mm3 10.0" in command and "--threshold 2.3" in command
+    assert "volume_surface='zstat1.nii.gz'" in report["reproduce"]["python"]
+    # the preview: the blob (left lateral, value 5: the bar's top) drawn, not the cortex's projection
+    blobs, projected = (preview(server, uid, "lateral-left", **o) for o in (BLOBS, {"threshold": 2.3}))
+    assert not np.array_equal(blobs, projected)
+    images = _job(server, uid, "images", {**BLOBS, "size": "64x48", "views": "dorsal,cutaway-left",
+                                          "clip": ["z>60"]})
+    names = {f["name"] for f in images["files"]}
+    assert {"zstat1_dorsal.png", "zstat1_cutaway-left.png"} <= names, names
+    figure = _job(server, uid, "figure", {**BLOBS, "size": "64x48", "views": "dorsal"},
+                  figure={"format": "png", "dpi": 100, "slices": ["z=10"], "projections": "z"})
+    png = png_pixels(server.get(figure["files"][0]["url"]).content)
+    rgb = png[..., :3].astype(int)
+    assert ((rgb.max(-1) - rgb.min(-1)) > 60).sum() > 100      # the blob in its panels, on the blobs' bar
+    movie = _job(server, uid, "movie", {**BLOBS, "size": "64x48", "views": "cutaway-left"},
+                 movie={"format": "gif", "frames_per_step": 3, "clip_sweep": "x"})
+    gif = [f for f in movie["files"] if f["name"] == "movie.gif"]
+    frames = png_frames(server.get(gif[0]["url"]).content)
+    assert len(frames) == 4 and not np.array_equal(frames[0], frames[-1])   # the cut sweeps through
+    export = _job(server, uid, "export", BLOBS, export={"row": 0})
+    page = server.get(next(f["url"] for f in export["files"] if f["name"] == "zstat1.html")).text
+    import base64
+    import re
+
+    (glb,) = (gzip.decompress(base64.b64decode(m)) for m in re.findall(r"H4sI[A-Za-z0-9+/=]+", page))
+    assert glb[:4] == b"glTF" and b'"blobs"' in glb                # the blobs' mesh in the 3D page
+
+
+@pytest.mark.parametrize("options, message", [
+    ({**BLOBS, "clip": ["w<3"]}, "--clip 'w<3'"),
+    ({**BLOBS, "threshold": 6}, "--threshold"),
+    ({**BLOBS, "min_cluster_mm3": 1e8}, "--min-cluster-mm3"),
+    ({"min_cluster_mm3": 10}, "--min-cluster-mm3"),
+])
+def test_bad_blob_and_clip_options_are_one_line_400(server, options, message):
+    uid = post(server, [("zstat1.nii.gz", mni_volume())]).json()["upload_id"]
+    r = server.post("/api/preview", json={"upload_id": uid, "row": 0, "view": "dorsal", "options": options})
+    assert r.status_code == 400, r.text
+    line = r.json()["error"]
+    assert message in line and "\n" not in line, line

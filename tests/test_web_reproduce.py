@@ -167,3 +167,55 @@ def test_the_preview_has_its_own_command_its_row_from_its_view():
     args, kwargs = called(got["python"])
     assert args == ["t.csv"] and (kwargs["rows"], kwargs["views"]) == ("sub1", "dorsal")
     assert "--rows" not in reproduce(TABLE, "t.csv", o, preview=(None, "dorsal"))["command"]
+
+
+def test_line_options_are_options_of_the_api_the_run_and_its_command():
+    """Issue 44's line options (--outline-style, --contour-*) on the web, as on the command line."""
+    from brainpainter.web.options import prepare
+
+    o = RenderOptions(outline="dk", outline_style="dashed", outline_width=2, contour_width=3,
+                      contour_color="#ff0000", contour_style="dashed")
+    settings = prepare(TABLE, "t.csv", o).run.settings
+    assert (settings.outline_style, settings.contour_width, settings.contour_style) == (
+        "dashed", 3.0, "dashed")
+    assert settings.contour_color == (1.0, 0.0, 0.0)
+    got = reproduce(TABLE, "t.csv", o)
+    _, cli = parsed(got["command"])
+    lines = ("outline_style", "contour_width", "contour_color", "contour_style")
+    assert {k: cli[k] for k in lines} == {"outline_style": "dashed", "contour_width": 3.0,
+                                          "contour_color": "#ff0000", "contour_style": "dashed"}
+    assert called(got["python"])[1]["contour_style"] == "dashed"
+    with pytest.raises(ValueError, match="dotted"):
+        RenderOptions(outline_style="dotted")
+
+
+def test_a_volume_drawn_as_blobs_and_cut_is_the_same_run_on_the_command_line_and_in_python(tmp_path):
+    """Option volume_surface draws a volume upload as blobs: --volume-surface FILE, with --clip planes."""
+    from test_web_maps import mni_volume
+
+    from brainpainter.rendering.run import prepare_run
+    from brainpainter.web.maps import build_bundle
+    from brainpainter.web.options import prepare
+
+    volume = tmp_path / "zstat1.nii.gz"
+    volume.write_bytes(mni_volume())
+    work = tmp_path / "vol"
+    work.mkdir()
+    (work / volume.name).write_bytes(volume.read_bytes())   # the upload's copy (the bundle takes it)
+    build_bundle(work, [(None, work / volume.name)], 10)
+    bundle = (work / "bundle.bin").read_bytes()
+    o = RenderOptions(volume_surface=True, threshold=2.3, min_cluster_mm3=10, clip=["x<0", "z>20"],
+                      views="dorsal,cutaway-left")
+    got = reproduce(bundle, "zstat1.nii.gz", o)
+    inputs, cli = parsed(got["command"])
+    assert inputs == [] and "--volume " not in got["command"], got["command"]
+    assert cli == {"volume_surface": "zstat1.nii.gz", "threshold": 2.3, "min_cluster_mm3": 10.0,
+                   "clip": ["x<0", "z>20"], "views": "dorsal,cutaway-left"}, cli
+    args, kwargs = called(got["python"])
+    assert args == [] and kwargs.pop("out") == OUT and kwargs == cli
+    web = prepare(bundle, "zstat1.nii.gz", o).run           # the web's run is the command's
+    cli_run = prepare_run(None, **{**cli, "volume_surface": str(volume)})
+    assert web.blobs.digest() == cli_run.blobs.digest() and web.table.images == cli_run.table.images
+    assert [v.name for v in web.views] == [v.name for v in cli_run.views]
+    assert web.options.scene.clip == cli_run.options.scene.clip == ("x<0", "z>20")
+    assert web.layers[0].label == cli_run.layers[0].label == "zstat1.nii.gz"

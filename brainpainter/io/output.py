@@ -184,18 +184,24 @@ def _png_chunk(kind: bytes, data: bytes) -> bytes:
     return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
 
 
-def png_bytes(image: NDArray[Any], metadata: dict[str, str] | None = None) -> bytes:
+def png_bytes(image: NDArray[Any], metadata: dict[str, str] | None = None, dpi: float | None = None) -> bytes:
     """Encode an RGBA uint8 image, shape (h, w, 4), as PNG with iTXt text chunks.
 
     Uses ``fpng`` (about 10x faster than zlib level 6, lossless, files ~20 %
     larger) when it is installed, else Pillow with ``compress_level=1``. The
-    text chunks go right after the header, as Pillow writes them.
+    text chunks go right after the header, as Pillow writes them; with `dpi`,
+    the print resolution too (a ``pHYs`` chunk in pixels per metre, as Pillow
+    and matplotlib write it).
     """
     pixels = np.ascontiguousarray(image, dtype=np.uint8)
     fpng = load_encoder()
     if fpng is not None and pixels.ndim == 3 and pixels.shape[2] in (3, 4):
+        import struct
+
         data = fpng.encode_ndarray(pixels)
-        chunks = b"".join(
+        per_metre = int(dpi / 0.0254 + 0.5) if dpi is not None else 0
+        chunks = (_png_chunk(b"pHYs", struct.pack(">IIB", per_metre, per_metre, 1)) if dpi is not None
+                  else b"") + b"".join(
             _png_chunk(b"iTXt", k.encode("latin-1") + b"\0\0\0\0\0" + str(v).encode("utf-8"))
             for k, v in (metadata or {}).items())
         head = 8 + 25  # signature, IHDR chunk
@@ -210,7 +216,8 @@ def png_bytes(image: NDArray[Any], metadata: dict[str, str] | None = None) -> by
     for k, v in (metadata or {}).items():
         info.add_itxt(k, v)
     buf = io.BytesIO()
-    Image.fromarray(pixels).save(buf, format="PNG", pnginfo=info, compress_level=1)
+    extra: dict[str, Any] = {} if dpi is None else {"dpi": (dpi, dpi)}
+    Image.fromarray(pixels).save(buf, format="PNG", pnginfo=info, compress_level=1, **extra)
     return buf.getvalue()
 
 

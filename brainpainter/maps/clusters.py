@@ -89,6 +89,13 @@ class Blobs:
     values: NDArray[np.float64]
     clusters: tuple[Cluster, ...]
 
+    def digest(self) -> str:
+        """A SHA-256 of the surfaces and their values: equal blobs, equal digests (a cached painter's key)."""
+        import hashlib
+
+        return hashlib.sha256(b"".join(np.ascontiguousarray(a).tobytes() for a in (
+            self.vertices, self.triangles, self.values))).hexdigest()
+
     @property
     def levels(self) -> NDArray[np.float64]:
         """The values the palette's blob slots stand for, shape (:data:`N_LEVELS`,), lowest to highest."""

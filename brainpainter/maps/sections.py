@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.maps.voxel_points import VOXEL_MEMO
 
 Axis = Literal["x", "y", "z"]
 AXES: tuple[Axis, ...] = ("x", "y", "z")
@@ -226,9 +227,15 @@ def sample_plane(data: NDArray[Any], affine: NDArray[np.float64], section: Secti
     """
     from scipy.ndimage import map_coordinates
 
-    points = plane_points(section, convention)
-    inverse = np.linalg.inv(affine)
-    ijk = np.tensordot(inverse[:3, :3], points, axes=1) + inverse[:3, 3, None, None]
+    def coordinates() -> NDArray[np.float64]:
+        points = plane_points(section, convention)
+        inverse = np.linalg.inv(affine)
+        ijk: NDArray[np.float64] = np.tensordot(inverse[:3, :3], points, axes=1) + inverse[:3, 3, None, None]
+        return ijk
+
+    # the same pixels in every figure of a grid: worked out once (VOXEL_MEMO)
+    key = ("plane", section, convention, np.asarray(affine, np.float64).tobytes())
+    ijk = VOXEL_MEMO.get(key, coordinates)
     out: NDArray[np.float32] = map_coordinates(np.asarray(data, dtype=np.float32), ijk, order=order,
                                                mode="constant", cval=np.nan, prefilter=False)
     return out

@@ -17,6 +17,7 @@ voxel sizes, an extent that does not cover the brain, every voxel 0 or NaN.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -31,6 +32,7 @@ from brainpainter.maps import sheet
 from brainpainter.maps.options import RADIUS_MM, Projection, check_projection
 from brainpainter.maps.regfusion import aseg_mni152, fsaverage_mni152
 from brainpainter.maps.trilinear import trilinear
+from brainpainter.maps.voxel_points import kept_voxel_coordinates, voxel_coordinates
 
 Method = Literal["linear", "nearest"]
 ORDERS = {"nearest": 0, "linear": 1}
@@ -185,14 +187,13 @@ def _fsaverage_points() -> NDArray[np.float64]:
 def _voxel_coordinates(volume: Volume, points: NDArray[np.float64]) -> tuple[NDArray[np.float64],
                                                                              NDArray[np.bool_]]:
     """Voxel coordinates of world points, shape (3, n), and which points lie inside the grid."""
-    inverse = np.linalg.inv(volume.affine)
-    ijk = np.empty((3, len(points)))
-    for r in range(3):   # element-wise: a (n, 3) @ (3, 3) product is slower through BLAS threads
-        ijk[r] = points[:, 0] * inverse[r, 0] + points[:, 1] * inverse[r, 1] + points[:, 2] * inverse[r, 2]
-        ijk[r] += inverse[r, 3]
-    size = np.asarray(volume.shape[:3], dtype=np.float64)[:, None]
-    inside = ((ijk >= -0.5) & (ijk <= size - 0.5)).all(axis=0)
-    return ijk, inside
+    return voxel_coordinates(volume.affine, volume.shape, points)
+
+
+def _kept_coordinates(volume: Volume, name: Hashable, points: Callable[[], NDArray[np.float64]]
+                      ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """:func:`_voxel_coordinates` of the shipped point set `name` (``points()``), kept per grid."""
+    return kept_voxel_coordinates(volume.affine, volume.shape, name, points)
 
 
 def _check_not_conformed(volume: Volume) -> None:
@@ -232,7 +233,7 @@ def _check_coverage(volume: Volume, inside: NDArray[np.bool_], subject: bool) ->
 def check_mni152(volume: Volume) -> None:
     """Refuse a volume that is not in MNI152 (one line): a FreeSurfer conformed volume, or one whose
     extent holds less than half of the cortex's MNI152 positions (a sample of them is enough)."""
-    _, inside = _voxel_coordinates(volume, _fsaverage_points()[::16])  # a sample of the cortex is enough
+    _, inside = _kept_coordinates(volume, "cortex sample", lambda: _fsaverage_points()[::16])  # enough
     _check_coverage(volume, inside, subject=False)
 
 
@@ -355,8 +356,8 @@ def project_volume(img: ImageLike, *, method: Method = "linear", projection: Pro
     volume = load_volume(img)
     points, counts = _where(white, pial, depth, n_depths)
     method = "nearest" if white is not None and depth == "nearest" else method
-    stacked = _fsaverage_points() if white is None else np.concatenate(list(points.values()))
-    ijk, inside = _voxel_coordinates(volume, stacked)
+    ijk, inside = (_kept_coordinates(volume, "cortex", _fsaverage_points) if white is None
+                   else _voxel_coordinates(volume, np.concatenate(list(points.values()))))
     _check_coverage(volume, inside, subject=white is not None)
     if white is None and projection != "point":
         return _project_depths(volume, projection, float(radius), ORDERS[method])
@@ -387,8 +388,8 @@ def _project_depths(volume: Volume, projection: str, radius: float,
     """Each fsaverage vertex's mean of the finite samples at the depths of `projection` along its
     normal (:func:`brainpainter.maps.sheet.depths`); over the sheet within `radius` for ``ribbon``."""
     offsets = sheet.depths(projection, radius)
-    along = np.concatenate([sheet.along_normals(hemi, offsets).reshape(-1, 3) for hemi in ("lh", "rh")])
-    ijk, inside = _voxel_coordinates(volume, along)
+    ijk, inside = _kept_coordinates(volume, ("along normals", offsets.tobytes()), lambda: np.concatenate(
+        [sheet.along_normals(hemi, offsets).reshape(-1, 3) for hemi in ("lh", "rh")]))
     samples = _sample(volume, ijk, inside, order).reshape(volume.n_volumes, 2, len(offsets), -1)
     out: dict[str, NDArray[np.float32]] = {}
     for i, hemi in enumerate(("lh", "rh")):
@@ -424,7 +425,7 @@ def subcortical_means(img: ImageLike, *, method: Method = "linear") -> dict[str,
         raise choice_error("method", method, ORDERS)
     volume = load_volume(img)
     points, structure, names = aseg_mni152()
-    ijk, inside = _voxel_coordinates(volume, points)
+    ijk, inside = _kept_coordinates(volume, "structures", lambda: points)
     check_mni152(volume)
     samples = _sample(volume, ijk, inside, ORDERS[method])
     finite = np.isfinite(samples)

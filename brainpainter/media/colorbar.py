@@ -323,6 +323,7 @@ def fit_axes(ax: Axes, box: tuple[float, float, float, float], *, grow: str = "x
         fig.draw_without_rendering()
         if legend.get_window_extent().width > 0.45 * bw:
             _legend_below(ax)
+    placed = None
     for _ in range(3):  # tick labels may move with the size; settle in a few passes
         fig.draw_without_rendering()
         across = decorations_bbox(ax, label=False)  # width: the x label may overhang
@@ -342,7 +343,11 @@ def fit_axes(ax: Axes, box: tuple[float, float, float, float], *, grow: str = "x
             y0 = bb + (inner.y0 - outer.y0)
         elif center:
             y0 = bb + (bh - outer.height) / 2 + (inner.y0 - outer.y0)
-        ax.set_position((x0 / fw, y0 / fh, w / fw, h / fh))
+        position = (x0 / fw, y0 / fh, w / fw, h / fh)
+        if position == placed:  # settled: another pass would measure the same figure again
+            break
+        ax.set_position(position)
+        placed = position
     _keep_label_inside(ax, bl, bl + bw)
     thin_tick_labels(ax, agg_canvas(fig).get_renderer())
 

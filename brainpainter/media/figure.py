@@ -137,10 +137,29 @@ def figure_bytes(fig: Figure, path: Path, dpi: float, transparent: bool = False)
     rc: dict[str, Any] = {"pdf.fonttype": 42, "ps.fonttype": 42, "svg.fonttype": "none",
                           "svg.hashsalt": "brainpainter"}
     extra: dict[str, Any] = {"pil_kwargs": {"compression": "tiff_lzw"}} if fmt == "tiff" else {}
+    # PNG: the canvas's pixels as matplotlib draws them for a PNG, encoded by fpng (~10x faster than
+    # the zlib of matplotlib's writer: 0.08 s of a 300 dpi figure of two views and four panels)
+    drawn = "rgba" if fmt == "png" else fmt
     with matplotlib.rc_context(rc):  # type: ignore[arg-type]
-        fig.savefig(buf, format=fmt, dpi=dpi, metadata=metadata, transparent=transparent,
-                    facecolor="none" if transparent else fig.get_facecolor(), **extra)
+        fig.savefig(buf, format=drawn, dpi=dpi, metadata=None if drawn == "rgba" else metadata,
+                    transparent=transparent, facecolor="none" if transparent else fig.get_facecolor(),
+                    **extra)
+    if drawn == "rgba":
+        return _png_of_rgba(buf.getvalue(), fig, dpi, metadata or {})
     return buf.getvalue()
+
+
+def _png_of_rgba(raw: bytes, fig: Figure, dpi: float, metadata: dict[str, str]) -> bytes:
+    """A PNG of `fig`'s canvas drawn at `dpi` (`raw`: its RGBA bytes, as ``savefig(format="rgba")``
+    writes them; the canvas is ``int(inches * dpi)`` pixels each way, as Agg sizes it)."""
+    import numpy as np
+
+    from brainpainter.io.output import png_bytes
+
+    w, h = int(fig.get_figwidth() * dpi), int(fig.get_figheight() * dpi)
+    if len(raw) != w * h * 4:  # pragma: no cover - Agg sized the canvas otherwise
+        raise RuntimeError(f"the figure's canvas has {len(raw)} bytes, not {w} x {h} RGBA pixels")
+    return png_bytes(np.frombuffer(raw, np.uint8).reshape(h, w, 4), metadata, dpi=dpi)
 
 
 #: The smallest printed height of a connectome's node labels in a figure, points (issue 44).

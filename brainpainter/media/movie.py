@@ -55,7 +55,6 @@ from brainpainter.media.timeline import (
     plan_frames,
     read_times,
 )
-from brainpainter.rendering.blob_layers import blob_colors
 from brainpainter.rendering.clip import parse_sweep
 from brainpainter.rendering.composition import tract_colors
 from brainpainter.rendering.connectome_layers import connectome_colors
@@ -400,9 +399,8 @@ class MovieFrames:
                 connectome = getattr(self.run, "connectome", None)
                 if connectome is not None:  # a series' edge weights change between key frames like regions
                     colors.update(connectome_colors(connectome, self.run.layers, (rows[a], rows[b], weight)))
-            blobs = getattr(self.run, "blobs", None)
-            if blobs is not None:  # one volume's clusters: the same colours in every frame
-                colors.update(blob_colors(blobs, self.run.layers))
+            for layer in self.run.drawn:  # a volume's blobs, plugin layers: their colours of the key frame
+                colors.update(layer.colors(rows[a]))
             label = names[a] if a == b else f"{names[a]} {ARROW} {names[b]} ({weight:.3f})"
             yield [Item(colors, view, label=label) for view in state_views]
 

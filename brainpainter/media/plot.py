@@ -77,8 +77,9 @@ def plot(values: Any, view: str = "lateral-left", *, ax: Axes | None = None, row
     """Render one row of a table from one view into `ax`, with an optional colour bar beside it.
 
     A view ``"z=50"`` (``x=``, ``y=``) or ``"glass-z"`` (``glass-x``, ``glass-y``) draws a slice or
-    glass-brain panel of the run's volume (``volume=``) instead, on the map's colour scale
-    (:mod:`brainpainter.media.volume_panels`).
+    glass-brain panel of the run's volume (``volume=``, else ``volume_surface=``) instead, on its
+    colour scale (:mod:`brainpainter.media.volume_panels`). Blobs (``volume_surface=``) and cutaways
+    (``clip=``, ``"cutaway-left"``) are drawn as :func:`brainpainter.render` draws them.
 
     Parameters
     ----------
@@ -169,8 +170,10 @@ def _colorbar(ax: Axes, result: RenderResult, row: str | int, view_name: str, la
 
         settings = result.manifest["settings"]
         _, scene = load_scene(table.atlas, template or "fsaverage", settings["surface"], settings["hidden"])
-    nan, missing = swatches_needed(table, select_rows(table.images, [row]), parse_views([view_name]),
-                                   scene.geometry)
+    alone = bool(result.layers) and result.layers[0].kind in ("edges", "blobs")  # no region swatch
+    nan, missing = ((False, False) if alone else
+                    swatches_needed(table, select_rows(table.images, [row]), parse_views([view_name]),
+                                    scene.geometry))
     draw_colorbar(cax, scale, label=label, ticks=ticks, orientation=orientation, nan=nan, missing=missing)
     return cax
 
@@ -181,7 +184,7 @@ def _plot_panel(values: Any, section: Section, ax: Axes | None, row: str | int, 
     """A slice or glass-brain panel of the run's volume into `ax`; `bar`: colorbar, label, ticks,
     orientation."""
     from brainpainter.media.colorbar import draw_colorbar, text_color
-    from brainpainter.media.volume_panels import PanelOptions, label_panel, volume_panels
+    from brainpainter.media.volume_panels import PanelOptions, label_panel, panel_layer, volume_panels
     from brainpainter.rendering.run import prepare_run
     from brainpainter.table.rows import select_rows
 
@@ -200,7 +203,7 @@ def _plot_panel(values: Any, section: Section, ax: Axes | None, row: str | int, 
     ax.set_aspect("equal")
     label_panel(ax, section, convention, text_color(run.settings.background), 8.0)
     colorbar, label, ticks, orientation = bar
-    scale = run.scale_of("map")
+    scale = run.scale_of(panel_layer(values, run)[1])
     cax = None
     if colorbar:
         cax = _bar_axes(ax, orientation)

@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 
 from brainpainter.color.scale import ColourScale
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.io.memo import Memo
 from brainpainter.maps.options import MapOptions, frame_rows
 from brainpainter.maps.sections import (
     CONVENTIONS,
@@ -105,13 +106,25 @@ class PanelOptions:
 
 
 def panel_volume(data: Any, maps: MapOptions, given: Any = None) -> Any:
-    """The run's volume the panels show (a path or nibabel image), or None: `given`
+    """The run's map volume the panels show (a path or nibabel image), or None: `given`
     (:attr:`PanelOptions.volume_image`), ``--volume``, else a volume given as INPUT."""
     from brainpainter.maps.volume import is_volume
 
     if given is not None or maps.volume is not None:
         return given if given is not None else maps.volume
-    return data if data is not None and not isinstance(data, list) and is_volume(data) else None
+    if data is not None and not isinstance(data, list) and is_volume(data):
+        return data
+    return None
+
+
+def panel_layer(data: Any, run: Any, given: Any = None) -> tuple[Any, str]:
+    """The panels' volume and the kind of the run's layer whose scale they are drawn on: ``"map"``,
+    or ``"blobs"`` where the volume is ``--volume-surface``'s (the panels read on the blobs' bar)."""
+    own = panel_volume(data, run.options.maps, given)
+    if own is not None:
+        return own, "map"
+    blobs = run.options.scene.volume_surface
+    return blobs, ("blobs" if blobs is not None else "map")
 
 
 def volume_panels(data: Any, run: Any, opts: PanelOptions, rows: Sequence[int]
@@ -139,10 +152,10 @@ def volume_panels(data: Any, run: Any, opts: PanelOptions, rows: Sequence[int]
     """
     from brainpainter.maps.volume import check_mni152, load_volume
 
-    given = panel_volume(data, run.options.maps, opts.volume_image)
+    given, kind = panel_layer(data, run, opts.volume_image)
     if given is None:
         raise BrainPainterError("slice and glass-brain panels (--slices, --projections) show a volume in "
-                                "MNI152; give one with --volume FILE.")
+                                "MNI152; give one with --volume FILE (or --volume-surface FILE).")
     volume = load_volume(given)
     check_mni152(volume)
     for section in opts.sections:
@@ -153,8 +166,8 @@ def volume_panels(data: Any, run: Any, opts: PanelOptions, rows: Sequence[int]
     grids = {i: volume.volume(v) for i, v in which.items()}
     _check_threshold(threshold, grids.values(), volume.name)
     labels = _outline_labels(opts)
-    scale, background = run.scale_of("map"), run.settings.background
-    opacity = run.layer("map").opacity
+    scale, background = run.scale_of(kind), run.settings.background
+    opacity = next((layer.opacity for layer in run.layers if layer.kind == kind), 1.0)
     out: dict[tuple[str, str], NDArray[np.uint8]] = {}
     for i, grid in grids.items():
         for section in opts.sections:
@@ -205,23 +218,10 @@ def panel_rgba(section: Section, values: NDArray[Any], scale: ColourScale, thres
     ndarray of uint8, shape (h, w, 4)
         Transparent (or `background`) outside the brain.
     """
-    from scipy.ndimage import binary_erosion
-
-    rgba = np.zeros((*values.shape, 4))
-    if background is not None:
-        rgba[...] = (*background, 1.0)
-    if section.coord is None:
-        inside = silhouette(section.axis, convention)
-        edge = inside & ~binary_erosion(inside, iterations=GLASS_LINE_PX)
-        rgba[glass_lines(section.axis, convention) & inside] = (*GLASS_INNER, 1.0)
-        rgba[edge] = (*GLASS_LINE, 1.0)
-    else:
-        t1, affine = template()
-        grey = sample_plane(t1, affine, section, convention)
-        inside = np.isfinite(grey) & (grey > 0)
-        level = np.clip(grey[inside] / template_bright(), 0.0, 1.0)
-        rgba[inside, :3] = (GREYS[0] + (GREYS[1] - GREYS[0]) * level)[:, None]
-        rgba[inside, 3] = 1.0
+    key = (section, convention, None if background is None else tuple(float(c) for c in background))
+    rgba = PANEL_MEMO.get(key, lambda: underlay(section, convention, background)).copy()
+    if rgba.shape[:2] != values.shape:  # pragma: no cover - every panel of an axis has one grid
+        raise ValueError(f"panel {section.name}: values {values.shape} on a grid of {rgba.shape[:2]}")
     with np.errstate(invalid="ignore"):
         shown = np.isfinite(values) & (values != 0) & (np.abs(values) >= (threshold or 0.0))
     rgba[shown, :3] = opacity * scale(values[shown]) + (1.0 - opacity) * rgba[shown, :3]
@@ -234,6 +234,46 @@ def panel_rgba(section: Section, values: NDArray[Any], scale: ColourScale, thres
         rgba[border] = (*line_color, 1.0)
     out: NDArray[np.uint8] = np.round(rgba * 255).astype(np.uint8)
     return out
+
+
+#: Each panel's template underlay (:func:`underlay`), the same in every figure: kept in the process
+#: (~5 MB a panel; resampling the template and eroding the outline cost ~0.02 s a figure before).
+PANEL_MEMO = Memo(max_bytes=64 * 1024 * 1024)
+
+
+def underlay(section: Section, convention: str, background: Any) -> NDArray[np.float64]:
+    """A panel's pixels under the values: the template's greys (a slice) or the brain's outline and
+    inner lines (a projection), on `background` (None: transparent) outside the brain.
+
+    Returns
+    -------
+    ndarray of float, shape (h, w, 4)
+        RGBA, 0-1.
+    """
+    from scipy.ndimage import binary_erosion
+
+    if section.coord is None:
+        inside = silhouette(section.axis, convention)
+        rgba = _background(inside.shape, background)
+        edge = inside & ~binary_erosion(inside, iterations=GLASS_LINE_PX)
+        rgba[glass_lines(section.axis, convention) & inside] = (*GLASS_INNER, 1.0)
+        rgba[edge] = (*GLASS_LINE, 1.0)
+        return rgba
+    t1, affine = template()
+    grey = sample_plane(t1, affine, section, convention)
+    rgba = _background(grey.shape, background)
+    inside = np.isfinite(grey) & (grey > 0)
+    level = np.clip(grey[inside] / template_bright(), 0.0, 1.0)
+    rgba[inside, :3] = (GREYS[0] + (GREYS[1] - GREYS[0]) * level)[:, None]
+    rgba[inside, 3] = 1.0
+    return rgba
+
+
+def _background(shape: tuple[int, ...], background: Any) -> NDArray[np.float64]:
+    rgba = np.zeros((*shape, 4))
+    if background is not None:
+        rgba[...] = (*background, 1.0)
+    return rgba
 
 
 def orientation_marks(section: Section, convention: str) -> tuple[str, str]:

@@ -54,13 +54,13 @@ def alone_source(alone: str, data: Any, options: Options) -> Any:
 
 def empty_table(atlas: Atlas | None, source: Any, images: Sequence[str] = (),
                 what: str = "connectome") -> RegionTable:
-    """A region table of no regions: of `images`, else of one image named after the file `source`
-    (`what` where it is no file)."""
-    name = Path(source).name.split(".")[0] if isinstance(source, str | Path) else what
+    """A region table of no regions: of `images`, else of one image named after the file `source` (or
+    the file of a nibabel image; `what` where there is none)."""
+    path = source if isinstance(source, str | Path) else getattr(source, "get_filename", lambda: None)()
+    name = Path(path).name.split(".")[0] if path else what  # a nibabel image: its file's name
     names = tuple(images) or (name or what,)
     return RegionTable(images=names, regions=(), values=np.zeros((len(names), 0)),
-                       atlas=atlas or get_atlas("dk"), source=str(source) if isinstance(source, str | Path)
-                       else what)
+                       atlas=atlas or get_atlas("dk"), source=str(path) if path else what)
 
 
 def default_views(atlas: Atlas, alone: str | None) -> tuple[str, ...] | None:

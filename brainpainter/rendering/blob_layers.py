@@ -89,6 +89,10 @@ class BlobLayer:
         """The manifest's ``blobs``: the clusters drawn."""
         return self.blobs.summary()
 
+    def digest(self) -> str:
+        """A digest of the blobs drawn (the web's painters are keyed by it)."""
+        return str(self.blobs.digest())
+
 
 def drawn_blobs(blobs: Blobs | None, layers: tuple[Layer, ...]) -> tuple[BlobLayer, ...]:
     """The blobs as a drawn layer (with their layer among `layers`); none without blobs."""

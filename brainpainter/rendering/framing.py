@@ -185,6 +185,13 @@ def views_aspect(points: NDArray[Any], views: list[tuple[float, float]], lo: flo
     return float(np.clip(np.exp(np.mean(np.log(shapes))), lo, hi)) if shapes else 4 / 3
 
 
+def _along(points: NDArray[Any], axis: NDArray[Any]) -> NDArray[Any]:
+    """``points @ axis`` element-wise, shape (n,): a BLAS product wakes OpenBLAS's worker thread, which
+    then spins a core for a while (more CPU than the product itself, for each view a figure frames)."""
+    out: NDArray[Any] = points[:, 0] * axis[0] + points[:, 1] * axis[1] + points[:, 2] * axis[2]
+    return out
+
+
 def frame(points: NDArray[Any], azimuth: float, elevation: float, zoom: float,
           aspect: float, margin: float = MARGIN) -> CameraPose:
     """Frame `points` tightly in an orthographic view.
@@ -208,7 +215,7 @@ def frame(points: NDArray[Any], azimuth: float, elevation: float, zoom: float,
     """
     right, up, back = view_axes(azimuth, elevation)
     pts = np.asarray(points, dtype=float)
-    u, v, w = pts @ right, pts @ up, pts @ back
+    u, v, w = (_along(pts, axis) for axis in (right, up, back))
     (u0, u1), (v0, v1), (w0, w1) = (u.min(), u.max()), (v.min(), v.max()), (w.min(), w.max())
     width = max(u1 - u0, 1e-6) * (1 + 2 * margin)
     height = max(v1 - v0, 1e-6) * (1 + 2 * margin)

@@ -13,9 +13,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.errors import BrainPainterError
 from brainpainter.rendering.mesh_edges import EdgeTable
+from brainpainter.rendering.mesh_memo import kept_vertex_normals
 
 #: Colour of subcortical structures that have no colour in the mapping (sRGB).
 NEUTRAL_GREY = (0.8, 0.8, 0.8)
@@ -173,7 +173,7 @@ def build_part(name: str, kind: str, hemi: str | None, verts: NDArray[Any], face
     faces, face_slot = np.asarray(faces)[keep], face_slot[keep]
     if not len(faces):
         return None
-    normals = vertex_normals(verts, faces)
+    normals = kept_vertex_normals(verts, faces)
     if not occlusion or ao is None or len(ao) != len(verts):
         ao = None  # flat colours stay exact; a template without occlusion draws without it
     per_vertex: tuple[NDArray[Any], ...] = (normals, sulc) if ao is None else (normals, sulc, ao)

@@ -45,7 +45,7 @@ OPTIONS = {"matrix": "--connectome", "nodes": "--nodes", "node_values": "--node-
 #: The render options of a connectome's edges and nodes (given to a run only with a connectome upload, whose
 #: files give --nodes, --node-values and --node-categories): :class:`ConnectomeOptions`'s.
 CONNECTOME_FIELDS = ("directed", "edge_threshold", "top_edges", "edges_of", "nodes_space", "node_labels",
-                     "node_labels_top")
+                     "node_labels_top", "node_labels_per_category")
 #: Nodes a web connectome has at most (a 1000 x 1000 matrix is 4 MB as float32).
 MAX_NODES = 1000
 
@@ -73,7 +73,8 @@ def connectome_fields() -> dict[str, Any]:
             "edges_of": made("edges_of", str | None, max_length=200),
             "nodes_space": made("nodes_space", Literal[of["nodes_space"].metadata["choices"]]),
             "node_labels": made("node_labels", bool),
-            "node_labels_top": made("node_labels_top", int | None, ge=1, le=MAX_NODES)}
+            "node_labels_top": made("node_labels_top", int | None, ge=1, le=MAX_NODES),
+            "node_labels_per_category": made("node_labels_per_category", bool)}
 
 
 def is_connectome_bundle(data: bytes) -> bool:

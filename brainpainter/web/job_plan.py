@@ -24,13 +24,19 @@ def job_plan(data: bytes, name: str, options: RenderOptions, kind: str, figure: 
     prep = prepare(data, name, options, max_images=max_images, max_pixels=max_pixels, data_dir=data_dir,
                    **uploads)
     n_rows, n_views = len(prep.run.table.images), len(prep.run.views)
-    if kind == "movie" and n_rows < 2:
+    keys = n_rows  # a movie's key frames: one row cut open by a sweeping plane is a movie too
+    if kind == "movie" and movie.clip_sweep:
+        from brainpainter.rendering.clip import parse_sweep
+
+        parse_sweep(movie.clip_sweep)
+        keys = max(n_rows, 2)
+    if kind == "movie" and keys < 2:
         raise BrainPainterError(f"a movie needs at least 2 rows (key frames); the table has {n_rows}.")
     if kind == "export" and export.row >= n_rows:
         raise BrainPainterError(f"row must be 0..{n_rows - 1}; {export.row} was given.")
     if kind == "figure" and figure.format == "png":  # a PDF embeds the renders as they are
         check_figure_pixels(*figure_pixels(prep, figure), max_figure_pixels)
-    total = n_rows * n_views if kind == "images" else movie.n_frames(n_rows) if kind == "movie" else 1
+    total = n_rows * n_views if kind == "images" else movie.n_frames(keys) if kind == "movie" else 1
     return total, n_rows
 
 

@@ -420,10 +420,32 @@ def bundle_volume(data: bytes) -> Any:
     return None
 
 
-def figure_panels(params: Any, data: bytes) -> dict[str, Any]:
+def blob_kwargs(data: bytes, options: Any) -> dict[str, Any]:
+    """The run's keywords of a volume upload `data` drawn as blobs (option ``volume_surface``): the
+    volume as ``--volume-surface``, its colour bar labelled with the file's name unless ``blobs_label``
+    was given, and no map label (the volume is not projected onto the cortex).
+
+    Raises
+    ------
+    BrainPainterError
+        The upload is no volume (a table, surface maps, CIFTI).
+    """
+    volume = bundle_volume(data)
+    if volume is None:
+        raise BrainPainterError("option volume_surface draws a volume upload's clusters as blobs; this "
+                                "upload is no volume. Upload an MNI152 volume (.nii, .nii.gz), or leave "
+                                "volume_surface out.")
+    (shown,) = base_of(data)["files"]
+    volume.set_filename(shown)  # a label only (the images' name, messages): the data are in memory
+    label = options.blobs_label or shown
+    return {"volume_surface": volume, "blobs_label": label, "map_label": options.map_label}
+
+
+def figure_panels(params: Any, data: bytes, blobs: bool = False) -> dict[str, Any]:
     """The slice and glass-brain panels of figure job `params` (``FigureParams``) as
-    :func:`brainpainter.media.figure.make_figure` keywords, with the volume of upload `data`."""
+    :func:`brainpainter.media.figure.make_figure` keywords, with the volume of upload `data` (`blobs`: it
+    is drawn as blobs, ``--volume-surface``, which the panels show on the blobs' scale)."""
     if not params.slices and not params.projections:
         return {}
     return {"slices": params.slices, "projections": params.projections or None,
-            "convention": params.convention, "volume_image": bundle_volume(data)}
+            "convention": params.convention, "volume_image": None if blobs else bundle_volume(data)}

@@ -135,7 +135,23 @@ class RenderOptions(_WithLayers):
     outline_width: FiniteFloat = Field(core(RenderSettings, "outline_width").default, ge=0, le=20,
                                        description=core(RenderSettings, "outline_width").description)
     outline_color: str = core(RenderSettings, "outline_color")
+    outline_style: Annotated[str, one_of(RenderSettings, "outline_style")] = core(RenderSettings,
+                                                                                  "outline_style")
+    contour_width: FiniteFloat = Field(0.0, ge=0, le=20, description=core(RenderSettings,
+                                                                          "contour_width").description)
+    contour_color: str | None = Field(None, max_length=40, description=core(RenderSettings,
+                                                                            "contour_color").description)
+    contour_style: Annotated[str, one_of(RenderSettings, "contour_style")] = core(RenderSettings,
+                                                                                  "contour_style")
     cortex: Annotated[str, one_of(RenderSettings, "cortex")] = core(RenderSettings, "cortex")
+    volume_surface: bool = Field(False, description=(
+        "Draw a volume upload as blobs: its clusters above threshold (both signs) as smooth lit surfaces "
+        "inside the glass brain, on a scale of their own (as --volume-surface FILE --threshold T), instead "
+        "of its projection onto the cortex."))
+    min_cluster_mm3: FiniteFloat = Field(0.0, ge=0, le=1e9,
+                                         description=core(SceneOptions, "min_cluster_mm3").description)
+    clip: list[Annotated[str, Field(max_length=40)]] = Field([], max_length=6, description=core(
+        SceneOptions, "clip").description)
     map: str | None = Field(None, pattern="^[0-9a-f]{32}$", description=(
         "Upload id of a map (POST /api/uploads: a surface map, a volume or a CIFTI file) drawn over the "
         "table's region colours, as --lh/--rh (or --volume) beside INPUT; map_alpha is its opacity."))
@@ -172,8 +188,8 @@ class RenderOptions(_WithLayers):
         files of a connectome upload (:func:`brainpainter.web.connectomes.materialise`), given with the
         connectome's options.
         """
-        values = self.model_dump(exclude={"atlas", "size", "transparent", "hide", *LAYER_UPLOADS,
-                                          *TRACT_FIELDS, *CONNECTOME_FIELDS})
+        values = self.model_dump(exclude={"atlas", "size", "transparent", "hide", "volume_surface",
+                                          *LAYER_UPLOADS, *TRACT_FIELDS, *CONNECTOME_FIELDS})
         if connectome is not None:
             values.update(connectome, **self.model_dump(include=set(CONNECTOME_FIELDS)))
         if self.size:  # none: the default size, which an atlas of another shape reshapes (as on the CLI)
@@ -235,13 +251,14 @@ class Prepared:
         return str(self.run.coloring)
 
     def painter_args(self) -> dict[str, Any]:
-        """The tract and contour arguments of the run's painter (as
+        """The tract, contour, connectome and drawn-layer arguments of the run's painter (as
         :meth:`brainpainter.rendering.run.Run.painter` gives them)."""
         scene = self.run.options.scene
         tv = getattr(self.run, "tract_values", None)
         return {"tracts": scene.tract_spec(), "tract_nodes": tv.nodes if tv is not None else (),
                 "tract_radius": scene.tract_radius, "contours": getattr(self.run, "contours", None),
-                "connectome": getattr(self.run, "connectome", None)}
+                "connectome": getattr(self.run, "connectome", None),
+                "drawn": self.run.drawn}
 
 
 def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int | None = None,
@@ -253,15 +270,13 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     Parameters
     ----------
     data : bytes
-        The uploaded table file, a map bundle (:mod:`brainpainter.web.maps`), a tract bundle with a table
-        of bundle values (the tracts alone), or a connectome bundle (the connectome alone).
+        The uploaded table, a map bundle (:mod:`brainpainter.web.maps`; a volume's: blobs with option
+        ``volume_surface``), tractograms with a table of bundle values or a connectome (each alone).
     name : str
         Its display name (from :func:`upload_name`).
     options : RenderOptions
-    max_images : int, optional
-        Largest rows x views.
-    max_pixels : int, optional
-        Largest width x height of one view.
+    max_images, max_pixels : int, optional
+        Largest rows x views; largest width x height of one view.
     tracts : bytes, optional
         The tract bundle that option ``tracts`` names (drawn with the table).
     data_dir : Path, optional
@@ -278,7 +293,7 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
     from brainpainter.rendering.painter import resolve_hidden
     from brainpainter.rendering.run import prepare_run
     from brainpainter.web.connectomes import connectome_files, is_connectome_bundle
-    from brainpainter.web.maps import is_bundle, read_bundle
+    from brainpainter.web.maps import blob_kwargs, is_bundle, read_bundle
     from brainpainter.web.tracts import is_tract_bundle
 
     alone = is_tract_bundle(data)
@@ -301,6 +316,9 @@ def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int |
         tract_table = files.values
         kwargs["tract_values"] = None
         run = prepare_run(str(tract_table), options.atlas, **kwargs)
+    elif options.volume_surface:  # a volume's blobs, as --volume-surface FILE (not projected onto the cortex)
+        kwargs.update(blob_kwargs(data, options))
+        run = prepare_run(None, options.atlas, **kwargs)
     elif is_bundle(data):  # a map: its files, read as the CLI reads --lh/--rh (tracts drawn with it)
         run = prepare_run(read_bundle(data), options.atlas, **kwargs)
     else:
@@ -397,6 +415,8 @@ class MovieParams(BaseModel):
     hold: int = Field(core(_movie_options(), "hold").default, ge=0, le=120,
                       description="Extra frames showing each key frame still.")
     fps: float = Field(core(_movie_options(), "fps").default, ge=1, le=60, description="Frames per second.")
+    clip_sweep: str | None = Field(None, max_length=8,
+                                   description=core(_movie_options(), "clip_sweep").description)
     title: str | None = Field(None, max_length=200)
     label: str | None = Field(None, max_length=200)
 

@@ -71,7 +71,7 @@ def changed(options: RenderOptions, *, kind: str, tracts: bool,
     out: list[tuple[str, Any]] = []
     for name, info in RenderOptions.model_fields.items():
         value = getattr(options, name)
-        if name in LAYER_UPLOADS or (name in TRACT_FIELDS and not tracts) or (
+        if name in LAYER_UPLOADS or name == "volume_surface" or (name in TRACT_FIELDS and not tracts) or (
                 name in MAP_ONLY and kind != "map") or (name in CONNECTOME_FIELDS and not connectome):
             continue
         if name == "hide":
@@ -255,6 +255,8 @@ def reproduce(data: bytes, name: str, options: RenderOptions, tracts: bytes | No
         ``command`` (one shell line) and ``python`` (a snippet), with the files under the client's names.
     """
     upload, positional, given = inputs(data, name)
+    if options.volume_surface:  # the volume drawn as blobs: --volume-surface FILE
+        given = [("volume_surface" if k == "volume" else k, v) for k, v in given]
     drawn = data if upload == "tracts" else tracts
     pairs: list[tuple[str, Any]] = list(given)
     if map_upload is not None:  # a map over the table: its files as --lh/--rh or --volume

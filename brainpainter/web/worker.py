@@ -35,6 +35,8 @@ HEARTBEAT_S = 5.0
 
 #: Job kinds and the output file name stems they make.
 KINDS = ("images", "figure", "movie", "export")
+#: What a preview request may add to a painter's scene (:meth:`PainterCache.get`).
+SCENE_PARTS = ("tracts", "tract_nodes", "tract_radius", "contours", "connectome", "drawn")
 
 
 class PainterCache:
@@ -46,21 +48,18 @@ class PainterCache:
         self._painters: OrderedDict[tuple[Any, ...], Any] = OrderedDict()
 
     def get(self, atlas: Any, surface: str, hidden: list[str], settings: Any,
-            coloring: str = "regions", tracts: Any = None, tract_nodes: Any = (),
-            tract_radius: float | None = None, contours: Any = None, connectome: Any = None) -> Any:
-        """A loaded painter; `coloring` ``"vertices"`` for a map run (a per-vertex scene); `tracts`,
-        `tract_nodes`, `tract_radius`, `contours` and `connectome` as :class:`~brainpainter.rendering.painter
-        .Painter` takes them (part of the key: the spec names content-addressed files, the contours and the
-        connectome by a digest of their values, so two uploads never share a painter)."""
+            coloring: str = "regions", **parts: Any) -> Any:
+        """A loaded painter; `coloring` ``"vertices"`` for a map run (a per-vertex scene); `parts`
+        (:data:`SCENE_PARTS`: tracts, contours, a connectome, the blobs) as :class:`~brainpainter.rendering.
+        painter.Painter` takes them (part of the key: the spec names content-addressed files, the contours,
+        the connectome and the blobs by a digest of their values, so two uploads never share a painter)."""
         from brainpainter.rendering.painter import Painter
 
-        key = painter_key(atlas.name, surface, hidden, settings, coloring, tracts, tract_nodes, tract_radius,
-                          contours, connectome)
+        key = painter_key(atlas.name, surface, hidden, settings, coloring, **parts)
         painter = self._painters.get(key)
         if painter is None:
             painter = Painter(atlas, "fsaverage", surface, hidden, settings, self.renderer, coloring=coloring,
-                              tracts=tracts, tract_nodes=tract_nodes, tract_radius=tract_radius,
-                              contours=contours, connectome=connectome)
+                              **parts)
             painter.load()
             self._painters[key] = painter
             while len(self._painters) > self.size:
@@ -83,17 +82,17 @@ class PainterCache:
 
 
 def painter_key(atlas: str, surface: str, hidden: list[str], settings: Any, coloring: str = "regions",
-                tracts: Any = None, tract_nodes: Any = (),
-                tract_radius: float | None = None, contours: Any = None,
-                connectome: Any = None) -> tuple[Any, ...]:
+                tracts: Any = None, tract_nodes: Any = (), tract_radius: float | None = None,
+                contours: Any = None, connectome: Any = None, drawn: Any = ()) -> tuple[Any, ...]:
     """What makes a painter's scene: a cached painter is reused only for the same key."""
     import hashlib
 
-    drawn = None if contours is None else (contours.levels, contours.regions, hashlib.sha256(b"".join(
+    lines = None if contours is None else (contours.levels, contours.regions, hashlib.sha256(b"".join(
         h.encode() + v.tobytes() for h, v in sorted(contours.values.items()))).hexdigest())
     network = None if connectome is None else connectome.digest()
     return (atlas, surface, tuple(sorted(hidden)), settings, coloring, tracts,
-            tuple((str(n), int(k)) for n, k in tract_nodes), tract_radius, drawn, network)
+            tuple((str(n), int(k)) for n, k in tract_nodes), tract_radius, lines, network,
+            tuple(layer.digest() for layer in drawn))
 
 
 def _orphaned(parent: int) -> bool:
@@ -268,12 +267,12 @@ def _prepared(folder: Path, job: dict[str, Any]) -> Any:
 
 def _media_input(data: bytes, name: str, prep: Any) -> Any:
     """What figure, movie and export read: the table as a named stream, a map's maps, the bundle values of
-    tracts alone, or None for a connectome alone (its files are in the run's keywords)."""
+    tracts alone, or None for a connectome or blobs alone (their files are in the run's keywords)."""
     from brainpainter.web.connectomes import is_connectome_bundle
     from brainpainter.web.maps import is_bundle, read_bundle
     from brainpainter.web.options import table_stream
 
-    if prep.tract_table is not None or is_connectome_bundle(data):
+    if prep.tract_table is not None or is_connectome_bundle(data) or prep.options.volume_surface:
         return None if prep.tract_table is None else str(prep.tract_table)
     return read_bundle(data) if is_bundle(data) else table_stream(data, name)
 
@@ -406,10 +405,11 @@ def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
     name = f"figure.{p.get('format', 'pdf')}"
     tick(0)
     params = FigureParams(**p)  # the CLI's defaults for what the job did not give
+    panels = figure_panels(params, data, prep.options.volume_surface)
     made = make_figure(_media_input(data, job["input_name"], prep), grid=params.grid,
                        title=params.title or None, label=params.label or None, dpi=params.dpi,
                        fig_width=params.fig_width, font_size=params.font_size, on_progress=tick,
-                       **figure_panels(params, data), **_media_kwargs(prep, painters.renderer))
+                       **panels, **_media_kwargs(prep, painters.renderer))
     if max_pixels is not None:  # composed now: its real size, before the PNG is drawn
         w, h = (round(x) for x in made.figure.get_size_inches() * params.dpi)
         check_figure_pixels(w, h, max_pixels)
@@ -430,7 +430,8 @@ def _run_movie(folder: Path, job: dict[str, Any], painters: PainterCache, tick: 
     kwargs = _media_kwargs(prep, painters.renderer)  # progress: per frame (on_progress), not 0/1
     make_movie(_media_input(data, job["input_name"], prep), out=folder / "out" / name,
                frames_per_step=params.frames_per_step, easing=params.easing, hold=params.hold, fps=params.fps,
-               title=params.title or None, label=params.label or None, on_progress=tick, **kwargs)
+               clip_sweep=params.clip_sweep or None, title=params.title or None, label=params.label or None,
+               on_progress=tick, **kwargs)
     return _media_manifest(folder, job, data, prep, name)
 
 
@@ -486,9 +487,8 @@ def preview_main(conn: Any, renderer: str, lp_threads: int, warm_size: tuple[int
             try:
                 atlas = get_atlas(req["atlas"])
                 painter = painters.get(atlas, req["surface"], req["hidden"], req["settings"],
-                                       req.get("coloring", "regions"), req.get("tracts"),
-                                       req.get("tract_nodes", ()), req.get("tract_radius"),
-                                       req.get("contours"), req.get("connectome"))
+                                       req.get("coloring", "regions"),
+                                       **{k: req[k] for k in SCENE_PARTS if k in req})
                 pixels = painter.paint_colors(req["colors"], req["view"])
                 conn.send(("ok", png_bytes(pixels), int((time.perf_counter() - t0) * 1000)))
             except BrainPainterError as exc:

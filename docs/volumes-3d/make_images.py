@@ -4,7 +4,8 @@
 
 A synthetic z-map on nilearn's MNI152 2 mm grid (six Gaussian blobs of both signs) drawn as blobs,
 the bundled DK example cut open, and four frames of a movie whose cut plane sweeps from left to right
-through the DK example's opaque cortex with the blobs inside.
+through the DK example's opaque cortex with the blobs inside; the blobs alone beside their slice and
+glass-brain panels, all on the blobs' bar.
 """
 
 from __future__ import annotations
@@ -43,6 +44,14 @@ def shrink(path: Path, width: int) -> None:
     small.save(path, optimize=True)
 
 
+def blob_panels(z: Path) -> None:
+    """The blobs from above with an axial slice and the axial projection of the same volume."""
+    brainpainter.figure(None, out=HERE / "blobs_panels.png", volume_surface=str(z), threshold=2.3,
+                        views="dorsal", slices="z=52", projections="z", width=600, height=450, label="z",
+                        dpi=150, progress=False)
+    shrink(HERE / "blobs_panels.png", 1000)
+
+
 def main() -> None:
     with TemporaryDirectory() as tmp:
         z = zmap(Path(tmp) / "zstat.nii.gz")
@@ -65,6 +74,7 @@ def main() -> None:
             sheet.paste(frame, (k * frame.width, 0))
         sheet.save(HERE / "sweep.png", optimize=True)
         shrink(HERE / "sweep.png", 1400)
+        blob_panels(z)
 
 
 if __name__ == "__main__":

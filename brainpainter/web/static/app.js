@@ -210,7 +210,13 @@ function options() {
     lighting: $("lighting").value, glass_opacity: Number($("glass_opacity").value || 0),
     underlay: $("underlay").value, threshold: numberOrNull("threshold"), outline: textOrNull("outline"),
     outline_threshold: $("outline_threshold").checked, outline_width: Number($("outline_width").value || 0),
-    outline_color: $("outline_color").value,
+    outline_color: $("outline_color").value, outline_style: $("outline_style").value,
+    contour_width: Number($("contour_width").value || 0), contour_color: textOrNull("contour_color"),
+    contour_style: $("contour_style").value,
+    // a volume upload drawn as blobs; cut-away planes ("x<0; z>20")
+    volume_surface: state.isMap && $("volume_surface").checked,
+    min_cluster_mm3: Number($("min_cluster_mm3").value || 0),
+    clip: $("clip").value.split(/[;,]/).map((s) => s.trim()).filter(Boolean),
     // tracts: drawn with the table (the table is the upload), or alone (the tract upload is the upload)
     tracts: state.tractsId && state.tractsId !== state.uploadId ? state.tractsId : null,
     tracts_space: $("tracts_space").value || undefined, cortex: $("cortex").value || undefined,
@@ -221,6 +227,7 @@ function options() {
     edge_threshold: textOrNull("edge_threshold"), top_edges: numberOrNull("top_edges"),
     edges_of: textOrNull("edges_of"), directed: $("directed").checked,
     node_labels: $("node_labels").checked, node_labels_top: numberOrNull("node_labels_top"),
+    node_labels_per_category: $("node_labels_per_category").checked,
     ...layerOptions(),
   };
 }
@@ -713,7 +720,8 @@ async function submit(kind, format) {
   }
   if (kind === "movie") {
     body.movie = { format, frames_per_step: Number($("frames_per_step").value), hold: Number($("hold").value),
-                   easing: $("easing").value, fps: Number($("fps").value) };
+                   easing: $("easing").value, fps: Number($("fps").value),
+                   clip_sweep: $("clip_sweep").value || null };
   }
   if (kind === "export") body.export = { row: Number($("row").value || 0) };
   let job;
@@ -760,7 +768,8 @@ function jobStep(job) {
 
 // A movie's length before it is made: frames as brainpainter movie plans them, and seconds.
 function movieLength() {
-  const k = state.uploadId ? state.nRows || 0 : 0;
+  const rows = state.uploadId ? state.nRows || 0 : 0;
+  const k = $("clip_sweep").value && rows === 1 ? 2 : rows;  // one row cut open by a sweeping plane
   const n = Number($("frames_per_step").value), hold = Number($("hold").value), fps = Number($("fps").value);
   if (k < 2 || !(n >= 1) || !(hold >= 0) || !(fps > 0)) {
     $("movie-length").textContent = k === 1 ? "A movie needs at least 2 rows." : "";
@@ -859,7 +868,7 @@ function wire() {
       setTimeout(() => { b.textContent = label; }, 2000);
     });
   }
-  for (const id of ["frames_per_step", "hold", "fps"]) $(id).addEventListener("input", movieLength);
+  for (const id of ["frames_per_step", "hold", "fps", "clip_sweep"]) $(id).addEventListener("input", movieLength);
   $("affine-file").addEventListener("change", async () => {
     const f = $("affine-file").files[0];
     if (!f) return;

@@ -14,7 +14,9 @@ neighbour (geometric post-process anti-aliasing, as in Humus's GPAA): the
 coverage of a straight edge is exact, with no blur inside the regions.
 
 The edge table of a part (edge ends, the two triangles, whether it is a
-region border) is built once, on the first view that shows it; a view's edges
+region border) is built once, on the first view that shows it, and kept in the
+process for the next run of the same mesh (a map's figures:
+:mod:`brainpainter.rendering.mesh_memo`); a view's edges
 are an index buffer into one vertex buffer of two vertices per edge. Lines one
 pixel wide suffice: a line rasterised along its major axis covers, in each
 column (row), the pixel whose centre is nearest to it, the one pixel there
@@ -30,7 +32,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from brainpainter.rendering.geometry import PartGeometry
-from brainpainter.rendering.mesh_edges import EdgeTable, edge_table
+from brainpainter.rendering.mesh_edges import EdgeTable
+from brainpainter.rendering.mesh_edges import edge_table as edge_table  # tests import it from here
+from brainpainter.rendering.mesh_memo import kept_edge_table
 
 #: Pixels of the edge buffers kept (one per view; 4 bytes a pixel): 4 views of 1200x900.
 MAX_BUFFER_PIXELS = 4 * 1200 * 900
@@ -87,7 +91,7 @@ class EdgeAA:
         if table is None:
             table = part.edges  # kept with the part (a region scene's cortex, read from the cache)
             if table is None:
-                table = edge_table(part.vertices, part.triangles, part.palette_index)
+                table = kept_edge_table(part.vertices, part.triangles, part.palette_index)
             self._tables[part.name] = table
         return table
 

@@ -44,13 +44,14 @@ import numpy as np
 from brainpainter.rendering.geometry import PartGeometry, SceneGeometry
 from brainpainter.rendering.scene import RenderSettings
 from brainpainter.rendering.views import View
-from brainpainter_blender import cutaway, edge_aa, glass_layers, gpu_shaders, meshorder, outlines, tract_lines
+from brainpainter_blender import cutaway, edge_aa, glass_layers, gpu_shaders, outlines, tract_lines
 from brainpainter_blender.aim import Aim as _Aim
 from brainpainter_blender.aim import aim_for as _aim_for
 from brainpainter_blender.aim import on_top
-from brainpainter_blender.facing import facing, triangle_normals
+from brainpainter_blender.facing import facing
 from brainpainter_blender.gpu_context import in_gpu_context
 from brainpainter_blender.gpu_lighting import FLAT, LIGHTING, for_maps
+from brainpainter_blender.meshorder import draw_order
 
 #: Supersampling factor per quality (per axis); ``high`` reaches here only for flat shading.
 SUPERSAMPLING = {"fast": 1, "default": 1, "high": 3}
@@ -150,7 +151,7 @@ class GpuDraw:
         if batch is None:
             import gpu
 
-            order, triangles = meshorder.cache_friendly(part.vertices, part.triangles)
+            order, triangles, normals = draw_order(part)
             attrs = {"pos": part.vertices[order], "nrm": part.normals[order],
                      "pal": part.palette_index[order].astype(np.float32), "sulc": part.sulc[order],
                      "ao": self._occlusion(part)[order]}
@@ -161,7 +162,7 @@ class GpuDraw:
             vbo = gpu.types.GPUVertBuf(fmt, len(order))
             for name, values in attrs.items():
                 vbo.attr_fill(name, np.ascontiguousarray(values, np.float32))
-            self._meshes[part.name] = (vbo, triangle_normals(attrs["pos"], triangles), triangles, order)
+            self._meshes[part.name] = (vbo, normals, triangles, order)
             batch = self._batches[part.name] = gpu.types.GPUBatch(
                 type="TRIS", buf=vbo, elem=gpu.types.GPUIndexBuf(type="TRIS", seq=triangles))
         return batch
