@@ -105,3 +105,21 @@ def test_bad_layer_options_are_one_line_errors(foci_site, peaks, tmp_path):
             code, out, err = invoke(["render", *args, "--out", str(tmp_path / "o"), "-q"])
             assert code == 2 and said in err and len(err.strip().splitlines()) == 1, (args, err)
             assert "Traceback" not in out + err and not (tmp_path / "o").exists()
+
+
+@pytest.mark.render
+@pytest.mark.integration
+def test_a_movie_over_a_region_table_draws_the_foci_in_their_colours(foci_site, peaks, tmp_path):
+    """A movie's frames are coloured in the movie module, not by Run.item: the drawn layers' colours too."""
+    with installed(foci_site):
+        result = CliRunner().invoke(cli, [
+            "movie", str(TABLE), "--rows", "stage-1,stage-2", "--frames-per-step", "4", "--views", "dorsal",
+            "--layer", f"foci:{peaks}", "--size", "320x240", "--shading", "flat", "--quality", "fast",
+            "-o", str(tmp_path / "m.gif"), "-q"])
+        assert result.exit_code == 0, result.output
+    with Image.open(tmp_path / "m.gif") as gif:
+        frames = []
+        for k in range(gif.n_frames):
+            gif.seek(k)
+            frames.append(np.asarray(gif.convert("RGB")))
+    assert all(_near(frame, MAGENTA).sum() > 20 for frame in frames)
