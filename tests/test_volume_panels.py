@@ -113,13 +113,18 @@ def test_slice_at_z50_shows_the_sphere_right_of_the_midline_in_the_bars_colours(
     assert abs(row - _expected("x")[0]) < 3 and abs(col - _expected("x")[1]) < 3
 
 
+def _panel_crop(png: np.ndarray, result, name: str):
+    """The pixels of panel `name` in the written figure `png`, and the panel's axes box."""
+    h, w = png.shape[:2]
+    box = result.image_axes[("sphere", name)].get_position()
+    return png[round((1 - box.y1) * h):round((1 - box.y0) * h), round(box.x0 * w):round(box.x1 * w)], box
+
+
 def test_slice_in_the_written_figure_reads_back_on_its_bar(sphere, tmp_path):
     result = _figure(sphere, tmp_path, slices=["z=50"], projections="z", dpi=200)
     png = np.asarray(Image.open(result.path).convert("RGBA"))
-    h, w = png.shape[:2]
     for name in ("z=50", "glass-z"):
-        box = result.image_axes[("sphere", name)].get_position()
-        crop = png[round((1 - box.y1) * h):round((1 - box.y0) * h), round(box.x0 * w):round(box.x1 * w)]
+        crop, box = _panel_crop(png, result, name)
         blob = _coloured(crop)
         assert blob.sum() > 30, name
         assert _bar_error(crop[blob], result.scale) < 10, name
@@ -300,10 +305,8 @@ def test_the_issues_figure_with_blender_views_three_slices_and_a_projection(sphe
     for view in ("lateral-right", "dorsal"):                      # the renders: a brain, not empty
         assert (result.images[("sphere", view)][..., 3] > 0).mean() > 0.2
     png = np.asarray(Image.open(result.path).convert("RGBA"))
-    h, w = png.shape[:2]
     for name in ("z=50", "glass-z"):
-        box = result.image_axes[("sphere", name)].get_position()
-        crop = png[round((1 - box.y1) * h):round((1 - box.y0) * h), round(box.x0 * w):round(box.x1 * w)]
+        crop, _box = _panel_crop(png, result, name)
         blob = _coloured(crop)
         assert blob.sum() > 20 and _bar_error(crop[blob], result.scale) < 10, name
         assert _centre(blob)[1] > 0.6 * crop.shape[1], name

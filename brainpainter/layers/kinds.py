@@ -92,11 +92,6 @@ def kind_of(name: str) -> LayerKind:
     return kind
 
 
-def all_kinds() -> list[LayerKind]:
-    """Every installed layer kind, built-in and plugins', by name."""
-    return [kind_of(name) for name in layer_kinds.names()]
-
-
 def parse_layer(given: str) -> tuple[str, str]:
     """``"KIND:FILE"`` to ``(kind, file)``."""
     kind, sep, path = str(given).partition(":")
