@@ -145,14 +145,9 @@ class StandInRenderer:
                                                                            strict=True)]
             self.connectome_keys += [("edge", str(sides[a]) if sides[a] == sides[b] else None, k)
                                      for a, b, k in zip(source, target, edge_keys(len(weight)), strict=True)]
-        blobs = getattr(scene, "blobs", None)
-        if blobs is not None:  # drawn where tracts are: a stripe per value level
-            from brainpainter.rendering.blob_parts import blob_keys
-
-            self.tract_keys += [(None, k) for k in blob_keys(len(blobs.levels))]
         # how cortex views draw the cortex (scene.geometry.cortex, resolved without building the geometry)
         cortex = getattr(getattr(scene, "settings", None), "cortex", "opaque")
-        inside = getattr(scene, "tracts", None) is not None or connectome is not None or blobs is not None
+        inside = getattr(scene, "tracts", None) is not None or connectome is not None
         self.cortex = ("glass" if inside else "opaque") if cortex == "auto" else cortex
         type(self).scenes += 1
 
