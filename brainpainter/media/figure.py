@@ -38,7 +38,7 @@ from brainpainter.media.layout import FigureKwargs, FigureLayout, FigureOptions,
 from brainpainter.media.outfile import check_out_file
 from brainpainter.media.plain_text import quiet_glyphs
 from brainpainter.media.volume_panels import PanelKwargs, PanelOptions, label_panels, volume_panels
-from brainpainter.rendering.layers import colorbar_layers, first_bar_label
+from brainpainter.rendering.layers import colorbar_layers, first_bar_label, without_regions
 from brainpainter.rendering.options import Options, RenderKwargs, take
 from brainpainter.rendering.run import make_runner, paint, prepare_run
 from brainpainter.rendering.views import ImagesByView
@@ -296,7 +296,7 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     panels = volume_panels(data, run, panel_opts, chosen) if panel_opts.sections else {}
     run = printed_labels(run, [table.images[i] for i in chosen], figure_opts)
     painter = run.painter()
-    nan, missing = ((False, False) if run.layers[0].kind in ("edges", "blobs")  # alone: no region swatch
+    nan, missing = ((False, False) if without_regions(run.layers)
                     else swatches_needed(table, chosen, run.views, painter.scene.geometry))
     plan = run.items(chosen)
     background = run.settings.background

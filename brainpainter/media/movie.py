@@ -58,7 +58,7 @@ from brainpainter.media.timeline import (
 from brainpainter.rendering.clip import parse_sweep
 from brainpainter.rendering.composition import tract_colors
 from brainpainter.rendering.connectome_layers import connectome_colors
-from brainpainter.rendering.layers import colorbar_layers, first_bar_label
+from brainpainter.rendering.layers import colorbar_layers, first_bar_label, without_regions
 from brainpainter.rendering.options import Options, RenderKwargs, take
 from brainpainter.rendering.painter import region_colors
 from brainpainter.rendering.parallel import Item, Runner
@@ -349,7 +349,7 @@ class MovieFrames:
     @classmethod
     def of(cls, run: Run, keys: MovieKeys, plan: list[FramePlan], movie: MovieOptions) -> MovieFrames:
         painter = run.painter()
-        nan, missing = ((False, False) if run.layers[0].kind in ("edges", "blobs")  # alone: no swatch
+        nan, missing = ((False, False) if without_regions(run.layers)
                         else swatches_needed(run.table, keys.rows, run.views, painter.scene.geometry))
         w, h = run.settings.width, run.settings.height
         assert run.settings.background is not None

@@ -157,6 +157,7 @@ def _colorbar(ax: Axes, result: RenderResult, row: str | int, view_name: str, la
     """The colour bar of a plot in an inset of `ax`, with the swatches of the colours it draws."""
     from brainpainter.media.colorbar import draw_colorbar
     from brainpainter.media.drawn import swatches_needed
+    from brainpainter.rendering.layers import without_regions
     from brainpainter.rendering.views import parse_views
     from brainpainter.table.rows import select_rows
 
@@ -170,7 +171,7 @@ def _colorbar(ax: Axes, result: RenderResult, row: str | int, view_name: str, la
 
         settings = result.manifest["settings"]
         _, scene = load_scene(table.atlas, template or "fsaverage", settings["surface"], settings["hidden"])
-    alone = bool(result.layers) and result.layers[0].kind in ("edges", "blobs")  # no region swatch
+    alone = without_regions(result.layers)
     nan, missing = ((False, False) if alone else
                     swatches_needed(table, select_rows(table.images, [row]), parse_views([view_name]),
                                     scene.geometry))

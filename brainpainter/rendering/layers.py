@@ -65,6 +65,12 @@ def colorbar_layers(layers: tuple[Layer, ...]) -> list[Layer]:
     return [layer for k, layer in enumerate(layers) if k == 0 or layer.own_scale]
 
 
+def without_regions(layers: Sequence[Layer]) -> bool:
+    """Whether the first layer is a connectome's edges or a volume's blobs drawn alone: no region
+    values, so a figure, movie or plot shows no region swatch (no data, not measured)."""
+    return bool(layers) and layers[0].kind in ("edges", "blobs")
+
+
 def first_bar_label(layers: tuple[Layer, ...], label: str | None, own: str | None) -> str | None:
     """The first colour bar's label: `label` (``--label``), else its layer's own (`own`: ``--map-label``,
     a Scene layer's ``label=``), else beside other bars its layer's (its file's name); None: none."""
