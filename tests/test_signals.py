@@ -232,3 +232,28 @@ def test_the_next_run_removes_the_folder_of_a_run_killed_with_sigkill(tmp_path):
             p.kill()
             p.wait(timeout=30)
             p.stdout.close()
+
+
+def test_a_signal_inside_a_finaliser_is_raised_after_it(tmp_path):
+    """A signal that lands in a ``__del__`` or the import system's weak-reference callback (where a
+    raised exception is printed as "Exception ignored" and dropped) is raised again once it is left."""
+    script = tmp_path / "finaliser.py"
+    script.write_text(
+        "import signal, time\n"
+        "from brainpainter.cli import guard\n"
+        "signal.signal(signal.SIGTERM, guard._on_signal)\n"
+        "class Held:\n"
+        "    def __del__(self):\n"
+        "        signal.raise_signal(signal.SIGTERM)\n"
+        "        time.sleep(0.001)\n"
+        "try:\n"
+        "    held = Held()\n"
+        "    del held\n"
+        "    time.sleep(2)\n"
+        "    print('not stopped')\n"
+        "except guard.Terminated:\n"
+        "    print('terminated')\n")
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=60,
+                          cwd=Path(__file__).resolve().parents[1])
+    assert done.stdout.strip() == "terminated", done.stdout + done.stderr
+    assert "Exception ignored" not in done.stderr, done.stderr

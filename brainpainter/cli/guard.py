@@ -113,8 +113,24 @@ class Terminated(Stopped):
     word = "terminated"
 
 
+def _swallows_exceptions(frame: Any) -> bool:
+    """True when an exception raised in `frame` would be printed and dropped, not propagated: inside a
+    ``__del__`` or a weak-reference callback (the import system's module-lock ``cb``), up the stack."""
+    while frame is not None:
+        code = frame.f_code
+        if code.co_name == "__del__" or (code.co_name == "cb" and "importlib" in code.co_filename):
+            return True
+        frame = frame.f_back
+    return False
+
+
 def _on_signal(signum: int, frame: Any) -> None:
     if defer(signum):  # a renderer cannot be interrupted just now: raised when it can
+        return
+    if _swallows_exceptions(frame):  # raised here it would be lost (and print a traceback): again soon
+        again = threading.Timer(0.02, os.kill, (os.getpid(), signum))
+        again.daemon = True
+        again.start()
         return
     # a second Ctrl-C must not cut the clean-up short (kill -9 still stops everything)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
