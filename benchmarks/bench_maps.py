@@ -27,9 +27,9 @@ def rss_mb() -> float:
 
 def main() -> None:
     from brainpainter.color.scale import make_scale
+    from brainpainter.layers.vertex_map import VertexColors
     from brainpainter.maps.inputs import read_maps
     from brainpainter.maps.layers import vertex_colors
-    from brainpainter.rendering.geometry import VertexColors
     from brainpainter.rendering.painter import Painter
     from brainpainter.rendering.settings import RenderSettings, parse_size
     from brainpainter.rendering.views import get_view

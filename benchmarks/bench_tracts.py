@@ -198,7 +198,8 @@ def main() -> None:
     import pandas as pd
 
     from brainpainter.color.scale import make_scale
-    from brainpainter.rendering.painter import Painter, region_colors
+    from brainpainter.layers.regions import region_colors
+    from brainpainter.rendering.painter import Painter
     from brainpainter.rendering.settings import RenderSettings
     from brainpainter.rendering.views import get_view
     from brainpainter.table.region_table import read_table

@@ -19,7 +19,8 @@ from brainpainter.atlas.registry import load_atlas_config
 from brainpainter.atlas.template import load_template
 from brainpainter.cli.main import cli, main
 from brainpainter.errors import BrainPainterError
-from brainpainter.rendering.painter import Painter, region_colors
+from brainpainter.layers.regions import region_colors
+from brainpainter.rendering.painter import Painter
 from brainpainter.rendering.run import render
 from brainpainter.testing import StandInRenderer, check_atlas, fake_distribution, installed, stand_in
 from brainpainter.testing import write_tiny_template as _tiny

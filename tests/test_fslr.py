@@ -276,8 +276,8 @@ def _dk_dlabel(path: Path) -> Path:
 def test_dk_dlabel_on_fslr_renders_as_dk(tmp_path):
     """The bar: a DK dlabel on fsLR 32k renders lateral-left with >= 90 % of brain pixels DK's colour."""
     from brainpainter.color.scale import make_scale
+    from brainpainter.layers.vertex_map import VertexColors
     from brainpainter.maps.layers import vertex_colors
-    from brainpainter.rendering.geometry import VertexColors
     from brainpainter.rendering.painter import Painter
     from brainpainter.rendering.settings import RenderSettings
     from brainpainter.rendering.views import get_view

@@ -213,7 +213,7 @@ def _brain(img):
 def test_dk_map_matches_region_render():
     """Bar: every vertex of a DK region carries its value -> within 10 RGB units on >= 97 % of pixels
     (flat shading: a map's cortex is lit to read true, not with the regions' relief)."""
-    from brainpainter.rendering.geometry import VertexColors
+    from brainpainter.layers.vertex_map import VertexColors
     from brainpainter.rendering.painter import Painter
     from brainpainter.rendering.settings import RenderSettings
     from brainpainter.rendering.views import get_view
@@ -251,8 +251,8 @@ def test_a_constant_map_reads_true_under_the_default_lighting():
     (L* p90 - p10 >= 8); a region render of the same colour keeps its relief."""
     from scipy.ndimage import binary_erosion
 
+    from brainpainter.layers.vertex_map import VertexColors
     from brainpainter.media.imagemetrics import lightness, read_values
-    from brainpainter.rendering.geometry import VertexColors
     from brainpainter.rendering.painter import Painter
     from brainpainter.rendering.settings import RenderSettings
     from brainpainter.rendering.views import get_view
@@ -385,7 +385,7 @@ def test_movie_through_a_gifti_series(tmp_path):
     nib.save(gii, tmp_path / "lh.series.func.gii")
     run = prepare_map_run(None, None, Options.of({"lh": tmp_path / "lh.series.func.gii"}))
     mid = run.blend(0, 1, 0.5).vertices["lh"]
-    cortex = masks("lh")["cortex"][run.source_vertex["lh"]]
+    cortex = masks("lh")["cortex"][run.base.source_vertex["lh"]]
     assert np.abs(mid[cortex] - run.scale([0.0])[0, :3]).max() < 1e-5  # v and -v blend to 0
     r = brainpainter.movie(None, lh=tmp_path / "lh.series.func.gii", out=tmp_path / "m.gif", width=160,
                            height=120, views="lateral-left", frames_per_step=4, progress=False)

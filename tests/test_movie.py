@@ -21,10 +21,10 @@ from brainpainter.errors import BrainPainterError
 from brainpainter.media.movie import (
     ease,
     format_clock,
-    interpolate,
     make_movie,
     plan_frames,
 )
+from brainpainter.table.rows import interpolate
 from brainpainter.testing import StandInRenderer, registered_renderer, stand_in
 
 REGIONS = ("Left-insula", "Left-precuneus")

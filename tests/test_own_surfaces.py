@@ -152,8 +152,8 @@ def test_a_ciftis_subcortical_structures_on_own_surfaces_are_left_out_with_a_not
     img.to_filename(str(path))
     run = prepare_run(path, lh_surface=str(pial), cmap="viridis", vmin=0, vmax=1)
     assert [view.name for view in run.views] == ["lateral-left", "medial-left"]
-    assert not run.maps.regions
-    (note,) = run.maps.notes
+    assert not run.table.maps.regions
+    (note,) = run.table.maps.notes
     assert "Left-Thalamus" in note and "not drawn on your own surfaces" in note and "\n" not in note
 
 
@@ -249,7 +249,7 @@ def test_a_template_built_from_a_subject_takes_maps_of_the_subject(tmp_path):
     colors = run.colors(0).vertices
     np.testing.assert_allclose(colors["lh"], run.scale(values[sv])[:, :3], atol=1e-6)
     np.testing.assert_allclose(colors["rh"], run.scale(-values[sv])[:, :3], atol=1e-6)
-    assert run.mesh_masks is not None and run.mesh_masks["lh"]["sulc"].shape == (500,)
+    assert run.base.mesh_masks is not None and run.base.mesh_masks["lh"]["sulc"].shape == (500,)
     with pytest.raises(BrainPainterError, match="10242 values per hemisphere, but the surface it is"):
         prepare_run({"lh": np.zeros(10242)}, template=str(folder))
     from brainpainter.testing import stand_in
@@ -272,8 +272,8 @@ def test_a_cifti_file_on_own_surfaces_is_drawn_as_it_is(tmp_path):
     path = tmp_path / "x.dscalar.nii"
     nib.Cifti2Image(data, header=(axes.ScalarAxis(["z"]), cols)).to_filename(str(path))
     run = prepare_run(path, lh_surface=str(pial), cmap="viridis", vmin=0, vmax=400)
-    assert run.maps.own_mesh and sorted(run.maps.values) == ["lh"]  # rh has no surface: not drawn
-    rgb, cortex = run.colors(0).vertices["lh"], run.mesh_masks["lh"]["cortex"]
+    assert run.table.maps.own_mesh and sorted(run.table.maps.values) == ["lh"]  # rh has no surface: not drawn
+    rgb, cortex = run.colors(0).vertices["lh"], run.base.mesh_masks["lh"]["cortex"]
     shown = cortex & (np.arange(n) < 100)  # vertices 100.. are absent from the file: the underlay
     np.testing.assert_allclose(rgb[shown], run.scale(data[0, :100][shown[:100]])[:, :3], atol=1e-6)
     assert (np.ptp(rgb[100:], axis=1) < 1e-6).all()
@@ -302,8 +302,8 @@ def test_hcp_32k_map_on_the_fslr_sphere_with_its_atlasroi():
     area = fslr / "resample_fsaverage" / "fs_LR.L.midthickness_va_avg.32k_fs_LR.shape.gii"
     run = prepare_run(None, lh=str(area), lh_surface=str(fslr / "L.sphere.32k_fs_LR.surf.gii"))
     roi = np.asarray(nib.load(fslr / "L.atlasroi.32k_fs_LR.shape.gii").darrays[0].data) > 0
-    assert len(roi) == 32492 and run.mesh_masks is not None
-    np.testing.assert_array_equal(run.mesh_masks["lh"]["cortex"], roi)
+    assert len(roi) == 32492 and run.base.mesh_masks is not None
+    np.testing.assert_array_equal(run.base.mesh_masks["lh"]["cortex"], roi)
     rgb = run.colors(0).vertices["lh"]
     values = np.asarray(nib.load(area).darrays[0].data, float)
     np.testing.assert_allclose(rgb[roi], run.scale(values[roi])[:, :3], atol=1e-6)

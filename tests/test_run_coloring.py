@@ -1,4 +1,4 @@
-"""A run says how it is coloured (``Run.coloring``, ``MapRun.coloring``; issue 43: no ``hasattr`` on
+"""A run says how it is coloured (``Run.coloring``: its first layer's; issue 43: no ``hasattr`` on
 runs), and a painter of the other colouring is refused before anything is drawn."""
 
 from __future__ import annotations

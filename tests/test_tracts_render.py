@@ -58,7 +58,7 @@ def test_an_along_tract_profile_runs_from_the_first_colour_to_the_last(tiny, bun
     from PIL import Image
 
     from brainpainter.color.scale import make_scale
-    from brainpainter.rendering.run import tract_colors
+    from brainpainter.layers.tracts import tract_colors
 
     scale = make_scale(vmin=0, vmax=3, cmap="viridis")
     values = {f"tract:AF_left:{k}": 3.0 * k / 9 for k in range(10)}

@@ -8,6 +8,19 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+#: Palette keys of a connectome's parts: ``node:i``, ``edge:k``.
+NODE_KEY, EDGE_KEY = "node:", "edge:"
+
+def node_keys(n: int) -> list[str]:
+    """Palette keys of `n` nodes (``node:0`` ...)."""
+    return [f"{NODE_KEY}{i}" for i in range(n)]
+
+
+def edge_keys(n: int) -> list[str]:
+    """Palette keys of `n` edges (``edge:0`` ..., in the order of ``Connectome.edges()``)."""
+    return [f"{EDGE_KEY}{k}" for k in range(n)]
+
+
 #: Most characters of a node's label drawn on an image (a longer one ends with an ellipsis).
 MAX_LABEL_CHARS = 60
 

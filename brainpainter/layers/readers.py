@@ -144,3 +144,10 @@ def is_map_data(data: Any) -> bool:
     if isinstance(data, str | Path):  # the table reader takes what no map reader claims
         return identify(data, ("regions", "map")).kind == "map"
     return is_map_input(data)
+
+
+def first_layer_kind(data: Any, maps_given: bool) -> str:
+    """The kind of a run's first layer: ``"map"`` where maps were given as options (`maps_given`:
+    ``--lh``/``--rh``/``--volume``) or `data` is one (:func:`is_map_data`), else ``"regions"`` (a region
+    table, or an empty one under tracts or a connectome drawn alone)."""
+    return "map" if maps_given or is_map_data(data) else "regions"

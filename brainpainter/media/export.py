@@ -32,17 +32,16 @@ from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.atlas.model import HEMI_PREFIX, Atlas
 from brainpainter.atlas.template import Template
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.layers.vertex_map import VertexColors
 from brainpainter.media.glb import RegionMesh, glb_bytes, packed
-from brainpainter.rendering.geometry import VertexColors
 from brainpainter.rendering.layers import LayerOptions
-from brainpainter.rendering.maprun import MapRun
 from brainpainter.rendering.options import Options, RenderKwargs, option_names
 from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.settings import RGB
 
 if TYPE_CHECKING:
     from brainpainter.connectome.model import Connectome
-    from brainpainter.rendering.run import Run
+    from brainpainter.rendering.checked_run import Run
 
 FORMATS = ("glb", "html")
 #: Colour of subcortical structures the atlas does not colour (as the Blender renderer draws them).
@@ -180,7 +179,8 @@ def connectome_meshes(scene: Scene, connectome: Connectome | None,
     list of RegionMesh
         Part ``connectome``.
     """
-    from brainpainter.rendering.connectome_parts import NODE_COLOR, edge_keys, node_keys
+    from brainpainter.connectome.model import edge_keys, node_keys
+    from brainpainter.rendering.connectome_parts import NODE_COLOR
 
     if connectome is None:
         return []
@@ -217,7 +217,7 @@ def vertex_meshes(scene: Scene, colors: VertexColors) -> list[RegionMesh]:
     ----------
     scene : Scene
     colors : VertexColors
-        One image of a map (:meth:`brainpainter.rendering.maprun.MapRun.colors`).
+        One image of a map (:meth:`brainpainter.rendering.run.Run.colors` of a map run).
     """
     from brainpainter.maps.resolution import map_mesh
 
@@ -340,14 +340,13 @@ EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cm
                   "top_edges", "edges_of", "nodes_space", "volume_surface", "min_cluster_mm3")
 
 
-def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
+def _row_meshes(run: Run, i: int) -> tuple[Scene, list[RegionMesh]]:
     """The scene of a run and the meshes of its row `i`: a map's cortex coloured per vertex, or
-    the regions, then the tracts' tubes."""
+    the regions, then the tracts' tubes, a connectome's nodes and edges, the blobs."""
     from brainpainter.connectome.series import image_connectome
+    from brainpainter.layers.connectome import connectome_colors
     from brainpainter.rendering.blob_layers import blob_colors
-    from brainpainter.rendering.composition import tract_colors
-    from brainpainter.rendering.connectome_layers import connectome_colors
-    from brainpainter.rendering.painter import load_scene, region_colors
+    from brainpainter.rendering.painter import load_scene
 
     opts, tv = run.options.scene, run.tract_values
     atlas_obj, scene = load_scene(run.table.atlas, opts.template, opts.surface, opts.hide,
@@ -358,16 +357,12 @@ def _row_meshes(run: Run | MapRun, i: int) -> tuple[Scene, list[RegionMesh]]:
                                if shown is not None else {})  # a connectome's nodes and edges
     if run.blobs is not None:  # a volume's clusters, per vertex on their bar
         inside += coloured_meshes(scene, blob_colors(run.blobs, run.layers), "blob", "blobs")
-    if isinstance(run, MapRun):  # the map, then the tracts drawn with it
-        colors = run.colors(i)
-        return scene, vertex_meshes(scene, colors) + tract_meshes(scene, colors.regions) + inside
-    table = run.table
-    values = table.row(i)
-    meshes = region_meshes(scene, region_colors(values, atlas_obj, run.scale_of("regions")),
-                           atlas_obj.expand(values))
-    meshes += tract_meshes(
-        scene, tract_colors(tv.row(table.images[i]), run.scale_of("tracts")) if tv is not None else {})
-    return scene, meshes + inside
+    colors = run.colors(i)
+    if run.coloring == "vertices":  # the cortex coloured per vertex: one mesh per hemisphere
+        cortex = vertex_meshes(scene, colors)  # type: ignore[arg-type]
+    else:  # one mesh per region, its value in the tooltip
+        cortex = region_meshes(scene, dict(colors), atlas_obj.expand(run.table.row(i)))
+    return scene, cortex + tract_meshes(scene, dict(colors)) + inside
 
 
 def export(data: Any, out: str | Path, *, format: str | None = None, row: str | int | None = None,
@@ -434,7 +429,8 @@ def export(data: Any, out: str | Path, *, format: str | None = None, row: str | 
         from brainpainter.rendering.layers import colorbar_layers, first_bar_label
         from brainpainter.rendering.views import parse_views
 
-        views = run.views if isinstance(run, MapRun) else parse_views("lateral-left,medial-right,subcortical")
+        views = (run.views if run.coloring == "vertices"
+                 else parse_views("lateral-left,medial-right,subcortical"))
         nan, missing = swatches_needed(table, [i], views, scene.geometry)
         layers = colorbar_layers(run.layers)
         label = first_bar_label(run.layers, label, run.options.layers.label(run.layers[0].kind))

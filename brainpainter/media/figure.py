@@ -27,7 +27,7 @@ import io
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeVar, Unpack
+from typing import TYPE_CHECKING, Any, Unpack
 
 from numpy.typing import NDArray
 
@@ -48,14 +48,12 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from brainpainter.rendering.maprun import MapRun
+    from brainpainter.rendering.checked_run import Run
     from brainpainter.rendering.painter import Painter
-    from brainpainter.rendering.run import Run
 
 __all__ = ["FigureResult", "check_out_file", "common_crop", "compose_figure", "content_box", "figure_bytes",
            "make_figure", "save_figure", "select_rows"]
 
-RunT = TypeVar("RunT", "Run", "MapRun")
 FIGURE_FORMATS = {".png": "png", ".pdf": "pdf", ".svg": "svg", ".tif": "tiff", ".tiff": "tiff"}
 VECTOR_FORMATS = ("pdf", "svg")
 
@@ -166,7 +164,7 @@ def _png_of_rgba(raw: bytes, fig: Figure, dpi: float, metadata: dict[str, str]) 
 MIN_LABEL_PT = 7.0
 
 
-def printed_labels(run: RunT, image_names: list[str], figure_opts: FigureOptions) -> RunT:
+def printed_labels(run: Run, image_names: list[str], figure_opts: FigureOptions) -> Run:
     """`run` with its connectome's labels tall enough to print at :data:`MIN_LABEL_PT` or more in the figure.
 
     The text is a share of each render's height (:func:`~brainpainter.rendering.node_labels.text_height`);
@@ -186,7 +184,7 @@ def printed_labels(run: RunT, image_names: list[str], figure_opts: FigureOptions
     return replace(run, connectome=replace(connectome, label_share=share))
 
 
-def line_legend(run: Run | MapRun, image_axes: list[Axes], font_size: float) -> None:
+def line_legend(run: Run, image_axes: list[Axes], font_size: float) -> None:
     """A legend of the run's line layers (``--outline``: its atlas's borders; ``--contour``: its levels), each
     in its own colour, width and dash, in the upper right of the last image (none without lines)."""
     from matplotlib.lines import Line2D
@@ -205,7 +203,7 @@ def line_legend(run: Run | MapRun, image_axes: list[Axes], font_size: float) -> 
                           handlelength=2.5, borderaxespad=0.1)
 
 
-def _bars(run: Run | MapRun, painter: Painter, figure_opts: FigureOptions) -> tuple[FigureOptions, list[Any]]:
+def _bars(run: Run, painter: Painter, figure_opts: FigureOptions) -> tuple[FigureOptions, list[Any]]:
     """The first bar's label and the other layers' bars (scale, label) of a figure of `run`.
 
     A bar for tracts that no view shows (cortex views, the cortex opaque) would name what is not there.
@@ -218,7 +216,7 @@ def _bars(run: Run | MapRun, painter: Painter, figure_opts: FigureOptions) -> tu
 
 
 def _with_panels(images: dict[tuple[str, str], NDArray[Any]], panels: dict[tuple[str, str], NDArray[Any]],
-                 panel_opts: PanelOptions, image_names: list[str], run: Run | MapRun,
+                 panel_opts: PanelOptions, image_names: list[str], run: Run,
                  figure_opts: FigureOptions, **bars: Any) -> FigureLayout:
     """The figure of the renders and the volume's panels (after the views, whole, labelled)."""
     from brainpainter.media.colorbar import text_color

@@ -50,24 +50,21 @@ from brainpainter.media.timeline import (
     FramePlan,
     ease,
     format_clock,
-    interpolate,
     key_frames,
     plan_frames,
     read_times,
 )
+from brainpainter.rendering.checked_run import Run
 from brainpainter.rendering.clip import parse_sweep
-from brainpainter.rendering.composition import tract_colors
-from brainpainter.rendering.connectome_layers import connectome_colors
 from brainpainter.rendering.layers import colorbar_layers, first_bar_label, without_regions
 from brainpainter.rendering.options import Options, RenderKwargs, take
-from brainpainter.rendering.painter import region_colors
 from brainpainter.rendering.parallel import Item, Runner
-from brainpainter.rendering.run import Run, make_runner, prepare_run
+from brainpainter.rendering.run import make_runner, prepare_run
 from brainpainter.rendering.views import View
 from brainpainter.table.rows import select_rows
 
 __all__ = ["MAX_FRAMES", "MAX_GIF_FRAMES", "MovieOptions", "MovieResult", "_GifWriter", "_Mp4Writer", "ease",
-           "format_clock", "interpolate", "make_movie", "plan_frames"]
+           "format_clock", "make_movie", "plan_frames"]
 
 MOVIE_FORMATS = (".mp4", ".gif")
 MAX_FRAME_PIXELS = 8192 * 8192
@@ -377,30 +374,10 @@ class MovieFrames:
 
     def chunks(self, wanted: Iterable[int]) -> Iterator[list[Item]]:
         """The renders of each wanted state, one chunk per state."""
-        table, names = self.run.table, self.keys.names
-        key_values = table.values[self.keys.rows]
-        rows = self.keys.rows
-        blend = getattr(self.run, "blend", None)  # a map run: per-vertex values blended
+        names, rows = self.keys.names, self.keys.rows
         for s in wanted:
             a, b, weight, state_views = self.states[s]
-            colors: Any
-            if blend is not None:
-                colors = blend(rows[a], rows[b], weight)
-            else:
-                values = interpolate(key_values[a], key_values[b], weight)
-                colors = region_colors(dict(zip(table.regions, values.tolist(), strict=True)), table.atlas,
-                                       self.run.scale)
-                tv = getattr(self.run, "tract_values", None)
-                if tv is not None:  # bundle values (and profiles) change between key frames like regions
-                    ra, rb = (tv.row(table.images[self.keys.rows[k]]) for k in (a, b))
-                    tvals = interpolate(np.array(list(ra.values())), np.array(list(rb.values())), weight)
-                    colors.update(tract_colors(dict(zip(ra, tvals.tolist(), strict=True)),
-                                                 self.run.scale_of("tracts")))
-                connectome = getattr(self.run, "connectome", None)
-                if connectome is not None:  # a series' edge weights change between key frames like regions
-                    colors.update(connectome_colors(connectome, self.run.layers, (rows[a], rows[b], weight)))
-            for layer in self.run.drawn:  # a volume's blobs, plugin layers: their colours of the key frame
-                colors.update(layer.colors(rows[a]))
+            colors = self.run.blend(rows[a], rows[b], weight)  # every layer's values between key frames
             label = names[a] if a == b else f"{names[a]} {ARROW} {names[b]} ({weight:.3f})"
             yield [Item(colors, view, label=label) for view in state_views]
 

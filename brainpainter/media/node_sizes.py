@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
     from brainpainter.color.scale import ColourScale
-    from brainpainter.rendering.run import Run
+    from brainpainter.rendering.checked_run import Run
 
 #: Diameter of the largest circle, points.
 LARGEST_PT = 8.0

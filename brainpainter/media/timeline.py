@@ -110,25 +110,6 @@ def plan_frames(times: Sequence[float], frames_per_step: int, easing: str = "lin
     return plan
 
 
-def interpolate(a: NDArray[Any], b: NDArray[Any], weight: float) -> NDArray[Any]:
-    """Values between two key frames: ``(1 - w) a + w b``.
-
-    NaN in either key frame gives NaN strictly between them; at ``w = 0``
-    and ``w = 1`` the key frame's own values are returned.
-
-    Parameters
-    ----------
-    a, b : ndarray of float, shape (n_regions,)
-    weight : float in [0, 1]
-    """
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    if weight <= 0.0:
-        return a.copy()
-    if weight >= 1.0:
-        return b.copy()
-    return (1.0 - weight) * a + weight * b  # NaN propagates
-
-
 def format_clock(value: float, keys: Sequence[float]) -> str:
     """The time shown in captions: as many decimals as the keys use (at least 1, at most 3)."""
     decimals = 1

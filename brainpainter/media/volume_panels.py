@@ -135,7 +135,7 @@ def volume_panels(data: Any, run: Any, opts: PanelOptions, rows: Sequence[int]
     ----------
     data : any
         The run's input (a volume given as INPUT is the panels' volume).
-    run : MapRun
+    run : Run
         The prepared run: its map scale, threshold, opacity and background.
     opts : PanelOptions
     rows : sequence of int

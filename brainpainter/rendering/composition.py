@@ -22,15 +22,14 @@ from numpy.typing import NDArray
 from brainpainter.atlas.model import HEMI_PREFIX
 from brainpainter.color.scale import ColourScale, ScaleOptions, widen
 from brainpainter.errors import BrainPainterError
+from brainpainter.layers.regions import region_colors
 from brainpainter.maps.inputs import VertexMaps, read_maps
 from brainpainter.maps.layers import map_scale
 from brainpainter.maps.options import MapOptions
 from brainpainter.maps.outlines import Contours
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import Options
-from brainpainter.rendering.painter import region_colors
 from brainpainter.rendering.settings import RGB, RenderSettings, outlined
-from brainpainter.rendering.tract_parts import MISSING_TRACT_KEY
 from brainpainter.table.region_table import RegionTable
 from brainpainter.tracts.values import TractValues
 
@@ -86,18 +85,6 @@ def layer_label(options: Options, kind: str, table: RegionTable) -> str:
         if table.regions:  # bundle columns beside region columns in one table
             return f"{Path(table.source).name} (tracts)"
     return Path(table.source).name if table.source else kind
-
-
-def tract_colors(values: Mapping[str, float], scale: ColourScale) -> dict[str, RGB]:
-    """Colour of each bundle (or bundle node) key for one image; NaN: the scale's NaN colour; the bundles
-    drawn without a value (:data:`~brainpainter.rendering.tract_parts.MISSING_TRACT_KEY`): missing colour."""
-    keys = list(values)
-    m = scale.missing_color
-    missing: dict[str, RGB] = {MISSING_TRACT_KEY: (float(m[0]), float(m[1]), float(m[2]))}
-    if not keys:
-        return missing
-    rgb = scale(np.array([values[k] for k in keys], dtype=float))
-    return {k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(keys, rgb, strict=True)} | missing
 
 
 def run_scale(options: ScaleOptions, values: NDArray[Any], measures: bool) -> ColourScale:

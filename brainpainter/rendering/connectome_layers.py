@@ -15,13 +15,11 @@ from functools import cache
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from brainpainter.color.scale import ColourScale, ScaleOptions
 from brainpainter.connectome.edges import MAX_EDGES_DRAWN
 from brainpainter.connectome.model import Connectome
 from brainpainter.maps.autoscale import choose_scale
-from brainpainter.rendering.connectome_parts import edge_keys, node_keys
 from brainpainter.rendering.layers import SCALE_FIELDS, Layer
 from brainpainter.rendering.options import Options
 from brainpainter.rendering.settings import RGB
@@ -108,7 +106,8 @@ def category_scale(categories: tuple[str, ...], plain: ScaleOptions) -> ColourSc
     networks = network_colors()
     if all(name.strip().lower() in networks for name in names):  # Yeo's networks: their published colours
         colors = np.array([networks[name.strip().lower()] for name in names], dtype=float).reshape(n, 3)
-    keyed = tuple(_keyed(names, colors).items())
+    keyed = tuple((name, (float(c[0]), float(c[1]), float(c[2])))
+                  for name, c in zip(names, colors, strict=True))
     base = replace(plain, cmap=cmap, vmin=0.0, vmax=float(max(n - 1, 1))).scale()
     return replace(base, colors=np.vstack([colors, colors[-1:]]), categories=keyed)
 
@@ -129,33 +128,6 @@ def network_colors() -> dict[str, RGB]:
             if key.strip():
                 out[key.strip().lower()] = rgb
     return out
-
-
-def connectome_colors(connectome: Connectome, layers: tuple[Layer, ...],
-                      image: float | tuple[int, int, float] | None = None) -> dict[str, RGB]:
-    """The colour of each node (``node:i``) and edge (``edge:k``) key, by the connectome's layers.
-
-    `image`: of a series of matrices, the image (or a movie's ``(a, b, weight)`` between two) whose edge
-    weights are drawn (:meth:`~brainpainter.connectome.series.EdgeSeries.at`).
-    """
-    out: dict[str, RGB] = {}
-    by_kind = {layer.kind: layer.scale for layer in layers}
-    if "edges" in by_kind:
-        weights = (connectome.edges()[2] if connectome.series is None or image is None
-                   else connectome.series.at(image))
-        out.update(_keyed(edge_keys(len(weights)), by_kind["edges"](weights)))
-    nodes = by_kind.get("nodes")
-    if nodes is not None and nodes.categories and connectome.node_categories is not None:
-        rgb = dict(nodes.categories)
-        out.update(zip(node_keys(connectome.n_nodes), (rgb[c] for c in connectome.node_categories),
-                       strict=True))
-    elif nodes is not None and connectome.node_values is not None:
-        out.update(_keyed(node_keys(connectome.n_nodes), nodes(np.asarray(connectome.node_values, float))))
-    return out
-
-
-def _keyed(keys: list[str], rgb: NDArray[Any]) -> dict[str, RGB]:
-    return {k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(keys, rgb, strict=True)}
 
 
 def connectome_summary(connectome: Connectome) -> dict[str, Any]:

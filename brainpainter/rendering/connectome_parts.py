@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from brainpainter.connectome.model import edge_keys, node_keys
 from brainpainter.rendering.parts import PartGeometry
 from brainpainter.rendering.settings import RGB
 
@@ -41,19 +42,8 @@ SPHERE_SUBDIVISIONS = ((500, 2), (None, 1))
 CYLINDER_SIDES = 8
 #: Colour of nodes without a value or category (sRGB).
 NODE_COLOR: RGB = (0.25, 0.25, 0.30)
-NODE_KEY, EDGE_KEY = "node:", "edge:"
 
 SlotsFor = Callable[[list[str], "int | RGB", frozenset[str]], NDArray[Any]]
-
-
-def node_keys(n: int) -> list[str]:
-    """Palette keys of `n` nodes (``node:0`` ...)."""
-    return [f"{NODE_KEY}{i}" for i in range(n)]
-
-
-def edge_keys(n: int) -> list[str]:
-    """Palette keys of `n` edges (``edge:0`` ..., in the order of ``Connectome.edges()``)."""
-    return [f"{EDGE_KEY}{k}" for k in range(n)]
 
 
 def node_radii(values: NDArray[Any] | None, n: int) -> NDArray[np.float64]:

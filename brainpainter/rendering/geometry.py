@@ -42,6 +42,7 @@ from numpy.typing import NDArray
 
 from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.errors import BrainPainterError, choice_error
+from brainpainter.layers.vertex_map import VertexColors
 from brainpainter.rendering import framing
 from brainpainter.rendering.blob_parts import inside_parts
 from brainpainter.rendering.clip import check_cut
@@ -160,31 +161,6 @@ class Palette(Mapping[str, RGB]):
                     rgb[start:start + n] = np.asarray(self._vertex_rgb[hemi], np.float32)[:, :3]
             self._rgb = np.clip(rgb, 0.0, 1.0).astype(np.float32)
         return self._rgb
-
-
-class VertexColors(Mapping[str, RGB]):
-    """One image of a map: region colours (a mapping, as for a region image) plus per-vertex cortex colours.
-
-    Parameters
-    ----------
-    regions : mapping of str to (r, g, b)
-        Colours of region keys (the subcortical structures).
-    vertices : mapping of str to ndarray of float32, shape (n_vertices, 3)
-        sRGB 0-1 per cortex vertex of each hemisphere (:attr:`SceneGeometry.vertex_slots`).
-    """
-
-    def __init__(self, regions: Mapping[str, RGB], vertices: Mapping[str, NDArray[Any]]) -> None:
-        self.regions = dict(regions)
-        self.vertices = dict(vertices)
-
-    def __getitem__(self, key: str) -> RGB:
-        return self.regions[key]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self.regions)
-
-    def __len__(self) -> int:
-        return len(self.regions)
 
 
 def cortex_mode(setting: str, parts: list[PartGeometry]) -> str:

@@ -1,16 +1,16 @@
-"""A run that draws per-vertex maps (:mod:`brainpainter.maps`) through the one paint loop.
+"""A run whose first layer is a per-vertex map (:mod:`brainpainter.maps`), painted through the one loop.
 
 :func:`prepare_map_run` reads the maps (any input :func:`brainpainter.maps.inputs.read_maps`
-takes) and builds a :class:`MapRun`: the same :class:`~brainpainter.rendering.run.Run` as a
-region table's, whose painter draws a per-vertex scene (``coloring="vertices"``)
-and whose items carry :class:`~brainpainter.rendering.geometry.VertexColors`.
+takes) and builds the same :class:`~brainpainter.rendering.run.Run` as a region table's, whose first
+layer is :class:`~brainpainter.layers.vertex_map.MapColors`: its painter draws a per-vertex scene
+(``coloring="vertices"``) and its items carry :class:`~brainpainter.layers.vertex_map.VertexColors`.
 So ``render``, ``--jobs`` and Dask paint maps exactly as they paint tables.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
-from typing import Any, ClassVar
+from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -18,31 +18,27 @@ from numpy.typing import NDArray
 from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.surfaces import Surface, read_surfaces, surface_template
 from brainpainter.atlas.template import Template, load_template
-from brainpainter.connectome.model import Connectome
 from brainpainter.connectome.series import check_images
 from brainpainter.errors import BrainPainterError
-from brainpainter.layers.kinds import DrawnLayer, open_layers
+from brainpainter.layers.kinds import open_layers
+from brainpainter.layers.over import over_layers
 from brainpainter.layers.readers import is_map_data
-from brainpainter.maps.clusters import Blobs
-from brainpainter.maps.flat import check_flat, flat_labels, flat_sheet, flat_values
+from brainpainter.layers.vertex_map import MapColors
+from brainpainter.maps.flat import check_flat, flat_labels, flat_sheet
 from brainpainter.maps.inputs import VertexMaps, read_maps
-from brainpainter.maps.layers import vertex_colors
-from brainpainter.maps.outlines import Contours, mesh_edges
+from brainpainter.maps.outlines import mesh_edges
 from brainpainter.maps.resolution import map_mesh, own_vertex_count
 from brainpainter.rendering.blob_layers import blob_kinds, blob_layer, drawn_blobs, load_blobs
-from brainpainter.rendering.composition import RegionsBelow, cortex_for, line_layers, map_layers, tract_colors
-from brainpainter.rendering.connectome_layers import connectome_colors, connectome_kinds, connectome_layers
-from brainpainter.rendering.geometry import VertexColors
-from brainpainter.rendering.layers import Layer
+from brainpainter.rendering.checked_run import Run
+from brainpainter.rendering.composition import cortex_for, line_layers, map_layers
+from brainpainter.rendering.connectome_layers import connectome_kinds, connectome_layers
 from brainpainter.rendering.options import Options
-from brainpainter.rendering.painter import Painter, flat_aspect, region_colors
-from brainpainter.rendering.parallel import Item
+from brainpainter.rendering.painter import flat_aspect
 from brainpainter.rendering.settings import with_aspect
 from brainpainter.rendering.sulc import convexity
 from brainpainter.rendering.tract_run import given_tract_values
-from brainpainter.rendering.views import View, parse_views, with_clip
+from brainpainter.rendering.views import parse_views, with_clip
 from brainpainter.table.region_table import RegionTable, read_table
-from brainpainter.tracts.values import TractValues
 
 #: Default views of a map run: both hemispheres, outside and inside.
 MAP_VIEWS = "lateral-left,medial-left,lateral-right,medial-right"
@@ -75,102 +71,7 @@ class MapTable:
                                                                "table": self.below.summary()}
 
 
-@dataclass
-class MapRun:
-    """A checked map run (the interface of :class:`brainpainter.rendering.run.Run`)."""
-
-    table: MapTable
-    scale: Any
-    views: list[View]
-    settings: Any
-    options: Options
-    source_vertex: dict[str, NDArray[Any]]
-    cluster_edges: dict[str, NDArray[Any]] | None = None
-    depth: dict[str, NDArray[Any]] | None = None  # sulcal depth of the drawn vertices, where the mesh has it
-    contours: Contours | None = None  # a second map's iso-lines (--contour)
-    tract_values: TractValues | None = None  # tract values drawn with the map (--tracts, --tract-values)
-    layers: tuple[Layer, ...] = ()
-    below: RegionsBelow | None = None  # region values under the map
-    mesh_masks: dict[str, dict[str, NDArray[Any]]] | None = None  # the user's own surfaces
-    flat: dict[str, NDArray[Any]] | None = None  # flat views: each sheet vertex's nearest fsaverage vertex
-    flat_edges: dict[str, NDArray[Any]] | None = None  # the sheets' edges (--outline-threshold on flat views)
-    connectome: Connectome | None = None  # nodes and edges inside the cortex, drawn as glass
-    blobs: Blobs | None = None  # a volume's clusters as surfaces (--volume-surface)
-    drawn: tuple[DrawnLayer, ...] = ()  # what adds its own parts: the blobs, plugin layers (--layer)
-    coloring: ClassVar[str] = "vertices"  # the painter colours each cortex vertex
-    _cache: dict[Any, VertexColors] = field(default_factory=dict, repr=False)
-
-    @property
-    def maps(self) -> VertexMaps:
-        return self.table.maps
-
-    def scale_of(self, kind: str) -> Any:
-        """The colour scale of layer `kind`; the map's where the run has no such layer."""
-        return next((layer.scale for layer in self.layers if layer.kind == kind), self.scale)
-
-    def layer(self, kind: str) -> Layer:
-        """The run's layer of `kind` (``"map"``)."""
-        return next(layer for layer in self.layers if layer.kind == kind)
-
-    def painter(self) -> Painter:
-        """A new (not loaded) painter drawing a per-vertex scene."""
-        scene = self.options.scene
-        nodes = self.tract_values.nodes if self.tract_values is not None else ()
-        return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
-                       scene.renderer, coloring="vertices", contours=self.contours, tracts=scene.tract_spec(),
-                       tract_nodes=nodes, tract_radius=scene.tract_radius, connectome=self.connectome,
-                       drawn=self.drawn)
-
-    def items(self, rows: Any) -> list[tuple[int, View]]:
-        return [(i, view) for i in rows for view in self.views]
-
-    def colors(self, image: float | tuple[int, int, float]) -> VertexColors:
-        """The colours of image `image` (or of ``(a, b, w)``: images a and b blended, a movie's frame)."""
-        if image not in self._cache:
-            self._cache.clear()  # one image at a time: the views of a row share it
-            m, scale = self.options.maps, self.scale_of("map")
-            map_image: float | tuple[int, int, float] = image if self.maps.n_images > 1 else 0
-            regions: dict[str, Any] = {}
-            below = None
-            row = round(image if not isinstance(image, tuple) else image[0] if image[2] < 0.5 else image[1])
-            if self.below is not None:  # region values under the map: a movie's frame takes the nearer row
-                regions, below = self.below.colors(row)
-            cortex = vertex_colors(self.maps, map_image, self.source_vertex, scale, m.underlay, m.threshold,
-                                   cluster_edges=self.cluster_edges, below=below,
-                                   opacity=self.layer("map").opacity, depth=self.depth,
-                                   contrast=m.underlay_contrast, mesh_masks=self.mesh_masks)
-            if self.flat is not None:  # the flat maps' vertices: the map's values there, the same layers
-                on_flat = vertex_colors(
-                    self.maps, map_image, self.flat, scale, m.underlay, m.threshold,
-                    cluster_edges=self.flat_edges,
-                    below=None if below is None else {h: below[f"flat-{h}"] for h in self.flat},
-                    opacity=self.layer("map").opacity, contrast=m.underlay_contrast,
-                    sample=lambda hemi, i: flat_values(self.maps, hemi, i))
-                cortex.update({f"flat-{hemi}": rgb for hemi, rgb in on_flat.items()})
-            # a volume's subcortical means: below --threshold a structure shows no value, as the cortex does
-            means = {k: v for k, v in self.maps.region_values(map_image).items()
-                     if m.threshold is None or abs(v) >= m.threshold}
-            means_rgb = region_colors(means, self.table.atlas, scale)
-            regions.update(means_rgb if self.below is None else {k: means_rgb[k] for k in means})
-            if self.tract_values is not None:  # each bundle on the tracts' own scale
-                regions.update(tract_colors(self.tract_values.row(self.table.images[row]),
-                                            self.scale_of("tracts")))
-            if self.connectome is not None:
-                regions.update(connectome_colors(self.connectome, self.layers, image))
-            for layer in self.drawn:  # the blobs, plugin layers
-                regions.update(layer.colors(row))
-            self._cache[image] = VertexColors(regions, cortex)
-        return self._cache[image]
-
-    def blend(self, a: int, b: int, weight: float) -> VertexColors:
-        """Images `a` and `b` blended, ``(1 - weight) * a + weight * b`` (a movie's in-between frame)."""
-        return self.colors((a, b, float(weight)) if a != b and weight else a)
-
-    def item(self, i: int, view: View, metadata: Any = None) -> Item:
-        return Item(self.colors(i), view, metadata, self.table.images[i])
-
-
-def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
+def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> Run:
     """Read the maps and check the options of a map run (as ``prepare_run`` does for a table)."""
     from brainpainter.atlas.registry import get_atlas
 
@@ -205,16 +106,7 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
                          radius=m.projection_radius, mesh=own or None)
     labels = atlas_obj.template_labels if atlas_obj.template_labels in tpl.label_sets else "dk"
     meshes = {hemi: map_mesh(tpl, labels, hemi) for hemi in ("lh", "rh")}
-    views = options.scene.views
-    if views is None:  # not given: both hemispheres
-        # a volume also colours the subcortical structures; tracts show in the subcortical view
-        views = MAP_VIEWS + (",subcortical" if maps.regions or options.scene.tracts else "")
-        if len(surfaces) == 1:  # one surface of your own: the views of its hemisphere
-            side = "left" if "lh" in surfaces else "right"
-            views = f"lateral-{side},medial-{side}"
-        elif len(maps.values) == 1 and not maps.regions:  # one hemisphere's map (--lh alone): its side
-            side = "left" if "lh" in maps.values else "right"
-            views = f"lateral-{side},medial-{side}" + (",subcortical" if options.scene.tracts else "")
+    views = options.scene.views if options.scene.views is not None else _map_views(maps, surfaces, options)
     view_list = with_clip(parse_views(views if isinstance(views, str) else list(views)), options.scene.clips)
     source_vertex = {hemi: np.asarray(m.source_vertex) for hemi, m in meshes.items()}
     edges = ({hemi: mesh_edges(m.faces) for hemi, m in meshes.items()} if options.maps.outline_threshold
@@ -246,10 +138,25 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> MapRun:
     depth = {hemi: np.asarray(m.sulc) for hemi, m in meshes.items() if getattr(m, "sulc", None) is not None}
     if not options.size_given and (aspect := flat_aspect(view_list)):  # flat maps: wider than a brain
         settings = with_aspect(settings, aspect)
-    return MapRun(MapTable(maps, atlas_obj, table), layers[0].scale, view_list, settings, options,
-                  source_vertex, edges, depth, contours, tract_values, layers=layers, below=below,
-                  mesh_masks=masks, flat=flat, flat_edges=flat_edges, connectome=connectome, blobs=blobs,
-                  drawn=drawn)
+    map_layer = next(layer for layer in layers if layer.kind == "map")
+    base = MapColors(maps, atlas_obj, map_layer.scale, map_layer.opacity, options.maps, source_vertex, edges,
+                     depth, masks, flat, flat_edges, below)
+    map_table = MapTable(maps, atlas_obj, table)
+    return Run(map_table, layers[0].scale, view_list, settings, options, base,
+               over_layers(layers, map_table.images, tract_values, connectome, drawn), layers, tract_values,
+               contours, connectome, blobs, drawn)
+
+
+def _map_views(maps: VertexMaps, surfaces: dict[str, Any], options: Options) -> str:
+    """The views of a map run whose views were not given: both hemispheres (a volume also colours the
+    subcortical structures; tracts show in the subcortical view), or one hemisphere's of a map of one."""
+    if len(surfaces) == 1:  # one surface of your own: the views of its hemisphere
+        side = "left" if "lh" in surfaces else "right"
+        return f"lateral-{side},medial-{side}"
+    if len(maps.values) == 1 and not maps.regions:  # one hemisphere's map (--lh alone): its side
+        side = "left" if "lh" in maps.values else "right"
+        return f"lateral-{side},medial-{side}" + (",subcortical" if options.scene.tracts else "")
+    return MAP_VIEWS + (",subcortical" if maps.regions or options.scene.tracts else "")
 
 
 def _own_surfaces(options: Options, surfaces: dict[str, Any]) -> dict[str, Surface]:

@@ -23,8 +23,10 @@ from brainpainter.color.rgb import ColorLike, to_rgb
 from brainpainter.color.scale import ColourScale
 from brainpainter.connectome.model import Connectome
 from brainpainter.errors import choice_error
+from brainpainter.layers.regions import region_colors
+from brainpainter.layers.vertex_map import VertexColors
 from brainpainter.maps.outlines import Contours
-from brainpainter.rendering.geometry import Palette, VertexColors
+from brainpainter.rendering.geometry import Palette
 from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.settings import RGB, RenderSettings
 from brainpainter.rendering.views import View
@@ -68,24 +70,6 @@ def resolve_hidden(tokens: Iterable[str], atlas: Atlas) -> frozenset[str]:
             raise choice_error("--hide", t, [*HIDE_GROUPS, *atlas.keys],
                                "Give region names, or a group.")
     return frozenset(hidden)
-
-
-def region_colors(values: Mapping[str, float], atlas: Atlas, scale: ColourScale) -> dict[str, RGB]:
-    """Colour of every atlas region for one image.
-
-    Parameters
-    ----------
-    values : mapping of region key to float
-        NaN = empty cell (``scale.nan_color``); keys absent = no data
-        (``scale.missing_color``).
-    """
-    values = atlas.expand(values)  # a group member without a value takes the group's
-    keys = [k for k in atlas.keys if k in values]
-    colors: dict[str, RGB] = {k: scale.missing_color for k in atlas.keys}
-    if keys:
-        rgb = scale(np.array([values[k] for k in keys], dtype=float))
-        colors.update({k: (float(c[0]), float(c[1]), float(c[2])) for k, c in zip(keys, rgb, strict=True)})
-    return atlas.expand(colors)  # a region group's colour goes to each of its member regions
 
 
 #: Default views of an atlas without cortical regions (volumetric atlases).

@@ -12,106 +12,27 @@ from __future__ import annotations
 import json
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextlib import nullcontext
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, ClassVar, Unpack
+from typing import TYPE_CHECKING, Any, Unpack
 
 from numpy.typing import NDArray
 
 from brainpainter.atlas.model import Atlas
 from brainpainter.atlas.registry import get_atlas, load_atlas_config
-from brainpainter.color.scale import ColourScale
-from brainpainter.connectome.model import Connectome
-from brainpainter.connectome.series import check_images
 from brainpainter.errors import BrainPainterError
-from brainpainter.layers.kinds import DrawnLayer, open_layers
-from brainpainter.layers.readers import is_map_data
-from brainpainter.maps.clusters import Blobs
-from brainpainter.maps.outlines import Contours
-from brainpainter.rendering.alone import alone_source, default_views, drawn_alone, empty_table
-from brainpainter.rendering.blob_layers import drawn_blobs, load_blobs
-from brainpainter.rendering.composition import (
-    cortex_for,
-    line_entries,
-    line_layers,
-    region_run_layers,
-    tract_colors,
-)
-from brainpainter.rendering.connectome_layers import connectome_colors, connectome_summary
-from brainpainter.rendering.layers import Layer
+from brainpainter.layers.readers import first_layer_kind
+from brainpainter.rendering.checked_run import Run
+from brainpainter.rendering.composition import line_entries
+from brainpainter.rendering.connectome_layers import connectome_summary
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
-from brainpainter.rendering.painter import (
-    Painter,
-    RenderResult,
-    flat_aspect,
-    region_colors,
-    resolve_hidden,
-    shown_aspect,
-)
-from brainpainter.rendering.parallel import Item, LocalRunner, PainterSpec, Runner, SerialRunner, chunked
-from brainpainter.rendering.settings import RenderSettings, with_aspect
-from brainpainter.rendering.tract_run import (
-    read_run_table,
-    run_tract_values,
-)
-from brainpainter.rendering.views import ImagesByView, View, parse_views, with_clip
-from brainpainter.table.region_table import RegionTable
+from brainpainter.rendering.painter import Painter, RenderResult, resolve_hidden
+from brainpainter.rendering.parallel import LocalRunner, PainterSpec, Runner, SerialRunner, chunked
+from brainpainter.rendering.views import ImagesByView, View
 from brainpainter.table.rows import select_rows
-from brainpainter.tracts.values import TractValues
 
 if TYPE_CHECKING:
     from brainpainter.io.transaction import FolderTransaction
-
-
-@dataclass
-class Run:
-    """A checked run: the table, its colour scale (fixed over all rows), views, settings and options.
-
-    `scale` is the first layer's; `layers` are the region values, the tract values and a
-    connectome's edges and nodes drawn, each with its scale (:mod:`brainpainter.rendering.layers`).
-    """
-
-    table: RegionTable
-    scale: ColourScale
-    views: list[View]
-    settings: RenderSettings
-    options: Options
-    tract_values: TractValues | None = None
-    layers: tuple[Layer, ...] = ()
-    contours: Contours | None = None  # a second map's iso-lines (--contour)
-    connectome: Connectome | None = None
-    blobs: Blobs | None = None  # a volume's clusters as surfaces (--volume-surface)
-    drawn: tuple[DrawnLayer, ...] = ()  # what adds its own parts: the blobs, plugin layers (--layer)
-    #: How the painter colours it: a region table per region (a map run, ``"vertices"``: per vertex).
-    coloring: ClassVar[str] = "regions"
-
-    def scale_of(self, kind: str) -> ColourScale:
-        """The colour scale of layer `kind` (``"regions"``, ``"tracts"``); the run's scale if it has none."""
-        return next((layer.scale for layer in self.layers if layer.kind == kind), self.scale)
-
-    def painter(self) -> Painter:
-        """A new (not loaded) painter for this run's atlas, scene options and image settings."""
-        scene = self.options.scene
-        nodes = self.tract_values.nodes if self.tract_values is not None else ()
-        return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
-                       scene.renderer, tracts=scene.tract_spec(), tract_nodes=nodes,
-                       tract_radius=scene.tract_radius, contours=self.contours, connectome=self.connectome,
-                       drawn=self.drawn)
-
-    def items(self, rows: Sequence[int]) -> list[tuple[int, View]]:
-        """The images of `rows`: ``(row, view)`` for every row and view, row by row."""
-        return [(i, view) for i in rows for view in self.views]
-
-    def item(self, i: int, view: View, metadata: Mapping[str, str] | None = None) -> Item:
-        """The image of row `i` from `view`, as a painter task."""
-        colors = region_colors(self.table.row(i), self.table.atlas, self.scale_of("regions"))
-        if self.tract_values is not None:
-            colors.update(tract_colors(self.tract_values.row(self.table.images[i]), self.scale_of("tracts")))
-        if self.connectome is not None:
-            colors.update(connectome_colors(self.connectome, self.layers, i))
-        for layer in self.drawn:  # the blobs, plugin layers
-            colors.update(layer.colors(i))
-        return Item(colors, view, metadata, self.table.images[i])
 
 
 def resolve_atlas(atlas: Atlas | str | None, atlas_config: str | Path | None) -> Atlas | None:
@@ -126,7 +47,7 @@ def resolve_atlas(atlas: Atlas | str | None, atlas_config: str | Path | None) ->
 
 def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options | None = None,
                 **kwargs: Unpack[RenderKwargs]) -> Run:
-    """Read the table and check every option, before anything is rendered or written.
+    """Read the input and check every option, before anything is rendered or written.
 
     Used by every command (render, figure, movie, plot, export, the web API).
     Cheap option errors come first, so they do not wait for a big input file.
@@ -134,9 +55,9 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     Parameters
     ----------
     data : path, DataFrame, dict, or a list of these
-        See :func:`brainpainter.table.region_table.read_table`. A map
-        (``{"lh": array, "rh": array}``, or ``lh=``/``rh=`` options) makes a
-        :class:`~brainpainter.rendering.maprun.MapRun` instead.
+        See :func:`brainpainter.table.region_table.read_table`; a map (``{"lh": array, "rh": array}``,
+        or ``lh=``/``rh=`` options): :func:`brainpainter.maps.inputs.read_maps`. The readers
+        (:func:`brainpainter.layers.readers.first_layer_kind`) say which kind of first layer it is.
     atlas : str or Atlas, optional
         Inferred from the region names when not given.
     options : Options, optional
@@ -144,51 +65,14 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     **kwargs
         The options as flat keywords, see :class:`~brainpainter.rendering.options.Options`.
     """
+    from brainpainter.rendering.maprun import prepare_map_run
+    from brainpainter.rendering.region_run import prepare_region_run
+
     if options is None:
         options = Options.of(kwargs, "prepare_run")
     atlas_obj = resolve_atlas(atlas, options.scene.atlas_config)
-    if options.maps.given or is_map_data(data):  # per-vertex maps: the same run, coloured per vertex
-        from brainpainter.rendering.maprun import prepare_map_run
-
-        return prepare_map_run(data, atlas_obj, options)  # type: ignore[return-value]
-    views = options.scene.views
-    if views is not None:  # a given option's errors before a big input file is read
-        view_list = parse_views(views if isinstance(views, str) else list(views))
-    tract_values, bundles_only = run_tract_values(data, options)
-    blobs = load_blobs(options)
-    drawn = open_layers(options.scene.layer, options.scene.layer_opt)
-    alone = drawn_alone(data, options, tract_values, bundles_only, blobs, drawn)  # None: a region table
-    if alone is None:
-        table = read_run_table(data, atlas_obj, options, tract_values)
-    else:
-        images = (tract_values.images or ("1",)) if alone == "tracts" and tract_values is not None else ()
-        table = empty_table(atlas_obj, alone_source(alone, data, options), images,
-                            "table" if alone == "tracts" else "connectome")
-    connectome = options.connectome.load(table.atlas, options.scene.template, options.scene.surface,
-                                         atlas_given=alone != "connectome" or atlas_obj is not None)
-    if alone == "connectome" and connectome is not None and connectome.series is not None:
-        table = empty_table(table.atlas, options.connectome.connectome, connectome.series.names)
-    check_images(connectome, len(table.images), f"table {table.source!r} has")
-    if views is None:
-        view_list = parse_views(default_views(table.atlas, alone))
-    view_list = with_clip(view_list, options.scene.clips)
-    own = (table.atlas.name, table.atlas.template_labels)
-    contours, settings = line_layers(options, "a region render", own)
-    cortical = {r.key for r in table.atlas.cortical()}
-    settings = cortex_for(settings, cortex_values=bool(cortical.intersection(table.regions)),
-                          tracts=bool(options.scene.tracts),
-                          connectome=connectome is not None or bool(blobs) or bool(drawn))
-    if not options.size_given and table.atlas.image_aspect:  # a brain of another shape: frame the views
-        settings = with_aspect(settings, shown_aspect(table.atlas, options.scene.template, view_list))
-    elif not options.size_given and (aspect := flat_aspect(view_list)):  # flat maps: wider than a brain
-        settings = with_aspect(settings, aspect)
-    layers = region_run_layers(options, table, tract_values, alone == "tracts", connectome, blobs,
-                               None if alone == "tracts" else alone)
-    layers += tuple(layer.layer() for layer in drawn)
-    return Run(table, layers[0].scale, view_list, settings, options, tract_values, layers, contours,
-               connectome, blobs, (*drawn_blobs(blobs, layers), *drawn))
-
-
+    prepare = {"map": prepare_map_run, "regions": prepare_region_run}
+    return prepare[first_layer_kind(data, options.maps.given)](data, atlas_obj, options)
 
 
 def layer_summaries(run: Run, painter: Painter) -> dict[str, Any]:

@@ -11,15 +11,13 @@ from numpy.typing import NDArray
 
 from brainpainter.rendering.parts import NEUTRAL_SLOT, Centrelines, PartGeometry
 from brainpainter.rendering.settings import RGB
+from brainpainter.tracts.values import MISSING_TRACT_KEY
 
 if TYPE_CHECKING:
     from brainpainter.tracts.model import Tracts
 
 #: Palette key prefix of the direction colours' slots.
 DIRECTION_KEY = "tract-direction:"
-#: Palette key of the bundles drawn without a value where other bundles have values (issue 44): the tract
-#: scale's missing colour, as regions without values (not direction colours beside a value bar).
-MISSING_TRACT_KEY = "tract-missing"
 
 
 def _rgb(c: NDArray[Any]) -> RGB:

@@ -1,10 +1,13 @@
-"""Choosing rows of the user's table by image name or position (``--rows``, ``--row``)."""
+"""Rows of the user's table: choosing them by image name or position (``--rows``, ``--row``), and values
+between two of them (a movie's frames between key frames)."""
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from brainpainter.errors import BrainPainterError, nearest
 
@@ -56,3 +59,22 @@ def select_rows(images: Sequence[str], rows: Iterable[str | int] | str | None,
     if not out:
         raise BrainPainterError(f"no row was chosen in {rows!r}; e.g. --rows stage-1,stage-4")
     return list(dict.fromkeys(out))
+
+
+def interpolate(a: NDArray[Any], b: NDArray[Any], weight: float) -> NDArray[Any]:
+    """Values between two key frames: ``(1 - w) a + w b``.
+
+    NaN in either key frame gives NaN strictly between them; at ``w = 0``
+    and ``w = 1`` the key frame's own values are returned.
+
+    Parameters
+    ----------
+    a, b : ndarray of float, shape (n_regions,)
+    weight : float in [0, 1]
+    """
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if weight <= 0.0:
+        return a.copy()
+    if weight >= 1.0:
+        return b.copy()
+    return (1.0 - weight) * a + weight * b  # NaN propagates

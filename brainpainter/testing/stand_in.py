@@ -137,7 +137,8 @@ class StandInRenderer:
         #: (kind, hemisphere, key) of a connectome's nodes and edges: a stripe each where a view draws them
         self.connectome_keys: list[tuple[str, str | None, str]] = []
         if connectome is not None:
-            from brainpainter.rendering.connectome_parts import edge_keys, node_hemis, node_keys
+            from brainpainter.connectome.model import edge_keys, node_keys
+            from brainpainter.rendering.connectome_parts import node_hemis
 
             sides = node_hemis(connectome.positions)
             source, target, weight = connectome.edges()

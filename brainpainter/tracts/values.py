@@ -32,6 +32,9 @@ from numpy.typing import NDArray
 from brainpainter.errors import BrainPainterError
 from brainpainter.tracts.names import bundle_key, canonical
 
+#: Palette key of the bundles drawn without a value where other bundles have values (issue 44): the tract
+#: scale's missing colour, as regions without values (not direction colours beside a value bar).
+MISSING_TRACT_KEY = "tract-missing"
 NODE_COLUMNS = ("node", "nodeid", "node_id", "nodes")
 BUNDLE_COLUMNS = ("bundle", "tract", "tractid", "tract_id", "bundle_name", "tractname")
 IMAGE_COLUMNS = ("image-name-unique", "image", "subject", "subjectid", "subject_id", "participant_id",

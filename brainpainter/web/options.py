@@ -32,7 +32,7 @@ from brainpainter.web.layer_uploads import layer_maps
 from brainpainter.web.tracts import MAX_WEB_STREAMLINES
 
 if TYPE_CHECKING:
-    from brainpainter.rendering.run import Run
+    from brainpainter.rendering.checked_run import Run
     from brainpainter.web.tracts import TractFiles
 
 #: The options of tracts (given to a run only with tractograms).

@@ -285,8 +285,7 @@ def preview_request(data: bytes, name: str, options: Any, row: int | str, view: 
     else:
         raise BrainPainterError(f"row {str(row)[:100]!r} is not an image of the table; it has "
                                 f"{list(table.images[:5])}{'...' if len(table.images) > 5 else ''}.")
-    colors = (prep.run.colors(i) if prep.coloring == "vertices"  # type: ignore[attr-defined]
-              else prep.run.item(i, views[0]).colors)  # regions and bundles, as render colours them
+    colors = prep.run.colors(i)  # every layer's, as render colours them
     return {"atlas": table.atlas.name, "surface": options.surface, "hidden": prep.hidden,
             "settings": preview_settings(prep.run.settings, config.preview_max_width),
             "colors": colors, "view": views[0], "coloring": prep.coloring, **prep.painter_args()}
