@@ -244,13 +244,14 @@ def main() -> None:
 
         from brainpainter.rendering.painter import Painter
         from brainpainter.rendering.settings import RenderSettings
+        from brainpainter.rendering.tract_parts import TractLayer
         from brainpainter.rendering.views import get_view
         from brainpainter.tracts.model import TractSpec
 
         with tempfile.TemporaryDirectory() as tmp:
             folder = bench_tracts.write_tractogram(Path(tmp) / "bundles", 10_000)
             with Painter("dk", settings=RenderSettings(width=WIDTH, height=HEIGHT),
-                         tracts=TractSpec((str(folder),), max_streamlines=10_000)) as painter:
+                         layers=(TractLayer(TractSpec((str(folder),), max_streamlines=10_000)),)) as painter:
                 painter.paint_colors({}, get_view("subcortical"))  # uploads the scene
                 with _bpy.LOCK:
                     timed, about = in_gpu_context(lambda: layer(painter, args.repeats))

@@ -50,6 +50,7 @@ def main() -> None:
 
     from brainpainter.rendering.painter import Painter
     from brainpainter.rendering.settings import RenderSettings
+    from brainpainter.rendering.tract_parts import TractLayer
     from brainpainter.rendering.views import get_view
     from brainpainter.tracts.model import TractSpec
     from brainpainter.tracts.tubes import SIDES, points_for
@@ -70,7 +71,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp, Painter("dk", settings=settings) as ref:
         folder = write_tractogram(Path(tmp) / "bundles", n)
         for kind in ("tubes", "ribbons", "tubes", "ribbons"):
-            with Painter("dk", settings=settings, tracts=TractSpec((str(folder),), max_streamlines=n)) as p:
+            tracts = TractLayer(TractSpec((str(folder),), max_streamlines=n))
+            with Painter("dk", settings=settings, layers=(tracts,)) as p:
                 g = p.scene.geometry
                 if kind == "ribbons":
                     back = np.asarray(g.camera(sub, settings.width / settings.height).back, float)

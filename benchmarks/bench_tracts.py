@@ -201,6 +201,7 @@ def main() -> None:
     from brainpainter.layers.regions import region_colors
     from brainpainter.rendering.painter import Painter
     from brainpainter.rendering.settings import RenderSettings
+    from brainpainter.rendering.tract_parts import TractLayer
     from brainpainter.rendering.views import get_view
     from brainpainter.table.region_table import read_table
     from brainpainter.tracts.model import TractSpec
@@ -222,8 +223,8 @@ def main() -> None:
             for label, nodes in (("direction colours", ()), ("one colour per bundle",
                                                              tuple((b, 1) for b in BUNDLES))):
                 t0 = time.perf_counter()
-                with Painter("dk", settings=replace(settings, quality=args.tract_quality), tracts=spec,
-                             tract_nodes=nodes) as painter:
+                with Painter("dk", settings=replace(settings, quality=args.tract_quality),
+                             layers=(TractLayer(spec, nodes),)) as painter:
                     colors = region_colors(table.row(0), painter.atlas, scale)
                     colors.update({f"tract:{b}": (0.9, 0.2, 0.1) for b in BUNDLES})
                     painter.load()

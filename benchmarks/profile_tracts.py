@@ -105,6 +105,7 @@ def main() -> None:
     from brainpainter.rendering.mesh_memo import MESH_MEMO
     from brainpainter.rendering.painter import Painter
     from brainpainter.rendering.settings import RenderSettings
+    from brainpainter.rendering.tract_parts import TractLayer
     from brainpainter.rendering.views import get_view
     from brainpainter.tracts.model import TractSpec
     from brainpainter_blender import _bpy, gpu_shaders, meshorder
@@ -116,7 +117,8 @@ def main() -> None:
     n = args.streamlines
     with tempfile.TemporaryDirectory() as tmp:
         folder = write_tractogram(Path(tmp) / "bundles", n)
-        with Painter("dk", settings=settings, tracts=TractSpec((str(folder),), max_streamlines=n)) as painter:
+        tracts = TractLayer(TractSpec((str(folder),), max_streamlines=n))
+        with Painter("dk", settings=settings, layers=(tracts,)) as painter:
             painter.load()
             geometry = painter.scene.geometry
             rgb = np.asarray(geometry.default_rgb, np.float32)

@@ -31,6 +31,7 @@ def render(out: Path, n: int) -> None:
     from brainpainter.io.output import png_bytes
     from brainpainter.rendering.painter import Painter
     from brainpainter.rendering.settings import RenderSettings
+    from brainpainter.rendering.tract_parts import TractLayer
     from brainpainter.rendering.views import get_view
     from brainpainter.tracts.model import TractSpec
 
@@ -42,7 +43,7 @@ def render(out: Path, n: int) -> None:
         folder = write_tractogram(Path(tmp) / "bundles", n)
         spec = TractSpec((str(folder),), max_streamlines=n)
         for label, nodes in (("direction", ()), ("values", tuple((b, 1) for b in BUNDLES))):
-            with Painter("dk", settings=settings, tracts=spec, tract_nodes=nodes) as painter:
+            with Painter("dk", settings=settings, layers=(TractLayer(spec, nodes),)) as painter:
                 colors = {f"tract:{b}": tuple(float(c) for c in scale(v)[:3])
                           for b, v in zip(BUNDLES, values, strict=True)} if nodes else {}
                 for view in VIEWS:

@@ -10,6 +10,7 @@ import pytest
 from brainpainter.atlas.template import load_template
 from brainpainter.connectome.model import Connectome
 from brainpainter.rendering import framing
+from brainpainter.rendering.connectome_layers import ConnectomeLayer
 from brainpainter.rendering.connectome_parts import (
     EDGE_RADIUS,
     NODE_RADIUS,
@@ -73,7 +74,7 @@ def test_a_cylinder_seen_from_any_side_is_nearly_as_wide_as_a_round_tube():
 
 
 def test_nodes_and_edges_are_parts_with_a_slot_each_drawn_inside_the_glass(tiny):
-    scene = Scene(load_template(tiny), "dk", connectome=tiny_connectome())
+    scene = Scene(load_template(tiny), "dk", layers=(ConnectomeLayer(tiny_connectome()),))
     g = scene.geometry
     parts = {p.name: p for p in g.parts}
     # one node a hemisphere, the edge between them: of neither (issue 44: views of one hemisphere skip it)
@@ -101,7 +102,7 @@ def test_four_hundred_nodes_and_eight_hundred_edges_are_cheap(tiny):
     t0 = time.perf_counter()
     plain = Scene(template, "dk").geometry
     t1 = time.perf_counter()
-    g = Scene(template, "dk", connectome=connectome).geometry
+    g = Scene(template, "dk", layers=(ConnectomeLayer(connectome),)).geometry
     t2 = time.perf_counter()
     extra = (t2 - t1) - (t1 - t0)
     triangles = {kind: sum(len(p.triangles) for p in g.parts if p.kind == kind) for kind in ("node", "edge")}
@@ -137,7 +138,7 @@ def test_a_connectome_over_a_cortex_without_values_is_drawn_in_the_smooth_glass_
     assert run.settings.cortex == "hull"
     with_values = prepare_run({"Left-insula": 1.0}, "dk", template=str(tiny), connectome=str(matrix))
     assert with_values.settings.cortex == "opaque"  # the regions' colours true to their bar
-    g = Scene(load_template(tiny), "dk", connectome=tiny_connectome(),
+    g = Scene(load_template(tiny), "dk", layers=(ConnectomeLayer(tiny_connectome()),),
               settings=RenderSettings(cortex="hull")).geometry
     for view, hulls in (("dorsal", {"glass-lh", "glass-rh"}), ("lateral-left", {"glass-lh"})):
         shown = {p.name: p.kind for p in g.visible(get_view(view))}

@@ -10,6 +10,7 @@ import pytest
 
 import brainpainter
 from brainpainter.connectome.model import Connectome
+from brainpainter.rendering.connectome_layers import ConnectomeLayer
 from brainpainter.rendering.run import prepare_run
 from brainpainter.testing.connectome_check import tiny_connectome
 
@@ -152,7 +153,7 @@ def test_connectome_parts_split_by_hemisphere_and_the_views_that_draw_them(tiny)
     from brainpainter.rendering.scene import Scene
     from brainpainter.rendering.views import get_view
 
-    scene = Scene(load_template(tiny), "dk", connectome=ladder())
+    scene = Scene(load_template(tiny), "dk", layers=(ConnectomeLayer(ladder()),))
     parts = {p.name: p.hemi for p in scene.geometry.parts if p.kind in ("node", "edge")}
     assert parts == {"nodes-lh": "lh", "nodes-rh": "rh", "edges-lh": "lh", "edges-rh": "rh", "edges": None}
     drawn = {view: {p.name for p in scene.geometry.visible(get_view(view)) if p.kind in ("node", "edge")}

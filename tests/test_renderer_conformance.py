@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from brainpainter.atlas import registry
+from brainpainter.rendering.tract_parts import TractLayer
 from brainpainter.testing import check_renderer
 
 
@@ -97,7 +98,7 @@ def test_a_stand_in_that_draws_tubes_gets_them(tmp_path):
 
     template = load_template(write_tiny_template(tmp_path / "tiny"))
     for draws, built in ((True, True), (False, False)):
-        scene = Scene(template, "dk", tracts=tiny_tracts(), tract_nodes=(("AF_left", 1),))
+        scene = Scene(template, "dk", layers=(TractLayer(None, (("AF_left", 1),), tracts=tiny_tracts()),))
         r = StandInRenderer.with_(draws_tubes=draws)(scene)
         tract = [p for p in scene.geometry._lazy.entries if p.kind == "tract"]
         assert [p.tubes_built for p in tract] == [built, built]

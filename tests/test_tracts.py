@@ -11,6 +11,7 @@ import pytest
 
 from brainpainter.errors import BrainPainterError
 from brainpainter.rendering.framing import shows
+from brainpainter.rendering.tract_parts import TractLayer
 from brainpainter.rendering.views import get_view
 from brainpainter.tracts.model import TractSpec, bundle_files, read_affine
 from brainpainter.tracts.names import canonical, hemisphere
@@ -311,7 +312,8 @@ def _scene(tiny, bundles, nodes=(), **settings):
 
     template = load_template(str(tiny))
     tracts = TractSpec((str(bundles),), space="template").load(template) if bundles else None
-    return Scene(template, "dk", tracts=tracts, tract_nodes=tuple(nodes), settings=RenderSettings(**settings))
+    layers = () if tracts is None else (TractLayer(None, tuple(nodes), tracts=tracts),)
+    return Scene(template, "dk", layers=layers, settings=RenderSettings(**settings))
 
 
 @pytest.mark.parametrize(("cortex", "visible"), [
@@ -485,10 +487,11 @@ def test_a_worker_builds_the_same_scene_from_the_pickled_spec(tiny, bundles):
     from brainpainter.rendering.parallel import PainterSpec
 
     spec = TractSpec((str(bundles),), space="template", max_streamlines=30)
-    painter = Painter("dk", str(tiny), tracts=spec, tract_nodes=(("AF_left", 1),), tract_radius=0.5)
+    painter = Painter("dk", str(tiny), layers=(TractLayer(spec, (("AF_left", 1),), 0.5),))
     spec = pickle.loads(pickle.dumps(PainterSpec.of(painter, str(tiny))))
     worker = spec.build()
-    assert worker.scene.tract_nodes == (("AF_left", 1),) and worker.scene.tract_radius == 0.5
+    (layer,) = worker.scene.layers
+    assert layer.nodes == (("AF_left", 1),) and layer.radius == 0.5
     np.testing.assert_array_equal(worker.scene.tracts.lines, painter.scene.tracts.lines)
 
 

@@ -12,6 +12,7 @@ import pytest
 from test_tracts import bundle, write
 
 from brainpainter.rendering.settings import RenderSettings
+from brainpainter.rendering.tract_parts import TractLayer
 from brainpainter.rendering.views import get_view
 from brainpainter.tracts.model import TractSpec
 
@@ -38,7 +39,7 @@ def _painter(tiny, bundles, nodes=(), **settings):
     s = {"width": 320, "height": 240, "shading": "flat", "quality": "fast", "glass_opacity": 0.0,
          "background": (1.0, 1.0, 1.0), **settings}
     return Painter("dk", str(tiny), settings=RenderSettings(**s),
-                   tracts=TractSpec((str(bundles),), space="template"), tract_nodes=nodes)
+                   layers=(TractLayer(TractSpec((str(bundles),), space="template"), nodes),))
 
 
 def test_a_red_bundle_is_drawn_red_on_its_side_seen_from_above(tiny, bundles):
@@ -159,7 +160,7 @@ def test_dipy_bundles_in_the_default_template(minimal_bundles, tmp_path):
     colors = {"tract:AF_left": RED, "tract:CST_right": BLUE, "tract:CC_ForcepsMajor": (0.0, 1.0, 0.0)}
     nodes = (("AF_left", 1), ("CST_right", 1), ("CC_ForcepsMajor", 1))
     hidden = ("ventricles", "cerebellum", "brainstem")  # else they hide bundles behind them
-    with Painter("dk", settings=settings, tracts=spec, tract_nodes=nodes, hidden=hidden) as p:
+    with Painter("dk", settings=settings, layers=(TractLayer(spec, nodes),), hidden=hidden) as p:
         top = p.paint_colors(colors, get_view("subcortical-dorsal"))
         side = p.paint_colors(colors, get_view("subcortical-left"))
     af, cst = _mask(top, RED, 2), _mask(top, BLUE, 2)
@@ -179,9 +180,9 @@ def test_dipy_bundles_in_lateral_left_through_the_glass_cortex(minimal_bundles, 
     colors = {"tract:AF_left": RED, "tract:CST_right": BLUE, "tract:CC_ForcepsMajor": (0.0, 1.0, 0.0),
               "Left-superiortemporal": (1.0, 1.0, 0.0)}
     nodes = (("AF_left", 1), ("CST_right", 1), ("CC_ForcepsMajor", 1))
-    with Painter("dk", settings=settings, tracts=spec, tract_nodes=nodes) as p:
+    with Painter("dk", settings=settings, layers=(TractLayer(spec, nodes),)) as p:
         img = p.paint_colors(colors, get_view("lateral-left"))  # --cortex auto: glass, as tracts are given
-    with Painter("dk", settings=replace(settings, cortex="opaque"), tracts=spec, tract_nodes=nodes) as p:
+    with Painter("dk", settings=replace(settings, cortex="opaque"), layers=(TractLayer(spec, nodes),)) as p:
         hidden = p.paint_colors(colors, get_view("lateral-left"))
     af, cst, cc = _mask(img, RED, 2), _mask(img, BLUE, 2), _mask(img, (0.0, 1.0, 0.0), 2)
     assert af.sum() > 100 and cc.sum() > 20  # the left arcuate and the forceps major (commissural)

@@ -203,7 +203,7 @@ def test_two_tract_uploads_never_share_a_painter(server, files):
         req = preview_request(data, "t.csv", o, 0, "subcortical", ServerConfig(), tracts=tracts,
                               data_dir=store.root)
         return painter_key(req["atlas"], req["surface"], req["hidden"], req["settings"], req["coloring"],
-                           req["tracts"], req["tract_nodes"], req["tract_radius"])
+                           req["contours"], req["layers"])
 
     ka, kb, kc = key(a), key(b), key(c)
     assert ka != kb and ka == kc  # content addressed: the same files may share, different ones never

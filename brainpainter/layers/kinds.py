@@ -21,19 +21,29 @@ from brainpainter.errors import BrainPainterError, choice_error
 RGB = tuple[float, float, float]
 
 
-class DrawnLayer(Protocol):
-    """A plugin layer read from its file: the parts it adds to the scene and their colours.
+class SceneLayer(Protocol):
+    """What adds its own parts to the scene (the tracts, a connectome, the blobs, a plugin's layer): what
+    a :class:`~brainpainter.rendering.painter.Painter` takes (``layers=``), in the order they are drawn.
 
-    It travels to every worker (``--jobs``, Dask) with the painter, so it pickles.
+    It travels to every worker (``--jobs``, Dask) with the painter, so it pickles. One that reads its
+    data for the scene's template (the tracts: placed in its coordinates) has ``for_template(template)``,
+    which returns the layer read (:func:`for_template`).
     """
 
     @property
     def kind(self) -> str:
-        """Its kind's name (``foci``): its key in the manifest."""
+        """Its kind's name (``tracts``, ``connectome``, ``foci``): its key in the manifest."""
 
     def parts(self, template: Any, slots_for: Callable[..., Any]) -> list[Any]:
         """Its :class:`~brainpainter.rendering.parts.PartGeometry` in `template`'s coordinates;
         ``slots_for(keys, default_rgb, frozenset())`` gives the palette slot of each colour key."""
+
+    def summary(self) -> dict[str, Any]:
+        """What was drawn, for the manifest and ``check`` (JSON types)."""
+
+
+class DrawnLayer(SceneLayer, Protocol):
+    """A layer read from its file that adds its parts and colours them itself (the blobs, a plugin's)."""
 
     def colors(self, row: int) -> dict[str, RGB]:
         """The sRGB colour of each of its palette keys in image (row) `row`."""
@@ -42,8 +52,12 @@ class DrawnLayer(Protocol):
         """Its :class:`~brainpainter.rendering.layers.Layer` (colour scale, opacity, label): its
         colour bar in figures and its entry in the manifest."""
 
-    def summary(self) -> dict[str, Any]:
-        """What was drawn, for the manifest and ``check`` (JSON types)."""
+
+def for_template(layer: SceneLayer, template: Any) -> SceneLayer:
+    """`layer` with its data read for `template` where it reads any there (its optional
+    ``for_template``, as the tracts have); else `layer` itself."""
+    read = getattr(layer, "for_template", None)
+    return layer if read is None else read(template)
 
 
 @dataclass(frozen=True)

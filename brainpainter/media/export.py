@@ -348,10 +348,9 @@ def _row_meshes(run: Run, i: int) -> tuple[Scene, list[RegionMesh]]:
     from brainpainter.rendering.blob_layers import blob_colors
     from brainpainter.rendering.painter import load_scene
 
-    opts, tv = run.options.scene, run.tract_values
+    opts = run.options.scene
     atlas_obj, scene = load_scene(run.table.atlas, opts.template, opts.surface, opts.hide,
-                                  tracts=opts.tract_spec(), tract_nodes=tv.nodes if tv is not None else (),
-                                  tract_radius=opts.tract_radius, connectome=run.connectome, drawn=run.drawn)
+                                  layers=run.scene_layers())
     shown = None if run.connectome is None else image_connectome(run.connectome, i)  # a series: row i's
     inside = connectome_meshes(scene, shown, connectome_colors(shown, run.layers)
                                if shown is not None else {})  # a connectome's nodes and edges

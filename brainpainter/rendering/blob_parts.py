@@ -56,12 +56,3 @@ def blob_parts(blobs: Blobs | None, template: Template, slots_for: SlotsFor) -> 
     return [PartGeometry("blobs", "blob", None, v32, normals.astype(np.float32),
                          np.asarray(blobs.triangles, np.uint32), pal, np.zeros(len(verts), np.float32),
                          verts)]
-
-
-def inside_parts(scene: Any, template: Template, slots_for: SlotsFor) -> list[PartGeometry]:
-    """The parts of each drawn layer besides a connectome's, in order (the blobs, then plugin layers:
-    :attr:`brainpainter.rendering.scene.Scene.drawn`); `scene` is the Scene."""
-    parts: list[PartGeometry] = []
-    for layer in scene.drawn:
-        parts += layer.parts(template, slots_for)
-    return parts

@@ -10,10 +10,11 @@ from typing import Any
 
 from brainpainter.color.scale import ColourScale
 from brainpainter.connectome.model import Connectome
-from brainpainter.layers.kinds import RGB, DrawnLayer
+from brainpainter.layers.kinds import RGB, DrawnLayer, SceneLayer
 from brainpainter.layers.over import FirstLayer, OverLayer
 from brainpainter.maps.clusters import Blobs
 from brainpainter.maps.outlines import Contours
+from brainpainter.rendering.composition import scene_layers
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import Options
 from brainpainter.rendering.painter import Painter
@@ -60,11 +61,14 @@ class Run:
     def painter(self) -> Painter:
         """A new (not loaded) painter for this run's atlas, scene options and image settings."""
         scene = self.options.scene
-        nodes = self.tract_values.nodes if self.tract_values is not None else ()
         return Painter(self.table.atlas, scene.template, scene.surface, scene.hide, self.settings,
-                       scene.renderer, coloring=self.coloring, tracts=scene.tract_spec(), tract_nodes=nodes,
-                       tract_radius=scene.tract_radius, contours=self.contours, connectome=self.connectome,
-                       drawn=self.drawn)
+                       scene.renderer, coloring=self.coloring, contours=self.contours,
+                       layers=self.scene_layers())
+
+    def scene_layers(self) -> tuple[SceneLayer, ...]:
+        """What the run adds to the scene, in the order drawn (:func:`~brainpainter.rendering.composition.
+        scene_layers`): the tracts, a connectome, the blobs, plugin layers."""
+        return scene_layers(self.options, self.tract_values, self.connectome, self.drawn)
 
     def items(self, rows: Sequence[int]) -> list[tuple[int, View]]:
         """The images of `rows`: ``(row, view)`` for every row and view, row by row."""

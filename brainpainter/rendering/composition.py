@@ -21,15 +21,19 @@ from numpy.typing import NDArray
 
 from brainpainter.atlas.model import HEMI_PREFIX
 from brainpainter.color.scale import ColourScale, ScaleOptions, widen
+from brainpainter.connectome.model import Connectome
 from brainpainter.errors import BrainPainterError
+from brainpainter.layers.kinds import DrawnLayer, SceneLayer
 from brainpainter.layers.regions import region_colors
 from brainpainter.maps.inputs import VertexMaps, read_maps
 from brainpainter.maps.layers import map_scale
 from brainpainter.maps.options import MapOptions
 from brainpainter.maps.outlines import Contours
+from brainpainter.rendering.connectome_layers import ConnectomeLayer
 from brainpainter.rendering.layers import Layer
 from brainpainter.rendering.options import Options
 from brainpainter.rendering.settings import RGB, RenderSettings, outlined
+from brainpainter.rendering.tract_parts import TractLayer
 from brainpainter.table.region_table import RegionTable
 from brainpainter.tracts.values import TractValues
 
@@ -333,3 +337,14 @@ def cortex_for(settings: RenderSettings, *, cortex_values: bool, tracts: bool,
     if cortex_values and (tracts or connectome):
         return replace(settings, cortex="opaque")
     return settings
+
+
+def scene_layers(options: Options, tract_values: TractValues | None, connectome: Connectome | None,
+                 drawn: Sequence[DrawnLayer]) -> tuple[SceneLayer, ...]:
+    """What a run adds to the scene, in the order drawn: the tracts (``--tracts``; their bundles with
+    values coloured by them), a connectome's nodes and edges, then the blobs and plugin layers."""
+    spec = options.scene.tract_spec()
+    tracts = () if spec is None else (TractLayer(spec, tract_values.nodes if tract_values is not None else (),
+                                                 options.scene.tract_radius),)
+    network = () if connectome is None else (ConnectomeLayer(connectome),)
+    return (*tracts, *network, *drawn)

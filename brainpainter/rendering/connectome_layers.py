@@ -10,7 +10,8 @@ in one neutral colour (:data:`~brainpainter.rendering.connectome_parts.NODE_COLO
 
 from __future__ import annotations
 
-from dataclasses import replace
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 from functools import cache
 from typing import Any
 
@@ -20,6 +21,7 @@ from brainpainter.color.scale import ColourScale, ScaleOptions
 from brainpainter.connectome.edges import MAX_EDGES_DRAWN
 from brainpainter.connectome.model import Connectome
 from brainpainter.maps.autoscale import choose_scale
+from brainpainter.rendering.connectome_parts import connectome_parts
 from brainpainter.rendering.layers import SCALE_FIELDS, Layer
 from brainpainter.rendering.options import Options
 from brainpainter.rendering.settings import RGB
@@ -161,3 +163,24 @@ def connectome_summary(connectome: Connectome) -> dict[str, Any]:
     if connectome.series is not None:
         out["series"] = connectome.series.summary()
     return out
+
+
+@dataclass(frozen=True)
+class ConnectomeLayer:
+    """A connectome as a scene layer (:class:`~brainpainter.layers.kinds.SceneLayer`): its nodes and edges
+    (:func:`~brainpainter.rendering.connectome_parts.connectome_parts`), drawn inside the glass cortex."""
+
+    connectome: Connectome
+    kind: str = "connectome"
+
+    def parts(self, template: Any, slots_for: Callable[..., Any]) -> list[Any]:
+        """Its nodes' spheres and edges' cylinders, by hemisphere."""
+        return connectome_parts(self.connectome, slots_for)
+
+    def summary(self) -> dict[str, Any]:
+        """The manifest's ``connectome`` (:func:`connectome_summary`)."""
+        return connectome_summary(self.connectome)
+
+    def digest(self) -> str:
+        """A digest of its nodes and edges (the web's painters are keyed by it)."""
+        return str(self.connectome.digest())

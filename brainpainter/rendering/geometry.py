@@ -44,9 +44,7 @@ from brainpainter.atlas.mesh import vertex_normals
 from brainpainter.errors import BrainPainterError, choice_error
 from brainpainter.layers.vertex_map import VertexColors
 from brainpainter.rendering import framing
-from brainpainter.rendering.blob_parts import inside_parts
 from brainpainter.rendering.clip import check_cut
-from brainpainter.rendering.connectome_parts import connectome_parts
 from brainpainter.rendering.lazy_parts import LazyParts, cortex_arrays
 from brainpainter.rendering.part_cache import cortex_kept
 from brainpainter.rendering.parts import (
@@ -62,12 +60,10 @@ from brainpainter.rendering.parts import (
     split_by_label,
 )
 from brainpainter.rendering.settings import RGB, SULC_LIGHTINGS, RenderSettings
-from brainpainter.rendering.tract_parts import tract_parts
 from brainpainter.rendering.views import View
 
 if TYPE_CHECKING:
     from brainpainter.atlas.template import Template
-    from brainpainter.tracts.model import Tracts
 
 
 # The parts and slots are defined in parts.py; named here for renderers and older imports.
@@ -96,13 +92,9 @@ class SceneParts(Protocol):
     @property
     def medial_wall_color(self) -> RGB: ...
     @property
-    def tracts(self) -> Tracts | None: ...
-    @property
-    def tract_nodes(self) -> tuple[tuple[str, int], ...]: ...
-    @property
-    def tract_radius(self) -> float | None: ...
-    @property
     def coloring(self) -> str: ...
+    @property
+    def layers(self) -> tuple[Any, ...]: ...
 
 class Palette(Mapping[str, RGB]):
     """The colours of one image: a mapping region key -> sRGB, and the slot array renderers draw.
@@ -265,11 +257,8 @@ class SceneGeometry:
         if template.manifest.get("subcortical"):
             self._lazy.later_subcortical(template, hidden, slots_for(list(template.subcortical_names()),
                                                                      NEUTRAL_SLOT, hidden))
-        if scene.tracts is not None:
-            self._lazy.entries += tract_parts(scene.tracts, dict(scene.tract_nodes), slots_for,
-                                              scene.tract_radius)
-        self._lazy.entries += connectome_parts(getattr(scene, "connectome", None), slots_for)
-        self._lazy.entries += inside_parts(scene, template, slots_for)  # blobs, plugin layers
+        for layer in scene.layers:  # tracts, a connectome, blobs, plugin layers
+            self._lazy.entries += layer.parts(template, slots_for)
         for hemi in HEMIS:
             if hemi in template.manifest.get("glass", {}):
                 self._lazy.later_glass(template, hemi)

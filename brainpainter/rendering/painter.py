@@ -21,8 +21,8 @@ from brainpainter.atlas.registry import get_atlas, load_atlas_config
 from brainpainter.atlas.template import Template, load_template, template_for
 from brainpainter.color.rgb import ColorLike, to_rgb
 from brainpainter.color.scale import ColourScale
-from brainpainter.connectome.model import Connectome
 from brainpainter.errors import choice_error
+from brainpainter.layers.kinds import SceneLayer, for_template
 from brainpainter.layers.regions import region_colors
 from brainpainter.layers.vertex_map import VertexColors
 from brainpainter.maps.outlines import Contours
@@ -31,7 +31,6 @@ from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.settings import RGB, RenderSettings
 from brainpainter.rendering.views import View
 from brainpainter.table.region_table import RegionTable
-from brainpainter.tracts.model import TractSpec
 
 if TYPE_CHECKING:
     pass
@@ -117,13 +116,9 @@ def load_scene(
     settings: RenderSettings | None = None,
     medial_wall_color: ColorLike = (0.72, 0.72, 0.72),
     atlas_config: str | Path | None = None,
-    tracts: TractSpec | None = None,
-    tract_nodes: Iterable[tuple[str, int]] = (),
-    tract_radius: float | None = None,
     coloring: str = "regions",
     contours: Contours | None = None,
-    connectome: Connectome | None = None,
-    drawn: tuple[Any, ...] = (),
+    layers: Iterable[SceneLayer] = (),
 ) -> tuple[Atlas, Scene]:
     """The atlas and the scene a renderer (or an exporter) draws; nothing is rendered.
 
@@ -157,13 +152,9 @@ def load_scene(
         hidden=frozenset(atlas.expand(dict.fromkeys(resolve_hidden(hidden, atlas)))),
         settings=settings or RenderSettings(),
         medial_wall_color=to_rgb(medial_wall_color),
-        tracts=None if tracts is None else tracts.load(template),
-        tract_nodes=tuple((str(n), int(k)) for n, k in tract_nodes),
-        tract_radius=None if tract_radius is None else float(tract_radius),
         coloring=coloring,
         contours=contours,
-        connectome=connectome,
-        drawn=tuple(drawn),
+        layers=tuple(for_template(layer, template) for layer in layers),  # the tracts read for the template
     )
     return atlas, scene
 
@@ -184,23 +175,14 @@ class Painter:
         Name in the ``brainpainter.renderers`` registry.
     atlas_config : path, optional
         Region-group TOML file (:mod:`brainpainter.atlas.config`); replaces `atlas`.
-    tracts : TractSpec, optional
-        White-matter bundles to draw (:mod:`brainpainter.tracts`).
-    tract_nodes : iterable of (str, int)
-        Bundles coloured by value: ``(name, 1)`` one colour, ``(name, n)`` a profile of
-        `n` nodes; the others are coloured by direction.
-    tract_radius : float, optional
-        Radius of the tubes, millimetres (default: by the number of streamlines,
-        :func:`brainpainter.tracts.tubes.auto_radius`).
     coloring : {"regions", "vertices"}
         ``"vertices"`` draws per-vertex maps (:attr:`brainpainter.rendering.scene.Scene.coloring`).
     contours : Contours, optional
         A second map's iso-lines (:attr:`brainpainter.rendering.scene.Scene.contours`).
-    connectome : Connectome, optional
-        Nodes and edges drawn inside the cortex (:attr:`brainpainter.rendering.scene.Scene.connectome`).
-    drawn : tuple of DrawnLayer
-        What adds its own parts: a volume's clusters (``BlobLayer``), plugin layers (``--layer
-        KIND:FILE``; :attr:`brainpainter.rendering.scene.Scene.drawn`).
+    layers : iterable of SceneLayer
+        What adds its own parts, in the order drawn (:attr:`brainpainter.rendering.scene.Scene.layers`):
+        white-matter bundles (``TractLayer(TractSpec(...), nodes)``), a connectome's nodes and edges
+        (``ConnectomeLayer``), a volume's clusters (``BlobLayer``), plugin layers (``--layer KIND:FILE``).
     """
 
     atlas: Atlas | str = "dk"
@@ -211,21 +193,16 @@ class Painter:
     renderer: str = "blender"
     medial_wall_color: ColorLike = (0.72, 0.72, 0.72)
     atlas_config: str | Path | None = None
-    tracts: TractSpec | None = None
-    tract_nodes: Iterable[tuple[str, int]] = ()
-    tract_radius: float | None = None
     coloring: str = "regions"
     contours: Contours | None = None
-    connectome: Connectome | None = None
-    drawn: tuple[Any, ...] = ()
+    layers: Iterable[SceneLayer] = ()
     _renderer: Any = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
-        self.tract_nodes = tuple(self.tract_nodes)
+        self.layers = tuple(self.layers)
         self.atlas, self.scene = load_scene(self.atlas, self.template, self.surface, self.hidden,
                                             self.settings, self.medial_wall_color, self.atlas_config,
-                                            self.tracts, self.tract_nodes, self.tract_radius,
-                                            self.coloring, self.contours, self.connectome, self.drawn)
+                                            self.coloring, self.contours, self.layers)
         self.template = self.scene.template
         from brainpainter.atlas import registry
         from brainpainter.rendering.pythons import require_bpy

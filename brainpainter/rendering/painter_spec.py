@@ -37,18 +37,13 @@ class PainterSpec:
         ``"module:Class"`` of the renderer, registered under `renderer` in a
         worker that does not know that name (a renderer registered at run time).
     medial_wall_color : (float, float, float)
-    tracts : TractSpec or None
-        The tractograms (paths and options: each worker reads them and draws the same subsample).
-    tract_nodes : tuple of (str, int)
-        How each bundle is coloured (:class:`~brainpainter.rendering.scene.Scene`).
     coloring : {"regions", "vertices"}
     contours : Contours, optional
         A second map's iso-lines (its values travel with the spec: about 1.3 MB for both hemispheres).
-    connectome : Connectome, optional
-        Its nodes and edges travel with the spec (400 nodes: about 1.3 MB of weights).
-    drawn : tuple of DrawnLayer
-        The blobs (a volume's clusters' surfaces: a few hundred kB) and plugin layers (``--layer``),
-        pickled with the spec.
+    layers : tuple of SceneLayer
+        Pickled with the spec: the tracts' (their paths and options: each worker reads them and draws
+        the same subsample), a connectome's (400 nodes: about 1.3 MB of weights), the blobs (a few
+        hundred kB), plugin layers (``--layer``).
     """
 
     atlas: Any
@@ -59,13 +54,9 @@ class PainterSpec:
     renderer: str
     renderer_target: str | None
     medial_wall_color: RGB
-    tracts: Any = None
-    tract_nodes: tuple[tuple[str, int], ...] = ()
-    tract_radius: float | None = None
     coloring: str = "regions"
     contours: Any = None
-    connectome: Any = None
-    drawn: tuple[Any, ...] = ()
+    layers: tuple[Any, ...] = ()
 
     @classmethod
     def of(cls, painter: Painter, template: Any = None) -> PainterSpec:
@@ -83,9 +74,7 @@ class PainterSpec:
             surface=painter.surface, hidden=tuple(str(h) for h in painter.hidden),
             settings=painter.settings, renderer=painter.renderer, renderer_target=target,
             medial_wall_color=tuple(float(c) for c in painter.scene.medial_wall_color),  # type: ignore[arg-type]
-            tracts=painter.tracts, tract_nodes=tuple(painter.tract_nodes), tract_radius=painter.tract_radius,
-            coloring=painter.scene.coloring, contours=painter.scene.contours,
-            connectome=painter.scene.connectome, drawn=painter.scene.drawn,
+            coloring=painter.scene.coloring, contours=painter.scene.contours, layers=tuple(painter.layers),
         )
 
     @property
@@ -112,6 +101,5 @@ class PainterSpec:
             if obj is not None and current is not obj:
                 registry.renderers.register(self.renderer, lambda: obj, replace=True)
         return Painter(self.atlas, self.template, self.surface, self.hidden, self.settings,
-                       self.renderer, self.medial_wall_color, tracts=self.tracts,
-                       tract_nodes=self.tract_nodes, tract_radius=self.tract_radius, coloring=self.coloring,
-                       contours=self.contours, connectome=self.connectome, drawn=self.drawn)
+                       self.renderer, self.medial_wall_color, coloring=self.coloring, contours=self.contours,
+                       layers=self.layers)

@@ -24,7 +24,6 @@ from brainpainter.errors import BrainPainterError
 from brainpainter.layers.readers import first_layer_kind
 from brainpainter.rendering.checked_run import Run
 from brainpainter.rendering.composition import line_entries
-from brainpainter.rendering.connectome_layers import connectome_summary
 from brainpainter.rendering.options import GROUPS, Options, RenderKwargs, RunnerOptions, option_names
 from brainpainter.rendering.painter import Painter, RenderResult, resolve_hidden
 from brainpainter.rendering.parallel import LocalRunner, PainterSpec, Runner, SerialRunner, chunked
@@ -75,17 +74,10 @@ def prepare_run(data: Any, atlas: Atlas | str | None = None, *, options: Options
     return prepare[first_layer_kind(data, options.maps.given)](data, atlas_obj, options)
 
 
-def layer_summaries(run: Run, painter: Painter) -> dict[str, Any]:
-    """A manifest's ``tracts`` (what was drawn of the tractograms: subsampling notes) and ``connectome``
-    (its nodes and the number of edges drawn), where the run draws them (render's and the web's jobs)."""
-    out: dict[str, Any] = {}
-    if painter.scene.tracts is not None:
-        out["tracts"] = painter.scene.tracts.summary()
-    if run.connectome is not None:
-        out["connectome"] = connectome_summary(run.connectome)
-    for layer in run.drawn:  # the blobs, plugin layers
-        out[layer.kind] = layer.summary()
-    return out
+def layer_summaries(painter: Painter) -> dict[str, Any]:
+    """Each scene layer's manifest entry by its kind: ``tracts`` (what was drawn of the tractograms:
+    subsampling notes), ``connectome`` (its nodes and the edges drawn), ``blobs``, plugin layers'."""
+    return {layer.kind: layer.summary() for layer in painter.scene.layers}
 
 
 def make_runner(painter: Painter, template: Any = None, options: RunnerOptions | None = None,
@@ -277,7 +269,7 @@ def write_images(run: Run, painter: Painter, runner: Runner, chosen: Sequence[in
             "files": [{"file": path.name, "image": table.images[i], "row": i, "view": view.name}
                       for path, (i, view) in zip(files, plan, strict=False)],
         }
-        manifest.update(layer_summaries(run, painter))
+        manifest.update(layer_summaries(painter))
         if tx is not None:
             tx.commit(manifest)  # verify every PNG, then publish them and the manifest last
     return files, images, manifest

@@ -63,30 +63,21 @@ class Scene:
         Region keys not drawn at all.
     settings : RenderSettings
     medial_wall_color : tuple of float, shape (3,)
-    tracts : Tracts, optional
-        White-matter bundles drawn as tubes (:mod:`brainpainter.tracts`).
-    tract_nodes : tuple of (str, int)
-        How each bundle is coloured: ``(name, 1)`` one colour (palette key
-        ``tract:NAME``), ``(name, n)`` an along-tract profile of `n` nodes (keys
-        ``tract:NAME:0`` ... ``tract:NAME:n-1``); bundles not listed are
-        coloured by local direction (fixed palette slots).
-    tract_radius : float, optional
-        Radius of the streamlines' tubes in millimetres; None: by their number
-        (:func:`brainpainter.tracts.tubes.auto_radius`).
     coloring : {"regions", "vertices"}
         ``"vertices"``: a map; the cortex has one palette slot per vertex
         (:class:`~brainpainter.rendering.geometry.SceneGeometry`).
     contours : Contours, optional
         A second map's iso-lines, drawn with the region borders at ``settings.outline_width``
         pixels (a per-vertex scene only).
-    connectome : Connectome, optional
-        Nodes drawn as lit spheres and edges as lit cylinders, inside the glass cortex
-        (:mod:`brainpainter.rendering.connectome_parts`; palette keys ``node:i``, ``edge:k``).
-    drawn : tuple of DrawnLayer
-        What adds its own parts and palette keys (:class:`brainpainter.layers.kinds.DrawnLayer`): a
-        volume's supra-threshold clusters drawn as lit surfaces inside the cortex
-        (:class:`brainpainter.rendering.blob_layers.BlobLayer`; palette keys ``blob:0`` ... of its
-        value levels), plugin layers (``--layer KIND:FILE``).
+    layers : tuple of SceneLayer
+        What adds its own parts and palette keys (:class:`brainpainter.layers.kinds.SceneLayer`), in the
+        order they are drawn: white-matter bundles as tubes
+        (:class:`~brainpainter.rendering.tract_parts.TractLayer`; keys ``tract:NAME``, ``tract:NAME:i``),
+        a connectome's nodes and edges as lit spheres and cylinders inside the glass cortex
+        (:class:`~brainpainter.rendering.connectome_layers.ConnectomeLayer`; ``node:i``, ``edge:k``),
+        a volume's supra-threshold clusters as lit surfaces
+        (:class:`~brainpainter.rendering.blob_layers.BlobLayer`; ``blob:0`` ...), plugin layers
+        (``--layer KIND:FILE``).
     """
 
     template: Template
@@ -95,19 +86,25 @@ class Scene:
     hidden: frozenset[str] = field(default_factory=frozenset)
     settings: RenderSettings = field(default_factory=RenderSettings)
     medial_wall_color: RGB = (0.72, 0.72, 0.72)
-    tracts: Tracts | None = None
-    tract_nodes: tuple[tuple[str, int], ...] = ()
-    tract_radius: float | None = None
     coloring: str = "regions"
     contours: Contours | None = None
-    connectome: Connectome | None = None
-    drawn: tuple[Any, ...] = ()
+    layers: tuple[Any, ...] = ()
 
     def __post_init__(self) -> None:
         if self.surface not in SURFACES:
             raise choice_error("surface", self.surface, SURFACES)
         if self.coloring not in COLORINGS:
             raise choice_error("coloring", self.coloring, COLORINGS)
+
+    @property
+    def tracts(self) -> Tracts | None:
+        """The bundles of its tracts layer, if it has one (what an exporter or a renderer may read)."""
+        return next((layer.tracts for layer in self.layers if layer.kind == "tracts"), None)
+
+    @property
+    def connectome(self) -> Connectome | None:
+        """The connectome of its connectome layer, if it has one (its nodes' labels are drawn)."""
+        return next((layer.connectome for layer in self.layers if layer.kind == "connectome"), None)
 
     @cached_property
     def geometry(self) -> SceneGeometry:

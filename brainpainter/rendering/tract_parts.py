@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
@@ -14,7 +16,7 @@ from brainpainter.rendering.settings import RGB
 from brainpainter.tracts.values import MISSING_TRACT_KEY
 
 if TYPE_CHECKING:
-    from brainpainter.tracts.model import Tracts
+    from brainpainter.tracts.model import Tracts, TractSpec
 
 #: Palette key prefix of the direction colours' slots.
 DIRECTION_KEY = "tract-direction:"
@@ -25,6 +27,59 @@ def _rgb(c: NDArray[Any]) -> RGB:
 
 
 SlotsFor = Callable[[list[str], "int | RGB", frozenset[str]], NDArray[Any]]
+
+
+@dataclass(frozen=True)
+class TractLayer:
+    """The tracts as a scene layer (:class:`~brainpainter.layers.kinds.SceneLayer`): their tubes and
+    centrelines (:func:`tract_parts`).
+
+    Parameters
+    ----------
+    spec : TractSpec, optional
+        What to read (:meth:`for_template` reads it; every worker reads it again: the same subsample).
+    nodes : tuple of (str, int)
+        How each bundle is coloured: ``(name, 1)`` one colour (palette key ``tract:NAME``),
+        ``(name, n)`` a profile of `n` nodes (``tract:NAME:0`` ...); the others by direction.
+    radius : float, optional
+        Of the tubes, millimetres; None: by the number of streamlines.
+    tracts : Tracts, optional
+        The bundles read, in the template's coordinates (given, or read from `spec`).
+    """
+
+    spec: TractSpec | None = None
+    nodes: tuple[tuple[str, int], ...] = ()
+    radius: float | None = None
+    tracts: Tracts | None = None
+    kind: str = "tracts"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "nodes", tuple((str(n), int(k)) for n, k in self.nodes))
+        object.__setattr__(self, "radius", None if self.radius is None else float(self.radius))
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled without the bundles read where a spec says what to read (a worker reads it again)."""
+        return {**self.__dict__, "tracts": None if self.spec is not None else self.tracts}
+
+    def for_template(self, template: Any) -> TractLayer:
+        """The layer with its bundles read and placed in `template`'s coordinates."""
+        if self.tracts is not None or self.spec is None:
+            return self
+        return replace(self, tracts=self.spec.load(template))
+
+    def parts(self, template: Any, slots_for: SlotsFor) -> list[PartGeometry]:
+        """The tubes and centrelines of the bundles read (:func:`tract_parts`)."""
+        assert self.tracts is not None, "TractLayer.for_template reads the tracts first"
+        return tract_parts(self.tracts, dict(self.nodes), slots_for, self.radius)
+
+    def summary(self) -> dict[str, Any]:
+        """The manifest's ``tracts``: each bundle's streamlines and how many were drawn."""
+        assert self.tracts is not None, "TractLayer.for_template reads the tracts first"
+        return self.tracts.summary()
+
+    def digest(self) -> str:
+        """A digest of what is drawn (the web's painters are keyed by it; the spec names its files)."""
+        return hashlib.sha256(repr((self.spec, self.nodes, self.radius)).encode()).hexdigest()
 
 
 def tract_parts(tracts: Tracts, nodes: Mapping[str, int], slots_for: SlotsFor,

@@ -271,12 +271,13 @@ def _tracts(run: _Run) -> None:
     in a cortex view, through the cortex drawn as glass: only the view's hemisphere's bundle)."""
     from brainpainter.rendering import framing
     from brainpainter.rendering.scene import RenderSettings, Scene
+    from brainpainter.rendering.tract_parts import TractLayer
     from brainpainter.rendering.views import get_view
 
     settings = RenderSettings(width=run.width, height=run.height, quality="fast", shading="flat",
                               glass_opacity=0.0, background=WHITE)
-    scene = Scene(run.template, "dk", settings=settings, tracts=tiny_tracts(),
-                  tract_nodes=(("AF_left", 1), ("CST_right", 1)), tract_radius=1.5)
+    scene = Scene(run.template, "dk", settings=settings,
+                  layers=(TractLayer(None, (("AF_left", 1), ("CST_right", 1)), 1.5, tiny_tracts()),))
     renderer = run.cls(scene)
     worst = 0.0
     try:

@@ -39,6 +39,7 @@ def connectome_check(run: Any) -> None:
     `run` is the conformance suite's run (:func:`brainpainter.testing.conformance.check_renderer`).
     """
     from brainpainter.rendering import framing
+    from brainpainter.rendering.connectome_layers import ConnectomeLayer
     from brainpainter.rendering.geometry import Palette
     from brainpainter.rendering.scene import RenderSettings, Scene
     from brainpainter.rendering.views import get_view
@@ -47,7 +48,7 @@ def connectome_check(run: Any) -> None:
     width, height = 2 * run.width, 2 * run.height  # a 2 mm node is a few pixels wide at 160 x 120
     settings = RenderSettings(width=width, height=height, quality="fast", shading="flat",
                               glass_opacity=0.0, background=WHITE)
-    scene = Scene(run.template, "dk", settings=settings, connectome=tiny_connectome())
+    scene = Scene(run.template, "dk", settings=settings, layers=(ConnectomeLayer(tiny_connectome()),))
     view = get_view("dorsal")
     renderer = run.cls(scene)
     try:

@@ -123,11 +123,12 @@ class StandInRenderer:
             self.parts["subcortical"] = (list(sub.label_names), np.sort(sub.face_label))
         # value-coloured tracts: (hemisphere, palette key) per bundle or node (direction colours: none)
         self.tract_keys: list[tuple[str | None, str]] = []
-        if getattr(scene, "tracts", None) is not None:
+        tract_layer = next((la for la in getattr(scene, "layers", ()) if la.kind == "tracts"), None)
+        if tract_layer is not None:
             from brainpainter.tracts.names import bundle_key, hemisphere
 
-            for name, n in scene.tract_nodes:
-                if name in scene.tracts.names:
+            for name, n in tract_layer.nodes:
+                if name in tract_layer.tracts.names:
                     keys = [bundle_key(name)] if n == 1 else [bundle_key(name, k) for k in range(n)]
                     self.tract_keys += [(hemisphere(name), k) for k in keys]
         self.tube_triangles = 0

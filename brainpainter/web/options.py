@@ -251,14 +251,9 @@ class Prepared:
         return str(self.run.coloring)
 
     def painter_args(self) -> dict[str, Any]:
-        """The tract, contour, connectome and drawn-layer arguments of the run's painter (as
-        :meth:`brainpainter.rendering.run.Run.painter` gives them)."""
-        scene = self.run.options.scene
-        tv = getattr(self.run, "tract_values", None)
-        return {"tracts": scene.tract_spec(), "tract_nodes": tv.nodes if tv is not None else (),
-                "tract_radius": scene.tract_radius, "contours": getattr(self.run, "contours", None),
-                "connectome": getattr(self.run, "connectome", None),
-                "drawn": self.run.drawn}
+        """The contours and scene layers of the run's painter (as
+        :meth:`brainpainter.rendering.checked_run.Run.painter` gives them)."""
+        return {"contours": self.run.contours, "layers": self.run.scene_layers()}
 
 
 def prepare(data: bytes, name: str, options: RenderOptions, *, max_images: int | None = None,

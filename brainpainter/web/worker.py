@@ -36,7 +36,7 @@ HEARTBEAT_S = 5.0
 #: Job kinds and the output file name stems they make.
 KINDS = ("images", "figure", "movie", "export")
 #: What a preview request may add to a painter's scene (:meth:`PainterCache.get`).
-SCENE_PARTS = ("tracts", "tract_nodes", "tract_radius", "contours", "connectome", "drawn")
+SCENE_PARTS = ("contours", "layers")
 
 
 class PainterCache:
@@ -50,9 +50,9 @@ class PainterCache:
     def get(self, atlas: Any, surface: str, hidden: list[str], settings: Any,
             coloring: str = "regions", **parts: Any) -> Any:
         """A loaded painter; `coloring` ``"vertices"`` for a map run (a per-vertex scene); `parts`
-        (:data:`SCENE_PARTS`: tracts, contours, a connectome, the blobs) as :class:`~brainpainter.rendering.
-        painter.Painter` takes them (part of the key: the spec names content-addressed files, the contours,
-        the connectome and the blobs by a digest of their values, so two uploads never share a painter)."""
+        (:data:`SCENE_PARTS`: contours, the scene layers) as :class:`~brainpainter.rendering.
+        painter.Painter` takes them (part of the key: the contours and each layer by a digest of what
+        it draws, the tracts' spec naming content-addressed files: two uploads never share a painter)."""
         from brainpainter.rendering.painter import Painter
 
         key = painter_key(atlas.name, surface, hidden, settings, coloring, **parts)
@@ -82,17 +82,14 @@ class PainterCache:
 
 
 def painter_key(atlas: str, surface: str, hidden: list[str], settings: Any, coloring: str = "regions",
-                tracts: Any = None, tract_nodes: Any = (), tract_radius: float | None = None,
-                contours: Any = None, connectome: Any = None, drawn: Any = ()) -> tuple[Any, ...]:
+                contours: Any = None, layers: Any = ()) -> tuple[Any, ...]:
     """What makes a painter's scene: a cached painter is reused only for the same key."""
     import hashlib
 
     lines = None if contours is None else (contours.levels, contours.regions, hashlib.sha256(b"".join(
         h.encode() + v.tobytes() for h, v in sorted(contours.values.items()))).hexdigest())
-    network = None if connectome is None else connectome.digest()
-    return (atlas, surface, tuple(sorted(hidden)), settings, coloring, tracts,
-            tuple((str(n), int(k)) for n, k in tract_nodes), tract_radius, lines, network,
-            tuple(layer.digest() for layer in drawn))
+    return (atlas, surface, tuple(sorted(hidden)), settings, coloring, lines,
+            tuple((layer.kind, layer.digest()) for layer in layers))
 
 
 def _orphaned(parent: int) -> bool:
@@ -308,7 +305,7 @@ def _run_images(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
                for name, (i, view) in zip(names, plan, strict=True)]
     manifest = {"software": {"brainpainter": __version__}, "input": table.summary(), "settings": settings,
                 "files": entries}
-    manifest.update(layer_summaries(run, painter))  # tracts and connectome drawn, as render's manifest
+    manifest.update(layer_summaries(painter))  # tracts and connectome drawn, as render's manifest
     manifest["reproduce"] = _reproduced(folder, job, data, prep)
     publish_drawn(folder, names, manifest, (run.settings.width, run.settings.height))
     # the zip is not stored (it would copy every PNG): it is made while it is downloaded
