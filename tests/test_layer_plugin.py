@@ -123,3 +123,32 @@ def test_a_movie_over_a_region_table_draws_the_foci_in_their_colours(foci_site, 
             gif.seek(k)
             frames.append(np.asarray(gif.convert("RGB")))
     assert all(_near(frame, MAGENTA).sum() > 20 for frame in frames)
+
+
+def test_check_reports_a_plugin_layer_file_as_render_would_read_it(foci_site, tmp_path):
+    peaks = tmp_path / "peaks.foci.csv"
+    peaks.write_text("x,y,z,name,value\n-40,-20,50,left M1,2.5\n40,-20,50,right M1,4\n")
+    with installed(foci_site):
+        code, out, err = invoke(["check", str(peaks)])
+        assert code == 0, err
+        assert "a foci file" in out and "n_foci  2" in out and f"--layer foci:{peaks}" in out, out
+        report = json.loads(CliRunner().invoke(cli, ["check", str(peaks), "--json"]).output)
+        assert report["kind"] == "foci" and report["summary"]["foci"][1]["mni"] == [40.0, -20.0, 50.0]
+        assert report["scale"].endswith("2.5 .. 4")  # the foci's own scale, over their values
+        (tmp_path / "bad.foci.csv").write_text("x,y,name\n1,2,a\n")
+        code, out, err = invoke(["check", str(tmp_path / "bad.foci.csv")])
+        assert code == 2 and "Traceback" not in out + err and len(err.strip().splitlines()) == 1, err
+
+
+def test_an_export_holds_the_foci_in_their_colours(foci_site, peaks, tmp_path):
+    import trimesh
+
+    with installed(foci_site):
+        result = CliRunner().invoke(cli, ["export", str(TABLE), "--row", "stage-3", "--layer", f"foci:{peaks}",
+                                          "-o", str(tmp_path / "b.glb")])
+        assert result.exit_code == 0, result.output
+    scene = trimesh.load(tmp_path / "b.glb", file_type="glb")
+    foci = scene.geometry["foci-lh"]  # x = -40: the left hemisphere's part
+    rgb = np.asarray(foci.visual.vertex_colors)[:, :3] / 255  # per vertex; magenta is 1, 0, 1 linear or not
+    assert np.abs(rgb - MAGENTA).max() < 0.03 and foci.vertices[:, 0].mean() < 0
+    assert "Left-precentral" in scene.geometry  # over the table's regions

@@ -112,7 +112,8 @@ def _check_other(path: Path, as_json: bool) -> bool:
             kind = "connectome"
         except BrainPainterError:
             return False
-    report = other.map_report(path) if kind == "map" else other.connectome_report(path)
+    reports = {"map": other.map_report, "connectome": other.connectome_report}
+    report = reports[kind](path) if kind in reports else other.layer_report(path, kind)
     if as_json:
         echo_json(report)
     else:

@@ -21,7 +21,7 @@ from brainpainter.errors import BrainPainterError, choice_error
 RGB = tuple[float, float, float]
 
 
-class SceneLayer(Protocol):
+class PartsLayer(Protocol):
     """What adds its own parts to the scene (the tracts, a connectome, the blobs, a plugin's layer): what
     a :class:`~brainpainter.rendering.painter.Painter` takes (``layers=``), in the order they are drawn.
 
@@ -42,7 +42,7 @@ class SceneLayer(Protocol):
         """What was drawn, for the manifest and ``check`` (JSON types)."""
 
 
-class DrawnLayer(SceneLayer, Protocol):
+class DrawnLayer(PartsLayer, Protocol):
     """A layer read from its file that adds its parts and colours them itself (the blobs, a plugin's)."""
 
     def colors(self, row: int) -> dict[str, RGB]:
@@ -53,7 +53,7 @@ class DrawnLayer(SceneLayer, Protocol):
         colour bar in figures and its entry in the manifest."""
 
 
-def for_template(layer: SceneLayer, template: Any) -> SceneLayer:
+def for_template(layer: PartsLayer, template: Any) -> PartsLayer:
     """`layer` with its data read for `template` where it reads any there (its optional
     ``for_template``, as the tracts have); else `layer` itself."""
     read = getattr(layer, "for_template", None)

@@ -136,23 +136,23 @@ def tract_meshes(scene: Scene, colors: dict[str, RGB]) -> list[RegionMesh]:
     list of RegionMesh
         One per tract part (``tracts-lh``, ``tracts-rh``, ``tracts``), part ``tracts``.
     """
-    return [] if scene.tracts is None else coloured_meshes(scene, colors, "tract", "tracts")
+    return layer_meshes(scene, colors, "tracts")
 
 
-def coloured_meshes(scene: Scene, colors: Mapping[str, RGB], kind: str, part: str) -> list[RegionMesh]:
-    """The scene's parts of `kind` (``tract``, ``blob``), one mesh each, coloured per vertex by `colors`
-    (sRGB 0-1 by palette key), as export part `part`."""
+def layer_meshes(scene: Scene, colors: Mapping[str, RGB], kind: str) -> list[RegionMesh]:
+    """The parts of the scene's layer of `kind` (``tracts``, ``blobs``, a plugin's), one mesh each,
+    coloured per vertex by `colors` (sRGB 0-1 by palette key), as export part `kind`."""
     from brainpainter.rendering.geometry import Palette
 
     geometry = scene.geometry
     rgb = Palette(colors, geometry).rgb
     out = []
     for p in geometry.parts:
-        if p.kind != kind:
+        if geometry.layer_of.get(p.name) != kind:
             continue
         per_vertex = rgb[p.palette_index]
         mean = per_vertex.mean(axis=0)
-        out.append(RegionMesh(p.name, part, p.vertices, p.triangles.astype(np.int32), p.normals,
+        out.append(RegionMesh(p.name, kind, p.vertices, p.triangles.astype(np.int32), p.normals,
                               (float(mean[0]), float(mean[1]), float(mean[2])), per_vertex))
     return out
 
@@ -337,7 +337,8 @@ EXPORT_OPTIONS = ("template", "surface", "hide", "atlas_config", "gradient", "cm
                   "underlay", "underlay_contrast", "threshold", "outline", "outline_threshold", "space",
                   "frames", "lh_surface", "rh_surface", *option_names(LayerOptions),  # each layer's own scale
                   "connectome", "nodes", "node_values", "node_categories", "directed", "edge_threshold",
-                  "top_edges", "edges_of", "nodes_space", "volume_surface", "min_cluster_mm3")
+                  "top_edges", "edges_of", "nodes_space", "volume_surface", "min_cluster_mm3", "layer",
+                  "layer_opt")
 
 
 def _row_meshes(run: Run, i: int) -> tuple[Scene, list[RegionMesh]]:
@@ -345,7 +346,6 @@ def _row_meshes(run: Run, i: int) -> tuple[Scene, list[RegionMesh]]:
     the regions, then the tracts' tubes, a connectome's nodes and edges, the blobs."""
     from brainpainter.connectome.series import image_connectome
     from brainpainter.layers.connectome import connectome_colors
-    from brainpainter.rendering.blob_layers import blob_colors
     from brainpainter.rendering.painter import load_scene
 
     opts = run.options.scene
@@ -354,9 +354,9 @@ def _row_meshes(run: Run, i: int) -> tuple[Scene, list[RegionMesh]]:
     shown = None if run.connectome is None else image_connectome(run.connectome, i)  # a series: row i's
     inside = connectome_meshes(scene, shown, connectome_colors(shown, run.layers)
                                if shown is not None else {})  # a connectome's nodes and edges
-    if run.blobs is not None:  # a volume's clusters, per vertex on their bar
-        inside += coloured_meshes(scene, blob_colors(run.blobs, run.layers), "blob", "blobs")
     colors = run.colors(i)
+    for layer in run.drawn:  # a volume's clusters, plugin layers: their parts, per vertex on their bar
+        inside += layer_meshes(scene, colors, layer.kind)
     if run.coloring == "vertices":  # the cortex coloured per vertex: one mesh per hemisphere
         cortex = vertex_meshes(scene, colors)  # type: ignore[arg-type]
     else:  # one mesh per region, its value in the tooltip

@@ -10,7 +10,7 @@ from typing import Any
 
 from brainpainter.color.scale import ColourScale
 from brainpainter.connectome.model import Connectome
-from brainpainter.layers.kinds import RGB, DrawnLayer, SceneLayer
+from brainpainter.layers.kinds import RGB, DrawnLayer, PartsLayer
 from brainpainter.layers.over import FirstLayer, OverLayer
 from brainpainter.maps.clusters import Blobs
 from brainpainter.maps.outlines import Contours
@@ -65,7 +65,7 @@ class Run:
                        scene.renderer, coloring=self.coloring, contours=self.contours,
                        layers=self.scene_layers())
 
-    def scene_layers(self) -> tuple[SceneLayer, ...]:
+    def scene_layers(self) -> tuple[PartsLayer, ...]:
         """What the run adds to the scene, in the order drawn (:func:`~brainpainter.rendering.composition.
         scene_layers`): the tracts, a connectome, the blobs, plugin layers."""
         return scene_layers(self.options, self.tract_values, self.connectome, self.drawn)

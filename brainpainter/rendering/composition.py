@@ -23,7 +23,7 @@ from brainpainter.atlas.model import HEMI_PREFIX
 from brainpainter.color.scale import ColourScale, ScaleOptions, widen
 from brainpainter.connectome.model import Connectome
 from brainpainter.errors import BrainPainterError
-from brainpainter.layers.kinds import DrawnLayer, SceneLayer
+from brainpainter.layers.kinds import DrawnLayer, PartsLayer
 from brainpainter.layers.regions import region_colors
 from brainpainter.maps.inputs import VertexMaps, read_maps
 from brainpainter.maps.layers import map_scale
@@ -340,7 +340,7 @@ def cortex_for(settings: RenderSettings, *, cortex_values: bool, tracts: bool,
 
 
 def scene_layers(options: Options, tract_values: TractValues | None, connectome: Connectome | None,
-                 drawn: Sequence[DrawnLayer]) -> tuple[SceneLayer, ...]:
+                 drawn: Sequence[DrawnLayer]) -> tuple[PartsLayer, ...]:
     """What a run adds to the scene, in the order drawn: the tracts (``--tracts``; their bundles with
     values coloured by them), a connectome's nodes and edges, then the blobs and plugin layers."""
     spec = options.scene.tract_spec()

@@ -167,7 +167,7 @@ def connectome_summary(connectome: Connectome) -> dict[str, Any]:
 
 @dataclass(frozen=True)
 class ConnectomeLayer:
-    """A connectome as a scene layer (:class:`~brainpainter.layers.kinds.SceneLayer`): its nodes and edges
+    """A connectome as a scene layer (:class:`~brainpainter.layers.kinds.PartsLayer`): its nodes and edges
     (:func:`~brainpainter.rendering.connectome_parts.connectome_parts`), drawn inside the glass cortex."""
 
     connectome: Connectome

@@ -257,8 +257,12 @@ class SceneGeometry:
         if template.manifest.get("subcortical"):
             self._lazy.later_subcortical(template, hidden, slots_for(list(template.subcortical_names()),
                                                                      NEUTRAL_SLOT, hidden))
+        #: the kind of the scene layer (:attr:`Scene.layers`) each of their parts came from, by part name
+        self.layer_of: dict[str, str] = {}
         for layer in scene.layers:  # tracts, a connectome, blobs, plugin layers
-            self._lazy.entries += layer.parts(template, slots_for)
+            made = layer.parts(template, slots_for)
+            self.layer_of.update((part.name, layer.kind) for part in made)
+            self._lazy.entries += made
         for hemi in HEMIS:
             if hemi in template.manifest.get("glass", {}):
                 self._lazy.later_glass(template, hemi)

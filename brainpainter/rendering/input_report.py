@@ -34,8 +34,30 @@ def input_kind(path: Path) -> str | None:
         return None
     if path.name.lower().endswith(".npy"):  # a map or a matrix: N x N of no mesh's size is a matrix
         return "connectome" if _square_npy(path) else "map"
-    reader = identify(path, ("regions", "map", "connectome"))
+    reader = identify(path, ("regions", "map", "connectome", *plugin_kinds()))
     return reader.kind if reader.kind != "regions" and reader.name != "nodes" else None
+
+
+def plugin_kinds() -> list[str]:
+    """The installed layer kinds read from a file of their own (``--layer KIND:FILE``: plugins')."""
+    from brainpainter.atlas.registry import layer_kinds
+
+    return [name for name in layer_kinds.names() if layer_kinds.get(name).open is not None]
+
+
+def layer_report(path: Path, kind: str) -> dict[str, Any]:
+    """What a plugin layer's file holds (its own summary) and how ``render --layer KIND:FILE`` draws it,
+    read as render reads it (without ``--layer-opt`` values)."""
+    from brainpainter.layers.kinds import kind_of
+
+    of = kind_of(kind)
+    layer = of.read(path, {})
+    own = layer.layer()
+    scale = own.scale
+    return {"kind": kind, "source": str(path), "format": f"a {kind} file", "summary": layer.summary(),
+            "label": own.label, "scale": f"{scale.name} {scale.vmin:.4g} .. {scale.vmax:.4g}",
+            "draws": f"the {kind} layer ({of.description}), with its own colour bar labelled {own.label!r}",
+            "command": f"brainpainter render --layer {kind}:{path} --out DIR", "errors": [], "notes": []}
 
 
 def _square_npy(path: Path) -> bool:
@@ -188,6 +210,10 @@ def format_input_report(report: dict[str, Any]) -> str:
         if "scale" in report:
             lines.append(f"scale   {report['scale']}")
         lines.extend(f"note    {note}" for note in report["notes"])
+    elif report["kind"] != "connectome":  # a plugin layer: its summary's plain entries, its scale
+        lines += [f"{key:<7} {value}" for key, value in report["summary"].items()
+                  if isinstance(value, str | int | float)]
+        lines.append(f"scale   {report['scale']}")
     else:
         lines.append(f"nodes   {report['nodes']}")
         if report["weight_range"] is not None:

@@ -22,7 +22,7 @@ from brainpainter.atlas.template import Template, load_template, template_for
 from brainpainter.color.rgb import ColorLike, to_rgb
 from brainpainter.color.scale import ColourScale
 from brainpainter.errors import choice_error
-from brainpainter.layers.kinds import SceneLayer, for_template
+from brainpainter.layers.kinds import PartsLayer, for_template
 from brainpainter.layers.regions import region_colors
 from brainpainter.layers.vertex_map import VertexColors
 from brainpainter.maps.outlines import Contours
@@ -118,7 +118,7 @@ def load_scene(
     atlas_config: str | Path | None = None,
     coloring: str = "regions",
     contours: Contours | None = None,
-    layers: Iterable[SceneLayer] = (),
+    layers: Iterable[PartsLayer] = (),
 ) -> tuple[Atlas, Scene]:
     """The atlas and the scene a renderer (or an exporter) draws; nothing is rendered.
 
@@ -179,7 +179,7 @@ class Painter:
         ``"vertices"`` draws per-vertex maps (:attr:`brainpainter.rendering.scene.Scene.coloring`).
     contours : Contours, optional
         A second map's iso-lines (:attr:`brainpainter.rendering.scene.Scene.contours`).
-    layers : iterable of SceneLayer
+    layers : iterable of PartsLayer
         What adds its own parts, in the order drawn (:attr:`brainpainter.rendering.scene.Scene.layers`):
         white-matter bundles (``TractLayer(TractSpec(...), nodes)``), a connectome's nodes and edges
         (``ConnectomeLayer``), a volume's clusters (``BlobLayer``), plugin layers (``--layer KIND:FILE``).
@@ -195,7 +195,7 @@ class Painter:
     atlas_config: str | Path | None = None
     coloring: str = "regions"
     contours: Contours | None = None
-    layers: Iterable[SceneLayer] = ()
+    layers: Iterable[PartsLayer] = ()
     _renderer: Any = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:

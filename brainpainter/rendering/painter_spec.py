@@ -40,7 +40,7 @@ class PainterSpec:
     coloring : {"regions", "vertices"}
     contours : Contours, optional
         A second map's iso-lines (its values travel with the spec: about 1.3 MB for both hemispheres).
-    layers : tuple of SceneLayer
+    layers : tuple of PartsLayer
         Pickled with the spec: the tracts' (their paths and options: each worker reads them and draws
         the same subsample), a connectome's (400 nodes: about 1.3 MB of weights), the blobs (a few
         hundred kB), plugin layers (``--layer``).

@@ -69,8 +69,8 @@ class Scene:
     contours : Contours, optional
         A second map's iso-lines, drawn with the region borders at ``settings.outline_width``
         pixels (a per-vertex scene only).
-    layers : tuple of SceneLayer
-        What adds its own parts and palette keys (:class:`brainpainter.layers.kinds.SceneLayer`), in the
+    layers : tuple of PartsLayer
+        What adds its own parts and palette keys (:class:`brainpainter.layers.kinds.PartsLayer`), in the
         order they are drawn: white-matter bundles as tubes
         (:class:`~brainpainter.rendering.tract_parts.TractLayer`; keys ``tract:NAME``, ``tract:NAME:i``),
         a connectome's nodes and edges as lit spheres and cylinders inside the glass cortex

@@ -31,7 +31,7 @@ SlotsFor = Callable[[list[str], "int | RGB", frozenset[str]], NDArray[Any]]
 
 @dataclass(frozen=True)
 class TractLayer:
-    """The tracts as a scene layer (:class:`~brainpainter.layers.kinds.SceneLayer`): their tubes and
+    """The tracts as a scene layer (:class:`~brainpainter.layers.kinds.PartsLayer`): their tubes and
     centrelines (:func:`tract_parts`).
 
     Parameters
