@@ -144,7 +144,8 @@ def test_an_export_holds_the_foci_in_their_colours(foci_site, peaks, tmp_path):
     import trimesh
 
     with installed(foci_site):
-        result = CliRunner().invoke(cli, ["export", str(TABLE), "--row", "stage-3", "--layer", f"foci:{peaks}",
+        result = CliRunner().invoke(cli, ["export", str(TABLE), "--row", "stage-3",
+                                          "--layer", f"foci:{peaks}",
                                           "-o", str(tmp_path / "b.glb")])
         assert result.exit_code == 0, result.output
     scene = trimesh.load(tmp_path / "b.glb", file_type="glb")
