@@ -88,3 +88,18 @@ def test_colour_bar_fit_stops_measuring_once_settled(monkeypatch):
     ax = fig.axes[0]
     box = ax.get_position()
     assert box.width > 0.8  # still grown to the figure's width, its ticks inside
+
+
+def test_a_colour_bars_measured_height_is_kept_per_bar():
+    from brainpainter.media import colorbar
+
+    scale = ColourScale(cmap_colors("viridis"), 2.3, 5.0)
+    colorbar._HEIGHTS.clear()
+    plain = colorbar.colorbar_height(scale, 3.0, dpi=300.0, fontsize=8.0)
+    assert len(colorbar._HEIGHTS) == 1 and colorbar.colorbar_height(scale, 3.0, dpi=300.0, fontsize=8.0) == plain
+    labelled = colorbar.colorbar_height(scale, 3.0, dpi=300.0, fontsize=8.0, label="z-score")
+    swatches = colorbar.colorbar_height(scale, 3.0, dpi=300.0, fontsize=8.0, nan=True, missing=True)
+    assert labelled > plain and len(colorbar._HEIGHTS) == 3 and swatches >= plain  # each bar its own
+    fresh = colorbar.decorations_bbox(colorbar.colorbar_figure(scale, 3.0, 3.0, dpi=300.0, fontsize=8.0,
+                                                                label="z-score").axes[0])
+    assert labelled == float(fresh.height) / 300.0 + 2 * 0.04 + 0.02  # what a fresh measure gives

@@ -12,6 +12,7 @@ missing swatches are added when asked; a label map's scale draws a key of its ca
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -402,16 +403,24 @@ def _label_y(ax: Axes) -> float:
     return float((bottom - 2.0 - inner.y0) / inner.height)
 
 
+#: :func:`colorbar_height` of each bar measured in this process, by its scale and options.
+_HEIGHTS: dict[str, float] = {}
+
+
 def colorbar_height(scale: ColourScale, width: float, *, dpi: float = 100.0, **kwargs: Any) -> float:
     """Height (inches) a colour bar of `width` inches needs for its ticks, label and swatches.
 
     Parameters as :func:`colorbar_figure` (``label``, ``ticks``, ``nan``, ``missing``,
-    ``fontsize``); includes the same padding.
+    ``fontsize``); includes the same padding. Measured on a figure of its own (~50 ms), once per
+    process for the same bar (a layout asks several times, the next figure of the scale the same).
     """
-    tall = 3.0
-    fig = colorbar_figure(scale, width, tall, dpi=dpi, **kwargs)
-    outer = decorations_bbox(fig.axes[0])
-    return float(outer.height) / dpi + 2 * 0.04 + 0.02
+    key = json.dumps([scale.to_dict(), width, dpi, {k: kwargs[k] for k in sorted(kwargs)}], default=repr)
+    if key not in _HEIGHTS:
+        if len(_HEIGHTS) >= 256:
+            _HEIGHTS.clear()
+        outer = decorations_bbox(colorbar_figure(scale, width, 3.0, dpi=dpi, **kwargs).axes[0])
+        _HEIGHTS[key] = float(outer.height) / dpi + 2 * 0.04 + 0.02
+    return _HEIGHTS[key]
 
 
 def colorbar_image(

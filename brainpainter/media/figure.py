@@ -38,10 +38,12 @@ from brainpainter.media.layout import FigureKwargs, FigureLayout, FigureOptions,
 from brainpainter.media.outfile import check_out_file
 from brainpainter.media.plain_text import quiet_glyphs
 from brainpainter.media.volume_panels import PanelKwargs, PanelOptions, label_panels, volume_panels
+from brainpainter.rendering.kept import is_kept, kept_painter, release
 from brainpainter.rendering.layers import colorbar_layers, first_bar_label, without_regions
 from brainpainter.rendering.options import Options, RenderKwargs, take
+from brainpainter.rendering.parallel import SerialRunner
 from brainpainter.rendering.run import make_runner, paint, prepare_run
-from brainpainter.rendering.views import ImagesByView
+from brainpainter.rendering.views import ImagesByView, View
 from brainpainter.table.rows import select_rows
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -239,6 +241,34 @@ def _legends(run: Any, layout: FigureLayout, background: Any, font_size: float) 
     line_legend(run, list(layout.image_axes.values()), font_size)
 
 
+def _rendered(run: Run, painter: Painter, checked: Options, plan: list[tuple[int, View]], progress: bool,
+              on_progress: Callable[[int, int], None] | None) -> dict[tuple[str, str], NDArray[Any]]:
+    """The renders of `plan`, by (image, view); the kept painter (:mod:`brainpainter.rendering.kept`)
+    stays open for the next figure unless a render failed."""
+    from tqdm.auto import tqdm
+
+    table = run.table
+    runner = make_runner(painter, run.options.scene.template, checked.runner, n_items=len(plan))
+    keep = is_kept(painter) and isinstance(runner, SerialRunner)
+    runner.start()
+    try:
+        with tqdm(total=len(plan), unit="img", desc="rendering", disable=not progress) as bar:
+            images: dict[tuple[str, str], NDArray[Any]] = ImagesByView()
+            for (i, view), pixels in paint(run, runner, plan):
+                images[(table.images[i], view.name)] = pixels
+                bar.update(1)
+                if on_progress is not None:
+                    on_progress(len(images), len(plan))
+    except BaseException:
+        if keep:  # a renderer that failed is not drawn with again
+            release()
+        raise
+    finally:
+        if not keep:
+            runner.close()
+    return images
+
+
 @quiet_glyphs
 def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path | None = None,
                 rows: Iterable[str | int] | str | None = None, progress: bool = True,
@@ -277,8 +307,6 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     """
     from contextlib import nullcontext
 
-    from tqdm.auto import tqdm
-
     from brainpainter.io.transaction import FileTransaction
     from brainpainter.media.colorbar import resolve_ticks
 
@@ -293,21 +321,16 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     chosen = select_rows(table.images, rows)
     panels = volume_panels(data, run, panel_opts, chosen) if panel_opts.sections else {}
     run = printed_labels(run, [table.images[i] for i in chosen], figure_opts)
-    painter = run.painter()
+    serial = checked.runner.n_jobs <= 1 and not checked.runner.cluster
+    # a serial figure draws with the painter kept from the figure before, where its scene is the same
+    painter = kept_painter(run.painter(), run.options.scene.template) if serial else run.painter()
     nan, missing = ((False, False) if without_regions(run.layers)
                     else swatches_needed(table, chosen, run.views, painter.scene.geometry))
     plan = run.items(chosen)
     background = run.settings.background
     # the output folder is locked from before the first render until the figure is published
     with FileTransaction(path) if path is not None else nullcontext() as tx:
-        with make_runner(painter, run.options.scene.template, checked.runner, n_items=len(plan)) as runner, \
-                tqdm(total=len(plan), unit="img", desc="rendering", disable=not progress) as bar:
-            images: dict[tuple[str, str], NDArray[Any]] = ImagesByView()
-            for (i, view), pixels in paint(run, runner, plan):
-                images[(table.images[i], view.name)] = pixels
-                bar.update(1)
-                if on_progress is not None:
-                    on_progress(len(images), len(plan))
+        images = _rendered(run, painter, checked, plan, progress, on_progress)
         figure_opts, more = _bars(run, painter, figure_opts)
         layout = _with_panels(images, panels, panel_opts, [table.images[i] for i in chosen], run, figure_opts,
                               nan=nan, missing=missing, more_bars=more)
