@@ -96,7 +96,8 @@ def test_a_colour_bars_measured_height_is_kept_per_bar():
     scale = ColourScale(cmap_colors("viridis"), 2.3, 5.0)
     colorbar._HEIGHTS.clear()
     plain = colorbar.colorbar_height(scale, 3.0, dpi=300.0, fontsize=8.0)
-    assert len(colorbar._HEIGHTS) == 1 and colorbar.colorbar_height(scale, 3.0, dpi=300.0, fontsize=8.0) == plain
+    again = colorbar.colorbar_height(scale, 3.0, dpi=300.0, fontsize=8.0)
+    assert len(colorbar._HEIGHTS) == 1 and again == plain
     labelled = colorbar.colorbar_height(scale, 3.0, dpi=300.0, fontsize=8.0, label="z-score")
     swatches = colorbar.colorbar_height(scale, 3.0, dpi=300.0, fontsize=8.0, nan=True, missing=True)
     assert labelled > plain and len(colorbar._HEIGHTS) == 3 and swatches >= plain  # each bar its own
