@@ -12,9 +12,8 @@ verified, renamed into place with the manifest last, signals held meanwhile),
 so a job killed or cancelled midway leaves nothing in ``out/`` and a finished
 job's folder is complete. An ``images`` job first draws its
 ``{image}_{view}.png`` files into ``jobs/<id>/drawn/`` (each written
-atomically; never served) and skips those already there, so a job re-queued
-after a crash or a server restart resumes where it stopped; then the job is
-marked done (at most once: see the store).
+atomically; never served) and skips those already there, so a job re-queued after a crash or
+a server restart resumes where it stopped; then the job is marked done (at most once: see the store).
 """
 
 from __future__ import annotations
@@ -392,6 +391,7 @@ def _media_kwargs(prep: Any, renderer: str) -> dict[str, Any]:
 
 def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick: Any) -> list[str]:
     from brainpainter.media.figure import make_figure, save_figure
+    from brainpainter.rendering.kept import release
     from brainpainter.web.job_plan import check_figure_pixels
     from brainpainter.web.maps import figure_panels
     from brainpainter.web.options import FigureParams
@@ -403,10 +403,13 @@ def _run_figure(folder: Path, job: dict[str, Any], painters: PainterCache, tick:
     tick(0)
     params = FigureParams(**p)  # the CLI's defaults for what the job did not give
     panels = figure_panels(params, data, prep.options.volume_surface)
-    made = make_figure(_media_input(data, job["input_name"], prep), grid=params.grid,
-                       title=params.title or None, label=params.label or None, dpi=params.dpi,
-                       fig_width=params.fig_width, font_size=params.font_size, on_progress=tick,
-                       **panels, **_media_kwargs(prep, painters.renderer))
+    try:
+        made = make_figure(_media_input(data, job["input_name"], prep), grid=params.grid,
+                           title=params.title or None, label=params.label or None, dpi=params.dpi,
+                           fig_width=params.fig_width, font_size=params.font_size, on_progress=tick,
+                           **panels, **_media_kwargs(prep, painters.renderer))
+    finally:
+        release()  # the worker's painters are its cache's (bounded); a figure keeps none beside them
     if max_pixels is not None:  # composed now: its real size, before the PNG is drawn
         w, h = (round(x) for x in made.figure.get_size_inches() * params.dpi)
         check_figure_pixels(w, h, max_pixels)
