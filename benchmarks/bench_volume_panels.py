@@ -7,6 +7,10 @@ process:
 * **brainpainter**: ``brainpainter.figure(volume=..., threshold=2.3, views=V1,V2,
   slices=["z=-20,10,50"], projections="z")``: 3 slices, 1 glass projection and 2 rendered 3-D
   views (volume projected onto the cortex, Blender renders, the figure laid out and written);
+* **brainpainter, other volume**: the same figure of another volume (with or without ``--stat``'s two
+  more blobs): the arms alternate, so each figure's values differ from the figure before's;
+* **brainpainter, new renderer**: the same figure with no painter kept from the figure before (a
+  figure of a new scene: the renderer started and the scene uploaded again; ``rendering/kept.py``);
 * **brainpainter, views only**: the same figure without its panels (what the panels add);
 * **nilearn**: ``plot_stat_map(display_mode="z", cut_coords=[-20, 10, 50])`` and
   ``plot_glass_brain(display_mode="z")`` of the same file, each saved as a PNG.
@@ -35,7 +39,7 @@ import numpy as np
 SLICES = [-20.0, 10.0, 50.0]
 
 
-def write_volume(folder: Path, stat: bool) -> Path:
+def write_volume(folder: Path, stat: bool, name: str = "sphere.nii.gz") -> Path:
     import nibabel as nib
 
     affine = np.array([[-2.0, 0, 0, 90], [0, 2, 0, -126], [0, 0, 2, -72], [0, 0, 0, 1]])
@@ -48,21 +52,27 @@ def write_volume(folder: Path, stat: bool) -> Path:
     image = nib.Nifti1Image(data.astype(np.float32), affine)
     image.header.set_sform(affine, 4)
     image.header.set_qform(affine, 4)
-    path = folder / "sphere.nii.gz"
+    path = folder / name
     nib.save(image, path)
     return path
 
 
-def brainpainter_figure(path: Path, out: Path, args: argparse.Namespace, panels: bool = True
-                        ) -> Callable[[], None]:
+def brainpainter_figure(path: Path, out: Path, args: argparse.Namespace, panels: bool = True,
+                        new_renderer: bool = False) -> Callable[[], None]:
     import brainpainter
 
     width, height = (int(v) for v in args.size.split("x"))
     extra = {"slices": [f"z={','.join(f'{z:g}' for z in SLICES)}"], "projections": "z"} if panels else {}
+    name = (f"brainpainter{'' if panels else '_views'}{'' if path.name == 'sphere.nii.gz' else '_other'}"
+            f"{'_new' if new_renderer else ''}.png")
 
     def call() -> None:
+        if new_renderer:  # no painter kept from the figure before (rendering/kept.py): a new scene's cost
+            from brainpainter.rendering import kept
+
+            kept.release()
         brainpainter.figure(None, volume=path, threshold=2.3, views=args.views, width=width, height=height,
-                            out=out / f"brainpainter{'' if panels else '_views'}.png", dpi=args.dpi,
+                            out=out / name, dpi=args.dpi,
                             progress=False, **extra)
     return call
 
@@ -104,7 +114,10 @@ def main() -> None:
         out = args.keep or Path(tmp)
         out.mkdir(parents=True, exist_ok=True)
         path = write_volume(Path(tmp), args.stat)
+        other = write_volume(Path(tmp), not args.stat, "other.nii.gz")
         calls = {"brainpainter": brainpainter_figure(path, out, args),
+                 "brainpainter_other_volume": brainpainter_figure(other, out, args),
+                 "brainpainter_new_renderer": brainpainter_figure(path, out, args, new_renderer=True),
                  "brainpainter_views_only": brainpainter_figure(path, out, args, panels=False),
                  "nilearn": nilearn_plots(path, out, args)}
         first: dict[str, float] = {}
