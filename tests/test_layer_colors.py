@@ -78,3 +78,10 @@ def test_a_map_run_s_frame_between_two_images_and_the_layers_over_it(tmp_path):
     assert not np.allclose(half.vertices["lh"], a.vertices["lh"]) and not np.allclose(
         half.vertices["lh"], b.vertices["lh"])
     assert np.array_equal(run.blend(0, 0, 0.3).vertices["lh"], a.vertices["lh"])  # one image: itself
+
+
+def test_a_map_given_as_arrays_has_its_bar_labelled_map_not_by_its_type():
+    lh = np.linspace(0, 3, 10242).astype(np.float32)
+    assert [layer.label for layer in prepare_run({"lh": lh, "rh": lh}, "dk").layers] == ["map"]  # was
+    # "lh=ndarray, rh=ndarray"
+    assert prepare_run({"lh": lh, "rh": lh}, "dk", map_label="thickness").layers[0].label == "thickness"

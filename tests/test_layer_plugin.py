@@ -153,3 +153,23 @@ def test_an_export_holds_the_foci_in_their_colours(foci_site, peaks, tmp_path):
     rgb = np.asarray(foci.visual.vertex_colors)[:, :3] / 255  # per vertex; magenta is 1, 0, 1 linear or not
     assert np.abs(rgb - MAGENTA).max() < 0.03 and foci.vertices[:, 0].mean() < 0
     assert "Left-precentral" in scene.geometry  # over the table's regions
+
+
+@pytest.mark.render
+def test_a_map_under_foci_reads_true_to_its_bar(foci_site, peaks):
+    """A plugin layer over a map leaves the map opaque, in its bar's colours (before: the map was drawn
+    as glass, pale, as a map under a connectome was before issue 44)."""
+    import brainpainter
+
+    value = np.full(10242, 2.0, np.float32)  # fsaverage5: the middle of a 0-4 viridis bar everywhere
+    with installed(foci_site):
+        result = brainpainter.render({"lh": value, "rh": value}, "dk", layer=[f"foci:{peaks}"], vmin=0, vmax=4,
+                                     cmap="viridis", views="lateral-left", width=320, height=240,
+                                     shading="flat", quality="fast", progress=False)
+    (img,) = result.images.values()
+    want = np.round(np.asarray(result.scale(np.array([2.0]))[0][:3]) * 255)
+    brain = img[..., 3] > 0 if img.shape[-1] == 4 else np.ones(img.shape[:2], bool)
+    brain &= np.abs(img[..., :3].astype(int) - 255).max(axis=-1) > 10  # not the white background
+    assert brain.sum() > 5000
+    on_bar = (np.abs(img[..., :3].astype(int) - want).max(axis=-1) <= 10) & brain
+    assert on_bar.sum() > 0.6 * brain.sum(), (on_bar.sum(), brain.sum())  # the cortex in the bar's colour

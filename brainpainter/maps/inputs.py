@@ -71,6 +71,8 @@ class VertexMaps:
     own_mesh : bool
         The values are per vertex of the user's own surfaces (``--lh-surface``, or a template
         built from a subject), drawn as they are (:meth:`on_surface`), not on fsaverage.
+    label : str
+        What its colour bar says when no label is given; empty: its file's name (``source``).
     """
 
     values: dict[str, NDArray[Any]]
@@ -82,6 +84,7 @@ class VertexMaps:
     space: str = "fsaverage"
     notes: tuple[str, ...] = ()
     own_mesh: bool = False
+    label: str = ""
 
     @property
     def n_images(self) -> int:
@@ -469,7 +472,9 @@ def _combine(hemis: dict[str, Hemi], given: dict[str, Any]) -> VertexMaps:
     images = (base,) if k == 1 else tuple(f"{base}-{j + 1:0{len(str(k))}d}" for j in range(k))
     source = ", ".join(f"{h}={v if isinstance(v, str | Path) else type(v).__name__}"
                        for h, v in given.items())
-    return VertexMaps(values, images, categories, colors, source)
+    # arrays given in memory have no name: their bar says "map", not "lh=ndarray, rh=ndarray"
+    label = "" if isinstance(first, str | Path) else "map"
+    return VertexMaps(values, images, categories, colors, source, label=label)
 
 
 def _stem(path: str | Path) -> str:

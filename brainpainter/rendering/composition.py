@@ -177,7 +177,7 @@ def map_layers(options: Options, maps: VertexMaps, table: RegionTable | None, me
     `others`: the kinds the run draws besides (a connectome's edges and nodes).
     """
     given = options.layers.label("map")
-    label = given if given is not None else Path(maps.source).name or "map"
+    label = given if given is not None else maps.label or Path(maps.source).name or "map"
     alpha = float(options.layers.map_alpha)
     threshold = options.maps.threshold
     tracts = ["tracts"] if tract_values is not None else []

@@ -117,13 +117,14 @@ def prepare_map_run(data: Any, atlas: Atlas | None, options: Options) -> Run:
     connectome = options.connectome.load(atlas_obj if atlas is None else atlas, tpl, options.scene.surface)
     check_images(connectome, maps.n_images, "the maps have")
     blobs = load_blobs(options)
+    drawn = open_layers(options.scene.layer, options.scene.layer_opt)
     layers, below = map_layers(options, maps, table, meshes, tract_values,
                                others=(*connectome_kinds(connectome), *blob_kinds(blobs)))
+    # what is drawn inside the brain (a connectome, blobs, a plugin's layer) over the map: it stays opaque
     settings = cortex_for(settings, cortex_values=True, tracts=bool(options.scene.tracts),
-                          connectome=connectome is not None or blobs is not None)
+                          connectome=connectome is not None or blobs is not None or bool(drawn))
     layers += connectome_layers(options, connectome, first=False) if connectome is not None else ()
     layers += (blob_layer(options, blobs, first=False),) if blobs is not None else ()
-    drawn = open_layers(options.scene.layer, options.scene.layer_opt)
     layers += tuple(layer.layer() for layer in drawn)
     drawn = (*drawn_blobs(blobs, layers), *drawn)
     flat = flat_edges = None
