@@ -163,8 +163,8 @@ def test_a_map_under_foci_reads_true_to_its_bar(foci_site, peaks):
 
     value = np.full(10242, 2.0, np.float32)  # fsaverage5: the middle of a 0-4 viridis bar everywhere
     with installed(foci_site):
-        result = brainpainter.render({"lh": value, "rh": value}, "dk", layer=[f"foci:{peaks}"], vmin=0, vmax=4,
-                                     cmap="viridis", views="lateral-left", width=320, height=240,
+        result = brainpainter.render({"lh": value, "rh": value}, "dk", layer=[f"foci:{peaks}"], vmin=0,
+                                     vmax=4, cmap="viridis", views="lateral-left", width=320, height=240,
                                      shading="flat", quality="fast", progress=False)
     (img,) = result.images.values()
     want = np.round(np.asarray(result.scale(np.array([2.0]))[0][:3]) * 255)
