@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -31,9 +31,6 @@ from brainpainter.rendering.scene import Scene
 from brainpainter.rendering.settings import RGB, RenderSettings
 from brainpainter.rendering.views import View
 from brainpainter.table.region_table import RegionTable
-
-if TYPE_CHECKING:
-    pass
 
 # Named groups for --hide: structure names (hemisphere-free) they cover.
 HIDE_GROUPS: dict[str, tuple[str, ...]] = {
