@@ -234,21 +234,43 @@ def test_the_next_run_removes_the_folder_of_a_run_killed_with_sigkill(tmp_path):
             p.stdout.close()
 
 
-def test_a_signal_inside_a_finaliser_is_raised_after_it(tmp_path):
-    """A signal that lands in a ``__del__`` or the import system's weak-reference callback (where a
-    raised exception is printed as "Exception ignored" and dropped) is raised again once it is left."""
+FINALISERS = {
+    "__del__": ("class Held:\n"
+                "    def __del__(self):\n"
+                "        signal.raise_signal(signal.SIGTERM)\n"
+                "        time.sleep(0.001)\n"
+                "held = Held()\n"
+                "del held\n"),
+    # a WeakValueDictionary's remove callback hashes the key: the signal lands inside weakref.py
+    "weakref": ("import weakref\n"
+                "class Key:\n"
+                "    armed = False\n"
+                "    def __hash__(self):\n"
+                "        if Key.armed:\n"
+                "            Key.armed = False\n"
+                "            signal.raise_signal(signal.SIGTERM)\n"
+                "            time.sleep(0.001)\n"
+                "        return 1\n"
+                "class Value:\n"
+                "    pass\n"
+                "values, key, value = weakref.WeakValueDictionary(), Key(), Value()\n"
+                "values[key] = value\n"
+                "Key.armed = True\n"
+                "del value\n"),
+}
+
+
+@pytest.mark.parametrize("where", sorted(FINALISERS))
+def test_a_signal_inside_a_finaliser_is_raised_after_it(tmp_path, where):
+    """A signal that lands in a ``__del__`` or a weak-reference callback (the import system's, weakref's:
+    where a raised exception is printed as "Exception ignored" and dropped) is raised again once left."""
     script = tmp_path / "finaliser.py"
+    body = "".join("    " + line + "\n" for line in FINALISERS[where].splitlines())
     script.write_text(
         "import signal, time\n"
         "from brainpainter.cli import guard\n"
         "signal.signal(signal.SIGTERM, guard._on_signal)\n"
-        "class Held:\n"
-        "    def __del__(self):\n"
-        "        signal.raise_signal(signal.SIGTERM)\n"
-        "        time.sleep(0.001)\n"
-        "try:\n"
-        "    held = Held()\n"
-        "    del held\n"
+        "try:\n" + body +
         "    time.sleep(2)\n"
         "    print('not stopped')\n"
         "except guard.Terminated:\n"

@@ -115,10 +115,12 @@ class Terminated(Stopped):
 
 def _swallows_exceptions(frame: Any) -> bool:
     """True when an exception raised in `frame` would be printed and dropped, not propagated: inside a
-    ``__del__`` or a weak-reference callback (the import system's module-lock ``cb``), up the stack."""
+    ``__del__`` or a weak-reference callback (the import system's module-lock ``cb``, ``weakref``'s own:
+    a ``WeakValueDictionary``'s ``remove``, a ``WeakSet``'s ``_remove``), up the stack."""
     while frame is not None:
         code = frame.f_code
-        if code.co_name == "__del__" or (code.co_name == "cb" and "importlib" in code.co_filename):
+        if code.co_name == "__del__" or (code.co_name == "cb" and "importlib" in code.co_filename) \
+                or code.co_filename.endswith(("weakref.py", "_weakrefset.py")):
             return True
         frame = frame.f_back
     return False
