@@ -63,3 +63,19 @@ def test_the_kept_renderer_draws_the_pixels_of_a_fresh_one(tiny):
     for key, pixels in fresh.images.items():
         np.testing.assert_array_equal(pixels, warm.images[key])
         assert not np.array_equal(pixels, again.images[key])  # the values changed, not the scene
+
+
+def test_a_figure_made_while_the_kept_painter_draws_another_draws_with_its_own(tiny):
+    with stand_in("kept-busy") as name:
+        first = brainpainter.Painter("dk", tiny, renderer=name)
+        second = brainpainter.Painter("dk", tiny, renderer=name)  # the same scene
+        assert kept.kept_painter(first) is first  # kept, and in use until put back
+        assert kept.kept_painter(second) is second and not kept.is_kept(second)  # meanwhile: its own
+        kept.put_back(first)
+        third = brainpainter.Painter("dk", tiny, renderer=name)
+        assert kept.kept_painter(third) is first  # put back: the next figure draws with it
+        kept.put_back(first)
+        _figure(tiny, name)  # a figure that fails before it renders leaves nothing in use
+        with pytest.raises(BrainPainterError):
+            _figure(tiny, name, views="no-such-view")
+        assert not kept._IN_USE

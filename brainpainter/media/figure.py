@@ -38,7 +38,7 @@ from brainpainter.media.layout import FigureKwargs, FigureLayout, FigureOptions,
 from brainpainter.media.outfile import check_out_file
 from brainpainter.media.plain_text import quiet_glyphs
 from brainpainter.media.volume_panels import PanelKwargs, PanelOptions, label_panels, volume_panels
-from brainpainter.rendering.kept import is_kept, kept_painter, release
+from brainpainter.rendering.kept import is_kept, kept_painter, put_back, release
 from brainpainter.rendering.layers import colorbar_layers, first_bar_label, without_regions
 from brainpainter.rendering.options import Options, RenderKwargs, take
 from brainpainter.rendering.parallel import SerialRunner
@@ -264,7 +264,9 @@ def _rendered(run: Run, painter: Painter, checked: Options, plan: list[tuple[int
             release()
         raise
     finally:
-        if not keep:
+        if keep:
+            put_back(painter)
+        else:
             runner.close()
     return images
 
@@ -322,15 +324,15 @@ def make_figure(data: Any, atlas: Atlas | str | None = None, *, out: str | Path 
     panels = volume_panels(data, run, panel_opts, chosen) if panel_opts.sections else {}
     run = printed_labels(run, [table.images[i] for i in chosen], figure_opts)
     serial = checked.runner.n_jobs <= 1 and not checked.runner.cluster
-    # a serial figure draws with the painter kept from the figure before, where its scene is the same
-    painter = kept_painter(run.painter(), run.options.scene.template) if serial else run.painter()
-    nan, missing = ((False, False) if without_regions(run.layers)
-                    else swatches_needed(table, chosen, run.views, painter.scene.geometry))
     plan = run.items(chosen)
     background = run.settings.background
     # the output folder is locked from before the first render until the figure is published
     with FileTransaction(path) if path is not None else nullcontext() as tx:
-        images = _rendered(run, painter, checked, plan, progress, on_progress)
+        # a serial figure draws with the painter kept from the figure before, where its scene is the same
+        painter = kept_painter(run.painter(), run.options.scene.template) if serial else run.painter()
+        images = _rendered(run, painter, checked, plan, progress, on_progress)  # the kept one put back
+        nan, missing = ((False, False) if without_regions(run.layers)
+                        else swatches_needed(table, chosen, run.views, painter.scene.geometry))
         figure_opts, more = _bars(run, painter, figure_opts)
         layout = _with_panels(images, panels, panel_opts, [table.images[i] for i in chosen], run, figure_opts,
                               nan=nan, missing=missing, more_bars=more)

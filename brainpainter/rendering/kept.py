@@ -4,11 +4,13 @@ A notebook or a script that makes figure after figure of one scene (the same atl
 surface, image settings and scene layers; only the values change, as for the rows of a table or
 the volumes of a study) would start a renderer and upload the scene's buffers for each figure.
 :func:`kept_painter` gives the figure the painter kept from the figure before when its scene is the
-same, already loaded: ~0.12 s of CPU less on a figure of two 1200x900 views (docs/benchmarks.md).
+same, already loaded: ~0.3 s of CPU less on a figure of two 1200x900 views (docs/benchmarks.md).
 
 One painter is kept, the last: a figure of another scene closes it and keeps its own,
-:func:`release` closes it, and so does the process's exit. Path-traced (``quality="high"``)
-painters are not kept: each holds Blender objects, and a render of seconds gains nothing from it.
+:func:`release` closes it, and so does the process's exit. While one figure draws with it (until
+:func:`put_back`), a figure made meanwhile (another thread) draws with its own painter. Path-traced
+(``quality="high"``) painters are not kept: each holds Blender objects, and a render of seconds gains
+nothing from it.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from brainpainter.rendering.painter import Painter
 from brainpainter.rendering.painter_spec import PainterSpec
 
 _KEPT: dict[str, Painter] = {}
+_IN_USE: set[str] = set()  # the key of the kept painter while a figure draws with it
 _LOCK = threading.Lock()
 _AT_EXIT: list[bool] = []
 
@@ -54,14 +57,22 @@ def kept_painter(painter: Painter, template: Any = None) -> Painter:
         return painter
     key = scene_key(painter, template)
     with _LOCK:
-        if key in _KEPT:
-            return _KEPT[key]
-        _close_kept()
-        _KEPT[key] = painter
+        if _IN_USE:  # the kept painter draws another figure (another thread): this one draws alone
+            return painter
+        if key not in _KEPT:
+            _close_kept()
+            _KEPT[key] = painter
         if not _AT_EXIT:
             atexit.register(release)
             _AT_EXIT.append(True)
-    return painter
+        _IN_USE.add(key)
+        return _KEPT[key]
+
+
+def put_back(painter: Painter) -> None:
+    """The figure that drew with the kept `painter` is done with it: the next figure may draw with it."""
+    with _LOCK:
+        _IN_USE.difference_update(k for k, p in _KEPT.items() if p is painter)
 
 
 def is_kept(painter: Painter) -> bool:
@@ -74,6 +85,7 @@ def release() -> None:
     """Close the kept painter, if any (its renderer and buffers freed)."""
     with _LOCK:
         _close_kept()
+        _IN_USE.clear()
 
 
 def _close_kept() -> None:
