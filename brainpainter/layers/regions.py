@@ -48,7 +48,7 @@ class RegionValues:
 
     def colors(self, row: int, over: Mapping[str, RGB]) -> dict[str, RGB]:
         """The region colours of image `row`, with `over` (the layers drawn over it) added."""
-        return region_colors(self.table.row(row), self.table.atlas, self.scale) | dict(over)
+        return self.blend(row, row, 0.0, over)  # a key frame: its own values
 
     def blend(self, a: int, b: int, weight: float, over: Mapping[str, RGB]) -> dict[str, RGB]:
         """Rows `a` and `b` blended, ``(1 - weight) * a + weight * b`` (a movie's frame), with `over`."""
